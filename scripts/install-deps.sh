@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Installs, with apt-get, the Debian packages stereodet needs to build, test and benchmark — only those
+# that are missing. Idempotent: a second run installs nothing and prints one line.
+#
+# Works as root; otherwise uses sudo (non-interactively); fails with a clear message if neither works.
+# Set STEREODET_DEPS_EXTRA="pkg1 pkg2" to add packages (e.g. clang for `make fuzz`).
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libfmt-dev              # util: formatting
+  libtbb-dev              # util: parallel-for over frames
+  libeigen3-dev           # geometry: small matrices, calibration
+  libopencv-dev           # stereo, synth: block matching, image I/O
+  opencv-doc              # stereo tests: Middlebury "Aloe" pair with ground truth
+  libtorch-dev            # models: LibTorch detectors (CPU)
+  nlohmann-json3-dev      # report: results.json
+  libcli11-dev            # cli: the stereodet command line
+  libgtest-dev libgmock-dev  # tests
+  libbenchmark-dev        # benchmarks
+  pybind11-dev            # Python bindings of eval
+)
+# shellcheck disable=SC2206
+extra=(${STEREODET_DEPS_EXTRA:-})
+packages+=("${extra[@]}")
+
+missing=()
+for p in "${packages[@]}"; do
+  # dpkg-query prints "install ok installed" only for a fully installed package.
+  status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+  [[ "$status" == "install ok installed" ]] || missing+=("$p")
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "install-deps: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+
+if [[ $(id -u) -eq 0 ]]; then
+  as_root=()
+elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+  as_root=(sudo -n)
+else
+  echo "install-deps: need root to install: ${missing[*]}" >&2
+  echo "install-deps: run as root, or give this user password-less sudo, or install them by hand" >&2
+  exit 1
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${as_root[@]}" apt-get update -q
+"${as_root[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+echo "install-deps: done"

@@ -1,0 +1,54 @@
+// Reading and writing KITTI label files (15 fields a line) and detection files (16, score last).
+#ifndef STEREODET_KITTI_LABEL_IO_H_
+#define STEREODET_KITTI_LABEL_IO_H_
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "stereodet/kitti/object.h"
+
+namespace stereodet {
+
+enum class ObjectFileKind {
+  kLabel,      // exactly 15 fields a line
+  kDetection,  // exactly 16 fields a line, the score last
+  kAny,        // 15 or 16 fields, each line on its own (KITTI's devkit accepts both in result files)
+};
+
+struct ObjectParseOptions {
+  ObjectFileKind kind = ObjectFileKind::kLabel;
+  // Strict (default): the first bad line throws a ParseError naming the file, line and field.
+  // Lenient: bad lines are skipped and counted in ObjectFile::skipped_lines.
+  bool lenient = false;
+};
+
+struct ObjectFile {
+  std::vector<Object> objects;  // in file order
+  int skipped_lines = 0;        // lenient mode only
+  // "FILE:LINE: field F: message" for each skipped line (lenient mode), in file order.
+  std::vector<std::string> problems;
+};
+
+// Parses the text of a label or detection file. `source` names the file in error messages. Blank
+// lines are ignored. A bad line (wrong field count; text, NaN or infinity where a number belongs;
+// a negative dimension other than KITTI's -1 "not estimated"; occluded not an integer) throws
+// ParseError(source, line, field, ...), or is skipped in lenient mode.
+ObjectFile ParseObjects(std::string_view text, const std::string& source,
+                        const ObjectParseOptions& options = {});
+// Reads and parses a file. Throws std::runtime_error if it cannot be read.
+ObjectFile ReadObjects(const std::filesystem::path& path, const ObjectParseOptions& options = {});
+
+// One line, no newline. Detections (objects with a score) get 16 fields. Numbers are written with
+// two decimals when that reads back exactly (KITTI's own style, so real KITTI files round-trip byte
+// for byte), otherwise with the shortest text that reads back exactly.
+std::string FormatObject(const Object& object);
+// Whole file: one line per object, each ending in '\n'.
+std::string FormatObjects(const std::vector<Object>& objects);
+// Writes atomically (temp file + rename).
+void WriteObjects(const std::filesystem::path& path, const std::vector<Object>& objects);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_KITTI_LABEL_IO_H_

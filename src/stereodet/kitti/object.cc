@@ -1,0 +1,44 @@
+#include "stereodet/kitti/object.h"
+
+namespace stereodet {
+
+void Object::SetNot3DEstimated() {
+  alpha = -10.0;
+  box3d.h = box3d.w = box3d.l = -1.0;
+  box3d.location = Eigen::Vector3d(-1000.0, -1000.0, -1000.0);
+  box3d.rotation_y = -10.0;
+}
+
+const char* DifficultyName(Difficulty difficulty) {
+  switch (difficulty) {
+    case Difficulty::kEasy: return "Easy";
+    case Difficulty::kModerate: return "Moderate";
+    case Difficulty::kHard: return "Hard";
+  }
+  return "?";
+}
+
+DifficultyLimits KittiDifficultyLimits(Difficulty difficulty) {
+  switch (difficulty) {
+    case Difficulty::kEasy: return {40.0, 0, 0.15};
+    case Difficulty::kModerate: return {25.0, 1, 0.30};
+    case Difficulty::kHard: return {25.0, 2, 0.50};
+  }
+  return {25.0, 2, 0.50};
+}
+
+bool MeetsDifficulty(const Object& label, Difficulty difficulty) {
+  if (label.IsDontCare()) return false;
+  const DifficultyLimits limits = KittiDifficultyLimits(difficulty);
+  return label.box.Height() >= limits.min_height_px && label.occluded <= limits.max_occlusion &&
+         label.truncated <= limits.max_truncation;
+}
+
+std::optional<Difficulty> EasiestDifficulty(const Object& label) {
+  for (Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+    if (MeetsDifficulty(label, d)) return d;
+  }
+  return std::nullopt;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,25 @@
+// KITTI velodyne scans: a flat array of float32 (x, y, z, reflectance), little endian, velo frame.
+#ifndef STEREODET_KITTI_VELODYNE_IO_H_
+#define STEREODET_KITTI_VELODYNE_IO_H_
+
+#include <filesystem>
+#include <vector>
+
+namespace stereodet {
+
+struct VeloPoint {
+  float x = 0, y = 0, z = 0;   // velo frame, metres
+  float reflectance = 0;       // [0, 1]
+  bool operator==(const VeloPoint&) const = default;
+};
+static_assert(sizeof(VeloPoint) == 16, "VeloPoint must match KITTI's on-disk layout");
+
+// Throws std::runtime_error naming the file if it cannot be read or its size is not a multiple of
+// 16 bytes.
+std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path);
+// Writes atomically.
+void WriteVelodyne(const std::filesystem::path& path, const std::vector<VeloPoint>& points);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_KITTI_VELODYNE_IO_H_

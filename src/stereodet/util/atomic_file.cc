@@ -1,0 +1,89 @@
+#include "stereodet/util/atomic_file.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+namespace fs = std::filesystem;
+
+namespace {
+
+// A name unique among the threads and processes writing into the same folder.
+fs::path MakeTempPath(const fs::path& final_path) {
+  static std::atomic<unsigned long> counter{0};
+  const unsigned long n = counter.fetch_add(1);
+  std::string name = "." + final_path.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
+                     std::to_string(n) + final_path.extension().string();
+  return final_path.parent_path() / name;
+}
+
+void CreateParent(const fs::path& path) {
+  const fs::path parent = path.parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  STEREODET_CHECK_IO(!ec) << "cannot create folder " << parent.string() << ": " << ec.message();
+}
+
+}  // namespace
+
+AtomicPath::AtomicPath(fs::path final_path)
+    : final_path_(std::move(final_path)), temp_path_(MakeTempPath(final_path_)) {
+  CreateParent(final_path_);
+}
+
+AtomicPath::~AtomicPath() {
+  if (!committed_) {
+    std::error_code ignored;
+    fs::remove(temp_path_, ignored);
+  }
+}
+
+void AtomicPath::Commit() {
+  STEREODET_CHECK_IO(!committed_) << "AtomicPath::Commit called twice for " << final_path_.string();
+  std::error_code ec;
+  STEREODET_CHECK_IO(fs::exists(temp_path_, ec))
+      << "cannot write " << final_path_.string() << ": the temporary file was not written";
+  fs::rename(temp_path_, final_path_, ec);
+  STEREODET_CHECK_IO(!ec) << "cannot write " << final_path_.string() << ": " << ec.message();
+  committed_ = true;
+}
+
+void WriteFileAtomically(const fs::path& path, std::string_view contents) {
+  AtomicPath out(path);
+  {
+    std::FILE* file = std::fopen(out.temp_path().c_str(), "wb");
+    STEREODET_CHECK_IO(file != nullptr)
+        << "cannot write " << path.string() << ": " << std::strerror(errno);
+    const size_t written = contents.empty() ? 0 : std::fwrite(contents.data(), 1, contents.size(), file);
+    const bool ok = written == contents.size() && std::fflush(file) == 0;
+    const int close_status = std::fclose(file);
+    STEREODET_CHECK_IO(ok && close_status == 0)
+        << "cannot write " << path.string() << ": " << std::strerror(errno);
+  }
+  out.Commit();
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  STEREODET_CHECK_IO(in.good()) << "cannot read " << path.string() << ": " << std::strerror(errno);
+  std::string contents;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  STEREODET_CHECK_IO(size >= 0) << "cannot read " << path.string() << ": not a regular file";
+  contents.resize(static_cast<size_t>(size));
+  in.seekg(0, std::ios::beg);
+  in.read(contents.data(), size);
+  STEREODET_CHECK_IO(in.good() || in.eof()) << "cannot read " << path.string();
+  return contents;
+}
+
+}  // namespace stereodet

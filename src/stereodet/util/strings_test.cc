@@ -1,0 +1,56 @@
+#include "stereodet/util/strings.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace stereodet {
+namespace {
+
+TEST(StringsTest, ParseDoubleAcceptsOnlyWholeNumbers) {
+  EXPECT_EQ(ParseDouble("1.5"), 1.5);
+  EXPECT_EQ(ParseDouble("-2e-3"), -2e-3);
+  EXPECT_EQ(ParseDouble("+7"), 7.0);
+  EXPECT_FALSE(ParseDouble(""));
+  EXPECT_FALSE(ParseDouble("1.5x"));
+  EXPECT_FALSE(ParseDouble(" 1"));
+  EXPECT_FALSE(ParseDouble("Car"));
+  EXPECT_FALSE(ParseDouble("1e999"));
+  EXPECT_TRUE(std::isnan(*ParseDouble("nan")));
+  EXPECT_TRUE(std::isinf(*ParseDouble("-inf")));
+  EXPECT_EQ(ParseInt("42"), 42);
+  EXPECT_FALSE(ParseInt("4.2"));
+  EXPECT_EQ(ParseFloat("0.1"), 0.1f);
+}
+
+TEST(StringsTest, SplitWhitespaceDropsEmptyTokens) {
+  const auto tokens = SplitWhitespace("  Car 0.00\t1 \r\n");
+  ASSERT_EQ(tokens.size(), 3u);
+  EXPECT_EQ(tokens[0], "Car");
+  EXPECT_EQ(tokens[2], "1");
+  EXPECT_TRUE(SplitWhitespace(" \t ").empty());
+}
+
+TEST(StringsTest, SplitKeepsEmptyTokensAndTrimTrims) {
+  const auto tokens = Split("a,,b", ',');
+  ASSERT_EQ(tokens.size(), 3u);
+  EXPECT_EQ(tokens[1], "");
+  EXPECT_EQ(Trim("  x y \n"), "x y");
+}
+
+TEST(StringsTest, FormatShortestRoundTripsRandomValues) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> dist(-1e4, 1e4);
+  for (int i = 0; i < 10000; ++i) {
+    const double d = dist(rng);
+    ASSERT_EQ(ParseDouble(FormatShortest(d)), d);
+    const float f = static_cast<float>(d);
+    ASSERT_EQ(ParseFloat(FormatShortest(f)), f);
+  }
+  EXPECT_EQ(FormatShortest(1.5), "1.5");
+  EXPECT_EQ(FormatShortest(0.1f), "0.1");
+}
+
+}  // namespace
+}  // namespace stereodet
