@@ -20,8 +20,13 @@ namespace {
 fs::path MakeTempPath(const fs::path& final_path) {
   static std::atomic<unsigned long> counter{0};
   const unsigned long n = counter.fetch_add(1);
-  std::string name = "." + final_path.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                     std::to_string(n) + final_path.extension().string();
+  std::string name = ".";
+  name.append(final_path.stem().string())
+      .append(".tmp-")
+      .append(std::to_string(::getpid()))
+      .append("-")
+      .append(std::to_string(n))
+      .append(final_path.extension().string());
   return final_path.parent_path() / name;
 }
 
