@@ -8,7 +8,7 @@
 
 namespace stereodet::cli {
 
-// void AddInfoCommand(CLI::App& app);  // info_command.cc (kitti helper)
+void AddInfoCommand(CLI::App& app);  // info_command.cc
 
 }  // namespace stereodet::cli
 

@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   // The subcommand table, in the order a user meets them.
-  // (kitti helper: stereodet::cli::AddInfoCommand(app);)
+  stereodet::cli::AddInfoCommand(app);
 
   try {
     app.parse(argc, argv);

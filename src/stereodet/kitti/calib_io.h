@@ -14,13 +14,15 @@ namespace stereodet {
 
 // Parses a calibration file's text. `source` names the file in errors. P0..P3, R0_rect and
 // Tr_velo_to_cam are required; Tr_imu_to_velo is optional (identity if absent). Throws ParseError
-// naming the line and key for a missing key, a wrong number count, a non-number, NaN or infinity,
-// or a duplicate key.
+// naming the line and key for a missing key (line 0), a wrong number count, a non-number, NaN or
+// infinity (field "P2(1,3)": key, row, column), or a duplicate key. Keys may be written with or
+// without the colon; other keys (KITTI raw's "calib_time") and blank lines are ignored.
 Calibration ParseCalibration(std::string_view text, const std::string& source);
 Calibration ReadCalibration(const std::filesystem::path& path);
 
 // KITTI's own layout: "KEY: v v v ..." with each value as "%.12e" when that reads back exactly,
-// otherwise the shortest exact text; all seven keys.
+// otherwise the shortest exact text; all seven keys, then an empty line, as KITTI's files end.
+// Throws std::invalid_argument for a NaN or infinite entry.
 std::string FormatCalibration(const Calibration& calib);
 void WriteCalibration(const std::filesystem::path& path, const Calibration& calib);  // atomic
 

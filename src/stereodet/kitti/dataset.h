@@ -34,11 +34,13 @@ class KittiDataset {
   explicit KittiDataset(std::filesystem::path root, std::string subset = "training");
 
   const std::filesystem::path& root() const { return root_; }
+  const std::string& subset() const { return subset_; }
   std::filesystem::path SubsetDir() const { return root_ / subset_; }
 
   FramePaths Paths(const std::string& id) const;
 
-  // All ids with a file in image_2/ (or label_2/ when there are no images), sorted.
+  // All ids with a file in image_2/ (or label_2/ when there are no images, or calib/ when there are
+  // neither), in numeric order. Names that are not digits, and hidden files, are ignored.
   std::vector<std::string> ListIds() const;
 
   // Reads a split file (one id per line; blank lines ignored). A relative `split` that names no

@@ -42,10 +42,21 @@ ObjectFile ReadObjects(const std::filesystem::path& path, const ObjectParseOptio
 
 // One line, no newline. Detections (objects with a score) get 16 fields. Numbers are written with
 // two decimals when that reads back exactly (KITTI's own style, so real KITTI files round-trip byte
-// for byte), otherwise with the shortest text that reads back exactly.
+// for byte), otherwise with the shortest text that reads back exactly; KITTI's sentinels are written
+// as KITTI writes them, as integers: truncated -1, alpha -10, dimensions -1, location -1000,
+// rotation_y -10 ("DontCare -1 -1 -10 503.89 169.71 590.61 190.13 -1 -1 -1 -1000 -1000 -1000 -10").
+// Throws std::invalid_argument for a number that is NaN or infinite, or a type that is empty or
+// holds whitespace (the file could not be read back).
 std::string FormatObject(const Object& object);
 // Whole file: one line per object, each ending in '\n'.
 std::string FormatObjects(const std::vector<Object>& objects);
+// The name of field `index` (0-based, file order) as used in ParseError: "type", "truncated",
+// "occluded", "alpha", "bbox.left", "bbox.top", "bbox.right", "bbox.bottom", "dimensions.h",
+// "dimensions.w", "dimensions.l", "location.x", "location.y", "location.z", "rotation_y", "score".
+// A line with the wrong number of fields names the first missing field, "score" for a 16th field
+// in a label file, or "field count".
+const char* ObjectFieldName(int index);
+
 // Writes atomically (temp file + rename).
 void WriteObjects(const std::filesystem::path& path, const std::vector<Object>& objects);
 

@@ -74,7 +74,7 @@ struct Voidify {
 #define STEREODET_INTERNAL_CHECK(kind, cond)                                               \
   (cond) ? (void)0                                                                         \
          : ::stereodet::internal::Voidify() &                                              \
-               ::stereodet::internal::CheckFailure(kind, #cond, __FILE__, __LINE__)
+               ::stereodet::internal::CheckFailure((kind), #cond, __FILE__, __LINE__)
 
 #define STEREODET_CHECK(cond) \
   STEREODET_INTERNAL_CHECK(::stereodet::internal::ErrorKind::kInvalidArgument, cond)

@@ -8,7 +8,11 @@ namespace stereodet {
 namespace {
 template <typename T>
 std::optional<T> ParseNumber(std::string_view text) {
-  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  if (!text.empty() && text.front() == '+') {
+    text.remove_prefix(1);
+    // from_chars takes a '-' itself; a sign after the '+' ("+-1", "++1") is not a number.
+    if (!text.empty() && (text.front() == '-' || text.front() == '+')) return std::nullopt;
+  }
   if (text.empty()) return std::nullopt;
   T value{};
   const char* end = text.data() + text.size();

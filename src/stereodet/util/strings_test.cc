@@ -17,6 +17,9 @@ TEST(StringsTest, ParseDoubleAcceptsOnlyWholeNumbers) {
   EXPECT_FALSE(ParseDouble(" 1"));
   EXPECT_FALSE(ParseDouble("Car"));
   EXPECT_FALSE(ParseDouble("1e999"));
+  EXPECT_FALSE(ParseDouble("+-1"));
+  EXPECT_FALSE(ParseDouble("++1"));
+  EXPECT_FALSE(ParseInt("+-1"));
   EXPECT_TRUE(std::isnan(*ParseDouble("nan")));
   EXPECT_TRUE(std::isinf(*ParseDouble("-inf")));
   EXPECT_EQ(ParseInt("42"), 42);

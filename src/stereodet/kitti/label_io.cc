@@ -1,0 +1,231 @@
+#include "stereodet/kitti/label_io.h"
+
+#include <array>
+#include <cstring>
+#include <string>
+
+#include "stereodet/kitti/text_number.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+namespace {
+
+using kitti_internal::AppendRoundTrip;
+using kitti_internal::NumberStatus;
+using kitti_internal::QuoteToken;
+using kitti_internal::ReadFiniteDouble;
+
+constexpr int kLabelFields = 15;
+constexpr int kDetectionFields = 16;
+
+// Field names in file order, as they appear in error messages.
+constexpr std::array<const char*, kDetectionFields> kFieldNames = {
+    "type",       "truncated",   "occluded",     "alpha",        "bbox.left",    "bbox.top",
+    "bbox.right", "bbox.bottom", "dimensions.h", "dimensions.w", "dimensions.l", "location.x",
+    "location.y", "location.z",  "rotation_y",   "score"};
+
+// KITTI's "not estimated" / DontCare value of each numeric field (index as kFieldNames), or 0 when
+// the field has none. KITTI writes these as integers ("-1", "-10", "-1000"), so the writer does
+// too.
+constexpr std::array<double, kDetectionFields> kSentinels = {
+    0, -1, 0, -10, 0, 0, 0, 0, -1, -1, -1, -1000, -1000, -1000, -10, 0};
+
+bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// Splits one line (no '\n') into at most `max_tokens` tokens; returns the true token count, which
+// may exceed max_tokens (the extra tokens are counted, not stored).
+int Tokenize(std::string_view line, std::string_view* tokens, int max_tokens) {
+  int count = 0;
+  const char* p = line.data();
+  const char* end = p + line.size();
+  while (true) {
+    while (p < end && IsBlank(*p)) ++p;
+    if (p == end) return count;
+    const char* start = p;
+    while (p < end && !IsBlank(*p)) ++p;
+    if (count < max_tokens) tokens[count] = std::string_view(start, static_cast<size_t>(p - start));
+    ++count;
+  }
+}
+
+// A bad line: the parser records it and moves on (lenient) or throws (strict).
+struct LineError {
+  int field = -1;  // index into kFieldNames, or -1 for the field count
+  std::string message;
+};
+
+const char* FieldName(int field) { return field >= 0 ? kFieldNames[field] : "field count"; }
+
+std::string ExpectedCount(ObjectFileKind kind) {
+  switch (kind) {
+    case ObjectFileKind::kLabel:
+      return "15 (a label line)";
+    case ObjectFileKind::kDetection:
+      return "16 (a detection line, score last)";
+    case ObjectFileKind::kAny:
+      return "15 (label) or 16 (detection, score last)";
+  }
+  return "15";
+}
+
+// Parses one non-blank line into `object`. Returns false and fills `error` for a bad line.
+bool ParseLine(std::string_view line, ObjectFileKind kind, Object* object, LineError* error) {
+  std::array<std::string_view, kDetectionFields> tokens;
+  const int count = Tokenize(line, tokens.data(), kDetectionFields);
+  const bool count_ok = kind == ObjectFileKind::kLabel ? count == kLabelFields
+                        : kind == ObjectFileKind::kDetection
+                            ? count == kDetectionFields
+                            : (count == kLabelFields || count == kDetectionFields);
+  if (!count_ok) {
+    // Name the first missing field, or the first unexpected one, so the user sees where it went
+    // wrong.
+    const int wanted = kind == ObjectFileKind::kDetection ? kDetectionFields : kLabelFields;
+    error->field = count < wanted ? count : (count == kDetectionFields ? kDetectionFields - 1 : -1);
+    error->message = (count < wanted ? "missing: the line has " : "unexpected: the line has ") +
+                     std::to_string(count) + " fields, expected " + ExpectedCount(kind);
+    return false;
+  }
+
+  object->type.assign(tokens[0].data(), tokens[0].size());
+  double values[kDetectionFields];
+  for (int i = 1; i < count; ++i) {
+    if (i == 2) continue;  // occluded: an integer, read below
+    const NumberStatus status = ReadFiniteDouble(tokens[i], &values[i]);
+    if (status != NumberStatus::kOk) {
+      error->field = i;
+      error->message = QuoteToken(tokens[i]) + " " + kitti_internal::NumberStatusMessage(status);
+      return false;
+    }
+  }
+  const std::optional<int> occluded = kitti_internal::ReadInt(tokens[2]);
+  if (!occluded) {
+    error->field = 2;
+    error->message = QuoteToken(tokens[2]) + " is not an integer (0, 1, 2, 3, or -1 for DontCare)";
+    return false;
+  }
+  for (int i = 8; i <= 10; ++i) {
+    if (values[i] < 0 && values[i] != -1.0) {
+      error->field = i;
+      error->message = QuoteToken(tokens[i]) +
+                       " is negative (dimensions are >= 0, or -1 for KITTI's \"not estimated\")";
+      return false;
+    }
+  }
+  object->truncated = values[1];
+  object->occluded = *occluded;
+  object->alpha = values[3];
+  object->box = Box2D{values[4], values[5], values[6], values[7]};
+  object->box3d.h = values[8];
+  object->box3d.w = values[9];
+  object->box3d.l = values[10];
+  object->box3d.location = Eigen::Vector3d(values[11], values[12], values[13]);
+  object->box3d.rotation_y = values[14];
+  if (count == kDetectionFields) {
+    object->score = values[15];
+  } else {
+    object->score.reset();
+  }
+  return true;
+}
+
+void AppendField(std::string* out, double value, int field) {
+  STEREODET_CHECK(std::isfinite(value))
+      << "cannot write a KITTI object: field " << kFieldNames[field] << " is " << value;
+  out->push_back(' ');
+  if (kSentinels[field] != 0 && value == kSentinels[field]) {
+    out->append(std::to_string(static_cast<int>(value)));
+    return;
+  }
+  AppendRoundTrip(out, value, std::chars_format::fixed, 2);
+}
+
+void AppendObject(std::string* out, const Object& object) {
+  STEREODET_CHECK(!object.type.empty() && object.type.find_first_of(" \t\r\n") == std::string::npos)
+      << "cannot write a KITTI object: type '" << object.type
+      << "' must be one word without spaces";
+  out->append(object.type);
+  AppendField(out, object.truncated, 1);
+  out->push_back(' ');
+  out->append(std::to_string(object.occluded));
+  AppendField(out, object.alpha, 3);
+  AppendField(out, object.box.left, 4);
+  AppendField(out, object.box.top, 5);
+  AppendField(out, object.box.right, 6);
+  AppendField(out, object.box.bottom, 7);
+  AppendField(out, object.box3d.h, 8);
+  AppendField(out, object.box3d.w, 9);
+  AppendField(out, object.box3d.l, 10);
+  AppendField(out, object.box3d.location.x(), 11);
+  AppendField(out, object.box3d.location.y(), 12);
+  AppendField(out, object.box3d.location.z(), 13);
+  AppendField(out, object.box3d.rotation_y, 14);
+  if (object.score) AppendField(out, *object.score, 15);
+}
+
+}  // namespace
+
+const char* ObjectFieldName(int index) {
+  STEREODET_CHECK(index >= 0 && index < kDetectionFields) << "no KITTI object field " << index;
+  return kFieldNames[index];
+}
+
+ObjectFile ParseObjects(std::string_view text, const std::string& source,
+                        const ObjectParseOptions& options) {
+  ObjectFile file;
+  // A label line is about 90 bytes: reserving avoids most regrowth without a counting pass.
+  file.objects.reserve(text.size() / 64 + 1);
+  LineError error;
+  int line_number = 0;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    ++line_number;
+    const void* newline = std::memchr(text.data() + pos, '\n', text.size() - pos);
+    const size_t end = newline
+                           ? static_cast<size_t>(static_cast<const char*>(newline) - text.data())
+                           : text.size();
+    const std::string_view line = text.substr(pos, end - pos);
+    pos = end + 1;
+
+    size_t first = 0;
+    while (first < line.size() && IsBlank(line[first])) ++first;
+    if (first == line.size()) continue;  // blank line
+
+    // Parse in place: no copy of the object (its type string) per line.
+    if (ParseLine(line, options.kind, &file.objects.emplace_back(), &error)) continue;
+    file.objects.pop_back();
+    ParseError parse_error(source, line_number, FieldName(error.field), error.message);
+    if (!options.lenient) throw parse_error;
+    ++file.skipped_lines;
+    file.problems.emplace_back(parse_error.what());
+  }
+  return file;
+}
+
+ObjectFile ReadObjects(const std::filesystem::path& path, const ObjectParseOptions& options) {
+  return ParseObjects(kitti_internal::ReadWholeFile(path), path.string(), options);
+}
+
+std::string FormatObject(const Object& object) {
+  std::string line;
+  line.reserve(128);
+  AppendObject(&line, object);
+  return line;
+}
+
+std::string FormatObjects(const std::vector<Object>& objects) {
+  std::string text;
+  text.reserve(objects.size() * 100);
+  for (const Object& object : objects) {
+    AppendObject(&text, object);
+    text.push_back('\n');
+  }
+  return text;
+}
+
+void WriteObjects(const std::filesystem::path& path, const std::vector<Object>& objects) {
+  WriteFileAtomically(path, FormatObjects(objects));
+}
+
+}  // namespace stereodet

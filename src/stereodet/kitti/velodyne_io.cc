@@ -1,0 +1,34 @@
+#include "stereodet/kitti/velodyne_io.h"
+
+#include <bit>
+#include <cstring>
+#include <string>
+#include <string_view>
+
+#include "stereodet/kitti/text_number.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+// The on-disk format is little-endian float32; a byte copy is only right on a little-endian host.
+static_assert(std::endian::native == std::endian::little,
+              "velodyne_io reads KITTI's little-endian floats by copying bytes");
+
+std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path) {
+  const std::string bytes = kitti_internal::ReadWholeFile(path);
+  STEREODET_CHECK_IO(bytes.size() % sizeof(VeloPoint) == 0)
+      << path.string() << ": size " << bytes.size()
+      << " bytes is not a multiple of 16 (4 float32 a point: x, y, z, reflectance); the file is "
+         "truncated or not a KITTI velodyne scan";
+  std::vector<VeloPoint> points(bytes.size() / sizeof(VeloPoint));
+  if (!points.empty()) std::memcpy(points.data(), bytes.data(), bytes.size());
+  return points;
+}
+
+void WriteVelodyne(const std::filesystem::path& path, const std::vector<VeloPoint>& points) {
+  WriteFileAtomically(path, std::string_view(reinterpret_cast<const char*>(points.data()),
+                                             points.size() * sizeof(VeloPoint)));
+}
+
+}  // namespace stereodet
