@@ -10,6 +10,7 @@
 #include <string>
 
 #include "stereodet/util/check.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -188,13 +189,12 @@ TEST(CalibIoTest, FormatRejectsNonFinite) {
 }
 
 TEST(CalibIoTest, WriteAndRead) {
-  const fs::path dir = fs::path(testing::TempDir()) / "calib_io_test";
-  fs::remove_all(dir);
+  const TestTempDir temp;
+  const fs::path dir = temp.path();
   WriteCalibration(dir / "calib" / "000000.txt", KittiLikeCalibration());
   ExpectSameCalibration(ReadCalibration(dir / "calib" / "000000.txt"), KittiLikeCalibration());
   EXPECT_THROW(ReadCalibration(dir / "calib" / "000001.txt"), std::runtime_error);
   EXPECT_THROW(ReadCalibration(dir / "calib"), std::runtime_error);  // a folder
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -38,8 +39,7 @@ constexpr char kDontCare[] =
 class DatasetSummaryTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fs::path(testing::TempDir()) / "dataset_summary_test";
-    fs::remove_all(root_);
+    root_ = temp_.path();
     const fs::path training = root_ / "training";
     Write(training / "label_2" / "000000.txt", std::string(kEasyPedestrian) + kDontCare);
     Write(training / "label_2" / "000001.txt", std::string(kModerateCar) + kHardCar + kTinyCyclist);
@@ -49,7 +49,7 @@ class DatasetSummaryTest : public ::testing::Test {
     }
     options_.progress.stream = nullptr;
   }
-  void TearDown() override { fs::remove_all(root_); }
+  TestTempDir temp_;
 
   fs::path root_;
   DatasetSummaryOptions options_;

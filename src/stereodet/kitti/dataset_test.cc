@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "stereodet/util/check.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -23,11 +24,10 @@ void Touch(const fs::path& path, const std::string& contents = "") {
 class DatasetTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fs::path(testing::TempDir()) / "dataset_test";
-    fs::remove_all(root_);
+    root_ = temp_.path();
     fs::create_directories(root_ / "training");
   }
-  void TearDown() override { fs::remove_all(root_); }
+  TestTempDir temp_;
   fs::path root_;
 };
 

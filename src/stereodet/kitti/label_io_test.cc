@@ -11,6 +11,7 @@
 #include <string>
 
 #include "stereodet/util/check.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -352,8 +353,8 @@ TEST(LabelIoTest, FormatRejectsWhatCouldNotBeReadBack) {
 }
 
 TEST(LabelIoTest, WriteAndReadFiles) {
-  const fs::path dir = fs::path(testing::TempDir()) / "label_io_test";
-  fs::remove_all(dir);
+  const TestTempDir temp;
+  const fs::path dir = temp.path();
   std::mt19937_64 rng(11);
   std::vector<Object> objects;
   for (int i = 0; i < 20; ++i) {
@@ -375,7 +376,6 @@ TEST(LabelIoTest, WriteAndReadFiles) {
     EXPECT_EQ(e.line(), 2);
     EXPECT_EQ(e.field(), "alpha");
   }
-  fs::remove_all(dir);
 }
 
 }  // namespace

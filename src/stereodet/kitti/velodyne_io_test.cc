@@ -1,4 +1,5 @@
 #include "stereodet/kitti/velodyne_io.h"
+#include "stereodet/util/test_temp_dir.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -16,11 +17,9 @@ namespace fs = std::filesystem;
 class VelodyneIoTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(testing::TempDir()) / "velodyne_io_test";
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = temp_.path();
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  TestTempDir temp_;
   fs::path dir_;
 };
 

@@ -1,4 +1,5 @@
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_temp_dir.h"
 
 #include <gtest/gtest.h>
 
@@ -11,18 +12,13 @@ namespace fs = std::filesystem;
 
 class AtomicFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("stereodet_atomic_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  void SetUp() override { dir_ = temp_.path(); }
   size_t CountFiles() const {
     size_t n = 0;
     for (const auto& entry : fs::recursive_directory_iterator(dir_)) n += entry.is_regular_file();
     return n;
   }
+  TestTempDir temp_;
   fs::path dir_;
 };
 
