@@ -9,6 +9,7 @@
 namespace stereodet::cli {
 
 void AddInfoCommand(CLI::App& app);  // info_command.cc
+void AddEvalCommand(CLI::App& app);  // eval_command.cc (eval, eval sweep, eval compare)
 
 }  // namespace stereodet::cli
 

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
 
   // The subcommand table, in the order a user meets them.
   stereodet::cli::AddInfoCommand(app);
+  stereodet::cli::AddEvalCommand(app);
 
   try {
     app.parse(argc, argv);

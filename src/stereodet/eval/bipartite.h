@@ -1,0 +1,74 @@
+// Bipartite matching between labels (left) and detections (right):
+//  - IncrementalMatching: a maximum-cardinality matching kept maximum while detections are added and
+//    labels removed, one augmenting-path search per operation;
+//  - MaxWeightAssignment: the Hungarian algorithm (sparse form) on exact lexicographic weights.
+#ifndef STEREODET_EVAL_BIPARTITE_H_
+#define STEREODET_EVAL_BIPARTITE_H_
+
+#include <cstdint>
+#include <vector>
+
+namespace stereodet {
+
+// Adjacency from detections to labels, CSR: detection j's labels are
+// labels[begin[j] .. begin[j+1]).
+struct DetAdjacency {
+  std::vector<int32_t> begin;
+  std::vector<int32_t> labels;
+  int num_labels = 0;
+  int num_dets() const { return static_cast<int>(begin.size()) - 1; }
+};
+
+// A maximum matching of (present labels) x (added detections), kept maximum:
+//  - AddDet(j): detection j joins; one augmenting-path search from j. Adding detections in any
+//    order keeps the matching maximum after every step (a matched vertex never becomes unmatched
+//    by augmentation, and a detection that finds no augmenting path when it joins never will:
+//    the matched detections form a greedy basis of the transversal matroid).
+//  - RemoveLabel(i): label i leaves; if it was matched, its detection searches one augmenting path
+//    (any augmenting path in the smaller graph must end at that detection).
+// Cost per operation O(edges) worst case, usually O(degree).
+class IncrementalMatching {
+ public:
+  explicit IncrementalMatching(const DetAdjacency* adjacency);
+
+  // Returns true if the matching grew by one. Requires: j not added before.
+  bool AddDet(int j);
+  // Returns the change of the matching size: 0 or -1. Requires: i present.
+  int RemoveLabel(int i);
+
+  int size() const { return size_; }
+  int label_match(int i) const { return label_match_[i]; }  // detection or -1
+  int det_match(int j) const { return det_match_[j]; }      // label or -1
+
+ private:
+  bool Augment(int j);
+
+  const DetAdjacency* adj_;
+  std::vector<int32_t> label_match_, det_match_;
+  std::vector<uint8_t> label_removed_, det_added_;
+  std::vector<int32_t> visit_stamp_;
+  int32_t stamp_ = 0;
+  int size_ = 0;
+};
+
+// A weight compared lexicographically: first the integer part, then the real part.
+struct LexWeight {
+  int64_t major = 0;
+  double minor = 0.0;
+};
+
+struct WeightedEdge {
+  int32_t label = 0, det = 0;
+  LexWeight weight;  // must be > 0 (major > 0, or major == 0 and minor > 0)
+};
+
+// A matching of maximum total weight (sum of LexWeight, compared lexicographically) among
+// `num_labels` x `num_dets` vertices and the given edges (at most one per pair, weights > 0). The
+// Hungarian algorithm in its sparse form (successive shortest paths with potentials, Dijkstra on the
+// reduced costs): O(n E log n) worst case, O(n^3) on a dense graph. Returns label -> detection or -1.
+std::vector<int32_t> MaxWeightAssignment(int num_labels, int num_dets,
+                                         const std::vector<WeightedEdge>& edges);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_BIPARTITE_H_

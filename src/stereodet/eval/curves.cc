@@ -1,0 +1,109 @@
+#include "stereodet/eval/curves.h"
+
+#include <algorithm>
+
+namespace stereodet {
+
+void FinishPoint(CurvePoint* p) {
+  p->precision = p->tp + p->fp > 0 ? static_cast<double>(p->tp) / static_cast<double>(p->tp + p->fp) : 0.0;
+  p->recall = p->tp + p->fn > 0 ? static_cast<double>(p->tp) / static_cast<double>(p->tp + p->fn) : 0.0;
+}
+
+std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels) {
+  std::sort(events.begin(), events.end(),
+            [](const CurveEvent& a, const CurveEvent& b) { return a.score > b.score; });
+  std::vector<CurvePoint> curve;
+  CurvePoint current;
+  current.fn = num_valid_labels;
+  for (size_t i = 0; i < events.size();) {
+    const double score = events[i].score;
+    for (; i < events.size() && events[i].score == score; ++i) {
+      current.tp += events[i].tp;
+      current.fp += events[i].fp;
+      current.fn += events[i].fn;
+    }
+    current.threshold = score;
+    FinishPoint(&current);
+    curve.push_back(current);
+  }
+  return curve;
+}
+
+namespace {
+
+double InterpolatedAp(const std::vector<CurvePoint>& curve, int first, int last, double step) {
+  // Best precision at recall >= r: a suffix maximum over points sorted by recall.
+  std::vector<std::pair<double, double>> pr;  // (recall, precision)
+  for (const CurvePoint& p : curve) {
+    if (p.tp + p.fp > 0) pr.emplace_back(p.recall, p.precision);
+  }
+  std::sort(pr.begin(), pr.end());
+  for (size_t i = pr.size(); i-- > 1;) pr[i - 1].second = std::max(pr[i - 1].second, pr[i].second);
+  double sum = 0.0;
+  for (int k = first; k <= last; ++k) {
+    const double r = k * step;
+    const auto it = std::lower_bound(pr.begin(), pr.end(), r,
+                                     [](const std::pair<double, double>& a, double v) { return a.first < v; });
+    if (it != pr.end()) sum += it->second;
+  }
+  return sum / (last - first + 1) * 100.0;
+}
+
+}  // namespace
+
+double InterpolatedApR40(const std::vector<CurvePoint>& curve) {
+  return InterpolatedAp(curve, 1, 40, 1.0 / 40.0);
+}
+
+double InterpolatedApR11(const std::vector<CurvePoint>& curve) {
+  return InterpolatedAp(curve, 0, 10, 1.0 / 10.0);
+}
+
+double EveryPointAp(const std::vector<CurvePoint>& curve) {
+  std::vector<std::pair<double, double>> pr;
+  for (const CurvePoint& p : curve) {
+    if (p.tp + p.fp > 0) pr.emplace_back(p.recall, p.precision);
+  }
+  std::stable_sort(pr.begin(), pr.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<double> mrec = {0.0}, mpre = {0.0};
+  for (const auto& [r, p] : pr) {
+    mrec.push_back(r);
+    mpre.push_back(p);
+  }
+  mrec.push_back(1.0);
+  mpre.push_back(0.0);
+  for (size_t i = mpre.size() - 1; i-- > 0;) mpre[i] = std::max(mpre[i], mpre[i + 1]);
+  double ap = 0.0;
+  for (size_t i = 0; i + 1 < mrec.size(); ++i) {
+    if (mrec[i + 1] != mrec[i]) ap += (mrec[i + 1] - mrec[i]) * mpre[i + 1];
+  }
+  return ap * 100.0;
+}
+
+OperatingPoint MakeOperatingPoint(double threshold, int64_t tp, int64_t fp, int64_t fn) {
+  OperatingPoint op;
+  op.threshold = threshold;
+  op.tp = tp;
+  op.fp = fp;
+  op.fn = fn;
+  op.precision = tp + fp > 0 ? static_cast<double>(tp) / static_cast<double>(tp + fp) : 0.0;
+  op.recall = tp + fn > 0 ? static_cast<double>(tp) / static_cast<double>(tp + fn) : 0.0;
+  op.f1 = op.precision + op.recall > 0 ? 2 * op.precision * op.recall / (op.precision + op.recall) : 0.0;
+  return op;
+}
+
+OperatingPoint BestF1(const std::vector<CurvePoint>& curve) {
+  OperatingPoint best;
+  bool first = true;
+  for (const CurvePoint& p : curve) {
+    const OperatingPoint op = MakeOperatingPoint(p.threshold, p.tp, p.fp, p.fn);
+    if (first || op.f1 > best.f1) {
+      best = op;
+      first = false;
+    }
+  }
+  return best;
+}
+
+}  // namespace stereodet

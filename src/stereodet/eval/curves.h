@@ -1,0 +1,53 @@
+// Precision-recall curves exact at every score threshold, and their summaries (AP_R40, AP_R11,
+// every-point AP, best F1).
+#ifndef STEREODET_EVAL_CURVES_H_
+#define STEREODET_EVAL_CURVES_H_
+
+#include <cstdint>
+#include <vector>
+
+namespace stereodet {
+
+// A change of the counts that happens when the score threshold drops to `score` (the thresholds
+// t <= score include it).
+struct CurveEvent {
+  double score = 0.0;
+  int32_t tp = 0, fp = 0, fn = 0;
+};
+
+// Counts at one threshold: every detection with score >= threshold takes part.
+struct CurvePoint {
+  double threshold = 0.0;
+  int64_t tp = 0, fp = 0, fn = 0;
+  double precision = 0.0;  // tp / (tp + fp); 0 when there is no detection
+  double recall = 0.0;     // tp / (tp + fn); 0 when there is no label
+};
+
+// Sorts the events by descending score and sums them; FN starts at `num_valid_labels` (nothing
+// detected). One point per distinct score, in descending threshold order.
+std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels);
+
+// Fills precision and recall from the counts.
+void FinishPoint(CurvePoint* point);
+
+// Interpolated AP in percent: the mean over recall levels r of max{precision(p) : recall(p) >= r}
+// (0 if no point reaches r). R40: r = 1/40, ..., 40/40; R11: r = 0, 0.1, ..., 1. Points with no
+// detection (tp + fp = 0) are skipped.
+double InterpolatedApR40(const std::vector<CurvePoint>& curve);
+double InterpolatedApR11(const std::vector<CurvePoint>& curve);
+// PASCAL VOC 2010+ "every point" AP in percent: the area under the precision envelope, integrated
+// over the recall changes.
+double EveryPointAp(const std::vector<CurvePoint>& curve);
+
+struct OperatingPoint {
+  double threshold = 0.0;
+  int64_t tp = 0, fp = 0, fn = 0;
+  double precision = 0.0, recall = 0.0, f1 = 0.0;
+};
+OperatingPoint MakeOperatingPoint(double threshold, int64_t tp, int64_t fp, int64_t fn);
+// The curve point of largest F1 (the highest threshold among ties); all zero for an empty curve.
+OperatingPoint BestF1(const std::vector<CurvePoint>& curve);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_CURVES_H_

@@ -1,0 +1,86 @@
+#include "stereodet/eval/eval_options.h"
+
+#include <cctype>
+#include <cmath>
+
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+const char* MatcherName(Matcher matcher) {
+  switch (matcher) {
+    case Matcher::kKitti: return "kitti";
+    case Matcher::kOptimal: return "optimal";
+    case Matcher::kVoc: return "voc";
+  }
+  return "?";
+}
+
+std::optional<Matcher> ParseMatcher(std::string_view text) {
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    if (text == MatcherName(m)) return m;
+  }
+  return std::nullopt;
+}
+
+const char* OverlapKindName(OverlapKind kind) {
+  switch (kind) {
+    case OverlapKind::k2D: return "2d";
+    case OverlapKind::kBev: return "bev";
+    case OverlapKind::k3D: return "3d";
+  }
+  return "?";
+}
+
+std::optional<OverlapKind> ParseOverlapKind(std::string_view text) {
+  for (OverlapKind k : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
+    if (EqualsIgnoreCase(text, OverlapKindName(k))) return k;
+  }
+  return std::nullopt;
+}
+
+bool EqualsIgnoreCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) {
+      return false;
+    }
+  }
+  return true;
+}
+
+ClassSpec KittiClassSpec(const std::string& name, bool loose) {
+  ClassSpec spec;
+  spec.name = name;
+  if (EqualsIgnoreCase(name, "Car")) {
+    spec.neighbours = {"Van"};
+    spec.min_overlap = loose ? std::array<double, 3>{0.7, 0.5, 0.5} : std::array<double, 3>{0.7, 0.7, 0.7};
+  } else if (EqualsIgnoreCase(name, "Pedestrian")) {
+    spec.neighbours = {"Person_sitting"};
+    spec.min_overlap = loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
+  } else if (EqualsIgnoreCase(name, "Cyclist")) {
+    spec.min_overlap = loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
+  }
+  return spec;
+}
+
+void EvalOptions::Check() const {
+  STEREODET_CHECK(!classes.empty()) << "no class to evaluate";
+  STEREODET_CHECK(!metrics.empty()) << "no overlap kind (2d, bev, 3d) to evaluate";
+  STEREODET_CHECK(!difficulties.empty()) << "no difficulty to evaluate";
+  for (const ClassSpec& c : classes) {
+    STEREODET_CHECK(!c.name.empty()) << "empty class name";
+    for (double tau : c.min_overlap) {
+      STEREODET_CHECK(tau > 0 && tau <= 1) << "class " << c.name << ": min overlap must be in (0, 1], got " << tau;
+    }
+  }
+  STEREODET_CHECK(!std::isnan(score_threshold)) << "score_threshold is NaN";
+  STEREODET_CHECK(calibration_bins >= 1 && calibration_bins <= 10000)
+      << "calibration_bins must be in [1, 10000], got " << calibration_bins;
+  STEREODET_CHECK(distance_bin_m > 0 && max_distance_m > 0 && max_distance_m / distance_bin_m <= 100000)
+      << "distance bins: need distance_bin_m > 0 and max_distance_m > 0";
+  STEREODET_CHECK(num_threads >= 0) << "num_threads must be >= 0";
+  filter.Check();
+}
+
+}  // namespace stereodet

@@ -1,0 +1,91 @@
+// The whole evaluation: every class x overlap kind x difficulty, with the chosen matcher.
+//
+//   std::vector<EvalFrame> frames = ...;           // labels + detections per frame
+//   EvalOptions options;                           // defaults: KITTI matcher, Car/Ped/Cyc, 2D/BEV/3D
+//   EvalResult result = Evaluate(frames, options);
+#ifndef STEREODET_EVAL_EVALUATOR_H_
+#define STEREODET_EVAL_EVALUATOR_H_
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "stereodet/eval/curves.h"
+#include "stereodet/eval/eval_options.h"
+#include "stereodet/eval/frame_data.h"
+#include "stereodet/eval/kitti_matcher.h"
+#include "stereodet/eval/score_metrics.h"
+
+namespace stereodet {
+
+// TP/FP/FN under a filter at the operating threshold, in both modes.
+struct FilteredStats {
+  OperatingPoint naive;
+  OperatingPoint stable;
+};
+
+// One class x overlap kind x difficulty.
+struct ClassResult {
+  std::string class_name;
+  OverlapKind metric = OverlapKind::k2D;
+  Difficulty difficulty = Difficulty::kModerate;
+  double min_overlap = 0.5;
+  // False when the devkit would skip this class and overlap kind (no detection of it with a valid box
+  // of that kind; see EvalOptions::require_detections). Nothing else is filled then.
+  bool evaluated = true;
+
+  int64_t num_valid_labels = 0;  // labels counted at this difficulty (KITTI's n_gt)
+  int64_t num_detections = 0;    // detections of the class
+
+  // Percent. ap_voc is NaN for the KITTI matcher (its curve has only 41 points); aos_* are NaN when
+  // AOS is not computed (BEV/3D, a detection with alpha = -10, or a matcher other than KITTI).
+  double ap_r40 = 0.0, ap_r11 = 0.0, ap_voc = 0.0;
+  double aos_r40 = 0.0, aos_r11 = 0.0;
+  bool has_aos = false;
+
+  // KITTI: one point per devkit threshold (<= 41); optimal/VOC: one per distinct score (exact).
+  std::vector<CurvePoint> curve;
+  // KITTI matcher only: the devkit's 41-slot arrays after the envelope, and its thresholds.
+  std::vector<double> kitti_precision, kitti_aos, kitti_thresholds;
+
+  OperatingPoint at_threshold;  // at EvalOptions::score_threshold
+  OperatingPoint best_f1;       // over the curve's points
+  std::optional<FilteredStats> filtered;  // when EvalOptions::filter has conditions
+
+  BrierScores brier;
+  CalibrationResult calibration;
+  std::vector<DistanceBin> localization;
+};
+
+struct EvalResult {
+  int64_t num_frames = 0;
+  bool aos_computed = false;  // false when a detection has alpha = -10 (devkit rule) or disabled
+  std::vector<ClassResult> results;  // class-major, then overlap kind, then difficulty (options order)
+  double seconds = 0.0;              // wall time of Evaluate()
+
+  // The result for a class / kind / difficulty, or nullptr.
+  const ClassResult* Find(const std::string& class_name, OverlapKind metric, Difficulty difficulty) const;
+};
+
+// Requires: options.Check() passes; every detection has a score.
+EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& options);
+
+// The association at `threshold` of one frame with `matcher`.
+FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
+                           double threshold);
+
+// Filter sweep (the paper's filter figure): for each value of `bound` from `from` to `to` by
+// `step`, the operating-point statistics under the naive and the stable filter.
+struct SweepRow {
+  std::string class_name;
+  OverlapKind metric = OverlapKind::k2D;
+  Difficulty difficulty = Difficulty::kModerate;
+  double value = 0.0;
+  FilteredStats stats;
+};
+std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const EvalOptions& options,
+                                  FilterBound bound, double from, double to, double step);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_EVALUATOR_H_

@@ -1,0 +1,205 @@
+#include "stereodet/eval/frame_data.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "stereodet/geometry/iou.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+namespace {
+
+// The devkit evaluates a detection lower than MIN_HEIGHT[difficulty] as "ignored" whatever its class;
+// 40 px is the largest MIN_HEIGHT, so lower detections of other classes may matter.
+constexpr double kLargestMinHeightPx = 40.0;
+
+// The devkit's footprint polygon: corners (+-l/2, +-w/2) turned by rotation_y. With l and w both
+// negative it is the same square as with |l|, |w| (a half turn); with one side <= 0 boost sees a
+// degenerate or reversed ring, which we treat as having no area.
+bool Footprint(const Box3D& box, Box3D* out) {
+  *out = box;
+  if (box.l < 0 && box.w < 0) {
+    out->l = -box.l;
+    out->w = -box.w;
+  }
+  return out->l > 0 && out->w > 0;
+}
+
+double FootprintIntersection(const Box3D& a, const Box3D& b) {
+  Box3D fa, fb;
+  if (!Footprint(a, &fa) || !Footprint(b, &fb)) return 0.0;
+  return BevIntersectionArea(fa, fb);
+}
+
+struct ImageOverlapParts {
+  double inter = 0.0, det_area = 0.0, label_area = 0.0;
+};
+
+// Same arithmetic as the devkit's imageBoxOverlap: returns false when the boxes do not overlap.
+bool ImageOverlap(const Box2D& d, const Box2D& g, ImageOverlapParts* parts) {
+  const double x1 = std::max(d.left, g.left);
+  const double y1 = std::max(d.top, g.top);
+  const double x2 = std::min(d.right, g.right);
+  const double y2 = std::min(d.bottom, g.bottom);
+  const double w = x2 - x1;
+  const double h = y2 - y1;
+  if (w <= 0 || h <= 0) return false;
+  parts->inter = w * h;
+  parts->det_area = (d.right - d.left) * (d.bottom - d.top);
+  parts->label_area = (g.right - g.left) * (g.bottom - g.top);
+  return true;
+}
+
+double IntersectionVolumeDevkit(const Box3D& d, const Box3D& g) {
+  const double inter_area = FootprintIntersection(d, g);
+  const double ymax = std::min(d.location.y(), g.location.y());
+  const double ymin = std::max(d.location.y() - d.h, g.location.y() - g.h);
+  return inter_area * std::max(0.0, ymax - ymin);
+}
+
+bool IsDontCare(const Object& o) { return EqualsIgnoreCase(o.type, "DontCare"); }
+
+}  // namespace
+
+double KittiOverlap(OverlapKind kind, const Object& detection, const Object& label) {
+  switch (kind) {
+    case OverlapKind::k2D: {
+      ImageOverlapParts p;
+      if (!ImageOverlap(detection.box, label.box, &p)) return 0.0;
+      return p.inter / (p.det_area + p.label_area - p.inter);
+    }
+    case OverlapKind::kBev: {
+      const double inter = FootprintIntersection(detection.box3d, label.box3d);
+      if (inter <= 0) return 0.0;
+      const double uni = detection.box3d.l * detection.box3d.w + label.box3d.l * label.box3d.w - inter;
+      return inter / uni;
+    }
+    case OverlapKind::k3D: {
+      const Box3D& d = detection.box3d;
+      const Box3D& g = label.box3d;
+      const double inter = IntersectionVolumeDevkit(d, g);
+      if (inter <= 0) return 0.0;
+      return inter / (d.h * d.l * d.w + g.h * g.l * g.w - inter);
+    }
+  }
+  return 0.0;
+}
+
+double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Object& dontcare) {
+  switch (kind) {
+    case OverlapKind::k2D: {
+      ImageOverlapParts p;
+      if (!ImageOverlap(detection.box, dontcare.box, &p)) return 0.0;
+      return p.inter / p.det_area;
+    }
+    case OverlapKind::kBev: {
+      const double inter = FootprintIntersection(detection.box3d, dontcare.box3d);
+      if (inter <= 0) return 0.0;
+      return inter / std::abs(detection.box3d.l * detection.box3d.w);
+    }
+    case OverlapKind::k3D: {
+      const Box3D& d = detection.box3d;
+      const double inter = IntersectionVolumeDevkit(d, dontcare.box3d);
+      if (inter <= 0) return 0.0;
+      return inter / (d.h * d.l * d.w);
+    }
+  }
+  return 0.0;
+}
+
+ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind) {
+  ClassFrame cf;
+  const double tau = spec.min_overlap[static_cast<int>(kind)];
+  cf.min_overlap = tau;
+
+  std::vector<const Object*> dontcares;
+  for (size_t i = 0; i < frame.labels.size(); ++i) {
+    const Object& label = frame.labels[i];
+    if (IsDontCare(label)) dontcares.push_back(&label);
+    const bool is_class = EqualsIgnoreCase(label.type, spec.name);
+    bool is_neighbour = false;
+    if (!is_class) {
+      for (const std::string& n : spec.neighbours) is_neighbour |= EqualsIgnoreCase(label.type, n);
+      if (!is_neighbour) continue;
+    }
+    uint8_t bits = 0;
+    const double height = label.box.bottom - label.box.top;
+    for (int d = 0; d < kNumDifficulties; ++d) {
+      const DifficultyLimits lim = KittiDifficultyLimits(static_cast<Difficulty>(d));
+      // The devkit's test, written as it is: ignored if occluded > max || truncated > max ||
+      // height < min.
+      const bool ignore = label.occluded > lim.max_occlusion || label.truncated > lim.max_truncation ||
+                          height < lim.min_height_px;
+      if (!ignore) bits |= static_cast<uint8_t>(1u << d);
+    }
+    cf.label_object.push_back(static_cast<int32_t>(i));
+    cf.label_neighbour.push_back(is_neighbour ? 1 : 0);
+    cf.label_difficulty.push_back(bits);
+    cf.label_alpha.push_back(label.alpha);
+  }
+
+  for (size_t j = 0; j < frame.detections.size(); ++j) {
+    const Object& det = frame.detections[j];
+    STEREODET_CHECK(det.score.has_value())
+        << "frame " << frame.id << ": detection " << j + 1 << " has no score";
+    const bool is_class = EqualsIgnoreCase(det.type, spec.name);
+    const double height = std::abs(det.box.top - det.box.bottom);
+    if (!is_class && !(height < kLargestMinHeightPx)) continue;
+    bool in_dontcare = false;
+    if (is_class) {
+      for (const Object* dc : dontcares) {
+        if (KittiDontCareOverlap(kind, det, *dc) > tau) {
+          in_dontcare = true;
+          break;
+        }
+      }
+    }
+    cf.det_object.push_back(static_cast<int32_t>(j));
+    cf.det_is_class.push_back(is_class ? 1 : 0);
+    cf.det_height.push_back(height);
+    cf.det_score.push_back(*det.score);
+    cf.det_alpha.push_back(det.alpha);
+    cf.det_dontcare.push_back(in_dontcare ? 1 : 0);
+  }
+
+  cf.edge_begin.assign(1, 0);
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    const Object& label = frame.labels[cf.label_object[i]];
+    for (int j = 0; j < cf.num_dets(); ++j) {
+      const double overlap = KittiOverlap(kind, frame.detections[cf.det_object[j]], label);
+      if (overlap >= tau) {  // NaN fails
+        cf.edge_det.push_back(j);
+        cf.edge_overlap.push_back(overlap);
+      }
+    }
+    cf.edge_begin.push_back(static_cast<int32_t>(cf.edge_det.size()));
+  }
+  return cf;
+}
+
+bool HasEvaluableDetection(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
+                           OverlapKind kind) {
+  for (const EvalFrame& frame : frames) {
+    for (const Object& det : frame.detections) {
+      if (!EqualsIgnoreCase(det.type, spec.name)) continue;
+      switch (kind) {
+        case OverlapKind::k2D: if (det.box.left >= 0) return true; break;
+        case OverlapKind::kBev: if (det.box3d.location.x() != -1000) return true; break;
+        case OverlapKind::k3D: if (det.box3d.location.y() != -1000) return true; break;
+      }
+    }
+  }
+  return false;
+}
+
+bool AllAlphasValid(const std::vector<EvalFrame>& frames) {
+  for (const EvalFrame& frame : frames) {
+    for (const Object& det : frame.detections) {
+      if (det.alpha == -10) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,279 @@
+#include "stereodet/eval/kitti_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "stereodet/util/parallel.h"
+
+namespace stereodet {
+
+namespace {
+
+// The devkit's NO_DETECTION: in pass 1 a detection is chosen only if its score is above it.
+constexpr double kNoDetection = -10000000;
+
+// The devkit's ignored_det: 1 if lower than the difficulty's minimum height (any class; the devkit
+// truncates the height to an int, which for an integer minimum compares the same), else 0 for the
+// class, -1 for other classes.
+void DetStates(const ClassFrame& f, Difficulty difficulty, std::vector<int8_t>* states) {
+  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+  states->resize(f.num_dets());
+  for (int j = 0; j < f.num_dets(); ++j) {
+    (*states)[j] = std::trunc(f.det_height[j]) < min_height ? 1 : (f.det_is_class[j] ? 0 : -1);
+  }
+}
+
+struct Pass2Result {
+  int64_t tp = 0, fn = 0;
+  double similarity = 0.0;
+};
+
+// computeStatistics(compute_fp = true) without the FP count: matches labels in order, each taking
+// the unassigned detection (score >= threshold) with overlap > tau of largest overlap; a valid
+// detection replaces an earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records pairs.
+Pass2Result RunPass2(const ClassFrame& f, Difficulty difficulty, const std::vector<int8_t>& states,
+                     double threshold, std::vector<uint8_t>* assigned, FrameAssociation* assoc) {
+  Pass2Result r;
+  const double tau = f.min_overlap;
+  assigned->assign(f.num_dets(), 0);
+  for (int i = 0; i < f.num_labels(); ++i) {
+    const bool label_valid = f.LabelValid(i, difficulty);
+    int best = -1;
+    double max_overlap = 0.0;
+    bool assigned_ignored = false;
+    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
+      const int j = f.edge_det[e];
+      if (states[j] == -1 || (*assigned)[j] || f.det_score[j] < threshold) continue;
+      const double overlap = f.edge_overlap[e];
+      if (!(overlap > tau)) continue;
+      if (states[j] == 0 && (overlap > max_overlap || assigned_ignored)) {
+        max_overlap = overlap;
+        best = j;
+        assigned_ignored = false;
+      } else if (best < 0 && states[j] == 1) {
+        best = j;
+        assigned_ignored = true;
+      }
+    }
+    if (best < 0) {
+      if (label_valid) {
+        ++r.fn;
+        if (assoc) assoc->label_outcome[i] = Outcome::kFn;
+      }
+    } else if (!label_valid || states[best] == 1) {
+      (*assigned)[best] = 1;
+    } else {
+      ++r.tp;
+      r.similarity += (1.0 + std::cos(f.label_alpha[i] - f.det_alpha[best])) / 2.0;
+      (*assigned)[best] = 1;
+      if (assoc) {
+        assoc->label_outcome[i] = Outcome::kTp;
+        assoc->label_det[i] = best;
+        assoc->det_outcome[best] = Outcome::kTp;
+        assoc->det_label[best] = i;
+      }
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+std::vector<double> KittiThresholds(std::vector<double> v, double n_groundtruth) {
+  std::vector<double> t;
+  std::sort(v.begin(), v.end(), std::greater<double>());
+  double current_recall = 0;
+  const size_t n = v.size();
+  for (size_t i = 0; i < n; ++i) {
+    const double l_recall = static_cast<double>(i + 1) / n_groundtruth;
+    const double r_recall = i + 1 < n ? static_cast<double>(i + 2) / n_groundtruth : l_recall;
+    if ((r_recall - current_recall) < (current_recall - l_recall) && i + 1 < n) continue;
+    t.push_back(v[i]);
+    current_recall += 1.0 / (kKittiSamplePoints - 1.0);
+  }
+  return t;
+}
+
+int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector<double>* tp_scores) {
+  std::vector<int8_t> states;
+  DetStates(f, difficulty, &states);
+  std::vector<uint8_t> assigned(f.num_dets(), 0);
+  const double tau = f.min_overlap;
+  int n_gt = 0;
+  for (int i = 0; i < f.num_labels(); ++i) {
+    const bool label_valid = f.LabelValid(i, difficulty);
+    n_gt += label_valid ? 1 : 0;
+    int best = -1;
+    double best_score = kNoDetection;
+    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
+      const int j = f.edge_det[e];
+      if (states[j] == -1 || assigned[j]) continue;
+      if (f.edge_overlap[e] > tau && f.det_score[j] > best_score) {
+        best = j;
+        best_score = f.det_score[j];
+      }
+    }
+    if (best < 0) continue;
+    assigned[best] = 1;
+    if (label_valid && states[best] == 0) tp_scores->push_back(f.det_score[best]);
+  }
+  return n_gt;
+}
+
+void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
+  std::vector<int8_t> states;
+  DetStates(f, difficulty, &states);
+  const double tau = f.min_overlap;
+  // Detections that can be chosen by some label; only their presence above the threshold changes
+  // the greedy's outcome. The others are FPs (valid, not in DontCare) or nothing.
+  std::vector<uint8_t> interacting(f.num_dets(), 0);
+  for (size_t e = 0; e < f.edge_det.size(); ++e) {
+    const int j = f.edge_det[e];
+    if (states[j] != -1 && f.edge_overlap[e] > tau) interacting[j] = 1;
+  }
+  std::vector<double> interacting_scores, free_fp_scores;
+  for (int j = 0; j < f.num_dets(); ++j) {
+    if (interacting[j]) interacting_scores.push_back(f.det_score[j]);
+    else if (states[j] == 0 && !f.det_dontcare[j]) free_fp_scores.push_back(f.det_score[j]);
+  }
+  std::sort(interacting_scores.begin(), interacting_scores.end(), std::greater<double>());
+  std::sort(free_fp_scores.begin(), free_fp_scores.end(), std::greater<double>());
+
+  int64_t n_valid = 0;
+  for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
+
+  std::vector<uint8_t> assigned;
+  size_t k_inter = 0, k_free = 0;
+  size_t last_k = static_cast<size_t>(-1);
+  KittiCounts cached;
+  for (size_t t = 0; t < thresholds.size(); ++t) {
+    const double threshold = thresholds[t];
+    while (k_inter < interacting_scores.size() && interacting_scores[k_inter] >= threshold) ++k_inter;
+    while (k_free < free_fp_scores.size() && free_fp_scores[k_free] >= threshold) ++k_free;
+    if (k_inter != last_k) {
+      last_k = k_inter;
+      cached = KittiCounts{};
+      if (k_inter == 0) {
+        cached.fn = n_valid;
+      } else {
+        const Pass2Result r = RunPass2(f, difficulty, states, threshold, &assigned, nullptr);
+        cached.tp = r.tp;
+        cached.fn = r.fn;
+        cached.similarity = r.similarity;
+        for (int j = 0; j < f.num_dets(); ++j) {
+          if (interacting[j] && states[j] == 0 && !assigned[j] && f.det_score[j] >= threshold &&
+              !f.det_dontcare[j]) {
+            ++cached.fp;
+          }
+        }
+      }
+    }
+    KittiCounts& c = (*counts)[t];
+    c.tp += cached.tp;
+    c.fn += cached.fn;
+    c.fp += cached.fp + static_cast<int64_t>(k_free);
+    c.similarity += cached.similarity;
+  }
+}
+
+FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
+  std::vector<int8_t> states;
+  DetStates(f, difficulty, &states);
+  FrameAssociation a;
+  a.label_outcome.assign(f.num_labels(), Outcome::kIgnored);
+  a.label_det.assign(f.num_labels(), -1);
+  a.det_outcome.assign(f.num_dets(), Outcome::kNone);
+  a.det_label.assign(f.num_dets(), -1);
+  std::vector<uint8_t> assigned;
+  RunPass2(f, difficulty, states, threshold, &assigned, &a);
+  for (int j = 0; j < f.num_dets(); ++j) {
+    if (a.det_outcome[j] == Outcome::kTp) continue;
+    if (states[j] == -1 || f.det_score[j] < threshold) continue;  // kNone
+    if (states[j] == 1 || assigned[j] || f.det_dontcare[j]) {
+      a.det_outcome[j] = Outcome::kIgnored;
+    } else {
+      a.det_outcome[j] = Outcome::kFp;
+    }
+  }
+  return a;
+}
+
+double KittiApR11(const std::array<double, kKittiSamplePoints>& curve) {
+  double sum = 0.0;
+  for (int i = 0; i < kKittiSamplePoints; i += 4) sum += curve[i];
+  return sum / 11.0 * 100.0;
+}
+
+double KittiApR40(const std::array<double, kKittiSamplePoints>& curve) {
+  double sum = 0.0;
+  for (int i = 1; i < kKittiSamplePoints; ++i) sum += curve[i];
+  return sum / 40.0 * 100.0;
+}
+
+KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
+                                    int num_threads) {
+  KittiClassResult result;
+  // Blocks of frames, so each worker accumulates locally and the reduction is short.
+  constexpr size_t kBlock = 64;
+  const size_t num_blocks = (frames.size() + kBlock - 1) / kBlock;
+
+  // Pass 1.
+  std::vector<std::vector<double>> block_scores(num_blocks);
+  std::vector<int64_t> block_gt(num_blocks, 0);
+  ParallelFor(num_blocks, [&](size_t b) {
+    for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
+      block_gt[b] += KittiCollectTpScores(frames[i], difficulty, &block_scores[b]);
+    }
+  }, num_threads);
+  std::vector<double> v;
+  for (size_t b = 0; b < num_blocks; ++b) {
+    result.num_groundtruth += block_gt[b];
+    v.insert(v.end(), block_scores[b].begin(), block_scores[b].end());
+  }
+  result.thresholds = KittiThresholds(std::move(v), static_cast<double>(result.num_groundtruth));
+  // The devkit writes precision[i] for every threshold into 41 slots; more than 41 thresholds cannot
+  // happen (see KittiThresholds), but never write past the array.
+  if (result.thresholds.size() > kKittiSamplePoints) result.thresholds.resize(kKittiSamplePoints);
+
+  // Pass 2.
+  const size_t n_t = result.thresholds.size();
+  std::vector<std::vector<KittiCounts>> block_counts(num_blocks, std::vector<KittiCounts>(n_t));
+  ParallelFor(num_blocks, [&](size_t b) {
+    for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
+      KittiAddFrameCounts(frames[i], difficulty, result.thresholds, &block_counts[b]);
+    }
+  }, num_threads);
+  result.counts.assign(n_t, KittiCounts{});
+  for (size_t b = 0; b < num_blocks; ++b) {
+    for (size_t t = 0; t < n_t; ++t) {
+      result.counts[t].tp += block_counts[b][t].tp;
+      result.counts[t].fp += block_counts[b][t].fp;
+      result.counts[t].fn += block_counts[b][t].fn;
+      result.counts[t].similarity += block_counts[b][t].similarity;
+    }
+  }
+
+  // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
+  std::array<double, kKittiSamplePoints> precision{}, aos{};
+  for (size_t i = 0; i < n_t; ++i) {
+    const KittiCounts& c = result.counts[i];
+    result.recall[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fn);
+    precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
+    aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
+  }
+  for (size_t i = 0; i < n_t; ++i) {
+    precision[i] = *std::max_element(precision.begin() + i, precision.end());
+    aos[i] = *std::max_element(aos.begin() + i, aos.end());
+  }
+  result.precision = precision;
+  result.aos = aos;
+  result.ap_r11 = KittiApR11(precision);
+  result.ap_r40 = KittiApR40(precision);
+  result.aos_r11 = KittiApR11(aos);
+  result.aos_r40 = KittiApR40(aos);
+  return result;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,74 @@
+// KITTI's devkit (evaluate_object_3d_offline / evaluate_object), reproduced exactly, quirks kept:
+// see docs/metrics.md, section "KITTI-compatible mode", for each quirk and the test that shows it.
+//
+// Per class, overlap kind and difficulty the devkit
+//  1. matches every frame greedily, label by label in file order, each label taking the unassigned
+//     detection with overlap > threshold and the HIGHEST SCORE; the scores of the true positives are
+//     collected over all frames (pass 1);
+//  2. picks at most 41 score thresholds from those TP scores (getThresholds);
+//  3. at each threshold, matches every frame again with detections of lower score left out, each
+//     label now taking the detection with the LARGEST OVERLAP (pass 2), and counts TP, FP (minus
+//     detections inside DontCare regions) and FN, and sums the orientation similarity of the TPs;
+//  4. precision[i] = TP / (TP + FP) at threshold i (41 slots, zero beyond the thresholds), replaced by
+//     its maximum over i..40 (the envelope); the same for AOS;
+//  5. AP_R11 = sum of precision[0, 4, ..., 40] / 11, AP_R40 = sum of precision[1..40] / 40, in %.
+#ifndef STEREODET_EVAL_KITTI_MATCHER_H_
+#define STEREODET_EVAL_KITTI_MATCHER_H_
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "stereodet/eval/association.h"
+#include "stereodet/eval/frame_data.h"
+
+namespace stereodet {
+
+inline constexpr int kKittiSamplePoints = 41;  // N_SAMPLE_PTS
+
+// getThresholds: sorts `tp_scores` descending and walks them, keeping a score when its recall
+// (i+1)/n_groundtruth is at least as close to the next recall step (0, 1/40, 2/40, ..., accumulated
+// in floating point as the devkit does) as the following score's; the last score is always kept.
+// Returns the kept scores, descending (at most 41 of them).
+std::vector<double> KittiThresholds(std::vector<double> tp_scores, double n_groundtruth);
+
+// Pass 1 on one frame: appends the scores of the true positives to `tp_scores` and returns the
+// number of valid labels (the recall denominator's share of this frame).
+int KittiCollectTpScores(const ClassFrame& frame, Difficulty difficulty, std::vector<double>* tp_scores);
+
+struct KittiCounts {
+  int64_t tp = 0, fp = 0, fn = 0;
+  double similarity = 0.0;  // sum of (1 + cos(alpha_label - alpha_det)) / 2 over the TPs
+};
+
+// Pass 2 on one frame at every threshold of `thresholds` (descending): adds each threshold's counts
+// to `counts[t]`. Equivalent to the devkit's computeStatistics(compute_fp = true) per threshold, but
+// the greedy is rerun only when the set of overlapping detections above the threshold changes.
+void KittiAddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
+                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts);
+
+// Pass 2 on one frame at one threshold, returning what every label and detection counts as.
+FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold);
+
+struct KittiClassResult {
+  int64_t num_groundtruth = 0;              // n_gt: valid labels over all frames
+  std::vector<double> thresholds;           // descending, <= 41
+  std::vector<KittiCounts> counts;          // per threshold
+  std::array<double, kKittiSamplePoints> precision{};  // after the envelope, as the devkit saves it
+  std::array<double, kKittiSamplePoints> aos{};        // idem (valid only if AOS was computed)
+  std::array<double, kKittiSamplePoints> recall{};     // TP / (TP + FN) per threshold, 0 beyond
+  double ap_r11 = 0.0, ap_r40 = 0.0;    // percent
+  double aos_r11 = 0.0, aos_r40 = 0.0;  // percent (valid only if AOS was computed)
+};
+
+// Runs passes 1-5 over all frames (parallel over frames).
+KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
+                                    int num_threads);
+
+// The devkit's summaries of a 41-slot curve, in percent: sum of [0,4,...,40] / 11 and [1..40] / 40.
+double KittiApR11(const std::array<double, kKittiSamplePoints>& curve);
+double KittiApR40(const std::array<double, kKittiSamplePoints>& curve);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_KITTI_MATCHER_H_

@@ -1,0 +1,340 @@
+#include "stereodet/eval/kitti_matcher.h"
+
+#include <cmath>
+#include <numeric>
+
+#include <gtest/gtest.h>
+
+#include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/random_frames.h"
+
+namespace stereodet {
+namespace {
+
+// ------------------------------------------------------------------------------------------------
+// A literal re-statement of the devkit's control flow (cleanData / computeStatistics / eval_class),
+// dense and slow, over raw Objects: the reference the optimized matcher must equal exactly.
+
+struct RefStats {
+  int64_t tp = 0, fp = 0, fn = 0;
+  double similarity = 0.0;
+  std::vector<double> v;
+};
+
+struct RefClean {
+  std::vector<int> ignored_gt, ignored_det;
+  std::vector<const Object*> dc;
+  int n_gt = 0;
+};
+
+RefClean RefCleanData(const EvalFrame& frame, const ClassSpec& spec, Difficulty difficulty) {
+  RefClean c;
+  const DifficultyLimits lim = KittiDifficultyLimits(difficulty);
+  for (const Object& g : frame.labels) {
+    int valid_class = -1;
+    if (EqualsIgnoreCase(g.type, spec.name)) valid_class = 1;
+    for (const std::string& n : spec.neighbours) {
+      if (valid_class != 1 && EqualsIgnoreCase(g.type, n)) valid_class = 0;
+    }
+    const double height = g.box.bottom - g.box.top;
+    const bool ignore = g.occluded > lim.max_occlusion || g.truncated > lim.max_truncation ||
+                        height < lim.min_height_px;
+    if (valid_class == 1 && !ignore) {
+      c.ignored_gt.push_back(0);
+      ++c.n_gt;
+    } else if (valid_class == 0 || (ignore && valid_class == 1)) {
+      c.ignored_gt.push_back(1);
+    } else {
+      c.ignored_gt.push_back(-1);
+    }
+  }
+  for (const Object& g : frame.labels) {
+    if (EqualsIgnoreCase(g.type, "DontCare")) c.dc.push_back(&g);
+  }
+  for (const Object& d : frame.detections) {
+    const int valid_class = EqualsIgnoreCase(d.type, spec.name) ? 1 : -1;
+    const int height = static_cast<int>(std::fabs(d.box.top - d.box.bottom));
+    if (height < lim.min_height_px) c.ignored_det.push_back(1);
+    else if (valid_class == 1) c.ignored_det.push_back(0);
+    else c.ignored_det.push_back(-1);
+  }
+  return c;
+}
+
+RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, OverlapKind kind, double tau,
+                              bool compute_fp, double thresh) {
+  RefStats stat;
+  const double kNoDetection = -10000000;
+  const auto& gt = frame.labels;
+  const auto& det = frame.detections;
+  std::vector<bool> assigned(det.size(), false), ignored_threshold(det.size(), false);
+  if (compute_fp) {
+    for (size_t i = 0; i < det.size(); ++i) ignored_threshold[i] = *det[i].score < thresh;
+  }
+  for (size_t i = 0; i < gt.size(); ++i) {
+    if (c.ignored_gt[i] == -1) continue;
+    int det_idx = -1;
+    double valid_detection = kNoDetection, max_overlap = 0;
+    bool assigned_ignored_det = false;
+    for (size_t j = 0; j < det.size(); ++j) {
+      if (c.ignored_det[j] == -1 || assigned[j] || ignored_threshold[j]) continue;
+      const double overlap = KittiOverlap(kind, det[j], gt[i]);
+      if (!compute_fp && overlap > tau && *det[j].score > valid_detection) {
+        det_idx = static_cast<int>(j);
+        valid_detection = *det[j].score;
+      } else if (compute_fp && overlap > tau && (overlap > max_overlap || assigned_ignored_det) &&
+                 c.ignored_det[j] == 0) {
+        max_overlap = overlap;
+        det_idx = static_cast<int>(j);
+        valid_detection = 1;
+        assigned_ignored_det = false;
+      } else if (compute_fp && overlap > tau && valid_detection == kNoDetection && c.ignored_det[j] == 1) {
+        det_idx = static_cast<int>(j);
+        valid_detection = 1;
+        assigned_ignored_det = true;
+      }
+    }
+    if (valid_detection == kNoDetection && c.ignored_gt[i] == 0) {
+      ++stat.fn;
+    } else if (valid_detection != kNoDetection && (c.ignored_gt[i] == 1 || c.ignored_det[det_idx] == 1)) {
+      assigned[det_idx] = true;
+    } else if (valid_detection != kNoDetection) {
+      ++stat.tp;
+      stat.v.push_back(*det[det_idx].score);
+      stat.similarity += (1.0 + std::cos(gt[i].alpha - det[det_idx].alpha)) / 2.0;
+      assigned[det_idx] = true;
+    }
+  }
+  if (compute_fp) {
+    for (size_t i = 0; i < det.size(); ++i) {
+      if (!(assigned[i] || c.ignored_det[i] == -1 || c.ignored_det[i] == 1 || ignored_threshold[i])) ++stat.fp;
+    }
+    int nstuff = 0;
+    for (const Object* dc : c.dc) {
+      for (size_t j = 0; j < det.size(); ++j) {
+        if (assigned[j] || c.ignored_det[j] == -1 || c.ignored_det[j] == 1 || ignored_threshold[j]) continue;
+        if (KittiDontCareOverlap(kind, det[j], *dc) > tau) {
+          assigned[j] = true;
+          ++nstuff;
+        }
+      }
+    }
+    stat.fp -= nstuff;
+  }
+  return stat;
+}
+
+KittiClassResult RefEvalClass(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
+                              OverlapKind kind, Difficulty difficulty) {
+  const double tau = spec.min_overlap[static_cast<int>(kind)];
+  KittiClassResult r;
+  std::vector<double> v;
+  std::vector<RefClean> cleans;
+  for (const EvalFrame& f : frames) {
+    cleans.push_back(RefCleanData(f, spec, difficulty));
+    r.num_groundtruth += cleans.back().n_gt;
+    const RefStats s = RefComputeStatistics(f, cleans.back(), kind, tau, false, 0);
+    v.insert(v.end(), s.v.begin(), s.v.end());
+  }
+  r.thresholds = KittiThresholds(v, static_cast<double>(r.num_groundtruth));
+  r.counts.assign(r.thresholds.size(), KittiCounts{});
+  for (size_t i = 0; i < frames.size(); ++i) {
+    for (size_t t = 0; t < r.thresholds.size(); ++t) {
+      const RefStats s = RefComputeStatistics(frames[i], cleans[i], kind, tau, true, r.thresholds[t]);
+      r.counts[t].tp += s.tp;
+      r.counts[t].fp += s.fp;
+      r.counts[t].fn += s.fn;
+      r.counts[t].similarity += s.similarity;
+    }
+  }
+  std::array<double, kKittiSamplePoints> precision{}, aos{};
+  for (size_t i = 0; i < r.thresholds.size(); ++i) {
+    precision[i] = r.counts[i].tp / static_cast<double>(r.counts[i].tp + r.counts[i].fp);
+    aos[i] = r.counts[i].similarity / static_cast<double>(r.counts[i].tp + r.counts[i].fp);
+  }
+  for (size_t i = 0; i < r.thresholds.size(); ++i) {
+    precision[i] = *std::max_element(precision.begin() + i, precision.end());
+    aos[i] = *std::max_element(aos.begin() + i, aos.end());
+  }
+  r.precision = precision;
+  r.aos = aos;
+  r.ap_r11 = KittiApR11(precision);
+  r.ap_r40 = KittiApR40(precision);
+  r.aos_r40 = KittiApR40(aos);
+  return r;
+}
+
+KittiClassResult RunKitti(const std::vector<EvalFrame>& frames, const ClassSpec& spec, OverlapKind kind,
+                     Difficulty difficulty) {
+  std::vector<ClassFrame> cfs;
+  for (const EvalFrame& f : frames) cfs.push_back(PrepareClassFrame(f, spec, kind));
+  return EvaluateKittiClass(cfs, difficulty, 2);
+}
+
+Object Label(const std::string& type, Box2D box, double truncated = 0, int occluded = 0) {
+  Object o;
+  o.type = type;
+  o.box = box;
+  o.truncated = truncated;
+  o.occluded = occluded;
+  o.box3d.h = 1.5;
+  o.box3d.w = 1.6;
+  o.box3d.l = 3.9;
+  o.box3d.location = Eigen::Vector3d(box.left / 100.0, 1.6, 20.0);
+  return o;
+}
+
+Object Det(const std::string& type, Box2D box, double score) {
+  Object o = Label(type, box);
+  o.truncated = -1;
+  o.occluded = -1;
+  o.score = score;
+  return o;
+}
+
+// ------------------------------------------------------------------------------------------------
+
+TEST(KittiThresholds, PerfectDetectorOn40LabelsKeepsEveryScore) {
+  std::vector<double> scores(40);
+  std::iota(scores.begin(), scores.end(), 1.0);
+  const std::vector<double> t = KittiThresholds(scores, 40);
+  ASSERT_EQ(t.size(), 40u);
+  EXPECT_EQ(t.front(), 40.0);
+  EXPECT_EQ(t.back(), 1.0);
+}
+
+TEST(KittiThresholds, SubsamplesToRecallStepsAndKeepsTheLast) {
+  // 400 labels, 400 TPs: one score every 10 (recall steps of 1/40), plus the last.
+  std::vector<double> scores(400);
+  std::iota(scores.begin(), scores.end(), 0.0);
+  const std::vector<double> t = KittiThresholds(scores, 400);
+  ASSERT_LE(t.size(), 41u);
+  EXPECT_EQ(t.front(), 399.0);  // the first TP score is always kept
+  EXPECT_EQ(t.back(), 0.0);     // and the last
+  EXPECT_TRUE(std::is_sorted(t.rbegin(), t.rend()));
+}
+
+TEST(KittiThresholds, EmptyWhenNoTruePositive) {
+  EXPECT_TRUE(KittiThresholds({}, 10).empty());
+}
+
+// The quirk in the issue: a perfect detector on 40 labels gets AP_R40 = 97.5, since threshold i sits
+// in slot i (recall (i+1)/40) and slot 40 stays 0.
+TEST(KittiMatcher, PerfectDetectorOn40LabelsScores97Point5) {
+  std::vector<EvalFrame> frames(40);
+  for (int i = 0; i < 40; ++i) {
+    const Box2D box{100, 100, 200, 200};
+    frames[i].labels.push_back(Label("Car", box));
+    frames[i].detections.push_back(Det("Car", box, 0.5 + i / 100.0));
+  }
+  const KittiClassResult r = RunKitti(frames, KittiClassSpec("Car"), OverlapKind::k2D, Difficulty::kModerate);
+  EXPECT_EQ(r.num_groundtruth, 40);
+  EXPECT_EQ(r.thresholds.size(), 40u);
+  EXPECT_DOUBLE_EQ(r.ap_r40, 97.5);
+  EXPECT_DOUBLE_EQ(r.ap_r11, 10.0 / 11.0 * 100.0);
+  EXPECT_DOUBLE_EQ(r.precision[39], 1.0);
+  EXPECT_DOUBLE_EQ(r.precision[40], 0.0);
+}
+
+TEST(KittiMatcher, NeighbourClassAndDontCareAreNotFalsePositives) {
+  EvalFrame f;
+  f.labels.push_back(Label("Car", {100, 100, 200, 200}));
+  f.labels.push_back(Label("Van", {300, 100, 400, 200}));
+  f.labels.push_back(Label("DontCare", {500, 100, 600, 200}));
+  f.detections.push_back(Det("Car", {100, 100, 200, 200}, 0.9));  // TP
+  f.detections.push_back(Det("Car", {300, 100, 400, 200}, 0.8));  // on the Van: ignored
+  f.detections.push_back(Det("Car", {510, 110, 590, 190}, 0.7));  // inside DontCare: ignored
+  f.detections.push_back(Det("Car", {700, 100, 800, 200}, 0.6));  // FP
+  const KittiClassResult r = RunKitti({f}, KittiClassSpec("Car"), OverlapKind::k2D, Difficulty::kModerate);
+  ASSERT_EQ(r.thresholds.size(), 1u);
+  EXPECT_EQ(r.counts[0].tp, 1);
+  EXPECT_EQ(r.counts[0].fp, 0);  // threshold 0.9: only the TP is above it
+  ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Car"), OverlapKind::k2D);
+  const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
+  EXPECT_EQ(a.CountDets(Outcome::kTp), 1);
+  EXPECT_EQ(a.CountDets(Outcome::kFp), 1);
+  EXPECT_EQ(a.CountDets(Outcome::kIgnored), 2);
+}
+
+// Quirk: a detection lower than the minimum height is "ignored" whatever its class, and such a
+// detection may take a label: a 30 px Pedestrian detection on a Car label at Easy (min 40 px) makes
+// the car neither TP nor FN.
+TEST(KittiMatcher, LowDetectionOfAnotherClassAbsorbsALabel) {
+  EvalFrame f;
+  f.labels.push_back(Label("Car", {100, 100, 200, 150}));  // 50 px: Easy
+  f.detections.push_back(Det("Pedestrian", {100, 100, 200, 139}, 0.9));  // 39 px, IoU 0.78
+  f.detections.push_back(Det("Car", {600, 100, 700, 200}, 0.5));  // unrelated FP
+  ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Car"), OverlapKind::k2D);
+  FrameAssociation a = KittiAssociate(cf, Difficulty::kEasy, 0.0);
+  EXPECT_EQ(a.CountLabels(Outcome::kFn), 0);
+  EXPECT_EQ(a.CountLabels(Outcome::kTp), 0);
+  // At Moderate (min 25 px) the 39 px Pedestrian is simply another class: the car is a FN.
+  a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
+  EXPECT_EQ(a.CountLabels(Outcome::kFn), 1);
+}
+
+// Pass 1 takes the highest score, pass 2 the largest overlap.
+TEST(KittiMatcher, ThresholdPassTakesHighestScorePrPassTakesLargestOverlap) {
+  EvalFrame f;
+  f.labels.push_back(Label("Car", {100, 100, 200, 200}));
+  f.detections.push_back(Det("Car", {100, 100, 200, 190}, 0.6));  // IoU 0.9
+  f.detections.push_back(Det("Car", {100, 100, 200, 175}, 0.9));  // IoU 0.75
+  std::vector<double> scores;
+  ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Car"), OverlapKind::k2D);
+  KittiCollectTpScores(cf, Difficulty::kModerate, &scores);
+  ASSERT_EQ(scores.size(), 1u);
+  EXPECT_EQ(scores[0], 0.9);
+  const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
+  EXPECT_EQ(a.label_det[0], 0);  // the 0.6 detection, of larger overlap
+  EXPECT_EQ(a.det_outcome[1], Outcome::kFp);
+}
+
+// Overlap must exceed the threshold strictly.
+TEST(KittiMatcher, OverlapEqualToThresholdIsNoMatch) {
+  EvalFrame f;
+  f.labels.push_back(Label("Pedestrian", {0, 0, 100, 100}));
+  f.detections.push_back(Det("Pedestrian", {0, 0, 100, 50}, 0.9));  // IoU exactly 0.5
+  ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Pedestrian"), OverlapKind::k2D);
+  const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
+  EXPECT_EQ(a.CountLabels(Outcome::kFn), 1);
+}
+
+class KittiMatchesReference : public ::testing::TestWithParam<int> {};
+
+TEST_P(KittiMatchesReference, OnRandomFrames) {
+  RandomFramesOptions ro;
+  ro.num_frames = 40;
+  ro.seed = 100 + GetParam();
+  ro.crowded = GetParam() % 2 == 1;
+  ro.score_decimals = GetParam() % 3 == 0 ? 2 : 0;  // ties
+  ro.labels_per_frame = ro.crowded ? 8 : 5;
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  for (const char* name : {"Car", "Pedestrian", "Cyclist"}) {
+    for (const bool loose : {false, true}) {
+      const ClassSpec spec = KittiClassSpec(name, loose);
+      for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
+        for (const Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+          SCOPED_TRACE(std::string(name) + " " + OverlapKindName(kind) + " " + DifficultyName(d) + (loose ? " loose" : ""));
+          const KittiClassResult ref = RefEvalClass(frames, spec, kind, d);
+          const KittiClassResult got = RunKitti(frames, spec, kind, d);
+          EXPECT_EQ(got.num_groundtruth, ref.num_groundtruth);
+          ASSERT_EQ(got.thresholds, ref.thresholds);
+          for (size_t t = 0; t < ref.thresholds.size(); ++t) {
+            EXPECT_EQ(got.counts[t].tp, ref.counts[t].tp) << t;
+            EXPECT_EQ(got.counts[t].fp, ref.counts[t].fp) << t;
+            EXPECT_EQ(got.counts[t].fn, ref.counts[t].fn) << t;
+            EXPECT_NEAR(got.counts[t].similarity, ref.counts[t].similarity, 1e-9) << t;
+          }
+          EXPECT_NEAR(got.ap_r40, ref.ap_r40, 1e-9);
+          EXPECT_NEAR(got.ap_r11, ref.ap_r11, 1e-9);
+          EXPECT_NEAR(got.aos_r40, ref.aos_r40, 1e-9);
+        }
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, KittiMatchesReference, ::testing::Range(0, 6));
+
+}  // namespace
+}  // namespace stereodet

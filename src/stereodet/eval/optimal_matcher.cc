@@ -1,0 +1,233 @@
+#include "stereodet/eval/optimal_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <optional>
+
+#include "stereodet/eval/bipartite.h"
+
+namespace stereodet {
+
+namespace {
+
+enum DetRole : int8_t { kOut = 0, kValid = 1, kIgnoredDet = 2 };
+
+struct OptimalGraph {
+  std::vector<int8_t> role;             // per detection
+  std::vector<uint8_t> label_valid;     // per label
+  std::vector<uint8_t> det_excusable;   // valid detection overlapping an ignored label or DontCare
+  DetAdjacency adj;                     // detection -> valid labels, overlap >= tau
+  std::vector<double> adj_overlap;      // parallel to adj.labels
+};
+
+OptimalGraph BuildGraph(const ClassFrame& f, Difficulty difficulty) {
+  OptimalGraph g;
+  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+  g.role.resize(f.num_dets());
+  for (int j = 0; j < f.num_dets(); ++j) {
+    if (!f.det_is_class[j]) g.role[j] = kOut;
+    else g.role[j] = std::trunc(f.det_height[j]) < min_height ? kIgnoredDet : kValid;
+  }
+  g.label_valid.resize(f.num_labels());
+  for (int i = 0; i < f.num_labels(); ++i) g.label_valid[i] = f.LabelValid(i, difficulty) ? 1 : 0;
+  g.det_excusable.assign(f.det_dontcare.begin(), f.det_dontcare.end());
+  // Transpose the label-major edges into detection-major lists of valid labels.
+  std::vector<int32_t> count(f.num_dets() + 1, 0);
+  for (int i = 0; i < f.num_labels(); ++i) {
+    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
+      const int j = f.edge_det[e];
+      if (g.role[j] == kOut) continue;
+      if (g.label_valid[i]) ++count[j + 1];
+      else if (g.role[j] == kValid) g.det_excusable[j] = 1;
+    }
+  }
+  std::partial_sum(count.begin(), count.end(), count.begin());
+  g.adj.begin = count;
+  g.adj.num_labels = f.num_labels();
+  g.adj.labels.resize(count.back());
+  g.adj_overlap.resize(count.back());
+  std::vector<int32_t> fill(count.begin(), count.end() - 1);
+  for (int i = 0; i < f.num_labels(); ++i) {
+    if (!g.label_valid[i]) continue;
+    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
+      const int j = f.edge_det[e];
+      if (g.role[j] == kOut) continue;
+      g.adj.labels[fill[j]] = i;
+      g.adj_overlap[fill[j]++] = f.edge_overlap[e];
+    }
+  }
+  return g;
+}
+
+// Detections of the class in descending score (file order among ties).
+std::vector<int32_t> ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role) {
+  std::vector<int32_t> order;
+  for (int j = 0; j < f.num_dets(); ++j) {
+    if (role[j] != kOut) order.push_back(j);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return f.det_score[a] > f.det_score[b]; });
+  return order;
+}
+
+}  // namespace
+
+int CountValidLabels(const ClassFrame& f, Difficulty difficulty) {
+  int n = 0;
+  for (int i = 0; i < f.num_labels(); ++i) n += f.LabelValid(i, difficulty) ? 1 : 0;
+  return n;
+}
+
+void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<CurveEvent>* events) {
+  const OptimalGraph g = BuildGraph(f, difficulty);
+  // Usually nothing is excused (no valid detection on an ignored label or DontCare, no ignored
+  // detection on a valid label); then the FP and FN matchings are the TP matching itself.
+  bool any_excusable = false, any_label_excuse = false;
+  for (int j = 0; j < f.num_dets(); ++j) {
+    any_excusable |= g.role[j] == kValid && g.det_excusable[j];
+    any_label_excuse |= g.role[j] == kIgnoredDet && g.adj.begin[j + 1] > g.adj.begin[j];
+  }
+  IncrementalMatching all(&g.adj);  // TP(t)
+  std::optional<IncrementalMatching> unexcused, labels;
+  if (any_excusable) unexcused.emplace(&g.adj);  // covers the most unexcusable detections: FP(t)
+  if (any_label_excuse) labels.emplace(&g.adj);  // covers the most unexcused labels: FN(t)
+  std::vector<uint8_t> label_excused(f.num_labels(), 0);
+  for (const int j : ByDescendingScore(f, g.role)) {
+    CurveEvent ev;
+    ev.score = f.det_score[j];
+    if (g.role[j] == kValid) {
+      const bool matched = all.AddDet(j);
+      if (matched) ++ev.tp;
+      if (unexcused) {
+        if (!g.det_excusable[j] && !unexcused->AddDet(j)) ++ev.fp;
+      } else if (!matched) {
+        ++ev.fp;
+      }
+      if (labels) {
+        if (labels->AddDet(j)) --ev.fn;
+      } else if (matched) {
+        --ev.fn;
+      }
+    } else if (labels) {
+      // An ignored detection excuses the labels it overlaps from now on: they leave the FN count,
+      // and the matching of the remaining labels is repaired by one augmenting search.
+      for (int k = g.adj.begin[j]; k < g.adj.begin[j + 1]; ++k) {
+        const int i = g.adj.labels[k];
+        if (label_excused[i]) continue;
+        label_excused[i] = 1;
+        ev.fn += -1 - labels->RemoveLabel(i);
+      }
+    }
+    if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0) events->push_back(ev);
+  }
+}
+
+FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
+  const OptimalGraph g = BuildGraph(f, difficulty);
+  const int nl = f.num_labels();
+  const int nd = f.num_dets();
+  FrameAssociation a;
+  a.label_outcome.assign(nl, Outcome::kIgnored);
+  a.label_det.assign(nl, -1);
+  a.det_outcome.assign(nd, Outcome::kNone);
+  a.det_label.assign(nd, -1);
+
+  std::vector<uint8_t> present(nd, 0), label_excused(nl, 0);
+  for (int j = 0; j < nd; ++j) {
+    present[j] = g.role[j] != kOut && f.det_score[j] >= threshold;
+    if (present[j] && g.role[j] == kIgnoredDet) {
+      for (int k = g.adj.begin[j]; k < g.adj.begin[j + 1]; ++k) label_excused[g.adj.labels[k]] = 1;
+    }
+  }
+
+  // Connected components of (valid labels) + (present valid detections), union-find.
+  std::vector<int32_t> parent(nl + nd);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int j = 0; j < nd; ++j) {
+    if (!present[j] || g.role[j] != kValid) continue;
+    for (int k = g.adj.begin[j]; k < g.adj.begin[j + 1]; ++k) {
+      const int ra = find(g.adj.labels[k]), rb = find(nl + j);
+      if (ra != rb) parent[ra] = rb;
+    }
+  }
+  // Group the vertices by component (counting sort on the root) into one flat array.
+  std::vector<int32_t> comp_begin(nl + nd + 1, 0), members(nl + nd);
+  auto in_graph = [&](int x) {
+    return x < nl ? g.label_valid[x] != 0 : (present[x - nl] && g.role[x - nl] == kValid);
+  };
+  for (int x = 0; x < nl + nd; ++x) {
+    if (in_graph(x)) ++comp_begin[find(x) + 1];
+  }
+  for (int r = 0; r < nl + nd; ++r) comp_begin[r + 1] += comp_begin[r];
+  {
+    std::vector<int32_t> fill(comp_begin.begin(), comp_begin.end() - 1);
+    for (int x = 0; x < nl + nd; ++x) {
+      if (in_graph(x)) members[fill[find(x)]++] = x;
+    }
+  }
+  std::vector<int32_t> local(nl + nd, -1), cl, cd;
+  std::vector<WeightedEdge> edges;
+  for (int root = 0; root < nl + nd; ++root) {
+    if (comp_begin[root + 1] - comp_begin[root] < 2) continue;  // an isolated vertex
+    cl.clear();
+    cd.clear();
+    for (int k = comp_begin[root]; k < comp_begin[root + 1]; ++k) {
+      const int x = members[k];
+      if (x < nl) {
+        local[x] = static_cast<int32_t>(cl.size());
+        cl.push_back(x);
+      } else {
+        local[x] = static_cast<int32_t>(cd.size());
+        cd.push_back(x - nl);
+      }
+    }
+    // Weight of a pair: K^2 (one TP) + K (the detection could not be excused otherwise) + 1 (nor the
+    // label), then the overlap. With K above any count in the component the integer part orders
+    // matchings by (TPs, unexcusable detections covered, unexcused labels covered) exactly.
+    const int64_t big_k = static_cast<int64_t>(std::max(cl.size(), cd.size())) + 1;
+    edges.clear();
+    for (const int j : cd) {
+      for (int k = g.adj.begin[j]; k < g.adj.begin[j + 1]; ++k) {
+        const int i = g.adj.labels[k];
+        WeightedEdge e;
+        e.label = local[i];
+        e.det = local[nl + j];
+        e.weight.major = big_k * big_k + (g.det_excusable[j] ? 0 : big_k) + (label_excused[i] ? 0 : 1);
+        e.weight.minor = g.adj_overlap[k];
+        edges.push_back(e);
+      }
+    }
+    std::vector<int32_t> match;
+    if (cl.size() == 1 && cd.size() == 1) {
+      match = {0};  // one edge: take it
+    } else {
+      match = MaxWeightAssignment(static_cast<int>(cl.size()), static_cast<int>(cd.size()), edges);
+    }
+    for (size_t k = 0; k < cl.size(); ++k) {
+      if (match[k] < 0) continue;
+      const int i = cl[k], j = cd[match[k]];
+      a.label_outcome[i] = Outcome::kTp;
+      a.label_det[i] = j;
+      a.det_outcome[j] = Outcome::kTp;
+      a.det_label[j] = i;
+    }
+  }
+  for (int i = 0; i < nl; ++i) {
+    if (g.label_valid[i] && a.label_outcome[i] != Outcome::kTp) {
+      a.label_outcome[i] = label_excused[i] ? Outcome::kIgnored : Outcome::kFn;
+    }
+  }
+  for (int j = 0; j < nd; ++j) {
+    if (!present[j] || a.det_outcome[j] == Outcome::kTp) continue;
+    if (g.role[j] == kIgnoredDet || g.det_excusable[j]) a.det_outcome[j] = Outcome::kIgnored;
+    else a.det_outcome[j] = Outcome::kFp;
+  }
+  return a;
+}
+
+}  // namespace stereodet

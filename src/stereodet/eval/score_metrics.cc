@@ -1,0 +1,150 @@
+#include "stereodet/eval/score_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+double Quantile(std::vector<double> values, double q) {
+  if (values.empty()) return kNaN;
+  std::sort(values.begin(), values.end());
+  const double pos = q * static_cast<double>(values.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(values.size() - 1, lo + 1);
+  const double frac = pos - static_cast<double>(lo);
+  return values[lo] + (values[hi] - values[lo]) * frac;
+}
+
+ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m,
+                                                 double max_distance_m)
+    : bin_count_(calibration_bins, 0),
+      bin_tp_(calibration_bins, 0),
+      bin_score_sum_(calibration_bins, 0.0),
+      distance_bin_m_(distance_bin_m),
+      max_distance_m_(max_distance_m) {
+  STEREODET_CHECK(calibration_bins >= 1) << "calibration_bins must be >= 1";
+  STEREODET_CHECK(distance_bin_m > 0 && max_distance_m > 0) << "distance bins must be positive";
+  const int num_distance_bins = static_cast<int>(std::ceil(max_distance_m / distance_bin_m));
+  centre_errors_.resize(num_distance_bins);
+  depth_errors_.resize(num_distance_bins);
+}
+
+void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
+                                  const FrameAssociation& a) {
+  const int num_bins = static_cast<int>(bin_count_.size());
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      const double s = cf.det_score[j];
+      brier_sums_.over_labels += (1 - s) * (1 - s);
+      brier_sums_.over_all += (1 - s) * (1 - s);
+      ++brier_sums_.num_label_terms;
+      ++brier_sums_.num_all_terms;
+      const Object& label = frame.labels[cf.label_object[i]];
+      const Object& det = frame.detections[cf.det_object[j]];
+      const double z = label.box3d.location.z();
+      if (label.Has3D() && det.Has3D() && z >= 0 && z < max_distance_m_) {
+        const int bin = std::min(static_cast<int>(z / distance_bin_m_),
+                                 static_cast<int>(centre_errors_.size()) - 1);
+        centre_errors_[bin].push_back((det.box3d.Centre() - label.box3d.Centre()).norm());
+        depth_errors_[bin].push_back(det.box3d.location.z() - z);
+      }
+    } else if (a.label_outcome[i] == Outcome::kFn) {
+      brier_sums_.over_labels += 1.0;
+      brier_sums_.over_all += 1.0;
+      ++brier_sums_.num_label_terms;
+      ++brier_sums_.num_all_terms;
+    }
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    const Outcome o = a.det_outcome[j];
+    if (o != Outcome::kTp && o != Outcome::kFp) continue;
+    const double s = cf.det_score[j];
+    const double y = o == Outcome::kTp ? 1.0 : 0.0;
+    brier_sums_.over_detections += (s - y) * (s - y);
+    ++brier_sums_.num_detection_terms;
+    if (o == Outcome::kFp) {
+      brier_sums_.over_all += s * s;
+      ++brier_sums_.num_all_terms;
+    }
+    if (s < 0 || s > 1) ++out_of_range_;
+    const double clamped = std::clamp(s, 0.0, 1.0);
+    const int bin = std::min(static_cast<int>(clamped * num_bins), num_bins - 1);
+    ++bin_count_[bin];
+    bin_tp_[bin] += o == Outcome::kTp ? 1 : 0;
+    bin_score_sum_[bin] += s;
+  }
+}
+
+BrierScores ScoreMetricsAccumulator::Brier() const {
+  BrierScores b = brier_sums_;
+  auto mean = [](double sum, int64_t n) { return n > 0 ? sum / static_cast<double>(n) : kNaN; };
+  b.over_labels = mean(b.over_labels, b.num_label_terms);
+  b.over_detections = mean(b.over_detections, b.num_detection_terms);
+  b.over_all = mean(b.over_all, b.num_all_terms);
+  return b;
+}
+
+CalibrationResult ScoreMetricsAccumulator::Calibration() const {
+  CalibrationResult c;
+  const int num_bins = static_cast<int>(bin_count_.size());
+  for (int k = 0; k < num_bins; ++k) c.num_detections += bin_count_[k];
+  c.num_out_of_range = out_of_range_;
+  double ece = 0.0;
+  for (int k = 0; k < num_bins; ++k) {
+    ReliabilityBin bin;
+    bin.lower = static_cast<double>(k) / num_bins;
+    bin.upper = static_cast<double>(k + 1) / num_bins;
+    bin.count = bin_count_[k];
+    if (bin.count > 0) {
+      bin.mean_score = bin_score_sum_[k] / static_cast<double>(bin.count);
+      bin.tp_fraction = static_cast<double>(bin_tp_[k]) / static_cast<double>(bin.count);
+      ece += static_cast<double>(bin.count) / static_cast<double>(c.num_detections) *
+             std::abs(bin.mean_score - bin.tp_fraction);
+    } else {
+      bin.mean_score = bin.tp_fraction = kNaN;
+    }
+    c.bins.push_back(bin);
+  }
+  c.ece = c.num_detections > 0 ? ece : kNaN;
+  return c;
+}
+
+std::vector<DistanceBin> ScoreMetricsAccumulator::Localization() const {
+  std::vector<DistanceBin> bins;
+  for (size_t k = 0; k < centre_errors_.size(); ++k) {
+    DistanceBin bin;
+    bin.lower_m = static_cast<double>(k) * distance_bin_m_;
+    bin.upper_m = std::min(max_distance_m_, static_cast<double>(k + 1) * distance_bin_m_);
+    const std::vector<double>& centre = centre_errors_[k];
+    const std::vector<double>& depth = depth_errors_[k];
+    bin.count = static_cast<int64_t>(centre.size());
+    std::vector<double> abs_depth(depth.size());
+    double sum_c = 0, sum_d = 0, sum_ad = 0;
+    for (size_t i = 0; i < centre.size(); ++i) {
+      sum_c += centre[i];
+      sum_d += depth[i];
+      abs_depth[i] = std::abs(depth[i]);
+      sum_ad += abs_depth[i];
+    }
+    const double n = static_cast<double>(bin.count);
+    bin.centre_error_mean_m = bin.count ? sum_c / n : kNaN;
+    bin.depth_error_mean_m = bin.count ? sum_d / n : kNaN;
+    bin.abs_depth_error_mean_m = bin.count ? sum_ad / n : kNaN;
+    bin.centre_error_median_m = Quantile(centre, 0.5);
+    bin.centre_error_p90_m = Quantile(centre, 0.9);
+    bin.abs_depth_error_median_m = Quantile(abs_depth, 0.5);
+    bin.abs_depth_error_p90_m = Quantile(abs_depth, 0.9);
+    bins.push_back(bin);
+  }
+  return bins;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,77 @@
+// Metrics of an association at an operating point: Brier scores (three ways), the reliability curve
+// and expected calibration error, and the 3D localization error of matched pairs by distance.
+// Definitions: docs/metrics.md.
+#ifndef STEREODET_EVAL_SCORE_METRICS_H_
+#define STEREODET_EVAL_SCORE_METRICS_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "stereodet/eval/association.h"
+#include "stereodet/eval/frame_data.h"
+
+namespace stereodet {
+
+// Sums of Brier terms; Finish() turns them into means (NaN when there is no term).
+struct BrierScores {
+  // Over labels (the default, the paper's recommendation): one term per valid label (TP or FN),
+  // (1 - s)^2 with s the score of its matched detection, 1 if unmatched.
+  double over_labels = 0.0;
+  int64_t num_label_terms = 0;
+  // Over detections: one term per counted detection (TP or FP), (s - y)^2 with y = 1 for a TP.
+  double over_detections = 0.0;
+  int64_t num_detection_terms = 0;
+  // Over all: matched pairs (1 - s)^2, unmatched detections (FP) s^2, unmatched labels (FN) 1.
+  double over_all = 0.0;
+  int64_t num_all_terms = 0;
+};
+
+struct ReliabilityBin {
+  double lower = 0.0, upper = 0.0;  // score range [lower, upper) ([lower, 1] for the last bin)
+  int64_t count = 0;                // counted detections (TP or FP) in the bin
+  double mean_score = 0.0;          // NaN if empty
+  double tp_fraction = 0.0;         // NaN if empty
+};
+
+struct CalibrationResult {
+  std::vector<ReliabilityBin> bins;
+  // Detection ECE: sum over bins of count / N * |mean_score - tp_fraction|; NaN if N = 0.
+  double ece = 0.0;
+  int64_t num_detections = 0;
+  int64_t num_out_of_range = 0;  // scores outside [0, 1], clamped into the end bins
+};
+
+struct DistanceBin {
+  double lower_m = 0.0, upper_m = 0.0;  // label depth z in [lower, upper)
+  int64_t count = 0;                    // TP pairs with 3D boxes on both sides
+  double centre_error_mean_m = 0.0, centre_error_median_m = 0.0, centre_error_p90_m = 0.0;
+  double depth_error_mean_m = 0.0;      // signed, detection z - label z
+  double abs_depth_error_mean_m = 0.0, abs_depth_error_median_m = 0.0, abs_depth_error_p90_m = 0.0;
+};
+
+// Accumulates the operating-point metrics of many frames' associations, then Finish().
+class ScoreMetricsAccumulator {
+ public:
+  ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m, double max_distance_m);
+
+  void Add(const EvalFrame& frame, const ClassFrame& class_frame, const FrameAssociation& association);
+
+  BrierScores Brier() const;                 // means
+  CalibrationResult Calibration() const;
+  std::vector<DistanceBin> Localization() const;  // bins [0, w), [w, 2w), ... up to max_distance_m
+
+ private:
+  BrierScores brier_sums_;
+  std::vector<int64_t> bin_count_, bin_tp_;
+  std::vector<double> bin_score_sum_;
+  int64_t out_of_range_ = 0;
+  double distance_bin_m_, max_distance_m_;
+  std::vector<std::vector<double>> centre_errors_, depth_errors_;
+};
+
+// Quantile q in [0, 1] of `values` with linear interpolation (NumPy's default); NaN if empty.
+double Quantile(std::vector<double> values, double q);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_SCORE_METRICS_H_

@@ -1,0 +1,293 @@
+#include "stereodet/report/eval_report.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "stereodet/util/atomic_file.h"
+
+namespace stereodet {
+
+namespace {
+
+using nlohmann::json;
+
+json OperatingPointJson(const OperatingPoint& op) {
+  return json{{"threshold", op.threshold}, {"tp", op.tp},     {"fp", op.fp}, {"fn", op.fn},
+              {"precision", op.precision}, {"recall", op.recall}, {"f1", op.f1}};
+}
+
+std::string LowerName(const std::string& s) {
+  std::string out = s;
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string CurveStem(const ClassResult& r) {
+  return LowerName(r.class_name) + "_" + OverlapKindName(r.metric) + "_" +
+         LowerName(DifficultyName(r.difficulty));
+}
+
+std::string Csv(double v) {
+  if (std::isnan(v)) return "";
+  return fmt::format("{}", v);
+}
+
+}  // namespace
+
+std::string FormatNumber(double value, int decimals) {
+  if (std::isnan(value)) return "-";
+  return fmt::format("{:.{}f}", value, decimals);
+}
+
+json EvalResultToJson(const EvalResult& result, const EvalOptions& options, const EvalRunInfo& info) {
+  json j;
+  j["tool"] = {{"name", "stereodet eval"}, {"version", info.tool_version}};
+  j["command_line"] = info.command_line;
+  j["input"] = {{"gt", info.gt_path},
+                {"det", info.det_path},
+                {"split", info.split_path},
+                {"num_frames", result.num_frames},
+                {"num_frames_without_detections", info.frames_without_detections.size()},
+                {"frames_without_detections", info.frames_without_detections}};
+  json classes = json::array();
+  for (const ClassSpec& c : options.classes) {
+    classes.push_back({{"name", c.name}, {"neighbours", c.neighbours}, {"min_overlap", c.min_overlap}});
+  }
+  json metrics = json::array();
+  for (OverlapKind k : options.metrics) metrics.push_back(OverlapKindName(k));
+  json difficulties = json::array();
+  for (Difficulty d : options.difficulties) difficulties.push_back(DifficultyName(d));
+  json filter = json::array();
+  for (const FilterCondition& c : options.filter.conditions) {
+    filter.push_back({{"bound", FilterBoundName(c.bound)}, {"value", c.value}});
+  }
+  j["options"] = {{"matcher", MatcherName(options.matcher)},
+                  {"classes", classes},
+                  {"metrics", metrics},
+                  {"difficulties", difficulties},
+                  {"score_threshold", options.score_threshold},
+                  {"require_detections", options.require_detections},
+                  {"calibration_bins", options.calibration_bins},
+                  {"distance_bin_m", options.distance_bin_m},
+                  {"max_distance_m", options.max_distance_m},
+                  {"filter", filter},
+                  {"filter_mode", FilterModeName(options.filter.mode)},
+                  {"num_threads", options.num_threads}};
+  j["aos_computed"] = result.aos_computed;
+  j["seconds"] = result.seconds;
+  json results = json::array();
+  for (const ClassResult& r : result.results) {
+    json e;
+    e["class"] = r.class_name;
+    e["metric"] = OverlapKindName(r.metric);
+    e["difficulty"] = DifficultyName(r.difficulty);
+    e["min_overlap"] = r.min_overlap;
+    e["evaluated"] = r.evaluated;
+    if (!r.evaluated) {
+      results.push_back(e);
+      continue;
+    }
+    e["num_valid_labels"] = r.num_valid_labels;
+    e["num_detections"] = r.num_detections;
+    e["ap_r40"] = r.ap_r40;
+    e["ap_r11"] = r.ap_r11;
+    e["ap_voc"] = r.ap_voc;
+    e["aos_r40"] = r.aos_r40;
+    e["aos_r11"] = r.aos_r11;
+    e["at_threshold"] = OperatingPointJson(r.at_threshold);
+    e["best_f1"] = OperatingPointJson(r.best_f1);
+    if (r.filtered) {
+      e["filtered"] = {{"naive", OperatingPointJson(r.filtered->naive)},
+                       {"stable", OperatingPointJson(r.filtered->stable)}};
+    }
+    json curve = {{"threshold", json::array()}, {"tp", json::array()},        {"fp", json::array()},
+                  {"fn", json::array()},        {"precision", json::array()}, {"recall", json::array()},
+                  {"fp_per_frame", json::array()}};
+    for (const CurvePoint& p : r.curve) {
+      curve["threshold"].push_back(p.threshold);
+      curve["tp"].push_back(p.tp);
+      curve["fp"].push_back(p.fp);
+      curve["fn"].push_back(p.fn);
+      curve["precision"].push_back(p.precision);
+      curve["recall"].push_back(p.recall);
+      curve["fp_per_frame"].push_back(result.num_frames ? static_cast<double>(p.fp) / result.num_frames : 0.0);
+    }
+    e["curve"] = curve;
+    if (!r.kitti_precision.empty()) {
+      e["kitti"] = {{"precision", r.kitti_precision}, {"aos", r.kitti_aos}, {"thresholds", r.kitti_thresholds}};
+    }
+    e["brier"] = {{"over_labels", r.brier.over_labels},
+                  {"num_label_terms", r.brier.num_label_terms},
+                  {"over_detections", r.brier.over_detections},
+                  {"num_detection_terms", r.brier.num_detection_terms},
+                  {"over_all", r.brier.over_all},
+                  {"num_all_terms", r.brier.num_all_terms}};
+    json bins = json::array();
+    for (const ReliabilityBin& b : r.calibration.bins) {
+      bins.push_back({{"lower", b.lower}, {"upper", b.upper}, {"count", b.count},
+                      {"mean_score", b.mean_score}, {"tp_fraction", b.tp_fraction}});
+    }
+    e["calibration"] = {{"ece", r.calibration.ece},
+                        {"num_detections", r.calibration.num_detections},
+                        {"num_out_of_range", r.calibration.num_out_of_range},
+                        {"bins", bins}};
+    json loc = json::array();
+    for (const DistanceBin& b : r.localization) {
+      loc.push_back({{"lower_m", b.lower_m}, {"upper_m", b.upper_m}, {"count", b.count},
+                     {"centre_error_mean_m", b.centre_error_mean_m},
+                     {"centre_error_median_m", b.centre_error_median_m},
+                     {"centre_error_p90_m", b.centre_error_p90_m},
+                     {"depth_error_mean_m", b.depth_error_mean_m},
+                     {"abs_depth_error_mean_m", b.abs_depth_error_mean_m},
+                     {"abs_depth_error_median_m", b.abs_depth_error_median_m},
+                     {"abs_depth_error_p90_m", b.abs_depth_error_p90_m}});
+    }
+    e["localization"] = loc;
+    results.push_back(e);
+  }
+  j["results"] = results;
+  return j;
+}
+
+std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
+                                                   const EvalResult& result, const EvalOptions& options,
+                                                   const EvalRunInfo& info) {
+  std::vector<std::filesystem::path> written;
+  auto write = [&](const std::filesystem::path& path, const std::string& text) {
+    WriteFileAtomically(path, text);
+    written.push_back(path);
+  };
+  write(out_dir / "results.json", EvalResultToJson(result, options, info).dump(1) + "\n");
+
+  std::ostringstream summary;
+  summary << "class,metric,difficulty,min_overlap,evaluated,num_valid_labels,num_detections,ap_r40,"
+             "ap_r11,ap_voc,aos_r40,aos_r11,threshold,tp,fp,fn,precision,recall,f1,best_f1_threshold,"
+             "best_f1,brier_labels,brier_detections,brier_all,ece\n";
+  for (const ClassResult& r : result.results) {
+    summary << r.class_name << ',' << OverlapKindName(r.metric) << ',' << DifficultyName(r.difficulty)
+            << ',' << r.min_overlap << ',' << (r.evaluated ? 1 : 0);
+    if (!r.evaluated) {
+      summary << std::string(20, ',') << '\n';
+      continue;
+    }
+    const OperatingPoint& op = r.at_threshold;
+    summary << ',' << r.num_valid_labels << ',' << r.num_detections << ',' << Csv(r.ap_r40) << ','
+            << Csv(r.ap_r11) << ',' << Csv(r.ap_voc) << ',' << Csv(r.aos_r40) << ',' << Csv(r.aos_r11)
+            << ',' << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ',' << op.fn << ','
+            << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(op.f1) << ','
+            << Csv(r.best_f1.threshold) << ',' << Csv(r.best_f1.f1) << ',' << Csv(r.brier.over_labels)
+            << ',' << Csv(r.brier.over_detections) << ',' << Csv(r.brier.over_all) << ','
+            << Csv(r.calibration.ece) << '\n';
+  }
+  write(out_dir / "summary.csv", summary.str());
+
+  for (const ClassResult& r : result.results) {
+    if (!r.evaluated) continue;
+    const std::string stem = CurveStem(r);
+    std::ostringstream pr;
+    pr << "threshold,tp,fp,fn,precision,recall,fp_per_frame\n";
+    for (const CurvePoint& p : r.curve) {
+      pr << Csv(p.threshold) << ',' << p.tp << ',' << p.fp << ',' << p.fn << ',' << Csv(p.precision)
+         << ',' << Csv(p.recall) << ','
+         << Csv(result.num_frames ? static_cast<double>(p.fp) / result.num_frames : 0.0) << '\n';
+    }
+    write(out_dir / "curves" / ("pr_" + stem + ".csv"), pr.str());
+    std::ostringstream rel;
+    rel << "lower,upper,count,mean_score,tp_fraction\n";
+    for (const ReliabilityBin& b : r.calibration.bins) {
+      rel << Csv(b.lower) << ',' << Csv(b.upper) << ',' << b.count << ',' << Csv(b.mean_score) << ','
+          << Csv(b.tp_fraction) << '\n';
+    }
+    write(out_dir / "curves" / ("reliability_" + stem + ".csv"), rel.str());
+    std::ostringstream loc;
+    loc << "lower_m,upper_m,count,centre_error_mean_m,centre_error_median_m,centre_error_p90_m,"
+           "depth_error_mean_m,abs_depth_error_mean_m,abs_depth_error_median_m,abs_depth_error_p90_m\n";
+    for (const DistanceBin& b : r.localization) {
+      loc << Csv(b.lower_m) << ',' << Csv(b.upper_m) << ',' << b.count << ',' << Csv(b.centre_error_mean_m)
+          << ',' << Csv(b.centre_error_median_m) << ',' << Csv(b.centre_error_p90_m) << ','
+          << Csv(b.depth_error_mean_m) << ',' << Csv(b.abs_depth_error_mean_m) << ','
+          << Csv(b.abs_depth_error_median_m) << ',' << Csv(b.abs_depth_error_p90_m) << '\n';
+    }
+    write(out_dir / "curves" / ("localization_" + stem + ".csv"), loc.str());
+  }
+  return written;
+}
+
+std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options) {
+  std::ostringstream out;
+  out << fmt::format("matcher {}, {} frames", MatcherName(options.matcher), result.num_frames);
+  if (!options.filter.empty()) out << ", filter " << FilterModeName(options.filter.mode);
+  out << "\n";
+  std::string diff_header;
+  for (Difficulty d : options.difficulties) diff_header += fmt::format(" {:>8}", DifficultyName(d));
+  out << fmt::format("{:<12} {:<4} {:>5} | {:<7}{} |", "class", "kind", "tau", "", diff_header);
+  // The operating point is shown at Moderate (KITTI's ranking level) when evaluated.
+  Difficulty op_difficulty = options.difficulties.front();
+  for (Difficulty d : options.difficulties) {
+    if (d == Difficulty::kModerate) op_difficulty = d;
+  }
+  out << "  (operating point at " << DifficultyName(op_difficulty) << ")\n";
+  for (const ClassSpec& spec : options.classes) {
+    for (OverlapKind kind : options.metrics) {
+      const ClassResult* first = result.Find(spec.name, kind, op_difficulty);
+      if (!first) continue;
+      if (!first->evaluated) {
+        out << fmt::format("{:<12} {:<4} {:>5.2f} | not evaluated (no detection of this class with a "
+                           "valid {} box)\n",
+                           spec.name, OverlapKindName(kind), first->min_overlap, OverlapKindName(kind));
+        continue;
+      }
+      auto row = [&](const char* what, auto get, bool with_op) {
+        std::string cells;
+        for (Difficulty d : options.difficulties) {
+          const ClassResult* r = result.Find(spec.name, kind, d);
+          cells += fmt::format(" {:>8}", r ? FormatNumber(get(*r), 2) : "-");
+        }
+        out << fmt::format("{:<12} {:<4} {:>5.2f} | {:<7}{} |", spec.name, OverlapKindName(kind),
+                           first->min_overlap, what, cells);
+        if (with_op) {
+          const OperatingPoint& op = first->at_threshold;
+          out << fmt::format("  TP {} FP {} FN {}  P {:.4f} R {:.4f} F1 {:.4f}  best F1 {:.4f} @ {:.4g}",
+                             op.tp, op.fp, op.fn, op.precision, op.recall, op.f1, first->best_f1.f1,
+                             first->best_f1.threshold);
+        }
+        out << "\n";
+      };
+      row("AP_R40", [](const ClassResult& r) { return r.ap_r40; }, true);
+      row("AP_R11", [](const ClassResult& r) { return r.ap_r11; }, false);
+      if (options.matcher != Matcher::kKitti) row("AP_VOC", [](const ClassResult& r) { return r.ap_voc; }, false);
+      if (first->has_aos) {
+        row("AOS_R40", [](const ClassResult& r) { return r.aos_r40; }, false);
+        row("AOS_R11", [](const ClassResult& r) { return r.aos_r11; }, false);
+      }
+      if (first->filtered) {
+        const FilteredStats& fs = *first->filtered;
+        out << fmt::format("{:<12} {:<4} {:>5} | filtered: naive TP {} FP {} FN {} P {:.4f} R {:.4f}; "
+                           "stable TP {} FP {} FN {} P {:.4f} R {:.4f}\n",
+                           "", "", "", fs.naive.tp, fs.naive.fp, fs.naive.fn, fs.naive.precision,
+                           fs.naive.recall, fs.stable.tp, fs.stable.fp, fs.stable.fn,
+                           fs.stable.precision, fs.stable.recall);
+      }
+    }
+  }
+  return out.str();
+}
+
+std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound) {
+  std::ostringstream out;
+  out << "class,metric,difficulty,filter,value,naive_tp,naive_fp,naive_fn,naive_precision,naive_recall,"
+         "stable_tp,stable_fp,stable_fn,stable_precision,stable_recall\n";
+  for (const SweepRow& r : rows) {
+    const OperatingPoint& n = r.stats.naive;
+    const OperatingPoint& s = r.stats.stable;
+    out << r.class_name << ',' << OverlapKindName(r.metric) << ',' << DifficultyName(r.difficulty) << ','
+        << FilterBoundName(bound) << ',' << Csv(r.value) << ',' << n.tp << ',' << n.fp << ',' << n.fn
+        << ',' << Csv(n.precision) << ',' << Csv(n.recall) << ',' << s.tp << ',' << s.fp << ',' << s.fn
+        << ',' << Csv(s.precision) << ',' << Csv(s.recall) << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace stereodet

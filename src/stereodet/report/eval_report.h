@@ -1,0 +1,49 @@
+// Writing evaluation results: results.json (every number and curve, the options, the tool version),
+// one CSV per curve, the filter-sweep CSV and the KITTI-like text table. Every file is written
+// atomically (temp file + rename).
+#ifndef STEREODET_REPORT_EVAL_REPORT_H_
+#define STEREODET_REPORT_EVAL_REPORT_H_
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "stereodet/eval/evaluator.h"
+
+namespace stereodet {
+
+// What the tool read, for the record.
+struct EvalRunInfo {
+  std::string tool_version;
+  std::string gt_path, det_path, split_path;
+  std::vector<std::string> frames_without_detections;  // ids whose detection file was missing
+  std::string command_line;
+};
+
+// The whole result as JSON. NaN (not computed) becomes null.
+nlohmann::json EvalResultToJson(const EvalResult& result, const EvalOptions& options,
+                                const EvalRunInfo& info);
+
+// Writes OUT/results.json, OUT/summary.csv and per evaluated class x metric x difficulty
+// OUT/curves/pr_CLASS_METRIC_DIFFICULTY.csv (threshold, tp, fp, fn, precision, recall,
+// fp_per_frame), reliability_*.csv and localization_*.csv. Returns the paths written.
+std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
+                                                   const EvalResult& result, const EvalOptions& options,
+                                                   const EvalRunInfo& info);
+
+// A table like KITTI's: one row per class and metric, AP_R40 / AP_R11 (and AOS) for Easy, Moderate,
+// Hard, then the operating-point counts and best F1 at Moderate (or the first difficulty evaluated).
+std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options);
+
+// The filter sweep as CSV: class, metric, difficulty, filter, value, then tp/fp/fn/precision/recall
+// for the naive and the stable filter.
+std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound);
+
+// "12.3457" (4 decimals) or "nan"/"-" for NaN.
+std::string FormatNumber(double value, int decimals = 4);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_REPORT_EVAL_REPORT_H_
