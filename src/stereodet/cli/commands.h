@@ -8,6 +8,7 @@
 
 namespace stereodet::cli {
 
+void AddSynthCommand(CLI::App& app);  // synth_command.cc
 void AddInfoCommand(CLI::App& app);  // info_command.cc
 void AddEvalCommand(CLI::App& app);  // eval_command.cc (eval, eval sweep, eval compare)
 

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   // The subcommand table, in the order a user meets them.
+  stereodet::cli::AddSynthCommand(app);
   stereodet::cli::AddInfoCommand(app);
   stereodet::cli::AddEvalCommand(app);
 

@@ -1,0 +1,168 @@
+#include "stereodet/synth/generator.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/kitti/velodyne_io.h"
+#include "stereodet/util/atomic_file.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Small and fast: 160 x 48 images and a coarse LiDAR.
+SynthOptions TinyOptions() {
+  SynthOptions options;
+  options.width = 160;
+  options.height = 48;
+  options.lidar_options.azimuth_step_deg = 1.0;
+  return options;
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() /
+            ("synth_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(GeneratorTest, FramesAreDeterministicAndDifferBySeed) {
+  const SynthOptions options = TinyOptions();
+  const SynthFrame a = GenerateFrame(options, 3, 1);
+  const SynthFrame b = GenerateFrame(options, 3, 1);
+  const SynthFrame c = GenerateFrame(options, 4, 1);
+  EXPECT_EQ(cv::norm(a.image_left, b.image_left, cv::NORM_INF), 0.0);
+  EXPECT_EQ(a.labels, b.labels);
+  EXPECT_EQ(a.scan, b.scan);
+  EXPECT_GT(cv::norm(a.image_left, c.image_left, cv::NORM_INF), 0.0);
+  EXPECT_EQ(a.image_left.size(), cv::Size(160, 48));
+  EXPECT_FALSE(a.scan.empty());
+}
+
+TEST(GeneratorTest, LabelsAreKittiLike) {
+  SynthOptions options = TinyOptions();
+  options.width = 621;  // half resolution: labels scale their pixel thresholds
+  options.height = 188;
+  int labelled = 0;
+  for (int i = 0; i < 4; ++i) {
+    const SynthFrame f = GenerateFrame(options, 9, i);
+    for (const Object& o : f.labels) {
+      if (o.IsDontCare()) continue;
+      ++labelled;
+      EXPECT_GE(o.truncated, 0.0);
+      EXPECT_LE(o.truncated, 1.0);
+      EXPECT_GE(o.occluded, 0);
+      EXPECT_LE(o.occluded, 3);
+      EXPECT_GE(o.box.left, 0.0);
+      EXPECT_LE(o.box.right, options.width - 1.0);
+      EXPECT_LT(o.box.left, o.box.right);
+      EXPECT_GT(o.box3d.h, 0.0);
+      EXPECT_NEAR(o.box3d.location.y(), f.scene.ground_y_m, 0.2);  // on the road or sidewalk
+      EXPECT_NEAR(o.alpha, AlphaFromRotationY(o.box3d.rotation_y, o.box3d.location), 0.006);
+    }
+  }
+  EXPECT_GT(labelled, 4);
+}
+
+TEST(GeneratorTest, DatasetRoundTripsThroughTheKittiModule) {
+  TempDir dir;
+  DatasetOptions options;
+  options.out = dir.path();
+  options.frames = 2;
+  options.seed = 5;
+  options.threads = 1;
+  options.progress.stream = nullptr;
+  options.synth = TinyOptions();
+  const DatasetSummaryLine summary = GenerateDataset(options);
+  EXPECT_EQ(summary.generated, 2);
+  EXPECT_EQ(summary.train + summary.val, 2);
+  EXPECT_EQ(summary.val, 1);
+
+  const KittiDataset dataset(dir.path());
+  EXPECT_EQ(dataset.ListIds(), (std::vector<std::string>{"000000", "000001"}));
+  EXPECT_EQ(dataset.ReadSplit("train").size() + dataset.ReadSplit("val").size(), 2u);
+  const SynthFrame frame = GenerateFrame(options.synth, 5, 1);
+  const FramePaths paths = dataset.Paths("000001");
+  EXPECT_EQ(ReadObjects(paths.label).objects, frame.labels);
+  const Calibration calib = ReadCalibration(paths.calib);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(calib.projection[i], frame.calib.projection[i]);
+  EXPECT_TRUE(calib.cam0_from_velo.isApprox(frame.calib.cam0_from_velo, 1e-15));
+  EXPECT_EQ(ReadVelodyne(paths.velodyne), frame.scan);
+  const cv::Mat left = cv::imread(paths.image_left.string(), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(cv::norm(left, frame.image_left, cv::NORM_INF), 0.0);
+  const cv::Mat disparity = cv::imread(paths.disparity.string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(disparity.type(), CV_16UC1);
+  EXPECT_LE(cv::norm(DecodeKittiDisparity(disparity), frame.disparity, cv::NORM_INF),
+            0.5 / 256 + 1e-6);
+
+  // Resuming skips complete frames and redoes a missing file's frame.
+  fs::remove(paths.velodyne);
+  const DatasetSummaryLine again = GenerateDataset(options);
+  EXPECT_EQ(again.skipped, 1);
+  EXPECT_EQ(again.generated, 1);
+  EXPECT_EQ(ReadVelodyne(paths.velodyne), frame.scan);
+  // ... but refuses other settings.
+  options.seed = 6;
+  EXPECT_THROW(GenerateDataset(options), std::invalid_argument);
+}
+
+TEST(GeneratorTest, SameSeedSameBytesWithOneAndTwoThreads) {
+  TempDir one, two;
+  DatasetOptions options;
+  options.frames = 3;
+  options.seed = 17;
+  options.progress.stream = nullptr;
+  options.synth = TinyOptions();
+  options.out = one.path();
+  options.threads = 1;
+  GenerateDataset(options);
+  options.out = two.path();
+  options.threads = 2;
+  GenerateDataset(options);
+  int files = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(one.path())) {
+    if (!entry.is_regular_file()) continue;
+    const fs::path relative = fs::relative(entry.path(), one.path());
+    ASSERT_TRUE(fs::exists(two.path() / relative)) << relative;
+    EXPECT_EQ(ReadFile(entry.path()), ReadFile(two.path() / relative)) << relative;
+    ++files;
+  }
+  EXPECT_EQ(files, 3 * 6 + 3 + 1);  // six files a frame, three splits, the settings
+}
+
+TEST(GeneratorTest, ValFramesAreExactAndStable) {
+  const std::vector<int> val = ValFrames(10, 0.3, 1);
+  EXPECT_EQ(val.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(val.begin(), val.end()));
+  EXPECT_EQ(val, ValFrames(10, 0.3, 1));
+  EXPECT_TRUE(ValFrames(10, 0.0, 1).empty());
+  EXPECT_EQ(ValFrames(10, 1.0, 1).size(), 10u);
+}
+
+TEST(GeneratorTest, RejectsBadOptions) {
+  DatasetOptions options;
+  EXPECT_THROW(options.Check(), std::invalid_argument);  // no output folder
+  options.out = "x";
+  options.val_fraction = 1.5;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  SynthOptions synth;
+  synth.width = 4;
+  EXPECT_THROW(synth.Check(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet

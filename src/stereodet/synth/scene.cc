@@ -1,0 +1,88 @@
+#include "stereodet/synth/scene.h"
+
+#include <cmath>
+
+namespace stereodet {
+
+Eigen::Vector2f Road::ToRoad(float x, float z) const {
+  const Eigen::Vector2f d(x - origin_xz.x(), z - origin_xz.y());
+  return {d.dot(RightXz()), d.dot(forward_xz)};
+}
+
+Eigen::Vector2f Road::FromRoad(float lateral_m, float along_m) const {
+  return origin_xz + lateral_m * RightXz() + along_m * forward_xz;
+}
+
+float Road::ForwardYaw() const {
+  // A heading (hx, hz) in the rect frame is rotation_y = atan2(-hz, hx) (geometry/box.h).
+  return std::atan2(-forward_xz.y(), forward_xz.x());
+}
+
+void Scene::Finalize() { bvh_ = Bvh(primitives); }
+
+int Scene::AddMaterial(const Material& material) {
+  materials.push_back(material);
+  return static_cast<int>(materials.size()) - 1;
+}
+
+bool Scene::Occluded(const Ray& ray, float t_min, float t_max, int* hint) const {
+  if (hint != nullptr && *hint >= 0 && primitives[*hint].Intersect(ray, t_min, t_max) != kNoHit) {
+    return true;
+  }
+  const RayHit blocker = bvh_.AnyHit(ray, t_min, t_max);
+  if (hint != nullptr && blocker.primitive >= 0) *hint = blocker.primitive;
+  return blocker.primitive >= 0;
+}
+
+float Scene::GroundHit(const Ray& ray, float t_min, float t_max) const {
+  if (ray.direction.y() <= 0.0f) return kNoHit;
+  const float t = (ground_y_m - ray.origin.y()) / ray.direction.y();
+  if (t <= t_min || t >= t_max) return kNoHit;
+  const float horizontal = t * std::hypot(ray.direction.x(), ray.direction.z());
+  return horizontal < max_ground_distance_m ? t : kNoHit;
+}
+
+SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
+  SurfaceHit hit;
+  if (t == kNoHit) return hit;
+  hit.t = t;
+  hit.point = ray.At(t);
+  if (primitive >= 0) {
+    const Primitive& p = primitives[primitive];
+    hit.kind = SurfaceHit::Kind::kPrimitive;
+    hit.normal = p.Normal(hit.point);
+    hit.primitive = primitive;
+    hit.material = p.material;
+    hit.object = p.object;
+  } else {
+    hit.kind = SurfaceHit::Kind::kGround;
+    hit.point.y() = ground_y_m;
+    hit.normal = Eigen::Vector3f(0.0f, -1.0f, 0.0f);
+    const float lateral = road.ToRoad(hit.point.x(), hit.point.z()).x();
+    hit.material = (lateral >= road.left_edge_m && lateral <= road.right_edge_m) ? road_material
+                                                                                 : offroad_material;
+  }
+  if (hit.normal.dot(ray.direction) > 0.0f) hit.normal = -hit.normal;
+  return hit;
+}
+
+SurfaceHit Scene::Trace(const Ray& ray, float t_min, float t_max, int hint) const {
+  // The ground first: it is analytic and, for the lower half of every image, the closest hit, so
+  // it bounds the BVH search from the start.
+  const float ground_t = GroundHit(ray, t_min, t_max);
+  if (ground_t != kNoHit) t_max = ground_t;
+  RayHit prim_hit;
+  if (hint >= 0) {
+    const float t = primitives[hint].Intersect(ray, t_min, t_max);
+    if (t != kNoHit) {
+      prim_hit = {t, hint};
+      t_max = t;
+    }
+  }
+  const RayHit closer = bvh_.Intersect(ray, t_min, t_max);
+  if (closer.primitive >= 0) prim_hit = closer;
+  if (prim_hit.primitive >= 0) return MakeHit(ray, prim_hit.t, prim_hit.primitive);
+  return MakeHit(ray, ground_t, -1);
+}
+
+}  // namespace stereodet

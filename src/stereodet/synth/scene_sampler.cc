@@ -1,0 +1,899 @@
+#include "stereodet/synth/scene_sampler.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "stereodet/synth/random.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+namespace {
+
+double Round2(double x) { return std::round(x * 100.0) / 100.0; }
+
+// ---------------------------------------------------------------------------------------------
+// Materials.
+
+Eigen::Vector3f Rgb(double r, double g, double b) {
+  return Eigen::Vector3f(static_cast<float>(r), static_cast<float>(g), static_cast<float>(b));
+}
+
+float Luma(const Eigen::Vector3f& c) { return 0.2126f * c.x() + 0.7152f * c.y() + 0.0722f * c.z(); }
+
+// A colour scaled by a random brightness factor.
+Eigen::Vector3f Vary(Rng& rng, const Eigen::Vector3f& c, double amount) {
+  return (c * static_cast<float>(rng.Uniform(1.0 - amount, 1.0 + amount))).cwiseMin(1.0f);
+}
+
+Material MakeMaterial(Pattern pattern, const Eigen::Vector3f& albedo, float contrast,
+                      float reflectance = -1.0f) {
+  Material m;
+  m.pattern = pattern;
+  m.albedo = albedo;
+  m.contrast = contrast;
+  // The HDL-64E's 905 nm return tracks visible brightness loosely.
+  m.lidar_reflectance = reflectance >= 0.0f ? reflectance : 0.08f + 0.5f * Luma(albedo);
+  return m;
+}
+
+Eigen::Vector3f CarColour(Rng& rng) {
+  // Roughly the colour mix of European city traffic: many greys, whites and blacks.
+  switch (rng.Categorical({0.22, 0.2, 0.18, 0.14, 0.09, 0.07, 0.05, 0.05})) {
+    case 0:
+      return Vary(rng, Rgb(0.72, 0.72, 0.72), 0.1);  // white
+    case 1:
+      return Vary(rng, Rgb(0.42, 0.43, 0.45), 0.2);  // silver
+    case 2:
+      return Vary(rng, Rgb(0.025, 0.025, 0.03), 0.3);  // black
+    case 3:
+      return Vary(rng, Rgb(0.16, 0.16, 0.17), 0.3);  // dark grey
+    case 4:
+      return Vary(rng, Rgb(0.05, 0.09, 0.28), 0.3);  // blue
+    case 5:
+      return Vary(rng, Rgb(0.45, 0.05, 0.04), 0.3);  // red
+    case 6:
+      return Vary(rng, Rgb(0.08, 0.18, 0.09), 0.3);  // green
+    default:
+      return Vary(rng, Rgb(0.5, 0.42, 0.3), 0.2);  // beige
+  }
+}
+
+Eigen::Vector3f ClothColour(Rng& rng) {
+  switch (rng.Categorical({0.3, 0.2, 0.2, 0.15, 0.15})) {
+    case 0:
+      return Vary(rng, Rgb(0.04, 0.04, 0.05), 0.4);
+    case 1:
+      return Vary(rng, Rgb(0.08, 0.1, 0.2), 0.4);
+    case 2:
+      return Vary(rng, Rgb(0.3, 0.28, 0.25), 0.4);
+    case 3:
+      return Vary(rng, Rgb(0.5, 0.12, 0.1), 0.4);
+    default:
+      return Rgb(rng.Uniform(0.05, 0.6), rng.Uniform(0.05, 0.6), rng.Uniform(0.05, 0.6));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Object parts, built in the object's local frame: x forward (the length), y down, z across (the
+// width), the origin on the ground. Heights are given positive (metres above the ground).
+
+class Parts {
+ public:
+  // Axis-aligned local box spanning [x0, x1] x heights [h0, h1] x [z0, z1].
+  void Box(float x0, float x1, float h0, float h1, float z0, float z1, int material) {
+    parts_.push_back(MakeBox(Eigen::Vector3f(0.5f * (x0 + x1), -0.5f * (h0 + h1), 0.5f * (z0 + z1)),
+                             Eigen::Vector3f(0.5f * (x1 - x0), 0.5f * (h1 - h0), 0.5f * (z1 - z0)),
+                             Eigen::Matrix3f::Identity(), material));
+  }
+  // A wheel: a cylinder with its axis across (local z).
+  void Wheel(float x, float z, float radius, float width, int material) {
+    Eigen::Matrix3f axis_z;
+    axis_z << 1, 0, 0,  //
+        0, 0, -1,       //
+        0, 1, 0;
+    parts_.push_back(
+        MakeCylinder(Eigen::Vector3f(x, -radius, z), radius, 0.5f * width, axis_z, material));
+  }
+  // A box from point a to point b (given as (x, height, z)), with half thicknesses across.
+  void Segment(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float half_x, float half_z,
+               int material) {
+    const Eigen::Vector3f pa(a.x(), -a.y(), a.z()), pb(b.x(), -b.y(), b.z());
+    const Eigen::Vector3f axis = (pb - pa).normalized();
+    Eigen::Vector3f across = Eigen::Vector3f::UnitZ();
+    if (std::abs(axis.dot(across)) > 0.9f) across = Eigen::Vector3f::UnitX();
+    across = (across - across.dot(axis) * axis).normalized();
+    Eigen::Matrix3f r;
+    r.col(1) = axis;
+    r.col(2) = across;
+    r.col(0) = axis.cross(across);
+    parts_.push_back(MakeBox(
+        0.5f * (pa + pb), Eigen::Vector3f(half_x, 0.5f * (pb - pa).norm(), half_z), r, material));
+  }
+  void Ellipsoid(const Eigen::Vector3f& centre, const Eigen::Vector3f& radii, int material) {
+    parts_.push_back(MakeEllipsoid(Eigen::Vector3f(centre.x(), -centre.y(), centre.z()), radii,
+                                   Eigen::Matrix3f::Identity(), material));
+  }
+  std::vector<Primitive>& parts() { return parts_; }
+
+ private:
+  std::vector<Primitive> parts_;
+};
+
+struct VehicleMaterials {
+  int paint, glass, tyre, dark;
+};
+
+VehicleMaterials AddVehicleMaterials(Scene& scene, Rng& rng, const Eigen::Vector3f& colour) {
+  Material paint = MakeMaterial(Pattern::kCarPaint, colour, 0.04f);
+  paint.specular = 0.12f;
+  Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.035, 0.04, 0.045), 0.15f, 0.05f);
+  glass.specular = 0.3f;
+  Material tyre = MakeMaterial(Pattern::kPlain, Rgb(0.03, 0.03, 0.03), 0.2f, 0.04f);
+  Material dark = MakeMaterial(Pattern::kPlain, Vary(rng, Rgb(0.06, 0.06, 0.06), 0.3), 0.3f);
+  return {scene.AddMaterial(paint), scene.AddMaterial(glass), scene.AddMaterial(tyre),
+          scene.AddMaterial(dark)};
+}
+
+void BuildCar(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rng& rng) {
+  const float r = static_cast<float>(rng.Uniform(0.29, 0.33));
+  const float body_half_w = 0.5f * w - 0.03f;
+  const float shoulder = h * static_cast<float>(rng.Uniform(0.56, 0.63));
+  p.Box(-0.5f * l, 0.5f * l, 0.2f, shoulder, -body_half_w, body_half_w, m.paint);
+  const float cabin_l = l * static_cast<float>(rng.Uniform(0.44, 0.54));
+  const float cabin_x = -0.06f * l;
+  p.Box(cabin_x - 0.5f * cabin_l, cabin_x + 0.5f * cabin_l, shoulder, h - 0.05f,
+        -body_half_w + 0.08f, body_half_w - 0.08f, m.glass);
+  p.Box(cabin_x - 0.45f * cabin_l, cabin_x + 0.4f * cabin_l, h - 0.05f, h, -body_half_w + 0.1f,
+        body_half_w - 0.1f, m.paint);
+  const float axle = 0.5f * l - static_cast<float>(rng.Uniform(0.68, 0.85));
+  for (float x : {-axle, axle}) {
+    for (float z : {-0.5f * w + 0.1f, 0.5f * w - 0.1f}) p.Wheel(x, z, r, 0.2f, m.tyre);
+  }
+}
+
+void BuildVan(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rng& rng) {
+  const float half_w = 0.5f * w - 0.03f;
+  p.Box(-0.5f * l, 0.5f * l, 0.3f, 1.05f, -half_w, half_w, m.paint);
+  p.Box(-0.5f * l, 0.5f * l - 0.85f, 1.05f, h, -half_w, half_w, m.paint);
+  p.Box(0.5f * l - 0.85f, 0.5f * l - 0.3f, 1.05f, h - 0.12f, -half_w + 0.05f, half_w - 0.05f,
+        m.glass);
+  const float r = static_cast<float>(rng.Uniform(0.33, 0.37));
+  for (float x : {-0.5f * l + 0.9f, 0.5f * l - 0.9f}) {
+    for (float z : {-0.5f * w + 0.11f, 0.5f * w - 0.11f}) p.Wheel(x, z, r, 0.22f, m.tyre);
+  }
+}
+
+void BuildTruck(Parts& p, float l, float w, float h, const VehicleMaterials& m,
+                int cargo_material) {
+  const float half_w = 0.5f * w;
+  const float cab_h = std::min(h, 3.0f);
+  p.Box(0.5f * l - 2.2f, 0.5f * l - 0.03f, 0.55f, cab_h, -half_w + 0.05f, half_w - 0.05f, m.paint);
+  p.Box(0.5f * l - 0.3f, 0.5f * l, 1.6f, cab_h - 0.3f, -half_w + 0.15f, half_w - 0.15f, m.glass);
+  p.Box(-0.5f * l, 0.5f * l - 2.4f, 1.0f, h, -half_w, half_w, cargo_material);
+  p.Box(-0.5f * l + 0.4f, 0.5f * l - 0.2f, 0.5f, 1.0f, -half_w + 0.45f, half_w - 0.45f, m.dark);
+  const float r = 0.5f;
+  std::vector<float> axles = {0.5f * l - 1.3f, -0.5f * l + 1.1f};
+  if (l > 7.5f) axles.push_back(-0.5f * l + 2.5f);
+  for (float x : axles) {
+    for (float z : {-half_w + 0.18f, half_w - 0.18f}) p.Wheel(x, z, r, 0.32f, m.tyre);
+  }
+}
+
+void BuildPedestrian(Parts& p, float h, int top, int bottom, int skin, Rng& rng) {
+  const float s = h / 1.75f;
+  const float stride = static_cast<float>(rng.Uniform(0.0, 0.33)) * s;
+  const float swing = 0.6f * stride;
+  const float lean = static_cast<float>(rng.Uniform(0.0, 0.05));
+  const float hip = 0.5f * h, neck = 0.83f * h;
+  for (float side : {-1.0f, 1.0f}) {
+    p.Segment({0.0f, hip, 0.09f * s * side}, {side * stride, 0.03f, 0.1f * s * side}, 0.065f * s,
+              0.07f * s, bottom);
+    p.Segment({lean, neck - 0.03f * s, 0.21f * s * side},
+              {-side * swing, 0.44f * h, 0.24f * s * side}, 0.045f * s, 0.045f * s, top);
+  }
+  p.Segment({0.0f, hip - 0.05f * s, 0.0f}, {lean, neck, 0.0f}, 0.11f * s, 0.18f * s, top);
+  p.Ellipsoid({lean + 0.01f, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.1f, 0.115f, 0.09f) * s, skin);
+}
+
+void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin) {
+  const float s = h / 1.27f;
+  const float seat = 0.46f * s;
+  for (float side : {-1.0f, 1.0f}) {
+    p.Segment({-0.05f, seat, 0.1f * side * s}, {0.4f * s, seat, 0.1f * side * s}, 0.07f * s,
+              0.07f * s, bottom);
+    p.Segment({0.4f * s, seat, 0.1f * side * s}, {0.45f * s, 0.02f, 0.11f * side * s}, 0.06f * s,
+              0.06f * s, bottom);
+    p.Segment({-0.08f * s, 0.98f * s, 0.2f * side * s},
+              {0.25f * s, seat + 0.08f * s, 0.18f * side * s}, 0.045f * s, 0.045f * s, top);
+  }
+  p.Segment({-0.1f * s, seat - 0.05f * s, 0.0f}, {-0.12f * s, 1.02f * s, 0.0f}, 0.11f * s,
+            0.18f * s, top);
+  p.Ellipsoid({-0.11f * s, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.1f, 0.115f, 0.09f) * s, skin);
+}
+
+void BuildCyclist(Parts& p, float h, int top, int bottom, int skin, int frame, int tyre, Rng& rng) {
+  const float s = h / 1.72f;
+  const float r = 0.34f;
+  for (float x : {-0.53f, 0.53f}) p.Wheel(x * s, 0.0f, r, 0.045f, tyre);
+  const Eigen::Vector3f bb(0.0f, 0.3f, 0.0f), saddle(-0.16f * s, 0.88f * s, 0.0f),
+      head_tube(0.42f * s, 0.82f * s, 0.0f), bar(0.4f * s, 1.0f * s, 0.0f);
+  p.Segment(bb, saddle, 0.02f, 0.02f, frame);
+  p.Segment(saddle, head_tube, 0.02f, 0.02f, frame);
+  p.Segment(bb, head_tube, 0.025f, 0.025f, frame);
+  p.Segment(head_tube, {0.53f * s, r, 0.0f}, 0.02f, 0.02f, frame);
+  p.Segment(bb, {-0.53f * s, r, 0.0f}, 0.02f, 0.02f, frame);
+  p.Segment({0.4f * s, 1.0f * s, -0.26f * s}, {0.4f * s, 1.0f * s, 0.26f * s}, 0.02f, 0.02f, frame);
+  const float phase = static_cast<float>(rng.Uniform(0.0, 2.0 * M_PI));
+  const Eigen::Vector3f hip(-0.14f * s, 0.93f * s, 0.0f);
+  const Eigen::Vector3f shoulder(0.2f * s, 1.43f * s, 0.0f);
+  for (float side : {-1.0f, 1.0f}) {
+    const float a = phase + (side > 0 ? 0.0f : static_cast<float>(M_PI));
+    const Eigen::Vector3f pedal(0.17f * std::cos(a), 0.3f + 0.17f * std::sin(a), 0.1f * side);
+    p.Segment(hip + Eigen::Vector3f(0, 0, 0.09f * side), pedal, 0.06f * s, 0.065f * s, bottom);
+    p.Segment(shoulder + Eigen::Vector3f(0, 0, 0.2f * side * s),
+              {0.4f * s, 1.0f * s, 0.24f * side * s}, 0.04f * s, 0.04f * s, top);
+  }
+  p.Segment(hip, shoulder, 0.11f * s, 0.18f * s, top);
+  p.Ellipsoid({0.3f * s, h - 0.11f * s, 0.0f}, Eigen::Vector3f(0.11f, 0.11f, 0.09f) * s, skin);
+}
+
+// Extent of parts in their local frame.
+Aabb LocalBounds(const std::vector<Primitive>& parts) {
+  Aabb b;
+  for (const Primitive& p : parts) b.Extend(p.Bounds());
+  return b;
+}
+
+// Moves the parts so that they are centred on the local origin in x and z and rest on the ground,
+// places them at `location` (bottom centre) turned by `rotation_y`, and appends them to the scene
+// as object `type`. The label box is the parts' extent (rounded to 0.01 m) at the given pose.
+int EmitObject(Scene& scene, const std::string& type, Parts& parts, const Eigen::Vector3d& location,
+               double rotation_y) {
+  const Aabb local = LocalBounds(parts.parts());
+  const Eigen::Vector3f shift(-0.5f * (local.min.x() + local.max.x()), -local.max.y(),
+                              -0.5f * (local.min.z() + local.max.z()));
+  const Eigen::Matrix3f rot = RotationY(static_cast<float>(rotation_y));
+  const Eigen::Vector3f loc = location.cast<float>();
+  SceneObject object;
+  object.type = type;
+  object.box.l = Round2(local.max.x() - local.min.x());
+  object.box.h = Round2(local.max.y() - local.min.y());
+  object.box.w = Round2(local.max.z() - local.min.z());
+  object.box.location = location;
+  object.box.rotation_y = rotation_y;
+  object.first_primitive = static_cast<int>(scene.primitives.size());
+  object.num_primitives = static_cast<int>(parts.parts().size());
+  const int index = static_cast<int>(scene.objects.size());
+  for (Primitive p : parts.parts()) {
+    p.centre = loc + rot * (p.centre + shift);
+    p.world_from_local = rot * p.world_from_local;
+    p.object = index;
+    scene.primitives.push_back(p);
+  }
+  scene.objects.push_back(object);
+  return index;
+}
+
+// Builds a labelled object of `type` with dimensions (l, w, h) and appends it.
+int AddObject(Scene& scene, const std::string& type, double l, double w, double h,
+              const Eigen::Vector3d& location, double rotation_y, Rng& rng) {
+  Parts parts;
+  const float lf = static_cast<float>(l), wf = static_cast<float>(w), hf = static_cast<float>(h);
+  if (type == "Car" || type == "Van" || type == "Truck" || type == "Misc" || type == "Tram") {
+    const VehicleMaterials m = AddVehicleMaterials(scene, rng, CarColour(rng));
+    if (type == "Car") {
+      BuildCar(parts, lf, wf, hf, m, rng);
+    } else if (type == "Van") {
+      BuildVan(parts, lf, wf, hf, m, rng);
+    } else if (type == "Truck") {
+      const int cargo = scene.AddMaterial(MakeMaterial(
+          Pattern::kPlain,
+          Vary(rng, rng.Bernoulli(0.5) ? Rgb(0.7, 0.7, 0.68) : CarColour(rng), 0.1), 0.08f));
+      BuildTruck(parts, lf, wf, hf, m, cargo);
+    } else if (type == "Tram") {
+      Material body = MakeMaterial(Pattern::kFacade, Vary(rng, Rgb(0.75, 0.72, 0.6), 0.1), 0.05f);
+      body.albedo2 = Rgb(0.04, 0.05, 0.06);
+      body.scale_m = 1.6f;
+      const int body_m = scene.AddMaterial(body);
+      parts.Box(-0.5f * lf, 0.5f * lf, 0.45f, hf - 0.35f, -0.5f * wf, 0.5f * wf, body_m);
+      parts.Box(-0.25f * lf, 0.25f * lf, hf - 0.35f, hf, -0.3f * wf, 0.3f * wf, m.dark);
+      for (float x : {-0.33f * lf, 0.0f, 0.33f * lf}) {
+        parts.Box(x - 1.0f, x + 1.0f, 0.0f, 0.45f, -0.4f * wf, 0.4f * wf, m.dark);
+      }
+    } else {  // Misc: a trailer on one axle with a drawbar
+      parts.Box(-0.5f * lf, 0.5f * lf - 0.8f, 0.45f, hf, -0.5f * wf, 0.5f * wf, m.paint);
+      parts.Box(0.5f * lf - 0.8f, 0.5f * lf, 0.35f, 0.45f, -0.05f, 0.05f, m.dark);
+      for (float z : {-0.5f * wf + 0.1f, 0.5f * wf - 0.1f})
+        parts.Wheel(-0.1f * lf, z, 0.3f, 0.18f, m.tyre);
+    }
+  } else {
+    const int top = scene.AddMaterial(MakeMaterial(Pattern::kCloth, ClothColour(rng), 0.25f));
+    const int bottom = scene.AddMaterial(MakeMaterial(Pattern::kCloth, ClothColour(rng), 0.25f));
+    const int skin =
+        scene.AddMaterial(MakeMaterial(Pattern::kPlain, Vary(rng, Rgb(0.55, 0.4, 0.3), 0.3), 0.1f));
+    if (type == "Pedestrian") {
+      BuildPedestrian(parts, hf, top, bottom, skin, rng);
+    } else if (type == "Person_sitting") {
+      BuildPersonSitting(parts, hf, top, bottom, skin);
+    } else if (type == "Cyclist") {
+      const int frame = scene.AddMaterial(MakeMaterial(Pattern::kPlain, CarColour(rng), 0.1f));
+      const int tyre =
+          scene.AddMaterial(MakeMaterial(Pattern::kPlain, Rgb(0.03, 0.03, 0.03), 0.1f, 0.04f));
+      BuildCyclist(parts, hf, top, bottom, skin, frame, tyre, rng);
+    } else {
+      STEREODET_THROW_ARG() << "unknown synthetic object type '" << type << "'";
+    }
+  }
+  return EmitObject(scene, type, parts, location, rotation_y);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Street layout.
+
+enum class StreetKind { kCity, kResidential, kRoad };
+
+// Sizes (l, w, h) by class, after KITTI's means and spreads.
+struct Dims {
+  double l, w, h;
+};
+Dims SampleDims(const std::string& type, Rng& rng) {
+  if (type == "Car") {
+    switch (rng.Categorical({0.3, 0.5, 0.2})) {
+      case 0:
+        return {rng.Uniform(3.4, 3.9), rng.Uniform(1.55, 1.7), rng.Uniform(1.4, 1.55)};
+      case 1:
+        return {rng.Uniform(3.9, 4.5), rng.Uniform(1.6, 1.8), rng.Uniform(1.4, 1.55)};
+      default:
+        return {rng.Uniform(4.4, 4.95), rng.Uniform(1.75, 1.95), rng.Uniform(1.5, 1.75)};
+    }
+  }
+  if (type == "Van") return {rng.Uniform(4.6, 5.8), rng.Uniform(1.85, 2.05), rng.Uniform(1.9, 2.5)};
+  if (type == "Truck")
+    return {rng.Uniform(6.5, 12.0), rng.Uniform(2.4, 2.55), rng.Uniform(2.9, 3.8)};
+  if (type == "Tram")
+    return {rng.Uniform(15.0, 28.0), rng.Uniform(2.5, 2.65), rng.Uniform(3.3, 3.6)};
+  if (type == "Misc") return {rng.Uniform(2.5, 4.0), rng.Uniform(1.5, 2.0), rng.Uniform(1.2, 2.2)};
+  if (type == "Pedestrian") return {0.0, 0.0, rng.ClampedNormal(1.74, 0.1, 1.45, 2.0)};
+  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.07, 1.1, 1.4)};
+  return {0.0, 0.0, rng.ClampedNormal(1.72, 0.08, 1.5, 1.95)};  // Cyclist
+}
+
+struct Footprint {
+  double lateral, along, radius;
+};
+
+class StreetBuilder {
+ public:
+  StreetBuilder(Scene& scene, const SceneOptions& options, Rng& rng)
+      : scene_(scene), options_(options), rng_(rng) {}
+
+  void Build();
+
+ private:
+  // World position of road coordinates on a surface `height_m` above the road.
+  Eigen::Vector3d At(double lateral, double along, double height_m = 0.0) const {
+    const Eigen::Vector2f xz =
+        scene_.road.FromRoad(static_cast<float>(lateral), static_cast<float>(along));
+    return {Round2(xz.x()), Round2(scene_.ground_y_m - height_m), Round2(xz.y())};
+  }
+  double Yaw(double relative) const { return Round2(WrapYaw(scene_.road.ForwardYaw() + relative)); }
+  static double WrapYaw(double a) {
+    while (a >= M_PI) a -= 2.0 * M_PI;
+    while (a < -M_PI) a += 2.0 * M_PI;
+    return a;
+  }
+  // Background box aligned with the road: along [a0, a1], lateral [s0, s1], heights [h0, h1].
+  // Long boxes (sidewalks, walls) are cut into pieces of at most kPieceM along the road: a BVH
+  // over 200 m long boxes would make every ray visit them. The texture runs on across the cuts.
+  void RoadBox(double a0, double a1, double s0, double s1, double h0, double h1, int material) {
+    constexpr double kPieceM = 12.0;
+    const int pieces = std::max(1, static_cast<int>(std::ceil((a1 - a0) / kPieceM)));
+    const double step = (a1 - a0) / pieces;
+    const float u_offset = static_cast<float>(rng_.Uniform(0, 100));
+    const float v_offset = static_cast<float>(rng_.Uniform(0, 3));
+    for (int i = 0; i < pieces; ++i) {
+      const double b0 = a0 + i * step, b1 = b0 + step;
+      const Eigen::Vector2f c = scene_.road.FromRoad(static_cast<float>(0.5 * (s0 + s1)),
+                                                     static_cast<float>(0.5 * (b0 + b1)));
+      Primitive p = MakeBox(
+          Eigen::Vector3f(c.x(), scene_.ground_y_m - static_cast<float>(0.5 * (h0 + h1)), c.y()),
+          Eigen::Vector3f(static_cast<float>(0.5 * step), static_cast<float>(0.5 * (h1 - h0)),
+                          static_cast<float>(0.5 * (s1 - s0))),
+          RotationY(scene_.road.ForwardYaw()), material);
+      p.texture_offset =
+          Eigen::Vector2f(u_offset + static_cast<float>(0.5 * (b0 + b1) - a0), v_offset);
+      scene_.primitives.push_back(p);
+    }
+  }
+  bool Free(double lateral, double along, double radius) const {
+    for (const Footprint& f : taken_) {
+      if (std::hypot(f.lateral - lateral, f.along - along) < f.radius + radius) return false;
+    }
+    // The ego car.
+    return !(std::abs(lateral - ego_lateral_) < 1.3 + radius && along > -3.5 - radius &&
+             along < 2.0 + radius);
+  }
+  void Take(double lateral, double along, double radius) {
+    taken_.push_back({lateral, along, radius});
+  }
+
+  std::string VehicleType(bool parked) {
+    if (parked)
+      return std::vector<std::string>{"Car", "Van", "Truck",
+                                      "Misc"}[rng_.Categorical({0.89, 0.08, 0.015, 0.015})];
+    return std::vector<std::string>{"Car", "Van", "Truck"}[rng_.Categorical({0.86, 0.08, 0.06})];
+  }
+  // Places a vehicle centred at (lateral, along) heading along the road (or against it).
+  double PlaceVehicle(const std::string& type, double lateral, double along, bool oncoming,
+                      double yaw_sd) {
+    const Dims d = SampleDims(type, rng_);
+    const double yaw = Yaw((oncoming ? M_PI : 0.0) + rng_.Normal(0.0, yaw_sd));
+    Take(lateral, along, 0.5 * d.l);
+    AddObject(scene_, type, d.l, d.w, d.h, At(lateral, along), yaw, rng_);
+    return d.l;
+  }
+  void PlacePerson(const std::string& type, double lateral, double along, double height_m,
+                   double yaw) {
+    const Dims d = SampleDims(type, rng_);
+    Take(lateral, along, type == "Cyclist" ? 0.9 : 0.4);
+    AddObject(scene_, type, 0, 0, d.h, At(lateral, along, height_m), Round2(WrapYaw(yaw)), rng_);
+  }
+
+  void Materials();
+  void Lanes();
+  void Traffic();
+  void Trams();
+  void Parking(double lateral, double width, int side);
+  void Sidewalk(int side);
+  void Roadside(int side);
+  void Pedestrians();
+
+  Scene& scene_;
+  const SceneOptions& options_;
+  Rng& rng_;
+  StreetKind kind_ = StreetKind::kCity;
+  std::vector<Footprint> taken_;
+  double ego_lateral_ = 0.0;
+  // Lateral layout (metres to the right of road coordinate 0).
+  struct Lane {
+    double centre;
+    bool oncoming;
+  };
+  std::vector<Lane> lanes_;
+  double lane_width_ = 3.3;
+  double carriage_left_ = 0.0, carriage_right_ = 0.0;  // edges of the driving lanes
+  double parking_width_[2] = {0.0, 0.0};               // left, right
+  double sidewalk_inner_[2] = {0.0, 0.0}, sidewalk_outer_[2] = {0.0, 0.0};
+  double curb_height_ = 0.12;
+  // Materials.
+  int sidewalk_material_ = 0, curb_material_ = 0, grass_material_ = 0, foliage_material_ = 0,
+      bark_material_ = 0, metal_material_ = 0, wall_material_ = 0, fence_material_ = 0;
+};
+
+void StreetBuilder::Materials() {
+  Material asphalt =
+      MakeMaterial(Pattern::kAsphalt, Vary(rng_, Rgb(0.15, 0.15, 0.155), 0.25), 0.35f, 0.22f);
+  asphalt.albedo2 = Rgb(0.7, 0.7, 0.68);
+  scene_.road_material = scene_.AddMaterial(asphalt);
+  Material offroad =
+      kind_ == StreetKind::kCity
+          ? MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.3, 0.29, 0.27), 0.2), 0.25f)
+          : MakeMaterial(Pattern::kGrass, Vary(rng_, Rgb(0.12, 0.2, 0.06), 0.3), 0.45f, 0.5f);
+  offroad.albedo2 = kind_ == StreetKind::kCity ? Rgb(0.1, 0.1, 0.1) : Rgb(0.22, 0.18, 0.1);
+  offroad.scale_m = 0.5f;
+  scene_.offroad_material = scene_.AddMaterial(offroad);
+  Material paving = MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.35, 0.33, 0.31), 0.2), 0.2f);
+  paving.albedo2 = Rgb(0.12, 0.12, 0.11);
+  paving.scale_m = static_cast<float>(rng_.Uniform(0.25, 0.5));
+  sidewalk_material_ = scene_.AddMaterial(paving);
+  curb_material_ = scene_.AddMaterial(MakeMaterial(Pattern::kPlain, Rgb(0.4, 0.4, 0.38), 0.2f));
+  Material grass = MakeMaterial(Pattern::kGrass, Vary(rng_, Rgb(0.1, 0.2, 0.05), 0.3), 0.5f, 0.5f);
+  grass.albedo2 = Rgb(0.2, 0.17, 0.1);
+  grass_material_ = scene_.AddMaterial(grass);
+  Material foliage =
+      MakeMaterial(Pattern::kFoliage, Vary(rng_, Rgb(0.06, 0.14, 0.04), 0.3), 0.7f, 0.55f);
+  foliage.albedo2 = Vary(rng_, Rgb(0.14, 0.2, 0.06), 0.3);
+  foliage_material_ = scene_.AddMaterial(foliage);
+  bark_material_ = scene_.AddMaterial(MakeMaterial(Pattern::kPlain, Rgb(0.12, 0.09, 0.07), 0.4f));
+  metal_material_ = scene_.AddMaterial(MakeMaterial(Pattern::kPlain, Rgb(0.3, 0.31, 0.32), 0.1f));
+  Material brick = MakeMaterial(Pattern::kBrick, Vary(rng_, Rgb(0.4, 0.2, 0.13), 0.2), 0.2f);
+  brick.albedo2 = Rgb(0.5, 0.48, 0.45);
+  if (rng_.Bernoulli(0.4)) {
+    brick = MakeMaterial(Pattern::kPlain, Vary(rng_, Rgb(0.45, 0.43, 0.4), 0.25), 0.35f);
+  }
+  wall_material_ = scene_.AddMaterial(brick);
+  Material fence = MakeMaterial(Pattern::kFence, Vary(rng_, Rgb(0.3, 0.22, 0.15), 0.4), 0.3f);
+  fence.albedo2 = Rgb(0.05, 0.07, 0.04);
+  fence.scale_m = static_cast<float>(rng_.Uniform(0.1, 0.2));
+  fence_material_ = scene_.AddMaterial(fence);
+}
+
+void StreetBuilder::Lanes() {
+  lane_width_ = rng_.Uniform(3.0, 3.6);
+  int forward_lanes = 1, oncoming_lanes = 1;
+  switch (kind_) {
+    case StreetKind::kCity:
+      forward_lanes = rng_.Categorical({0.6, 0.4}) + 1;
+      oncoming_lanes = rng_.Categorical({0.15, 0.55, 0.3});
+      break;
+    case StreetKind::kResidential:
+      forward_lanes = 1;
+      oncoming_lanes = rng_.Categorical({0.2, 0.8});
+      break;
+    case StreetKind::kRoad:
+      forward_lanes = rng_.Categorical({0.5, 0.5}) + 1;
+      oncoming_lanes = rng_.Categorical({0.1, 0.5, 0.4});
+      break;
+  }
+  // Lanes from left to right; the ego car drives in one of the forward lanes.
+  const int ego = oncoming_lanes + rng_.UniformInt(0, forward_lanes - 1);
+  const int total = forward_lanes + oncoming_lanes;
+  for (int i = 0; i < total; ++i) lanes_.push_back({(i - ego) * lane_width_, i < oncoming_lanes});
+  carriage_left_ = lanes_.front().centre - 0.5 * lane_width_;
+  carriage_right_ = lanes_.back().centre + 0.5 * lane_width_;
+  // Markings: lane lines (dashed between lanes of one direction, solid or dashed between the two
+  // directions), edge lines where there is no parking.
+  for (int i = 1; i < total; ++i) {
+    const bool divider = lanes_[i - 1].oncoming != lanes_[i].oncoming;
+    scene_.road.markings.push_back({static_cast<float>(lanes_[i].centre - 0.5 * lane_width_),
+                                    divider ? 0.15f : 0.12f, !divider || rng_.Bernoulli(0.5)});
+  }
+  const double parking_p =
+      kind_ == StreetKind::kCity ? 0.85 : (kind_ == StreetKind::kResidential ? 0.6 : 0.0);
+  for (int side = 0; side < 2; ++side) {
+    parking_width_[side] =
+        rng_.Bernoulli(parking_p) ? rng_.Uniform(2.0, 2.5) : rng_.Uniform(0.3, 0.8);
+    const double edge = side == 0 ? carriage_left_ : carriage_right_;
+    if (parking_width_[side] > 1.5 || rng_.Bernoulli(0.5)) {
+      scene_.road.markings.push_back(
+          {static_cast<float>(edge + (side == 0 ? 0.15 : -0.15)), 0.12f, false});
+    }
+  }
+  scene_.road.left_edge_m = static_cast<float>(carriage_left_ - parking_width_[0]);
+  scene_.road.right_edge_m = static_cast<float>(carriage_right_ + parking_width_[1]);
+}
+
+void StreetBuilder::Traffic() {
+  const double density = options_.object_density;
+  for (const Lane& lane : lanes_) {
+    const bool ego_lane = std::abs(lane.centre - ego_lateral_) < 0.5 * lane_width_;
+    double along = options_.min_along_m + rng_.Uniform(0.0, 20.0);
+    const double mean_gap = (kind_ == StreetKind::kRoad ? 40.0 : 55.0) / std::max(density, 1e-3);
+    while (along < options_.max_along_m) {
+      if (ego_lane && along > -8.0 && along < 6.0) {
+        along = 6.0 + rng_.Uniform(0.0, 8.0);
+        continue;
+      }
+      const std::string type = VehicleType(false);
+      const double lateral = lane.centre + rng_.Normal(0.0, 0.2);
+      if (Free(lateral, along, 3.0)) {
+        const double l = PlaceVehicle(type, lateral, along, lane.oncoming, 0.03);
+        along += l;
+      }
+      along += 4.0 + rng_.Uniform(0.0, 2.0 * mean_gap);
+    }
+  }
+  // Cyclists ride along the right edge of the carriageway (or against it on the left).
+  const double cyclists = (kind_ == StreetKind::kRoad ? 0.1 : 0.18) * density;
+  for (int i = 0; i < 4; ++i) {
+    if (!rng_.Bernoulli(cyclists / 4.0 * 2.0)) continue;
+    const bool right = rng_.Bernoulli(0.7);
+    const double lateral = right ? carriage_right_ - 0.6 : carriage_left_ + 0.6;
+    const double along = rng_.Uniform(4.0, 50.0);
+    if (!Free(lateral, along, 1.0)) continue;
+    PlacePerson("Cyclist", lateral, along, 0.0,
+                scene_.road.ForwardYaw() + (right ? 0.0 : M_PI) + rng_.Normal(0.0, 0.08));
+  }
+}
+
+void StreetBuilder::Trams() {
+  // A tram now and then on a city street, placed before the other vehicles so it finds room.
+  if (kind_ != StreetKind::kCity || !rng_.Bernoulli(std::min(1.0, 0.2 * options_.object_density)))
+    return;
+  const Lane& lane = lanes_[rng_.UniformInt(0, static_cast<int>(lanes_.size()) - 1)];
+  const double along = rng_.Uniform(20.0, 70.0);
+  if (Free(lane.centre, along, 10.0)) PlaceVehicle("Tram", lane.centre, along, lane.oncoming, 0.01);
+}
+
+void StreetBuilder::Parking(double lateral, double width, int side) {
+  if (width < 1.5) return;
+  const double density = options_.object_density;
+  const double fill =
+      (kind_ == StreetKind::kCity ? rng_.Uniform(0.15, 0.5) : rng_.Uniform(0.1, 0.4)) *
+      std::min(1.0, density);
+  double along = options_.min_along_m + rng_.Uniform(0.0, 6.0);
+  while (along < options_.max_along_m) {
+    const double slot = rng_.Uniform(5.2, 6.5);
+    if (rng_.Bernoulli(fill)) {
+      const std::string type = VehicleType(true);
+      const double l_guess = type == "Truck" ? 9.0 : 5.0;
+      const double centre_along = along + 0.5 * l_guess;
+      const double lat = lateral + (side == 0 ? 1 : -1) * rng_.Uniform(0.0, 0.25);
+      if (Free(lat, centre_along, 2.2)) {
+        const double l = PlaceVehicle(type, lat, centre_along, rng_.Bernoulli(0.25), 0.03);
+        along += std::max(0.0, l - slot);
+      }
+    }
+    along += slot;
+  }
+}
+
+void StreetBuilder::Sidewalk(int side) {
+  const double inner = side == 0 ? scene_.road.left_edge_m : scene_.road.right_edge_m;
+  const double width = kind_ == StreetKind::kCity          ? rng_.Uniform(2.5, 5.0)
+                       : kind_ == StreetKind::kResidential ? rng_.Uniform(1.5, 3.0)
+                                                           : rng_.Uniform(0.0, 1.5);
+  const double outer = side == 0 ? inner - width : inner + width;
+  sidewalk_inner_[side] = inner;
+  sidewalk_outer_[side] = outer;
+  if (width < 0.5) return;
+  const double s0 = std::min(inner, outer), s1 = std::max(inner, outer);
+  const double a0 = options_.min_along_m - 20.0, a1 = options_.max_along_m + 100.0;
+  RoadBox(a0, a1, s0, s1, 0.0, curb_height_, sidewalk_material_);
+  // The kerb stone: a thin lighter strip at the road side.
+  const double k0 = side == 0 ? inner - 0.15 : inner, k1 = side == 0 ? inner : inner + 0.15;
+  RoadBox(a0, a1, k0, k1, 0.0, curb_height_ + 0.005, curb_material_);
+}
+
+void StreetBuilder::Roadside(int side) {
+  const double sign = side == 0 ? -1.0 : 1.0;
+  const double line = sidewalk_outer_[side];
+  const double a0 = options_.min_along_m - 20.0, a1 = options_.max_along_m + 90.0;
+  // Trees and poles along the kerb.
+  const double tree_p =
+      kind_ == StreetKind::kCity ? 0.4 : (kind_ == StreetKind::kResidential ? 0.7 : 0.5);
+  if (rng_.Bernoulli(tree_p)) {
+    const double spacing = rng_.Uniform(8.0, 20.0);
+    for (double a = a0 + rng_.Uniform(0.0, spacing); a < a1;
+         a += spacing * rng_.Uniform(0.8, 1.3)) {
+      const double s = sidewalk_inner_[side] + sign * rng_.Uniform(0.6, 1.2);
+      if (!Free(s, a, 1.0)) continue;
+      Take(s, a, 0.5);
+      const double trunk_h = rng_.Uniform(2.0, 3.5), crown = rng_.Uniform(1.5, 3.2);
+      const Eigen::Vector3d base = At(s, a, curb_height_);
+      const float r = static_cast<float>(rng_.Uniform(0.1, 0.22));
+      Primitive trunk = MakeCylinder(
+          Eigen::Vector3f(base.x(), base.y() - 0.5 * (trunk_h + 0.5), base.z()), r,
+          static_cast<float>(0.5 * (trunk_h + 0.5)), Eigen::Matrix3f::Identity(), bark_material_);
+      scene_.primitives.push_back(trunk);
+      Primitive top =
+          MakeEllipsoid(Eigen::Vector3f(base.x(), base.y() - trunk_h - 0.8 * crown, base.z()),
+                        Eigen::Vector3f(crown, 1.1 * crown, crown).cast<float>(),
+                        RotationY(rng_.Uniform(0, 3)), foliage_material_);
+      top.texture_offset = Eigen::Vector2f(static_cast<float>(rng_.Uniform(0, 50)), 0.0f);
+      scene_.primitives.push_back(top);
+    }
+  }
+  {
+    const double spacing = rng_.Uniform(20.0, 40.0);
+    for (double a = a0 + rng_.Uniform(0.0, spacing); a < a1; a += spacing) {
+      const double s = sidewalk_inner_[side] + sign * 0.4;
+      if (!Free(s, a, 0.3)) continue;
+      const double h = rng_.Uniform(4.0, 8.0);
+      const Eigen::Vector3d base = At(s, a, curb_height_);
+      scene_.primitives.push_back(
+          MakeCylinder(Eigen::Vector3f(base.x(), base.y() - 0.5 * h, base.z()), 0.07f,
+                       static_cast<float>(0.5 * h), Eigen::Matrix3f::Identity(), metal_material_));
+      if (rng_.Bernoulli(0.5)) {  // a sign
+        Primitive sign_box = MakeBox(
+            Eigen::Vector3f(base.x(), base.y() - 2.4f, base.z()),
+            Eigen::Vector3f(0.03f, 0.3f, 0.3f), RotationY(scene_.road.ForwardYaw()),
+            scene_.AddMaterial(MakeMaterial(Pattern::kPlain, CarColour(rng_), 0.05f, 0.9f)));
+        scene_.primitives.push_back(sign_box);
+      }
+    }
+  }
+  // Buildings, front yards, fences and hedges.
+  double a = a0;
+  while (a < a1) {
+    if (kind_ == StreetKind::kCity) {
+      const double w = rng_.Uniform(8.0, 28.0);
+      const double setback = rng_.Bernoulli(0.8) ? 0.0 : rng_.Uniform(1.0, 6.0);
+      const double depth = rng_.Uniform(10.0, 16.0), h = rng_.Uniform(9.0, 22.0);
+      if (rng_.Bernoulli(0.1)) {  // a gap: a yard behind a 30 cm wall
+        const double s0 = line + sign * 0.3, s1 = line + sign * 0.6;
+        RoadBox(a, a + w, std::min(s0, s1), std::max(s0, s1), 0.0, rng_.Uniform(1.0, 2.5),
+                wall_material_);
+      } else {
+        Material facade = MakeMaterial(
+            Pattern::kFacade,
+            Vary(rng_,
+                 std::vector<Eigen::Vector3f>{Rgb(0.6, 0.53, 0.42), Rgb(0.68, 0.66, 0.62),
+                                              Rgb(0.45, 0.44, 0.43), Rgb(0.5, 0.3, 0.22),
+                                              Rgb(0.65, 0.58, 0.38)}[rng_.UniformInt(0, 4)],
+                 0.15),
+            0.25f);
+        facade.albedo2 = Vary(rng_, Rgb(0.06, 0.07, 0.09), 0.5);
+        facade.scale_m = static_cast<float>(rng_.Uniform(2.4, 4.2));
+        const double s_front = line + sign * setback;
+        RoadBox(a, a + w, std::min(s_front, s_front + sign * depth),
+                std::max(s_front, s_front + sign * depth), 0.0, h, scene_.AddMaterial(facade));
+      }
+      a += w + (rng_.Bernoulli(0.15) ? rng_.Uniform(2.0, 8.0) : 0.0);
+    } else if (kind_ == StreetKind::kResidential) {
+      const double w = rng_.Uniform(12.0, 25.0);
+      // Fence, wall or hedge at the plot's front, a house set back behind it.
+      const int front = rng_.Categorical({0.35, 0.25, 0.3, 0.1});
+      const double s_front = line + sign * 0.2;
+      const double fs0 = std::min(s_front, s_front + sign * (front == 2 ? 0.8 : 0.12));
+      const double fs1 = std::max(s_front, s_front + sign * (front == 2 ? 0.8 : 0.12));
+      if (front == 0)
+        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(0.9, 1.6), fence_material_);
+      if (front == 1)
+        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(0.6, 1.8), wall_material_);
+      if (front == 2)
+        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(1.0, 2.2), foliage_material_);
+      if (rng_.Bernoulli(0.85)) {
+        Material facade = MakeMaterial(
+            Pattern::kFacade,
+            Vary(rng_,
+                 std::vector<Eigen::Vector3f>{Rgb(0.7, 0.66, 0.58), Rgb(0.62, 0.55, 0.45),
+                                              Rgb(0.55, 0.35, 0.28),
+                                              Rgb(0.7, 0.7, 0.68)}[rng_.UniformInt(0, 3)],
+                 0.15),
+            0.25f);
+        facade.albedo2 = Vary(rng_, Rgb(0.06, 0.07, 0.09), 0.5);
+        facade.scale_m = static_cast<float>(rng_.Uniform(2.8, 4.5));
+        const double setback = rng_.Uniform(3.0, 10.0), depth = rng_.Uniform(8.0, 12.0);
+        const double hw = std::min(w - 3.0, rng_.Uniform(8.0, 14.0));
+        const double s_house = line + sign * setback;
+        RoadBox(a + 1.5, a + 1.5 + hw, std::min(s_house, s_house + sign * depth),
+                std::max(s_house, s_house + sign * depth), 0.0, rng_.Uniform(5.5, 10.0),
+                scene_.AddMaterial(facade));
+      }
+      a += w;
+    } else {
+      const double w = rng_.Uniform(20.0, 60.0);
+      const int kind = rng_.Categorical({0.35, 0.25, 0.2, 0.2});
+      const double s_front = line + sign * rng_.Uniform(0.5, 4.0);
+      if (kind == 0) {  // a hedge or a wood's edge
+        const double d = rng_.Uniform(1.0, 6.0);
+        RoadBox(a, a + w, std::min(s_front, s_front + sign * d),
+                std::max(s_front, s_front + sign * d), 0.0, rng_.Uniform(1.5, 7.0),
+                foliage_material_);
+      } else if (kind == 1) {  // guard rail
+        const double s = sidewalk_inner_[side] + sign * 0.5;
+        RoadBox(a, a + w, std::min(s, s + sign * 0.08), std::max(s, s + sign * 0.08), 0.45, 0.75,
+                metal_material_);
+      } else if (kind == 2) {  // a noise wall or fence
+        RoadBox(a, a + w, std::min(s_front, s_front + sign * 0.2),
+                std::max(s_front, s_front + sign * 0.2), 0.0, rng_.Uniform(1.5, 3.5),
+                rng_.Bernoulli(0.5) ? wall_material_ : fence_material_);
+      }
+      a += w;
+    }
+  }
+}
+
+void StreetBuilder::Pedestrians() {
+  const double density = options_.object_density;
+  const double mean =
+      (kind_ == StreetKind::kCity ? 2.1 : (kind_ == StreetKind::kResidential ? 0.8 : 0.15)) *
+      density;
+  // Groups of one to three walking along the sidewalks, sometimes across the road.
+  int groups = 0;
+  for (int i = 0; i < 12; ++i) groups += rng_.Bernoulli(mean / 12.0 / 1.5) ? 1 : 0;
+  for (int g = 0; g < groups; ++g) {
+    const int side = rng_.UniformInt(0, 1);
+    const double sign = side == 0 ? -1.0 : 1.0;
+    const bool crossing = rng_.Bernoulli(0.12);
+    const double along = rng_.Uniform(4.0, 45.0);
+    const double width = std::abs(sidewalk_outer_[side] - sidewalk_inner_[side]);
+    double lateral, height, heading;
+    if (crossing || width < 0.8) {
+      lateral = rng_.Uniform(scene_.road.left_edge_m + 1.0, scene_.road.right_edge_m - 1.0);
+      height = 0.0;
+      heading = scene_.road.ForwardYaw() + (rng_.Bernoulli(0.5) ? 0.5 : -0.5) * M_PI;
+      if (!crossing) continue;
+    } else {
+      lateral = sidewalk_inner_[side] + sign * rng_.Uniform(0.5, std::max(0.6, width - 0.4));
+      height = curb_height_;
+      heading = scene_.road.ForwardYaw() + (rng_.Bernoulli(0.5) ? 0.0 : M_PI);
+    }
+    const int size = rng_.Categorical({0.6, 0.3, 0.1}) + 1;
+    for (int k = 0; k < size; ++k) {
+      const double dl = k == 0 ? 0.0 : rng_.Uniform(-0.9, 0.9),
+                   da = k == 0 ? 0.0 : rng_.Uniform(-1.5, 1.5);
+      if (!Free(lateral + dl, along + da, 0.4)) continue;
+      PlacePerson("Pedestrian", lateral + dl, along + da, height, heading + rng_.Normal(0.0, 0.3));
+    }
+  }
+  // People sitting on a bench by the sidewalk (rare, as in KITTI).
+  if (kind_ != StreetKind::kRoad && rng_.Bernoulli(0.06 * density)) {
+    const int side = rng_.UniformInt(0, 1);
+    const double sign = side == 0 ? -1.0 : 1.0;
+    const double along = rng_.Uniform(6.0, 30.0);
+    const double lateral = sidewalk_outer_[side] - sign * 0.6;
+    if (Free(lateral, along, 1.5)) {
+      // Facing the road.
+      const double heading = scene_.road.ForwardYaw() + sign * 0.5 * M_PI;
+      const int n = rng_.UniformInt(1, 2);
+      for (int k = 0; k < n; ++k) {
+        PlacePerson("Person_sitting", lateral, along + 0.7 * k, curb_height_, heading);
+      }
+      RoadBox(along - 0.7, along + 0.7 * n, lateral - 0.35, lateral + 0.35, 0.35, 0.45,
+              bark_material_);
+    }
+  }
+}
+
+void StreetBuilder::Build() {
+  kind_ = static_cast<StreetKind>(
+      rng_.Categorical({options_.city_weight, options_.residential_weight, options_.road_weight}));
+  // The camera sits in its lane with a small lateral offset; the road turns by a small angle.
+  const double yaw = rng_.Normal(0.0, options_.road_yaw_sd_deg * M_PI / 180.0);
+  ego_lateral_ = rng_.Normal(0.0, 0.25);
+  scene_.ground_y_m = static_cast<float>(
+      Round2(options_.camera_height_m + rng_.Normal(0.0, options_.camera_height_jitter_m)));
+  scene_.road.forward_xz =
+      Eigen::Vector2f(static_cast<float>(std::sin(yaw)), static_cast<float>(std::cos(yaw)));
+  scene_.road.origin_xz = -static_cast<float>(ego_lateral_) * scene_.road.RightXz();
+  curb_height_ = Round2(rng_.Uniform(0.1, 0.16));
+
+  Materials();
+  Lanes();
+  Sidewalk(0);
+  Sidewalk(1);
+  Trams();
+  for (int side = 0; side < 2; ++side) {
+    const double width = parking_width_[side];
+    const double centre = side == 0 ? carriage_left_ - 0.5 * width : carriage_right_ + 0.5 * width;
+    Parking(centre, width, side);
+  }
+  Traffic();
+  Pedestrians();
+  Roadside(0);
+  Roadside(1);
+
+  // Light: sun elevation 15 to 65 degrees, any azimuth; overcast days get a weaker, bluer sun.
+  Lighting& light = scene_.light;
+  const double elevation = rng_.Uniform(15.0, 65.0) * M_PI / 180.0;
+  const double azimuth = rng_.Uniform(0.0, 2.0 * M_PI);
+  light.to_sun = Eigen::Vector3f(static_cast<float>(std::cos(elevation) * std::sin(azimuth)),
+                                 static_cast<float>(-std::sin(elevation)),
+                                 static_cast<float>(std::cos(elevation) * std::cos(azimuth)));
+  light.cloudiness = static_cast<float>(rng_.Uniform(0.0, 1.0));
+  const float sun =
+      static_cast<float>(rng_.Uniform(1.6, 2.6)) * (light.cloudiness > 0.75f ? 0.35f : 1.0f);
+  light.sun = sun * Rgb(1.0, 0.96, 0.9);
+  const float ambient = static_cast<float>(rng_.Uniform(0.4, 0.65));
+  light.sky_ambient = ambient * Rgb(0.9, 0.95, 1.05);
+  light.sky_zenith = Vary(rng_, Rgb(0.45, 0.6, 0.9), 0.15);
+  light.sky_horizon = Vary(rng_, Rgb(0.85, 0.88, 0.92), 0.08);
+  light.haze_per_m = static_cast<float>(rng_.Uniform(1.0 / 900.0, 1.0 / 300.0));
+  light.exposure = static_cast<float>(rng_.Uniform(0.85, 1.1) / (0.55 * sun + ambient));
+  scene_.Finalize();
+}
+
+}  // namespace
+
+void SceneOptions::Check() const {
+  STEREODET_CHECK(city_weight >= 0 && residential_weight >= 0 && road_weight >= 0 &&
+                  city_weight + residential_weight + road_weight > 0)
+      << "street kind weights must be non-negative with a positive sum";
+  STEREODET_CHECK(object_density >= 0.0 && object_density <= 10.0)
+      << "object_density must be in [0, 10], got " << object_density;
+  STEREODET_CHECK(min_along_m < max_along_m) << "min_along_m must be below max_along_m";
+  STEREODET_CHECK(camera_height_m > 0.5 && camera_height_m < 5.0)
+      << "camera_height_m must be in (0.5, 5), got " << camera_height_m;
+  STEREODET_CHECK(camera_height_jitter_m >= 0.0 && road_yaw_sd_deg >= 0.0)
+      << "jitters must be non-negative";
+}
+
+Scene SampleScene(const SceneOptions& options, uint64_t seed) {
+  options.Check();
+  Scene scene;
+  Rng rng(seed);
+  StreetBuilder(scene, options, rng).Build();
+  return scene;
+}
+
+int AddSimpleObject(Scene& scene, const std::string& type, const Box3D& box, uint64_t seed) {
+  Rng rng(seed);
+  return AddObject(scene, type, box.l, box.w, box.h, box.location, box.rotation_y, rng);
+}
+
+}  // namespace stereodet

@@ -1,0 +1,288 @@
+#include "stereodet/synth/texture.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "stereodet/synth/random.h"
+
+namespace stereodet {
+
+namespace {
+
+constexpr int kNoisePeriod = 256;
+
+// The lattice values of ValueNoise, fixed for every run (a constant seed), built at load time (a
+// namespace-scope table rather than a function-local static: no guard check in the hot loop).
+using Lattice = std::array<float, kNoisePeriod * kNoisePeriod>;
+Lattice MakeLattice() {
+  Lattice values{};
+  for (int i = 0; i < kNoisePeriod * kNoisePeriod; ++i) {
+    values[i] = 2.0f * HashToUnitFloat(HashOf({0x5eed, static_cast<uint64_t>(i)})) - 1.0f;
+  }
+  return values;
+}
+const Lattice kLattice = MakeLattice();
+
+inline float Noise(float x, float y) {
+  const float fx = std::floor(x), fy = std::floor(y);
+  const int ix = static_cast<int>(fx) & (kNoisePeriod - 1);
+  const int iy = static_cast<int>(fy) & (kNoisePeriod - 1);
+  const int ix1 = (ix + 1) & (kNoisePeriod - 1), iy1 = (iy + 1) & (kNoisePeriod - 1);
+  float tx = x - fx, ty = y - fy;
+  tx = tx * tx * (3.0f - 2.0f * tx);  // smoothstep: C1 across cells
+  ty = ty * ty * (3.0f - 2.0f * ty);
+  const float a = kLattice[iy * kNoisePeriod + ix], b = kLattice[iy * kNoisePeriod + ix1];
+  const float c = kLattice[iy1 * kNoisePeriod + ix], d = kLattice[iy1 * kNoisePeriod + ix1];
+  const float top = a + (b - a) * tx;
+  return top + ((c + (d - c) * tx) - top) * ty;
+}
+
+float Fract(float x) { return x - std::floor(x); }
+float Clamp01(float x) { return std::clamp(x, 0.0f, 1.0f); }
+
+// Fraction of a footprint of width 2*half_fp centred at `coord` covered by lines of `width` that
+// repeat every `period` (the first centred at `phase`): a 1-D box filter, exact for one line.
+float LineCoverage(float coord, float period, float phase, float width, float footprint) {
+  const float half_fp = std::max(0.5f * footprint, 1e-5f);
+  const float d = std::abs((Fract((coord - phase) / period + 0.5f) - 0.5f) * period);
+  const float half = 0.5f * width;
+  const float overlap = std::min(d + half_fp, half) - std::max(d - half_fp, -half);
+  return Clamp01(overlap / (2.0f * half_fp));
+}
+
+// Tone in [-1, 1] of lattice cell (i, j), for stones, bricks and windows.
+float CellTone(float i, float j, uint64_t salt) {
+  return 2.0f * HashToUnitFloat(HashOf({salt, static_cast<uint64_t>(static_cast<int64_t>(i)),
+                                        static_cast<uint64_t>(static_cast<int64_t>(j))})) -
+         1.0f;
+}
+
+struct FaceInfo {
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();  // surface coordinates, metres
+  int axis = 1;                                  // local axis of the face normal (boxes)
+  float sign = 1.0f;                             // direction of the normal along that axis
+  Eigen::Vector3f local = Eigen::Vector3f::Zero();
+  Eigen::Vector3f half = Eigen::Vector3f::Zero();
+};
+
+FaceInfo Face(const Scene& scene, const SurfaceHit& hit) {
+  FaceInfo f;
+  if (hit.kind == SurfaceHit::Kind::kGround) {
+    f.uv = Eigen::Vector2f(hit.point.x(), hit.point.z());
+    return f;
+  }
+  const Primitive& p = scene.primitives[hit.primitive];
+  f.local = p.ToLocal(hit.point);
+  f.half = p.half_extent;
+  const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
+  const float height = p.half_extent.y() - f.local.y();  // above the primitive's bottom (y down)
+  switch (p.kind) {
+    case ShapeKind::kBox: {
+      n.cwiseAbs().maxCoeff(&f.axis);
+      f.sign = n[f.axis] >= 0.0f ? 1.0f : -1.0f;
+      if (f.axis == 1) {
+        f.uv = Eigen::Vector2f(f.local.x(), f.local.z());
+      } else if (f.axis == 0) {
+        f.uv = Eigen::Vector2f(f.local.z(), height);
+      } else {
+        f.uv = Eigen::Vector2f(f.local.x(), height);
+      }
+      break;
+    }
+    case ShapeKind::kCylinder:
+      if (std::abs(n.y()) > 0.5f) {
+        f.uv = Eigen::Vector2f(f.local.x(), f.local.z());
+      } else {
+        f.uv = Eigen::Vector2f(std::atan2(f.local.z(), f.local.x()) * p.half_extent.x(), height);
+      }
+      break;
+    case ShapeKind::kEllipsoid:
+      f.uv = Eigen::Vector2f(
+          std::atan2(f.local.z(), f.local.x()) * 0.5f * (p.half_extent.x() + p.half_extent.z()),
+          height);
+      break;
+  }
+  f.uv += p.texture_offset;
+  return f;
+}
+
+}  // namespace
+
+float ValueNoise(float x, float y) { return Noise(x, y); }
+
+float FilteredFbm(float x, float y, float base_frequency, float gain, int max_octaves,
+                  float footprint_m) {
+  float sum = 0.0f, norm = 0.0f, amplitude = 1.0f, frequency = base_frequency;
+  for (int k = 0; k < max_octaves; ++k) {
+    // Wavelength / footprint: full weight from 4 footprints up, none below 2.
+    const float cycles_per_footprint = frequency * footprint_m;
+    const float weight = Clamp01(2.0f - 4.0f * cycles_per_footprint);
+    norm += amplitude;
+    if (weight <= 0.0f) break;
+    sum += weight * amplitude * Noise(frequency * x + 37.1f * k, frequency * y + 11.7f * k);
+    // Each octave is rotated (by 36.87 degrees) and shifted so the lattices do not line up.
+    const float rotated_x = 0.8f * x - 0.6f * y;
+    y = 0.6f * x + 0.8f * y;
+    x = rotated_x;
+    amplitude *= gain;
+    frequency *= 2.0f;
+  }
+  return norm > 0.0f ? sum / norm * 1.6f : 0.0f;
+}
+
+Eigen::Vector2f SurfaceCoordinates(const Scene& scene, const SurfaceHit& hit) {
+  return Face(scene, hit).uv;
+}
+
+bool OnRoadMarking(const Road& road, float x, float z) {
+  const Eigen::Vector2f rc = road.ToRoad(x, z);
+  for (const Road::Marking& m : road.markings) {
+    if (std::abs(rc.x() - m.lateral_m) <= 0.5f * m.width_m) {
+      if (!m.dashed || Fract(rc.y() / 9.0f) < 1.0f / 3.0f) return true;
+    }
+  }
+  return false;
+}
+
+Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float footprint_m) {
+  const Material& m = scene.materials[hit.material];
+  const FaceInfo f = Face(scene, hit);
+  const float u = f.uv.x(), v = f.uv.y();
+  const float fp = footprint_m;
+  switch (m.pattern) {
+    case Pattern::kPlain:
+      return m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 2.0f, 0.6f, 8, fp));
+    case Pattern::kAsphalt: {
+      const float grain = FilteredFbm(u, v, 6.0f, 0.7f, 7, fp);
+      const float patches =
+          0.5f * Noise(0.12f * u + 91.0f, 0.12f * v) + 0.25f * Noise(0.5f * u, 0.5f * v + 13.0f);
+      Eigen::Vector3f albedo = m.albedo * (1.0f + m.contrast * grain + 0.18f * patches);
+      if (hit.kind == SurfaceHit::Kind::kGround && hit.material == scene.road_material) {
+        // Markings, box-filtered across their width so far lines fade instead of flickering.
+        const Eigen::Vector2f rc = scene.road.ToRoad(hit.point.x(), hit.point.z());
+        float paint = 0.0f;
+        for (const Road::Marking& mk : scene.road.markings) {
+          float cover = LineCoverage(rc.x(), 1000.0f, mk.lateral_m, mk.width_m, fp);
+          if (cover > 0.0f && mk.dashed) cover *= LineCoverage(rc.y(), 9.0f, 1.5f, 3.0f, fp);
+          paint = std::max(paint, cover);
+        }
+        if (paint > 0.0f) {
+          const Eigen::Vector3f white = m.albedo2 * (1.0f + 0.1f * grain);
+          albedo = albedo + paint * (white - albedo);
+        }
+      }
+      return albedo;
+    }
+    case Pattern::kPaving: {
+      const float s = m.scale_m;
+      const float joint =
+          std::max(LineCoverage(u, s, 0.0f, 0.012f, fp), LineCoverage(v, s, 0.0f, 0.012f, fp));
+      const float tone = CellTone(std::floor(u / s), std::floor(v / s), 17);
+      const Eigen::Vector3f stone =
+          m.albedo * (1.0f + 0.12f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 6, fp));
+      return stone + joint * (m.albedo2 - stone);
+    }
+    case Pattern::kFacade: {
+      const float pitch = m.scale_m, floor_h = 3.1f;
+      // Windows: 45% of the pitch wide, 1.5 m high from 0.9 m above each floor.
+      const float wu = f.axis == 1 ? 0.0f : LineCoverage(u, pitch, 0.5f * pitch, 0.45f * pitch, fp);
+      const float wv = (wu <= 0.0f || v < 1.0f) ? 0.0f : LineCoverage(v, floor_h, 1.65f, 1.5f, fp);
+      const float window = wu * wv;
+      Eigen::Vector3f out = Eigen::Vector3f::Zero();
+      if (window < 1.0f) {
+        out = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 1.5f, 0.65f, 8, fp));
+        // Floor bands (cornices) give horizontal structure; roofs and undersides are plain.
+        if (f.axis != 1) out *= 1.0f - 0.25f * LineCoverage(v, floor_h, 0.0f, 0.18f, fp);
+      }
+      if (window > 0.0f) {
+        const float tone = CellTone(std::floor(u / pitch), std::floor(v / floor_h), 23);
+        const Eigen::Vector3f glass =
+            m.albedo2 * (1.0f + 0.5f * tone + 0.2f * FilteredFbm(u, v, 3.0f, 0.5f, 4, fp));
+        out += window * (glass - out);
+      }
+      return out;
+    }
+    case Pattern::kBrick: {
+      const float course = 0.077f, length = 0.25f;
+      const float row = std::floor(v / course);
+      const float shifted = u + (std::fmod(row, 2.0f) == 0.0f ? 0.0f : 0.5f * length);
+      const float mortar = std::max(LineCoverage(v, course, 0.0f, 0.012f, fp),
+                                    LineCoverage(shifted, length, 0.0f, 0.012f, fp));
+      const float tone = CellTone(std::floor(shifted / length), row, 29);
+      const Eigen::Vector3f brick =
+          m.albedo * (1.0f + 0.15f * tone + m.contrast * FilteredFbm(u, v, 10.0f, 0.6f, 5, fp));
+      return brick + mortar * (m.albedo2 - brick);
+    }
+    case Pattern::kFence: {
+      const float gap = f.axis == 1 ? 0.0f : LineCoverage(u, m.scale_m, 0.0f, 0.3f * m.scale_m, fp);
+      const Eigen::Vector3f slat =
+          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 4.0f, 0.6f, 6, fp));
+      return slat + gap * (m.albedo2 - slat);
+    }
+    case Pattern::kFoliage: {
+      const float leaves = FilteredFbm(u, v, 5.0f, 0.75f, 7, fp);
+      const float clumps = Noise(1.3f * u + 5.0f, 1.3f * v);
+      const Eigen::Vector3f base = m.albedo + 0.5f * (clumps + 1.0f) * (m.albedo2 - m.albedo);
+      return base * std::max(0.15f, 1.0f + m.contrast * leaves);
+    }
+    case Pattern::kGrass: {
+      const float blades = FilteredFbm(u, v, 10.0f, 0.7f, 6, fp);
+      const float soil = Clamp01(0.5f + Noise(0.3f * u, 0.3f * v + 7.0f));
+      const Eigen::Vector3f base = m.albedo + soil * 0.5f * (m.albedo2 - m.albedo);
+      return base * (1.0f + m.contrast * blades);
+    }
+    case Pattern::kCarPaint: {
+      Eigen::Vector3f paint = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp));
+      if (f.axis == 1) return paint;
+      // Bumper band at the bottom of the body.
+      if (v < 0.16f) paint = Eigen::Vector3f(0.05f, 0.05f, 0.055f);
+      if (f.axis == 0) {
+        // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle.
+        const float z = std::abs(f.local.z()), edge = f.half.z();
+        const bool lamp_row = v > 0.32f && v < 0.5f;
+        if (lamp_row && z > edge - 0.32f) {
+          return f.sign > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f)
+                               : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
+        }
+        if (z < 0.26f && v > 0.18f && v < 0.29f) {
+          const float text = LineCoverage(f.local.z(), 0.07f, 0.0f, 0.025f, fp);
+          return Eigen::Vector3f(0.8f, 0.8f, 0.78f) * (1.0f - 0.8f * text);
+        }
+      } else {
+        // Sides: a rubbing strip and door seams.
+        const float strip = LineCoverage(v, 1000.0f, 0.3f, 0.05f, fp);
+        const float seam = LineCoverage(f.local.x(), 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
+        paint = paint + std::max(strip, seam) * (Eigen::Vector3f(0.04f, 0.04f, 0.04f) - paint);
+      }
+      return paint;
+    }
+    case Pattern::kGlass:
+      return m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 2.0f, 0.5f, 5, fp));
+    case Pattern::kCloth: {
+      const float folds = FilteredFbm(u, v, 4.0f, 0.6f, 6, fp);
+      return m.albedo * (1.0f + m.contrast * folds);
+    }
+  }
+  return m.albedo;
+}
+
+Eigen::Vector3f SkyRadiance(const Lighting& light, const Eigen::Vector3f& direction) {
+  const float elevation = std::max(0.0f, -direction.y());  // sin of the elevation (y is down)
+  Eigen::Vector3f sky =
+      light.sky_horizon + std::sqrt(elevation) * (light.sky_zenith - light.sky_horizon);
+  const float to_sun = std::max(0.0f, direction.dot(light.to_sun));
+  sky += light.sun * (0.08f * std::pow(to_sun, 16.0f));
+  if (light.cloudiness > 0.0f && elevation > 0.01f) {
+    // Clouds on a plane above the camera: texture coordinates by central projection.
+    const float scale = 1.0f / (elevation + 0.05f);
+    const float x = 2.0f * direction.x() * scale, z = 2.0f * direction.z() * scale;
+    const float c = 0.6f * Noise(x, z) + 0.3f * Noise(2.1f * x + 3.0f, 2.1f * z) +
+                    0.15f * Noise(4.3f * x, 4.3f * z + 9.0f);
+    const float cover = Clamp01((c + 1.2f * light.cloudiness - 0.6f) * 2.0f);
+    sky += cover * (Eigen::Vector3f(0.95f, 0.95f, 0.97f) - sky);
+  }
+  return sky;
+}
+
+}  // namespace stereodet
