@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/eval/compare.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
@@ -270,33 +271,26 @@ void RunCompare(const EvalArgs& a, const CompareArgs& c) {
   fmt::print("A = {}\nB = {}\nstereo model: dz = z^2 / (b f) * dd, b = {:.4f} m, f = {:.2f} px, dd = {} px{}\n",
              a.det, c.det_b, baseline_m, focal_px, c.disparity_error_px,
              c.calib.empty() ? " (KITTI-like calibration)" : "");
-  std::string csv =
-      "class,metric,difficulty,lower_m,upper_m,count_a,abs_dz_mean_a,count_b,abs_dz_mean_b,"
-      "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz\n";
-  for (const ClassResult& x : ra.results) {
-    const ClassResult* y = rb.Find(x.class_name, x.metric, x.difficulty);
-    if (!x.evaluated || !y || !y->evaluated) continue;
-    fmt::print("\n{} {} {}: mean |depth error| of matched pairs (m)\n", x.class_name,
-               OverlapKindName(x.metric), DifficultyName(x.difficulty));
-    fmt::print("  {:>11} {:>7} {:>8} {:>7} {:>8} {:>8} {:>8}\n", "depth", "n A", "A", "n B", "B", "B - A",
-               "model");
-    for (size_t k = 0; k < x.localization.size() && k < y->localization.size(); ++k) {
-      const DistanceBin& ba = x.localization[k];
-      const DistanceBin& bb = y->localization[k];
-      const double model = StereoDepthError((ba.lower_m + ba.upper_m) / 2, baseline_m, focal_px,
-                                            c.disparity_error_px);
-      const double diff = bb.abs_depth_error_mean_m - ba.abs_depth_error_mean_m;
-      fmt::print("  {:>4g}-{:<4g} m {:>7} {:>8} {:>7} {:>8} {:>8} {:>8.3f}\n", ba.lower_m, ba.upper_m, ba.count,
-                 FormatNumber(ba.abs_depth_error_mean_m, 3), bb.count, FormatNumber(bb.abs_depth_error_mean_m, 3),
-                 FormatNumber(diff, 3), model);
-      csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", x.class_name, OverlapKindName(x.metric),
-                         DifficultyName(x.difficulty), ba.lower_m, ba.upper_m, ba.count,
-                         FormatNumber(ba.abs_depth_error_mean_m, 6), bb.count,
-                         FormatNumber(bb.abs_depth_error_mean_m, 6), FormatNumber(diff, 6),
-                         FormatNumber(ba.centre_error_mean_m, 6), FormatNumber(bb.centre_error_mean_m, 6),
-                         model);
+  CompareOptions compare_options;
+  compare_options.baseline_m = baseline_m;
+  compare_options.focal_px = focal_px;
+  compare_options.disparity_error_px = c.disparity_error_px;
+  const std::vector<CompareRow> rows = CompareLocalization(ra, rb, compare_options);
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const CompareRow& r = rows[k];
+    if (k == 0 || rows[k - 1].class_name != r.class_name || rows[k - 1].metric != r.metric ||
+        rows[k - 1].difficulty != r.difficulty) {
+      fmt::print("\n{} {} {}: mean |depth error| of matched pairs (m)\n", r.class_name,
+                 OverlapKindName(r.metric), DifficultyName(r.difficulty));
+      fmt::print("  {:>11} {:>7} {:>8} {:>7} {:>8} {:>8} {:>8}\n", "depth", "n A", "A", "n B", "B", "B - A",
+                 "model");
     }
+    fmt::print("  {:>4g}-{:<4g} m {:>7} {:>8} {:>7} {:>8} {:>8} {:>8.3f}\n", r.lower_m, r.upper_m, r.count_a,
+               FormatNumber(r.abs_depth_error_mean_a_m, 3), r.count_b,
+               FormatNumber(r.abs_depth_error_mean_b_m, 3), FormatNumber(r.difference_b_minus_a_m, 3),
+               r.model_depth_error_m);
   }
+  const std::string csv = FormatCompareCsv(rows);
   if (!a.out.empty()) {
     WriteFileAtomically(fs::path(a.out) / "compare.csv", csv);
     fmt::print("\nwrote {}\n", (fs::path(a.out) / "compare.csv").string());

@@ -7,6 +7,7 @@ namespace stereodet {
 void FinishPoint(CurvePoint* p) {
   p->precision = p->tp + p->fp > 0 ? static_cast<double>(p->tp) / static_cast<double>(p->tp + p->fp) : 0.0;
   p->recall = p->tp + p->fn > 0 ? static_cast<double>(p->tp) / static_cast<double>(p->tp + p->fn) : 0.0;
+  p->orientation = p->tp + p->fp > 0 ? p->similarity / static_cast<double>(p->tp + p->fp) : 0.0;
 }
 
 std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels) {
@@ -21,6 +22,7 @@ std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_v
       current.tp += events[i].tp;
       current.fp += events[i].fp;
       current.fn += events[i].fn;
+      current.similarity += events[i].similarity;
     }
     current.threshold = score;
     FinishPoint(&current);
@@ -31,11 +33,13 @@ std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_v
 
 namespace {
 
-double InterpolatedAp(const std::vector<CurvePoint>& curve, int first, int last, double step) {
-  // Best precision at recall >= r: a suffix maximum over points sorted by recall.
+double InterpolatedAp(const std::vector<CurvePoint>& curve, int first, int last, double step,
+                      bool orientation = false) {
+  // Best precision (or orientation ratio) at recall >= r: a suffix maximum over points sorted by
+  // recall.
   std::vector<std::pair<double, double>> pr;  // (recall, precision)
   for (const CurvePoint& p : curve) {
-    if (p.tp + p.fp > 0) pr.emplace_back(p.recall, p.precision);
+    if (p.tp + p.fp > 0) pr.emplace_back(p.recall, orientation ? p.orientation : p.precision);
   }
   std::sort(pr.begin(), pr.end());
   for (size_t i = pr.size(); i-- > 1;) pr[i - 1].second = std::max(pr[i - 1].second, pr[i].second);
@@ -57,6 +61,14 @@ double InterpolatedApR40(const std::vector<CurvePoint>& curve) {
 
 double InterpolatedApR11(const std::vector<CurvePoint>& curve) {
   return InterpolatedAp(curve, 0, 10, 1.0 / 10.0);
+}
+
+double InterpolatedAosR40(const std::vector<CurvePoint>& curve) {
+  return InterpolatedAp(curve, 1, 40, 1.0 / 40.0, true);
+}
+
+double InterpolatedAosR11(const std::vector<CurvePoint>& curve) {
+  return InterpolatedAp(curve, 0, 10, 1.0 / 10.0, true);
 }
 
 double EveryPointAp(const std::vector<CurvePoint>& curve) {

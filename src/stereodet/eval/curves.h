@@ -13,6 +13,7 @@ namespace stereodet {
 struct CurveEvent {
   double score = 0.0;
   int32_t tp = 0, fp = 0, fn = 0;
+  double similarity = 0.0;  // change of the orientation-similarity sum of the TPs
 };
 
 // Counts at one threshold: every detection with score >= threshold takes part.
@@ -21,6 +22,10 @@ struct CurvePoint {
   int64_t tp = 0, fp = 0, fn = 0;
   double precision = 0.0;  // tp / (tp + fp); 0 when there is no detection
   double recall = 0.0;     // tp / (tp + fn); 0 when there is no label
+  // Sum over the TP pairs of (1 + cos(alpha_det - alpha_label)) / 2, and its ratio to tp + fp (the
+  // devkit's AOS "precision"; 0 when there is no detection). Filled only where AOS is computed.
+  double similarity = 0.0;
+  double orientation = 0.0;
 };
 
 // Sorts the events by descending score and sums them; FN starts at `num_valid_labels` (nothing
@@ -38,6 +43,11 @@ double InterpolatedApR11(const std::vector<CurvePoint>& curve);
 // PASCAL VOC 2010+ "every point" AP in percent: the area under the precision envelope, integrated
 // over the recall changes.
 double EveryPointAp(const std::vector<CurvePoint>& curve);
+// Average orientation similarity in percent, interpolated like InterpolatedApR40/R11 with the
+// orientation ratio in place of precision: the mean over r of max{orientation(p) : recall(p) >= r}.
+// Perfect orientation makes it equal to the AP.
+double InterpolatedAosR40(const std::vector<CurvePoint>& curve);
+double InterpolatedAosR11(const std::vector<CurvePoint>& curve);
 
 struct OperatingPoint {
   double threshold = 0.0;

@@ -18,10 +18,21 @@
 
 namespace stereodet {
 
-// TP/FP/FN under a filter at the operating threshold, in both modes.
+// The PR curve and its summaries under a filter (percent; aos_* NaN where AOS is not computed).
+// KITTI matcher: the devkit's arithmetic (41 slots, envelope) at the devkit thresholds (naive: those
+// of the struck set; stable: those of the unfiltered set). Optimal / VOC: exact at every score.
+struct FilteredCurve {
+  std::vector<CurvePoint> curve;
+  double ap_r40 = 0.0, ap_r11 = 0.0, ap_voc = 0.0;
+  double aos_r40 = 0.0, aos_r11 = 0.0;
+};
+
+// TP/FP/FN under a filter at the operating threshold, and the curves, in both modes.
 struct FilteredStats {
   OperatingPoint naive;
   OperatingPoint stable;
+  FilteredCurve naive_curve;
+  FilteredCurve stable_curve;
 };
 
 // One class x overlap kind x difficulty.
@@ -38,7 +49,7 @@ struct ClassResult {
   int64_t num_detections = 0;    // detections of the class
 
   // Percent. ap_voc is NaN for the KITTI matcher (its curve has only 41 points); aos_* are NaN when
-  // AOS is not computed (BEV/3D, a detection with alpha = -10, or a matcher other than KITTI).
+  // AOS is not computed (BEV/3D, or a detection with alpha = -10, for every matcher).
   double ap_r40 = 0.0, ap_r11 = 0.0, ap_voc = 0.0;
   double aos_r40 = 0.0, aos_r11 = 0.0;
   bool has_aos = false;
@@ -73,6 +84,16 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
 // The association at `threshold` of one frame with `matcher`.
 FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
                            double threshold);
+
+// Curve events of one frame derived from the matcher's association at every distinct detection
+// score of the frame (exact by construction, one association per distinct score). With `conditions`
+// non-null the counts are the stable filter's (pairs whose label and detection both pass; unmatched
+// labels / detections that pass); the similarity is that of the counted TP pairs. Returns the FN
+// count with no detection (the frame's share of the curve's starting FN). `frame` is the EvalFrame
+// `cf` was prepared from.
+int64_t AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
+                          Difficulty difficulty, const std::vector<FilterCondition>* conditions,
+                          std::vector<CurveEvent>* events);
 
 // Filter sweep (the paper's filter figure): for each value of `bound` from `from` to `to` by
 // `step`, the operating-point statistics under the naive and the stable filter.

@@ -165,7 +165,8 @@ TEST(ScoreMetrics, BrierThreeWaysByHand) {
   options.difficulties = {Difficulty::kModerate};
   for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
     options.matcher = m;
-    const ClassResult& r = Evaluate({f}, options).results.at(0);
+    const EvalResult result = Evaluate({f}, options);  // keeps the result alive
+    const ClassResult& r = result.results.at(0);
     EXPECT_NEAR(r.brier.over_labels, (0.01 + 1.0) / 2, 1e-12);
     EXPECT_NEAR(r.brier.over_detections, (0.01 + 0.16) / 2, 1e-12);
     EXPECT_NEAR(r.brier.over_all, (0.01 + 0.16 + 1.0) / 3, 1e-12);
@@ -195,7 +196,8 @@ TEST(Filters, NaiveFilterTurnsAMatchedDetectionIntoAFalsePositive) {
   options.filter.conditions = ParseFilterConditions("min-area=10000");
   for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
     options.matcher = m;
-    const ClassResult& r = Evaluate({f}, options).results.at(0);
+    const EvalResult result = Evaluate({f}, options);  // keeps the result alive
+    const ClassResult& r = result.results.at(0);
     ASSERT_TRUE(r.filtered.has_value());
     EXPECT_EQ(r.filtered->naive.fp, 1) << MatcherName(m);
     EXPECT_EQ(r.filtered->stable.fp, 0) << MatcherName(m);
@@ -209,6 +211,257 @@ TEST(Filters, NaiveFilterTurnsAMatchedDetectionIntoAFalsePositive) {
   EXPECT_EQ(rows[0].stats.stable.tp, 1);  // 9000: both pass
   EXPECT_EQ(rows[1].stats.naive.fp, 1);   // 10000: the naive FP
   EXPECT_EQ(rows[2].stats.naive.fp, 0);   // 11000: both struck
+}
+
+Object Car2D(double left, double top, double right, double bottom, double alpha, double score = -1) {
+  Object o;
+  o.type = "Car";
+  o.box = {left, top, right, bottom};
+  o.alpha = alpha;
+  if (score >= 0) o.score = score;  // labels carry no score
+  return o;
+}
+
+EvalOptions CarModerate2D(Matcher matcher) {
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.metrics = {OverlapKind::k2D};
+  options.difficulties = {Difficulty::kModerate};
+  options.matcher = matcher;
+  return options;
+}
+
+// AOS by hand for the exact matchers: two labels (alpha 0), found at scores 0.9 (alpha 0,
+// similarity 1) and 0.8 (alpha pi/2, similarity 1/2). Orientation ratio 1 at recall 1/2, 3/4 at
+// recall 1: AOS_R40 = (20 * 1 + 20 * 0.75) / 40 = 87.5 %, AOS_R11 = (6 + 5 * 0.75) / 11.
+TEST(Aos, ExactMatchersByHand) {
+  EvalFrame f;
+  f.labels = {Car2D(0, 0, 100, 100, 0), Car2D(300, 0, 400, 100, 0)};
+  f.detections = {Car2D(0, 0, 100, 100, 0, 0.9), Car2D(300, 0, 400, 100, M_PI / 2, 0.8)};
+  for (Matcher m : {Matcher::kOptimal, Matcher::kVoc}) {
+    const EvalResult result = Evaluate({f}, CarModerate2D(m));
+    const ClassResult& r = result.results.at(0);
+    ASSERT_TRUE(r.has_aos) << MatcherName(m);
+    ASSERT_EQ(r.curve.size(), 2u);
+    EXPECT_NEAR(r.curve[0].orientation, 1.0, 1e-12);
+    EXPECT_NEAR(r.curve[1].similarity, 1.5, 1e-12);
+    EXPECT_NEAR(r.aos_r40, 87.5, 1e-9) << MatcherName(m);
+    EXPECT_NEAR(r.aos_r11, (6 + 5 * 0.75) / 11 * 100, 1e-9) << MatcherName(m);
+    EXPECT_NEAR(r.ap_r40, 100.0, 1e-9);
+  }
+}
+
+// The optimal association re-pairs a label when a better detection arrives: label A (alpha 0) is
+// first taken by a detection of alpha pi (similarity 0); at a lower score a detection that only
+// fits A arrives while the first one also fits label B, so the maximum matching pairs both and the
+// similarity of A's pair changes.
+TEST(Aos, OptimalSimilarityFollowsTheAssociationAtEachScore) {
+  EvalFrame f;
+  f.labels = {Car2D(0, 0, 100, 100, 0), Car2D(20, 0, 120, 100, 0)};
+  f.detections = {Car2D(10, 0, 110, 100, M_PI, 0.9), Car2D(0, 0, 100, 100, 0, 0.8)};
+  EvalOptions options = CarModerate2D(Matcher::kOptimal);
+  options.classes[0].min_overlap = {0.5, 0.5, 0.5};
+  const EvalResult result = Evaluate({f}, options);
+  const ClassResult& r = result.results.at(0);
+  ASSERT_EQ(r.curve.size(), 2u);
+  EXPECT_EQ(r.curve[0].tp, 1);
+  EXPECT_NEAR(r.curve[0].similarity, 0.0, 1e-12);
+  EXPECT_EQ(r.curve[1].tp, 2);
+  EXPECT_NEAR(r.curve[1].similarity, 1.0, 1e-12);  // (0 for B's pair) + 1 for A's
+}
+
+// With every orientation right, AOS equals AP; and the optimal curve's similarity at each point
+// equals that of the association at that threshold, summed over frames.
+TEST(Aos, PerfectOrientationGivesApAndCurveAgreesWithAssociations) {
+  RandomFramesOptions ro;
+  ro.num_frames = 40;
+  ro.crowded = true;
+  std::vector<EvalFrame> frames = RandomFrames(ro);
+  for (Matcher m : {Matcher::kOptimal, Matcher::kVoc}) {
+    EvalOptions options;
+    options.metrics = {OverlapKind::k2D};
+    options.matcher = m;
+    const EvalResult result = Evaluate(frames, options);
+    ASSERT_TRUE(result.aos_computed);
+    for (const ClassResult& r : result.results) {
+      if (!r.evaluated) continue;
+      ASSERT_TRUE(r.has_aos);
+      EXPECT_LE(r.aos_r40, r.ap_r40 + 1e-9);
+      const ClassSpec spec = KittiClassSpec(r.class_name);
+      for (size_t k = 0; k < r.curve.size(); k += 3) {
+        double similarity = 0.0;
+        for (const EvalFrame& frame : frames) {
+          const ClassFrame cf = PrepareClassFrame(frame, spec, OverlapKind::k2D);
+          const FrameAssociation a = Associate(m, cf, r.difficulty, r.curve[k].threshold);
+          for (int i = 0; i < cf.num_labels(); ++i) {
+            if (a.label_outcome[i] != Outcome::kTp) continue;
+            similarity += (1 + std::cos(cf.det_alpha[a.label_det[i]] - cf.label_alpha[i])) / 2;
+          }
+        }
+        EXPECT_NEAR(r.curve[k].similarity, similarity, 1e-9) << MatcherName(m) << ' ' << k;
+      }
+    }
+  }
+  for (EvalFrame& frame : frames) {
+    for (Object& d : frame.detections) d.alpha = 0;
+    for (Object& l : frame.labels) l.alpha = 0;
+  }
+  for (Matcher m : {Matcher::kOptimal, Matcher::kVoc}) {
+    EvalOptions options;
+    options.metrics = {OverlapKind::k2D};
+    options.matcher = m;
+    const EvalResult result = Evaluate(frames, options);
+    for (const ClassResult& r : result.results) {
+      if (!r.evaluated) continue;
+      EXPECT_NEAR(r.aos_r40, r.ap_r40, 1e-9) << r.class_name;
+      EXPECT_NEAR(r.aos_r11, r.ap_r11, 1e-9) << r.class_name;
+    }
+  }
+}
+
+// A component with more distinct scores than the exact AOS bound (256): the similarity is sampled at
+// 64 scores, the lowest included, so the last curve point is still exact.
+TEST(Aos, HugeComponentIsSampledAndExactAtTheLowestScore) {
+  EvalFrame f;
+  for (int i = 0; i < 3; ++i) f.labels.push_back(Car2D(10.0 * i, 0, 100 + 10.0 * i, 100, 0.1 * i));
+  for (int k = 0; k < 400; ++k) {
+    const double shift = (k % 21) - 10.0;
+    f.detections.push_back(Car2D(shift, 0, 100 + shift, 100, 0.01 * (k % 50), 1.0 - k / 1000.0));
+  }
+  EvalOptions options = CarModerate2D(Matcher::kOptimal);
+  options.classes[0].min_overlap = {0.5, 0.5, 0.5};
+  const EvalResult result = Evaluate({f}, options);
+  const ClassResult& r = result.results.at(0);
+  ASSERT_FALSE(r.curve.empty());
+  EXPECT_EQ(r.curve.back().tp, 3);
+  const ClassFrame cf = PrepareClassFrame(f, options.classes[0], OverlapKind::k2D);
+  const FrameAssociation a = Associate(Matcher::kOptimal, cf, Difficulty::kModerate, r.curve.back().threshold);
+  double similarity = 0.0;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    ASSERT_EQ(a.label_outcome[i], Outcome::kTp);
+    similarity += (1 + std::cos(cf.det_alpha[a.label_det[i]] - cf.label_alpha[i])) / 2;
+  }
+  EXPECT_NEAR(r.curve.back().similarity, similarity, 1e-9);
+  EXPECT_LE(r.aos_r40, r.ap_r40 + 1e-9);
+}
+
+// Curves under a filter, by hand: a passing pair (score 0.8) and a label of 9900 px^2 matched by a
+// detection of 10100 px^2 (score 0.9) under min-area=10000. Naive: the 0.9 detection is a FP, so
+// precision is 0 then 1/2 at recall 1: AP_R40 50. Stable: the failing pair drops out: AP_R40 100.
+TEST(FilteredCurves, ExactMatchersByHand) {
+  EvalFrame f;
+  f.labels = {Car2D(0, 0, 99, 100, 0), Car2D(300, 0, 500, 100, 0)};
+  f.detections = {Car2D(0, 0, 101, 100, 0, 0.9), Car2D(300, 0, 500, 100, 0, 0.8)};
+  for (Matcher m : {Matcher::kOptimal, Matcher::kVoc}) {
+    EvalOptions options = CarModerate2D(m);
+    options.filter.conditions = ParseFilterConditions("min-area=10000");
+    const EvalResult result = Evaluate({f}, options);
+    const ClassResult& r = result.results.at(0);
+    ASSERT_TRUE(r.filtered.has_value());
+    const FilteredStats& fs = *r.filtered;
+    ASSERT_EQ(fs.naive_curve.curve.size(), 2u) << MatcherName(m);
+    EXPECT_EQ(fs.naive_curve.curve[0].fp, 1);
+    EXPECT_EQ(fs.naive_curve.curve[1].tp, 1);
+    EXPECT_NEAR(fs.naive_curve.ap_r40, 50.0, 1e-9) << MatcherName(m);
+    EXPECT_NEAR(fs.stable_curve.ap_r40, 100.0, 1e-9) << MatcherName(m);
+    EXPECT_NEAR(fs.stable_curve.aos_r40, 100.0, 1e-9) << MatcherName(m);
+    ASSERT_EQ(fs.stable_curve.curve.size(), 1u);  // nothing counts at 0.9
+    EXPECT_EQ(fs.stable_curve.curve[0].tp, 1);
+    EXPECT_EQ(fs.stable_curve.curve[0].fp, 0);
+    EXPECT_EQ(fs.stable_curve.curve[0].fn, 0);
+    EXPECT_NEAR(r.ap_r40, 100.0, 1e-9);  // unfiltered: both pairs
+  }
+  // KITTI matcher, stable: the unfiltered thresholds (0.9 and 0.8); at 0.9 nothing counts (0 / 0),
+  // at 0.8 the passing pair.
+  EvalOptions options = CarModerate2D(Matcher::kKitti);
+  options.filter.conditions = ParseFilterConditions("min-area=10000");
+  const EvalResult result = Evaluate({f}, options);
+  const FilteredStats& fs = *result.results.at(0).filtered;
+  ASSERT_EQ(fs.stable_curve.curve.size(), 2u);
+  EXPECT_EQ(fs.stable_curve.curve[0].tp + fs.stable_curve.curve[0].fp, 0);
+  EXPECT_EQ(fs.stable_curve.curve[1].tp, 1);
+  EXPECT_EQ(fs.stable_curve.curve[1].fp, 0);
+  ASSERT_EQ(fs.naive_curve.curve.size(), 1u);  // one label left, one threshold (0.8)
+  EXPECT_EQ(fs.naive_curve.curve[0].tp, 1);
+  EXPECT_EQ(fs.naive_curve.curve[0].fp, 1);
+}
+
+// The mirror case: the label passes (10100 px^2) and its detection fails (9900 px^2). Naive: the
+// label is missed (FN); stable: the pair drops out, nothing counts. Every matcher, curve and
+// operating point.
+TEST(FilteredCurves, PassingLabelWithFailingDetectionDropsOutWhenStable) {
+  EvalFrame f;
+  f.labels = {Car2D(0, 0, 101, 100, 0), Car2D(300, 0, 500, 100, 0)};
+  f.detections = {Car2D(0, 0, 99, 100, 0, 0.9), Car2D(300, 0, 500, 100, 0, 0.8)};
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    EvalOptions options = CarModerate2D(m);
+    options.filter.conditions = ParseFilterConditions("min-area=10000");
+    const EvalResult result = Evaluate({f}, options);
+    const FilteredStats& fs = *result.results.at(0).filtered;
+    EXPECT_EQ(fs.stable.tp, 1) << MatcherName(m);
+    EXPECT_EQ(fs.stable.fn, 0) << MatcherName(m);
+    EXPECT_EQ(fs.naive.fn, 1) << MatcherName(m);
+    ASSERT_FALSE(fs.stable_curve.curve.empty());
+    EXPECT_EQ(fs.stable_curve.curve.back().tp, 1) << MatcherName(m);
+    EXPECT_EQ(fs.stable_curve.curve.back().fn, 0) << MatcherName(m);
+    EXPECT_EQ(fs.naive_curve.curve.back().fn, 1) << MatcherName(m);
+    if (m != Matcher::kKitti) {
+      EXPECT_NEAR(fs.stable_curve.ap_r40, 100.0, 1e-9) << MatcherName(m);
+      EXPECT_NEAR(fs.naive_curve.ap_r40, 50.0, 1e-9) << MatcherName(m);  // recall 1/2 at precision 1
+    }
+  }
+}
+
+// Properties on random frames, every matcher: a filter everything passes leaves the curves and AP
+// unchanged in both modes; and under a real filter, each mode's curve at the operating threshold
+// has the counts of that mode's operating point.
+TEST(FilteredCurves, AgreeWithUnfilteredAndWithTheOperatingPoint) {
+  RandomFramesOptions ro;
+  ro.num_frames = 30;
+  ro.crowded = true;
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    EvalOptions options;
+    options.matcher = m;
+    options.metrics = {OverlapKind::k2D, OverlapKind::kBev};
+    options.filter.conditions = ParseFilterConditions("min-area=0");
+    const EvalResult all_pass = Evaluate(frames, options);
+    for (const ClassResult& r : all_pass.results) {
+      if (!r.evaluated) continue;
+      for (const FilteredCurve* c : {&r.filtered->naive_curve, &r.filtered->stable_curve}) {
+        EXPECT_NEAR(c->ap_r40, r.ap_r40, 1e-9) << MatcherName(m) << ' ' << r.class_name;
+        EXPECT_NEAR(c->ap_r11, r.ap_r11, 1e-9) << MatcherName(m) << ' ' << r.class_name;
+        ASSERT_EQ(c->curve.size(), r.curve.size()) << MatcherName(m) << ' ' << r.class_name;
+        for (size_t k = 0; k < r.curve.size(); ++k) {
+          EXPECT_EQ(c->curve[k].tp, r.curve[k].tp);
+          EXPECT_EQ(c->curve[k].fp, r.curve[k].fp);
+          EXPECT_EQ(c->curve[k].fn, r.curve[k].fn);
+        }
+      }
+    }
+    if (m == Matcher::kKitti) continue;  // its curve has only the devkit's thresholds
+    options.filter.conditions = ParseFilterConditions("min-area=3000,max-distance=40");
+    options.score_threshold = 0.5;
+    const EvalResult filtered = Evaluate(frames, options);
+    int nontrivial = 0;
+    for (const ClassResult& r : filtered.results) {
+      if (!r.evaluated) continue;
+      auto at = [&](const FilteredCurve& c, const OperatingPoint& op) {
+        CurvePoint p;
+        p.fn = op.tp + op.fn;  // nothing detected above every threshold: all counted labels are FN
+        for (const CurvePoint& q : c.curve) {
+          if (q.threshold >= 0.5) p = q;
+        }
+        EXPECT_EQ(p.tp, op.tp) << MatcherName(m) << ' ' << r.class_name;
+        EXPECT_EQ(p.fp, op.fp) << MatcherName(m) << ' ' << r.class_name;
+        EXPECT_EQ(p.fn, op.fn) << MatcherName(m) << ' ' << r.class_name;
+      };
+      at(r.filtered->naive_curve, r.filtered->naive);
+      at(r.filtered->stable_curve, r.filtered->stable);
+      nontrivial += r.filtered->stable.tp > 0 ? 1 : 0;
+    }
+    EXPECT_GT(nontrivial, 0);
+  }
 }
 
 TEST(Filters, ParsesAndRejects) {

@@ -205,6 +205,16 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
     std::vector<int32_t> match;
     if (cl.size() == 1 && cd.size() == 1) {
       match = {0};  // one edge: take it
+    } else if (cl.size() == 1) {
+      // One label: its best edge, the first (lowest detection index) among equal weights. The AOS
+      // curve (evaluator.cc, SingleLabelSimilarityEvents) relies on this exact choice.
+      size_t best = 0;
+      for (size_t k = 1; k < edges.size(); ++k) {
+        const LexWeight& w = edges[k].weight;
+        const LexWeight& b = edges[best].weight;
+        if (w.major > b.major || (w.major == b.major && w.minor > b.minor)) best = k;
+      }
+      match = {edges[best].det};
     } else {
       match = MaxWeightAssignment(static_cast<int>(cl.size()), static_cast<int>(cd.size()), edges);
     }

@@ -61,6 +61,7 @@ void VocFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<Curv
     if (outcome == Outcome::kTp) {
       ev.tp = 1;
       ev.fn = -1;
+      ev.similarity = (1.0 + std::cos(f.det_alpha[j] - f.label_alpha[label])) / 2.0;
     } else if (outcome == Outcome::kFp) {
       ev.fp = 1;
     } else if (label >= 0) {

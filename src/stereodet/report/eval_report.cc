@@ -41,6 +41,37 @@ std::string FormatNumber(double value, int decimals) {
   return fmt::format("{:.{}f}", value, decimals);
 }
 
+namespace {
+
+double FpPerFrame(const CurvePoint& p, int64_t num_frames) {
+  return num_frames > 0 ? static_cast<double>(p.fp) / static_cast<double>(num_frames) : 0.0;
+}
+
+json CurveJson(const std::vector<CurvePoint>& points, int64_t num_frames, bool with_aos) {
+  json curve = {{"threshold", json::array()}, {"tp", json::array()},        {"fp", json::array()},
+                {"fn", json::array()},        {"precision", json::array()}, {"recall", json::array()},
+                {"fp_per_frame", json::array()}};
+  if (with_aos) curve["orientation"] = json::array();
+  for (const CurvePoint& p : points) {
+    curve["threshold"].push_back(p.threshold);
+    curve["tp"].push_back(p.tp);
+    curve["fp"].push_back(p.fp);
+    curve["fn"].push_back(p.fn);
+    curve["precision"].push_back(p.precision);
+    curve["recall"].push_back(p.recall);
+    curve["fp_per_frame"].push_back(FpPerFrame(p, num_frames));
+    if (with_aos) curve["orientation"].push_back(p.orientation);
+  }
+  return curve;
+}
+
+json FilteredCurveJson(const FilteredCurve& c, int64_t num_frames, bool with_aos) {
+  return {{"ap_r40", c.ap_r40},   {"ap_r11", c.ap_r11},   {"ap_voc", c.ap_voc},
+          {"aos_r40", c.aos_r40}, {"aos_r11", c.aos_r11}, {"curve", CurveJson(c.curve, num_frames, with_aos)}};
+}
+
+}  // namespace
+
 json EvalResultToJson(const EvalResult& result, const EvalOptions& options, const EvalRunInfo& info) {
   json j;
   j["tool"] = {{"name", "stereodet eval"}, {"version", info.tool_version}};
@@ -99,22 +130,13 @@ json EvalResultToJson(const EvalResult& result, const EvalOptions& options, cons
     e["at_threshold"] = OperatingPointJson(r.at_threshold);
     e["best_f1"] = OperatingPointJson(r.best_f1);
     if (r.filtered) {
-      e["filtered"] = {{"naive", OperatingPointJson(r.filtered->naive)},
-                       {"stable", OperatingPointJson(r.filtered->stable)}};
+      const FilteredStats& fs = *r.filtered;
+      e["filtered"] = {{"naive", OperatingPointJson(fs.naive)},
+                       {"stable", OperatingPointJson(fs.stable)},
+                       {"naive_curve", FilteredCurveJson(fs.naive_curve, result.num_frames, r.has_aos)},
+                       {"stable_curve", FilteredCurveJson(fs.stable_curve, result.num_frames, r.has_aos)}};
     }
-    json curve = {{"threshold", json::array()}, {"tp", json::array()},        {"fp", json::array()},
-                  {"fn", json::array()},        {"precision", json::array()}, {"recall", json::array()},
-                  {"fp_per_frame", json::array()}};
-    for (const CurvePoint& p : r.curve) {
-      curve["threshold"].push_back(p.threshold);
-      curve["tp"].push_back(p.tp);
-      curve["fp"].push_back(p.fp);
-      curve["fn"].push_back(p.fn);
-      curve["precision"].push_back(p.precision);
-      curve["recall"].push_back(p.recall);
-      curve["fp_per_frame"].push_back(result.num_frames ? static_cast<double>(p.fp) / result.num_frames : 0.0);
-    }
-    e["curve"] = curve;
+    e["curve"] = CurveJson(r.curve, result.num_frames, r.has_aos);
     if (!r.kitti_precision.empty()) {
       e["kitti"] = {{"precision", r.kitti_precision}, {"aos", r.kitti_aos}, {"thresholds", r.kitti_thresholds}};
     }
@@ -149,6 +171,29 @@ json EvalResultToJson(const EvalResult& result, const EvalOptions& options, cons
   }
   j["results"] = results;
   return j;
+}
+
+std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos) {
+  std::ostringstream pr;
+  pr << "threshold,tp,fp,fn,precision,recall,fp_per_frame" << (with_aos ? ",orientation" : "") << '\n';
+  for (const CurvePoint& p : curve) {
+    pr << Csv(p.threshold) << ',' << p.tp << ',' << p.fp << ',' << p.fn << ',' << Csv(p.precision) << ','
+       << Csv(p.recall) << ',' << Csv(FpPerFrame(p, num_frames));
+    if (with_aos) pr << ',' << Csv(p.orientation);
+    pr << '\n';
+  }
+  return pr.str();
+}
+
+std::string RocCsv(const std::vector<CurvePoint>& curve, int64_t num_frames) {
+  std::ostringstream roc;
+  roc << "fp_per_frame,recall,threshold,tp,fp\n";
+  // The curve is in descending threshold order, so FP per frame ascends.
+  for (const CurvePoint& p : curve) {
+    roc << Csv(FpPerFrame(p, num_frames)) << ',' << Csv(p.recall) << ',' << Csv(p.threshold) << ',' << p.tp
+        << ',' << p.fp << '\n';
+  }
+  return roc.str();
 }
 
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
@@ -186,14 +231,14 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
   for (const ClassResult& r : result.results) {
     if (!r.evaluated) continue;
     const std::string stem = CurveStem(r);
-    std::ostringstream pr;
-    pr << "threshold,tp,fp,fn,precision,recall,fp_per_frame\n";
-    for (const CurvePoint& p : r.curve) {
-      pr << Csv(p.threshold) << ',' << p.tp << ',' << p.fp << ',' << p.fn << ',' << Csv(p.precision)
-         << ',' << Csv(p.recall) << ','
-         << Csv(result.num_frames ? static_cast<double>(p.fp) / result.num_frames : 0.0) << '\n';
+    write(out_dir / "curves" / ("pr_" + stem + ".csv"), PrCsv(r.curve, result.num_frames, r.has_aos));
+    write(out_dir / "curves" / ("roc_" + stem + ".csv"), RocCsv(r.curve, result.num_frames));
+    if (r.filtered) {
+      write(out_dir / "curves" / ("pr_naive_" + stem + ".csv"),
+            PrCsv(r.filtered->naive_curve.curve, result.num_frames, r.has_aos));
+      write(out_dir / "curves" / ("pr_stable_" + stem + ".csv"),
+            PrCsv(r.filtered->stable_curve.curve, result.num_frames, r.has_aos));
     }
-    write(out_dir / "curves" / ("pr_" + stem + ".csv"), pr.str());
     std::ostringstream rel;
     rel << "lower,upper,count,mean_score,tp_fraction\n";
     for (const ReliabilityBin& b : r.calibration.bins) {
@@ -269,6 +314,8 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
                            "", "", "", fs.naive.tp, fs.naive.fp, fs.naive.fn, fs.naive.precision,
                            fs.naive.recall, fs.stable.tp, fs.stable.fp, fs.stable.fn,
                            fs.stable.precision, fs.stable.recall);
+        out << fmt::format("{:<12} {:<4} {:>5} | filtered AP_R40: naive {}, stable {}\n", "", "", "",
+                           FormatNumber(fs.naive_curve.ap_r40, 2), FormatNumber(fs.stable_curve.ap_r40, 2));
       }
     }
   }
@@ -288,6 +335,21 @@ std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound)
         << ',' << Csv(s.precision) << ',' << Csv(s.recall) << '\n';
   }
   return out.str();
+}
+
+std::string FormatCompareCsv(const std::vector<CompareRow>& rows) {
+  std::string csv =
+      "class,metric,difficulty,lower_m,upper_m,count_a,abs_dz_mean_a,count_b,abs_dz_mean_b,"
+      "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz\n";
+  for (const CompareRow& r : rows) {
+    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name, OverlapKindName(r.metric),
+                       DifficultyName(r.difficulty), r.lower_m, r.upper_m, r.count_a,
+                       FormatNumber(r.abs_depth_error_mean_a_m, 6), r.count_b,
+                       FormatNumber(r.abs_depth_error_mean_b_m, 6), FormatNumber(r.difference_b_minus_a_m, 6),
+                       FormatNumber(r.centre_error_mean_a_m, 6), FormatNumber(r.centre_error_mean_b_m, 6),
+                       r.model_depth_error_m);
+  }
+  return csv;
 }
 
 }  // namespace stereodet

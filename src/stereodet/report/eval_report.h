@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "stereodet/eval/compare.h"
 #include "stereodet/eval/evaluator.h"
 
 namespace stereodet {
@@ -27,11 +28,19 @@ nlohmann::json EvalResultToJson(const EvalResult& result, const EvalOptions& opt
                                 const EvalRunInfo& info);
 
 // Writes OUT/results.json, OUT/summary.csv and per evaluated class x metric x difficulty
-// OUT/curves/pr_CLASS_METRIC_DIFFICULTY.csv (threshold, tp, fp, fn, precision, recall,
-// fp_per_frame), reliability_*.csv and localization_*.csv. Returns the paths written.
+// OUT/curves/pr_CLASS_METRIC_DIFFICULTY.csv (PrCsv), roc_*.csv (RocCsv, the detector ROC),
+// reliability_*.csv and localization_*.csv; with a filter also pr_naive_*.csv and pr_stable_*.csv
+// (the curves under the filter in each mode). Returns the paths written.
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
                                                    const EvalResult& result, const EvalOptions& options,
                                                    const EvalRunInfo& info);
+
+// A PR curve as CSV: threshold, tp, fp, fn, precision, recall, fp_per_frame, and with AOS the
+// orientation ratio (similarity / (tp + fp)); one row per curve point, descending threshold.
+std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos);
+// The detector ROC as CSV: fp_per_frame (ascending), recall, threshold, tp, fp; one row per curve
+// point.
+std::string RocCsv(const std::vector<CurvePoint>& curve, int64_t num_frames);
 
 // A table like KITTI's: one row per class and metric, AP_R40 / AP_R11 (and AOS) for Easy, Moderate,
 // Hard, then the operating-point counts and best F1 at Moderate (or the first difficulty evaluated).
@@ -40,6 +49,11 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
 // The filter sweep as CSV: class, metric, difficulty, filter, value, then tp/fp/fn/precision/recall
 // for the naive and the stable filter.
 std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound);
+
+// `stereodet eval compare` as CSV: class, metric, difficulty, lower_m, upper_m, count_a,
+// abs_dz_mean_a, count_b, abs_dz_mean_b, difference_b_minus_a, centre_error_mean_a,
+// centre_error_mean_b, model_dz (metres, 6 decimals; "-" for an empty bin).
+std::string FormatCompareCsv(const std::vector<CompareRow>& rows);
 
 // "12.3457" (4 decimals) or "nan"/"-" for NaN.
 std::string FormatNumber(double value, int decimals = 4);
