@@ -8,9 +8,13 @@
 
 namespace stereodet::cli {
 
+void AddInfoCommand(CLI::App& app);  // info_command.cc (kitti helper)
 void AddSynthCommand(CLI::App& app);  // synth_command.cc
-void AddInfoCommand(CLI::App& app);  // info_command.cc
-void AddEvalCommand(CLI::App& app);  // eval_command.cc (eval, eval sweep, eval compare)
+void AddEvalCommand(CLI::App& app);   // eval_command.cc (eval, eval sweep, eval compare)
+void AddStereoCommand(CLI::App& app);  // stereo_command.cc
+#ifdef STEREODET_HAVE_MODELS
+void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect ssd)
+#endif
 
 }  // namespace stereodet::cli
 

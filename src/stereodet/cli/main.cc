@@ -21,9 +21,13 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   // The subcommand table, in the order a user meets them.
-  stereodet::cli::AddSynthCommand(app);
-  stereodet::cli::AddInfoCommand(app);
-  stereodet::cli::AddEvalCommand(app);
+  stereodet::cli::AddSynthCommand(app);  // synth
+  stereodet::cli::AddStereoCommand(app);  // stereo
+  stereodet::cli::AddInfoCommand(app);  // kitti helper
+  stereodet::cli::AddEvalCommand(app);  // eval
+#ifdef STEREODET_HAVE_MODELS
+  stereodet::cli::AddModelsCommand(app);  // train ssd, detect ssd
+#endif
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,350 @@
+// SsdModel and SsdTrainer: the pimpl boundary between the torch-free API (ssd.h) and LibTorch.
+#include "stereodet/models/ssd.h"
+
+#include <nlohmann/json.hpp>
+
+#include "stereodet/models/ssd_net.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+namespace {
+
+constexpr char kConfigFile[] = "model.json";
+constexpr char kWeightsFile[] = "model.pt";
+constexpr int kConfigVersion = 1;
+
+}  // namespace
+
+// --- SsdConfig
+// --------------------------------------------------------------------------------------
+
+void SsdConfig::Check() const {
+  boxes.Check();
+  STEREODET_CHECK(!classes.empty()) << "need at least one class";
+  for (const std::string& name : classes) {
+    STEREODET_CHECK(!name.empty() && name.find_first_of(" \t\n") == std::string::npos)
+        << "class names must be non-empty and without spaces, got '" << name << "'";
+  }
+  STEREODET_CHECK(boxes.num_maps == 4 && boxes.first_map_stride_log2 == 3)
+      << "the SSD backbone has 4 feature maps from stride 8; got " << boxes.num_maps
+      << " maps from stride " << (1 << boxes.first_map_stride_log2);
+  STEREODET_CHECK(base_channels >= 4 && base_channels <= 256)
+      << "base_channels must be in [4, 256], got " << base_channels;
+}
+
+std::string SsdConfigToJson(const SsdConfig& config) {
+  nlohmann::json j;
+  j["version"] = kConfigVersion;
+  j["architecture"] = "ssd";
+  j["encoding"] = InputEncodingName(config.encoding);
+  j["classes"] = config.classes;
+  j["input_width"] = config.boxes.input_width;
+  j["input_height"] = config.boxes.input_height;
+  j["num_maps"] = config.boxes.num_maps;
+  j["first_map_stride_log2"] = config.boxes.first_map_stride_log2;
+  j["min_size_fraction"] = config.boxes.min_size_fraction;
+  j["aspect_ratios"] = config.boxes.aspect_ratios;
+  j["base_channels"] = config.base_channels;
+  return j.dump(2) + "\n";
+}
+
+SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
+  }
+  std::string field;
+  try {
+    SsdConfig config;
+    field = "version";
+    const int version = j.at(field).get<int>();
+    if (version != kConfigVersion) {
+      throw ParseError(source, 0, field, "unsupported version " + std::to_string(version));
+    }
+    field = "architecture";
+    if (j.at(field).get<std::string>() != "ssd") {
+      throw ParseError(source, 0, field, "expected \"ssd\"");
+    }
+    field = "encoding";
+    config.encoding = ParseInputEncoding(j.at(field).get<std::string>());
+    field = "classes";
+    config.classes = j.at(field).get<std::vector<std::string>>();
+    field = "input_width";
+    config.boxes.input_width = j.at(field).get<int>();
+    field = "input_height";
+    config.boxes.input_height = j.at(field).get<int>();
+    field = "num_maps";
+    config.boxes.num_maps = j.at(field).get<int>();
+    field = "first_map_stride_log2";
+    config.boxes.first_map_stride_log2 = j.at(field).get<int>();
+    field = "min_size_fraction";
+    config.boxes.min_size_fraction = j.at(field).get<double>();
+    field = "aspect_ratios";
+    config.boxes.aspect_ratios = j.at(field).get<std::vector<double>>();
+    field = "base_channels";
+    config.base_channels = j.at(field).get<int>();
+    field = "";
+    config.Check();
+    return config;
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, field, e.what());
+  } catch (const std::invalid_argument& e) {
+    throw ParseError(source, 0, field, e.what());
+  }
+}
+
+std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
+                               int width) {
+  const size_t size = static_cast<size_t>(channels) * height * width;
+  std::vector<float> stacked;
+  stacked.reserve(inputs.size() * size);
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    const PlanarImage& input = inputs[i];
+    STEREODET_CHECK(input.channels == channels && input.rows == height && input.cols == width &&
+                    input.data.size() == size)
+        << "input " << i << " must have " << channels << " planes of " << width << "x" << height
+        << " px, got " << input.channels << " of " << input.cols << "x" << input.rows;
+    stacked.insert(stacked.end(), input.data.begin(), input.data.end());
+  }
+  return stacked;
+}
+
+void SetTorchThreads(int num_threads) {
+  STEREODET_CHECK(num_threads >= 0) << "threads must be >= 0, got " << num_threads;
+  if (num_threads > 0) torch::set_num_threads(num_threads);
+}
+
+// --- SsdModel
+// ---------------------------------------------------------------------------------------
+
+struct SsdModel::Impl {
+  explicit Impl(const SsdConfig& c)
+      : config(c), default_boxes(GenerateDefaultBoxes(c.boxes)), net(c) {}
+
+  SsdConfig config;
+  std::vector<DefaultBox> default_boxes;
+  // LibTorch's forward() is not const; inference does not change the weights.
+  mutable internal::SsdNet net;
+
+  torch::Tensor ToTensor(const std::vector<PlanarImage>& inputs) const {
+    const int c = NetworkInputChannels(config.encoding);
+    std::vector<float> planar = StackPlanar(inputs, c, config.InputHeight(), config.InputWidth());
+    return torch::from_blob(
+               planar.data(),
+               {static_cast<int64_t>(inputs.size()), c, config.InputHeight(), config.InputWidth()},
+               torch::kFloat32)
+        .clone();
+  }
+};
+
+SsdModel::SsdModel(const SsdConfig& config, uint64_t seed) {
+  config.Check();
+  torch::manual_seed(seed);
+  impl_ = std::make_unique<Impl>(config);
+}
+
+SsdModel::SsdModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SsdModel::~SsdModel() = default;
+SsdModel::SsdModel(SsdModel&&) noexcept = default;
+SsdModel& SsdModel::operator=(SsdModel&&) noexcept = default;
+
+SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
+  const std::filesystem::path config_path = model_dir / kConfigFile;
+  const SsdConfig config = SsdConfigFromJson(ReadFile(config_path), config_path.string());
+  auto impl = std::make_unique<Impl>(config);
+  const std::filesystem::path weights_path = model_dir / kWeightsFile;
+  STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
+      << "missing weights file " << weights_path.string();
+  try {
+    torch::serialize::InputArchive archive;
+    archive.load_from(weights_path.string());
+    impl->net->load(archive);
+  } catch (const c10::Error& e) {
+    STEREODET_THROW_IO() << "cannot load weights " << weights_path.string() << " for the model in "
+                         << config_path.string() << ": " << e.what_without_backtrace();
+  }
+  return SsdModel(std::move(impl));
+}
+
+void SsdModel::Save(const std::filesystem::path& model_dir) const {
+  std::filesystem::create_directories(model_dir);
+  AtomicPath weights(model_dir / kWeightsFile);
+  torch::serialize::OutputArchive archive;
+  impl_->net->save(archive);
+  archive.save_to(weights.temp_path().string());
+  weights.Commit();
+  WriteFileAtomically(model_dir / kConfigFile, SsdConfigToJson(impl_->config));
+}
+
+const SsdConfig& SsdModel::config() const { return impl_->config; }
+const std::vector<DefaultBox>& SsdModel::default_boxes() const { return impl_->default_boxes; }
+
+SsdOutputs SsdModel::Forward(const std::vector<PlanarImage>& inputs) const {
+  SsdOutputs outputs;
+  outputs.num_images = static_cast<int>(inputs.size());
+  outputs.num_boxes = static_cast<int>(impl_->default_boxes.size());
+  outputs.num_classes = impl_->config.NumClassesWithBackground();
+  if (inputs.empty()) return outputs;
+  torch::NoGradGuard no_grad;
+  impl_->net->eval();
+  auto [deltas, logits] = impl_->net->forward(impl_->ToTensor(inputs));
+  STEREODET_CHECK(deltas.size(1) == outputs.num_boxes)
+      << "network emits " << deltas.size(1) << " boxes, default boxes are " << outputs.num_boxes;
+  const torch::Tensor probabilities = torch::softmax(logits, 2).contiguous();
+  deltas = deltas.contiguous();
+  outputs.deltas.assign(deltas.data_ptr<float>(), deltas.data_ptr<float>() + deltas.numel());
+  outputs.probabilities.assign(probabilities.data_ptr<float>(),
+                               probabilities.data_ptr<float>() + probabilities.numel());
+  return outputs;
+}
+
+std::vector<std::vector<ScoredBox>> SsdModel::Detect(const std::vector<PlanarImage>& inputs,
+                                                     const DecodeOptions& options) const {
+  const SsdOutputs outputs = Forward(inputs);
+  std::vector<std::vector<ScoredBox>> detections(inputs.size());
+  const size_t boxes = outputs.num_boxes;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    detections[i] = DecodeDetections(outputs.deltas.data() + i * boxes * 4,
+                                     outputs.probabilities.data() + i * boxes * outputs.num_classes,
+                                     outputs.num_classes, impl_->default_boxes, options);
+  }
+  return detections;
+}
+
+int64_t SsdModel::ParameterCount() const {
+  int64_t count = 0;
+  for (const auto& p : impl_->net->parameters()) count += p.numel();
+  return count;
+}
+
+int64_t SsdModel::CompressionParameterCount() const {
+  return impl_->net->CompressionParameterCount();
+}
+
+int64_t SsdModel::MultiplyAccumulates() const {
+  return internal::CountMultiplyAccumulates(impl_->config);
+}
+
+// --- SsdTrainer
+// -------------------------------------------------------------------------------------
+
+void MultiBoxLossOptions::Check() const {
+  STEREODET_CHECK(negative_ratio > 0.0) << "negative_ratio must be > 0, got " << negative_ratio;
+  STEREODET_CHECK(min_negatives_per_image >= 0)
+      << "min_negatives_per_image must be >= 0, got " << min_negatives_per_image;
+  STEREODET_CHECK(localization_weight >= 0.0)
+      << "localization_weight must be >= 0, got " << localization_weight;
+}
+
+void SsdTrainerOptions::Check() const {
+  loss.Check();
+  STEREODET_CHECK(weight_decay >= 0.0) << "weight_decay must be >= 0, got " << weight_decay;
+}
+
+struct SsdTrainer::Impl {
+  Impl(SsdModel::Impl& m, const SsdTrainerOptions& o)
+      : model(m),
+        options(o),
+        optimizer(m.net->parameters(),
+                  torch::optim::AdamWOptions(1e-3).weight_decay(o.weight_decay)) {}
+
+  SsdModel::Impl& model;
+  SsdTrainerOptions options;
+  torch::optim::AdamW optimizer;
+
+  // Tensors viewing the batch's arrays (no copy; the batch outlives them).
+  internal::MultiBoxLossTerms Loss(const TrainBatch& batch) const {
+    const int64_t boxes = static_cast<int64_t>(model.default_boxes.size());
+    STEREODET_CHECK(
+        batch.batch_size > 0 && batch.channels == NetworkInputChannels(model.config.encoding) &&
+        batch.height == model.config.InputHeight() && batch.width == model.config.InputWidth())
+        << "batch of " << batch.batch_size << " x " << batch.channels << " x " << batch.height
+        << " x " << batch.width << " does not fit the model";
+    STEREODET_CHECK(batch.labels.size() == static_cast<size_t>(batch.batch_size * boxes) &&
+                    batch.deltas.size() == static_cast<size_t>(batch.batch_size * boxes * 4) &&
+                    batch.images.size() == static_cast<size_t>(batch.batch_size) * batch.channels *
+                                               batch.height * batch.width)
+        << "batch arrays have the wrong size";
+    auto* images = const_cast<float*>(batch.images.data());
+    auto* labels = const_cast<int64_t*>(batch.labels.data());
+    auto* deltas = const_cast<float*>(batch.deltas.data());
+    const torch::Tensor x = torch::from_blob(
+        images, {batch.batch_size, batch.channels, batch.height, batch.width}, torch::kFloat32);
+    const torch::Tensor target_labels =
+        torch::from_blob(labels, {batch.batch_size, boxes}, torch::kInt64);
+    const torch::Tensor target_deltas =
+        torch::from_blob(deltas, {batch.batch_size, boxes, 4}, torch::kFloat32);
+    auto [pred_deltas, logits] = model.net->forward(x);
+    return internal::MultiBoxLoss(pred_deltas, logits, target_labels, target_deltas, options.loss);
+  }
+
+  static LossParts Parts(const internal::MultiBoxLossTerms& terms) {
+    return {terms.total.item<double>(), terms.localization.item<double>(),
+            terms.confidence.item<double>(), static_cast<int>(terms.num_positive)};
+  }
+};
+
+SsdTrainer::SsdTrainer(SsdModel& model, const SsdTrainerOptions& options) {
+  options.Check();
+  impl_ = std::make_unique<Impl>(*model.impl_, options);
+}
+
+SsdTrainer::~SsdTrainer() = default;
+
+LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
+  STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
+  for (auto& group : impl_->optimizer.param_groups()) {
+    static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
+  }
+  impl_->model.net->train();
+  impl_->optimizer.zero_grad();
+  const internal::MultiBoxLossTerms terms = impl_->Loss(batch);
+  terms.total.backward();
+  impl_->optimizer.step();
+  return Impl::Parts(terms);
+}
+
+LossParts SsdTrainer::Evaluate(const TrainBatch& batch) const {
+  torch::NoGradGuard no_grad;
+  impl_->model.net->eval();
+  return Impl::Parts(impl_->Loss(batch));
+}
+
+void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const {
+  torch::serialize::OutputArchive root, model, optimizer;
+  impl_->model.net->save(model);
+  impl_->optimizer.save(optimizer);
+  root.write("model", model);
+  root.write("optimizer", optimizer);
+  root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  AtomicPath out(path);
+  root.save_to(out.temp_path().string());
+  out.Commit();
+}
+
+int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path) {
+  STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
+      << "missing checkpoint " << path.string();
+  try {
+    torch::serialize::InputArchive root, model, optimizer;
+    root.load_from(path.string());
+    root.read("model", model);
+    root.read("optimizer", optimizer);
+    torch::Tensor epochs;
+    root.read("epochs_done", epochs);
+    impl_->model.net->load(model);
+    impl_->optimizer.load(optimizer);
+    return static_cast<int>(epochs.item<int64_t>());
+  } catch (const c10::Error& e) {
+    STEREODET_THROW_IO() << "cannot load checkpoint " << path.string() << ": "
+                         << e.what_without_backtrace();
+  }
+  return 0;
+}
+
+}  // namespace stereodet

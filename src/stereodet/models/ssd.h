@@ -1,0 +1,164 @@
+// The single-shot detector (SSD) on one image-like input, as in the paper's RGB vs RGB-H study: a
+// small convolutional backbone, four feature maps (strides 8, 16, 32, 64 px), 3x3 convolutional
+// heads giving per default box class scores and box offsets, MultiBox loss with 3:1 hard negative
+// mining, per-class NMS. LibTorch is an implementation detail: nothing here exposes a torch type.
+//
+// A model folder holds:
+//   model.json      the SsdConfig (input encoding, classes, input size, default boxes, width)
+//   model.pt        the weights (LibTorch archive)
+//   checkpoint.pt   training state for --resume (weights, optimizer, epochs done); not needed to
+//   detect train_log.csv   one line per epoch (ssd_train.h)
+#ifndef STEREODET_MODELS_SSD_H_
+#define STEREODET_MODELS_SSD_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "stereodet/models/box_coder.h"
+#include "stereodet/models/default_boxes.h"
+#include "stereodet/models/input_encoding.h"
+
+namespace stereodet {
+
+struct SsdConfig {
+  InputEncoding encoding = InputEncoding::kRgb;
+  // Class names in KITTI's spelling; the network's class index i >= 1 is classes[i - 1], 0 is
+  // background.
+  std::vector<std::string> classes = {"Car", "Pedestrian", "Cyclist"};
+  // Input size and default boxes. The backbone fixes 4 maps starting at stride 8.
+  DefaultBoxOptions boxes;
+  // Backbone width: its stages have base, 2, 4 and 8 times base channels (ssd_net.cc).
+  int base_channels = 16;
+
+  void Check() const;  // throws std::invalid_argument
+  int NumClassesWithBackground() const { return static_cast<int>(classes.size()) + 1; }
+  int InputWidth() const { return boxes.input_width; }
+  int InputHeight() const { return boxes.input_height; }
+};
+
+// JSON text of a config, and back. Parse errors throw ParseError naming `source`.
+std::string SsdConfigToJson(const SsdConfig& config);
+SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source);
+
+// Raw network outputs for a batch, row-major: deltas [image][default box][4], probabilities
+// [image][default box][class] (softmax over background + classes).
+struct SsdOutputs {
+  int num_images = 0;
+  int num_boxes = 0;
+  int num_classes = 0;  // with background
+  std::vector<float> deltas;
+  std::vector<float> probabilities;
+};
+
+// One training batch as plain arrays (built by ssd_data.h's loader, consumed by SsdTrainer).
+struct TrainBatch {
+  int batch_size = 0, channels = 0, height = 0, width = 0;
+  std::vector<float> images;    // [batch][channel][row][column], the encoded inputs
+  std::vector<int64_t> labels;  // [batch][default box]: 0 background, >= 1 class, kIgnoreLabel
+  std::vector<float> deltas;    // [batch][default box][4]: box targets (box_coder.h) for positives
+  int num_positive = 0;         // over the batch
+};
+
+// Concatenates `inputs` (each `channels` planes of height x width) into one
+// [image][channel][row][column] array. Throws std::invalid_argument for an input of another shape.
+std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
+                               int width);
+
+// Threads LibTorch's operators use (0 = leave LibTorch's default, all cores). Process-wide.
+void SetTorchThreads(int num_threads);
+
+// Not thread-safe: one thread at a time may call Forward/Detect (LibTorch parallelises inside).
+class SsdModel {
+ public:
+  // A new network, its weights drawn from `seed` (the same seed gives the same weights).
+  SsdModel(const SsdConfig& config, uint64_t seed);
+  ~SsdModel();
+  SsdModel(SsdModel&&) noexcept;
+  SsdModel& operator=(SsdModel&&) noexcept;
+
+  // Reads model.json and model.pt from `model_dir`. Throws std::runtime_error naming the file.
+  static SsdModel Load(const std::filesystem::path& model_dir);
+  // Writes model.json and model.pt into `model_dir` (created if missing), each atomically.
+  void Save(const std::filesystem::path& model_dir) const;
+
+  const SsdConfig& config() const;
+  // The default boxes, in the order of the outputs' box dimension.
+  const std::vector<DefaultBox>& default_boxes() const;
+
+  // Inference (no gradients, batch norm in evaluation mode). Requires: each input has
+  // NetworkInputChannels(config().encoding) planes of the config's input size (EncodeNetworkInput).
+  SsdOutputs Forward(const std::vector<PlanarImage>& inputs) const;
+  // Forward + DecodeDetections: per input, boxes in network-input px, labels >= 1, best first.
+  std::vector<std::vector<ScoredBox>> Detect(const std::vector<PlanarImage>& inputs,
+                                             const DecodeOptions& options = {}) const;
+
+  // Trainable parameters, all of them / of the learned 1x1 colour compression alone (0 unless
+  // rgbh-learned: 3 x 2 weights, no bias, = 6).
+  int64_t ParameterCount() const;
+  int64_t CompressionParameterCount() const;
+  // Multiply-accumulates of one forward pass on one image (convolutions; FLOPs ~ 2x this).
+  int64_t MultiplyAccumulates() const;
+
+ private:
+  friend class SsdTrainer;
+  struct Impl;
+  explicit SsdModel(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+struct MultiBoxLossOptions {
+  // Hard negative mining: per image, the negatives with the highest background loss are kept, at
+  // most negative_ratio per positive (SSD's 3:1) ...
+  double negative_ratio = 3.0;
+  // ... and at least this many, so frames without objects still teach "background".
+  int min_negatives_per_image = 8;
+  // Weight of the smooth-L1 box loss against the softmax cross-entropy.
+  double localization_weight = 1.0;
+  void Check() const;
+};
+
+struct SsdTrainerOptions {
+  MultiBoxLossOptions loss;
+  // AdamW; the learning rate is given per step (the schedule lives in ssd_train.cc).
+  double weight_decay = 5e-4;
+  void Check() const;
+};
+
+// The loss terms of one step, each divided by the number of positives (at least 1).
+struct LossParts {
+  double total = 0;
+  double localization = 0;
+  double confidence = 0;
+  int num_positive = 0;
+};
+
+// Trains an SsdModel in place: holds the optimizer state.
+class SsdTrainer {
+ public:
+  // `model` must outlive the trainer.
+  SsdTrainer(SsdModel& model, const SsdTrainerOptions& options = {});
+  ~SsdTrainer();
+
+  // One optimizer step on `batch` at `learning_rate`. Returns the loss before the step.
+  LossParts Step(const TrainBatch& batch, double learning_rate);
+  // The loss on `batch` without changing anything (training-mode batch norm is not used: evaluation
+  // mode, no gradients).
+  LossParts Evaluate(const TrainBatch& batch) const;
+
+  // Weights + optimizer state + `epochs_done`, written atomically.
+  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;
+  // Restores what SaveCheckpoint wrote (into the model given to the constructor); returns
+  // epochs_done. Throws std::runtime_error if the file is missing or does not fit the model.
+  int LoadCheckpoint(const std::filesystem::path& path);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_SSD_H_

@@ -1,0 +1,363 @@
+#include "stereodet/models/ssd_data.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/parallel.h"
+
+namespace stereodet {
+
+void AugmentOptions::Check() const {
+  STEREODET_CHECK(flip_probability >= 0.0 && flip_probability <= 1.0)
+      << "flip_probability must be in [0, 1], got " << flip_probability;
+  STEREODET_CHECK(min_zoom > 0.0 && min_zoom <= max_zoom && max_zoom <= 10.0)
+      << "need 0 < min_zoom <= max_zoom <= 10, got " << min_zoom << ", " << max_zoom;
+  STEREODET_CHECK(brightness >= 0.0 && brightness <= 1.0)
+      << "brightness must be in [0, 1], got " << brightness;
+  STEREODET_CHECK(contrast >= 0.0 && contrast < 1.0)
+      << "contrast must be in [0, 1), got " << contrast;
+  STEREODET_CHECK(saturation >= 0.0 && saturation < 1.0)
+      << "saturation must be in [0, 1), got " << saturation;
+  STEREODET_CHECK(min_visible_fraction >= 0.0 && min_visible_fraction <= 1.0)
+      << "min_visible_fraction must be in [0, 1], got " << min_visible_fraction;
+}
+
+void SsdDataOptions::Check() const {
+  augment.Check();
+  match.Check();
+  stereo.Check();
+  STEREODET_CHECK(min_object_height_px >= 0.0)
+      << "min_object_height_px must be >= 0, got " << min_object_height_px;
+  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
+}
+
+std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
+                                         const std::vector<std::string>& classes,
+                                         const SsdDataOptions& options) {
+  std::vector<TargetBox> targets;
+  for (const Object& label : labels) {
+    const auto cls = std::find(classes.begin(), classes.end(), label.type);
+    if (cls != classes.end()) {
+      const bool too_small = label.box.Height() < options.min_object_height_px;
+      targets.push_back({label.box, too_small ? kIgnoreLabel : 1 + (cls - classes.begin())});
+    } else if (std::find(options.ignore_types.begin(), options.ignore_types.end(), label.type) !=
+               options.ignore_types.end()) {
+      targets.push_back({label.box, kIgnoreLabel});
+    }
+  }
+  return targets;
+}
+
+namespace {
+
+cv::Mat ReadColour(const std::filesystem::path& path) {
+  cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
+  STEREODET_CHECK_IO(!bgr.empty()) << "cannot read image " << path.string();
+  return bgr;
+}
+
+cv::Mat ResizeHeightCodes(const cv::Mat& code, cv::Size size) {
+  cv::Mat resized;
+  cv::resize(code, resized, size, 0, 0, cv::INTER_NEAREST);
+  return resized;
+}
+
+// Brightness, contrast and saturation on an 8-bit BGR image.
+void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double offset = unit(rng) * options.brightness * 255.0;
+  const double contrast = 1.0 + unit(rng) * options.contrast;
+  const double saturation = 1.0 + unit(rng) * options.saturation;
+  cv::Mat f;
+  bgr.convertTo(f, CV_32FC3);
+  const cv::Scalar channel_means = cv::mean(f);
+  const double mean = (channel_means[0] + channel_means[1] + channel_means[2]) / 3.0;
+  f = (f - cv::Scalar::all(mean)) * contrast + cv::Scalar::all(mean + offset);
+  cv::Mat grey, grey3;
+  cv::cvtColor(f, grey, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(grey, grey3, cv::COLOR_GRAY2BGR);
+  f = grey3 + (f - grey3) * saturation;
+  f.convertTo(bgr, CV_8UC3);  // saturates to [0, 255]
+}
+
+}  // namespace
+
+PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
+                                const SsdConfig& config) {
+  const cv::Size size(config.InputWidth(), config.InputHeight());
+  cv::Mat resized;
+  cv::resize(bgr, resized, size, 0, 0, cv::INTER_AREA);
+  cv::Mat code;
+  if (UsesHeight(config.encoding)) {
+    STEREODET_CHECK(height_code.type() == CV_16UC1 && height_code.size() == bgr.size())
+        << "height codes must be CV_16UC1 of the image's size";
+    code = ResizeHeightCodes(height_code, size);
+  }
+  return EncodeNetworkInput(resized, code, config.encoding);
+}
+
+// --- SsdTrainingData
+// --------------------------------------------------------------------------------
+
+SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                                 const SsdConfig& config, const SsdDataOptions& options,
+                                 const ProgressOptions& progress)
+    : config_(config), options_(options), default_boxes_(GenerateDefaultBoxes(config.boxes)) {
+  config.Check();
+  options.Check();
+  STEREODET_CHECK(!ids.empty()) << "no frames to train on";
+  const bool height = UsesHeight(config.encoding);
+  RequiredFiles required;
+  required.image_left = required.label = true;
+  required.image_right = required.calib = height;
+  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
+  if (!missing.empty()) {
+    std::string list;
+    for (size_t i = 0; i < std::min<size_t>(missing.size(), 5); ++i) list += "\n  " + missing[i];
+    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
+                         << dataset.SubsetDir().string() << ", e.g." << list;
+  }
+  frames_.resize(ids.size());
+  ProgressReporter reporter(height ? "stereo" : "labels", static_cast<int64_t>(ids.size()),
+                            progress);
+  const cv::Size network_size(config.InputWidth(), config.InputHeight());
+  ParallelFor(
+      ids.size(),
+      [&](size_t i) {
+        const FramePaths paths = dataset.Paths(ids[i]);
+        TrainingFrame& frame = frames_[i];
+        frame.id = ids[i];
+        frame.image_path = paths.image_left;
+        frame.targets =
+            TargetsFromLabels(ReadObjects(paths.label).objects, config.classes, options);
+        if (height) {
+          // One encoder per frame: StereoEncoder is not thread-safe and cheap to make.
+          StereoEncoder encoder(options.stereo);
+          const StereoGeometry geometry =
+              StereoGeometry::FromCalibration(ReadCalibration(paths.calib));
+          StereoOutputs outputs;
+          outputs.rgbh = false;
+          const StereoEncoding encoding = encoder.Encode(
+              ReadColour(paths.image_left), ReadColour(paths.image_right), geometry, outputs);
+          frame.height_code = ResizeHeightCodes(encoding.height_code, network_size);
+        }
+        reporter.Add(1);
+      },
+      options.threads);
+  reporter.Finish();
+}
+
+SsdTrainingData::SsdTrainingData(std::vector<TrainingFrame> frames, const SsdConfig& config,
+                                 const SsdDataOptions& options)
+    : frames_(std::move(frames)),
+      config_(config),
+      options_(options),
+      default_boxes_(GenerateDefaultBoxes(config.boxes)) {
+  config.Check();
+  options.Check();
+}
+
+TrainSample SsdTrainingData::Sample(int index, uint64_t seed) const {
+  STEREODET_CHECK(index >= 0 && index < size()) << "frame index " << index << " out of range";
+  const TrainingFrame& frame = frames_[index];
+  const AugmentOptions& aug = options_.augment;
+  const int net_w = config_.InputWidth(), net_h = config_.InputHeight();
+  const bool height = UsesHeight(config_.encoding);
+  if (height) {
+    STEREODET_CHECK(frame.height_code.type() == CV_16UC1 &&
+                    frame.height_code.size() == cv::Size(net_w, net_h))
+        << "frame " << frame.id << ": height codes must be CV_16UC1 of the network's size";
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+
+  const cv::Mat full = ReadColour(frame.image_path);
+  const int full_w = full.cols, full_h = full.rows;
+
+  // The window of the original image the network will see (integer px, may extend outside).
+  int x0 = 0, y0 = 0, win_w = full_w, win_h = full_h;
+  bool flip = false;
+  if (aug.enabled) {
+    const double zoom = std::exp(std::log(aug.min_zoom) +
+                                 uniform(rng) * (std::log(aug.max_zoom) - std::log(aug.min_zoom)));
+    win_w = std::max(1, static_cast<int>(std::lround(full_w / zoom)));
+    win_h = std::max(1, static_cast<int>(std::lround(full_h / zoom)));
+    const int slack_x = full_w - win_w, slack_y = full_h - win_h;
+    x0 =
+        std::min(0, slack_x) + static_cast<int>(std::floor(uniform(rng) * (std::abs(slack_x) + 1)));
+    y0 =
+        std::min(0, slack_y) + static_cast<int>(std::floor(uniform(rng) * (std::abs(slack_y) + 1)));
+    flip = uniform(rng) < aug.flip_probability;
+  }
+
+  // Colour: crop (padding with grey outside the image), then resize to the network's size.
+  cv::Mat window(win_h, win_w, CV_8UC3, cv::Scalar::all(128));
+  const cv::Rect inside = cv::Rect(x0, y0, win_w, win_h) & cv::Rect(0, 0, full_w, full_h);
+  if (inside.area() > 0) full(inside).copyTo(window(inside - cv::Point(x0, y0)));
+  cv::Mat bgr;
+  cv::resize(window, bgr, cv::Size(net_w, net_h), 0, 0,
+             win_w >= net_w ? cv::INTER_AREA : cv::INTER_LINEAR);
+  if (flip) cv::flip(bgr, bgr, 1);
+  if (aug.enabled) JitterColour(bgr, aug, rng);
+
+  // Original px -> network px.
+  const double sx = static_cast<double>(net_w) / win_w, sy = static_cast<double>(net_h) / win_h;
+  auto map_x = [&](double x) {
+    const double u = (x - x0) * sx;
+    return flip ? net_w - u : u;
+  };
+  auto map_y = [&](double y) { return (y - y0) * sy; };
+
+  cv::Mat code;
+  if (height) {
+    // Cache px -> original px -> network px, as one affine map; nearest neighbour keeps codes
+    // exact.
+    const double cache_to_full_x = static_cast<double>(full_w) / net_w;
+    const double cache_to_full_y = static_cast<double>(full_h) / net_h;
+    double ax = cache_to_full_x * sx, bx = -x0 * sx;
+    if (flip) {
+      ax = -ax;
+      bx = net_w - bx;
+    }
+    const cv::Matx23d affine(ax, 0, bx, 0, cache_to_full_y * sy, -y0 * sy);
+    cv::warpAffine(frame.height_code, code, affine, cv::Size(net_w, net_h), cv::INTER_NEAREST,
+                   cv::BORDER_CONSTANT, cv::Scalar(0));
+  }
+
+  TrainSample sample;
+  sample.input = EncodeNetworkInput(bgr, code, config_.encoding);
+  for (const TargetBox& target : frame.targets) {
+    double l = map_x(target.box.left), r = map_x(target.box.right);
+    if (l > r) std::swap(l, r);
+    const Box2D mapped{l, map_y(target.box.top), r, map_y(target.box.bottom)};
+    const Box2D clipped{std::clamp(mapped.left, 0.0, double(net_w)),
+                        std::clamp(mapped.top, 0.0, double(net_h)),
+                        std::clamp(mapped.right, 0.0, double(net_w)),
+                        std::clamp(mapped.bottom, 0.0, double(net_h))};
+    if (clipped.Width() < 1.0 || clipped.Height() < 1.0) continue;
+    int64_t label = target.label;
+    if (label >= 1 && clipped.Area() < aug.min_visible_fraction * mapped.Area())
+      label = kIgnoreLabel;
+    sample.targets.push_back({clipped, label});
+  }
+  sample.match = MatchDefaultBoxes(default_boxes_, sample.targets, options_.match);
+  return sample;
+}
+
+TrainBatch SsdTrainingData::MakeBatch(const std::vector<int>& indices,
+                                      const std::vector<uint64_t>& seeds) const {
+  STEREODET_CHECK(indices.size() == seeds.size() && !indices.empty())
+      << "need one seed per frame and at least one frame";
+  TrainBatch batch;
+  batch.batch_size = static_cast<int>(indices.size());
+  batch.channels = NetworkInputChannels(config_.encoding);
+  batch.height = config_.InputHeight();
+  batch.width = config_.InputWidth();
+  const size_t image_size = static_cast<size_t>(batch.channels) * batch.height * batch.width;
+  batch.images.reserve(indices.size() * image_size);
+  for (size_t i = 0; i < indices.size(); ++i) {
+    TrainSample sample = Sample(indices[i], seeds[i]);
+    batch.images.insert(batch.images.end(), sample.input.data.begin(), sample.input.data.end());
+    batch.labels.insert(batch.labels.end(), sample.match.labels.begin(), sample.match.labels.end());
+    batch.deltas.insert(batch.deltas.end(), sample.match.deltas.begin(), sample.match.deltas.end());
+    batch.num_positive += sample.match.num_positive;
+  }
+  return batch;
+}
+
+uint64_t SampleSeed(uint64_t seed, int epoch, int frame_index) {
+  // SplitMix64 over the three numbers: well mixed, cheap, and stable across platforms.
+  auto mix = [](uint64_t z) {
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  };
+  return mix(mix(mix(seed) ^ static_cast<uint64_t>(epoch)) ^ static_cast<uint64_t>(frame_index));
+}
+
+std::vector<int> EpochOrder(int n, uint64_t seed, int epoch) {
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  // Fisher-Yates with our own index draws: std::shuffle's algorithm is not specified, so results
+  // would differ between standard libraries.
+  std::mt19937_64 rng(SampleSeed(seed, epoch, -1));
+  for (int i = n - 1; i > 0; --i) {
+    const int j = static_cast<int>(rng() % static_cast<uint64_t>(i + 1));
+    std::swap(order[i], order[j]);
+  }
+  return order;
+}
+
+// --- BatchLoader
+// ------------------------------------------------------------------------------------
+
+BatchLoader::BatchLoader(const SsdTrainingData& data, std::vector<int> order, int batch_size,
+                         uint64_t seed, int epoch, int capacity)
+    : data_(data),
+      order_(std::move(order)),
+      batch_size_(batch_size),
+      seed_(seed),
+      epoch_(epoch),
+      capacity_(capacity),
+      num_batches_(0) {
+  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+  STEREODET_CHECK(capacity >= 1) << "capacity must be >= 1, got " << capacity;
+  num_batches_ = static_cast<int>((order_.size() + batch_size - 1) / batch_size);
+  thread_ = std::thread(&BatchLoader::Produce, this);
+}
+
+BatchLoader::~BatchLoader() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  changed_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void BatchLoader::Produce() {
+  try {
+    for (int b = 0; b < num_batches_; ++b) {
+      const size_t begin = static_cast<size_t>(b) * batch_size_;
+      const size_t end = std::min(order_.size(), begin + batch_size_);
+      std::vector<int> indices(order_.begin() + begin, order_.begin() + end);
+      std::vector<uint64_t> seeds;
+      for (int index : indices) seeds.push_back(SampleSeed(seed_, epoch_, index));
+      TrainBatch batch = data_.MakeBatch(indices, seeds);
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [&] { return stop_ || static_cast<int>(queue_.size()) < capacity_; });
+      if (stop_) return;
+      queue_.push_back(std::move(batch));
+      changed_.notify_all();
+    }
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    error_ = std::current_exception();
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  finished_ = true;
+  changed_.notify_all();
+}
+
+std::optional<TrainBatch> BatchLoader::Next() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [&] { return !queue_.empty() || finished_; });
+  if (!queue_.empty()) {
+    TrainBatch batch = std::move(queue_.front());
+    queue_.pop_front();
+    changed_.notify_all();
+    return batch;
+  }
+  if (error_) std::rethrow_exception(error_);
+  return std::nullopt;
+}
+
+}  // namespace stereodet

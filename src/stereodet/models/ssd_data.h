@@ -1,0 +1,172 @@
+// Training data for the SSD: frames of a KITTI-format split, their labels as training targets, the
+// stereo height codes (computed once, cached in memory at the network's resolution), augmentation
+// that keeps the height consistent with the image, and a loader that builds batches on its own
+// thread while the network trains.
+//
+// Augmentation (per sample, fully determined by its seed):
+//   - zoom: a window of the image's aspect ratio, 1/zoom of its size, zoom log-uniform in
+//     [min_zoom, max_zoom], at a uniform position (zoom < 1 pads around the image: grey colour,
+//     height code 0 = "no stereo"); colour is cropped from the full-resolution image and resized
+//     with INTER_AREA, the height codes are warped from the cache with the same affine map, nearest
+//     neighbour (codes must not be interpolated);
+//   - horizontal flip of colour, height and boxes together (height above the ground does not change
+//     under a flip or a zoom, so the codes themselves are kept);
+//   - photometric jitter (brightness, contrast, saturation) on the colour only, before encoding.
+#ifndef STEREODET_MODELS_SSD_DATA_H_
+#define STEREODET_MODELS_SSD_DATA_H_
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/object.h"
+#include "stereodet/models/box_coder.h"
+#include "stereodet/models/ssd.h"
+#include "stereodet/stereo/stereo_encoder.h"
+#include "stereodet/util/progress.h"
+
+namespace stereodet {
+
+struct AugmentOptions {
+  bool enabled = true;
+  double flip_probability = 0.5;
+  // Window = image / zoom, zoom log-uniform in [min_zoom, max_zoom] (< 1 zooms out, > 1 crops in).
+  double min_zoom = 0.8;
+  double max_zoom = 1.6;
+  // Colour only: value += U(-brightness, brightness) * 255; value = mean + U(1 - contrast,
+  // 1 + contrast) * (value - mean); saturation blends with grey by U(1 - saturation, 1 +
+  // saturation).
+  double brightness = 0.12;
+  double contrast = 0.25;
+  double saturation = 0.25;
+  // An object that keeps less than this fraction of its box inside the window becomes an ignore
+  // region (neither positive nor negative).
+  double min_visible_fraction = 0.5;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct SsdDataOptions {
+  // Label types that become ignore regions; other types not among the model's classes are
+  // background. Van and Person_sitting are KITTI's "neighbouring classes" of Car and Pedestrian:
+  // detecting them is neither right nor wrong in KITTI's evaluation, so they are not negatives.
+  std::vector<std::string> ignore_types = {"DontCare", "Van", "Person_sitting"};
+  // Objects of a class whose box is less tall than this (original image px) become ignore regions:
+  // KITTI's evaluation ignores anything below 25 px, so they are neither taught nor punished.
+  double min_object_height_px = 20.0;
+  AugmentOptions augment;
+  MatchOptions match;
+  // Stereo pipeline for the height codes (disparity, ground plane, 9-bit quantization). Blur is
+  // applied at evaluation only (ssd_detect.h), never here.
+  StereoOptions stereo;
+  // Threads for the one-off stereo pass over the split (0 = all cores).
+  int threads = 0;
+  void Check() const;
+};
+
+// The training targets of a frame's labels in original image px: classes -> 1 + index in `classes`,
+// ignore types and too-small objects -> kIgnoreLabel, anything else dropped.
+std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
+                                         const std::vector<std::string>& classes,
+                                         const SsdDataOptions& options);
+
+// One frame's network input at the model's size, from a full-resolution BGR image and, for RGB-H
+// encodings, the full-resolution height codes (resized nearest-neighbour). The inference path.
+PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
+                                const SsdConfig& config);
+
+// A frame held in memory for training.
+struct TrainingFrame {
+  std::string id;
+  std::filesystem::path image_path;  // left image (image_2), read at every use
+  std::vector<TargetBox> targets;    // original image px
+  cv::Mat height_code;               // CV_16UC1 at the network's input size (empty for rgb)
+};
+
+struct TrainSample {
+  PlanarImage input;
+  MatchResult match;
+  std::vector<TargetBox> targets;  // after augmentation, network-input px
+};
+
+// The frames of one split, ready to sample from. Construction reads every label file and, for RGB-H
+// encodings, runs the stereo pipeline on every frame (in parallel, with progress).
+class SsdTrainingData {
+ public:
+  // Throws std::runtime_error listing missing files (first few) before doing any work.
+  SsdTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                  const SsdConfig& config, const SsdDataOptions& options,
+                  const ProgressOptions& progress = {});
+  // From frames already in memory (tests).
+  SsdTrainingData(std::vector<TrainingFrame> frames, const SsdConfig& config,
+                  const SsdDataOptions& options);
+
+  int size() const { return static_cast<int>(frames_.size()); }
+  const TrainingFrame& frame(int index) const { return frames_[index]; }
+  const SsdConfig& config() const { return config_; }
+  const std::vector<DefaultBox>& default_boxes() const { return default_boxes_; }
+
+  // The augmented, encoded sample of frame `index`; the same seed gives the same sample.
+  TrainSample Sample(int index, uint64_t seed) const;
+  // Samples `indices` (seeds[i] for indices[i]) into one batch.
+  TrainBatch MakeBatch(const std::vector<int>& indices, const std::vector<uint64_t>& seeds) const;
+
+ private:
+  std::vector<TrainingFrame> frames_;
+  SsdConfig config_;
+  SsdDataOptions options_;
+  std::vector<DefaultBox> default_boxes_;
+};
+
+// A seed per (run seed, epoch, frame), independent of the order frames are visited in.
+uint64_t SampleSeed(uint64_t seed, int epoch, int frame_index);
+// Frame order of an epoch: a permutation of 0..n-1 drawn from (seed, epoch).
+std::vector<int> EpochOrder(int n, uint64_t seed, int epoch);
+
+// Builds the batches of one epoch on a background thread, up to `capacity` batches ahead of the
+// consumer (a bounded queue: memory stays small and the producer waits when training is slower).
+class BatchLoader {
+ public:
+  // Batches are consecutive slices of `order` of `batch_size` frames (the last may be smaller).
+  // `data` must outlive the loader.
+  BatchLoader(const SsdTrainingData& data, std::vector<int> order, int batch_size, uint64_t seed,
+              int epoch, int capacity = 3);
+  ~BatchLoader();  // stops the producer and joins it
+  BatchLoader(const BatchLoader&) = delete;
+  BatchLoader& operator=(const BatchLoader&) = delete;
+
+  int num_batches() const { return num_batches_; }
+  // The next batch, or nullopt after the last. Rethrows an exception of the producer (a frame that
+  // cannot be read).
+  std::optional<TrainBatch> Next();
+
+ private:
+  void Produce();
+
+  const SsdTrainingData& data_;
+  std::vector<int> order_;
+  int batch_size_;
+  uint64_t seed_;
+  int epoch_;
+  int capacity_;
+  int num_batches_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<TrainBatch> queue_;
+  bool finished_ = false;  // the producer is done (or failed)
+  bool stop_ = false;      // the consumer is gone
+  std::exception_ptr error_;
+  std::thread thread_;  // last: starts after everything above is initialised
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_SSD_DATA_H_

@@ -1,0 +1,161 @@
+#include "stereodet/models/ssd_detect.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd_data.h"
+#include "stereodet/stereo/degradation.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/parallel.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+void DetectSsdOptions::Check() const {
+  decode.Check();
+  stereo.Check();
+  STEREODET_CHECK(!model_dir.empty()) << "--model is required";
+  STEREODET_CHECK(!data_root.empty()) << "--data is required";
+  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
+  STEREODET_CHECK(blur_sigma_px >= 0.0 && std::isfinite(blur_sigma_px))
+      << "blur sigma must be >= 0, got " << blur_sigma_px;
+  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
+  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+}
+
+std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
+                                      const std::vector<std::string>& classes, double scale_x,
+                                      double scale_y, int image_width, int image_height) {
+  std::vector<Object> objects;
+  for (const ScoredBox& b : boxes) {
+    STEREODET_CHECK(b.label >= 1 && b.label <= static_cast<int>(classes.size()))
+        << "detection label " << b.label << " out of range";
+    Object o;
+    o.type = classes[b.label - 1];
+    o.truncated = -1.0;
+    o.occluded = -1;
+    // Rounded to 0.01 px (KITTI's own precision; the files stay short and read back exactly).
+    auto px = [](double v, double hi) {
+      return std::round(std::clamp(v, 0.0, hi) * 100.0) / 100.0;
+    };
+    o.box = {px(b.box.left * scale_x, image_width), px(b.box.top * scale_y, image_height),
+             px(b.box.right * scale_x, image_width), px(b.box.bottom * scale_y, image_height)};
+    if (o.box.Width() <= 0.0 || o.box.Height() <= 0.0) continue;
+    o.SetNot3DEstimated();
+    // Six decimals keep the ranking of all but near-identical scores.
+    o.score = std::round(static_cast<double>(b.score) * 1e6) / 1e6;
+    objects.push_back(o);
+  }
+  return objects;
+}
+
+namespace {
+
+cv::Mat ReadColour(const std::filesystem::path& path) {
+  cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
+  STEREODET_CHECK_IO(!bgr.empty()) << "cannot read image " << path.string();
+  return bgr;
+}
+
+}  // namespace
+
+DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
+  options.Check();
+  const Timer timer;
+  SetTorchThreads(options.threads);
+  const SsdModel model = SsdModel::Load(options.model_dir);
+  const SsdConfig& config = model.config();
+  const bool height = UsesHeight(config.encoding);
+
+  const KittiDataset dataset(options.data_root, options.subset);
+  std::vector<std::string> ids = dataset.ReadSplit(options.split);
+  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
+    ids.resize(options.max_frames);
+  }
+  RequiredFiles required;
+  required.image_left = true;
+  required.image_right = required.calib = height;
+  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
+  if (!missing.empty()) {
+    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
+                         << dataset.SubsetDir().string() << ", e.g. " << missing.front();
+  }
+  std::filesystem::create_directories(options.out_dir);
+
+  StereoOptions stereo = options.stereo;
+  stereo.blur.sigma_px = options.blur_sigma_px;
+  stereo.blur.mode = BlurMode::kNetworkImage;
+
+  DetectSsdSummary summary;
+  StageTimes times;
+  ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), options.progress);
+  for (size_t begin = 0; begin < ids.size(); begin += options.batch_size) {
+    const size_t end = std::min(ids.size(), begin + options.batch_size);
+    const size_t n = end - begin;
+    std::vector<PlanarImage> inputs(n);
+    std::vector<cv::Size> sizes(n);
+    ParallelFor(
+        n,
+        [&](size_t i) {
+          const FramePaths paths = dataset.Paths(ids[begin + i]);
+          cv::Mat left;
+          {
+            ScopedStage stage(times, "read");
+            left = ReadColour(paths.image_left);
+          }
+          sizes[i] = left.size();
+          cv::Mat network_image = left, height_code;
+          if (height) {
+            cv::Mat right;
+            {
+              ScopedStage stage(times, "read");
+              right = ReadColour(paths.image_right);
+            }
+            ScopedStage stage(times, "stereo");
+            StereoEncoder encoder(stereo);
+            StereoOutputs outputs;
+            outputs.rgbh = false;
+            StereoEncoding encoding = encoder.Encode(
+                left, right, StereoGeometry::FromCalibration(ReadCalibration(paths.calib)),
+                outputs);
+            network_image = encoding.network_image;  // blurred when asked; stereo saw it sharp
+            height_code = encoding.height_code;
+          } else if (options.blur_sigma_px > 0.0) {
+            ScopedStage stage(times, "blur");
+            network_image = GaussianBlurImage(left, options.blur_sigma_px);
+          }
+          ScopedStage stage(times, "encode");
+          inputs[i] = PrepareNetworkInput(network_image, height_code, config);
+        },
+        options.threads);
+    std::vector<std::vector<ScoredBox>> boxes;
+    {
+      ScopedStage stage(times, "network");
+      boxes = model.Detect(inputs, options.decode);
+    }
+    ScopedStage stage(times, "write");
+    for (size_t i = 0; i < n; ++i) {
+      const double sx = static_cast<double>(sizes[i].width) / config.InputWidth();
+      const double sy = static_cast<double>(sizes[i].height) / config.InputHeight();
+      const std::vector<Object> objects =
+          ToKittiDetections(boxes[i], config.classes, sx, sy, sizes[i].width, sizes[i].height);
+      WriteObjects(options.out_dir / (ids[begin + i] + ".txt"), objects);
+      summary.detections += static_cast<int64_t>(objects.size());
+    }
+    progress.Add(static_cast<int64_t>(n));
+  }
+  progress.Finish();
+  summary.frames = static_cast<int>(ids.size());
+  summary.seconds = timer.ElapsedSeconds();
+  summary.images_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
+  summary.stage_times = times.Format();
+  return summary;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,59 @@
+// Running a trained SSD over a KITTI-format split: `stereodet detect ssd`. Writes one KITTI
+// detection file per frame (OUT/ID.txt, also for frames without detections), which `stereodet eval
+// --det OUT` and KITTI's devkit read.
+#ifndef STEREODET_MODELS_SSD_DETECT_H_
+#define STEREODET_MODELS_SSD_DETECT_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "stereodet/kitti/object.h"
+#include "stereodet/models/box_coder.h"
+#include "stereodet/stereo/stereo_encoder.h"
+#include "stereodet/util/progress.h"
+
+namespace stereodet {
+
+struct DetectSsdOptions {
+  std::filesystem::path model_dir;  // written by `stereodet train ssd`
+  std::filesystem::path data_root;  // KITTI layout
+  std::string subset = "training";  // "training" or "testing"
+  std::string split = "val";        // ImageSets/SPLIT.txt, or a path to a split file
+  std::filesystem::path out_dir;    // receives ID.txt per frame
+  // Gaussian blur (sigma in original image px) of the network's image only; stereo matching sees
+  // the sharp pair, as in the paper's degradation study. 0 = off.
+  double blur_sigma_px = 0.0;
+  int batch_size = 8;
+  int threads = 0;       // LibTorch and the per-frame preparation (0 = all cores)
+  int max_frames = 0;    // only the first N frames of the split (0 = all)
+  DecodeOptions decode;  // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
+  // Stereo pipeline for RGB-H models. Must be what the model was trained with (the defaults).
+  StereoOptions stereo;
+  ProgressOptions progress;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct DetectSsdSummary {
+  int frames = 0;
+  int64_t detections = 0;
+  double seconds = 0;
+  double images_per_second = 0;  // end to end: reading, stereo, encoding, network, writing
+  std::string stage_times;       // StageTimes::Format(): read, stereo, encode, network, write
+};
+
+DetectSsdSummary DetectSsd(const DetectSsdOptions& options);
+
+// Network-input boxes -> KITTI detections in the original image: scaled by (scale_x, scale_y),
+// clipped to [0, image_width] x [0, image_height], rounded to 0.01 px, empty boxes dropped, score
+// rounded to 1e-6, type = classes[label - 1],
+// truncated and occluded -1 (unknown), 3D fields "not estimated" (Object::SetNot3DEstimated), score
+// kept. Order kept (best first).
+std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
+                                      const std::vector<std::string>& classes, double scale_x,
+                                      double scale_y, int image_width, int image_height);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_SSD_DETECT_H_

@@ -1,0 +1,199 @@
+// Tests of the network through the public, torch-free API (tiny inputs, a few steps: fast).
+#include "stereodet/models/ssd.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+namespace {
+
+SsdConfig TinyConfig(InputEncoding encoding) {
+  SsdConfig config;
+  config.encoding = encoding;
+  config.boxes.input_width = 64;
+  config.boxes.input_height = 48;
+  config.boxes.min_size_fraction = 0.2;
+  config.base_channels = 8;
+  return config;
+}
+
+std::vector<PlanarImage> RandomInputs(const SsdConfig& config, int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> value(0.0f, 1.0f);
+  std::vector<PlanarImage> inputs;
+  for (int i = 0; i < n; ++i) {
+    PlanarImage p{
+        NetworkInputChannels(config.encoding), config.InputHeight(), config.InputWidth(), {}};
+    p.data.resize(static_cast<size_t>(p.channels) * p.rows * p.cols);
+    for (float& v : p.data) v = value(rng);
+    inputs.push_back(std::move(p));
+  }
+  return inputs;
+}
+
+// A batch of frames each with one bright box (class 1) on a dark noisy background.
+TrainBatch ToyBatch(const SsdModel& model, int n, unsigned seed) {
+  const SsdConfig& config = model.config();
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> x(0, 34), y(0, 20), w(12, 28), h(12, 26);
+  std::vector<PlanarImage> inputs;
+  TrainBatch batch;
+  batch.batch_size = n;
+  batch.channels = NetworkInputChannels(config.encoding);
+  batch.height = config.InputHeight();
+  batch.width = config.InputWidth();
+  for (int i = 0; i < n; ++i) {
+    PlanarImage image{batch.channels, batch.height, batch.width, {}};
+    image.data.assign(static_cast<size_t>(batch.channels) * batch.height * batch.width, 0.1f);
+    const int left = x(rng), top = y(rng), right = left + w(rng), bottom = top + h(rng);
+    for (int c = 0; c < batch.channels; ++c) {
+      for (int v = top; v < bottom; ++v) {
+        for (int u = left; u < right; ++u) image.Channel(c)[v * batch.width + u] = 0.9f;
+      }
+    }
+    inputs.push_back(std::move(image));
+    const MatchResult match = MatchDefaultBoxes(
+        model.default_boxes(),
+        {{Box2D{double(left), double(top), double(right), double(bottom)}, 1}}, {});
+    batch.labels.insert(batch.labels.end(), match.labels.begin(), match.labels.end());
+    batch.deltas.insert(batch.deltas.end(), match.deltas.begin(), match.deltas.end());
+    batch.num_positive += match.num_positive;
+  }
+  batch.images = StackPlanar(inputs, batch.channels, batch.height, batch.width);
+  return batch;
+}
+
+TEST(SsdTest, ParameterCountsEqualApartFromTheLearnedCompression) {
+  const SsdModel rgb(SsdConfig{}, 1);
+  SsdConfig fixed_config, learned_config;
+  fixed_config.encoding = InputEncoding::kRgbhFixed;
+  learned_config.encoding = InputEncoding::kRgbhLearned;
+  const SsdModel fixed(fixed_config, 1), learned(learned_config, 1);
+  EXPECT_EQ(rgb.CompressionParameterCount(), 0);
+  EXPECT_EQ(fixed.CompressionParameterCount(), 0);
+  EXPECT_EQ(learned.CompressionParameterCount(), 3 * 2);
+  EXPECT_EQ(rgb.ParameterCount(), fixed.ParameterCount());
+  EXPECT_EQ(learned.ParameterCount() - learned.CompressionParameterCount(), rgb.ParameterCount());
+  EXPECT_GT(rgb.ParameterCount(), 100000);
+  // The learned compression, folded into the stem, adds one input channel to it: 16 outputs x 9
+  // taps per stem output pixel (311 x 94).
+  EXPECT_EQ(learned.MultiplyAccumulates() - rgb.MultiplyAccumulates(), 311 * 94 * 16 * 9);
+}
+
+TEST(SsdTest, OutputsCoverEveryDefaultBoxAndAreProbabilities) {
+  for (InputEncoding encoding :
+       {InputEncoding::kRgb, InputEncoding::kRgbhFixed, InputEncoding::kRgbhLearned}) {
+    const SsdModel model(TinyConfig(encoding), 5);
+    const SsdOutputs out = model.Forward(RandomInputs(model.config(), 2, 1));
+    EXPECT_EQ(out.num_images, 2);
+    EXPECT_EQ(out.num_boxes, static_cast<int>(model.default_boxes().size()));
+    EXPECT_EQ(out.num_classes, 4);
+    ASSERT_EQ(out.deltas.size(), static_cast<size_t>(2 * out.num_boxes * 4));
+    ASSERT_EQ(out.probabilities.size(), static_cast<size_t>(2 * out.num_boxes * 4));
+    for (int b = 0; b < 2 * out.num_boxes; b += 97) {
+      double sum = 0;
+      for (int c = 0; c < 4; ++c) sum += out.probabilities[b * 4 + c];
+      EXPECT_NEAR(sum, 1.0, 1e-5);
+    }
+  }
+}
+
+TEST(SsdTest, WrongInputShapeThrows) {
+  const SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 5);
+  EXPECT_THROW(model.Forward(RandomInputs(TinyConfig(InputEncoding::kRgb), 1, 1)),
+               std::invalid_argument);
+}
+
+TEST(SsdTest, SameSeedSameWeights) {
+  const SsdModel a(TinyConfig(InputEncoding::kRgb), 9), b(TinyConfig(InputEncoding::kRgb), 9),
+      c(TinyConfig(InputEncoding::kRgb), 10);
+  const auto inputs = RandomInputs(a.config(), 1, 2);
+  EXPECT_EQ(a.Forward(inputs).deltas, b.Forward(inputs).deltas);
+  EXPECT_NE(a.Forward(inputs).deltas, c.Forward(inputs).deltas);
+}
+
+TEST(SsdTest, SaveThenLoadGivesIdenticalOutputs) {
+  const std::filesystem::path dir =
+      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "save_load";
+  std::filesystem::remove_all(dir);
+  SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 3);
+  // Train one step so batch-norm statistics differ from their initial values.
+  SsdTrainer trainer(model);
+  trainer.Step(ToyBatch(model, 2, 1), 1e-2);
+  model.Save(dir);
+  const SsdModel loaded = SsdModel::Load(dir);
+  EXPECT_EQ(loaded.config().encoding, InputEncoding::kRgbhLearned);
+  EXPECT_EQ(loaded.config().InputWidth(), 64);
+  const auto inputs = RandomInputs(model.config(), 2, 4);
+  const SsdOutputs a = model.Forward(inputs), b = loaded.Forward(inputs);
+  EXPECT_EQ(a.deltas, b.deltas);
+  EXPECT_EQ(a.probabilities, b.probabilities);
+  // No temporaries left behind.
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    (void)entry;
+    ++files;
+  }
+  EXPECT_EQ(files, 2);
+}
+
+TEST(SsdTest, LoadReportsMissingFiles) {
+  EXPECT_THROW(SsdModel::Load("/nonexistent/model"), std::runtime_error);
+}
+
+TEST(SsdTest, ConfigJsonRoundTrip) {
+  SsdConfig config = TinyConfig(InputEncoding::kRgbhFixed);
+  config.classes = {"Car"};
+  config.boxes.aspect_ratios = {0.5, 2.5};
+  const SsdConfig back = SsdConfigFromJson(SsdConfigToJson(config), "test");
+  EXPECT_EQ(back.encoding, config.encoding);
+  EXPECT_EQ(back.classes, config.classes);
+  EXPECT_EQ(back.boxes.aspect_ratios, config.boxes.aspect_ratios);
+  EXPECT_EQ(back.boxes.min_size_fraction, config.boxes.min_size_fraction);
+  EXPECT_EQ(back.base_channels, config.base_channels);
+  EXPECT_THROW(SsdConfigFromJson("{\"version\": 1}", "model.json"), ParseError);
+  EXPECT_THROW(SsdConfigFromJson("not json", "model.json"), ParseError);
+}
+
+TEST(SsdTest, AFewStepsLowerTheLoss) {
+  SetTorchThreads(1);
+  SsdModel model(TinyConfig(InputEncoding::kRgb), 21);
+  SsdTrainer trainer(model);
+  const TrainBatch batch = ToyBatch(model, 4, 2);
+  ASSERT_GT(batch.num_positive, 0);
+  const double first = trainer.Step(batch, 1e-2).total;
+  double last = first;
+  for (int i = 0; i < 15; ++i) last = trainer.Step(batch, 1e-2).total;
+  EXPECT_TRUE(std::isfinite(first));
+  EXPECT_LT(last, 0.5 * first);
+}
+
+TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
+  SetTorchThreads(1);
+  const std::filesystem::path path =
+      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "resume" / "checkpoint.pt";
+  std::filesystem::remove_all(path.parent_path());
+  SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 4);
+  SsdTrainer trainer(model);
+  const TrainBatch batch = ToyBatch(model, 2, 3);
+  trainer.Step(batch, 1e-2);
+  trainer.Step(batch, 1e-2);
+  trainer.SaveCheckpoint(path, 7);
+  const double continued = trainer.Step(batch, 1e-2).total;
+  const double next = trainer.Step(batch, 1e-2).total;
+
+  SsdModel fresh(TinyConfig(InputEncoding::kRgbhLearned), 99);
+  SsdTrainer resumed(fresh);
+  EXPECT_EQ(resumed.LoadCheckpoint(path), 7);
+  EXPECT_DOUBLE_EQ(resumed.Step(batch, 1e-2).total, continued);
+  // The optimizer's moments were restored too, so the step after matches as well.
+  EXPECT_DOUBLE_EQ(resumed.Step(batch, 1e-2).total, next);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,176 @@
+#include "stereodet/models/ssd_train.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+namespace {
+
+constexpr char kCheckpointFile[] = "checkpoint.pt";
+constexpr char kLogFile[] = "train_log.csv";
+constexpr char kLogHeader[] =
+    "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
+
+// The log's lines for epochs <= `epochs_done` (a resumed run drops what came after its checkpoint).
+std::string KeptLogLines(const std::filesystem::path& path, int epochs_done) {
+  std::string kept = std::string(kLogHeader) + "\n";
+  if (!std::filesystem::exists(path)) return kept;
+  std::istringstream in(ReadFile(path));
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    const std::vector<std::string_view> fields = Split(line, ',');
+    if (fields.empty()) continue;
+    const std::optional<long long> epoch = ParseInt(fields[0]);
+    if (epoch && *epoch <= epochs_done) kept += line + "\n";
+  }
+  return kept;
+}
+
+}  // namespace
+
+void TrainSsdOptions::Check() const {
+  model.Check();
+  data.Check();
+  trainer.Check();
+  STEREODET_CHECK(!data_root.empty()) << "--data is required";
+  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
+  STEREODET_CHECK(epochs >= 1) << "epochs must be >= 1, got " << epochs;
+  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+  STEREODET_CHECK(learning_rate > 0.0 && std::isfinite(learning_rate))
+      << "learning rate must be > 0, got " << learning_rate;
+  STEREODET_CHECK(warmup_steps >= 0) << "warmup_steps must be >= 0, got " << warmup_steps;
+  STEREODET_CHECK(final_lr_fraction >= 0.0 && final_lr_fraction <= 1.0)
+      << "final_lr_fraction must be in [0, 1], got " << final_lr_fraction;
+  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
+  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+  STEREODET_CHECK(max_epochs_this_run >= 0)
+      << "max_epochs_this_run must be >= 0, got " << max_epochs_this_run;
+  STEREODET_CHECK(loader_capacity >= 1) << "loader_capacity must be >= 1, got " << loader_capacity;
+}
+
+double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps) {
+  const double warmup =
+      options.warmup_steps > 0 ? std::min(1.0, (step + 1.0) / options.warmup_steps) : 1.0;
+  const double progress =
+      total_steps > 1 ? std::clamp(static_cast<double>(step) / (total_steps - 1), 0.0, 1.0) : 1.0;
+  const double cosine = 0.5 * (1.0 + std::cos(M_PI * progress));
+  const double f = options.final_lr_fraction;
+  return options.learning_rate * warmup * (f + (1.0 - f) * cosine);
+}
+
+TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
+  options.Check();
+  const Timer total_timer;
+  SetTorchThreads(options.threads);
+  TrainSsdSummary summary;
+
+  // With --resume the model folder's settings win; asking for different ones is a mistake.
+  SsdConfig config = options.model;
+  const std::filesystem::path config_path = options.out_dir / "model.json";
+  const std::filesystem::path checkpoint_path = options.out_dir / kCheckpointFile;
+  const bool resuming = options.resume && std::filesystem::exists(checkpoint_path);
+  if (resuming) {
+    const SsdConfig saved = SsdConfigFromJson(ReadFile(config_path), config_path.string());
+    STEREODET_CHECK(saved.encoding == config.encoding)
+        << "--resume: " << config_path.string() << " was trained with --input "
+        << InputEncodingName(saved.encoding) << ", not " << InputEncodingName(config.encoding);
+    STEREODET_CHECK(saved.InputWidth() == config.InputWidth() &&
+                    saved.InputHeight() == config.InputHeight())
+        << "--resume: " << config_path.string() << " has input size " << saved.InputWidth() << "x"
+        << saved.InputHeight() << ", not " << config.InputWidth() << "x" << config.InputHeight();
+    config = saved;
+  }
+
+  const KittiDataset dataset(options.data_root, "training");
+  std::vector<std::string> ids = dataset.ReadSplit(options.split);
+  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
+    ids.resize(options.max_frames);
+  }
+  STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
+
+  SsdModel model(config, options.seed);
+  SsdTrainer trainer(model, options.trainer);
+  summary.parameters = model.ParameterCount();
+  summary.compression_parameters = model.CompressionParameterCount();
+  int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path) : 0;
+  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << checkpoint_path.string();
+  summary.epochs_done = start_epoch;
+  if (start_epoch >= options.epochs) {
+    summary.seconds = total_timer.ElapsedSeconds();
+    return summary;
+  }
+
+  const Timer data_timer;
+  const SsdTrainingData data(dataset, ids, config, options.data, options.progress);
+  summary.stereo_seconds = data_timer.ElapsedSeconds();
+  summary.frames = data.size();
+
+  std::filesystem::create_directories(options.out_dir);
+  const std::filesystem::path log_path = options.out_dir / kLogFile;
+  std::string log = KeptLogLines(log_path, start_epoch);
+
+  const int64_t steps_per_epoch = (data.size() + options.batch_size - 1) / options.batch_size;
+  const int64_t total_steps = steps_per_epoch * options.epochs;
+  double train_seconds = 0;
+  int64_t images_trained = 0;
+  const int end_epoch = options.max_epochs_this_run > 0
+                            ? std::min(options.epochs, start_epoch + options.max_epochs_this_run)
+                            : options.epochs;
+  for (int epoch = start_epoch; epoch < end_epoch; ++epoch) {
+    const Timer epoch_timer;
+    BatchLoader loader(data, EpochOrder(data.size(), options.seed, epoch), options.batch_size,
+                       options.seed, epoch, options.loader_capacity);
+    ProgressReporter progress(fmt::format("epoch {}/{}", epoch + 1, options.epochs), data.size(),
+                              options.progress);
+    double loss_sum = 0, loc_sum = 0, conf_sum = 0, lr = 0;
+    int64_t step = epoch * steps_per_epoch;
+    int steps = 0, images = 0;
+    while (std::optional<TrainBatch> batch = loader.Next()) {
+      lr = ScheduledLearningRate(options, step, total_steps);
+      const LossParts loss = trainer.Step(*batch, lr);
+      STEREODET_CHECK_IO(std::isfinite(loss.total))
+          << "training diverged at epoch " << epoch + 1 << ", step " << step << " (loss "
+          << loss.total << "); try a lower --lr";
+      loss_sum += loss.total;
+      loc_sum += loss.localization;
+      conf_sum += loss.confidence;
+      ++steps;
+      ++step;
+      images += batch->batch_size;
+      progress.Add(batch->batch_size,
+                   fmt::format("loss {:.3f} (box {:.3f} cls {:.3f})", loss_sum / steps,
+                               loc_sum / steps, conf_sum / steps));
+    }
+    progress.Finish();
+    const double epoch_seconds = epoch_timer.ElapsedSeconds();
+    train_seconds += epoch_seconds;
+    images_trained += images;
+
+    // Weights and config first, then the checkpoint: a crash in between resumes from the previous
+    // epoch and redoes this one.
+    model.Save(options.out_dir);
+    trainer.SaveCheckpoint(checkpoint_path, epoch + 1);
+    log += fmt::format("{},{},{},{:.6f},{:.6f},{:.6f},{:.6g},{:.3f},{:.1f}\n", epoch + 1, steps,
+                       images, loss_sum / steps, loc_sum / steps, conf_sum / steps, lr,
+                       images / epoch_seconds, epoch_seconds);
+    WriteFileAtomically(log_path, log);
+    summary.epochs_done = epoch + 1;
+    ++summary.epochs_run;
+    summary.final_loss = loss_sum / steps;
+  }
+  summary.images_per_second = train_seconds > 0 ? images_trained / train_seconds : 0;
+  summary.seconds = total_timer.ElapsedSeconds();
+  return summary;
+}
+
+}  // namespace stereodet

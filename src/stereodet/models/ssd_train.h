@@ -1,0 +1,70 @@
+// Training an SSD on a KITTI-format split: `stereodet train ssd`.
+//
+// Per epoch: frames in a seeded random order, batches built by a BatchLoader thread while the
+// network trains, AdamW with a linear warm-up then a cosine decay of the learning rate over all
+// steps, a progress line with the loss and images per second, then (atomically) the checkpoint, the
+// model and the CSV log. --resume continues from the checkpoint's epoch; because the data order,
+// the augmentation and the schedule depend only on (seed, epoch, step), a resumed run ends with the
+// same weights as an uninterrupted one (same threads; LibTorch's CPU kernels are deterministic for
+// a fixed thread count).
+#ifndef STEREODET_MODELS_SSD_TRAIN_H_
+#define STEREODET_MODELS_SSD_TRAIN_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd_data.h"
+#include "stereodet/util/progress.h"
+
+namespace stereodet {
+
+struct TrainSsdOptions {
+  std::filesystem::path data_root;  // KITTI layout: training/, ImageSets/
+  std::string split = "train";      // ImageSets/SPLIT.txt, or a path to a split file
+  std::filesystem::path out_dir;    // the model folder (ssd.h)
+  SsdConfig model;                  // encoding, classes, input size, width
+  int epochs = 15;
+  int batch_size = 8;
+  double learning_rate = 2e-3;      // peak (AdamW)
+  int warmup_steps = 100;           // linear ramp from lr / warmup_steps
+  double final_lr_fraction = 0.05;  // the cosine ends at learning_rate * this
+  uint64_t seed = 1;                // weights, data order and augmentation
+  bool resume = false;              // continue from out_dir/checkpoint.pt
+  int threads = 0;                  // LibTorch threads (0 = all cores)
+  int max_frames = 0;               // use only the first N frames of the split (0 = all)
+  // Stop after this many epochs in this call (0 = run to `epochs`); --resume continues. The
+  // schedule always spans `epochs`, so a run split this way ends exactly where an uninterrupted one
+  // does.
+  int max_epochs_this_run = 0;
+  int loader_capacity = 3;  // batches prepared ahead
+  SsdDataOptions data;
+  SsdTrainerOptions trainer;
+  ProgressOptions progress;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct TrainSsdSummary {
+  int frames = 0;
+  int epochs_done = 0;           // in total, including those before a resume
+  int epochs_run = 0;            // in this call
+  double final_loss = 0;         // mean training loss of the last epoch run
+  double images_per_second = 0;  // training throughput of this call (loader included)
+  double seconds = 0;            // wall time of this call, stereo pre-pass included
+  double stereo_seconds = 0;     // the one-off stereo/label pass
+  int64_t parameters = 0;
+  int64_t compression_parameters = 0;
+};
+
+// Learning rate at `step` of `total_steps` (0-based): warm-up, then cosine to the final fraction.
+double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps);
+
+// Trains and writes out_dir/{model.json, model.pt, checkpoint.pt, train_log.csv}. With resume, the
+// model settings come from out_dir/model.json (a mismatching --input is an error) and training
+// continues after the checkpoint's epoch; if that is already `epochs`, nothing is trained.
+TrainSsdSummary TrainSsd(const TrainSsdOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_SSD_TRAIN_H_

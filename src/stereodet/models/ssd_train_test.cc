@@ -1,0 +1,213 @@
+// End to end on a tiny KITTI-format dataset written by the test: train, resume, detect (seconds).
+#include "stereodet/models/ssd_train.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd_detect.h"
+#include "stereodet/util/atomic_file.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Frames of 256 x 80 px: textured background, one bright textured "car" (shifted by 8 px in the
+// right image so stereo finds something), labelled Car.
+fs::path WriteTinyDataset(const std::string& name, int frames) {
+  const fs::path root = TempDir(name);
+  std::mt19937 rng(5);
+  std::vector<std::string> ids;
+  for (int i = 0; i < frames; ++i) {
+    const std::string id = FrameId(i);
+    ids.push_back(id);
+    cv::Mat left(80, 256, CV_8UC3), right;
+    cv::randu(left, 0, 90);
+    const cv::Rect car(40 + 20 * i, 30, 70, 36);
+    cv::Mat patch(car.size(), CV_8UC3);
+    cv::randu(patch, 160, 255);
+    patch.copyTo(left(car));
+    right = left.clone();
+    patch.copyTo(right(car - cv::Point(8, 0)));
+    for (const char* folder : {"image_2", "image_3", "label_2", "calib"}) {
+      fs::create_directories(root / "training" / folder);
+    }
+    cv::imwrite((root / "training/image_2" / (id + ".png")).string(), left);
+    cv::imwrite((root / "training/image_3" / (id + ".png")).string(), right);
+    WriteCalibration(root / "training/calib" / (id + ".txt"), KittiLikeCalibration());
+    Object label;
+    label.type = "Car";
+    label.box = {double(car.x), double(car.y), double(car.br().x), double(car.br().y)};
+    label.box3d.h = 1.5;
+    label.box3d.w = 1.6;
+    label.box3d.l = 3.9;
+    label.box3d.location = {0, 1.6, 10};
+    WriteObjects(root / "training/label_2" / (id + ".txt"), {label});
+  }
+  WriteSplit(root / "ImageSets/train.txt", ids);
+  WriteSplit(root / "ImageSets/val.txt", ids);
+  return root;
+}
+
+StereoOptions TinyStereo() {
+  StereoOptions stereo;
+  stereo.disparity.num_disparities = 32;
+  stereo.ground.enabled = false;
+  return stereo;
+}
+
+TrainSsdOptions TinyTraining(const fs::path& root, const fs::path& out) {
+  TrainSsdOptions options;
+  options.data_root = root;
+  options.out_dir = out;
+  options.model.encoding = InputEncoding::kRgbhLearned;
+  options.model.boxes.input_width = 128;
+  options.model.boxes.input_height = 40;
+  options.model.base_channels = 4;
+  options.batch_size = 2;
+  options.warmup_steps = 2;
+  options.threads = 1;
+  options.data.threads = 1;
+  options.data.stereo = TinyStereo();
+  options.progress.stream = nullptr;
+  return options;
+}
+
+int CountLines(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) ++n;
+  return n;
+}
+
+TEST(SsdTrainTest, ScheduleWarmsUpThenDecays) {
+  TrainSsdOptions options;
+  options.learning_rate = 1.0;
+  options.warmup_steps = 10;
+  options.final_lr_fraction = 0.1;
+  EXPECT_DOUBLE_EQ(ScheduledLearningRate(options, 0, 100), 0.1 * (0.1 + 0.9 * 1.0));
+  EXPECT_NEAR(ScheduledLearningRate(options, 99, 100), 0.1, 1e-12);
+  EXPECT_GT(ScheduledLearningRate(options, 10, 100), ScheduledLearningRate(options, 50, 100));
+}
+
+TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
+  const fs::path root = WriteTinyDataset("e2e_data", 4);
+  const fs::path out = TempDir("e2e_model");
+
+  // Three epochs, interrupted after two, then resumed.
+  TrainSsdOptions options = TinyTraining(root, out);
+  options.epochs = 3;
+  options.max_epochs_this_run = 2;
+  TrainSsdSummary s = TrainSsd(options);
+  EXPECT_EQ(s.frames, 4);
+  EXPECT_EQ(s.epochs_done, 2);
+  EXPECT_EQ(s.compression_parameters, 6);
+  for (const char* file : {"model.json", "model.pt", "checkpoint.pt", "train_log.csv"}) {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+  }
+  EXPECT_EQ(CountLines(out / "train_log.csv"), 3);
+  options.max_epochs_this_run = 0;
+  options.resume = true;
+  s = TrainSsd(options);
+  EXPECT_EQ(s.epochs_run, 1);
+  EXPECT_EQ(s.epochs_done, 3);
+  EXPECT_EQ(CountLines(out / "train_log.csv"), 4);
+
+  // An uninterrupted 3-epoch run ends with the same weights.
+  const fs::path straight = TempDir("e2e_straight");
+  TrainSsdOptions direct = TinyTraining(root, straight);
+  direct.epochs = 3;
+  TrainSsd(direct);
+  const SsdModel a = SsdModel::Load(out), b = SsdModel::Load(straight);
+  PlanarImage input{4, 40, 128, std::vector<float>(4 * 40 * 128, 0.5f)};
+  EXPECT_EQ(a.Forward({input}).probabilities, b.Forward({input}).probabilities);
+
+  // A mismatching --input on resume is refused.
+  TrainSsdOptions wrong = options;
+  wrong.model.encoding = InputEncoding::kRgb;
+  EXPECT_THROW(TrainSsd(wrong), std::invalid_argument);
+
+  // Detection writes one parseable file per frame, also with blur.
+  for (double sigma : {0.0, 3.0}) {
+    DetectSsdOptions detect;
+    detect.model_dir = out;
+    detect.data_root = root;
+    detect.out_dir = TempDir(sigma > 0 ? "e2e_det_blur" : "e2e_det");
+    detect.blur_sigma_px = sigma;
+    detect.stereo = TinyStereo();
+    detect.threads = 1;
+    detect.batch_size = 3;
+    detect.progress.stream = nullptr;
+    const DetectSsdSummary d = DetectSsd(detect);
+    EXPECT_EQ(d.frames, 4);
+    for (int i = 0; i < 4; ++i) {
+      const fs::path file = detect.out_dir / (FrameId(i) + ".txt");
+      ASSERT_TRUE(fs::exists(file));
+      ObjectParseOptions parse;
+      parse.kind = ObjectFileKind::kDetection;
+      for (const Object& o : ReadObjects(file, parse).objects) {
+        EXPECT_FALSE(o.Has3D());
+        EXPECT_GE(o.box.left, 0.0);
+        EXPECT_LE(o.box.right, 256.0);
+        EXPECT_TRUE(o.score.has_value());
+      }
+    }
+  }
+}
+
+TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
+  const fs::path root = WriteTinyDataset("rgb_data", 2);
+  fs::remove_all(root / "training/image_3");
+  fs::remove_all(root / "training/calib");
+  TrainSsdOptions options = TinyTraining(root, TempDir("rgb_model"));
+  options.model.encoding = InputEncoding::kRgb;
+  options.epochs = 1;
+  EXPECT_EQ(TrainSsd(options).epochs_done, 1);
+  // ... but RGB-H does, and says which are missing.
+  options.model.encoding = InputEncoding::kRgbhFixed;
+  options.out_dir = TempDir("rgbh_model");
+  try {
+    TrainSsd(options);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("image_3"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SsdDetectTest, ToKittiDetectionsScalesClipsAndMarks3DUnknown) {
+  const std::vector<ScoredBox> boxes = {{{10, 5, 20, 15}, 0.9f, 2},
+                                        {{-5, -5, 700, 200}, 0.5f, 1},
+                                        {{700, 0, 800, 10}, 0.4f, 1}};  // fully outside
+  const std::vector<Object> d =
+      ToKittiDetections(boxes, {"Car", "Pedestrian"}, 2.0, 2.0, 1242, 375);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].type, "Pedestrian");
+  EXPECT_EQ(d[0].box, (Box2D{20, 10, 40, 30}));
+  EXPECT_NEAR(*d[0].score, 0.9, 1e-6);
+  EXPECT_FALSE(d[0].Has3D());
+  EXPECT_EQ(d[0].alpha, -10.0);
+  EXPECT_EQ(d[1].box, (Box2D{0, 0, 1242, 375}));
+  EXPECT_THROW(ToKittiDetections({{{0, 0, 1, 1}, 0.5f, 3}}, {"Car", "Pedestrian"}, 1, 1, 10, 10),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,42 @@
+#include "stereodet/stereo/degradation.h"
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+std::string BlurModeName(BlurMode mode) {
+  return mode == BlurMode::kNetworkImage ? "image" : "both";
+}
+
+BlurMode ParseBlurMode(const std::string& name) {
+  if (name == "image") return BlurMode::kNetworkImage;
+  if (name == "both") return BlurMode::kBothBeforeMatching;
+  STEREODET_THROW_ARG() << "blur mode must be 'image' or 'both', got '" << name << "'";
+  return BlurMode::kNetworkImage;  // not reached
+}
+
+void BlurOptions::Check() const {
+  STEREODET_CHECK(std::isfinite(sigma_px) && sigma_px >= 0)
+      << "blur sigma must be a finite number >= 0, got " << sigma_px;
+}
+
+int GaussianKernelSize(double sigma_px) {
+  STEREODET_CHECK(std::isfinite(sigma_px) && sigma_px >= 0)
+      << "blur sigma must be a finite number >= 0, got " << sigma_px;
+  if (sigma_px == 0) return 1;
+  return 2 * static_cast<int>(std::ceil(3.0 * sigma_px)) + 1;
+}
+
+cv::Mat GaussianBlurImage(const cv::Mat& image, double sigma_px) {
+  const int size = GaussianKernelSize(sigma_px);
+  if (size == 1) return image.clone();
+  cv::Mat blurred;
+  cv::GaussianBlur(image, blurred, cv::Size(size, size), sigma_px, sigma_px,
+                   cv::BORDER_REFLECT_101);
+  return blurred;
+}
+
+}  // namespace stereodet

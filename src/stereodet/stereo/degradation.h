@@ -1,0 +1,36 @@
+// Image degradation for robustness studies: a Gaussian blur modelling defocus (the paper blurs the
+// network's input image at evaluation time, not at training time).
+#ifndef STEREODET_STEREO_DEGRADATION_H_
+#define STEREODET_STEREO_DEGRADATION_H_
+
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace stereodet {
+
+enum class BlurMode {
+  kNetworkImage,  // blur only the image the network sees; stereo uses the sharp pair (the paper)
+  kBothBeforeMatching,  // blur both images before matching: degraded stereo too (correlated
+                        // defocus)
+};
+// "image" / "both"; ParseBlurMode throws std::invalid_argument for anything else.
+std::string BlurModeName(BlurMode mode);
+BlurMode ParseBlurMode(const std::string& name);
+
+struct BlurOptions {
+  double sigma_px = 0.0;  // >= 0, Gaussian standard deviation in pixels; 0 = no blur
+  BlurMode mode = BlurMode::kNetworkImage;
+  void Check() const;
+};
+
+// The kernel side used for `sigma_px`: 2 * ceil(3 sigma) + 1 (covers +-3 sigma, > 99.7% of the
+// mass), and 1 for sigma 0.
+int GaussianKernelSize(double sigma_px);
+
+// Blurs with a separable Gaussian of `sigma_px` (border: reflect-101). Sigma 0 returns an identical
+// copy. Throws std::invalid_argument for a negative or non-finite sigma.
+cv::Mat GaussianBlurImage(const cv::Mat& image, double sigma_px);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_STEREO_DEGRADATION_H_

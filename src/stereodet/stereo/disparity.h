@@ -1,0 +1,129 @@
+// Disparity from a rectified stereo pair (KITTI cameras 2 and 3) with OpenCV's block matcher
+// (StereoBM, the default, as in the paper) or semi-global matcher (StereoSGBM), and the KITTI
+// stereo-benchmark file format for disparity maps.
+//
+// Disparity maps are CV_32FC1 images in the left image's frame, in pixels (u_left - u_right,
+// sub-pixel with OpenCV's 1/16 px resolution). Pixels without a match hold kInvalidDisparity (-1);
+// a disparity of 0 (a point at infinity) is never produced for a valid pixel, so no invalid pixel
+// can read as "0 m".
+#ifndef STEREODET_STEREO_DISPARITY_H_
+#define STEREODET_STEREO_DISPARITY_H_
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace stereodet {
+
+// The value of a pixel with no disparity. Test validity with IsValidDisparity, not equality.
+inline constexpr float kInvalidDisparity = -1.0f;
+// True for a usable disparity (> 0). False for kInvalidDisparity, 0, negatives and NaN.
+inline bool IsValidDisparity(float disparity_px) { return disparity_px > 0.0f; }
+
+enum class DisparityMethod { kBlockMatching, kSemiGlobal };
+// "bm" / "sgbm".
+std::string DisparityMethodName(DisparityMethod method);
+// Parses "bm" or "sgbm"; throws std::invalid_argument for anything else.
+DisparityMethod ParseDisparityMethod(const std::string& name);
+
+// StereoBM settings. Defaults measured on KITTI-like frames and the Middlebury Aloe pair
+// (docs/stereo.md).
+struct BlockMatchingOptions {
+  int block_size = 11;           // odd, 5..255: side of the square SAD window, pixels
+  bool xsobel_prefilter = true;  // x-Sobel pre-filter (true) or normalized response (false)
+  int prefilter_size = 9;        // odd, 5..255; used by the normalized-response pre-filter only
+  int prefilter_cap = 31;        // 1..63: clips the pre-filtered intensities
+  int texture_threshold = 10;    // >= 0: windows with less texture (sum |dI/dx|) are invalid
+  void Check() const;            // throws std::invalid_argument
+};
+
+// StereoSGBM settings.
+struct SemiGlobalOptions {
+  int block_size = 5;      // odd, >= 1: matching window side, pixels
+  int p1_per_pixel = 8;    // smoothness penalty for +-1 px changes, P1 = p1_per_pixel * block^2
+  int p2_per_pixel = 32;   // penalty for larger changes, P2 = p2_per_pixel * block^2 (> P1)
+  int prefilter_cap = 63;  // >= 1: clips the x-derivative pre-filter
+  bool full_8_directions = false;  // MODE_HH (8 paths, ~2x slower) instead of MODE_SGBM (5 paths)
+  void Check() const;
+};
+
+struct DisparityOptions {
+  DisparityMethod method = DisparityMethod::kBlockMatching;
+  // > 0, multiple of 16: search range [min, min + num) pixels. 128 px is a depth of
+  // f b / 128 = 3.0 m on KITTI; the left-most (min + num - 1) columns get no disparity.
+  int num_disparities = 128;
+  int min_disparity = 0;        // pixels
+  int uniqueness_ratio = 15;    // 0..100: the best cost must beat the second best by this percent
+  int speckle_window_px = 100;  // >= 0: regions of fewer pixels than this are removed (0 = off)
+  int speckle_range_px = 2;     // >= 0: disparity variation within one speckle region, pixels
+  // Left-right consistency: pixels whose left and right disparities differ by more than this many
+  // pixels are invalid. OpenCV's disp12MaxDiff: for BM a cost-based check, disabled by < 0; SGBM
+  // computes the right disparity itself and always checks (OpenCV treats values <= 0 as 1).
+  int left_right_max_diff_px = 1;
+  BlockMatchingOptions bm;
+  SemiGlobalOptions sgbm;
+  void Check() const;  // throws std::invalid_argument, also for a bad setting of the chosen method
+};
+
+// Runs OpenCV's matcher. Not thread-safe (OpenCV's matcher keeps buffers); use one per thread. The
+// matcher itself is parallel over rows with OpenCV's parallel_for_.
+class DisparityMatcher {
+ public:
+  explicit DisparityMatcher(const DisparityOptions& options = {});
+  const DisparityOptions& options() const { return options_; }
+
+  // Requires: rectified 8-bit images of equal size, grey (CV_8UC1) or BGR (CV_8UC3, converted to
+  // grey). Returns CV_32FC1 disparity in pixels of the left image, kInvalidDisparity where there is
+  // none.
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
+
+  // The same, but returns OpenCV's raw CV_16SC1 output: disparity * 16, values <= 0 invalid (this
+  // is what the fused encoders read). Requires grey images.
+  cv::Mat ComputeFixedPoint(const cv::Mat& left_grey, const cv::Mat& right_grey);
+
+ private:
+  DisparityOptions options_;
+  cv::Ptr<cv::Algorithm> matcher_;  // cv::StereoBM or cv::StereoSGBM
+};
+
+// Converts OpenCV's CV_16SC1 (disparity * 16) to CV_32FC1 pixels with kInvalidDisparity for <= 0.
+cv::Mat DisparityFromFixedPoint(const cv::Mat& fixed_point);
+
+// Converts an 8-bit BGR (or already grey) image to CV_8UC1 grey. Grey input is returned shared.
+cv::Mat ToGrey(const cv::Mat& image);
+
+// --- KITTI stereo format: uint16 PNG holding round(disparity * 256), 0 = invalid. ---
+
+// Writes atomically. Valid disparities are clamped to [1/256, 255.99] px; invalid pixels write 0.
+void WriteKittiDisparity(const std::filesystem::path& path, const cv::Mat& disparity_px);
+// Returns CV_32FC1 with kInvalidDisparity where the file holds 0. Throws std::runtime_error naming
+// the file if it is missing, unreadable or not a 16-bit single-channel image.
+cv::Mat ReadKittiDisparity(const std::filesystem::path& path);
+
+// --- Accuracy against ground truth. ---
+
+struct DisparityErrorOptions {
+  double bad_threshold_px = 2.0;  // "bad pixel": |estimate - truth| > this (Middlebury's bad-2.0)
+  // KITTI's D1 outlier: error > d1_abs_px AND error > d1_relative * truth.
+  double d1_abs_px = 3.0;
+  double d1_relative = 0.05;
+  void Check() const;
+};
+
+struct DisparityErrorStats {
+  long ground_truth_pixels = 0;  // pixels with a valid ground truth
+  long estimated_pixels = 0;     // ... of which the estimate is valid too
+  double density = 0;            // estimated_pixels / ground_truth_pixels
+  double bad_rate = 0;  // fraction of estimated_pixels that are bad (error > bad_threshold)
+  double d1_rate = 0;   // fraction of estimated_pixels that are D1 outliers
+  double mean_abs_error_px = 0;  // over estimated_pixels
+};
+
+// Compares an estimate with ground truth (both CV_32FC1, same size; invalid = !IsValidDisparity).
+// Rates are over pixels where both are valid (0 when there are none).
+DisparityErrorStats EvaluateDisparity(const cv::Mat& estimate_px, const cv::Mat& truth_px,
+                                      const DisparityErrorOptions& options = {});
+
+}  // namespace stereodet
+
+#endif  // STEREODET_STEREO_DISPARITY_H_

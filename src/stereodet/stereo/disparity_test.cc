@@ -1,0 +1,196 @@
+#include "stereodet/stereo/disparity.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/stereo/planar_scene.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("stereodet_disparity_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// A smooth random texture: noise blurred so that block matching has structure at several scales.
+cv::Mat Texture(int rows, int cols, unsigned seed) {
+  cv::Mat noise(rows, cols, CV_8UC1);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat smooth;
+  cv::GaussianBlur(noise, smooth, cv::Size(5, 5), 1.0);
+  cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
+  return smooth;
+}
+
+// Fraction of `disparity` pixels in columns >= first_col that are valid and within `tolerance` of
+// `expected`, and the fraction that are valid.
+std::pair<double, double> AccuracyAndDensity(const cv::Mat& disparity, double expected,
+                                             double tolerance, int first_col) {
+  long valid = 0, close = 0, total = 0;
+  for (int v = 0; v < disparity.rows; ++v) {
+    for (int u = first_col; u < disparity.cols; ++u) {
+      ++total;
+      const float d = disparity.at<float>(v, u);
+      if (!IsValidDisparity(d)) continue;
+      ++valid;
+      close += std::abs(d - expected) <= tolerance;
+    }
+  }
+  return {valid > 0 ? static_cast<double>(close) / valid : 0.0, static_cast<double>(valid) / total};
+}
+
+TEST(DisparityOptionsTest, RejectsBadSettings) {
+  DisparityOptions options;
+  EXPECT_NO_THROW(options.Check());
+  options.num_disparities = 100;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = {};
+  options.bm.block_size = 14;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = {};
+  options.method = DisparityMethod::kSemiGlobal;
+  options.sgbm.p2_per_pixel = options.sgbm.p1_per_pixel;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = {};
+  options.min_disparity = -16;
+  EXPECT_THROW(DisparityMatcher{options}, std::invalid_argument);
+}
+
+TEST(DisparityOptionsTest, ParsesMethodNames) {
+  EXPECT_EQ(ParseDisparityMethod("bm"), DisparityMethod::kBlockMatching);
+  EXPECT_EQ(ParseDisparityMethod("sgbm"), DisparityMethod::kSemiGlobal);
+  EXPECT_EQ(DisparityMethodName(DisparityMethod::kSemiGlobal), "sgbm");
+  EXPECT_THROW(ParseDisparityMethod("BM"), std::invalid_argument);
+}
+
+TEST(DisparityTest, ValidityConvention) {
+  EXPECT_FALSE(IsValidDisparity(kInvalidDisparity));
+  EXPECT_FALSE(IsValidDisparity(0.0f));
+  EXPECT_FALSE(IsValidDisparity(std::nanf("")));
+  EXPECT_TRUE(IsValidDisparity(0.0625f));
+}
+
+TEST(DisparityTest, FixedPointConversionMarksInvalid) {
+  cv::Mat fixed = (cv::Mat_<int16_t>(1, 4) << -16, 0, 1, 328);
+  const cv::Mat disparity = DisparityFromFixedPoint(fixed);
+  EXPECT_EQ(disparity.at<float>(0, 0), kInvalidDisparity);
+  EXPECT_EQ(disparity.at<float>(0, 1), kInvalidDisparity);
+  EXPECT_FLOAT_EQ(disparity.at<float>(0, 2), 1.0f / 16);
+  EXPECT_FLOAT_EQ(disparity.at<float>(0, 3), 20.5f);
+}
+
+// A texture shifted by a whole number of pixels: right(u) = left(u + 20), so the disparity is 20.
+class ShiftedTextureTest : public ::testing::TestWithParam<DisparityMethod> {};
+
+TEST_P(ShiftedTextureTest, RecoversIntegerShift) {
+  const int shift = 20;
+  const cv::Mat wide = Texture(120, 360 + shift, 7);
+  const cv::Mat left = wide.colRange(0, 360).clone();
+  const cv::Mat right = wide.colRange(shift, 360 + shift).clone();
+  DisparityOptions options;
+  options.method = GetParam();
+  options.num_disparities = 48;
+  DisparityMatcher matcher(options);
+  const cv::Mat disparity = matcher.Compute(left, right);
+  ASSERT_EQ(disparity.type(), CV_32FC1);
+  ASSERT_EQ(disparity.size(), left.size());
+  const auto [accuracy, density] = AccuracyAndDensity(disparity, shift, 0.25, 64);
+  EXPECT_GT(density, 0.85);
+  EXPECT_GT(accuracy, 0.98);
+  // The left-most columns cannot be matched and must be marked, not left at 0.
+  EXPECT_EQ(disparity.at<float>(60, 5), kInvalidDisparity);
+}
+
+TEST_P(ShiftedTextureTest, SubPixelOnRenderedWall) {
+  // A wall 20 m ahead fills the whole view (the ground is 100 m down): its disparity is the
+  // non-integer f b / 20 everywhere, so the matcher's sub-pixel interpolation is exercised.
+  PlanarSceneOptions scene_options;
+  scene_options.width_px = 1242;
+  scene_options.height_px = 120;
+  scene_options.camera_height_m = 100;
+  scene_options.wall_depth_m = 20;
+  scene_options.texture_scale_m = 0.02;
+  const PlanarScene scene = RenderPlanarScene(KittiLikeCalibration(), scene_options);
+  const double expected = scene.disparity_px.at<float>(60, 600);
+  DisparityOptions options;
+  options.method = GetParam();
+  options.num_disparities = 32;
+  DisparityMatcher matcher(options);
+  const cv::Mat disparity = matcher.Compute(scene.left_bgr, scene.right_bgr);
+  // SGBM's fixed-point sub-pixel fit "locks" towards whole pixels a little more than BM's: 0.3 px.
+  const auto [accuracy, density] = AccuracyAndDensity(disparity, expected, 0.3, 64);
+  EXPECT_GT(density, 0.8);
+  EXPECT_GT(accuracy, 0.98) << "expected " << expected;
+  EXPECT_NE(std::round(expected), expected);
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, ShiftedTextureTest,
+                         ::testing::Values(DisparityMethod::kBlockMatching,
+                                           DisparityMethod::kSemiGlobal),
+                         [](const auto& info) { return DisparityMethodName(info.param); });
+
+TEST(DisparityTest, RejectsMismatchedImages) {
+  DisparityMatcher matcher;
+  cv::Mat a(100, 200, CV_8UC1, cv::Scalar(0)), b(100, 201, CV_8UC1, cv::Scalar(0));
+  EXPECT_THROW(matcher.Compute(a, b), std::invalid_argument);
+  cv::Mat f(100, 200, CV_32FC1);
+  EXPECT_THROW(matcher.Compute(f, f), std::invalid_argument);
+}
+
+TEST(KittiDisparityFormatTest, RoundTripsWithinQuantization) {
+  const fs::path dir = TempDir("roundtrip");
+  cv::Mat disparity = (cv::Mat_<float>(2, 3) << 0.5f, 100.25f, kInvalidDisparity,  //
+                       0.001f, 255.99f, 300.0f);
+  WriteKittiDisparity(dir / "d.png", disparity);
+  const cv::Mat raw = cv::imread((dir / "d.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(raw.type(), CV_16UC1);
+  EXPECT_EQ(raw.at<uint16_t>(0, 0), 128);
+  EXPECT_EQ(raw.at<uint16_t>(0, 1), 25664);
+  EXPECT_EQ(raw.at<uint16_t>(0, 2), 0);
+  EXPECT_EQ(raw.at<uint16_t>(1, 0), 1);  // tiny but valid: never written as "invalid"
+  EXPECT_EQ(raw.at<uint16_t>(1, 2), 65535);
+  const cv::Mat back = ReadKittiDisparity(dir / "d.png");
+  EXPECT_FLOAT_EQ(back.at<float>(0, 0), 0.5f);
+  EXPECT_FLOAT_EQ(back.at<float>(0, 1), 100.25f);
+  EXPECT_EQ(back.at<float>(0, 2), kInvalidDisparity);
+  EXPECT_NEAR(back.at<float>(1, 1), 255.99f, 1.0 / 256);
+  // No temporary left behind.
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir)) ++files;
+  EXPECT_EQ(files, 1);
+}
+
+TEST(KittiDisparityFormatTest, RejectsWrongFiles) {
+  const fs::path dir = TempDir("wrong");
+  EXPECT_THROW(ReadKittiDisparity(dir / "missing.png"), std::runtime_error);
+  cv::imwrite((dir / "eight.png").string(), cv::Mat(4, 4, CV_8UC1, cv::Scalar(3)));
+  EXPECT_THROW(ReadKittiDisparity(dir / "eight.png"), std::runtime_error);
+}
+
+TEST(EvaluateDisparityTest, HandComputedRates) {
+  const float x = kInvalidDisparity;
+  cv::Mat truth = (cv::Mat_<float>(1, 6) << 10, 10, 100, 100, x, 50);
+  cv::Mat estimate = (cv::Mat_<float>(1, 6) << 10.5f, 13.5f, 104, 106, 7, x);
+  const DisparityErrorStats stats = EvaluateDisparity(estimate, truth);
+  EXPECT_EQ(stats.ground_truth_pixels, 5);
+  EXPECT_EQ(stats.estimated_pixels, 4);
+  EXPECT_DOUBLE_EQ(stats.density, 0.8);
+  EXPECT_DOUBLE_EQ(stats.bad_rate, 0.75);  // errors 0.5, 3.5, 4, 6: three over 2 px
+  EXPECT_DOUBLE_EQ(stats.d1_rate, 0.5);    // 3.5 (> 3 and > 0.5) and 6 (> 3 and > 5); 4 < 5
+  EXPECT_DOUBLE_EQ(stats.mean_abs_error_px, (0.5 + 3.5 + 4 + 6) / 4);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,78 @@
+// The whole per-frame stereo pipeline, fused for speed: disparity -> ground plane -> height and
+// depth codes, RGB-H packing and the point cloud in one parallel pass over the rows.
+//
+// It produces exactly what the separate functions of reprojection.h, rgbh.h and point_cloud.h
+// produce (they are its reference in the tests), but reads OpenCV's fixed-point disparity once,
+// uses look-up tables indexed by it for depth, and per-row/per-column tables for the height, so
+// everything after the matcher costs a few percent of the matcher (benchmarks/stereo_benchmark.cc).
+#ifndef STEREODET_STEREO_STEREO_ENCODER_H_
+#define STEREODET_STEREO_STEREO_ENCODER_H_
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "stereodet/kitti/velodyne_io.h"
+#include "stereodet/stereo/degradation.h"
+#include "stereodet/stereo/disparity.h"
+#include "stereodet/stereo/point_cloud.h"
+#include "stereodet/stereo/reprojection.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+struct StereoOptions {
+  DisparityOptions disparity;
+  GroundPlaneOptions ground;
+  HeightQuantization height;
+  DepthQuantization depth;
+  PointCloudOptions points;
+  BlurOptions blur;
+  void Check() const;
+};
+
+// What Encode should produce besides the disparity, the ground fit and the height codes.
+struct StereoOutputs {
+  bool rgbh = true;     // packed RGB-H image
+  bool depth = false;   // depth codes
+  bool points = false;  // point cloud
+};
+
+struct StereoEncoding {
+  cv::Mat network_image;  // CV_8UC3: the left image the network sees (blurred when blur is on)
+  cv::Mat disparity_px;   // CV_32FC1, kInvalidDisparity where none
+  GroundPlaneFit ground;
+  cv::Mat height_code;  // CV_16UC1, 0 = no stereo, 1..511
+  cv::Mat depth_code;   // CV_16UC1, 0 = no stereo (empty unless outputs.depth)
+  cv::Mat rgbh;         // CV_8UC3 packed RGB-H of network_image (empty unless outputs.rgbh)
+  std::vector<VeloPoint> points;  // velo frame (empty unless outputs.points)
+};
+
+// Not thread-safe (it owns an OpenCV matcher): use one per thread. Internally parallel (OpenCV).
+class StereoEncoder {
+ public:
+  explicit StereoEncoder(const StereoOptions& options = {});
+  const StereoOptions& options() const { return options_; }
+
+  // Requires: rectified 8-bit BGR images (CV_8UC3) of the same size. Stage times, when `times` is
+  // not null, are added under "blur", "grey", "disparity" (OpenCV's matcher), "ground", "encode".
+  StereoEncoding Encode(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
+                        const StereoGeometry& geometry, const StereoOutputs& outputs = {},
+                        StageTimes* times = nullptr);
+
+  // The part after the matcher, from OpenCV's CV_16SC1 disparity (x16) of `left_grey`; exposed for
+  // the benchmark. `network_image` is the BGR image to pack; `left_grey` gives the reflectance.
+  StereoEncoding EncodeFromFixedPoint(const cv::Mat& fixed_point, const cv::Mat& network_image,
+                                      const cv::Mat& left_grey, const StereoGeometry& geometry,
+                                      const StereoOutputs& outputs, StageTimes* times = nullptr);
+
+  DisparityMatcher& matcher() { return matcher_; }
+
+ private:
+  StereoOptions options_;
+  DisparityMatcher matcher_;
+  std::vector<VeloPoint> scratch_points_;  // reused between frames: one slot per pixel
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_STEREO_STEREO_ENCODER_H_

@@ -1,0 +1,112 @@
+#include "stereodet/stereo/stereo_encoder.h"
+
+#include <gtest/gtest.h>
+
+#include "stereodet/stereo/planar_scene.h"
+#include "stereodet/stereo/rgbh.h"
+
+namespace stereodet {
+namespace {
+
+// The fused encoder must agree with the separate reference functions.
+TEST(StereoEncoderTest, MatchesTheReferenceFunctions) {
+  const Calibration calib = KittiLikeCalibration();
+  const StereoGeometry geometry = StereoGeometry::FromCalibration(calib);
+  PlanarSceneOptions scene_options;
+  scene_options.ground_pitch_deg = 1.0;
+  const PlanarScene scene = RenderPlanarScene(calib, scene_options);
+  StereoOptions options;
+  StereoEncoder encoder(options);
+  StageTimes times;
+  const StereoEncoding encoding =
+      encoder.Encode(scene.left_bgr, scene.right_bgr, geometry,
+                     {.rgbh = true, .depth = true, .points = true}, &times);
+  ASSERT_TRUE(encoding.ground.fitted) << encoding.ground.reason;
+
+  // Disparity: exactly the matcher's.
+  DisparityMatcher matcher(options.disparity);
+  const cv::Mat disparity = matcher.Compute(scene.left_bgr, scene.right_bgr);
+  EXPECT_EQ(cv::norm(disparity, encoding.disparity_px, cv::NORM_INF), 0.0);
+
+  // Height and depth codes: equal but for rare rounding ties (float vs double order of operations).
+  const cv::Mat height = HeightFromDisparity(disparity, geometry, encoding.ground.plane);
+  const cv::Mat height_code = QuantizeHeight(height, options.height);
+  const cv::Mat depth_code = QuantizeDepth(DepthFromDisparity(disparity, geometry), options.depth);
+  cv::Mat height_diff, depth_diff;
+  cv::absdiff(height_code, encoding.height_code, height_diff);
+  cv::absdiff(depth_code, encoding.depth_code, depth_diff);
+  double max_height_diff, max_depth_diff;
+  cv::minMaxLoc(height_diff, nullptr, &max_height_diff);
+  cv::minMaxLoc(depth_diff, nullptr, &max_depth_diff);
+  EXPECT_LE(max_height_diff, 1);
+  EXPECT_LE(max_depth_diff, 1);
+  EXPECT_LT(cv::countNonZero(height_diff), height_diff.total() / 1000);
+  // Reserved zero exactly where there is no disparity.
+  for (int v = 0; v < disparity.rows; v += 5) {
+    for (int u = 0; u < disparity.cols; u += 5) {
+      ASSERT_EQ(encoding.height_code.at<uint16_t>(v, u) == 0,
+                !IsValidDisparity(disparity.at<float>(v, u)));
+    }
+  }
+
+  // RGB-H: the packing of the left image with those codes.
+  const UnpackedRgbh unpacked = UnpackRgbh(encoding.rgbh);
+  EXPECT_EQ(cv::norm(unpacked.height_code, encoding.height_code, cv::NORM_INF), 0.0);
+  cv::Mat floor5(scene.left_bgr.size(), CV_8UC3);
+  for (int i = 0; i < static_cast<int>(scene.left_bgr.total() * 3); ++i) {
+    floor5.data[i] = scene.left_bgr.data[i] >> 3;
+  }
+  EXPECT_EQ(cv::norm(unpacked.bgr5, floor5, cv::NORM_INF), 0.0);
+
+  // Point cloud: the reference's, in the same order.
+  const std::vector<VeloPoint> reference = StereoPointCloud(
+      disparity, ToGrey(scene.left_bgr), geometry, encoding.ground.plane, options.points);
+  ASSERT_GT(reference.size(), 10000u);
+  // Points whose height sits on a truncation bound may differ; allow a handful.
+  ASSERT_NEAR(static_cast<double>(encoding.points.size()), reference.size(), 5.0);
+  if (encoding.points.size() == reference.size()) {
+    for (size_t i = 0; i < reference.size(); i += 97) {
+      EXPECT_NEAR(encoding.points[i].x, reference[i].x, 1e-3);
+      EXPECT_NEAR(encoding.points[i].z, reference[i].z, 1e-3);
+      EXPECT_EQ(encoding.points[i].reflectance, reference[i].reflectance);
+    }
+  }
+  const auto stages = times.Snapshot();
+  for (const char* stage : {"grey", "disparity", "ground", "encode"}) {
+    EXPECT_EQ(stages.count(stage), 1u) << stage;
+  }
+}
+
+TEST(StereoEncoderTest, BlurModes) {
+  const Calibration calib = KittiLikeCalibration();
+  const StereoGeometry geometry = StereoGeometry::FromCalibration(calib);
+  PlanarSceneOptions scene_options;
+  scene_options.height_px = 200;
+  const PlanarScene scene = RenderPlanarScene(calib, scene_options);
+  StereoOptions sharp_options;
+  const StereoEncoding sharp =
+      StereoEncoder(sharp_options).Encode(scene.left_bgr, scene.right_bgr, geometry);
+
+  StereoOptions image_options;
+  image_options.blur = {.sigma_px = 2.0, .mode = BlurMode::kNetworkImage};
+  const StereoEncoding image_only =
+      StereoEncoder(image_options).Encode(scene.left_bgr, scene.right_bgr, geometry);
+  // The network image is blurred, the stereo is not.
+  EXPECT_GT(cv::norm(image_only.network_image, scene.left_bgr, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(image_only.disparity_px, sharp.disparity_px, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(image_only.height_code, sharp.height_code, cv::NORM_INF), 0.0);
+
+  StereoOptions both_options;
+  both_options.blur = {.sigma_px = 2.0, .mode = BlurMode::kBothBeforeMatching};
+  const StereoEncoding both =
+      StereoEncoder(both_options).Encode(scene.left_bgr, scene.right_bgr, geometry);
+  EXPECT_EQ(cv::norm(both.network_image, image_only.network_image, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(both.disparity_px, sharp.disparity_px, cv::NORM_INF), 0.0);
+
+  StereoOptions bad;
+  bad.blur.sigma_px = -1;
+  EXPECT_THROW(StereoEncoder{bad}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,33 @@
+// Pictures a person can look at (`stereodet stereo frame`): colourized disparity, depth and height,
+// and the point cloud from above. All return 8-bit BGR images; pixels without stereo are black.
+#ifndef STEREODET_STEREO_VISUALIZE_H_
+#define STEREODET_STEREO_VISUALIZE_H_
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "stereodet/kitti/velodyne_io.h"
+
+namespace stereodet {
+
+// Disparity (CV_32FC1 px) with the turbo colour map over [0, max_disparity_px] (near = red).
+cv::Mat ColourizeDisparity(const cv::Mat& disparity_px, double max_disparity_px);
+// Depth (CV_32FC1 m, NaN invalid) as inverse depth over [min_depth_m, inf) (near = red).
+cv::Mat ColourizeDepth(const cv::Mat& depth_m, double min_depth_m = 3.0);
+// Height above ground (CV_32FC1 m, NaN invalid) over [min_m, max_m] (ground = blue, high = red).
+cv::Mat ColourizeHeight(const cv::Mat& height_m, double min_m = -1.0, double max_m = 4.0);
+
+struct BirdsEyeOptions {
+  double forward_m = 80.0;               // velo x shown: [0, forward_m]
+  double side_m = 40.0;                  // velo y shown: [-side_m, side_m]
+  double resolution_m = 0.1;             // metres per pixel
+  double min_z_m = -2.5, max_z_m = 1.5;  // velo z range of the colour map
+  void Check() const;
+};
+// Velo points seen from above: forward is up, left is left; colour by velo z; range rings every 10
+// m.
+cv::Mat RenderBirdsEye(const std::vector<VeloPoint>& points, const BirdsEyeOptions& options = {});
+
+}  // namespace stereodet
+
+#endif  // STEREODET_STEREO_VISUALIZE_H_
