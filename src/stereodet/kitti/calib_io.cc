@@ -58,12 +58,7 @@ Calibration ParseCalibration(std::string_view text, const std::string& source) {
   size_t pos = 0;
   while (pos < text.size()) {
     ++line_number;
-    const void* newline = std::memchr(text.data() + pos, '\n', text.size() - pos);
-    const size_t end = newline
-                           ? static_cast<size_t>(static_cast<const char*>(newline) - text.data())
-                           : text.size();
-    std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
+    std::string_view line = kitti_internal::NextLine(text, &pos);
 
     while (!line.empty() && IsBlank(line.front())) line.remove_prefix(1);
     if (line.empty()) continue;

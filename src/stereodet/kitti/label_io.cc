@@ -181,12 +181,7 @@ ObjectFile ParseObjects(std::string_view text, const std::string& source,
   size_t pos = 0;
   while (pos < text.size()) {
     ++line_number;
-    const void* newline = std::memchr(text.data() + pos, '\n', text.size() - pos);
-    const size_t end = newline
-                           ? static_cast<size_t>(static_cast<const char*>(newline) - text.data())
-                           : text.size();
-    const std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
+    const std::string_view line = kitti_internal::NextLine(text, &pos);
 
     size_t first = 0;
     while (first < line.size() && IsBlank(line[first])) ++first;

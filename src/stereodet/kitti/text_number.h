@@ -5,6 +5,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -73,6 +74,17 @@ std::string QuoteToken(std::string_view token);
 
 // Reads a whole file with one read(). Throws std::runtime_error naming the path on failure.
 std::string ReadWholeFile(const std::filesystem::path& path);
+
+// The line of `text` that starts at *pos, without its '\n'; moves *pos past the '\n' (to
+// text.size() + 1 after a last line without one). Callers loop `while (pos < text.size())`.
+inline std::string_view NextLine(std::string_view text, size_t* pos) {
+  const size_t start = *pos;
+  const void* newline = std::memchr(text.data() + start, '\n', text.size() - start);
+  const size_t end =
+      newline ? static_cast<size_t>(static_cast<const char*>(newline) - text.data()) : text.size();
+  *pos = end + 1;
+  return text.substr(start, end - start);
+}
 
 }  // namespace stereodet::kitti_internal
 
