@@ -19,6 +19,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/velodyne_io.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/planar_scene.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/stereo/visualize.h"
@@ -150,19 +151,6 @@ std::vector<fs::path> RequiredPaths(const FrameOutputs& paths, const std::set<Ou
   return required;
 }
 
-void WriteImage(const fs::path& path, const cv::Mat& image) {
-  fs::create_directories(path.parent_path());
-  AtomicPath out(path);
-  STEREODET_CHECK_IO(cv::imwrite(out.temp_path().string(), image)) << "cannot write " << path;
-  out.Commit();
-}
-
-cv::Mat ReadColour(const fs::path& path) {
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
-  STEREODET_CHECK_IO(!image.empty()) << "cannot read image " << path;
-  return image;
-}
-
 std::string GroundLine(const GroundPlaneFit& fit) {
   const Eigen::Vector3d& n = fit.plane.normal_in_rect;
   return fmt::format(
@@ -261,8 +249,8 @@ void RunStereo(const RunArgs& args) {
           return;
         }
         Timer timer;
-        const cv::Mat left = ReadColour(in.image_left);
-        const cv::Mat right = ReadColour(in.image_right);
+        const cv::Mat left = ReadColourImage(in.image_left);
+        const cv::Mat right = ReadColourImage(in.image_right);
         const StereoGeometry geometry = StereoGeometry::FromCalibration(ReadCalibration(in.calib));
         times.Add("decode", timer.ElapsedSeconds());
 
@@ -275,11 +263,11 @@ void RunStereo(const RunArgs& args) {
                            &times);
 
         timer.Restart();
-        if (outputs.count(Output::kRgbh)) WriteImage(paths.rgbh, encoding.rgbh);
+        if (outputs.count(Output::kRgbh)) WriteImageAtomically(paths.rgbh, encoding.rgbh);
         if (outputs.count(Output::kRgbd)) {
-          WriteImage(paths.depth, encoding.depth_code);
-          WriteImage(paths.height, encoding.height_code);
-          if (blurred) WriteImage(paths.image, encoding.network_image);
+          WriteImageAtomically(paths.depth, encoding.depth_code);
+          WriteImageAtomically(paths.height, encoding.height_code);
+          if (blurred) WriteImageAtomically(paths.image, encoding.network_image);
         }
         if (outputs.count(Output::kPoints)) {
           fs::create_directories(paths.points.parent_path());
@@ -349,8 +337,8 @@ void RunFrame(const FrameArgs& args) {
   StereoOptions options = args.shared.ToOptions();
   const KittiDataset dataset(args.shared.data, args.shared.subset);
   const FramePaths in = dataset.Paths(args.id);
-  const cv::Mat left = ReadColour(in.image_left);
-  const cv::Mat right = ReadColour(in.image_right);
+  const cv::Mat left = ReadColourImage(in.image_left);
+  const cv::Mat right = ReadColourImage(in.image_right);
   const StereoGeometry geometry = StereoGeometry::FromCalibration(ReadCalibration(in.calib));
   StereoEncoder encoder(options);
   const StereoEncoding encoding =
@@ -366,7 +354,7 @@ void RunFrame(const FrameArgs& args) {
       {"height", ColourizeHeight(height, options.height.min_m, options.height.max_m)},
       {"bev", RenderBirdsEye(encoding.points)}};
   for (const auto& [name, picture] : pictures) {
-    WriteImage(out / (args.id + "_" + name + ".png"), picture);
+    WriteImageAtomically(out / (args.id + "_" + name + ".png"), picture);
   }
   if (!args.shared.quiet) {
     long valid = cv::countNonZero(encoding.height_code);
@@ -407,8 +395,8 @@ void RunScene(const SceneArgs& args) {
     options.wall_depth_m = 15.0 + 10.0 * (i % 3);
     options.ground_pitch_deg = 0.5 * (i % 3) - 0.5;
     const PlanarScene scene = RenderPlanarScene(calib, options);
-    WriteImage(training / "image_2" / (id + ".png"), scene.left_bgr);
-    WriteImage(training / "image_3" / (id + ".png"), scene.right_bgr);
+    WriteImageAtomically(training / "image_2" / (id + ".png"), scene.left_bgr);
+    WriteImageAtomically(training / "image_3" / (id + ".png"), scene.right_bgr);
     fs::create_directories(training / "disp_noc_0");
     WriteKittiDisparity(training / "disp_noc_0" / (id + ".png"), scene.disparity_px);
     WriteCalibration(training / "calib" / (id + ".txt"), calib);

@@ -9,6 +9,7 @@
 
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
 
@@ -56,12 +57,6 @@ std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
 }
 
 namespace {
-
-cv::Mat ReadColour(const std::filesystem::path& path) {
-  cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
-  STEREODET_CHECK_IO(!bgr.empty()) << "cannot read image " << path.string();
-  return bgr;
-}
 
 cv::Mat ResizeHeightCodes(const cv::Mat& code, cv::Size size) {
   cv::Mat resized;
@@ -145,7 +140,7 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
           StereoOutputs outputs;
           outputs.rgbh = false;
           const StereoEncoding encoding = encoder.Encode(
-              ReadColour(paths.image_left), ReadColour(paths.image_right), geometry, outputs);
+              ReadColourImage(paths.image_left), ReadColourImage(paths.image_right), geometry, outputs);
           frame.height_code = ResizeHeightCodes(encoding.height_code, network_size);
         }
         reporter.Add(1);
@@ -178,7 +173,7 @@ TrainSample SsdTrainingData::Sample(int index, uint64_t seed) const {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
 
-  const cv::Mat full = ReadColour(frame.image_path);
+  const cv::Mat full = ReadColourImage(frame.image_path);
   const int full_w = full.cols, full_h = full.rows;
 
   // The window of the original image the network will see (integer px, may extend outside).

@@ -9,6 +9,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_data.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/degradation.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
@@ -55,16 +56,6 @@ std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
   return objects;
 }
 
-namespace {
-
-cv::Mat ReadColour(const std::filesystem::path& path) {
-  cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
-  STEREODET_CHECK_IO(!bgr.empty()) << "cannot read image " << path.string();
-  return bgr;
-}
-
-}  // namespace
-
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   options.Check();
   const Timer timer;
@@ -107,7 +98,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
           cv::Mat left;
           {
             ScopedStage stage(times, "read");
-            left = ReadColour(paths.image_left);
+            left = ReadColourImage(paths.image_left);
           }
           sizes[i] = left.size();
           cv::Mat network_image = left, height_code;
@@ -115,7 +106,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
             cv::Mat right;
             {
               ScopedStage stage(times, "read");
-              right = ReadColour(paths.image_right);
+              right = ReadColourImage(paths.image_right);
             }
             ScopedStage stage(times, "stereo");
             StereoEncoder encoder(stereo);
