@@ -8,13 +8,16 @@
 
 namespace stereodet {
 
-IncrementalMatching::IncrementalMatching(const DetAdjacency* adjacency)
-    : adj_(adjacency),
-      label_match_(adjacency->num_labels, -1),
-      det_match_(adjacency->num_dets(), -1),
-      label_removed_(adjacency->num_labels, 0),
-      det_added_(adjacency->num_dets(), 0),
-      visit_stamp_(adjacency->num_labels, 0) {}
+void IncrementalMatching::Reset(const DetAdjacency* adjacency) {
+  adj_ = adjacency;
+  label_match_.assign(adjacency->num_labels, -1);
+  det_match_.assign(adjacency->num_dets(), -1);
+  label_removed_.assign(adjacency->num_labels, 0);
+  det_added_.assign(adjacency->num_dets(), 0);
+  visit_stamp_.assign(adjacency->num_labels, 0);
+  stamp_ = 0;
+  size_ = 0;
+}
 
 bool IncrementalMatching::Augment(int j) {
   const int32_t* begin = adj_->labels.data() + adj_->begin[j];

@@ -29,7 +29,12 @@ struct DetAdjacency {
 // Cost per operation O(edges) worst case, usually O(degree).
 class IncrementalMatching {
  public:
-  explicit IncrementalMatching(const DetAdjacency* adjacency);
+  IncrementalMatching() = default;  // empty; call Reset before use
+  explicit IncrementalMatching(const DetAdjacency* adjacency) { Reset(adjacency); }
+
+  // Starts over on `adjacency` (no detection added, no label removed), keeping the memory: an
+  // evaluation builds one matching per frame, class and difficulty, and reuses one per thread.
+  void Reset(const DetAdjacency* adjacency);
 
   // Returns true if the matching grew by one. Requires: j not added before.
   bool AddDet(int j);
@@ -43,7 +48,7 @@ class IncrementalMatching {
  private:
   bool Augment(int j);
 
-  const DetAdjacency* adj_;
+  const DetAdjacency* adj_ = nullptr;
   std::vector<int32_t> label_match_, det_match_;
   std::vector<uint8_t> label_removed_, det_added_;
   std::vector<int32_t> visit_stamp_;

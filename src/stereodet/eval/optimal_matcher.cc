@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <optional>
 
 #include "stereodet/eval/bipartite.h"
 
@@ -19,56 +18,73 @@ struct OptimalGraph {
   std::vector<uint8_t> det_excusable;   // valid detection overlapping an ignored label or DontCare
   DetAdjacency adj;                     // detection -> valid labels, overlap >= tau
   std::vector<double> adj_overlap;      // parallel to adj.labels
+  std::vector<int32_t> fill;            // scratch of BuildGraph
 };
 
-OptimalGraph BuildGraph(const ClassFrame& f, Difficulty difficulty) {
-  OptimalGraph g;
+// Memory reused by one thread from call to call. An evaluation runs these functions once per
+// frame, class, difficulty (and, for the association, per threshold); most frames are small, so
+// allocating every buffer afresh cost more than the matching itself (half the optimal matcher's
+// profile was malloc/free before this).
+struct ThreadScratch {
+  OptimalGraph graph;
+  std::vector<int32_t> order;
+  IncrementalMatching all, unexcused, labels;
+  std::vector<uint8_t> label_excused, present;
+  std::vector<int32_t> parent, comp_begin, members, local, cl, cd, fill, match;
+  std::vector<WeightedEdge> edges;
+};
+
+ThreadScratch& Scratch() {
+  thread_local ThreadScratch scratch;
+  return scratch;
+}
+
+// Fills *g for `f` at `difficulty`, reusing g's memory (see ThreadScratch).
+void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  g.role.resize(f.num_dets());
+  g->role.resize(f.num_dets());
   for (int j = 0; j < f.num_dets(); ++j) {
-    if (!f.det_is_class[j]) g.role[j] = kOut;
-    else g.role[j] = std::trunc(f.det_height[j]) < min_height ? kIgnoredDet : kValid;
+    if (!f.det_is_class[j]) g->role[j] = kOut;
+    else g->role[j] = std::trunc(f.det_height[j]) < min_height ? kIgnoredDet : kValid;
   }
-  g.label_valid.resize(f.num_labels());
-  for (int i = 0; i < f.num_labels(); ++i) g.label_valid[i] = f.LabelValid(i, difficulty) ? 1 : 0;
-  g.det_excusable.assign(f.det_dontcare.begin(), f.det_dontcare.end());
+  g->label_valid.resize(f.num_labels());
+  for (int i = 0; i < f.num_labels(); ++i) g->label_valid[i] = f.LabelValid(i, difficulty) ? 1 : 0;
+  g->det_excusable.assign(f.det_dontcare.begin(), f.det_dontcare.end());
   // Transpose the label-major edges into detection-major lists of valid labels.
-  std::vector<int32_t> count(f.num_dets() + 1, 0);
+  std::vector<int32_t>& count = g->adj.begin;
+  count.assign(f.num_dets() + 1, 0);
   for (int i = 0; i < f.num_labels(); ++i) {
     for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
       const int j = f.edge_det[e];
-      if (g.role[j] == kOut) continue;
-      if (g.label_valid[i]) ++count[j + 1];
-      else if (g.role[j] == kValid) g.det_excusable[j] = 1;
+      if (g->role[j] == kOut) continue;
+      if (g->label_valid[i]) ++count[j + 1];
+      else if (g->role[j] == kValid) g->det_excusable[j] = 1;
     }
   }
   std::partial_sum(count.begin(), count.end(), count.begin());
-  g.adj.begin = count;
-  g.adj.num_labels = f.num_labels();
-  g.adj.labels.resize(count.back());
-  g.adj_overlap.resize(count.back());
-  std::vector<int32_t> fill(count.begin(), count.end() - 1);
+  g->adj.num_labels = f.num_labels();
+  g->adj.labels.resize(count.back());
+  g->adj_overlap.resize(count.back());
+  g->fill.assign(count.begin(), count.end() - 1);
   for (int i = 0; i < f.num_labels(); ++i) {
-    if (!g.label_valid[i]) continue;
+    if (!g->label_valid[i]) continue;
     for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
       const int j = f.edge_det[e];
-      if (g.role[j] == kOut) continue;
-      g.adj.labels[fill[j]] = i;
-      g.adj_overlap[fill[j]++] = f.edge_overlap[e];
+      if (g->role[j] == kOut) continue;
+      g->adj.labels[g->fill[j]] = i;
+      g->adj_overlap[g->fill[j]++] = f.edge_overlap[e];
     }
   }
-  return g;
 }
 
-// Detections of the class in descending score (file order among ties).
-std::vector<int32_t> ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role) {
-  std::vector<int32_t> order;
+// Detections of the class in descending score (file order among ties), into *order.
+void ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role, std::vector<int32_t>* order) {
+  order->clear();
   for (int j = 0; j < f.num_dets(); ++j) {
-    if (role[j] != kOut) order.push_back(j);
+    if (role[j] != kOut) order->push_back(j);
   }
-  std::stable_sort(order.begin(), order.end(),
+  std::stable_sort(order->begin(), order->end(),
                    [&](int a, int b) { return f.det_score[a] > f.det_score[b]; });
-  return order;
 }
 
 }  // namespace
@@ -80,7 +96,10 @@ int CountValidLabels(const ClassFrame& f, Difficulty difficulty) {
 }
 
 void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<CurveEvent>* events) {
-  const OptimalGraph g = BuildGraph(f, difficulty);
+  if (f.num_dets() == 0) return;  // no events: the valid labels are all FN at every threshold
+  ThreadScratch& scratch = Scratch();
+  OptimalGraph& g = scratch.graph;
+  BuildGraph(f, difficulty, &g);
   // Usually nothing is excused (no valid detection on an ignored label or DontCare, no ignored
   // detection on a valid label); then the FP and FN matchings are the TP matching itself.
   bool any_excusable = false, any_label_excuse = false;
@@ -88,12 +107,16 @@ void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<
     any_excusable |= g.role[j] == kValid && g.det_excusable[j];
     any_label_excuse |= g.role[j] == kIgnoredDet && g.adj.begin[j + 1] > g.adj.begin[j];
   }
-  IncrementalMatching all(&g.adj);  // TP(t)
-  std::optional<IncrementalMatching> unexcused, labels;
-  if (any_excusable) unexcused.emplace(&g.adj);  // covers the most unexcusable detections: FP(t)
-  if (any_label_excuse) labels.emplace(&g.adj);  // covers the most unexcused labels: FN(t)
-  std::vector<uint8_t> label_excused(f.num_labels(), 0);
-  for (const int j : ByDescendingScore(f, g.role)) {
+  IncrementalMatching& all = scratch.all;  // TP(t)
+  all.Reset(&g.adj);
+  IncrementalMatching* unexcused = nullptr;  // covers the most unexcusable detections: FP(t)
+  IncrementalMatching* labels = nullptr;     // covers the most unexcused labels: FN(t)
+  if (any_excusable) (unexcused = &scratch.unexcused)->Reset(&g.adj);
+  if (any_label_excuse) (labels = &scratch.labels)->Reset(&g.adj);
+  std::vector<uint8_t>& label_excused = scratch.label_excused;
+  label_excused.assign(f.num_labels(), 0);
+  ByDescendingScore(f, g.role, &scratch.order);
+  for (const int j : scratch.order) {
     CurveEvent ev;
     ev.score = f.det_score[j];
     if (g.role[j] == kValid) {
@@ -124,7 +147,9 @@ void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<
 }
 
 FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
-  const OptimalGraph g = BuildGraph(f, difficulty);
+  ThreadScratch& scratch = Scratch();
+  OptimalGraph& g = scratch.graph;
+  BuildGraph(f, difficulty, &g);
   const int nl = f.num_labels();
   const int nd = f.num_dets();
   FrameAssociation a;
@@ -133,7 +158,10 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
   a.det_outcome.assign(nd, Outcome::kNone);
   a.det_label.assign(nd, -1);
 
-  std::vector<uint8_t> present(nd, 0), label_excused(nl, 0);
+  std::vector<uint8_t>& present = scratch.present;
+  std::vector<uint8_t>& label_excused = scratch.label_excused;
+  present.assign(nd, 0);
+  label_excused.assign(nl, 0);
   for (int j = 0; j < nd; ++j) {
     present[j] = g.role[j] != kOut && f.det_score[j] >= threshold;
     if (present[j] && g.role[j] == kIgnoredDet) {
@@ -142,7 +170,8 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
   }
 
   // Connected components of (valid labels) + (present valid detections), union-find.
-  std::vector<int32_t> parent(nl + nd);
+  std::vector<int32_t>& parent = scratch.parent;
+  parent.resize(nl + nd);
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
@@ -156,7 +185,10 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
     }
   }
   // Group the vertices by component (counting sort on the root) into one flat array.
-  std::vector<int32_t> comp_begin(nl + nd + 1, 0), members(nl + nd);
+  std::vector<int32_t>& comp_begin = scratch.comp_begin;
+  std::vector<int32_t>& members = scratch.members;
+  comp_begin.assign(nl + nd + 1, 0);
+  members.resize(nl + nd);
   auto in_graph = [&](int x) {
     return x < nl ? g.label_valid[x] != 0 : (present[x - nl] && g.role[x - nl] == kValid);
   };
@@ -165,13 +197,17 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
   }
   for (int r = 0; r < nl + nd; ++r) comp_begin[r + 1] += comp_begin[r];
   {
-    std::vector<int32_t> fill(comp_begin.begin(), comp_begin.end() - 1);
+    std::vector<int32_t>& fill = scratch.fill;
+    fill.assign(comp_begin.begin(), comp_begin.end() - 1);
     for (int x = 0; x < nl + nd; ++x) {
       if (in_graph(x)) members[fill[find(x)]++] = x;
     }
   }
-  std::vector<int32_t> local(nl + nd, -1), cl, cd;
-  std::vector<WeightedEdge> edges;
+  std::vector<int32_t>& local = scratch.local;
+  std::vector<int32_t>& cl = scratch.cl;
+  std::vector<int32_t>& cd = scratch.cd;
+  std::vector<WeightedEdge>& edges = scratch.edges;
+  local.assign(nl + nd, -1);
   for (int root = 0; root < nl + nd; ++root) {
     if (comp_begin[root + 1] - comp_begin[root] < 2) continue;  // an isolated vertex
     cl.clear();
@@ -202,9 +238,9 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
         edges.push_back(e);
       }
     }
-    std::vector<int32_t> match;
+    std::vector<int32_t>& match = scratch.match;
     if (cl.size() == 1 && cd.size() == 1) {
-      match = {0};  // one edge: take it
+      match.assign(1, 0);  // one edge: take it
     } else if (cl.size() == 1) {
       // One label: its best edge, the first (lowest detection index) among equal weights. The AOS
       // curve (evaluator.cc, SingleLabelSimilarityEvents) relies on this exact choice.
@@ -214,7 +250,7 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
         const LexWeight& b = edges[best].weight;
         if (w.major > b.major || (w.major == b.major && w.minor > b.minor)) best = k;
       }
-      match = {edges[best].det};
+      match.assign(1, edges[best].det);
     } else {
       match = MaxWeightAssignment(static_cast<int>(cl.size()), static_cast<int>(cd.size()), edges);
     }
