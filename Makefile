@@ -4,8 +4,9 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 CTEST_FLAGS ?=
 DEMO_DIR ?= $(BUILD_DIR)/demo
+SYNTH_DIR ?= data/synth
 
-.PHONY: all deps configure build test demo bench fuzz clean format tidy
+.PHONY: all deps configure build test demo bench fuzz clean format tidy models ssd-results
 
 all: build
 
@@ -27,6 +28,18 @@ test: deps
 demo: deps
 	$(MAKE) build
 	./scripts/demo.sh $(BUILD_DIR) $(DEMO_DIR)
+
+# The committed detectors models/ssd-{rgb,rgbh-fixed,rgbh-learned}, reproduced from seed 1: a
+# 4000-frame synthetic set in $(SYNTH_DIR), then three 10-epoch trainings (docs/models.md for the
+# time they take; SSD_PARALLEL=3 trains them at once). Resumes where it stopped.
+models: deps
+	$(MAKE) build
+	./scripts/train-ssd-models.sh $(BUILD_DIR) $(SYNTH_DIR) models
+
+# docs/RESULTS.md's table: the committed detectors on the val split, sharp and blurred.
+ssd-results: deps
+	$(MAKE) build
+	./scripts/ssd-results.sh $(BUILD_DIR) $(SYNTH_DIR) models results/ssd
 
 bench: deps
 	$(MAKE) build

@@ -31,7 +31,7 @@ CLI::App* Group(CLI::App& app, const std::string& name, const std::string& descr
 
 struct TrainArgs {
   std::string data, split = "train", input = "rgb", out;
-  int epochs = 15, batch_size = 8, width = 621, height = 188, threads = 0, max_frames = 0;
+  int epochs = 10, batch_size = 8, width = 621, height = 188, threads = 0, max_frames = 0;
   int stop_after = 0;
   double lr = 2e-3;
   uint64_t seed = 1;

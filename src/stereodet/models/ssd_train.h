@@ -25,7 +25,7 @@ struct TrainSsdOptions {
   std::string split = "train";      // ImageSets/SPLIT.txt, or a path to a split file
   std::filesystem::path out_dir;    // the model folder (ssd.h)
   SsdConfig model;                  // encoding, classes, input size, width
-  int epochs = 15;
+  int epochs = 10;                  // the committed models (docs/models.md)
   int batch_size = 8;
   double learning_rate = 2e-3;      // peak (AdamW)
   int warmup_steps = 100;           // linear ramp from lr / warmup_steps

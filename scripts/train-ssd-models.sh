@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Reproduces the committed detectors models/ssd-{rgb,rgbh-fixed,rgbh-learned} from seed 1
+# (docs/models.md "Reproducing the checkpoints", docs/RESULTS.md):
+#   1. the synthetic data set: 4000 frames, seed 1, 3000 train / 1000 val (no LiDAR: the image
+#      detector does not use it, and the images, labels and calibration do not depend on it);
+#   2. the three trainings, identical apart from --input: 10 epochs, seed 1, one LibTorch thread
+#      each (a fixed thread count makes the weights bit-identical from run to run).
+# Every step resumes: rerunning after an interruption continues where it stopped.
+# Usage: scripts/train-ssd-models.sh BUILD_DIR [DATA_DIR] [MODELS_DIR]
+#   SSD_INPUTS="rgb rgbh-fixed rgbh-learned"  which models
+#   SSD_PARALLEL=1   train the models one after the other (default); any other value trains them all
+#                    at once (each is one network thread plus a data-loader thread, so three at once
+#                    keep both cores of a 2-core machine busy; output then goes to MODELS_DIR/ssd-*.out)
+#   SSD_EPOCHS=10    epochs (the committed models: 10)
+set -euo pipefail
+build_dir=${1:-build}
+data=${2:-data/synth}
+models=${3:-models}
+inputs=${SSD_INPUTS:-rgb rgbh-fixed rgbh-learned}
+parallel=${SSD_PARALLEL:-1}
+epochs=${SSD_EPOCHS:-10}
+bin="$build_dir/bin/stereodet"
+[[ -x "$bin" ]] || { echo "train-ssd-models: $bin not built; run make build" >&2; exit 1; }
+"$bin" train ssd --help >/dev/null 2>&1 ||
+  { echo "train-ssd-models: $bin has no LibTorch detectors (STEREODET_BUILD_MODELS=OFF)" >&2; exit 1; }
+
+echo "==> synthetic data set ($data)"
+"$bin" synth --out "$data" --frames 4000 --seed 1 --val-fraction 0.25 --no-lidar
+
+train() {
+  local input=$1
+  "$bin" train ssd --data "$data" --split train --input "$input" --out "$models/ssd-$input" \
+    --epochs "$epochs" --seed 1 --threads 1 --resume
+}
+
+mkdir -p "$models"
+pids=()
+for input in $inputs; do
+  echo "==> training ssd-$input ($models/ssd-$input; log: $models/ssd-$input/train_log.csv)"
+  if (( parallel > 1 )); then
+    train "$input" > "$models/ssd-$input.out" 2>&1 &
+    pids+=("$!")
+  else
+    train "$input"
+  fi
+done
+failed=0
+for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
+(( failed == 0 )) || { echo "train-ssd-models: a training failed; see $models/ssd-*.out" >&2; exit 1; }
+echo "train-ssd-models: done; commit $models/ssd-*/model.json and model.pt"
