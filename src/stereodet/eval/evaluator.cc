@@ -18,10 +18,15 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// KITTI mode decides with the devkit's own overlap values where they may differ from ours; the
+// optimal and VOC matchers (>= tau, the paper's definition) keep the exact ones.
 std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
-                                   OverlapKind kind, int num_threads) {
+                                   OverlapKind kind, Matcher matcher, int num_threads) {
+  const OverlapArithmetic arithmetic =
+      matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
   std::vector<ClassFrame> out(frames.size());
-  ParallelFor(frames.size(), [&](size_t i) { out[i] = PrepareClassFrame(frames[i], spec, kind); },
+  ParallelFor(frames.size(),
+              [&](size_t i) { out[i] = PrepareClassFrame(frames[i], spec, kind, arithmetic); },
               num_threads);
   return out;
 }
@@ -473,8 +478,10 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       const bool evaluated = !options.require_detections || HasEvaluableDetection(frames, spec, kind);
       std::vector<ClassFrame> cfs, struck_cfs;
       if (evaluated) {
-        cfs = PrepareAll(frames, spec, kind, threads);
-        if (!options.filter.empty()) struck_cfs = PrepareAll(struck, spec, kind, threads);
+        cfs = PrepareAll(frames, spec, kind, options.matcher, threads);
+        if (!options.filter.empty()) {
+          struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads);
+        }
       }
       for (const Difficulty difficulty : options.difficulties) {
         ClassResult r;
@@ -566,7 +573,7 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
   std::vector<SweepRow> rows;
   for (const ClassSpec& spec : options.classes) {
     for (const OverlapKind kind : options.metrics) {
-      const std::vector<ClassFrame> cfs = PrepareAll(frames, spec, kind, threads);
+      const std::vector<ClassFrame> cfs = PrepareAll(frames, spec, kind, options.matcher, threads);
       for (const Difficulty difficulty : options.difficulties) {
         const std::vector<FrameAssociation> assocs =
             AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
@@ -581,7 +588,8 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
           row.value = value;
           row.stats.stable = CountStable(frames, cfs, assocs, conditions, t_op);
           const std::vector<ClassFrame> struck_cfs =
-              PrepareAll(StrikeFailing(frames, conditions, threads), spec, kind, threads);
+              PrepareAll(StrikeFailing(frames, conditions, threads), spec, kind, options.matcher,
+                         threads);
           row.stats.naive =
               CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           rows.push_back(std::move(row));

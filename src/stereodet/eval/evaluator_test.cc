@@ -63,6 +63,93 @@ TEST(Evaluator, AgreesWithTheDevkitOnTheFixture) {
   EXPECT_EQ(checked, 72);
 }
 
+// One-frame data sets on which KITTI's devkit (prclibo/kitti_eval, boost 1.74) was run; the
+// expected numbers are its AP_R40 / AP_R11 (%, from its 41-slot precision output), the same at all
+// three difficulties. A-C: overlaps mathematically at tau, decided by the devkit's rounding; F, H:
+// two detections at mathematically equal overlaps of one car, which the devkit orders otherwise
+// than exact arithmetic; G: a detection 6 cm wider than its car, same centre, length and rotation,
+// whose intersection boost 1.74 loses (overlap 0); E / E2: a detection without 3D, with and without
+// a DontCare row (both 3D-less squares at (-1000, -1000): suppressed in BEV only).
+struct DevkitCase {
+  const char* name;
+  const char* labels;
+  const char* detections;
+  const char* class_name;
+  double ap[3][2];  // [2D, BEV, 3D][AP_R40, AP_R11]
+};
+
+TEST(Evaluator, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
+  const DevkitCase cases[] = {
+      {"A: car, same footprint 0.3 m lower: 3D IoU 0.7 exactly, > 0.7 for the devkit",
+       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n"
+       "Car 0.00 0 0.00 100.00 100.00 150.00 200.00 1.70 1.60 3.90 -4.10 1.65 22.70 0.00\n",
+       "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00 0.90\n"
+       "Car -1 -1 0.00 100.00 100.00 150.00 200.00 1.70 1.60 3.90 -4.10 1.95 22.70 0.00 0.80\n",
+       "Car", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
+      {"B: pedestrian, same footprint 0.5 m lower: 3D IoU 0.5 exactly, not > 0.5 for the devkit",
+       "Pedestrian 0.00 0 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30\n"
+       "Pedestrian 0.00 0 0.00 100.00 100.00 150.00 200.00 1.50 0.60 0.80 2.30 1.80 15.40 1.00\n",
+       "Pedestrian -1 -1 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30 0.90\n"
+       "Pedestrian -1 -1 0.00 100.00 100.00 150.00 200.00 1.50 0.60 0.80 2.30 2.30 15.40 1.00 0.80\n",
+       "Pedestrian", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {0.0, 100.0 / 11}}},
+      {"C: pedestrian shifted by a third of its length: BEV and 3D IoU 0.5 exactly",
+       "Pedestrian 0.00 0 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30\n"
+       "Pedestrian 0.00 0 0.00 100.00 100.00 150.00 200.00 1.50 0.60 3.00 2.30 1.80 15.40 0.00\n",
+       "Pedestrian -1 -1 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30 0.90\n"
+       "Pedestrian -1 -1 0.00 100.00 100.00 150.00 200.00 1.50 0.60 3.00 3.30 1.80 15.40 0.00 0.80\n",
+       "Pedestrian", {{2.5, 100.0 / 11}, {0.0, 100.0 / 11}, {2.5, 100.0 / 11}}},
+      {"F: detections 0.33 m either side of a car, same rotation",
+       "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -0.51 1.65 15.80 0.00\n"
+       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -0.84 1.65 16.00 0.00\n",
+       "Car -1 -1 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -0.18 1.65 15.80 0.00 0.90\n"
+       "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -0.84 1.65 15.80 0.00 0.80\n",
+       "Car", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
+      {"H: detections 0.33 m either side of a car, turned +-0.02 rad",
+       "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -7.32 1.65 10.46 0.00\n"
+       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -7.65 1.65 10.66 0.00\n",
+       "Car -1 -1 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -6.99 1.65 10.46 0.02 0.90\n"
+       "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -7.65 1.65 10.46 -0.02 0.80\n",
+       "Car", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
+      {"G: a detection 6 cm wider than its car, nested between common end lines",
+       "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.27 2.41 0.75 9.69 1.74 15.90 -1.57\n"
+       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -4.00 1.65 30.00 0.30\n",
+       "Car -1 -1 0.00 100.00 100.00 200.00 200.00 1.27 2.47 0.75 9.69 1.74 15.90 -1.57 0.90\n"
+       "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -4.00 1.65 30.00 0.30 0.80\n",
+       "Car", {{2.5, 100.0 / 11}, {0.0, 50.0 / 11}, {0.0, 50.0 / 11}}},
+      {"E: a detection without 3D inside KITTI's DontCare row: suppressed in BEV, not in 3D",
+       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n"
+       "DontCare -1 -1 -10 600.00 100.00 700.00 150.00 -1 -1 -1 -1000 -1000 -1000 -10\n",
+       "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00 0.90\n"
+       "Car -1 -1 -10 100.00 100.00 150.00 200.00 -1 -1 -1 -1000 -1000 -1000 -10 0.95\n",
+       "Car", {{0.0, 50.0 / 11}, {0.0, 100.0 / 11}, {0.0, 50.0 / 11}}},
+      {"E2: the same without the DontCare row",
+       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n",
+       "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00 0.90\n"
+       "Car -1 -1 -10 100.00 100.00 150.00 200.00 -1 -1 -1 -1000 -1000 -1000 -10 0.95\n",
+       "Car", {{0.0, 50.0 / 11}, {0.0, 50.0 / 11}, {0.0, 50.0 / 11}}},
+  };
+  for (const DevkitCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    EvalFrame frame;
+    frame.id = "000000";
+    frame.labels = ParseObjects(c.labels, "label", {ObjectFileKind::kLabel}).objects;
+    frame.detections = ParseObjects(c.detections, "det", {ObjectFileKind::kDetection}).objects;
+    EvalOptions options;
+    options.num_threads = 1;
+    const EvalResult result = Evaluate({frame}, options);
+    for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
+      for (const Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+        const ClassResult* r = result.Find(c.class_name, kind, d);
+        ASSERT_NE(r, nullptr);
+        ASSERT_TRUE(r->evaluated);
+        const int k = static_cast<int>(kind);
+        EXPECT_NEAR(r->ap_r40, c.ap[k][0], 1e-4) << OverlapKindName(kind) << " " << DifficultyName(d);
+        EXPECT_NEAR(r->ap_r11, c.ap[k][1], 1e-4) << OverlapKindName(kind) << " " << DifficultyName(d);
+      }
+    }
+  }
+}
+
 TEST(Evaluator, ClassWithoutDetectionsIsNotEvaluatedLikeTheDevkit) {
   RandomFramesOptions ro;
   ro.num_frames = 20;

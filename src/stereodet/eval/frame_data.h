@@ -22,18 +22,54 @@ struct EvalFrame {
 };
 
 // Overlap of a detection with a label as KITTI's devkit computes it (criterion -1, "union"):
-//   2D:  intersection / (area(det) + area(label) - intersection), boxes as given (no +1);
+//   2D:  intersection / (area(det) + area(label) - intersection), boxes as given (no +1), in the
+//        devkit's own arithmetic;
 //   BEV: rotated-rectangle intersection of the (x, z) footprints / union (the devkit uses
-//        boost::geometry; we use the exact clipping of geometry::BevIntersectionArea);
+//        boost::geometry; we use the exact clipping of geometry::BevIntersectionArea, which agrees
+//        with the devkit's value to ~1e-6 but not bit for bit: see KittiOverlapAtThreshold);
 //   3D:  BEV intersection * max(0, min(y_d, y_l) - max(y_d - h_d, y_l - h_l)) /
 //        (h_d l_d w_d + h_l l_l w_l - intersection).
 // A footprint with both l and w negative (KITTI's -1 "not estimated") is the same square as with
-// |l|, |w| (the devkit's polygon); a footprint with one non-positive side has no area.
+// |l|, |w| (the devkit's polygon); a footprint with one non-positive side has no area (the devkit
+// crashes on it when it overlaps a label).
 double KittiOverlap(OverlapKind kind, const Object& detection, const Object& label);
 // The devkit's DontCare test (criterion 0): the intersection over the detection's own area (2D),
-// footprint (BEV) or volume (3D). KITTI's DontCare rows carry 3D fields of -1 / -1000, so in BEV
-// and 3D they suppress nothing, exactly as in the devkit.
+// footprint (BEV) or volume (3D). KITTI's DontCare rows carry 3D fields of -1 / -1000: in BEV their
+// footprint is a 1 m x 1 m square at (x, z) = (-1000, -1000), exactly that of a detection whose 3D
+// was not estimated (own-area overlap 1), so in BEV they suppress such detections, as the devkit
+// does; in 3D (height -1, no volume) they suppress nothing.
 double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Object& dontcare);
+
+// Half-width of the band around a class threshold (and around another overlap of the same label,
+// see PrepareClassFrame) in which KITTI mode recomputes a BEV / 3D overlap in the devkit's
+// arithmetic. The devkit's boost::geometry (1.74) snaps coordinates to an integer grid of ~1e7
+// steps across the two boxes, so its overlaps differ from KittiOverlap's exact ones by up to ~1e-6
+// for KITTI-like boxes and ~1e-5 for boxes 1-10 cm wide (measured on 10^6 pairs); 1e-4 covers
+// both.
+inline constexpr double kDevkitTieBand = 1e-4;
+
+// The overlap KITTI mode decides `> tau` with and stores (ClassFrame::edge_overlap): KittiOverlap,
+// except in BEV and 3D, where the devkit's own value (DevkitBoxOverlap, devkit_overlap.h) replaces
+// a positive KittiOverlap
+//  - within kDevkitTieBand of `tau`: an overlap mathematically equal to tau (a box shifted by a
+//    third of its length, or in y by the right amount) then falls on the devkit's side of it;
+//  - of footprints with parallel edges (rotations equal modulo 90 degrees, to 1e-4 rad) that are
+//    not identical: boost 1.74 loses the intersection of some of them (measured: ~2% of the pairs
+//    where one footprint lies inside the other between common end lines, e.g. a detection that
+//    differs from its label only in width), and the devkit then sees overlap 0.
+// Where the devkit has no answer (it crashes) KittiOverlap's value is kept. Requires: tau in
+// (0, 1].
+double KittiOverlapAtThreshold(OverlapKind kind, const Object& detection, const Object& label,
+                               double tau);
+// The same for the DontCare test (KittiDontCareOverlap; the devkit's criterion 0).
+double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection,
+                                       const Object& dontcare, double tau);
+
+// Which overlap values PrepareClassFrame stores.
+enum class OverlapArithmetic {
+  kExact,   // KittiOverlap / KittiDontCareOverlap everywhere (optimal and VOC matchers)
+  kDevkit,  // KITTI mode: the devkit's own values where they may decide differently (see below)
+};
 
 // The labels that concern one class (the class and its neighbours, file order), the detections that
 // may take part (the class, plus any detection lower than 40 px, which KITTI's devkit treats as an
@@ -65,8 +101,15 @@ struct ClassFrame {
   }
 };
 
-// Builds the ClassFrame of `frame` for `spec` and `kind`. Requires: every detection has a score.
-ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind);
+// Builds the ClassFrame of `frame` for `spec` and `kind`. With OverlapArithmetic::kDevkit, overlaps
+// and the DontCare test are KittiOverlapAtThreshold's and KittiDontCareOverlapAtThreshold's at the
+// class threshold, and in BEV and 3D two overlaps of one label (both >= the threshold) that lie
+// within kDevkitTieBand of each other are both the devkit's values too: KITTI's pass 2 takes the
+// larger, and the devkit may order (or tie) two mathematically equal overlaps otherwise than
+// KittiOverlap does, e.g. two detections shifted by the same distance either side of a label. All
+// of this is rare; every other overlap is KittiOverlap's. Requires: every detection has a score.
+ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
+                             OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit);
 
 // Whether the devkit would evaluate `spec` for `kind` given these detections (a detection of the
 // class with left >= 0 for 2D, x != -1000 for BEV, y != -1000 for 3D).

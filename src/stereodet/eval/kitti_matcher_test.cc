@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "stereodet/eval/devkit_overlap.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/random_frames.h"
 
@@ -14,6 +15,8 @@ namespace {
 // ------------------------------------------------------------------------------------------------
 // A literal re-statement of the devkit's control flow (cleanData / computeStatistics / eval_class),
 // dense and slow, over raw Objects: the reference the optimized matcher must equal exactly.
+// Overlaps are the ones KITTI mode decides with (RefOverlaps; their devkit arithmetic is tested in
+// devkit_overlap_test.cc): this reference is about the control flow.
 
 struct RefStats {
   int64_t tp = 0, fp = 0, fn = 0;
@@ -25,7 +28,41 @@ struct RefClean {
   std::vector<int> ignored_gt, ignored_det;
   std::vector<const Object*> dc;
   int n_gt = 0;
+  std::vector<std::vector<double>> overlap;  // [label][detection], RefOverlaps
 };
+
+// KITTI mode's overlaps, restated densely: KittiOverlapAtThreshold for each pair; in BEV and 3D, a
+// label's overlaps >= tau with detections that take part (the class, or lower than 40 px) that lie
+// within kDevkitTieBand of another such overlap of the label are the devkit's.
+std::vector<std::vector<double>> RefOverlaps(const EvalFrame& frame, const ClassSpec& spec,
+                                             OverlapKind kind, double tau) {
+  const auto& gt = frame.labels;
+  const auto& det = frame.detections;
+  std::vector<std::vector<double>> ov(gt.size(), std::vector<double>(det.size()));
+  for (size_t i = 0; i < gt.size(); ++i) {
+    for (size_t j = 0; j < det.size(); ++j) {
+      ov[i][j] = KittiOverlapAtThreshold(kind, det[j], gt[i], tau);
+    }
+  }
+  if (kind == OverlapKind::k2D) return ov;
+  auto candidate = [&](size_t i, size_t j) {
+    return ov[i][j] >= tau && (EqualsIgnoreCase(det[j].type, spec.name) ||
+                               std::fabs(det[j].box.top - det[j].box.bottom) < 40);
+  };
+  for (size_t i = 0; i < gt.size(); ++i) {
+    std::vector<double> row = ov[i];
+    for (size_t j = 0; j < det.size(); ++j) {
+      for (size_t k = 0; k < det.size() && candidate(i, j); ++k) {
+        if (k == j || !candidate(i, k) || std::fabs(ov[i][j] - ov[i][k]) > kDevkitTieBand) continue;
+        row[j] = DevkitBoxOverlap(kind, DevkitCriterion::kUnion, det[j].box3d, gt[i].box3d)
+                     .value_or(ov[i][j]);
+        break;
+      }
+    }
+    ov[i] = row;
+  }
+  return ov;
+}
 
 RefClean RefCleanData(const EvalFrame& frame, const ClassSpec& spec, Difficulty difficulty) {
   RefClean c;
@@ -78,7 +115,7 @@ RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, Overlap
     bool assigned_ignored_det = false;
     for (size_t j = 0; j < det.size(); ++j) {
       if (c.ignored_det[j] == -1 || assigned[j] || ignored_threshold[j]) continue;
-      const double overlap = KittiOverlap(kind, det[j], gt[i]);
+      const double overlap = c.overlap[i][j];
       if (!compute_fp && overlap > tau && *det[j].score > valid_detection) {
         det_idx = static_cast<int>(j);
         valid_detection = *det[j].score;
@@ -113,7 +150,7 @@ RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, Overlap
     for (const Object* dc : c.dc) {
       for (size_t j = 0; j < det.size(); ++j) {
         if (assigned[j] || c.ignored_det[j] == -1 || c.ignored_det[j] == 1 || ignored_threshold[j]) continue;
-        if (KittiDontCareOverlap(kind, det[j], *dc) > tau) {
+        if (KittiDontCareOverlapAtThreshold(kind, det[j], *dc, tau) > tau) {
           assigned[j] = true;
           ++nstuff;
         }
@@ -132,6 +169,7 @@ KittiClassResult RefEvalClass(const std::vector<EvalFrame>& frames, const ClassS
   std::vector<RefClean> cleans;
   for (const EvalFrame& f : frames) {
     cleans.push_back(RefCleanData(f, spec, difficulty));
+    cleans.back().overlap = RefOverlaps(f, spec, kind, tau);
     r.num_groundtruth += cleans.back().n_gt;
     const RefStats s = RefComputeStatistics(f, cleans.back(), kind, tau, false, 0);
     v.insert(v.end(), s.v.begin(), s.v.end());
