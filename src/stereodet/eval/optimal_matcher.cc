@@ -87,6 +87,12 @@ void ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role, std
                    [&](int a, int b) { return f.det_score[a] > f.det_score[b]; });
 }
 
+// The maximum-weight association of each connected component of the overlap graph at the
+// threshold (present = detections taking part), written into *assoc's TP pairs.
+void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vector<uint8_t>& present,
+                     const std::vector<uint8_t>& label_excused, ThreadScratch* scratch,
+                     FrameAssociation* assoc);
+
 }  // namespace
 
 int CountValidLabels(const ClassFrame& f, Difficulty difficulty) {
@@ -169,6 +175,31 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
     }
   }
 
+  // No valid label overlaps a detection of the class (the usual case for a class absent from the
+  // frame): nothing to match, only the outcomes below.
+  if (!g.adj.labels.empty()) MatchComponents(f, g, present, label_excused, &scratch, &a);
+  for (int i = 0; i < nl; ++i) {
+    if (g.label_valid[i] && a.label_outcome[i] != Outcome::kTp) {
+      a.label_outcome[i] = label_excused[i] ? Outcome::kIgnored : Outcome::kFn;
+    }
+  }
+  for (int j = 0; j < nd; ++j) {
+    if (!present[j] || a.det_outcome[j] == Outcome::kTp) continue;
+    if (g.role[j] == kIgnoredDet || g.det_excusable[j]) a.det_outcome[j] = Outcome::kIgnored;
+    else a.det_outcome[j] = Outcome::kFp;
+  }
+  return a;
+}
+
+namespace {
+
+void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vector<uint8_t>& present,
+                     const std::vector<uint8_t>& label_excused, ThreadScratch* scratch_ptr,
+                     FrameAssociation* assoc) {
+  ThreadScratch& scratch = *scratch_ptr;
+  FrameAssociation& a = *assoc;
+  const int nl = f.num_labels();
+  const int nd = f.num_dets();
   // Connected components of (valid labels) + (present valid detections), union-find.
   std::vector<int32_t>& parent = scratch.parent;
   parent.resize(nl + nd);
@@ -263,17 +294,8 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
       a.det_label[j] = i;
     }
   }
-  for (int i = 0; i < nl; ++i) {
-    if (g.label_valid[i] && a.label_outcome[i] != Outcome::kTp) {
-      a.label_outcome[i] = label_excused[i] ? Outcome::kIgnored : Outcome::kFn;
-    }
-  }
-  for (int j = 0; j < nd; ++j) {
-    if (!present[j] || a.det_outcome[j] == Outcome::kTp) continue;
-    if (g.role[j] == kIgnoredDet || g.det_excusable[j]) a.det_outcome[j] = Outcome::kIgnored;
-    else a.det_outcome[j] = Outcome::kFp;
-  }
-  return a;
 }
+
+}  // namespace
 
 }  // namespace stereodet
