@@ -15,7 +15,8 @@ epochs=${DEMO_EPOCHS:-3}
 bin="$build_dir/bin/stereodet"
 [[ -x "$bin" ]] || { echo "demo: $bin not built; run make build" >&2; exit 1; }
 mkdir -p "$demo_dir"
-data="$demo_dir/data"
+# Named after its settings: synth refuses to resume a folder made with other settings (an older demo).
+data="$demo_dir/data-seed7-$frames"
 
 step() { printf '\n==> %s\n' "$*"; }
 
