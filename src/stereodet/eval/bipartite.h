@@ -1,4 +1,5 @@
 // Bipartite matching between labels (left) and detections (right):
+//  - DisjointSets: the connected components of an overlap graph;
 //  - IncrementalMatching: a maximum-cardinality matching kept maximum while detections are added and
 //    labels removed, one augmenting-path search per operation;
 //  - MaxWeightAssignment: the Hungarian algorithm (sparse form) on exact lexicographic weights.
@@ -6,6 +7,7 @@
 #define STEREODET_EVAL_BIPARTITE_H_
 
 #include <cstdint>
+#include <numeric>
 #include <vector>
 
 namespace stereodet {
@@ -17,6 +19,32 @@ struct DetAdjacency {
   std::vector<int32_t> labels;
   int num_labels = 0;
   int num_dets() const { return static_cast<int>(begin.size()) - 1; }
+};
+
+// Disjoint sets over the vertices 0 .. n-1 (labels and detections of a frame as one range, e.g.
+// label i = i and detection j = num_labels + j), with path halving. Union(a, b) links a's root
+// under b's, so for a given sequence of unions the roots, and hence the order in which callers meet
+// the components, are fixed. Reset keeps the memory (one instance per thread can be reused).
+class DisjointSets {
+ public:
+  DisjointSets() = default;
+  explicit DisjointSets(int n) { Reset(n); }
+
+  void Reset(int n) {
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), 0);
+  }
+  int Find(int x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
+  void Union(int a, int b) {
+    const int ra = Find(a), rb = Find(b);
+    if (ra != rb) parent_[ra] = rb;
+  }
+
+ private:
+  std::vector<int32_t> parent_;
 };
 
 // A maximum matching of (present labels) x (added detections), kept maximum:

@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 
+#include "stereodet/eval/bipartite.h"
 #include "stereodet/eval/optimal_matcher.h"
 #include "stereodet/eval/voc_matcher.h"
 #include "stereodet/util/check.h"
@@ -188,17 +189,9 @@ int64_t FrameEventsFromAssociations(Matcher matcher, const EvalFrame& frame, con
 template <typename OnLabel>
 std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
   const int nl = cf.num_labels(), nd = cf.num_dets();
-  std::vector<int32_t> parent(nl + nd);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets sets(nl + nd);
   for (int i = 0; i < nl; ++i) {
-    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
-      const int ra = find(i), rb = find(nl + cf.edge_det[e]);
-      if (ra != rb) parent[ra] = rb;
-    }
+    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) sets.Union(i, nl + cf.edge_det[e]);
   }
   // Single-label components first: a label whose detections overlap no other label.
   std::vector<int32_t> det_degree(nd, 0);
@@ -216,7 +209,7 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
   std::vector<int32_t> comp_of_root(nl + nd, -1), local(nl + nd, -1);
   std::vector<ClassFrame> comps;
   auto comp = [&](int x) -> ClassFrame& {
-    const int r = find(x);
+    const int r = sets.Find(x);
     if (comp_of_root[r] < 0) {
       comp_of_root[r] = static_cast<int32_t>(comps.size());
       comps.emplace_back();
@@ -234,7 +227,7 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
     c.label_alpha.push_back(cf.label_alpha[i]);
   }
   for (int j = 0; j < nd; ++j) {
-    if (comp_of_root[find(nl + j)] < 0) continue;  // no edge, or in a single-edge component
+    if (comp_of_root[sets.Find(nl + j)] < 0) continue;  // no edge, or in a single-edge component
     ClassFrame& c = comp(nl + j);
     local[nl + j] = c.num_dets();
     c.det_object.push_back(cf.det_object[j]);
@@ -247,7 +240,7 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
   for (ClassFrame& c : comps) c.edge_begin.push_back(0);
   for (int i = 0; i < nl; ++i) {  // labels in order, so each component's CSR is built in order
     if (local[i] < 0) continue;
-    ClassFrame& c = comps[comp_of_root[find(i)]];
+    ClassFrame& c = comps[comp_of_root[sets.Find(i)]];
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
       c.edge_det.push_back(local[nl + cf.edge_det[e]]);
       c.edge_overlap.push_back(cf.edge_overlap[e]);

@@ -30,7 +30,8 @@ struct ThreadScratch {
   std::vector<int32_t> order;
   IncrementalMatching all, unexcused, labels;
   std::vector<uint8_t> label_excused, present;
-  std::vector<int32_t> parent, comp_begin, members, local, cl, cd, fill, match;
+  DisjointSets sets;
+  std::vector<int32_t> comp_begin, members, local, cl, cd, fill, match;
   std::vector<WeightedEdge> edges;
 };
 
@@ -201,19 +202,11 @@ void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vect
   const int nl = f.num_labels();
   const int nd = f.num_dets();
   // Connected components of (valid labels) + (present valid detections), union-find.
-  std::vector<int32_t>& parent = scratch.parent;
-  parent.resize(nl + nd);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets& sets = scratch.sets;
+  sets.Reset(nl + nd);
   for (int j = 0; j < nd; ++j) {
     if (!present[j] || g.role[j] != kValid) continue;
-    for (int k = g.adj.begin[j]; k < g.adj.begin[j + 1]; ++k) {
-      const int ra = find(g.adj.labels[k]), rb = find(nl + j);
-      if (ra != rb) parent[ra] = rb;
-    }
+    for (int k = g.adj.begin[j]; k < g.adj.begin[j + 1]; ++k) sets.Union(g.adj.labels[k], nl + j);
   }
   // Group the vertices by component (counting sort on the root) into one flat array.
   std::vector<int32_t>& comp_begin = scratch.comp_begin;
@@ -224,14 +217,14 @@ void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vect
     return x < nl ? g.label_valid[x] != 0 : (present[x - nl] && g.role[x - nl] == kValid);
   };
   for (int x = 0; x < nl + nd; ++x) {
-    if (in_graph(x)) ++comp_begin[find(x) + 1];
+    if (in_graph(x)) ++comp_begin[sets.Find(x) + 1];
   }
   for (int r = 0; r < nl + nd; ++r) comp_begin[r + 1] += comp_begin[r];
   {
     std::vector<int32_t>& fill = scratch.fill;
     fill.assign(comp_begin.begin(), comp_begin.end() - 1);
     for (int x = 0; x < nl + nd; ++x) {
-      if (in_graph(x)) members[fill[find(x)]++] = x;
+      if (in_graph(x)) members[fill[sets.Find(x)]++] = x;
     }
   }
   std::vector<int32_t>& local = scratch.local;
