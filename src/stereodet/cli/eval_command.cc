@@ -3,15 +3,18 @@
 //                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable] [--out DIR]
 //   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5 [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE] [--disparity-error-px 1]
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <fmt/format.h>
 
 #include "stereodet/cli/commands.h"
 #include "stereodet/eval/compare.h"
@@ -23,6 +26,7 @@
 #include "stereodet/report/eval_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/strings.h"
 
@@ -51,6 +55,7 @@ struct EvalArgs {
   double distance_bin_m = 5.0;
   double max_distance_m = 80.0;
   std::string out;
+  bool records = false;
   int threads = 0;
 };
 
@@ -199,25 +204,70 @@ LoadedInput LoadInput(const std::string& gt, const std::string& det, const std::
   STEREODET_CHECK_IO(!ids.empty()) << "no frame to evaluate in " << label_dir.string();
   in.frames.resize(ids.size());
   std::vector<uint8_t> missing(ids.size(), 0);
+  std::vector<uint64_t> frame_hash(ids.size(), 0);
   ParallelFor(ids.size(), [&](size_t i) {
     EvalFrame& f = in.frames[i];
     f.id = ids[i];
-    f.labels = ReadObjects(label_dir / (ids[i] + ".txt"), {ObjectFileKind::kLabel, false}).objects;
+    const fs::path label_path = label_dir / (ids[i] + ".txt");
+    const std::string label_text = ReadFile(label_path);
+    f.labels =
+        ParseObjects(label_text, label_path.string(), {ObjectFileKind::kLabel, false}).objects;
+    uint64_t hash = Fnv1a64(label_text, Fnv1a64(std::string_view("\0", 1), Fnv1a64(ids[i])));
+    hash = Fnv1a64(std::string_view("\0", 1), hash);
     if (det_stems.count(ids[i])) {
-      f.detections = ReadObjects(det_dir / (ids[i] + ".txt"), {ObjectFileKind::kDetection, false}).objects;
+      const fs::path det_path = det_dir / (ids[i] + ".txt");
+      const std::string det_text = ReadFile(det_path);
+      f.detections =
+          ParseObjects(det_text, det_path.string(), {ObjectFileKind::kDetection, false}).objects;
+      hash = Fnv1a64(det_text, hash);
     } else {
       missing[i] = 1;
     }
+    frame_hash[i] = hash;
   }, threads);
+  uint64_t input_hash = kFnv1a64Offset;
   for (size_t i = 0; i < ids.size(); ++i) {
     if (missing[i]) in.info.frames_without_detections.push_back(ids[i]);
+    char bytes[8];
+    for (int b = 0; b < 8; ++b) bytes[b] = static_cast<char>(frame_hash[i] >> (8 * b) & 0xff);
+    input_hash = Fnv1a64(std::string_view(bytes, 8), input_hash);
   }
+  in.info.input_hash = HashHex(input_hash);
   return in;
 }
 
+// The command line of this process (/proc/self/cmdline), arguments joined by spaces, those with
+// spaces or quotes in single quotes. Empty where /proc is not there.
+std::string ProcessCommandLine() {
+  // /proc files report size 0, so read to the end rather than by size.
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  if (!in) return {};
+  const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string out;
+  for (std::string_view arg : Split(raw, '\0')) {
+    if (arg.empty()) continue;
+    if (!out.empty()) out += ' ';
+    if (arg.find_first_of(" \t'\"") == std::string_view::npos) {
+      out += arg;
+    } else {
+      out += '\'';
+      for (const char c : arg) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      out += '\'';
+    }
+  }
+  return out;
+}
+
 void RunEval(const EvalArgs& a) {
-  const EvalOptions options = MakeOptions(a);
+  EvalOptions options = MakeOptions(a);
+  options.keep_records = a.records;
+  STEREODET_CHECK(!a.records || !a.out.empty())
+      << "--records needs --out (it writes OUT/matches.csv)";
+  // Refuse a folder of something else before the work, not after it.
+  std::optional<StagedFolder> out;
+  if (!a.out.empty()) out.emplace(a.out, "results.json");
   LoadedInput in = LoadInput(a.gt, a.det, a.split, a.threads);
+  in.info.command_line = ProcessCommandLine();
   const EvalResult result = Evaluate(in.frames, options);
   fmt::print("{}", FormatEvalTable(result, options));
   if (!in.info.frames_without_detections.empty()) {
@@ -225,9 +275,15 @@ void RunEval(const EvalArgs& a) {
                in.info.frames_without_detections.size());
   }
   fmt::print("evaluated in {:.3f} s\n", result.seconds);
-  if (!a.out.empty()) {
-    const auto written = WriteEvalReport(a.out, result, options, in.info);
-    fmt::print("wrote {} files to {}\n", written.size(), a.out);
+  if (out) {
+    size_t num_files = WriteEvalReport(out->path(), result, options, in.info).size();
+    if (a.records) {
+      const int64_t rows = WriteMatchRecordsCsv(out->path() / "matches.csv", result, in.frames);
+      ++num_files;
+      fmt::print("per-detection records: {} rows in matches.csv\n", rows);
+    }
+    out->Commit();
+    fmt::print("wrote {} files to {}\n", num_files, a.out);
   }
 }
 
@@ -304,7 +360,13 @@ void AddEvalCommand(CLI::App& app) {
   CLI::App* eval = app.add_subcommand("eval", "evaluate detections: KITTI-compatible AP, optimal "
                                               "matching, filters, Brier, calibration, 3D error");
   AddCommonOptions(eval, args.get(), true);
-  eval->add_option("--out", args->out, "write results.json and CSVs here");
+  eval->add_option(
+      "--out", args->out,
+      "write results.json and CSVs here (one run per folder: an earlier run's folder is "
+      "replaced whole; a folder of other files is refused)");
+  eval->add_flag("--records", args->records,
+                 "also write OUT/matches.csv: what every detection and label counts as, per class, "
+                 "metric and difficulty (docs/metrics.md)");
   eval->require_subcommand(0, 1);
   // Options of eval itself must come before a sub-subcommand; the sub-subcommands have their own.
   eval->fallthrough(false);

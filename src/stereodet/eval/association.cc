@@ -4,6 +4,24 @@
 
 namespace stereodet {
 
+const char* OutcomeName(Outcome outcome) {
+  switch (outcome) {
+    case Outcome::kNone:
+      return "none";
+    case Outcome::kTp:
+      return "tp";
+    case Outcome::kFp:
+      return "fp";
+    case Outcome::kFn:
+      return "fn";
+    case Outcome::kIgnored:
+      return "ignored";
+    case Outcome::kDontCare:
+      return "dontcare";
+  }
+  return "none";
+}
+
 int64_t FrameAssociation::CountLabels(Outcome o) const {
   return std::count(label_outcome.begin(), label_outcome.end(), o);
 }

@@ -14,14 +14,17 @@ enum class Outcome : int8_t {
   kTp,        // a true positive (label or detection of a matched pair)
   kFp,        // a detection that counts as a false positive
   kFn,        // a label that counts as a false negative
-  kIgnored,   // neither: an ignored label/detection, or one excused by an ignored one or DontCare
+  kIgnored,   // neither: an ignored label/detection, or one excused by an ignored one
+  kDontCare,  // a detection that would be a false positive but lies in a DontCare region (excused)
 };
+// "none", "tp", "fp", "fn", "ignored", "dontcare".
+const char* OutcomeName(Outcome outcome);
 
 // Indices are those of the ClassFrame the association was computed on.
 struct FrameAssociation {
   std::vector<Outcome> label_outcome;  // kTp, kFn or kIgnored
   std::vector<int32_t> label_det;      // the detection of a kTp label, else -1
-  std::vector<Outcome> det_outcome;    // kTp, kFp, kIgnored or kNone
+  std::vector<Outcome> det_outcome;    // kTp, kFp, kIgnored, kDontCare or kNone
   std::vector<int32_t> det_label;      // the label of a kTp detection, else -1
 
   int64_t CountLabels(Outcome o) const;

@@ -78,6 +78,10 @@ struct EvalOptions {
   // Extra filter on labels and detections (difficulty filtering is always KITTI's).
   FilterOptions filter;
 
+  // Keep every cell's per-detection records (ClassResult::records). Memory: 24 bytes a row, about
+  // (detections + unmatched labels) x overlap kinds x difficulties rows.
+  bool keep_records = false;
+
   int num_threads = 0;  // 0 = all hardware threads
 
   // Throws std::invalid_argument on an empty class list, a threshold outside (0, 1], bins < 1, ...

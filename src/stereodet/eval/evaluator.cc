@@ -403,6 +403,68 @@ FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames, const std::
   return c;
 }
 
+// The rows of one frame (see MatchRecord), in the documented order.
+void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame& cf,
+                   const FrameAssociation& a, OverlapKind kind, double threshold,
+                   std::vector<MatchRecord>* out) {
+  auto pair_overlap = [&](int i, int j) {
+    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
+      if (cf.edge_det[e] == j) return cf.edge_overlap[e];
+    }
+    return KittiOverlap(kind, frame.detections[cf.det_object[j]], frame.labels[cf.label_object[i]]);
+  };
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    if (a.det_outcome[j] == Outcome::kNone) continue;
+    MatchRecord r;
+    r.frame = frame_index;
+    r.detection = cf.det_object[j];
+    r.outcome = a.det_outcome[j];
+    if (r.outcome == Outcome::kTp) {
+      r.label = cf.label_object[a.det_label[j]];
+      r.iou = pair_overlap(a.det_label[j], j);
+    } else {
+      for (int i = 0; i < cf.num_labels(); ++i) {
+        r.iou = std::max(r.iou, KittiOverlap(kind, frame.detections[cf.det_object[j]],
+                                             frame.labels[cf.label_object[i]]));
+      }
+    }
+    out->push_back(r);
+  }
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) continue;
+    MatchRecord r;
+    r.frame = frame_index;
+    r.label = cf.label_object[i];
+    r.outcome = a.label_outcome[i];
+    for (int j = 0; j < cf.num_dets(); ++j) {
+      if (!cf.det_is_class[j] || cf.det_score[j] < threshold) continue;
+      r.iou = std::max(r.iou, KittiOverlap(kind, frame.detections[cf.det_object[j]],
+                                           frame.labels[cf.label_object[i]]));
+    }
+    out->push_back(r);
+  }
+}
+
+std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
+                                      const std::vector<ClassFrame>& cfs,
+                                      const std::vector<FrameAssociation>& assocs, OverlapKind kind,
+                                      double threshold, int num_threads) {
+  std::vector<std::vector<MatchRecord>> per_frame(frames.size());
+  ParallelFor(
+      frames.size(),
+      [&](size_t f) {
+        AppendRecords(static_cast<int32_t>(f), frames[f], cfs[f], assocs[f], kind, threshold,
+                      &per_frame[f]);
+      },
+      num_threads);
+  size_t total = 0;
+  for (const auto& v : per_frame) total += v.size();
+  std::vector<MatchRecord> out;
+  out.reserve(total);
+  for (const auto& v : per_frame) out.insert(out.end(), v.begin(), v.end());
+  return out;
+}
+
 void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
                 int num_threads, ClassResult* r) {
   const KittiClassResult k = EvaluateKittiClass(cfs, difficulty, num_threads);
@@ -514,6 +576,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         r.brier = acc.Brier();
         r.calibration = acc.Calibration();
         r.localization = acc.Localization();
+        if (options.keep_records) {
+          r.records = BuildRecords(frames, cfs, assocs, kind, t_op, threads);
+        }
 
         if (!options.filter.empty()) {
           FilteredStats fs;

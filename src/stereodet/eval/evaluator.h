@@ -35,6 +35,29 @@ struct FilteredStats {
   FilteredCurve stable_curve;
 };
 
+// What one detection or label counts as in one class x overlap kind x difficulty at the operating
+// point (EvalOptions::score_threshold), as the matcher associated them (EvalOptions::keep_records).
+// A true positive is one row holding both sides; every other row holds one side:
+//   kTp                          detection + label, the matched pair;
+//   kFp, kIgnored, kDontCare     a detection alone (kIgnored: an ignored detection, e.g. lower than
+//                                the difficulty's minimum height, or one on an ignored label);
+//   kFn, kIgnored                a label alone (kIgnored: a neighbour class, a label that does not
+//                                meet the difficulty, or one excused by an ignored detection).
+// Detections below the operating point and those of other classes that take no part
+// (Outcome::kNone) have no row. Summing the rows gives ClassResult::at_threshold and the Brier
+// scores exactly.
+struct MatchRecord {
+  int32_t frame = -1;      // index into the evaluated frames
+  int32_t detection = -1;  // index into the frame's detections (file order); -1 for a label alone
+  int32_t label = -1;      // index into the frame's labels (file order); -1 for a detection alone
+  Outcome outcome = Outcome::kNone;
+  // kTp: the overlap that decided the match. Otherwise the largest overlap of the row's object with
+  // the other side: for a detection, with any label of the class or its neighbours; for a label,
+  // with any detection of the class at the operating point (0 when there is none). Same overlap
+  // kind and definition as the matching (KittiOverlap).
+  double iou = 0.0;
+};
+
 // One class x overlap kind x difficulty.
 struct ClassResult {
   std::string class_name;
@@ -66,6 +89,10 @@ struct ClassResult {
   BrierScores brier;
   CalibrationResult calibration;
   std::vector<DistanceBin> localization;
+
+  // With EvalOptions::keep_records: by frame, then detections in file order, then the labels
+  // without a detection in file order.
+  std::vector<MatchRecord> records;
 };
 
 struct EvalResult {

@@ -191,8 +191,10 @@ FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, doub
   for (int j = 0; j < f.num_dets(); ++j) {
     if (a.det_outcome[j] == Outcome::kTp) continue;
     if (states[j] == -1 || f.det_score[j] < threshold) continue;  // kNone
-    if (states[j] == 1 || assigned[j] || f.det_dontcare[j]) {
+    if (states[j] == 1 || assigned[j]) {
       a.det_outcome[j] = Outcome::kIgnored;
+    } else if (f.det_dontcare[j]) {
+      a.det_outcome[j] = Outcome::kDontCare;
     } else {
       a.det_outcome[j] = Outcome::kFp;
     }

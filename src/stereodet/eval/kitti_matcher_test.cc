@@ -291,7 +291,9 @@ TEST(KittiMatcher, NeighbourClassAndDontCareAreNotFalsePositives) {
   const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
   EXPECT_EQ(a.CountDets(Outcome::kTp), 1);
   EXPECT_EQ(a.CountDets(Outcome::kFp), 1);
-  EXPECT_EQ(a.CountDets(Outcome::kIgnored), 2);
+  EXPECT_EQ(a.CountDets(Outcome::kIgnored), 1);   // on the Van
+  EXPECT_EQ(a.CountDets(Outcome::kDontCare), 1);  // inside DontCare
+  EXPECT_EQ(a.det_outcome[2], Outcome::kDontCare);
 }
 
 // Quirk: a detection lower than the minimum height is "ignored" whatever its class, and such a

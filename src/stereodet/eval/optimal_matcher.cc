@@ -16,6 +16,7 @@ struct OptimalGraph {
   std::vector<int8_t> role;             // per detection
   std::vector<uint8_t> label_valid;     // per label
   std::vector<uint8_t> det_excusable;   // valid detection overlapping an ignored label or DontCare
+  std::vector<uint8_t> det_on_ignored;  // valid detection overlapping an ignored label
   DetAdjacency adj;                     // detection -> valid labels, overlap >= tau
   std::vector<double> adj_overlap;      // parallel to adj.labels
   std::vector<int32_t> fill;            // scratch of BuildGraph
@@ -51,6 +52,7 @@ void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
   g->label_valid.resize(f.num_labels());
   for (int i = 0; i < f.num_labels(); ++i) g->label_valid[i] = f.LabelValid(i, difficulty) ? 1 : 0;
   g->det_excusable.assign(f.det_dontcare.begin(), f.det_dontcare.end());
+  g->det_on_ignored.assign(f.num_dets(), 0);
   // Transpose the label-major edges into detection-major lists of valid labels.
   std::vector<int32_t>& count = g->adj.begin;
   count.assign(f.num_dets() + 1, 0);
@@ -59,7 +61,8 @@ void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
       const int j = f.edge_det[e];
       if (g->role[j] == kOut) continue;
       if (g->label_valid[i]) ++count[j + 1];
-      else if (g->role[j] == kValid) g->det_excusable[j] = 1;
+      else if (g->role[j] == kValid)
+        g->det_excusable[j] = g->det_on_ignored[j] = 1;
     }
   }
   std::partial_sum(count.begin(), count.end(), count.begin());
@@ -186,7 +189,10 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
   }
   for (int j = 0; j < nd; ++j) {
     if (!present[j] || a.det_outcome[j] == Outcome::kTp) continue;
-    if (g.role[j] == kIgnoredDet || g.det_excusable[j]) a.det_outcome[j] = Outcome::kIgnored;
+    if (g.role[j] == kIgnoredDet || g.det_on_ignored[j])
+      a.det_outcome[j] = Outcome::kIgnored;
+    else if (g.det_excusable[j])
+      a.det_outcome[j] = Outcome::kDontCare;
     else a.det_outcome[j] = Outcome::kFp;
   }
   return a;

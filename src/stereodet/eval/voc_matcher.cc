@@ -47,7 +47,7 @@ void RunVoc(const ClassFrame& f, Difficulty difficulty, double threshold, OnDet 
       taken[i] = 1;
       on_det(j, Outcome::kTp, i);
     } else {
-      on_det(j, f.det_dontcare[j] ? Outcome::kIgnored : Outcome::kFp, -1);
+      on_det(j, f.det_dontcare[j] ? Outcome::kDontCare : Outcome::kFp, -1);
     }
   }
 }

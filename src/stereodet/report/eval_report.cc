@@ -1,11 +1,15 @@
 #include "stereodet/report/eval_report.h"
 
-#include <cmath>
-#include <sstream>
-
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstdio>
+#include <iterator>
+#include <optional>
+#include <sstream>
+
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 
@@ -76,6 +80,7 @@ json EvalResultToJson(const EvalResult& result, const EvalOptions& options, cons
   json j;
   j["tool"] = {{"name", "stereodet eval"}, {"version", info.tool_version}};
   j["command_line"] = info.command_line;
+  j["input_hash"] = info.input_hash;
   j["input"] = {{"gt", info.gt_path},
                 {"det", info.det_path},
                 {"split", info.split_path},
@@ -171,6 +176,68 @@ json EvalResultToJson(const EvalResult& result, const EvalOptions& options, cons
   }
   j["results"] = results;
   return j;
+}
+
+int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult& result,
+                             const std::vector<EvalFrame>& frames) {
+  AtomicPath out(path);
+  std::FILE* file = std::fopen(out.temp_path().c_str(), "wb");
+  STEREODET_CHECK_IO(file != nullptr) << "cannot write " << path.string();
+  fmt::memory_buffer buf;
+  auto flush = [&](bool force) {
+    if (!force && buf.size() < (1 << 20)) return;
+    const size_t n = std::fwrite(buf.data(), 1, buf.size(), file);
+    const bool ok = n == buf.size();
+    buf.clear();
+    if (!ok) {
+      std::fclose(file);
+      STEREODET_THROW_IO() << "cannot write " << path.string();
+    }
+  };
+  auto out_it = std::back_inserter(buf);
+  fmt::format_to(out_it,
+                 "frame,class,metric,difficulty,min_overlap,outcome,detection,label,score,iou,"
+                 "det_type,det_height_px,det_width_px,det_distance_m,label_type,label_height_px,"
+                 "label_width_px,label_distance_m,label_occluded,label_truncated,"
+                 "label_difficulty\n");
+  int64_t rows = 0;
+  for (const ClassResult& r : result.results) {
+    for (const MatchRecord& m : r.records) {
+      STEREODET_CHECK(m.frame >= 0 && static_cast<size_t>(m.frame) < frames.size())
+          << "match record of frame " << m.frame << " outside the " << frames.size() << " frames";
+      const EvalFrame& f = frames[m.frame];
+      fmt::format_to(out_it, "{},{},{},{},{},{},{},{},", f.id, r.class_name,
+                     OverlapKindName(r.metric), DifficultyName(r.difficulty), r.min_overlap,
+                     OutcomeName(m.outcome), m.detection, m.label);
+      if (m.detection >= 0) {
+        fmt::format_to(out_it, "{}", f.detections[m.detection].score.value_or(NAN));
+      }
+      fmt::format_to(out_it, ",{},", m.iou);
+      if (m.detection >= 0) {
+        const Object& d = f.detections[m.detection];
+        fmt::format_to(out_it, "{},{:.6g},{:.6g},{},", d.type, d.box.Height(), d.box.Width(),
+                       d.Has3D() ? fmt::format("{}", d.box3d.location.z()) : std::string());
+      } else {
+        fmt::format_to(out_it, ",,,,");
+      }
+      if (m.label >= 0) {
+        const Object& l = f.labels[m.label];
+        const std::optional<Difficulty> easiest = EasiestDifficulty(l);
+        fmt::format_to(out_it, "{},{:.6g},{:.6g},{},{},{},{}\n", l.type, l.box.Height(),
+                       l.box.Width(),
+                       l.Has3D() ? fmt::format("{}", l.box3d.location.z()) : std::string(),
+                       l.occluded, l.truncated, easiest ? DifficultyName(*easiest) : "");
+      } else {
+        fmt::format_to(out_it, ",,,,,,\n");
+      }
+      ++rows;
+      flush(false);
+    }
+  }
+  flush(true);
+  STEREODET_CHECK_IO(std::fclose(file) == 0) << "cannot write " << path.string();
+  out.Commit();
+  return rows;
 }
 
 std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos) {

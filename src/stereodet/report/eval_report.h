@@ -21,6 +21,11 @@ struct EvalRunInfo {
   std::string gt_path, det_path, split_path;
   std::vector<std::string> frames_without_detections;  // ids whose detection file was missing
   std::string command_line;
+  // What was read, as 16 hex digits (empty if not computed): FNV-1a 64 (util/hash.h) over the
+  // frames' hashes in evaluation order (8 bytes each, little-endian), a frame's hash being FNV-1a
+  // 64 over its id, a NUL, its label file's bytes, a NUL and its detection file's bytes (none when
+  // the file is missing). Equal inputs give equal hashes whatever the thread count.
+  std::string input_hash;
 };
 
 // The whole result as JSON. NaN (not computed) becomes null.
@@ -34,6 +39,20 @@ nlohmann::json EvalResultToJson(const EvalResult& result, const EvalOptions& opt
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
                                                    const EvalResult& result, const EvalOptions& options,
                                                    const EvalRunInfo& info);
+
+// The per-detection records of every cell (ClassResult::records, EvalOptions::keep_records) as CSV,
+// streamed to `path` atomically; `frames` are those the result was evaluated on. One row per
+// record, cells in result order, then the records' order. Columns:
+//   frame (id), class, metric, difficulty, min_overlap, outcome (tp, fp, fn, ignored, dontcare),
+//   detection, label (indices in file order, -1 for none), score (the detection's, full precision),
+//   iou (MatchRecord::iou), then the filter attributes of each side, empty where the side is
+//   absent: det_type, det_height_px, det_width_px, det_distance_m, label_type, label_height_px,
+//   label_width_px, label_distance_m (the 3D location's z), label_occluded, label_truncated,
+//   label_difficulty (the easiest difficulty the label meets: Easy, Moderate, Hard, or empty).
+// Sizes are 2D box heights and widths to 6 significant digits; score and iou at full precision.
+// Returns the number of rows.
+int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult& result,
+                             const std::vector<EvalFrame>& frames);
 
 // A PR curve as CSV: threshold, tp, fp, fn, precision, recall, fp_per_frame, and with AOS the
 // orientation ratio (similarity / (tp + fp)); one row per curve point, descending threshold.

@@ -77,6 +77,68 @@ void WriteFileAtomically(const fs::path& path, std::string_view contents) {
   out.Commit();
 }
 
+namespace {
+
+// A hidden sibling of `dir` named `.NAME.KIND-PID-N`, unique among threads and processes.
+fs::path SiblingName(const fs::path& dir, const char* kind) {
+  static std::atomic<unsigned long> counter{0};
+  const unsigned long n = counter.fetch_add(1);
+  std::string name = ".";
+  name.append(dir.filename().string()).append(".").append(kind).append("-");
+  name.append(std::to_string(::getpid())).append("-").append(std::to_string(n));
+  return dir.parent_path() / name;
+}
+
+// `dir` without a trailing separator, so that filename() names the folder itself.
+fs::path WithoutTrailingSeparator(fs::path dir) {
+  dir = dir.lexically_normal();
+  if (!dir.has_filename() && dir.has_parent_path()) dir = dir.parent_path();
+  return dir;
+}
+
+}  // namespace
+
+StagedFolder::StagedFolder(fs::path final_dir, const std::string& marker)
+    : final_dir_(WithoutTrailingSeparator(std::move(final_dir))) {
+  std::error_code ec;
+  if (fs::exists(final_dir_, ec)) {
+    STEREODET_CHECK_IO(fs::is_directory(final_dir_, ec))
+        << final_dir_.string() << " exists and is not a folder";
+    const bool empty = fs::is_empty(final_dir_, ec);
+    STEREODET_CHECK_IO(empty || fs::exists(final_dir_ / marker, ec))
+        << final_dir_.string() << " is a folder with other files in it (it holds no " << marker
+        << ", so it is not an earlier output of this command); give a new or empty folder";
+  }
+  staging_dir_ = SiblingName(final_dir_, "staging");
+  fs::create_directories(staging_dir_, ec);
+  STEREODET_CHECK_IO(!ec) << "cannot create folder " << staging_dir_.string() << ": "
+                          << ec.message();
+}
+
+StagedFolder::~StagedFolder() {
+  if (!committed_) {
+    std::error_code ignored;
+    fs::remove_all(staging_dir_, ignored);
+  }
+}
+
+void StagedFolder::Commit() {
+  STEREODET_CHECK_IO(!committed_) << "StagedFolder::Commit called twice for "
+                                  << final_dir_.string();
+  std::error_code ec;
+  fs::path old;
+  if (fs::exists(final_dir_, ec)) {
+    old = SiblingName(final_dir_, "old");
+    fs::rename(final_dir_, old, ec);
+    STEREODET_CHECK_IO(!ec) << "cannot replace " << final_dir_.string() << ": " << ec.message();
+  }
+  fs::rename(staging_dir_, final_dir_, ec);
+  STEREODET_CHECK_IO(!ec) << "cannot write " << final_dir_.string() << ": " << ec.message()
+                          << (old.empty() ? "" : "; the previous run is kept as " + old.string());
+  committed_ = true;
+  if (!old.empty()) fs::remove_all(old, ec);  // best effort: the new run is in place
+}
+
 std::string ReadFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   STEREODET_CHECK_IO(in.good()) << "cannot read " << path.string() << ": " << std::strerror(errno);

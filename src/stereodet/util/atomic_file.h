@@ -40,6 +40,40 @@ class AtomicPath {
   bool committed_ = false;
 };
 
+// An output folder written as one run. Files go into a hidden staging folder beside `final_dir`
+// (`.NAME.staging-PID-N`); Commit() puts it in place of `final_dir` with two renames (an existing
+// `final_dir` is renamed aside, then removed). So the folder never mixes the files of two runs, two
+// runs into one folder cannot interleave (the last to commit wins, whole), and an interrupted run
+// leaves the previous folder as it was. Without Commit() the destructor removes the staging folder.
+//
+//   StagedFolder out(dir, "results.json");
+//   WriteFileAtomically(out.path() / "results.json", ...);
+//   out.Commit();
+class StagedFolder {
+ public:
+  // Throws std::runtime_error, naming the folder, if `final_dir` exists and is not a folder, or is
+  // a non-empty folder without the file `marker` (so it is not an earlier output of this kind and
+  // replacing it could destroy someone's data).
+  StagedFolder(std::filesystem::path final_dir, const std::string& marker);
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  ~StagedFolder();
+
+  // Where to write now: the staging folder (created empty).
+  const std::filesystem::path& path() const { return staging_dir_; }
+  const std::filesystem::path& final_path() const { return final_dir_; }
+
+  // Replaces `final_dir` by the staging folder. Throws std::runtime_error naming the folder if a
+  // rename fails (`final_dir` is then the previous run's or, if the second rename failed, absent
+  // with the previous run kept as `.NAME.old-*` beside it, named in the message).
+  void Commit();
+
+ private:
+  std::filesystem::path final_dir_;
+  std::filesystem::path staging_dir_;
+  bool committed_ = false;
+};
+
 // Reads a whole file. Throws std::runtime_error naming the path if it cannot be read.
 std::string ReadFile(const std::filesystem::path& path);
 

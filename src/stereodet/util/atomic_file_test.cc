@@ -71,5 +71,55 @@ TEST_F(AtomicFileTest, WritingIntoAFileAsIfAFolderFails) {
   EXPECT_THROW(WriteFileAtomically(dir_ / "plain" / "child.txt", "y"), std::runtime_error);
 }
 
+// StagedFolder: one run per folder.
+TEST_F(AtomicFileTest, StagedFolderReplacesAnEarlierRunWhole) {
+  const fs::path out = dir_ / "results";
+  {
+    StagedFolder run1(out, "results.json");
+    WriteFileAtomically(run1.path() / "results.json", "1");
+    WriteFileAtomically(run1.path() / "curves" / "only_in_run1.csv", "x");
+    EXPECT_FALSE(fs::exists(out));  // nothing visible before the commit
+    run1.Commit();
+  }
+  EXPECT_EQ(ReadFile(out / "results.json"), "1");
+  {
+    StagedFolder run2(out / "", "results.json");  // a trailing separator names the same folder
+    WriteFileAtomically(run2.path() / "results.json", "2");
+    EXPECT_EQ(ReadFile(out / "results.json"), "1");  // the old run stays whole until the commit
+    run2.Commit();
+  }
+  EXPECT_EQ(ReadFile(out / "results.json"), "2");
+  EXPECT_FALSE(fs::exists(out / "curves" / "only_in_run1.csv"));  // no stale file of run 1
+  EXPECT_EQ(CountFiles(), 1u);  // no staging or old folder left beside it
+}
+
+TEST_F(AtomicFileTest, UncommittedStagedFolderLeavesThePreviousRun) {
+  const fs::path out = dir_ / "results";
+  WriteFileAtomically(out / "results.json", "old");
+  {
+    StagedFolder run(out, "results.json");
+    WriteFileAtomically(run.path() / "results.json", "new");
+  }  // interrupted: no Commit()
+  EXPECT_EQ(ReadFile(out / "results.json"), "old");
+  EXPECT_EQ(CountFiles(), 1u);
+}
+
+TEST_F(AtomicFileTest, StagedFolderRefusesAFolderOfSomethingElse) {
+  WriteFileAtomically(dir_ / "home" / "thesis.tex", "precious");
+  EXPECT_THROW(StagedFolder(dir_ / "home", "results.json"), std::runtime_error);
+  try {
+    StagedFolder refused(dir_ / "home", "results.json");
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds no results.json"), std::string::npos) << e.what();
+  }
+  WriteFileAtomically(dir_ / "plain_file", "x");
+  EXPECT_THROW(StagedFolder(dir_ / "plain_file", "results.json"), std::runtime_error);
+  EXPECT_EQ(ReadFile(dir_ / "home" / "thesis.tex"), "precious");
+  fs::create_directories(dir_ / "empty");
+  StagedFolder ok(dir_ / "empty", "results.json");  // an empty folder is fine
+  ok.Commit();
+  EXPECT_TRUE(fs::is_directory(dir_ / "empty"));
+}
+
 }  // namespace
 }  // namespace stereodet

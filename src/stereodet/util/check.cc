@@ -1,6 +1,7 @@
 #include "stereodet/util/check.h"
 
 #include <cstring>
+#include <exception>
 #include <utility>
 
 namespace stereodet {
@@ -26,9 +27,16 @@ ParseError::ParseError(std::string file, int line, std::string field, std::strin
 namespace internal {
 
 CheckFailure::CheckFailure(ErrorKind kind, const char* condition, const char* file, int line)
-    : kind_(kind), condition_(condition), file_(file), line_(line) {}
+    : kind_(kind),
+      condition_(condition),
+      file_(file),
+      line_(line),
+      uncaught_at_start_(std::uncaught_exceptions()) {}
 
 CheckFailure::~CheckFailure() noexcept(false) {
+  // Destroyed during unwinding: building the message threw (e.g. a streamed call whose own check
+  // failed). Throwing now would call std::terminate; let that exception carry the error instead.
+  if (std::uncaught_exceptions() > uncaught_at_start_) return;
   std::string message = stream_.str();
   // Unconditional throws pass "false" as the condition; it says nothing, so leave it out.
   const bool has_condition = std::strcmp(condition_, "false") != 0;

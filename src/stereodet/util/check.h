@@ -7,15 +7,23 @@
 //   STEREODET_THROW_IO() << "...";  STEREODET_THROW_ARG() << "...";
 //       throw unconditionally.
 //
-// The message is assembled with operator<< and the exception is thrown when the full expression ends,
-// so the streamed operands are evaluated only when the check fails. Every message is prefixed with the
-// failed condition; the source location is appended for developers.
+//   STEREODET_CHECK_GE(calibration_bins, 1) << "(--calibration-bins)";
+//       comparison checks (_EQ, _NE, _LT, _LE, _GT, _GE, and _IO_ variants) that describe
+//       themselves: "calibration_bins = 0, must be >= 1 (--calibration-bins)". Each operand is
+//       evaluated once.
+//
+// The message is assembled with operator<< and the exception is thrown when the full expression
+// ends, so the streamed operands are evaluated only when the check fails. The source location and
+// the failed condition are appended for developers. If evaluating a streamed operand itself throws,
+// that exception propagates and the check's own is dropped (never std::terminate).
 #ifndef STEREODET_UTIL_CHECK_H_
 #define STEREODET_UTIL_CHECK_H_
 
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace stereodet {
 
@@ -47,7 +55,8 @@ class CheckFailure {
   CheckFailure(ErrorKind kind, const char* condition, const char* file, int line);
   CheckFailure(const CheckFailure&) = delete;
   CheckFailure& operator=(const CheckFailure&) = delete;
-  [[noreturn]] ~CheckFailure() noexcept(false);
+  // Throws, unless an exception thrown while the message was being built is already in flight.
+  ~CheckFailure() noexcept(false);
 
   template <typename T>
   CheckFailure& operator<<(const T& value) {
@@ -60,8 +69,24 @@ class CheckFailure {
   const char* condition_;
   const char* file_;
   int line_;
+  int uncaught_at_start_;
   std::ostringstream stream_;
 };
+
+// The message of a failed comparison check, or nothing when `holds`: "A = 0, must be >= 1", or
+// "A = 0, must be >= B (3)" where B is not a literal.
+template <typename T, typename U>
+std::optional<std::string> CheckOpMessage(bool holds, const T& a, const U& b, const char* text_a,
+                                          const char* op, const char* text_b) {
+  if (holds) return std::nullopt;
+  std::ostringstream os;
+  os << text_a << " = " << a << ", must be " << op << ' ';
+  std::ostringstream b_value;
+  b_value << b;
+  os << text_b;
+  if (b_value.str() != text_b) os << " (" << b_value.str() << ")";
+  return os.str();
+}
 
 // Lets the macros be used as a statement followed by `<< ...` without dangling-else problems.
 struct Voidify {
@@ -84,5 +109,28 @@ struct Voidify {
   STEREODET_INTERNAL_CHECK(::stereodet::internal::ErrorKind::kInvalidArgument, false)
 #define STEREODET_THROW_IO() \
   STEREODET_INTERNAL_CHECK(::stereodet::internal::ErrorKind::kRuntime, false)
+
+// A for statement that runs its body (the throwing CheckFailure) once when the comparison fails, so
+// `<< ...` can follow and the operands are evaluated once.
+#define STEREODET_INTERNAL_CHECK_OP(kind, op, a, b)                                   \
+  for (std::optional<std::string> stereodet_check_op_message_ =                       \
+           [&](const auto&x, const auto&y) {                                          \
+             return ::stereodet::internal::CheckOpMessage(x op y, x, y, #a, #op, #b); \
+           }((a), (b));                                                               \
+       stereodet_check_op_message_.has_value(); stereodet_check_op_message_.reset())  \
+  ::stereodet::internal::CheckFailure((kind), #a " " #op " " #b, __FILE__, __LINE__)  \
+      << *stereodet_check_op_message_
+
+#define STEREODET_INTERNAL_ARG ::stereodet::internal::ErrorKind::kInvalidArgument
+#define STEREODET_INTERNAL_IO ::stereodet::internal::ErrorKind::kRuntime
+#define STEREODET_CHECK_EQ(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_ARG, ==, a, b)
+#define STEREODET_CHECK_NE(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_ARG, !=, a, b)
+#define STEREODET_CHECK_LT(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_ARG, <, a, b)
+#define STEREODET_CHECK_LE(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_ARG, <=, a, b)
+#define STEREODET_CHECK_GT(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_ARG, >, a, b)
+#define STEREODET_CHECK_GE(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_ARG, >=, a, b)
+#define STEREODET_CHECK_IO_EQ(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_IO, ==, a, b)
+#define STEREODET_CHECK_IO_LE(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_IO, <=, a, b)
+#define STEREODET_CHECK_IO_GE(a, b) STEREODET_INTERNAL_CHECK_OP(STEREODET_INTERNAL_IO, >=, a, b)
 
 #endif  // STEREODET_UTIL_CHECK_H_

@@ -57,6 +57,82 @@ TEST(CheckTest, WorksAsTheBodyOfAnIfWithoutBraces) {
   EXPECT_TRUE(reached_else);
 }
 
+// A streamed operand whose own check fails: its exception propagates (before the guard in
+// ~CheckFailure this was std::terminate, exit 134).
+std::string Describe(int value) {
+  STEREODET_CHECK(value >= 0) << "cannot describe " << value;
+  return std::to_string(value);
+}
+
+TEST(CheckTest, AFailingCheckInsideTheMessagePropagatesInsteadOfAborting) {
+  try {
+    STEREODET_CHECK_IO(false) << "outer: " << Describe(-3);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {  // the inner check's kind, not the outer's
+    EXPECT_THAT(e.what(), HasSubstr("cannot describe -3"));
+    EXPECT_THAT(e.what(), ::testing::Not(HasSubstr("outer")));
+  }
+}
+
+TEST(CheckTest, ChecksInsideAnUnwindingDestructorStillThrow) {
+  // A check that starts while another exception is in flight (here in a destructor during
+  // unwinding, caught there) still throws its own.
+  struct Cleanup {
+    bool* caught;
+    ~Cleanup() {
+      try {
+        STEREODET_CHECK(false) << "inner";
+      } catch (const std::invalid_argument&) {
+        *caught = true;
+      }
+    }
+  };
+  bool caught = false;
+  try {
+    Cleanup c{&caught};
+    throw std::runtime_error("outer");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_TRUE(caught);
+}
+
+TEST(CheckTest, ComparisonChecksDescribeThemselves) {
+  const int calibration_bins = 0;
+  try {
+    STEREODET_CHECK_GE(calibration_bins, 1) << " (--calibration-bins)";
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("calibration_bins = 0, must be >= 1 (--calibration-bins)"));
+    EXPECT_THAT(e.what(), HasSubstr("calibration_bins >= 1"));
+  }
+  const double lower = 5.0, upper = 3.5;
+  try {
+    STEREODET_CHECK_LT(lower, upper);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("lower = 5, must be < upper (3.5)"));
+  }
+  EXPECT_THROW(STEREODET_CHECK_IO_EQ(2, 3), std::runtime_error);
+  EXPECT_NO_THROW(STEREODET_CHECK_EQ(2, 2));
+  EXPECT_NO_THROW(STEREODET_CHECK_NE(2, 3) << "never built");
+  EXPECT_THROW(STEREODET_CHECK_LE(4, 3), std::invalid_argument);
+  EXPECT_THROW(STEREODET_CHECK_GT(3, 3), std::invalid_argument);
+}
+
+TEST(CheckTest, ComparisonChecksEvaluateEachOperandOnce) {
+  int evaluations = 0;
+  EXPECT_NO_THROW(STEREODET_CHECK_GE(CountEvaluations(&evaluations), 1));
+  EXPECT_EQ(evaluations, 1);
+  EXPECT_THROW(STEREODET_CHECK_LT(CountEvaluations(&evaluations), 0), std::invalid_argument);
+  EXPECT_EQ(evaluations, 2);
+  bool reached_else = false;
+  if (false)
+    STEREODET_CHECK_EQ(1, 2) << "never";
+  else
+    reached_else = true;
+  EXPECT_TRUE(reached_else);
+}
+
 TEST(ParseErrorTest, NamesFileLineAndField) {
   const ParseError error("label_2/000001.txt", 3, "dimensions.h", "negative value -1.5");
   EXPECT_STREQ(error.what(), "label_2/000001.txt:3: field dimensions.h: negative value -1.5");
