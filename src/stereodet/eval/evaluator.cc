@@ -428,6 +428,23 @@ void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool 
   }
 }
 
+ScoreSummary SummarizeScores(const std::vector<EvalFrame>& frames) {
+  ScoreSummary s;
+  s.min_score = std::numeric_limits<double>::infinity();
+  s.max_score = -std::numeric_limits<double>::infinity();
+  for (const EvalFrame& f : frames) {
+    for (const Object& d : f.detections) {
+      const double score = d.score.value_or(0.0);
+      ++s.num_scores;
+      s.num_outside_unit += score < 0 || score > 1 ? 1 : 0;
+      s.min_score = std::min(s.min_score, score);
+      s.max_score = std::max(s.max_score, score);
+    }
+  }
+  if (s.num_scores == 0) s.min_score = s.max_score = kNaN;
+  return s;
+}
+
 }  // namespace
 
 const ClassResult* EvalResult::Find(const std::string& class_name, OverlapKind metric,
@@ -458,6 +475,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   result.aos_computed = options.compute_aos && AllAlphasValid(frames);
   const int threads = options.num_threads;
   const double t_op = options.score_threshold;
+  result.scores = SummarizeScores(frames);
+  result.probability_metrics =
+      options.score_transform != ScoreTransform::kNone || result.scores.num_outside_unit == 0;
 
   std::vector<EvalFrame> struck;
   if (!options.filter.empty()) struck = StrikeFailing(frames, options.filter.conditions, threads);
@@ -509,10 +529,13 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
         r.at_threshold = CountAll(assocs, t_op);
         ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
-                                    options.max_distance_m);
-        for (size_t f = 0; f < frames.size(); ++f) acc.Add(frames[f], cfs[f], assocs[f]);
+                                    options.max_distance_m, options.score_transform);
+        for (size_t f = 0; f < frames.size(); ++f) {
+          acc.Add(frames[f], cfs[f], assocs[f], difficulty);
+        }
         r.brier = acc.Brier();
         r.calibration = acc.Calibration();
+        if (!result.probability_metrics) LeaveOutProbabilityMetrics(&r.brier, &r.calibration);
         r.localization = acc.Localization();
 
         if (!options.filter.empty()) {
