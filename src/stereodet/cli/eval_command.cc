@@ -1,29 +1,31 @@
 // `stereodet eval`: KITTI-compatible AP and the corrected safety metrics.
 //   stereodet eval --gt DIR --det DIR [--split FILE] [--classes ..] [--metrics 2d,bev,3d]
-//                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable] [--out DIR]
-//   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5 [--out DIR]
-//   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE] [--disparity-error-px 1]
+//                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable]
+//                  [--overlaps strict,loose] [--score-transform none|sigmoid] [--lenient]
+//                  [--out DIR]
+//   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5
+//                  [--out DIR]
+//   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
+//                  [--disparity-error-px 1]
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <set>
 #include <string>
 #include <vector>
 
-#include <fmt/format.h>
-
 #include "stereodet/cli/commands.h"
 #include "stereodet/eval/compare.h"
+#include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
-#include "stereodet/kitti/dataset.h"
-#include "stereodet/kitti/label_io.h"
 #include "stereodet/report/eval_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
-#include "stereodet/util/parallel.h"
 #include "stereodet/util/strings.h"
 
 #ifndef STEREODET_VERSION
@@ -45,7 +47,10 @@ struct EvalArgs {
   std::string filter;
   std::string filter_mode = "stable";
   double score_threshold = -std::numeric_limits<double>::infinity();
+  std::string score_transform = ScoreTransformName(EvalOptions().score_transform);
   bool loose = false;
+  std::string overlaps;  // empty: strict, or loose with --loose
+  bool lenient = false;
   bool all_classes = false;
   int calibration_bins = 10;
   double distance_bin_m = 5.0;
@@ -71,7 +76,16 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--filter-mode", a->filter_mode, "naive | stable")->capture_default_str();
   cmd->add_option("--score-threshold", a->score_threshold,
                   "operating point for TP/FP/FN, Brier, calibration, filters (default: all)");
-  cmd->add_flag("--loose", a->loose, "KITTI's loose BEV/3D thresholds (0.5/0.25/0.25)");
+  cmd->add_option("--score-transform", a->score_transform,
+                  "none | sigmoid (logit scores): applied for Brier and ECE only")
+      ->capture_default_str();
+  cmd->add_option("--overlaps", a->overlaps,
+                  "KITTI overlap sets, e.g. strict,loose (eval only; sweep/compare take one) "
+                  "(default strict)");
+  cmd->add_flag("--loose", a->loose,
+                "KITTI's loose BEV/3D thresholds (0.5/0.25/0.25): --overlaps loose");
+  cmd->add_flag("--lenient", a->lenient,
+                "skip malformed label/detection lines, count and list them");
   cmd->add_flag("--all-classes", a->all_classes,
                 "evaluate classes without any detection too (the devkit skips them)");
   cmd->add_option("--calibration-bins", a->calibration_bins, "reliability bins")->capture_default_str();
@@ -89,12 +103,33 @@ std::vector<std::string> SplitList(const std::string& text) {
   return out;
 }
 
-EvalOptions MakeOptions(const EvalArgs& a) {
+// The overlap sets of --overlaps (and --loose, its alias for loose), in the order given.
+std::vector<OverlapSet> OverlapSets(const EvalArgs& a) {
+  std::vector<OverlapSet> sets;
+  for (const std::string& name : SplitList(a.overlaps)) {
+    const auto set = ParseOverlapSet(name);
+    STEREODET_CHECK(set.has_value()) << "--overlaps: unknown '" << name << "' (strict, loose)";
+    STEREODET_CHECK(std::find(sets.begin(), sets.end(), *set) == sets.end())
+        << "--overlaps: '" << name << "' given twice";
+    sets.push_back(*set);
+  }
+  if (a.loose) {
+    STEREODET_CHECK(sets.empty() || (sets.size() == 1 && sets[0] == OverlapSet::kLoose))
+        << "--loose is --overlaps loose; give one of them";
+    sets = {OverlapSet::kLoose};
+  }
+  if (sets.empty()) sets.push_back(OverlapSet::kStrict);
+  return sets;
+}
+
+EvalOptions MakeOptions(const EvalArgs& a, OverlapSet overlaps) {
   STEREODET_CHECK(!a.gt.empty()) << "--gt is required";
   STEREODET_CHECK(!a.det.empty()) << "--det is required";
   EvalOptions o;
   o.classes.clear();
-  for (const std::string& name : SplitList(a.classes)) o.classes.push_back(KittiClassSpec(name, a.loose));
+  for (const std::string& name : SplitList(a.classes)) {
+    o.classes.push_back(KittiClassSpec(name, overlaps == OverlapSet::kLoose));
+  }
   o.metrics.clear();
   for (const std::string& m : SplitList(a.metrics)) {
     const auto kind = ParseOverlapKind(m);
@@ -116,6 +151,10 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   o.filter.mode = *mode;
   if (!a.filter.empty()) o.filter.conditions = ParseFilterConditions(a.filter);
   o.score_threshold = a.score_threshold;
+  const auto transform = ParseScoreTransform(a.score_transform);
+  STEREODET_CHECK(transform.has_value())
+      << "--score-transform: unknown '" << a.score_transform << "' (none, sigmoid)";
+  o.score_transform = *transform;
   o.require_detections = !a.all_classes;
   o.calibration_bins = a.calibration_bins;
   o.distance_bin_m = a.distance_bin_m;
@@ -125,44 +164,11 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   return o;
 }
 
-fs::path LabelDir(const fs::path& p) {
-  if (fs::is_directory(p / "training" / "label_2")) return p / "training" / "label_2";
-  if (fs::is_directory(p / "label_2")) return p / "label_2";
-  STEREODET_CHECK_IO(fs::is_directory(p)) << "--gt: " << p << " is not a folder";
-  return p;
-}
-
-fs::path DetectionDir(const fs::path& p) {
-  if (fs::is_directory(p / "data")) return p / "data";
-  STEREODET_CHECK_IO(fs::is_directory(p)) << "--det: " << p << " is not a folder";
-  return p;
-}
-
-std::set<std::string> TxtStems(const fs::path& dir) {
-  std::set<std::string> stems;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (e.is_regular_file() && e.path().extension() == ".txt" && name[0] != '.') {
-      stems.insert(e.path().stem().string());
-    }
-  }
-  return stems;
-}
-
-std::vector<std::string> ReadIds(const fs::path& gt_root, const std::string& split) {
-  if (fs::is_directory(gt_root / "training")) return KittiDataset(gt_root).ReadSplit(split);
-  std::vector<std::string> ids;
-  const std::string text = ReadFile(split);
-  int line_no = 0;
-  for (std::string_view line : Split(text, '\n')) {
-    ++line_no;
-    line = Trim(line);
-    if (line.empty()) continue;
-    const bool digits = std::all_of(line.begin(), line.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (!digits) throw ParseError(split, line_no, "frame id", "'" + std::string(line) + "' is not a frame id");
-    ids.emplace_back(line);
-  }
-  return ids;
+// One overlap set for eval sweep and eval compare.
+EvalOptions MakeSingleOptions(const EvalArgs& a) {
+  const std::vector<OverlapSet> sets = OverlapSets(a);
+  STEREODET_CHECK(sets.size() == 1) << "--overlaps: this command takes one overlap set";
+  return MakeOptions(a, sets[0]);
 }
 
 struct LoadedInput {
@@ -170,63 +176,51 @@ struct LoadedInput {
   EvalRunInfo info;
 };
 
-LoadedInput LoadInput(const std::string& gt, const std::string& det, const std::string& split,
-                      int threads) {
+// LoadEvalFrames, its notices on `notices` (at most kMaxListed skipped lines listed; all of them go
+// to results.json).
+LoadedInput LoadInput(const EvalArgs& a, const std::string& det, std::FILE* notices = stdout) {
+  EvalInputOptions options;
+  options.gt = a.gt;
+  options.det = det;
+  options.split = a.split;
+  options.lenient = a.lenient;
+  options.num_threads = a.threads;
+  EvalInput input = LoadEvalFrames(options);
+  for (const std::string& notice : input.Notices()) fmt::print(notices, "{}\n", notice);
+  constexpr size_t kMaxListed = 10;
+  for (size_t i = 0; i < std::min(kMaxListed, input.skipped_lines.size()); ++i) {
+    fmt::print(notices, "  {}\n", input.skipped_lines[i]);
+  }
+  if (input.skipped_lines.size() > kMaxListed) {
+    fmt::print(notices, "  ... and {} more (all in results.json with --out)\n",
+               input.skipped_lines.size() - kMaxListed);
+  }
   LoadedInput in;
+  in.frames = std::move(input.frames);
   in.info.tool_version = STEREODET_VERSION;
-  in.info.gt_path = gt;
+  in.info.gt_path = a.gt;
   in.info.det_path = det;
-  in.info.split_path = split;
-  const fs::path label_dir = LabelDir(gt);
-  const fs::path det_dir = DetectionDir(det);
-  const std::set<std::string> label_stems = TxtStems(label_dir);
-  const std::set<std::string> det_stems = TxtStems(det_dir);
-  for (const std::string& s : det_stems) {
-    STEREODET_CHECK_IO(label_stems.count(s))
-        << "detection file " << (det_dir / (s + ".txt")).string() << " has no label file in "
-        << label_dir.string();
-  }
-  std::vector<std::string> ids;
-  if (split.empty()) {
-    ids.assign(label_stems.begin(), label_stems.end());
-  } else {
-    ids = ReadIds(gt, split);
-    for (const std::string& id : ids) {
-      STEREODET_CHECK_IO(label_stems.count(id))
-          << "split " << split << ": frame " << id << " has no label file in " << label_dir.string();
-    }
-  }
-  STEREODET_CHECK_IO(!ids.empty()) << "no frame to evaluate in " << label_dir.string();
-  in.frames.resize(ids.size());
-  std::vector<uint8_t> missing(ids.size(), 0);
-  ParallelFor(ids.size(), [&](size_t i) {
-    EvalFrame& f = in.frames[i];
-    f.id = ids[i];
-    f.labels = ReadObjects(label_dir / (ids[i] + ".txt"), {ObjectFileKind::kLabel, false}).objects;
-    if (det_stems.count(ids[i])) {
-      f.detections = ReadObjects(det_dir / (ids[i] + ".txt"), {ObjectFileKind::kDetection, false}).objects;
-    } else {
-      missing[i] = 1;
-    }
-  }, threads);
-  for (size_t i = 0; i < ids.size(); ++i) {
-    if (missing[i]) in.info.frames_without_detections.push_back(ids[i]);
-  }
+  in.info.split_path = a.split;
+  in.info.frames_without_detections = std::move(input.frames_without_detections);
+  in.info.lenient = a.lenient;
+  in.info.ignored_files = std::move(input.ignored_files);
+  in.info.skipped_lines = std::move(input.skipped_lines);
   return in;
 }
 
 void RunEval(const EvalArgs& a) {
-  const EvalOptions options = MakeOptions(a);
-  LoadedInput in = LoadInput(a.gt, a.det, a.split, a.threads);
-  const EvalResult result = Evaluate(in.frames, options);
-  fmt::print("{}", FormatEvalTable(result, options));
-  if (!in.info.frames_without_detections.empty()) {
-    fmt::print("frames without a detection file (no detections): {}\n",
-               in.info.frames_without_detections.size());
+  std::vector<EvalRun> runs;
+  for (const OverlapSet set : OverlapSets(a)) runs.push_back(EvalRun{MakeOptions(a, set), {}});
+  LoadedInput in = LoadInput(a, a.det);
+  double seconds = 0.0;
+  for (EvalRun& run : runs) {
+    run.result = Evaluate(in.frames, run.options);
+    seconds += run.result.seconds;
   }
-  fmt::print("evaluated in {:.3f} s\n", result.seconds);
+  fmt::print("{}", FormatEvalTable(runs));
+  fmt::print("evaluated in {:.3f} s\n", seconds);
   if (!a.out.empty()) {
-    const auto written = WriteEvalReport(a.out, result, options, in.info);
+    const auto written = WriteEvalReport(a.out, runs, in.info);
     fmt::print("wrote {} files to {}\n", written.size(), a.out);
   }
 }
@@ -240,10 +234,11 @@ struct SweepArgs {
 void RunSweep(const EvalArgs& a, const SweepArgs& s) {
   EvalArgs fixed = a;
   fixed.filter = s.where;
-  const EvalOptions options = MakeOptions(fixed);
+  const EvalOptions options = MakeSingleOptions(fixed);
   const auto bound = ParseFilterBound(s.bound);
   STEREODET_CHECK(bound.has_value()) << "--filter: unknown '" << s.bound << "' (e.g. min-area)";
-  LoadedInput in = LoadInput(a.gt, a.det, a.split, a.threads);
+  // The CSV may go to stdout: the notices go to stderr then.
+  LoadedInput in = LoadInput(a, a.det, a.out.empty() ? stderr : stdout);
   const std::vector<SweepRow> rows = FilterSweep(in.frames, options, *bound, s.from, s.to, s.step);
   const std::string csv = FormatSweepCsv(rows, *bound);
   if (a.out.empty()) {
@@ -261,9 +256,9 @@ struct CompareArgs {
 };
 
 void RunCompare(const EvalArgs& a, const CompareArgs& c) {
-  EvalOptions options = MakeOptions(a);
-  LoadedInput in_a = LoadInput(a.gt, a.det, a.split, a.threads);
-  LoadedInput in_b = LoadInput(a.gt, c.det_b, a.split, a.threads);
+  EvalOptions options = MakeSingleOptions(a);
+  LoadedInput in_a = LoadInput(a, a.det);
+  LoadedInput in_b = LoadInput(a, c.det_b);
   const EvalResult ra = Evaluate(in_a.frames, options);
   const EvalResult rb = Evaluate(in_b.frames, options);
   const Calibration calib = c.calib.empty() ? KittiLikeCalibration() : ReadCalibration(c.calib);
