@@ -1,33 +1,34 @@
 // `stereodet eval`: KITTI-compatible AP and the corrected safety metrics.
 //   stereodet eval --gt DIR --det DIR [--split FILE] [--classes ..] [--metrics 2d,bev,3d]
-//                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable] [--out DIR]
-//   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5 [--out DIR]
-//   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE] [--disparity-error-px 1]
+//                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable]
+//                  [--overlaps strict,loose] [--score-transform none|sigmoid] [--lenient]
+//                  [--out DIR [--records]]
+//   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5
+//                  [--out DIR]
+//   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
+//                  [--disparity-error-px 1]
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
 #include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
 #include "stereodet/cli/commands.h"
 #include "stereodet/eval/compare.h"
+#include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
-#include "stereodet/kitti/dataset.h"
-#include "stereodet/kitti/label_io.h"
 #include "stereodet/report/eval_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
-#include "stereodet/util/hash.h"
-#include "stereodet/util/parallel.h"
 #include "stereodet/util/strings.h"
 
 #ifndef STEREODET_VERSION
@@ -49,7 +50,10 @@ struct EvalArgs {
   std::string filter;
   std::string filter_mode = "stable";
   double score_threshold = -std::numeric_limits<double>::infinity();
+  std::string score_transform = ScoreTransformName(EvalOptions().score_transform);
   bool loose = false;
+  std::string overlaps;  // empty: strict, or loose with --loose
+  bool lenient = false;
   bool all_classes = false;
   int calibration_bins = 10;
   double distance_bin_m = 5.0;
@@ -76,7 +80,16 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--filter-mode", a->filter_mode, "naive | stable")->capture_default_str();
   cmd->add_option("--score-threshold", a->score_threshold,
                   "operating point for TP/FP/FN, Brier, calibration, filters (default: all)");
-  cmd->add_flag("--loose", a->loose, "KITTI's loose BEV/3D thresholds (0.5/0.25/0.25)");
+  cmd->add_option("--score-transform", a->score_transform,
+                  "none | sigmoid (logit scores): applied for Brier and ECE only")
+      ->capture_default_str();
+  cmd->add_option("--overlaps", a->overlaps,
+                  "KITTI overlap sets, e.g. strict,loose (eval only; sweep/compare take one) "
+                  "(default strict)");
+  cmd->add_flag("--loose", a->loose,
+                "KITTI's loose BEV/3D thresholds (0.5/0.25/0.25): --overlaps loose");
+  cmd->add_flag("--lenient", a->lenient,
+                "skip malformed label/detection lines, count and list them");
   cmd->add_flag("--all-classes", a->all_classes,
                 "evaluate classes without any detection too (the devkit skips them)");
   cmd->add_option("--calibration-bins", a->calibration_bins, "reliability bins")->capture_default_str();
@@ -94,12 +107,33 @@ std::vector<std::string> SplitList(const std::string& text) {
   return out;
 }
 
-EvalOptions MakeOptions(const EvalArgs& a) {
+// The overlap sets of --overlaps (and --loose, its alias for loose), in the order given.
+std::vector<OverlapSet> OverlapSets(const EvalArgs& a) {
+  std::vector<OverlapSet> sets;
+  for (const std::string& name : SplitList(a.overlaps)) {
+    const auto set = ParseOverlapSet(name);
+    STEREODET_CHECK(set.has_value()) << "--overlaps: unknown '" << name << "' (strict, loose)";
+    STEREODET_CHECK(std::find(sets.begin(), sets.end(), *set) == sets.end())
+        << "--overlaps: '" << name << "' given twice";
+    sets.push_back(*set);
+  }
+  if (a.loose) {
+    STEREODET_CHECK(sets.empty() || (sets.size() == 1 && sets[0] == OverlapSet::kLoose))
+        << "--loose is --overlaps loose; give one of them";
+    sets = {OverlapSet::kLoose};
+  }
+  if (sets.empty()) sets.push_back(OverlapSet::kStrict);
+  return sets;
+}
+
+EvalOptions MakeOptions(const EvalArgs& a, OverlapSet overlaps) {
   STEREODET_CHECK(!a.gt.empty()) << "--gt is required";
   STEREODET_CHECK(!a.det.empty()) << "--det is required";
   EvalOptions o;
   o.classes.clear();
-  for (const std::string& name : SplitList(a.classes)) o.classes.push_back(KittiClassSpec(name, a.loose));
+  for (const std::string& name : SplitList(a.classes)) {
+    o.classes.push_back(KittiClassSpec(name, overlaps == OverlapSet::kLoose));
+  }
   o.metrics.clear();
   for (const std::string& m : SplitList(a.metrics)) {
     const auto kind = ParseOverlapKind(m);
@@ -121,6 +155,10 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   o.filter.mode = *mode;
   if (!a.filter.empty()) o.filter.conditions = ParseFilterConditions(a.filter);
   o.score_threshold = a.score_threshold;
+  const auto transform = ParseScoreTransform(a.score_transform);
+  STEREODET_CHECK(transform.has_value())
+      << "--score-transform: unknown '" << a.score_transform << "' (none, sigmoid)";
+  o.score_transform = *transform;
   o.require_detections = !a.all_classes;
   o.calibration_bins = a.calibration_bins;
   o.distance_bin_m = a.distance_bin_m;
@@ -130,44 +168,11 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   return o;
 }
 
-fs::path LabelDir(const fs::path& p) {
-  if (fs::is_directory(p / "training" / "label_2")) return p / "training" / "label_2";
-  if (fs::is_directory(p / "label_2")) return p / "label_2";
-  STEREODET_CHECK_IO(fs::is_directory(p)) << "--gt: " << p << " is not a folder";
-  return p;
-}
-
-fs::path DetectionDir(const fs::path& p) {
-  if (fs::is_directory(p / "data")) return p / "data";
-  STEREODET_CHECK_IO(fs::is_directory(p)) << "--det: " << p << " is not a folder";
-  return p;
-}
-
-std::set<std::string> TxtStems(const fs::path& dir) {
-  std::set<std::string> stems;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (e.is_regular_file() && e.path().extension() == ".txt" && name[0] != '.') {
-      stems.insert(e.path().stem().string());
-    }
-  }
-  return stems;
-}
-
-std::vector<std::string> ReadIds(const fs::path& gt_root, const std::string& split) {
-  if (fs::is_directory(gt_root / "training")) return KittiDataset(gt_root).ReadSplit(split);
-  std::vector<std::string> ids;
-  const std::string text = ReadFile(split);
-  int line_no = 0;
-  for (std::string_view line : Split(text, '\n')) {
-    ++line_no;
-    line = Trim(line);
-    if (line.empty()) continue;
-    const bool digits = std::all_of(line.begin(), line.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (!digits) throw ParseError(split, line_no, "frame id", "'" + std::string(line) + "' is not a frame id");
-    ids.emplace_back(line);
-  }
-  return ids;
+// One overlap set for eval sweep and eval compare.
+EvalOptions MakeSingleOptions(const EvalArgs& a) {
+  const std::vector<OverlapSet> sets = OverlapSets(a);
+  STEREODET_CHECK(sets.size() == 1) << "--overlaps: this command takes one overlap set";
+  return MakeOptions(a, sets[0]);
 }
 
 struct LoadedInput {
@@ -175,64 +180,36 @@ struct LoadedInput {
   EvalRunInfo info;
 };
 
-LoadedInput LoadInput(const std::string& gt, const std::string& det, const std::string& split,
-                      int threads) {
+// LoadEvalFrames, its notices on `notices` (at most kMaxListed skipped lines listed; all of them go
+// to results.json).
+LoadedInput LoadInput(const EvalArgs& a, const std::string& det, std::FILE* notices = stdout) {
+  EvalInputOptions options;
+  options.gt = a.gt;
+  options.det = det;
+  options.split = a.split;
+  options.lenient = a.lenient;
+  options.num_threads = a.threads;
+  EvalInput input = LoadEvalFrames(options);
+  for (const std::string& notice : input.Notices()) fmt::print(notices, "{}\n", notice);
+  constexpr size_t kMaxListed = 10;
+  for (size_t i = 0; i < std::min(kMaxListed, input.skipped_lines.size()); ++i) {
+    fmt::print(notices, "  {}\n", input.skipped_lines[i]);
+  }
+  if (input.skipped_lines.size() > kMaxListed) {
+    fmt::print(notices, "  ... and {} more (all in results.json with --out)\n",
+               input.skipped_lines.size() - kMaxListed);
+  }
   LoadedInput in;
+  in.frames = std::move(input.frames);
   in.info.tool_version = STEREODET_VERSION;
-  in.info.gt_path = gt;
+  in.info.gt_path = a.gt;
   in.info.det_path = det;
-  in.info.split_path = split;
-  const fs::path label_dir = LabelDir(gt);
-  const fs::path det_dir = DetectionDir(det);
-  const std::set<std::string> label_stems = TxtStems(label_dir);
-  const std::set<std::string> det_stems = TxtStems(det_dir);
-  for (const std::string& s : det_stems) {
-    STEREODET_CHECK_IO(label_stems.count(s))
-        << "detection file " << (det_dir / (s + ".txt")).string() << " has no label file in "
-        << label_dir.string();
-  }
-  std::vector<std::string> ids;
-  if (split.empty()) {
-    ids.assign(label_stems.begin(), label_stems.end());
-  } else {
-    ids = ReadIds(gt, split);
-    for (const std::string& id : ids) {
-      STEREODET_CHECK_IO(label_stems.count(id))
-          << "split " << split << ": frame " << id << " has no label file in " << label_dir.string();
-    }
-  }
-  STEREODET_CHECK_IO(!ids.empty()) << "no frame to evaluate in " << label_dir.string();
-  in.frames.resize(ids.size());
-  std::vector<uint8_t> missing(ids.size(), 0);
-  std::vector<uint64_t> frame_hash(ids.size(), 0);
-  ParallelFor(ids.size(), [&](size_t i) {
-    EvalFrame& f = in.frames[i];
-    f.id = ids[i];
-    const fs::path label_path = label_dir / (ids[i] + ".txt");
-    const std::string label_text = ReadFile(label_path);
-    f.labels =
-        ParseObjects(label_text, label_path.string(), {ObjectFileKind::kLabel, false}).objects;
-    uint64_t hash = Fnv1a64(label_text, Fnv1a64(std::string_view("\0", 1), Fnv1a64(ids[i])));
-    hash = Fnv1a64(std::string_view("\0", 1), hash);
-    if (det_stems.count(ids[i])) {
-      const fs::path det_path = det_dir / (ids[i] + ".txt");
-      const std::string det_text = ReadFile(det_path);
-      f.detections =
-          ParseObjects(det_text, det_path.string(), {ObjectFileKind::kDetection, false}).objects;
-      hash = Fnv1a64(det_text, hash);
-    } else {
-      missing[i] = 1;
-    }
-    frame_hash[i] = hash;
-  }, threads);
-  uint64_t input_hash = kFnv1a64Offset;
-  for (size_t i = 0; i < ids.size(); ++i) {
-    if (missing[i]) in.info.frames_without_detections.push_back(ids[i]);
-    char bytes[8];
-    for (int b = 0; b < 8; ++b) bytes[b] = static_cast<char>(frame_hash[i] >> (8 * b) & 0xff);
-    input_hash = Fnv1a64(std::string_view(bytes, 8), input_hash);
-  }
-  in.info.input_hash = HashHex(input_hash);
+  in.info.split_path = a.split;
+  in.info.frames_without_detections = std::move(input.frames_without_detections);
+  in.info.lenient = a.lenient;
+  in.info.ignored_files = std::move(input.ignored_files);
+  in.info.skipped_lines = std::move(input.skipped_lines);
+  in.info.input_hash = input.input_hash;
   return in;
 }
 
@@ -259,28 +236,37 @@ std::string ProcessCommandLine() {
 }
 
 void RunEval(const EvalArgs& a) {
-  EvalOptions options = MakeOptions(a);
-  options.keep_records = a.records;
   STEREODET_CHECK(!a.records || !a.out.empty())
       << "--records needs --out (it writes OUT/matches.csv)";
+  std::vector<EvalRun> runs;
+  for (const OverlapSet set : OverlapSets(a)) {
+    runs.push_back(EvalRun{MakeOptions(a, set), {}});
+    runs.back().options.keep_records = a.records;
+  }
   // Refuse a folder of something else before the work, not after it.
   std::optional<StagedFolder> out;
   if (!a.out.empty()) out.emplace(a.out, "results.json");
-  LoadedInput in = LoadInput(a.gt, a.det, a.split, a.threads);
+  LoadedInput in = LoadInput(a, a.det);
   in.info.command_line = ProcessCommandLine();
-  const EvalResult result = Evaluate(in.frames, options);
-  fmt::print("{}", FormatEvalTable(result, options));
-  if (!in.info.frames_without_detections.empty()) {
-    fmt::print("frames without a detection file (no detections): {}\n",
-               in.info.frames_without_detections.size());
+  double seconds = 0.0;
+  for (EvalRun& run : runs) {
+    run.result = Evaluate(in.frames, run.options);
+    seconds += run.result.seconds;
   }
-  fmt::print("evaluated in {:.3f} s\n", result.seconds);
+  fmt::print("{}", FormatEvalTable(runs));
+  fmt::print("evaluated in {:.3f} s\n", seconds);
   if (out) {
-    size_t num_files = WriteEvalReport(out->path(), result, options, in.info).size();
+    size_t num_files = WriteEvalReport(out->path(), runs, in.info).size();
     if (a.records) {
-      const int64_t rows = WriteMatchRecordsCsv(out->path() / "matches.csv", result, in.frames);
-      ++num_files;
-      fmt::print("per-detection records: {} rows in matches.csv\n", rows);
+      for (const EvalRun& run : runs) {
+        // One file per overlap set when there are several, named as the curve files are.
+        const std::string name =
+            runs.size() == 1 ? std::string("matches.csv")
+                             : fmt::format("matches_{}.csv", DescribeOverlaps(run.options.classes));
+        const int64_t rows = WriteMatchRecordsCsv(out->path() / name, run.result, in.frames);
+        ++num_files;
+        fmt::print("per-detection records: {} rows in {}\n", rows, name);
+      }
     }
     out->Commit();
     fmt::print("wrote {} files to {}\n", num_files, a.out);
@@ -296,10 +282,11 @@ struct SweepArgs {
 void RunSweep(const EvalArgs& a, const SweepArgs& s) {
   EvalArgs fixed = a;
   fixed.filter = s.where;
-  const EvalOptions options = MakeOptions(fixed);
+  const EvalOptions options = MakeSingleOptions(fixed);
   const auto bound = ParseFilterBound(s.bound);
   STEREODET_CHECK(bound.has_value()) << "--filter: unknown '" << s.bound << "' (e.g. min-area)";
-  LoadedInput in = LoadInput(a.gt, a.det, a.split, a.threads);
+  // The CSV may go to stdout: the notices go to stderr then.
+  LoadedInput in = LoadInput(a, a.det, a.out.empty() ? stderr : stdout);
   const std::vector<SweepRow> rows = FilterSweep(in.frames, options, *bound, s.from, s.to, s.step);
   const std::string csv = FormatSweepCsv(rows, *bound);
   if (a.out.empty()) {
@@ -317,9 +304,9 @@ struct CompareArgs {
 };
 
 void RunCompare(const EvalArgs& a, const CompareArgs& c) {
-  EvalOptions options = MakeOptions(a);
-  LoadedInput in_a = LoadInput(a.gt, a.det, a.split, a.threads);
-  LoadedInput in_b = LoadInput(a.gt, c.det_b, a.split, a.threads);
+  EvalOptions options = MakeSingleOptions(a);
+  LoadedInput in_a = LoadInput(a, a.det);
+  LoadedInput in_b = LoadInput(a, c.det_b);
   const EvalResult ra = Evaluate(in_a.frames, options);
   const EvalResult rb = Evaluate(in_b.frames, options);
   const Calibration calib = c.calib.empty() ? KittiLikeCalibration() : ReadCalibration(c.calib);

@@ -64,6 +64,61 @@ ClassSpec KittiClassSpec(const std::string& name, bool loose) {
   return spec;
 }
 
+const char* OverlapSetName(OverlapSet set) {
+  switch (set) {
+    case OverlapSet::kStrict:
+      return "strict";
+    case OverlapSet::kLoose:
+      return "loose";
+  }
+  return "?";
+}
+
+std::optional<OverlapSet> ParseOverlapSet(std::string_view text) {
+  for (OverlapSet s : {OverlapSet::kStrict, OverlapSet::kLoose}) {
+    if (EqualsIgnoreCase(text, OverlapSetName(s))) return s;
+  }
+  return std::nullopt;
+}
+
+std::string DescribeOverlaps(const std::vector<ClassSpec>& classes) {
+  for (const bool loose : {false, true}) {
+    bool all = true;
+    for (const ClassSpec& c : classes) {
+      all &= c.min_overlap == KittiClassSpec(c.name, loose).min_overlap;
+    }
+    if (all) return loose ? "loose" : "strict";
+  }
+  return "custom";
+}
+
+const char* ScoreTransformName(ScoreTransform transform) {
+  switch (transform) {
+    case ScoreTransform::kNone:
+      return "none";
+    case ScoreTransform::kSigmoid:
+      return "sigmoid";
+  }
+  return "?";
+}
+
+std::optional<ScoreTransform> ParseScoreTransform(std::string_view text) {
+  for (ScoreTransform t : {ScoreTransform::kNone, ScoreTransform::kSigmoid}) {
+    if (EqualsIgnoreCase(text, ScoreTransformName(t))) return t;
+  }
+  return std::nullopt;
+}
+
+double ApplyScoreTransform(ScoreTransform transform, double score) {
+  switch (transform) {
+    case ScoreTransform::kNone:
+      return score;
+    case ScoreTransform::kSigmoid:
+      return 1.0 / (1.0 + std::exp(-score));
+  }
+  return score;
+}
+
 void EvalOptions::Check() const {
   STEREODET_CHECK(!classes.empty()) << "no class to evaluate";
   STEREODET_CHECK(!metrics.empty()) << "no overlap kind (2d, bev, 3d) to evaluate";

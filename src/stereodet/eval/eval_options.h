@@ -45,6 +45,24 @@ struct ClassSpec {
 // 2D keeps 0.7 / 0.5 / 0.5. Another name gets no neighbours and 0.5 everywhere.
 ClassSpec KittiClassSpec(const std::string& name, bool loose = false);
 
+// KITTI's two overlap sets (KittiClassSpec's thresholds), as OpenPCDet prints both.
+enum class OverlapSet { kStrict, kLoose };
+const char* OverlapSetName(OverlapSet set);  // "strict", "loose"
+std::optional<OverlapSet> ParseOverlapSet(std::string_view text);
+// "strict" or "loose" when every class has that set's KittiClassSpec thresholds (strict first, for
+// classes where both agree), else "custom".
+std::string DescribeOverlaps(const std::vector<ClassSpec>& classes);
+
+// How scores are turned into probabilities for the Brier scores and calibration (only there: AP,
+// curves and the operating point always use the raw scores, so they do not depend on it).
+enum class ScoreTransform {
+  kNone,     // scores are probabilities already
+  kSigmoid,  // scores are logits: p = 1 / (1 + exp(-s))
+};
+const char* ScoreTransformName(ScoreTransform transform);  // "none", "sigmoid"
+std::optional<ScoreTransform> ParseScoreTransform(std::string_view text);
+double ApplyScoreTransform(ScoreTransform transform, double score);
+
 // Case-insensitive ASCII comparison (strcasecmp).
 bool EqualsIgnoreCase(std::string_view a, std::string_view b);
 
@@ -65,6 +83,10 @@ struct EvalOptions {
   // box of that kind (2D: left >= 0; BEV: x != -1000; 3D: y != -1000). Kept in every matcher so the
   // tables line up; a class that is not evaluated is reported with evaluated = false.
   bool require_detections = true;
+
+  // Brier scores and calibration need probabilities: with kNone and any detection's score outside
+  // [0, 1] they are left out (NaN; EvalResult::probability_metrics false).
+  ScoreTransform score_transform = ScoreTransform::kNone;
 
   // AOS is computed (2D only, as the devkit) unless a detection has alpha == -10 (devkit rule).
   bool compute_aos = true;

@@ -405,8 +405,8 @@ FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames, const std::
 
 // The rows of one frame (see MatchRecord), in the documented order.
 void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame& cf,
-                   const FrameAssociation& a, OverlapKind kind, double threshold,
-                   std::vector<MatchRecord>* out) {
+                   const FrameAssociation& a, OverlapKind kind, Difficulty difficulty,
+                   double threshold, std::vector<MatchRecord>* out) {
   auto pair_overlap = [&](int i, int j) {
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
       if (cf.edge_det[e] == j) return cf.edge_overlap[e];
@@ -421,6 +421,7 @@ void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame
     r.outcome = a.det_outcome[j];
     if (r.outcome == Outcome::kTp) {
       r.label = cf.label_object[a.det_label[j]];
+      r.label_valid = true;
       r.iou = pair_overlap(a.det_label[j], j);
     } else {
       for (int i = 0; i < cf.num_labels(); ++i) {
@@ -436,6 +437,7 @@ void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame
     r.frame = frame_index;
     r.label = cf.label_object[i];
     r.outcome = a.label_outcome[i];
+    r.label_valid = cf.LabelValid(i, difficulty);
     for (int j = 0; j < cf.num_dets(); ++j) {
       if (!cf.det_is_class[j] || cf.det_score[j] < threshold) continue;
       r.iou = std::max(r.iou, KittiOverlap(kind, frame.detections[cf.det_object[j]],
@@ -448,13 +450,13 @@ void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame
 std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
                                       const std::vector<ClassFrame>& cfs,
                                       const std::vector<FrameAssociation>& assocs, OverlapKind kind,
-                                      double threshold, int num_threads) {
+                                      Difficulty difficulty, double threshold, int num_threads) {
   std::vector<std::vector<MatchRecord>> per_frame(frames.size());
   ParallelFor(
       frames.size(),
       [&](size_t f) {
-        AppendRecords(static_cast<int32_t>(f), frames[f], cfs[f], assocs[f], kind, threshold,
-                      &per_frame[f]);
+        AppendRecords(static_cast<int32_t>(f), frames[f], cfs[f], assocs[f], kind, difficulty,
+                      threshold, &per_frame[f]);
       },
       num_threads);
   size_t total = 0;
@@ -490,6 +492,23 @@ void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool 
   }
 }
 
+ScoreSummary SummarizeScores(const std::vector<EvalFrame>& frames) {
+  ScoreSummary s;
+  s.min_score = std::numeric_limits<double>::infinity();
+  s.max_score = -std::numeric_limits<double>::infinity();
+  for (const EvalFrame& f : frames) {
+    for (const Object& d : f.detections) {
+      const double score = d.score.value_or(0.0);
+      ++s.num_scores;
+      s.num_outside_unit += score < 0 || score > 1 ? 1 : 0;
+      s.min_score = std::min(s.min_score, score);
+      s.max_score = std::max(s.max_score, score);
+    }
+  }
+  if (s.num_scores == 0) s.min_score = s.max_score = kNaN;
+  return s;
+}
+
 }  // namespace
 
 const ClassResult* EvalResult::Find(const std::string& class_name, OverlapKind metric,
@@ -520,6 +539,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   result.aos_computed = options.compute_aos && AllAlphasValid(frames);
   const int threads = options.num_threads;
   const double t_op = options.score_threshold;
+  result.scores = SummarizeScores(frames);
+  result.probability_metrics =
+      options.score_transform != ScoreTransform::kNone || result.scores.num_outside_unit == 0;
 
   std::vector<EvalFrame> struck;
   if (!options.filter.empty()) struck = StrikeFailing(frames, options.filter.conditions, threads);
@@ -571,13 +593,16 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
         r.at_threshold = CountAll(assocs, t_op);
         ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
-                                    options.max_distance_m);
-        for (size_t f = 0; f < frames.size(); ++f) acc.Add(frames[f], cfs[f], assocs[f]);
+                                    options.max_distance_m, options.score_transform);
+        for (size_t f = 0; f < frames.size(); ++f) {
+          acc.Add(frames[f], cfs[f], assocs[f], difficulty);
+        }
         r.brier = acc.Brier();
         r.calibration = acc.Calibration();
+        if (!result.probability_metrics) LeaveOutProbabilityMetrics(&r.brier, &r.calibration);
         r.localization = acc.Localization();
         if (options.keep_records) {
-          r.records = BuildRecords(frames, cfs, assocs, kind, t_op, threads);
+          r.records = BuildRecords(frames, cfs, assocs, kind, difficulty, t_op, threads);
         }
 
         if (!options.filter.empty()) {

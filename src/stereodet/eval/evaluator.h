@@ -51,6 +51,9 @@ struct MatchRecord {
   int32_t detection = -1;  // index into the frame's detections (file order); -1 for a label alone
   int32_t label = -1;      // index into the frame's labels (file order); -1 for a detection alone
   Outcome outcome = Outcome::kNone;
+  // The label is valid at the cell's difficulty (class, not a neighbour, meets the difficulty): one
+  // term of the Brier score over labels, 1 unless kTp, also when excused by an ignored detection.
+  bool label_valid = false;
   // kTp: the overlap that decided the match. Otherwise the largest overlap of the row's object with
   // the other side: for a detection, with any label of the class or its neighbours; for a label,
   // with any detection of the class at the operating point (0 when there is none). Same overlap
@@ -95,9 +98,28 @@ struct ClassResult {
   std::vector<MatchRecord> records;
 };
 
+// With this many valid labels or fewer in a cell, the devkit's AP_R40 (KITTI matcher) is capped
+// at (TP - 1) / 40: every TP score becomes one of its thresholds, so at most TP of its 41 slots
+// are filled (26 perfect detections of 27 labels give 62.5). Reports mark such cells.
+inline constexpr int64_t kSmallSampleLabels = 40;
+inline bool IsSmallSample(const ClassResult& r) {
+  return r.evaluated && r.num_valid_labels <= kSmallSampleLabels;
+}
+
+// The raw scores of every detection (any class) of the evaluated frames.
+struct ScoreSummary {
+  int64_t num_scores = 0;
+  int64_t num_outside_unit = 0;             // scores < 0 or > 1
+  double min_score = 0.0, max_score = 0.0;  // NaN when there is no detection
+};
+
 struct EvalResult {
   int64_t num_frames = 0;
   bool aos_computed = false;  // false when a detection has alpha = -10 (devkit rule) or disabled
+  ScoreSummary scores;
+  // False when a score is outside [0, 1] and EvalOptions::score_transform is kNone: the scores are
+  // not probabilities, and every cell's Brier scores and ECE are left out (NaN).
+  bool probability_metrics = true;
   std::vector<ClassResult> results;  // class-major, then overlap kind, then difficulty (options order)
   double seconds = 0.0;              // wall time of Evaluate()
 

@@ -74,6 +74,9 @@ TEST_P(RecordsByMatcher, EveryOutcomeOfAHandMadeFrame) {
     EXPECT_EQ(rec[k].detection, want_det[k]) << k;
     EXPECT_EQ(rec[k].label, want_label[k]) << k;
   }
+  EXPECT_TRUE(rec[1].label_valid);
+  EXPECT_FALSE(rec[5].label_valid);  // the Van
+  EXPECT_TRUE(rec[6].label_valid);
   EXPECT_DOUBLE_EQ(rec[1].iou, 1.0);  // the TP pair
   EXPECT_DOUBLE_EQ(rec[0].iou, 0.0);  // overlaps nothing
   EXPECT_DOUBLE_EQ(rec[2].iou, 1.0);  // on the Van, exactly
@@ -150,10 +153,16 @@ TEST(Records, ReSumToTheTableExactly) {
             case Outcome::kFn:
               ++fn;
               EXPECT_EQ(m.detection, -1);
+              EXPECT_TRUE(m.label_valid);
               label_terms[m.frame].emplace_back(m.label, 1.0);
               break;
             default:
               EXPECT_TRUE(m.outcome == Outcome::kIgnored || m.outcome == Outcome::kDontCare);
+              // A valid label excused by an ignored detection keeps its Brier term (fixed support).
+              if (m.detection < 0 && m.label_valid) label_terms[m.frame].emplace_back(m.label, 1.0);
+          }
+          if (m.outcome == Outcome::kTp) {
+            EXPECT_TRUE(m.label_valid);
           }
         }
         EXPECT_EQ(tp, r.at_threshold.tp);
@@ -173,6 +182,7 @@ TEST(Records, ReSumToTheTableExactly) {
         const double brier_labels = mean(label_terms, &n_labels);
         const double brier_dets = mean(det_terms, &n_dets);
         EXPECT_EQ(n_labels, r.brier.num_label_terms);
+        EXPECT_EQ(n_labels, r.num_valid_labels);  // the fixed support
         EXPECT_EQ(n_dets, r.brier.num_detection_terms);
         if (n_labels > 0) {
           EXPECT_EQ(brier_labels, r.brier.over_labels);

@@ -22,13 +22,20 @@ double Quantile(std::vector<double> values, double q) {
   return values[lo] + (values[hi] - values[lo]) * frac;
 }
 
+void LeaveOutProbabilityMetrics(BrierScores* brier, CalibrationResult* calibration) {
+  brier->over_labels = brier->over_detections = brier->over_all = kNaN;
+  calibration->ece = kNaN;
+  for (ReliabilityBin& bin : calibration->bins) bin.mean_score = bin.tp_fraction = kNaN;
+}
+
 ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m,
-                                                 double max_distance_m)
+                                                 double max_distance_m, ScoreTransform transform)
     : bin_count_(calibration_bins, 0),
       bin_tp_(calibration_bins, 0),
       bin_score_sum_(calibration_bins, 0.0),
       distance_bin_m_(distance_bin_m),
-      max_distance_m_(max_distance_m) {
+      max_distance_m_(max_distance_m),
+      transform_(transform) {
   STEREODET_CHECK(calibration_bins >= 1) << "calibration_bins must be >= 1";
   STEREODET_CHECK(distance_bin_m > 0 && max_distance_m > 0) << "distance bins must be positive";
   const int num_distance_bins = static_cast<int>(std::ceil(max_distance_m / distance_bin_m));
@@ -37,12 +44,12 @@ ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double di
 }
 
 void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
-                                  const FrameAssociation& a) {
+                                  const FrameAssociation& a, Difficulty difficulty) {
   const int num_bins = static_cast<int>(bin_count_.size());
   for (int i = 0; i < cf.num_labels(); ++i) {
     if (a.label_outcome[i] == Outcome::kTp) {
       const int j = a.label_det[i];
-      const double s = cf.det_score[j];
+      const double s = ApplyScoreTransform(transform_, cf.det_score[j]);
       brier_sums_.over_labels += (1 - s) * (1 - s);
       brier_sums_.over_all += (1 - s) * (1 - s);
       ++brier_sums_.num_label_terms;
@@ -56,7 +63,9 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
         centre_errors_[bin].push_back((det.box3d.Centre() - label.box3d.Centre()).norm());
         depth_errors_[bin].push_back(det.box3d.location.z() - z);
       }
-    } else if (a.label_outcome[i] == Outcome::kFn) {
+    } else if (cf.LabelValid(i, difficulty)) {
+      // FN, or excused by an ignored (too low) detection: the label's term is there all the same,
+      // so that every detector is scored over the same labels.
       brier_sums_.over_labels += 1.0;
       brier_sums_.over_all += 1.0;
       ++brier_sums_.num_label_terms;
@@ -66,7 +75,7 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
   for (int j = 0; j < cf.num_dets(); ++j) {
     const Outcome o = a.det_outcome[j];
     if (o != Outcome::kTp && o != Outcome::kFp) continue;
-    const double s = cf.det_score[j];
+    const double s = ApplyScoreTransform(transform_, cf.det_score[j]);
     const double y = o == Outcome::kTp ? 1.0 : 0.0;
     brier_sums_.over_detections += (s - y) * (s - y);
     ++brier_sums_.num_detection_terms;

@@ -12,16 +12,19 @@
 
 namespace stereodet {
 
-// Sums of Brier terms; Finish() turns them into means (NaN when there is no term).
+// Means of Brier terms (NaN when there is no term, or when left out: LeaveOutProbabilityMetrics).
+// s is a detection's score after EvalOptions::score_transform. Definitions: docs/metrics.md.
 struct BrierScores {
-  // Over labels (the default, the paper's recommendation): one term per valid label (TP or FN),
-  // (1 - s)^2 with s the score of its matched detection, 1 if unmatched.
+  // Over labels (the default, the paper's recommendation): a fixed support, one term per valid
+  // label of the cell whatever the detector did: (1 - s)^2 with s the score of its TP detection,
+  // 1 otherwise (FN, or excused by an ignored detection). num_label_terms is the cell's
+  // num_valid_labels for every detector.
   double over_labels = 0.0;
   int64_t num_label_terms = 0;
   // Over detections: one term per counted detection (TP or FP), (s - y)^2 with y = 1 for a TP.
   double over_detections = 0.0;
   int64_t num_detection_terms = 0;
-  // Over all: matched pairs (1 - s)^2, unmatched detections (FP) s^2, unmatched labels (FN) 1.
+  // Over all: the label terms above plus s^2 for each FP detection.
   double over_all = 0.0;
   int64_t num_all_terms = 0;
 };
@@ -41,6 +44,10 @@ struct CalibrationResult {
   int64_t num_out_of_range = 0;  // scores outside [0, 1], clamped into the end bins
 };
 
+// Sets every Brier mean, the ECE and the bins' mean score and TP fraction to NaN (the term counts
+// and bin counts stay): the scores are not probabilities (see EvalResult::probability_metrics).
+void LeaveOutProbabilityMetrics(BrierScores* brier, CalibrationResult* calibration);
+
 struct DistanceBin {
   double lower_m = 0.0, upper_m = 0.0;  // label depth z in [lower, upper)
   int64_t count = 0;                    // TP pairs with 3D boxes on both sides
@@ -52,9 +59,13 @@ struct DistanceBin {
 // Accumulates the operating-point metrics of many frames' associations, then Finish().
 class ScoreMetricsAccumulator {
  public:
-  ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m, double max_distance_m);
+  // Brier scores and calibration use ApplyScoreTransform(transform, score).
+  ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m, double max_distance_m,
+                          ScoreTransform transform = ScoreTransform::kNone);
 
-  void Add(const EvalFrame& frame, const ClassFrame& class_frame, const FrameAssociation& association);
+  // `association` is that of `class_frame` at `difficulty` (which decides the valid labels).
+  void Add(const EvalFrame& frame, const ClassFrame& class_frame,
+           const FrameAssociation& association, Difficulty difficulty);
 
   BrierScores Brier() const;                 // means
   CalibrationResult Calibration() const;
@@ -66,6 +77,7 @@ class ScoreMetricsAccumulator {
   std::vector<double> bin_score_sum_;
   int64_t out_of_range_ = 0;
   double distance_bin_m_, max_distance_m_;
+  ScoreTransform transform_;
   std::vector<std::vector<double>> centre_errors_, depth_errors_;
 };
 

@@ -1,6 +1,7 @@
 #include "stereodet/kitti/label_io.h"
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -99,7 +100,16 @@ bool ParseLine(std::string_view line, ObjectFileKind kind, Object* object, LineE
       return false;
     }
   }
-  const std::optional<int> occluded = kitti_internal::ReadInt(tokens[2]);
+  std::optional<int> occluded = kitti_internal::ReadInt(tokens[2]);
+  if (!occluded && count == kDetectionFields && kind != ObjectFileKind::kLabel) {
+    // A detection line: the devkit reads truncation and occlusion of detections as throw-away
+    // doubles, and several tools write "-1.0000" there. Accept any finite number; an integral one
+    // is kept, any other becomes -1 (unknown).
+    double value = 0.0;
+    if (ReadFiniteDouble(tokens[2], &value) == NumberStatus::kOk) {
+      occluded = value == std::trunc(value) && std::abs(value) < 1e9 ? static_cast<int>(value) : -1;
+    }
+  }
   if (!occluded) {
     error->field = 2;
     error->message = QuoteToken(tokens[2]) + " is not an integer (0, 1, 2, 3, or -1 for DontCare)";

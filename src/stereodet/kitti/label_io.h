@@ -34,7 +34,9 @@ struct ObjectFile {
 // Parses the text of a label or detection file. `source` names the file in error messages. Blank
 // lines are ignored. A bad line (wrong field count; text, NaN or infinity where a number belongs;
 // a negative dimension other than KITTI's -1 "not estimated"; occluded not an integer) throws
-// ParseError(source, line, field, ...), or is skipped in lenient mode.
+// ParseError(source, line, field, ...), or is skipped in lenient mode. In a detection line (16
+// fields, kDetection or kAny) occluded may be any finite number, as the devkit reads it as a
+// throw-away double ("-1.0000"): an integral value is kept, another becomes -1. Labels stay strict.
 ObjectFile ParseObjects(std::string_view text, const std::string& source,
                         const ObjectParseOptions& options = {});
 // Reads and parses a file. Throws std::runtime_error if it cannot be read.

@@ -224,6 +224,47 @@ TEST(LabelIoErrorTest, OccludedMustBeAnInteger) {
   }
 }
 
+// The devkit reads a detection's truncation and occlusion as throw-away doubles; tools write them
+// as floats ("-1.0000"). Detections accept them, labels stay strict.
+TEST(LabelIoTest, DetectionLinesAcceptFloatsInEveryField) {
+  const std::string line =
+      "Car -1.0000 -1.0000 -1.5600 564.6200 174.5900 616.4300 224.7400 1.6100 1.6600 3.2000 "
+      "-0.6900 1.6900 25.0100 -1.5900 0.9700";
+  for (const ObjectFileKind kind : {ObjectFileKind::kDetection, ObjectFileKind::kAny}) {
+    ObjectParseOptions options;
+    options.kind = kind;
+    const ObjectFile file = ParseObjects(line, "det/000000.txt", options);
+    ASSERT_EQ(file.objects.size(), 1u);
+    const Object& o = file.objects[0];
+    EXPECT_EQ(o.truncated, -1.0);
+    EXPECT_EQ(o.occluded, -1);
+    EXPECT_EQ(o.box.left, 564.62);
+    EXPECT_EQ(*o.score, 0.97);
+  }
+  ObjectParseOptions detection;
+  detection.kind = ObjectFileKind::kDetection;
+  auto occluded = [&](const std::string& token) {
+    return ParseObjects("Car 0 " + token + " 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5 0.9", "x",
+                        detection)
+        .objects.at(0)
+        .occluded;
+  };
+  EXPECT_EQ(occluded("2.0"), 2);
+  EXPECT_EQ(occluded("1.5"), -1);  // not integral: unknown
+  EXPECT_EQ(occluded("1e30"), -1);
+  // Text and non-finite numbers are still errors in a detection line.
+  for (const std::string bad : {"x", "nan", "inf"}) {
+    const ParseError e = ExpectParseError(
+        "Car 0 " + bad + " 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5 0.9", ObjectFileKind::kDetection);
+    EXPECT_EQ(e.field(), "occluded") << bad;
+  }
+  // A label line (15 fields, also in a kAny file) keeps the integer rule.
+  EXPECT_EQ(
+      ExpectParseError("Car 0 -1.0000 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5", ObjectFileKind::kAny)
+          .field(),
+      "occluded");
+}
+
 TEST(LabelIoErrorTest, ErrorMessagesQuoteBinaryGarbageSafely) {
   const std::string line =
       std::string("Car \x01\xff\x7f") + " 0 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5";

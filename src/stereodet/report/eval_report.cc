@@ -76,21 +76,17 @@ json FilteredCurveJson(const FilteredCurve& c, int64_t num_frames, bool with_aos
 
 }  // namespace
 
-json EvalResultToJson(const EvalResult& result, const EvalOptions& options, const EvalRunInfo& info) {
-  json j;
-  j["tool"] = {{"name", "stereodet eval"}, {"version", info.tool_version}};
-  j["command_line"] = info.command_line;
-  j["input_hash"] = info.input_hash;
-  j["input"] = {{"gt", info.gt_path},
-                {"det", info.det_path},
-                {"split", info.split_path},
-                {"num_frames", result.num_frames},
-                {"num_frames_without_detections", info.frames_without_detections.size()},
-                {"frames_without_detections", info.frames_without_detections}};
+namespace {
+
+json ClassesJson(const std::vector<ClassSpec>& specs) {
   json classes = json::array();
-  for (const ClassSpec& c : options.classes) {
+  for (const ClassSpec& c : specs) {
     classes.push_back({{"name", c.name}, {"neighbours", c.neighbours}, {"min_overlap", c.min_overlap}});
   }
+  return classes;
+}
+
+json OptionsJson(const EvalOptions& options) {
   json metrics = json::array();
   for (OverlapKind k : options.metrics) metrics.push_back(OverlapKindName(k));
   json difficulties = json::array();
@@ -99,83 +95,184 @@ json EvalResultToJson(const EvalResult& result, const EvalOptions& options, cons
   for (const FilterCondition& c : options.filter.conditions) {
     filter.push_back({{"bound", FilterBoundName(c.bound)}, {"value", c.value}});
   }
-  j["options"] = {{"matcher", MatcherName(options.matcher)},
-                  {"classes", classes},
-                  {"metrics", metrics},
-                  {"difficulties", difficulties},
-                  {"score_threshold", options.score_threshold},
-                  {"require_detections", options.require_detections},
-                  {"calibration_bins", options.calibration_bins},
-                  {"distance_bin_m", options.distance_bin_m},
-                  {"max_distance_m", options.max_distance_m},
-                  {"filter", filter},
-                  {"filter_mode", FilterModeName(options.filter.mode)},
-                  {"num_threads", options.num_threads}};
-  j["aos_computed"] = result.aos_computed;
-  j["seconds"] = result.seconds;
+  return {{"matcher", MatcherName(options.matcher)},
+          {"classes", ClassesJson(options.classes)},
+          {"metrics", metrics},
+          {"difficulties", difficulties},
+          {"score_threshold", options.score_threshold},
+          {"score_transform", ScoreTransformName(options.score_transform)},
+          {"require_detections", options.require_detections},
+          {"calibration_bins", options.calibration_bins},
+          {"distance_bin_m", options.distance_bin_m},
+          {"max_distance_m", options.max_distance_m},
+          {"filter", filter},
+          {"filter_mode", FilterModeName(options.filter.mode)},
+          {"num_threads", options.num_threads}};
+}
+
+json ClassResultJson(const ClassResult& r, int64_t num_frames, const std::string& overlaps) {
+  json e;
+  e["class"] = r.class_name;
+  e["metric"] = OverlapKindName(r.metric);
+  e["difficulty"] = DifficultyName(r.difficulty);
+  e["overlaps"] = overlaps;
+  e["min_overlap"] = r.min_overlap;
+  e["evaluated"] = r.evaluated;
+  if (!r.evaluated) return e;
+  e["num_valid_labels"] = r.num_valid_labels;
+  e["small_sample"] = IsSmallSample(r);
+  e["num_detections"] = r.num_detections;
+  e["ap_r40"] = r.ap_r40;
+  e["ap_r11"] = r.ap_r11;
+  e["ap_voc"] = r.ap_voc;
+  e["aos_r40"] = r.aos_r40;
+  e["aos_r11"] = r.aos_r11;
+  e["at_threshold"] = OperatingPointJson(r.at_threshold);
+  e["best_f1"] = OperatingPointJson(r.best_f1);
+  if (r.filtered) {
+    const FilteredStats& fs = *r.filtered;
+    e["filtered"] = {{"naive", OperatingPointJson(fs.naive)},
+                     {"stable", OperatingPointJson(fs.stable)},
+                     {"naive_curve", FilteredCurveJson(fs.naive_curve, num_frames, r.has_aos)},
+                     {"stable_curve", FilteredCurveJson(fs.stable_curve, num_frames, r.has_aos)}};
+  }
+  e["curve"] = CurveJson(r.curve, num_frames, r.has_aos);
+  if (!r.kitti_precision.empty()) {
+    e["kitti"] = {
+        {"precision", r.kitti_precision}, {"aos", r.kitti_aos}, {"thresholds", r.kitti_thresholds}};
+  }
+  e["brier"] = {{"over_labels", r.brier.over_labels},
+                {"num_label_terms", r.brier.num_label_terms},
+                {"over_detections", r.brier.over_detections},
+                {"num_detection_terms", r.brier.num_detection_terms},
+                {"over_all", r.brier.over_all},
+                {"num_all_terms", r.brier.num_all_terms}};
+  json bins = json::array();
+  for (const ReliabilityBin& b : r.calibration.bins) {
+    bins.push_back({{"lower", b.lower},
+                    {"upper", b.upper},
+                    {"count", b.count},
+                    {"mean_score", b.mean_score},
+                    {"tp_fraction", b.tp_fraction}});
+  }
+  e["calibration"] = {{"ece", r.calibration.ece},
+                      {"num_detections", r.calibration.num_detections},
+                      {"num_out_of_range", r.calibration.num_out_of_range},
+                      {"bins", bins}};
+  json loc = json::array();
+  for (const DistanceBin& b : r.localization) {
+    loc.push_back({{"lower_m", b.lower_m},
+                   {"upper_m", b.upper_m},
+                   {"count", b.count},
+                   {"centre_error_mean_m", b.centre_error_mean_m},
+                   {"centre_error_median_m", b.centre_error_median_m},
+                   {"centre_error_p90_m", b.centre_error_p90_m},
+                   {"depth_error_mean_m", b.depth_error_mean_m},
+                   {"abs_depth_error_mean_m", b.abs_depth_error_mean_m},
+                   {"abs_depth_error_median_m", b.abs_depth_error_median_m},
+                   {"abs_depth_error_p90_m", b.abs_depth_error_p90_m}});
+  }
+  e["localization"] = loc;
+  return e;
+}
+
+std::vector<EvalRun> OneRun(const EvalResult& result, const EvalOptions& options) {
+  return {EvalRun{options, result}};
+}
+
+}  // namespace
+
+std::vector<std::string> EvalNotes(const std::vector<EvalRun>& runs) {
+  std::vector<std::string> notes;
+  if (runs.empty()) return notes;
+  const EvalResult& first = runs.front().result;
+  const ScoreSummary& sc = first.scores;
+  const ScoreTransform transform = runs.front().options.score_transform;
+  if (!first.probability_metrics) {
+    notes.push_back(fmt::format(
+        "scores outside [0, 1] ({} of {} detections, min {:.4g}, max {:.4g}) are not "
+        "probabilities: Brier and ECE are left out; if they are logits, pass --score-transform "
+        "sigmoid",
+        sc.num_outside_unit, sc.num_scores, sc.min_score, sc.max_score));
+  } else if (transform != ScoreTransform::kNone) {
+    std::string note = fmt::format(
+        "Brier and ECE on {}(score) (--score-transform); AP, curves and the operating point on the "
+        "raw scores",
+        ScoreTransformName(transform));
+    if (sc.num_scores > 0 && sc.num_outside_unit == 0) {
+      note += "; note: every raw score is in [0, 1] already";
+    }
+    notes.push_back(note);
+  }
+  bool small = false;
+  for (const EvalRun& run : runs) {
+    if (run.options.matcher != Matcher::kKitti) continue;
+    for (const ClassResult& r : run.result.results) small |= IsSmallSample(r);
+  }
+  if (small) {
+    notes.push_back(
+        fmt::format("* {} or fewer valid labels: the devkit's AP_R40 is capped at (TP - 1) / 40 "
+                    "there (26 perfect detections of 27 labels give 62.5); --matcher optimal "
+                    "gives the exact AP",
+                    kSmallSampleLabels));
+  }
+  return notes;
+}
+
+json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info) {
+  STEREODET_CHECK(!runs.empty()) << "no evaluation run to write";
+  const EvalRun& first = runs.front();
+  json j;
+  j["tool"] = {{"name", "stereodet eval"}, {"version", info.tool_version}};
+  j["command_line"] = info.command_line;
+  j["input_hash"] = info.input_hash;
+  j["input"] = {{"gt", info.gt_path},
+                {"det", info.det_path},
+                {"split", info.split_path},
+                {"num_frames", first.result.num_frames},
+                {"num_frames_without_detections", info.frames_without_detections.size()},
+                {"frames_without_detections", info.frames_without_detections},
+                {"num_ignored_files", info.ignored_files.size()},
+                {"ignored_files", info.ignored_files},
+                {"lenient", info.lenient},
+                {"num_skipped_lines", info.skipped_lines.size()},
+                {"skipped_lines", info.skipped_lines}};
+  j["options"] = OptionsJson(first.options);
+  json overlaps = json::array(), overlap_sets = json::array();
+  double seconds = 0.0;
+  for (const EvalRun& run : runs) {
+    const std::string tag = DescribeOverlaps(run.options.classes);
+    overlaps.push_back(tag);
+    overlap_sets.push_back({{"name", tag}, {"classes", ClassesJson(run.options.classes)}});
+    seconds += run.result.seconds;
+  }
+  j["options"]["overlaps"] = overlaps;
+  j["overlap_sets"] = overlap_sets;
+  j["aos_computed"] = first.result.aos_computed;
+  j["seconds"] = seconds;
+  const ScoreSummary& sc = first.result.scores;
+  j["scores"] = {{"num_scores", sc.num_scores},
+                 {"num_outside_unit", sc.num_outside_unit},
+                 {"min", sc.min_score},
+                 {"max", sc.max_score},
+                 {"transform", ScoreTransformName(first.options.score_transform)},
+                 {"probability_metrics", first.result.probability_metrics}};
+  j["small_sample_labels"] = kSmallSampleLabels;
+  j["notes"] = EvalNotes(runs);
   json results = json::array();
-  for (const ClassResult& r : result.results) {
-    json e;
-    e["class"] = r.class_name;
-    e["metric"] = OverlapKindName(r.metric);
-    e["difficulty"] = DifficultyName(r.difficulty);
-    e["min_overlap"] = r.min_overlap;
-    e["evaluated"] = r.evaluated;
-    if (!r.evaluated) {
-      results.push_back(e);
-      continue;
+  for (const EvalRun& run : runs) {
+    const std::string tag = DescribeOverlaps(run.options.classes);
+    for (const ClassResult& r : run.result.results) {
+      results.push_back(ClassResultJson(r, run.result.num_frames, tag));
     }
-    e["num_valid_labels"] = r.num_valid_labels;
-    e["num_detections"] = r.num_detections;
-    e["ap_r40"] = r.ap_r40;
-    e["ap_r11"] = r.ap_r11;
-    e["ap_voc"] = r.ap_voc;
-    e["aos_r40"] = r.aos_r40;
-    e["aos_r11"] = r.aos_r11;
-    e["at_threshold"] = OperatingPointJson(r.at_threshold);
-    e["best_f1"] = OperatingPointJson(r.best_f1);
-    if (r.filtered) {
-      const FilteredStats& fs = *r.filtered;
-      e["filtered"] = {{"naive", OperatingPointJson(fs.naive)},
-                       {"stable", OperatingPointJson(fs.stable)},
-                       {"naive_curve", FilteredCurveJson(fs.naive_curve, result.num_frames, r.has_aos)},
-                       {"stable_curve", FilteredCurveJson(fs.stable_curve, result.num_frames, r.has_aos)}};
-    }
-    e["curve"] = CurveJson(r.curve, result.num_frames, r.has_aos);
-    if (!r.kitti_precision.empty()) {
-      e["kitti"] = {{"precision", r.kitti_precision}, {"aos", r.kitti_aos}, {"thresholds", r.kitti_thresholds}};
-    }
-    e["brier"] = {{"over_labels", r.brier.over_labels},
-                  {"num_label_terms", r.brier.num_label_terms},
-                  {"over_detections", r.brier.over_detections},
-                  {"num_detection_terms", r.brier.num_detection_terms},
-                  {"over_all", r.brier.over_all},
-                  {"num_all_terms", r.brier.num_all_terms}};
-    json bins = json::array();
-    for (const ReliabilityBin& b : r.calibration.bins) {
-      bins.push_back({{"lower", b.lower}, {"upper", b.upper}, {"count", b.count},
-                      {"mean_score", b.mean_score}, {"tp_fraction", b.tp_fraction}});
-    }
-    e["calibration"] = {{"ece", r.calibration.ece},
-                        {"num_detections", r.calibration.num_detections},
-                        {"num_out_of_range", r.calibration.num_out_of_range},
-                        {"bins", bins}};
-    json loc = json::array();
-    for (const DistanceBin& b : r.localization) {
-      loc.push_back({{"lower_m", b.lower_m}, {"upper_m", b.upper_m}, {"count", b.count},
-                     {"centre_error_mean_m", b.centre_error_mean_m},
-                     {"centre_error_median_m", b.centre_error_median_m},
-                     {"centre_error_p90_m", b.centre_error_p90_m},
-                     {"depth_error_mean_m", b.depth_error_mean_m},
-                     {"abs_depth_error_mean_m", b.abs_depth_error_mean_m},
-                     {"abs_depth_error_median_m", b.abs_depth_error_median_m},
-                     {"abs_depth_error_p90_m", b.abs_depth_error_p90_m}});
-    }
-    e["localization"] = loc;
-    results.push_back(e);
   }
   j["results"] = results;
   return j;
+}
+
+json EvalResultToJson(const EvalResult& result, const EvalOptions& options,
+                      const EvalRunInfo& info) {
+  return EvalResultToJson(OneRun(result, options), info);
 }
 
 int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult& result,
@@ -199,7 +296,7 @@ int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult
                  "frame,class,metric,difficulty,min_overlap,outcome,detection,label,score,iou,"
                  "det_type,det_height_px,det_width_px,det_distance_m,label_type,label_height_px,"
                  "label_width_px,label_distance_m,label_occluded,label_truncated,"
-                 "label_difficulty\n");
+                 "label_difficulty,label_valid\n");
   int64_t rows = 0;
   for (const ClassResult& r : result.results) {
     for (const MatchRecord& m : r.records) {
@@ -223,12 +320,13 @@ int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult
       if (m.label >= 0) {
         const Object& l = f.labels[m.label];
         const std::optional<Difficulty> easiest = EasiestDifficulty(l);
-        fmt::format_to(out_it, "{},{:.6g},{:.6g},{},{},{},{}\n", l.type, l.box.Height(),
+        fmt::format_to(out_it, "{},{:.6g},{:.6g},{},{},{},{},{}\n", l.type, l.box.Height(),
                        l.box.Width(),
                        l.Has3D() ? fmt::format("{}", l.box3d.location.z()) : std::string(),
-                       l.occluded, l.truncated, easiest ? DifficultyName(*easiest) : "");
+                       l.occluded, l.truncated, easiest ? DifficultyName(*easiest) : "",
+                       m.label_valid ? 1 : 0);
       } else {
-        fmt::format_to(out_it, ",,,,,,\n");
+        fmt::format_to(out_it, ",,,,,,,\n");
       }
       ++rows;
       flush(false);
@@ -264,72 +362,95 @@ std::string RocCsv(const std::vector<CurvePoint>& curve, int64_t num_frames) {
 }
 
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
-                                                   const EvalResult& result, const EvalOptions& options,
+                                                   const std::vector<EvalRun>& runs,
                                                    const EvalRunInfo& info) {
   std::vector<std::filesystem::path> written;
   auto write = [&](const std::filesystem::path& path, const std::string& text) {
     WriteFileAtomically(path, text);
     written.push_back(path);
   };
-  write(out_dir / "results.json", EvalResultToJson(result, options, info).dump(1) + "\n");
+  write(out_dir / "results.json", EvalResultToJson(runs, info).dump(1) + "\n");
 
   std::ostringstream summary;
-  summary << "class,metric,difficulty,min_overlap,evaluated,num_valid_labels,num_detections,ap_r40,"
-             "ap_r11,ap_voc,aos_r40,aos_r11,threshold,tp,fp,fn,precision,recall,f1,best_f1_threshold,"
-             "best_f1,brier_labels,brier_detections,brier_all,ece\n";
-  for (const ClassResult& r : result.results) {
-    summary << r.class_name << ',' << OverlapKindName(r.metric) << ',' << DifficultyName(r.difficulty)
-            << ',' << r.min_overlap << ',' << (r.evaluated ? 1 : 0);
-    if (!r.evaluated) {
-      summary << std::string(20, ',') << '\n';
-      continue;
+  summary
+      << "class,metric,difficulty,min_overlap,evaluated,num_valid_labels,num_detections,ap_r40,"
+         "ap_r11,ap_voc,aos_r40,aos_r11,threshold,tp,fp,fn,precision,recall,f1,best_f1_threshold,"
+         "best_f1,brier_labels,brier_detections,brier_all,ece,overlaps\n";
+  for (const EvalRun& run : runs) {
+    const std::string tag = DescribeOverlaps(run.options.classes);
+    for (const ClassResult& r : run.result.results) {
+      summary << r.class_name << ',' << OverlapKindName(r.metric) << ','
+              << DifficultyName(r.difficulty) << ',' << r.min_overlap << ','
+              << (r.evaluated ? 1 : 0);
+      if (!r.evaluated) {
+        summary << std::string(20, ',') << ',' << tag << '\n';
+        continue;
+      }
+      const OperatingPoint& op = r.at_threshold;
+      summary << ',' << r.num_valid_labels << ',' << r.num_detections << ',' << Csv(r.ap_r40) << ','
+              << Csv(r.ap_r11) << ',' << Csv(r.ap_voc) << ',' << Csv(r.aos_r40) << ','
+              << Csv(r.aos_r11) << ',' << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ','
+              << op.fn << ',' << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(op.f1)
+              << ',' << Csv(r.best_f1.threshold) << ',' << Csv(r.best_f1.f1) << ','
+              << Csv(r.brier.over_labels) << ',' << Csv(r.brier.over_detections) << ','
+              << Csv(r.brier.over_all) << ',' << Csv(r.calibration.ece) << ',' << tag << '\n';
     }
-    const OperatingPoint& op = r.at_threshold;
-    summary << ',' << r.num_valid_labels << ',' << r.num_detections << ',' << Csv(r.ap_r40) << ','
-            << Csv(r.ap_r11) << ',' << Csv(r.ap_voc) << ',' << Csv(r.aos_r40) << ',' << Csv(r.aos_r11)
-            << ',' << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ',' << op.fn << ','
-            << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(op.f1) << ','
-            << Csv(r.best_f1.threshold) << ',' << Csv(r.best_f1.f1) << ',' << Csv(r.brier.over_labels)
-            << ',' << Csv(r.brier.over_detections) << ',' << Csv(r.brier.over_all) << ','
-            << Csv(r.calibration.ece) << '\n';
   }
   write(out_dir / "summary.csv", summary.str());
 
-  for (const ClassResult& r : result.results) {
-    if (!r.evaluated) continue;
-    const std::string stem = CurveStem(r);
-    write(out_dir / "curves" / ("pr_" + stem + ".csv"), PrCsv(r.curve, result.num_frames, r.has_aos));
-    write(out_dir / "curves" / ("roc_" + stem + ".csv"), RocCsv(r.curve, result.num_frames));
-    if (r.filtered) {
-      write(out_dir / "curves" / ("pr_naive_" + stem + ".csv"),
-            PrCsv(r.filtered->naive_curve.curve, result.num_frames, r.has_aos));
-      write(out_dir / "curves" / ("pr_stable_" + stem + ".csv"),
-            PrCsv(r.filtered->stable_curve.curve, result.num_frames, r.has_aos));
+  for (const EvalRun& run : runs) {
+    const EvalResult& result = run.result;
+    // (append, not "_" + string: g++ 12 warns falsely on the latter, -Wrestrict)
+    std::string suffix;
+    if (runs.size() > 1) suffix.append("_").append(DescribeOverlaps(run.options.classes));
+    for (const ClassResult& r : result.results) {
+      if (!r.evaluated) continue;
+      const std::string stem = CurveStem(r) + suffix;
+      write(out_dir / "curves" / ("pr_" + stem + ".csv"),
+            PrCsv(r.curve, result.num_frames, r.has_aos));
+      write(out_dir / "curves" / ("roc_" + stem + ".csv"), RocCsv(r.curve, result.num_frames));
+      if (r.filtered) {
+        write(out_dir / "curves" / ("pr_naive_" + stem + ".csv"),
+              PrCsv(r.filtered->naive_curve.curve, result.num_frames, r.has_aos));
+        write(out_dir / "curves" / ("pr_stable_" + stem + ".csv"),
+              PrCsv(r.filtered->stable_curve.curve, result.num_frames, r.has_aos));
+      }
+      std::ostringstream rel;
+      rel << "lower,upper,count,mean_score,tp_fraction\n";
+      for (const ReliabilityBin& b : r.calibration.bins) {
+        rel << Csv(b.lower) << ',' << Csv(b.upper) << ',' << b.count << ',' << Csv(b.mean_score)
+            << ',' << Csv(b.tp_fraction) << '\n';
+      }
+      write(out_dir / "curves" / ("reliability_" + stem + ".csv"), rel.str());
+      std::ostringstream loc;
+      loc << "lower_m,upper_m,count,centre_error_mean_m,centre_error_median_m,centre_error_p90_m,"
+             "depth_error_mean_m,abs_depth_error_mean_m,abs_depth_error_median_m,"
+             "abs_depth_error_p90_m\n";
+      for (const DistanceBin& b : r.localization) {
+        loc << Csv(b.lower_m) << ',' << Csv(b.upper_m) << ',' << b.count << ','
+            << Csv(b.centre_error_mean_m) << ',' << Csv(b.centre_error_median_m) << ','
+            << Csv(b.centre_error_p90_m) << ',' << Csv(b.depth_error_mean_m) << ','
+            << Csv(b.abs_depth_error_mean_m) << ',' << Csv(b.abs_depth_error_median_m) << ','
+            << Csv(b.abs_depth_error_p90_m) << '\n';
+      }
+      write(out_dir / "curves" / ("localization_" + stem + ".csv"), loc.str());
     }
-    std::ostringstream rel;
-    rel << "lower,upper,count,mean_score,tp_fraction\n";
-    for (const ReliabilityBin& b : r.calibration.bins) {
-      rel << Csv(b.lower) << ',' << Csv(b.upper) << ',' << b.count << ',' << Csv(b.mean_score) << ','
-          << Csv(b.tp_fraction) << '\n';
-    }
-    write(out_dir / "curves" / ("reliability_" + stem + ".csv"), rel.str());
-    std::ostringstream loc;
-    loc << "lower_m,upper_m,count,centre_error_mean_m,centre_error_median_m,centre_error_p90_m,"
-           "depth_error_mean_m,abs_depth_error_mean_m,abs_depth_error_median_m,abs_depth_error_p90_m\n";
-    for (const DistanceBin& b : r.localization) {
-      loc << Csv(b.lower_m) << ',' << Csv(b.upper_m) << ',' << b.count << ',' << Csv(b.centre_error_mean_m)
-          << ',' << Csv(b.centre_error_median_m) << ',' << Csv(b.centre_error_p90_m) << ','
-          << Csv(b.depth_error_mean_m) << ',' << Csv(b.abs_depth_error_mean_m) << ','
-          << Csv(b.abs_depth_error_median_m) << ',' << Csv(b.abs_depth_error_p90_m) << '\n';
-    }
-    write(out_dir / "curves" / ("localization_" + stem + ".csv"), loc.str());
   }
   return written;
 }
 
-std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options) {
-  std::ostringstream out;
-  out << fmt::format("matcher {}, {} frames", MatcherName(options.matcher), result.num_frames);
+std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
+                                                   const EvalResult& result,
+                                                   const EvalOptions& options,
+                                                   const EvalRunInfo& info) {
+  return WriteEvalReport(out_dir, OneRun(result, options), info);
+}
+
+namespace {
+
+void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostringstream& out) {
+  out << fmt::format("matcher {}, {} frames, overlaps {}", MatcherName(options.matcher),
+                     result.num_frames, DescribeOverlaps(options.classes));
   if (!options.filter.empty()) out << ", filter " << FilterModeName(options.filter.mode);
   out << "\n";
   std::string diff_header;
@@ -341,6 +462,8 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
     if (d == Difficulty::kModerate) op_difficulty = d;
   }
   out << "  (operating point at " << DifficultyName(op_difficulty) << ")\n";
+  // The small-sample mark explains the KITTI matcher's AP_R40 cap; other matchers are exact.
+  const bool mark_small = options.matcher == Matcher::kKitti;
   for (const ClassSpec& spec : options.classes) {
     for (OverlapKind kind : options.metrics) {
       const ClassResult* first = result.Find(spec.name, kind, op_difficulty);
@@ -351,14 +474,21 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
                            spec.name, OverlapKindName(kind), first->min_overlap, OverlapKindName(kind));
         continue;
       }
-      auto row = [&](const char* what, auto get, bool with_op) {
-        std::string cells;
+      auto cells = [&](auto format) {
+        std::string text;
         for (Difficulty d : options.difficulties) {
           const ClassResult* r = result.Find(spec.name, kind, d);
-          cells += fmt::format(" {:>8}", r ? FormatNumber(get(*r), 2) : "-");
+          text += fmt::format(" {:>8}", r ? format(*r) : std::string("-"));
         }
-        out << fmt::format("{:<12} {:<4} {:>5.2f} | {:<7}{} |", spec.name, OverlapKindName(kind),
-                           first->min_overlap, what, cells);
+        return text;
+      };
+      auto line = [&](const char* what, const std::string& text) {
+        return fmt::format("{:<12} {:<4} {:>5.2f} | {:<7}{} |", spec.name, OverlapKindName(kind),
+                           first->min_overlap, what, text);
+      };
+      auto row = [&](const char* what, auto get, bool with_op, int decimals = 2) {
+        out << line(what,
+                    cells([&](const ClassResult& r) { return FormatNumber(get(r), decimals); }));
         if (with_op) {
           const OperatingPoint& op = first->at_threshold;
           out << fmt::format("  TP {} FP {} FN {}  P {:.4f} R {:.4f} F1 {:.4f}  best F1 {:.4f} @ {:.4g}",
@@ -374,6 +504,15 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
         row("AOS_R40", [](const ClassResult& r) { return r.aos_r40; }, false);
         row("AOS_R11", [](const ClassResult& r) { return r.aos_r11; }, false);
       }
+      out << line("labels", cells([&](const ClassResult& r) {
+                    return std::to_string(r.num_valid_labels) +
+                           (mark_small && IsSmallSample(r) ? "*" : "");
+                  }))
+          << "\n";
+      auto brier = [](const ClassResult& r) { return r.brier.over_labels; };
+      auto ece = [](const ClassResult& r) { return r.calibration.ece; };
+      row("Brier_L", brier, false, 4);
+      row("ECE", ece, false, 4);
       if (first->filtered) {
         const FilteredStats& fs = *first->filtered;
         out << fmt::format("{:<12} {:<4} {:>5} | filtered: naive TP {} FP {} FN {} P {:.4f} R {:.4f}; "
@@ -386,7 +525,22 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
       }
     }
   }
+}
+
+}  // namespace
+
+std::string FormatEvalTable(const std::vector<EvalRun>& runs) {
+  std::ostringstream out;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    if (k > 0) out << "\n";
+    FormatRun(runs[k].result, runs[k].options, out);
+  }
+  for (const std::string& note : EvalNotes(runs)) out << note << "\n";
   return out.str();
+}
+
+std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options) {
+  return FormatEvalTable(OneRun(result, options));
 }
 
 std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound) {

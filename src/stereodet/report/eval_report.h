@@ -21,21 +21,41 @@ struct EvalRunInfo {
   std::string gt_path, det_path, split_path;
   std::vector<std::string> frames_without_detections;  // ids whose detection file was missing
   std::string command_line;
-  // What was read, as 16 hex digits (empty if not computed): FNV-1a 64 (util/hash.h) over the
-  // frames' hashes in evaluation order (8 bytes each, little-endian), a frame's hash being FNV-1a
-  // 64 over its id, a NUL, its label file's bytes, a NUL and its detection file's bytes (none when
-  // the file is missing). Equal inputs give equal hashes whatever the thread count.
+  // What was read, as 16 hex digits (empty if not computed): EvalInput::input_hash.
   std::string input_hash;
+  bool lenient = false;
+  std::vector<std::string> ignored_files;  // EvalInput::ignored_files
+  std::vector<std::string> skipped_lines;  // EvalInput::skipped_lines ("FILE:LINE: field F: ...")
 };
 
-// The whole result as JSON. NaN (not computed) becomes null.
+// One evaluation of the same frames under one set of options, e.g. one overlap set of
+// `--overlaps strict,loose`. Its results are tagged with DescribeOverlaps(options.classes).
+struct EvalRun {
+  EvalOptions options;
+  EvalResult result;
+};
+
+// Notes for the reader, one line each: scores that are not probabilities (Brier and ECE left out)
+// or transformed, and cells with kSmallSampleLabels valid labels or fewer (marked '*' in the
+// table; the KITTI matcher's AP_R40 cap). In the table's footer and results.json "notes".
+std::vector<std::string> EvalNotes(const std::vector<EvalRun>& runs);
+
+// The whole result as JSON. NaN (not computed) becomes null. With several runs, "results" holds
+// every run's entries, each tagged "overlaps"; "options" are the first run's, with the overlap sets
+// of all runs in "overlaps" and their thresholds in "overlap_sets".
+nlohmann::json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info);
 nlohmann::json EvalResultToJson(const EvalResult& result, const EvalOptions& options,
                                 const EvalRunInfo& info);
 
 // Writes OUT/results.json, OUT/summary.csv and per evaluated class x metric x difficulty
 // OUT/curves/pr_CLASS_METRIC_DIFFICULTY.csv (PrCsv), roc_*.csv (RocCsv, the detector ROC),
 // reliability_*.csv and localization_*.csv; with a filter also pr_naive_*.csv and pr_stable_*.csv
-// (the curves under the filter in each mode). Returns the paths written.
+// (the curves under the filter in each mode). With several runs every curve file name ends in
+// _OVERLAPS (pr_car_bev_moderate_loose.csv) and summary.csv has one row per run and cell (its
+// last column, overlaps, says which). Returns the paths written.
+std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
+                                                   const std::vector<EvalRun>& runs,
+                                                   const EvalRunInfo& info);
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
                                                    const EvalResult& result, const EvalOptions& options,
                                                    const EvalRunInfo& info);
@@ -48,7 +68,8 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
 //   iou (MatchRecord::iou), then the filter attributes of each side, empty where the side is
 //   absent: det_type, det_height_px, det_width_px, det_distance_m, label_type, label_height_px,
 //   label_width_px, label_distance_m (the 3D location's z), label_occluded, label_truncated,
-//   label_difficulty (the easiest difficulty the label meets: Easy, Moderate, Hard, or empty).
+//   label_difficulty (the easiest difficulty the label meets: Easy, Moderate, Hard, or empty),
+//   label_valid (MatchRecord::label_valid, 1 or 0).
 // Sizes are 2D box heights and widths to 6 significant digits; score and iou at full precision.
 // Returns the number of rows.
 int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult& result,
@@ -61,8 +82,11 @@ std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool
 // point.
 std::string RocCsv(const std::vector<CurvePoint>& curve, int64_t num_frames);
 
-// A table like KITTI's: one row per class and metric, AP_R40 / AP_R11 (and AOS) for Easy, Moderate,
-// Hard, then the operating-point counts and best F1 at Moderate (or the first difficulty evaluated).
+// A table like KITTI's: per class and metric, rows AP_R40 / AP_R11 (and AOS) for Easy, Moderate,
+// Hard, then the operating-point counts and best F1 at Moderate (or the first difficulty
+// evaluated); the valid label count per cell (marked '*' at kSmallSampleLabels or fewer with the
+// KITTI matcher), the Brier score over labels and the ECE. One block per run, then EvalNotes.
+std::string FormatEvalTable(const std::vector<EvalRun>& runs);
 std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options);
 
 // The filter sweep as CSV: class, metric, difficulty, filter, value, then tp/fp/fn/precision/recall

@@ -97,5 +97,83 @@ TEST(EvalReport, WritesRocAndFilteredCurves) {
   EXPECT_NE(FormatEvalTable(result, options).find("AOS_R40"), std::string::npos);
 }
 
+// --overlaps strict,loose: one block per set in the table, results tagged in results.json and in
+// summary.csv, curve files suffixed; the input record (ignored files, skipped lines) and the notes
+// (small samples) are written.
+TEST(EvalReport, SeveralOverlapSetsAreTaggedAndNotesAreWritten) {
+  RandomFramesOptions ro;
+  ro.num_frames = 8;  // few labels per cell: small samples
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  std::vector<EvalRun> runs;
+  for (const bool loose : {false, true}) {
+    EvalOptions options;
+    options.num_threads = 1;
+    options.classes = {KittiClassSpec("Car", loose)};
+    options.metrics = {OverlapKind::kBev};
+    runs.push_back(EvalRun{options, Evaluate(frames, options)});
+  }
+  EvalRunInfo info;
+  info.lenient = true;
+  info.skipped_lines = {"det/000001.txt:2: field score: 'abc' is not a number"};
+  info.ignored_files = {"det/009999.txt"};
+  const TestTempDir dir;
+  WriteEvalReport(dir.path(), runs, info);
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(dir.path() / "results.json"));
+  EXPECT_EQ(j["options"]["overlaps"], nlohmann::json::array({"strict", "loose"}));
+  EXPECT_EQ(j["overlap_sets"][1]["classes"][0]["min_overlap"][1], 0.5);
+  ASSERT_EQ(j["results"].size(), runs[0].result.results.size() + runs[1].result.results.size());
+  EXPECT_EQ(j["results"].front()["overlaps"], "strict");
+  EXPECT_EQ(j["results"].back()["overlaps"], "loose");
+  EXPECT_EQ(j["results"].back()["min_overlap"], 0.5);
+  EXPECT_EQ(j["input"]["num_skipped_lines"], 1);
+  EXPECT_EQ(j["input"]["skipped_lines"][0], info.skipped_lines[0]);
+  EXPECT_EQ(j["input"]["ignored_files"][0], "det/009999.txt");
+  EXPECT_TRUE(j["scores"]["probability_metrics"].get<bool>());
+  const ClassResult& car = *runs[0].result.Find("Car", OverlapKind::kBev, Difficulty::kModerate);
+  ASSERT_TRUE(IsSmallSample(car));
+  EXPECT_TRUE(j["results"][1]["small_sample"].get<bool>());
+  EXPECT_NE(j["notes"].dump().find("40 or fewer valid labels"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "curves" / "pr_car_bev_moderate_strict.csv"));
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "curves" / "pr_car_bev_moderate_loose.csv"));
+  const std::string summary = ReadFile(dir.path() / "summary.csv");
+  EXPECT_NE(summary.find(",loose\n"), std::string::npos);
+  EXPECT_NE(summary.find(",strict\n"), std::string::npos);
+
+  const std::string table = FormatEvalTable(runs);
+  const size_t strict = table.find("overlaps strict"), loose = table.find("overlaps loose");
+  ASSERT_NE(strict, std::string::npos);
+  ASSERT_NE(loose, std::string::npos);
+  EXPECT_LT(strict, loose);
+  EXPECT_NE(table.find("Car          bev   0.50 | AP_R40"), std::string::npos);
+  EXPECT_NE(table.find(std::to_string(car.num_valid_labels) + "*"), std::string::npos);
+  EXPECT_NE(table.find("Brier_L"), std::string::npos);
+  EXPECT_NE(table.find("ECE"), std::string::npos);
+}
+
+// Scores that are not probabilities: the table and results.json say so, and Brier / ECE are null.
+TEST(EvalReport, ScoresOutsideTheUnitIntervalAreReported) {
+  RandomFramesOptions ro;
+  ro.num_frames = 5;
+  std::vector<EvalFrame> frames = RandomFrames(ro);
+  for (EvalFrame& f : frames) {
+    for (Object& d : f.detections) d.score = *d.score * 10 - 5;  // logit-like
+  }
+  EvalOptions options;
+  options.num_threads = 1;
+  options.metrics = {OverlapKind::k2D};
+  const EvalResult result = Evaluate(frames, options);
+  // NaN is a number in memory and null once written.
+  const nlohmann::json j =
+      nlohmann::json::parse(EvalResultToJson(result, options, EvalRunInfo{}).dump());
+  EXPECT_FALSE(j["scores"]["probability_metrics"].get<bool>());
+  for (const auto& r : j["results"]) {
+    if (!r["evaluated"].get<bool>()) continue;
+    EXPECT_TRUE(r["brier"]["over_labels"].is_null());
+    EXPECT_TRUE(r["calibration"]["ece"].is_null());
+  }
+  EXPECT_NE(j["notes"].dump().find("--score-transform sigmoid"), std::string::npos);
+  EXPECT_NE(FormatEvalTable(result, options).find("Brier and ECE are left out"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace stereodet

@@ -1,0 +1,214 @@
+#include "stereodet/eval/eval_input.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/parallel.h"
+#include "stereodet/util/strings.h"
+
+namespace stereodet {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool IsFrameId(std::string_view s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+fs::path LabelDir(const fs::path& p) {
+  if (fs::is_directory(p / "training" / "label_2")) return p / "training" / "label_2";
+  if (fs::is_directory(p / "label_2")) return p / "label_2";
+  STEREODET_CHECK_IO(fs::is_directory(p)) << "--gt: " << p.string() << " is not a folder";
+  return p;
+}
+
+fs::path DetectionDir(const fs::path& p) {
+  if (fs::is_directory(p / "data")) return p / "data";
+  STEREODET_CHECK_IO(fs::is_directory(p)) << "--det: " << p.string() << " is not a folder";
+  return p;
+}
+
+// The stems of the .txt files of `dir` that are frame ids; other .txt files go to `not_ids`
+// (full paths). Hidden files and files of other extensions are skipped.
+std::set<std::string> FrameStems(const fs::path& dir, std::vector<std::string>* not_ids) {
+  std::set<std::string> stems;
+  std::set<std::string> others;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (!e.is_regular_file() || e.path().extension() != ".txt" || name[0] == '.') continue;
+    const std::string stem = e.path().stem().string();
+    if (IsFrameId(stem)) {
+      stems.insert(stem);
+    } else {
+      others.insert(e.path().string());
+    }
+  }
+  not_ids->insert(not_ids->end(), others.begin(), others.end());
+  return stems;
+}
+
+// A split file of a plain label folder (no KITTI root to look a name up in).
+std::vector<std::string> ReadSplitFile(const fs::path& gt, const std::string& split) {
+  std::error_code ec;
+  if (!fs::is_regular_file(split, ec)) {
+    // A name such as "val": say where it was looked for, and where it probably is.
+    std::string found;
+    fs::path dir = fs::absolute(gt, ec).lexically_normal();
+    for (int up = 0; up < 3 && !dir.empty(); ++up, dir = dir.parent_path()) {
+      fs::path candidate = dir / "ImageSets" / split;
+      if (!candidate.has_extension()) candidate += ".txt";
+      if (fs::is_regular_file(candidate, ec)) {
+        found = candidate.string();
+        break;
+      }
+      if (dir == dir.parent_path()) break;
+    }
+    const std::string image_sets =
+        "ImageSets/" + split + (fs::path(split).has_extension() ? "" : ".txt");
+    STEREODET_THROW_IO() << "--split " << split << ": no such file. --gt " << gt.string()
+                         << " is a folder of label files, not a KITTI root (a folder with "
+                            "training/label_2 and ImageSets/), so a split name is not looked up; "
+                            "looked for the file '"
+                         << split << "' and for " << image_sets
+                         << " in --gt and the two folders above it"
+                         << (found.empty() ? ": none there" : ": found " + found)
+                         << ". Pass the split file itself: --split "
+                         << (found.empty() ? "ROOT/" + image_sets : found)
+                         << ", or the KITTI root: --gt ROOT";
+  }
+  std::vector<std::string> ids;
+  const std::string text = ReadFile(split);
+  int line_no = 0;
+  for (std::string_view line : Split(text, '\n')) {
+    ++line_no;
+    line = Trim(line);
+    if (line.empty()) continue;
+    if (!IsFrameId(line)) {
+      throw ParseError(split, line_no, "frame id", "'" + std::string(line) + "' is not a frame id");
+    }
+    ids.emplace_back(line);
+  }
+  return ids;
+}
+
+std::vector<std::string> ReadIds(const fs::path& gt, const std::string& split) {
+  if (fs::is_directory(gt / "training")) return KittiDataset(gt).ReadSplit(split);
+  return ReadSplitFile(gt, split);
+}
+
+}  // namespace
+
+void EvalInputOptions::Check() const {
+  STEREODET_CHECK(!gt.empty()) << "--gt is required";
+  STEREODET_CHECK(!det.empty()) << "--det is required";
+  STEREODET_CHECK(num_threads >= 0) << "num_threads = " << num_threads << ", must be >= 0";
+}
+
+std::vector<std::string> EvalInput::Notices() const {
+  std::vector<std::string> out;
+  if (!frames_without_detections.empty()) {
+    out.push_back("frames without a detection file (no detections): " +
+                  std::to_string(frames_without_detections.size()));
+  }
+  if (!ignored_files.empty()) {
+    out.push_back("ignored " + std::to_string(ignored_files.size()) +
+                  " .txt file(s) that are not frames of this evaluation (not in the split, or not "
+                  "a frame id), first: " +
+                  ignored_files.front());
+  }
+  if (!skipped_lines.empty()) {
+    out.push_back("skipped bad lines (--lenient): " + std::to_string(skipped_lines.size()));
+  }
+  return out;
+}
+
+EvalInput LoadEvalFrames(const EvalInputOptions& options) {
+  options.Check();
+  EvalInput in;
+  in.label_dir = LabelDir(options.gt);
+  in.det_dir = DetectionDir(options.det);
+  std::vector<std::string> label_not_ids;
+  const std::set<std::string> label_stems = FrameStems(in.label_dir, &label_not_ids);
+  const std::set<std::string> det_stems = FrameStems(in.det_dir, &in.ignored_files);
+  std::vector<std::string> ids;
+  if (options.split.empty()) {
+    for (const std::string& s : det_stems) {
+      STEREODET_CHECK_IO(label_stems.count(s))
+          << "detection file " << (in.det_dir / (s + ".txt")).string() << " has no label file in "
+          << in.label_dir.string()
+          << " (with --split, detection files of frames outside the split are ignored)";
+    }
+    ids.assign(label_stems.begin(), label_stems.end());
+  } else {
+    ids = ReadIds(options.gt, options.split);
+    for (const std::string& id : ids) {
+      STEREODET_CHECK_IO(label_stems.count(id))
+          << "split " << options.split << ": frame " << id << " has no label file in "
+          << in.label_dir.string();
+    }
+    const std::set<std::string> in_split(ids.begin(), ids.end());
+    std::vector<std::string> outside;
+    for (const std::string& s : det_stems) {
+      if (!in_split.count(s)) outside.push_back((in.det_dir / (s + ".txt")).string());
+    }
+    in.ignored_files.insert(in.ignored_files.end(), outside.begin(), outside.end());
+    std::sort(in.ignored_files.begin(), in.ignored_files.end());
+  }
+  in.ignored_files.insert(in.ignored_files.end(), label_not_ids.begin(), label_not_ids.end());
+  STEREODET_CHECK_IO(!ids.empty()) << "no frame to evaluate in " << in.label_dir.string();
+
+  in.frames.resize(ids.size());
+  std::vector<uint8_t> missing(ids.size(), 0);
+  std::vector<std::vector<std::string>> problems(ids.size());
+  std::vector<uint64_t> frame_hash(ids.size(), 0);
+  const std::string_view nul("\0", 1);
+  ParallelFor(
+      ids.size(),
+      [&](size_t i) {
+        EvalFrame& f = in.frames[i];
+        f.id = ids[i];
+        // Read the bytes once: parsed here and hashed for InputHash.
+        const fs::path label_path = in.label_dir / (ids[i] + ".txt");
+        const std::string label_text = ReadFile(label_path);
+        ObjectFile labels = ParseObjects(label_text, label_path.string(),
+                                         {ObjectFileKind::kLabel, options.lenient});
+        f.labels = std::move(labels.objects);
+        problems[i] = std::move(labels.problems);
+        uint64_t hash = Fnv1a64(nul, Fnv1a64(label_text, Fnv1a64(nul, Fnv1a64(ids[i]))));
+        if (det_stems.count(ids[i])) {
+          const fs::path det_path = in.det_dir / (ids[i] + ".txt");
+          const std::string det_text = ReadFile(det_path);
+          ObjectFile dets = ParseObjects(det_text, det_path.string(),
+                                         {ObjectFileKind::kDetection, options.lenient});
+          f.detections = std::move(dets.objects);
+          problems[i].insert(problems[i].end(), dets.problems.begin(), dets.problems.end());
+          hash = Fnv1a64(det_text, hash);
+        } else {
+          missing[i] = 1;
+        }
+        frame_hash[i] = hash;
+      },
+      options.num_threads);
+  uint64_t input_hash = kFnv1a64Offset;
+  for (size_t i = 0; i < ids.size(); ++i) {
+    if (missing[i]) in.frames_without_detections.push_back(ids[i]);
+    in.skipped_lines.insert(in.skipped_lines.end(), problems[i].begin(), problems[i].end());
+    char bytes[8];
+    for (int b = 0; b < 8; ++b) bytes[b] = static_cast<char>(frame_hash[i] >> (8 * b) & 0xff);
+    input_hash = Fnv1a64(std::string_view(bytes, 8), input_hash);
+  }
+  in.input_hash = HashHex(input_hash);
+  return in;
+}
+
+}  // namespace stereodet

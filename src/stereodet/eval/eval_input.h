@@ -1,0 +1,72 @@
+// Finding and reading the frames of an evaluation: the label folder, the detection folder, the
+// split, and what was skipped on the way. The CLI (`stereodet eval`) and the Python module call
+// this, then Evaluate().
+//
+//   EvalInputOptions in;
+//   in.gt = "kitti";  in.det = "results/data";  in.split = "val";
+//   EvalInput input = LoadEvalFrames(in);
+//   for (const std::string& line : input.Notices()) std::cout << line << '\n';
+//   EvalResult result = Evaluate(input.frames, options);
+#ifndef STEREODET_EVAL_EVAL_INPUT_H_
+#define STEREODET_EVAL_EVAL_INPUT_H_
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "stereodet/eval/frame_data.h"
+
+namespace stereodet {
+
+struct EvalInputOptions {
+  // Labels: a KITTI root (with training/label_2), a folder with label_2/ inside, or a folder of
+  // label .txt files.
+  std::filesystem::path gt;
+  // Detections: a folder of detection .txt files, or one with data/ inside (the devkit's layout).
+  std::filesystem::path det;
+  // Frame ids, one per line: a file, or with a KITTI root a name under ROOT/ImageSets ("val").
+  // Empty: every label file.
+  std::string split;
+  // Strict (default): the first bad line of a label or detection file throws a ParseError naming
+  // file, line and field. Lenient: bad lines are skipped and listed in EvalInput::skipped_lines.
+  bool lenient = false;
+  int num_threads = 0;  // 0 = all hardware threads
+
+  // Throws std::invalid_argument when gt or det is empty or num_threads < 0.
+  void Check() const;
+};
+
+struct EvalInput {
+  // One frame per id, in split order (without a split, ascending file name order).
+  std::vector<EvalFrame> frames;
+  std::filesystem::path label_dir, det_dir;  // the folders actually read
+  // Ids of frames that have no detection file (evaluated with no detections).
+  std::vector<std::string> frames_without_detections;
+  // .txt files not evaluated, full paths in name order, detection folder first: detection files of
+  // frames outside the split, and .txt files whose name is not a frame id (README.txt) in either
+  // folder. Other files (README.md, hidden files) are ignored without a trace.
+  std::vector<std::string> ignored_files;
+  // Lenient mode: "FILE:LINE: field F: message" for each skipped line, frame order then line order.
+  std::vector<std::string> skipped_lines;
+  // What was read, as 16 hex digits: FNV-1a 64 (util/hash.h) over the frames' hashes in frame order
+  // (8 bytes each, little-endian), a frame's hash being FNV-1a 64 over its id, a NUL, its label
+  // file's bytes, a NUL and its detection file's bytes (none when the file is missing). Equal inputs
+  // give equal hashes whatever the thread count.
+  std::string input_hash;
+
+  // One line each (no newline) for the user: frames without detections, ignored files (count and
+  // the first), skipped lines (count). Empty when there is nothing to say.
+  std::vector<std::string> Notices() const;
+};
+
+// Finds the folders, reads the split and every frame's label and detection file (in parallel).
+// Frame ids are digits only. Throws std::runtime_error (the message names the path) when a folder
+// is missing, the split names a frame without a label file, no frame is left, or, without a
+// split, a detection file has no label file; ParseError for a bad split line or, unless lenient,
+// a bad label or detection line. A split name ("val") with a plain label folder is an error that
+// says where it looked and how to pass the file.
+EvalInput LoadEvalFrames(const EvalInputOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_EVAL_INPUT_H_

@@ -1,0 +1,200 @@
+#include "stereodet/eval/eval_input.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "stereodet/util/check.h"
+#include "stereodet/util/test_temp_dir.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+constexpr char kLabel[] =
+    "Car 0.00 0 -1.57 100.00 100.00 200.00 200.00 1.5 1.6 3.9 1 1.6 20 -1.57\n";
+constexpr char kDetection[] = "Car -1 -1 -1.57 100 100 200 200 1.5 1.6 3.9 1 1.6 20 -1.57 0.9\n";
+
+void Write(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+// gt/000000..000002 with one car each, det/000000 and det/000001.
+struct Folders {
+  TestTempDir dir;
+  fs::path gt = dir / "gt", det = dir / "det";
+  Folders() {
+    for (const char* id : {"000000", "000001", "000002"}) {
+      Write(gt / (std::string(id) + ".txt"), kLabel);
+    }
+    for (const char* id : {"000000", "000001"}) Write(det / (std::string(id) + ".txt"), kDetection);
+  }
+  EvalInputOptions Options() const {
+    EvalInputOptions o;
+    o.gt = gt;
+    o.det = det;
+    o.num_threads = 2;
+    return o;
+  }
+};
+
+std::string ErrorOf(const EvalInputOptions& options) {
+  try {
+    LoadEvalFrames(options);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no exception";
+  return "";
+}
+
+TEST(EvalInput, ReadsEveryLabelFileAndNotesFramesWithoutDetections) {
+  const Folders f;
+  const EvalInput in = LoadEvalFrames(f.Options());
+  ASSERT_EQ(in.frames.size(), 3u);
+  EXPECT_EQ(in.frames[0].id, "000000");
+  EXPECT_EQ(in.frames[2].id, "000002");
+  EXPECT_EQ(in.frames[0].labels.size(), 1u);
+  EXPECT_EQ(in.frames[1].detections.size(), 1u);
+  EXPECT_TRUE(in.frames[2].detections.empty());
+  EXPECT_THAT(in.frames_without_detections, ElementsAre("000002"));
+  EXPECT_TRUE(in.ignored_files.empty());
+  EXPECT_THAT(in.Notices(), ElementsAre("frames without a detection file (no detections): 1"));
+}
+
+TEST(EvalInput, KittiRootAndDevkitDataFolderAreFound) {
+  TestTempDir dir;
+  Write(dir / "kitti/training/label_2/000007.txt", kLabel);
+  Write(dir / "kitti/ImageSets/val.txt", "000007\n");
+  Write(dir / "results/data/000007.txt", kDetection);
+  EvalInputOptions o;
+  o.gt = dir / "kitti";
+  o.det = dir / "results";
+  o.split = "val";
+  const EvalInput in = LoadEvalFrames(o);
+  ASSERT_EQ(in.frames.size(), 1u);
+  EXPECT_EQ(in.frames[0].detections.size(), 1u);
+  EXPECT_EQ(in.label_dir, dir / "kitti/training/label_2");
+  EXPECT_EQ(in.det_dir, dir / "results/data");
+  EXPECT_TRUE(in.Notices().empty());
+}
+
+TEST(EvalInput, StrayFilesAreIgnoredWithOneNotice) {
+  Folders f;
+  Write(f.det / "009999.txt", kDetection);  // a frame outside the split
+  Write(f.det / "README.txt", "how these were made\n");
+  Write(f.det / "README.md", "not a .txt: ignored silently\n");
+  Write(f.det / ".hidden.txt", "hidden: ignored silently\n");
+  Write(f.gt / "notes.txt", "not a frame id\n");
+  Write(f.dir / "split.txt", "000000\n000001\n");
+  EvalInputOptions o = f.Options();
+  o.split = (f.dir / "split.txt").string();
+  const EvalInput in = LoadEvalFrames(o);
+  ASSERT_EQ(in.frames.size(), 2u);
+  EXPECT_THAT(in.ignored_files,
+              ElementsAre((f.det / "009999.txt").string(), (f.det / "README.txt").string(),
+                          (f.gt / "notes.txt").string()));
+  const std::vector<std::string> notices = in.Notices();
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_THAT(notices[0], HasSubstr("ignored 3 .txt file(s)"));
+  EXPECT_THAT(notices[0], HasSubstr("first: " + (f.det / "009999.txt").string()));
+}
+
+TEST(EvalInput, WithoutASplitADetectionFileWithoutALabelFileIsAnError) {
+  Folders f;
+  Write(f.det / "README.txt", "not a frame: ignored\n");
+  EXPECT_EQ(LoadEvalFrames(f.Options()).ignored_files.size(), 1u);
+  Write(f.det / "009999.txt", kDetection);
+  const std::string error = ErrorOf(f.Options());
+  EXPECT_THAT(error, HasSubstr("009999.txt has no label file in"));
+  EXPECT_THAT(error, HasSubstr("with --split"));
+}
+
+TEST(EvalInput, SplitFrameWithoutALabelFileIsAnError) {
+  Folders f;
+  Write(f.dir / "split.txt", "000000\n000005\n");
+  EvalInputOptions o = f.Options();
+  o.split = (f.dir / "split.txt").string();
+  EXPECT_THAT(ErrorOf(o), HasSubstr("frame 000005 has no label file"));
+  Write(f.dir / "split.txt", "000000\nabc\n");
+  try {
+    LoadEvalFrames(o);
+    ADD_FAILURE() << "no ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_EQ(e.field(), "frame id");
+  }
+}
+
+TEST(EvalInput, SplitNameWithAPlainLabelFolderSaysWhereItLookedAndHowToPassAFile) {
+  TestTempDir dir;
+  Write(dir / "kitti/training/label_2/000007.txt", kLabel);
+  Write(dir / "kitti/ImageSets/val.txt", "000007\n");
+  Write(dir / "det/000007.txt", kDetection);
+  EvalInputOptions o;
+  o.gt = dir / "kitti/training/label_2";
+  o.det = dir / "det";
+  o.split = "val";
+  const std::string error = ErrorOf(o);
+  EXPECT_THAT(error, HasSubstr("--split val: no such file"));
+  EXPECT_THAT(error, HasSubstr("not a KITTI root"));
+  const std::string found = (dir / "kitti/ImageSets/val.txt").string();
+  EXPECT_THAT(error, HasSubstr("looked for the file 'val' and for ImageSets/val.txt"));
+  EXPECT_THAT(error,
+              HasSubstr(": found " + found + ". Pass the split file itself: --split " + found));
+  // Nothing to find: the message still says how to pass a file.
+  o.split = "test";
+  const std::string none = ErrorOf(o);
+  EXPECT_THAT(none, HasSubstr(": none there"));
+  EXPECT_THAT(none, HasSubstr("--split ROOT/ImageSets/test.txt, or the KITTI root: --gt ROOT"));
+}
+
+TEST(EvalInput, LenientSkipsAndListsBadLinesStrictThrows) {
+  Folders f;
+  Write(f.det / "000001.txt", std::string(kDetection) + "Car 0 0 1 2 3 4 5 6 7 8 9 10 11 12 nan\n");
+  Write(f.gt / "000002.txt", std::string("Car 0 0 x\n") + kLabel);
+  try {
+    LoadEvalFrames(f.Options());
+    ADD_FAILURE() << "strict mode did not throw";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.line(), e.file() == (f.det / "000001.txt").string() ? 2 : 1);
+  }
+  EvalInputOptions o = f.Options();
+  o.lenient = true;
+  const EvalInput in = LoadEvalFrames(o);
+  ASSERT_EQ(in.skipped_lines.size(), 2u);
+  EXPECT_THAT(in.skipped_lines[0], HasSubstr((f.det / "000001.txt").string() + ":2: field score"));
+  EXPECT_THAT(in.skipped_lines[1], HasSubstr((f.gt / "000002.txt").string() + ":1: field"));
+  EXPECT_EQ(in.frames[1].detections.size(), 1u);
+  EXPECT_EQ(in.frames[2].labels.size(), 1u);
+  EXPECT_THAT(in.Notices(), ::testing::Contains("skipped bad lines (--lenient): 2"));
+}
+
+TEST(EvalInput, DetectionsWithFloatsInEveryFieldAreRead) {
+  Folders f;
+  Write(f.det / "000000.txt",
+        "Car -1.0000 -1.0000 -1.5700 100.0000 100.0000 200.0000 200.0000 1.5000 1.6000 3.9000 "
+        "1.0000 1.6000 20.0000 -1.5700 0.9000\n");
+  const EvalInput in = LoadEvalFrames(f.Options());
+  ASSERT_EQ(in.frames[0].detections.size(), 1u);
+  EXPECT_EQ(*in.frames[0].detections[0].score, 0.9);
+}
+
+TEST(EvalInput, MissingFoldersAndEmptyOptionsAreErrors) {
+  Folders f;
+  EvalInputOptions o = f.Options();
+  o.det = f.dir / "nowhere";
+  EXPECT_THAT(ErrorOf(o), HasSubstr("nowhere is not a folder"));
+  o.det.clear();
+  EXPECT_THROW(LoadEvalFrames(o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet
