@@ -195,7 +195,7 @@ TEST(Evaluator, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
 //  - Moderate / Hard: the 100 and 40.00 px cars count (n = 2); the 25.00 px one is ignored and its
 //    detection (25 px, not lower than 25) is assigned to it. Two thresholds: slots 0, 1 = 1:
 //    AP_R40 = 2.5, AP_R11 = 100/11.
-// The official devkit prints these (run on this frame). The prclibo/kitti_eval fork (height < min)
+// The official devkit's arrays give these (run on this frame). The prclibo fork (height < min)
 // counts 2 / 3 / 3 labels and gives AP_R40 2.5 / 5.0 / 5.0.
 TEST(Evaluator, LabelsExactly40And25PxTallAreIgnoredLikeTheOfficialDevkit) {
   EvalFrame frame;
