@@ -1,4 +1,4 @@
-// The BEV and 3D overlaps of KITTI's devkit (evaluate_object_3d_offline: groundBoxOverlap and
+// The BEV and 3D overlaps of KITTI's devkit (evaluate_object.cpp: groundBoxOverlap and
 // box3DOverlap) in the devkit's own arithmetic, for the rare overlaps whose decision depends on it
 // (see KittiOverlapAtThreshold, frame_data.h). boost::geometry 1.74 computes intersections and
 // unions on coordinates rescaled to an integer grid (about 1e7 steps across the two boxes), so its

@@ -19,7 +19,7 @@ namespace stereodet {
 
 // How detections are associated with labels.
 enum class Matcher {
-  kKitti,    // KITTI's devkit (evaluate_object_3d_offline), quirks included
+  kKitti,    // KITTI's official devkit (devkit_object, evaluate_object.cpp), quirks included
   kOptimal,  // maximum number of true positives, then maximum total IoU (the paper's metric)
   kVoc,      // PASCAL VOC: detections in descending score, each to its best-overlapping label
 };
@@ -80,8 +80,9 @@ struct EvalOptions {
   double score_threshold = -std::numeric_limits<double>::infinity();
 
   // KITTI's devkit evaluates a class (per overlap kind) only if some detection of it has a valid
-  // box of that kind (2D: left >= 0; BEV: x != -1000; 3D: y != -1000). Kept in every matcher so the
-  // tables line up; a class that is not evaluated is reported with evaluated = false.
+  // box of that kind (2D: left >= 0; BEV: x, z != -1000 and w, l > 0; 3D: x, y, z != -1000 and
+  // h, w, l > 0). Kept in every matcher so the tables line up; a class that is not evaluated is
+  // reported with evaluated = false.
   bool require_detections = true;
 
   // Brier scores and calibration need probabilities: with kNone and any detection's score outside

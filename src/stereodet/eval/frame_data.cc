@@ -211,10 +211,10 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
     const double height = label.box.bottom - label.box.top;
     for (int d = 0; d < kNumDifficulties; ++d) {
       const DifficultyLimits lim = KittiDifficultyLimits(static_cast<Difficulty>(d));
-      // The devkit's test, written as it is: ignored if occluded > max || truncated > max ||
-      // height < min.
-      const bool ignore = label.occluded > lim.max_occlusion || label.truncated > lim.max_truncation ||
-                          height < lim.min_height_px;
+      // The official devkit's test (cleanData), written as it is: ignored if occluded > max ||
+      // truncated > max || height <= min (the prclibo/kitti_eval fork has height < min).
+      const bool ignore = label.occluded > lim.max_occlusion ||
+                          label.truncated > lim.max_truncation || height <= lim.min_height_px;
       if (!ignore) bits |= static_cast<uint8_t>(1u << d);
     }
     cf.label_object.push_back(static_cast<int32_t>(i));
@@ -278,8 +278,21 @@ bool HasEvaluableDetection(const std::vector<EvalFrame>& frames, const ClassSpec
       if (!EqualsIgnoreCase(det.type, spec.name)) continue;
       switch (kind) {
         case OverlapKind::k2D: if (det.box.left >= 0) return true; break;
-        case OverlapKind::kBev: if (det.box3d.location.x() != -1000) return true; break;
-        case OverlapKind::k3D: if (det.box3d.location.y() != -1000) return true; break;
+        // The official devkit's tests (loadDetections); the prclibo/kitti_eval fork tests only
+        // x != -1000 (BEV) and y != -1000 (3D).
+        case OverlapKind::kBev:
+          if (det.box3d.location.x() != -1000 && det.box3d.location.z() != -1000 &&
+              det.box3d.w > 0 && det.box3d.l > 0) {
+            return true;
+          }
+          break;
+        case OverlapKind::k3D:
+          if (det.box3d.location.x() != -1000 && det.box3d.location.y() != -1000 &&
+              det.box3d.location.z() != -1000 && det.box3d.h > 0 && det.box3d.w > 0 &&
+              det.box3d.l > 0) {
+            return true;
+          }
+          break;
       }
     }
   }

@@ -111,8 +111,9 @@ struct ClassFrame {
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit);
 
-// Whether the devkit would evaluate `spec` for `kind` given these detections (a detection of the
-// class with left >= 0 for 2D, x != -1000 for BEV, y != -1000 for 3D).
+// Whether KITTI's official devkit would evaluate `spec` for `kind` given these detections: some
+// detection of the class with left >= 0 (2D); x, z != -1000 and w, l > 0 (BEV); x, y, z != -1000
+// and h, w, l > 0 (3D).
 bool HasEvaluableDetection(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
                            OverlapKind kind);
 // False if any detection (any class) has alpha == -10: the devkit then skips AOS altogether.

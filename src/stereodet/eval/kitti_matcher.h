@@ -1,5 +1,6 @@
-// KITTI's devkit (evaluate_object_3d_offline / evaluate_object), reproduced exactly, quirks kept:
-// see docs/metrics.md, section "KITTI-compatible mode", for each quirk and the test that shows it.
+// KITTI's official devkit (devkit_object, cpp/evaluate_object.cpp), reproduced exactly, quirks
+// kept: see docs/metrics.md, section "KITTI-compatible mode", for each quirk and the test that
+// shows it.
 //
 // Per class, overlap kind and difficulty the devkit
 //  1. matches every frame greedily, label by label in file order, each label taking the unassigned

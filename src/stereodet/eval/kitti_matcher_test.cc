@@ -75,7 +75,7 @@ RefClean RefCleanData(const EvalFrame& frame, const ClassSpec& spec, Difficulty 
     }
     const double height = g.box.bottom - g.box.top;
     const bool ignore = g.occluded > lim.max_occlusion || g.truncated > lim.max_truncation ||
-                        height < lim.min_height_px;
+                        height <= lim.min_height_px;
     if (valid_class == 1 && !ignore) {
       c.ignored_gt.push_back(0);
       ++c.n_gt;

@@ -30,7 +30,10 @@ DifficultyLimits KittiDifficultyLimits(Difficulty difficulty) {
 bool MeetsDifficulty(const Object& label, Difficulty difficulty) {
   if (label.IsDontCare()) return false;
   const DifficultyLimits limits = KittiDifficultyLimits(difficulty);
-  return label.box.Height() >= limits.min_height_px && label.occluded <= limits.max_occlusion &&
+  // KITTI's official devkit (devkit_object, evaluate_object.cpp) ignores a label when
+  // `height <= MIN_HEIGHT`: a label exactly 40.00 px tall is not Easy, one of 25.00 px meets no
+  // level.
+  return label.box.Height() > limits.min_height_px && label.occluded <= limits.max_occlusion &&
          label.truncated <= limits.max_truncation;
 }
 

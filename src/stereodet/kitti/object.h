@@ -47,7 +47,10 @@ struct DifficultyLimits {
 // {40, 0, 0.15}, {25, 1, 0.30}, {25, 2, 0.50} for Easy, Moderate, Hard.
 DifficultyLimits KittiDifficultyLimits(Difficulty difficulty);
 
-// Whether a label meets `difficulty`'s limits (height >= min, occluded <= max, truncated <= max).
+// Whether a label meets `difficulty`'s limits as KITTI's official devkit tests them: 2D height
+// (bottom - top) > min, occluded <= max, truncated <= max. A label exactly 40.00 px tall is
+// Moderate, not Easy; one exactly 25.00 px tall meets no level (the prclibo/kitti_eval fork kept
+// `>= min`).
 bool MeetsDifficulty(const Object& label, Difficulty difficulty);
 // The easiest level the label meets, or nullopt if it meets none (too small, too occluded or too
 // truncated even for Hard; DontCare regions).

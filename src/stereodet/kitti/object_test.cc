@@ -29,18 +29,40 @@ TEST(ObjectTest, DifficultyNamesAndLimits) {
   EXPECT_EQ(hard.max_truncation, 0.50);
 }
 
+// The official devkit's rule: a label is ignored when height <= the minimum (40 / 25 / 25 px),
+// occluded > max or truncated > max; so exactly 40.00 px is not Easy and exactly 25.00 px is
+// nothing.
 TEST(ObjectTest, EasiestDifficultyAtTheBoundaries) {
-  EXPECT_EQ(EasiestDifficulty(MakeLabel(40.0, 0, 0.15)), Difficulty::kEasy);
+  EXPECT_EQ(EasiestDifficulty(MakeLabel(40.01, 0, 0.15)), Difficulty::kEasy);
+  EXPECT_EQ(EasiestDifficulty(MakeLabel(40.0, 0, 0.15)), Difficulty::kModerate);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(39.99, 0, 0.0)), Difficulty::kModerate);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 1, 0.0)), Difficulty::kModerate);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 0, 0.16)), Difficulty::kModerate);
-  EXPECT_EQ(EasiestDifficulty(MakeLabel(25.0, 1, 0.30)), Difficulty::kModerate);
+  EXPECT_EQ(EasiestDifficulty(MakeLabel(25.01, 1, 0.30)), Difficulty::kModerate);
+  EXPECT_EQ(EasiestDifficulty(MakeLabel(25.0, 1, 0.30)), std::nullopt);
+  EXPECT_EQ(EasiestDifficulty(MakeLabel(25.0, 0, 0.0)), std::nullopt);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 2, 0.0)), Difficulty::kHard);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 0, 0.31)), Difficulty::kHard);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(24.99, 0, 0.0)), std::nullopt);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 3, 0.0)), std::nullopt);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 0, 0.51)), std::nullopt);
   EXPECT_EQ(EasiestDifficulty(MakeLabel(100.0, 0, 0.0, "DontCare")), std::nullopt);
+}
+
+// Heights as KITTI's two-decimal files give them: bottom - top of the parsed numbers.
+TEST(ObjectTest, TwoDecimalBoxesExactly25And40PxTall) {
+  Object o = MakeLabel(0.0, 0, 0.0);
+  o.box = {612.37, 150.37, 700.12, 190.37};  // 190.37 - 150.37 == 40.0 in double
+  ASSERT_EQ(o.box.Height(), 40.0);
+  EXPECT_FALSE(MeetsDifficulty(o, Difficulty::kEasy));
+  EXPECT_TRUE(MeetsDifficulty(o, Difficulty::kModerate));
+  EXPECT_TRUE(MeetsDifficulty(o, Difficulty::kHard));
+  o.box = {612.37, 180.12, 700.12, 205.12};  // 25.0
+  ASSERT_EQ(o.box.Height(), 25.0);
+  EXPECT_FALSE(MeetsDifficulty(o, Difficulty::kHard));
+  o.box.bottom = 205.13;
+  EXPECT_TRUE(MeetsDifficulty(o, Difficulty::kHard));
+  EXPECT_FALSE(MeetsDifficulty(o, Difficulty::kEasy));
 }
 
 TEST(ObjectTest, EasyImpliesModerateImpliesHard) {
