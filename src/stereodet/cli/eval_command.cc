@@ -16,6 +16,7 @@
 #include "stereodet/cli/commands.h"
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
@@ -42,6 +43,7 @@ struct EvalArgs {
   std::string metrics = "2d,bev,3d";
   std::string difficulties = "easy,moderate,hard";
   std::string matcher = "kitti";
+  std::string compat = "devkit";
   std::string filter;
   std::string filter_mode = "stable";
   double score_threshold = -std::numeric_limits<double>::infinity();
@@ -65,6 +67,10 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--metrics", a->metrics, "overlap kinds: 2d,bev,3d")->capture_default_str();
   cmd->add_option("--difficulties", a->difficulties, "easy,moderate,hard")->capture_default_str();
   cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc")->capture_default_str();
+  cmd->add_option("--compat", a->compat,
+                  "devkit | openpcdet (kitti matcher: OpenPCDet's kitti_object_eval_python numbers, "
+                  "and its printout)")
+      ->capture_default_str();
   if (with_filter) {
     cmd->add_option("--filter", a->filter, "filter, e.g. min-area=100,max-distance=40");
   }
@@ -94,7 +100,14 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   STEREODET_CHECK(!a.det.empty()) << "--det is required";
   EvalOptions o;
   o.classes.clear();
-  for (const std::string& name : SplitList(a.classes)) o.classes.push_back(KittiClassSpec(name, a.loose));
+  const auto compat = ParseEvalCompat(a.compat);
+  STEREODET_CHECK(compat.has_value())
+      << "--compat: unknown '" << a.compat << "' (devkit, openpcdet)";
+  o.compat = *compat;
+  for (const std::string& name : SplitList(a.classes)) {
+    o.classes.push_back(o.compat == EvalCompat::kOpenPcdet ? OpenPcdetClassSpec(name, a.loose)
+                                                           : KittiClassSpec(name, a.loose));
+  }
   o.metrics.clear();
   for (const std::string& m : SplitList(a.metrics)) {
     const auto kind = ParseOverlapKind(m);
@@ -220,6 +233,10 @@ void RunEval(const EvalArgs& a) {
   LoadedInput in = LoadInput(a.gt, a.det, a.split, a.threads);
   const EvalResult result = Evaluate(in.frames, options);
   fmt::print("{}", FormatEvalTable(result, options));
+  if (options.compat == EvalCompat::kOpenPcdet) {
+    fmt::print("\nas OpenPCDet's get_official_eval_result prints it:\n{}",
+               OpenPcdetPrintout(in.frames, options));
+  }
   if (!in.info.frames_without_detections.empty()) {
     fmt::print("frames without a detection file (no detections): {}\n",
                in.info.frames_without_detections.size());
