@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -298,6 +302,32 @@ TEST(FormatOpenPcdetResult, PrintsLikeGetOfficialEvalResult) {
       "3d   AP:0.0000, 0.0000, 0.0000\n"
       "aos  AP:0.00, 0.00, 0.00\n";
   EXPECT_EQ(text, expected);
+}
+
+// tests/data/eval_small/openpcdet_expected.txt is what OpenPCDet's get_official_eval_result (commit
+// 8cacccec, numba 0.56.4 CUDA simulator) printed for Car, Pedestrian and Cyclist on these frames.
+TEST(OpenPcdetPrintout, EqualsTheToolsOnTheFixture) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
+  std::vector<fs::path> labels;
+  for (const auto& e : fs::directory_iterator(dir / "label_2")) labels.push_back(e.path());
+  std::sort(labels.begin(), labels.end());
+  std::vector<EvalFrame> frames;
+  for (const fs::path& p : labels) {
+    EvalFrame f;
+    f.id = p.stem().string();
+    f.labels = ReadObjects(p, {ObjectFileKind::kLabel, false}).objects;
+    f.detections =
+        ReadObjects(dir / "det" / p.filename(), {ObjectFileKind::kDetection, false}).objects;
+    frames.push_back(std::move(f));
+  }
+  ASSERT_EQ(frames.size(), 12u);
+  std::ifstream in(dir / "openpcdet_expected.txt");
+  std::stringstream expected;
+  expected << in.rdbuf();
+  EvalOptions options;
+  options.num_threads = 2;
+  EXPECT_EQ(OpenPcdetPrintout(frames, options), expected.str());
 }
 
 }  // namespace

@@ -95,6 +95,7 @@ json EvalResultToJson(const EvalResult& result, const EvalOptions& options, cons
     filter.push_back({{"bound", FilterBoundName(c.bound)}, {"value", c.value}});
   }
   j["options"] = {{"matcher", MatcherName(options.matcher)},
+                  {"compat", EvalCompatName(options.compat)},
                   {"classes", classes},
                   {"metrics", metrics},
                   {"difficulties", difficulties},
