@@ -24,6 +24,7 @@
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/report/eval_report.h"
@@ -47,6 +48,7 @@ struct EvalArgs {
   std::string metrics = "2d,bev,3d";
   std::string difficulties = "easy,moderate,hard";
   std::string matcher = "kitti";
+  std::string compat = "devkit";
   std::string filter;
   std::string filter_mode = "stable";
   double score_threshold = -std::numeric_limits<double>::infinity();
@@ -74,6 +76,10 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--metrics", a->metrics, "overlap kinds: 2d,bev,3d")->capture_default_str();
   cmd->add_option("--difficulties", a->difficulties, "easy,moderate,hard")->capture_default_str();
   cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc")->capture_default_str();
+  cmd->add_option("--compat", a->compat,
+                  "devkit | openpcdet (kitti matcher: OpenPCDet's kitti_object_eval_python numbers, "
+                  "and its printout)")
+      ->capture_default_str();
   if (with_filter) {
     cmd->add_option("--filter", a->filter, "filter, e.g. min-area=100,max-distance=40");
   }
@@ -131,8 +137,14 @@ EvalOptions MakeOptions(const EvalArgs& a, OverlapSet overlaps) {
   STEREODET_CHECK(!a.det.empty()) << "--det is required";
   EvalOptions o;
   o.classes.clear();
+  const auto compat = ParseEvalCompat(a.compat);
+  STEREODET_CHECK(compat.has_value())
+      << "--compat: unknown '" << a.compat << "' (devkit, openpcdet)";
+  o.compat = *compat;
+  const bool loose = overlaps == OverlapSet::kLoose;
   for (const std::string& name : SplitList(a.classes)) {
-    o.classes.push_back(KittiClassSpec(name, overlaps == OverlapSet::kLoose));
+    o.classes.push_back(o.compat == EvalCompat::kOpenPcdet ? OpenPcdetClassSpec(name, loose)
+                                                           : KittiClassSpec(name, loose));
   }
   o.metrics.clear();
   for (const std::string& m : SplitList(a.metrics)) {
@@ -254,6 +266,11 @@ void RunEval(const EvalArgs& a) {
     seconds += run.result.seconds;
   }
   fmt::print("{}", FormatEvalTable(runs));
+  if (runs.front().options.compat == EvalCompat::kOpenPcdet) {
+    // OpenPCDet prints both overlap sets itself: once, whatever --overlaps says.
+    fmt::print("\nas OpenPCDet's get_official_eval_result prints it:\n{}",
+               OpenPcdetPrintout(in.frames, runs.front().options));
+  }
   fmt::print("evaluated in {:.3f} s\n", seconds);
   if (out) {
     size_t num_files = WriteEvalReport(out->path(), runs, in.info).size();

@@ -23,6 +23,21 @@ std::optional<Matcher> ParseMatcher(std::string_view text) {
   return std::nullopt;
 }
 
+const char* EvalCompatName(EvalCompat compat) {
+  switch (compat) {
+    case EvalCompat::kDevkit: return "devkit";
+    case EvalCompat::kOpenPcdet: return "openpcdet";
+  }
+  return "?";
+}
+
+std::optional<EvalCompat> ParseEvalCompat(std::string_view text) {
+  for (EvalCompat c : {EvalCompat::kDevkit, EvalCompat::kOpenPcdet}) {
+    if (EqualsIgnoreCase(text, EvalCompatName(c))) return c;
+  }
+  return std::nullopt;
+}
+
 const char* OverlapKindName(OverlapKind kind) {
   switch (kind) {
     case OverlapKind::k2D: return "2d";
@@ -129,6 +144,9 @@ void EvalOptions::Check() const {
       STEREODET_CHECK(tau > 0 && tau <= 1) << "class " << c.name << ": min overlap must be in (0, 1], got " << tau;
     }
   }
+  STEREODET_CHECK(compat == EvalCompat::kDevkit || matcher == Matcher::kKitti)
+      << "compat " << EvalCompatName(compat)
+      << " reproduces a KITTI evaluation: it needs matcher kitti, got " << MatcherName(matcher);
   STEREODET_CHECK(!std::isnan(score_threshold)) << "score_threshold is NaN";
   STEREODET_CHECK(calibration_bins >= 1 && calibration_bins <= 10000)
       << "calibration_bins must be in [1, 10000], got " << calibration_bins;

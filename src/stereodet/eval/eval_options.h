@@ -26,6 +26,15 @@ enum class Matcher {
 const char* MatcherName(Matcher matcher);  // "kitti", "optimal", "voc"
 std::optional<Matcher> ParseMatcher(std::string_view text);
 
+// Whose KITTI evaluation `--matcher kitti` reproduces where they differ (docs/metrics.md,
+// "OpenPCDet / mmdetection3d compatibility").
+enum class EvalCompat {
+  kDevkit,     // KITTI's devkit (the leaderboard's numbers)
+  kOpenPcdet,  // OpenPCDet's / mmdetection3d's kitti_object_eval_python (its printed numbers)
+};
+const char* EvalCompatName(EvalCompat compat);  // "devkit", "openpcdet"
+std::optional<EvalCompat> ParseEvalCompat(std::string_view text);
+
 // Which overlap decides a match. The numeric values index ClassSpec::min_overlap.
 enum class OverlapKind { k2D = 0, kBev = 1, k3D = 2 };
 inline constexpr int kNumOverlapKinds = 3;
@@ -73,6 +82,10 @@ struct EvalOptions {
   std::vector<Difficulty> difficulties = {Difficulty::kEasy, Difficulty::kModerate,
                                           Difficulty::kHard};
   Matcher matcher = Matcher::kKitti;
+  // With kOpenPcdet (KITTI matcher only): OpenPCDet's label rule, DontCare use, rotated-box
+  // overlaps, AOS switch and envelope (openpcdet_compat.h); every class is evaluated
+  // (require_detections is not consulted).
+  EvalCompat compat = EvalCompat::kDevkit;
 
   // Operating point: detections with score >= this take part in the statistics at a threshold
   // (TP/FP/FN, precision, recall, F1), the Brier scores, calibration, localization error and the
@@ -107,7 +120,8 @@ struct EvalOptions {
 
   int num_threads = 0;  // 0 = all hardware threads
 
-  // Throws std::invalid_argument on an empty class list, a threshold outside (0, 1], bins < 1, ...
+  // Throws std::invalid_argument on an empty class list, a threshold outside (0, 1], bins < 1,
+  // compat kOpenPcdet with another matcher than kKitti, ...
   void Check() const;
 };
 

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "stereodet/eval/bipartite.h"
+#include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/eval/optimal_matcher.h"
 #include "stereodet/eval/voc_matcher.h"
 #include "stereodet/util/check.h"
@@ -21,14 +22,17 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // KITTI mode decides with the devkit's own overlap values where they may differ from ours; the
 // optimal and VOC matchers (>= tau, the paper's definition) keep the exact ones.
+// With --compat openpcdet, OpenPCDet's rules and overlaps instead (openpcdet_compat.h).
 std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
-                                   OverlapKind kind, Matcher matcher, int num_threads) {
+                                   OverlapKind kind, Matcher matcher, int num_threads,
+                                   EvalCompat compat = EvalCompat::kDevkit) {
   const OverlapArithmetic arithmetic =
       matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
   std::vector<ClassFrame> out(frames.size());
-  ParallelFor(frames.size(),
-              [&](size_t i) { out[i] = PrepareClassFrame(frames[i], spec, kind, arithmetic); },
-              num_threads);
+  ParallelFor(frames.size(), [&](size_t i) {
+    out[i] = compat == EvalCompat::kOpenPcdet ? PrepareClassFrameOpenPcdet(frames[i], spec, kind)
+                                              : PrepareClassFrame(frames[i], spec, kind, arithmetic);
+  }, num_threads);
   return out;
 }
 
@@ -468,8 +472,8 @@ std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
 }
 
 void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
-                int num_threads, ClassResult* r) {
-  const KittiClassResult k = EvaluateKittiClass(cfs, difficulty, num_threads);
+                int num_threads, ClassResult* r, EvalCompat compat = EvalCompat::kDevkit) {
+  const KittiClassResult k = EvaluateKittiClass(cfs, difficulty, num_threads, compat);
   r->num_valid_labels = k.num_groundtruth;
   r->ap_r40 = k.ap_r40;
   r->ap_r11 = k.ap_r11;
@@ -536,7 +540,10 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   const Timer timer;
   EvalResult result;
   result.num_frames = static_cast<int64_t>(frames.size());
-  result.aos_computed = options.compute_aos && AllAlphasValid(frames);
+  const EvalCompat compat = options.compat;
+  result.aos_computed = options.compute_aos && (compat == EvalCompat::kOpenPcdet
+                                                    ? OpenPcdetComputesAos(frames)
+                                                    : AllAlphasValid(frames));
   const int threads = options.num_threads;
   const double t_op = options.score_threshold;
   result.scores = SummarizeScores(frames);
@@ -552,12 +559,13 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       for (const Object& d : f.detections) num_detections += EqualsIgnoreCase(d.type, spec.name) ? 1 : 0;
     }
     for (const OverlapKind kind : options.metrics) {
-      const bool evaluated = !options.require_detections || HasEvaluableDetection(frames, spec, kind);
+      const bool evaluated = compat == EvalCompat::kOpenPcdet || !options.require_detections ||
+                             HasEvaluableDetection(frames, spec, kind);
       std::vector<ClassFrame> cfs, struck_cfs;
       if (evaluated) {
-        cfs = PrepareAll(frames, spec, kind, options.matcher, threads);
+        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat);
         if (!options.filter.empty()) {
-          struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads);
+          struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads, compat);
         }
       }
       for (const Difficulty difficulty : options.difficulties) {
@@ -575,7 +583,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         }
         const bool with_aos = result.aos_computed && kind == OverlapKind::k2D;
         if (options.matcher == Matcher::kKitti) {
-          KittiCurve(cfs, difficulty, with_aos, threads, &r);
+          KittiCurve(cfs, difficulty, with_aos, threads, &r, compat);
         } else {
           FilteredCurve c;
           ExactCurve(options.matcher, frames, cfs, difficulty, with_aos, threads, &c, &r.num_valid_labels);
@@ -612,7 +620,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           // Naive curve: the struck set evaluated exactly like the unfiltered one.
           if (options.matcher == Matcher::kKitti) {
             ClassResult naive;
-            KittiCurve(struck_cfs, difficulty, with_aos, threads, &naive);
+            KittiCurve(struck_cfs, difficulty, with_aos, threads, &naive, compat);
             fs.naive_curve.curve = std::move(naive.curve);
             fs.naive_curve.ap_r40 = naive.ap_r40;
             fs.naive_curve.ap_r11 = naive.ap_r11;
@@ -656,7 +664,8 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
   std::vector<SweepRow> rows;
   for (const ClassSpec& spec : options.classes) {
     for (const OverlapKind kind : options.metrics) {
-      const std::vector<ClassFrame> cfs = PrepareAll(frames, spec, kind, options.matcher, threads);
+      const std::vector<ClassFrame> cfs =
+          PrepareAll(frames, spec, kind, options.matcher, threads, options.compat);
       for (const Difficulty difficulty : options.difficulties) {
         const std::vector<FrameAssociation> assocs =
             AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
@@ -672,7 +681,7 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
           row.stats.stable = CountStable(frames, cfs, assocs, conditions, t_op);
           const std::vector<ClassFrame> struck_cfs =
               PrepareAll(StrikeFailing(frames, conditions, threads), spec, kind, options.matcher,
-                         threads);
+                         threads, options.compat);
           row.stats.naive =
               CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           rows.push_back(std::move(row));

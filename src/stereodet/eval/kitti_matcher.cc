@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 
+#include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/util/parallel.h"
 
 namespace stereodet {
@@ -215,7 +216,7 @@ double KittiApR40(const std::array<double, kKittiSamplePoints>& curve) {
 }
 
 KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
-                                    int num_threads) {
+                                    int num_threads, EvalCompat compat) {
   KittiClassResult result;
   // Blocks of frames, so each worker accumulates locally and the reduction is short.
   constexpr size_t kBlock = 64;
@@ -265,9 +266,14 @@ KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Diffi
     precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
     aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
   }
-  for (size_t i = 0; i < n_t; ++i) {
-    precision[i] = *std::max_element(precision.begin() + i, precision.end());
-    aos[i] = *std::max_element(aos.begin() + i, aos.end());
+  if (compat == EvalCompat::kOpenPcdet) {
+    OpenPcdetEnvelope(&precision);
+    OpenPcdetEnvelope(&aos);
+  } else {
+    for (size_t i = 0; i < n_t; ++i) {
+      precision[i] = *std::max_element(precision.begin() + i, precision.end());
+      aos[i] = *std::max_element(aos.begin() + i, aos.end());
+    }
   }
   result.precision = precision;
   result.aos = aos;

@@ -62,9 +62,10 @@ struct KittiClassResult {
   double aos_r11 = 0.0, aos_r40 = 0.0;  // percent (valid only if AOS was computed)
 };
 
-// Runs passes 1-5 over all frames (parallel over frames).
+// Runs passes 1-5 over all frames (parallel over frames). With EvalCompat::kOpenPcdet the envelope
+// is numpy's (OpenPcdetEnvelope: a NaN slot makes every slot before it NaN); the rest is the same.
 KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
-                                    int num_threads);
+                                    int num_threads, EvalCompat compat = EvalCompat::kDevkit);
 
 // The devkit's summaries of a 41-slot curve, in percent: sum of [0,4,...,40] / 11 and [1..40] / 40.
 double KittiApR11(const std::array<double, kKittiSamplePoints>& curve);

@@ -96,6 +96,7 @@ json OptionsJson(const EvalOptions& options) {
     filter.push_back({{"bound", FilterBoundName(c.bound)}, {"value", c.value}});
   }
   return {{"matcher", MatcherName(options.matcher)},
+          {"compat", EvalCompatName(options.compat)},
           {"classes", ClassesJson(options.classes)},
           {"metrics", metrics},
           {"difficulties", difficulties},
