@@ -1,20 +1,64 @@
-// The `stereodet` subcommands. Each area adds its subcommands to the app in its own file; main.cc
-// holds the table. A command's callback throws on failure; main() turns that into one clear line on
-// stderr and a non-zero exit.
+// The `stereodet` commands and the executables that hold them.
+//
+// `stereodet` is a git-style front end: it runs the commands that need neither OpenCV nor LibTorch
+// (info, eval) itself and hands the others to a sibling executable in its own folder, so that a
+// command loads only the libraries it uses:
+//   stereodet         info, eval            (util, geometry, kitti, eval, report)
+//   stereodet-vision  synth, stereo         (+ OpenCV)
+//   stereodet-models  train, detect         (+ OpenCV, LibTorch; only with STEREODET_BUILD_MODELS)
+// CommandTable() below is the one list of commands (name, owner, description) that every executable
+// shares; each executable's main() passes its own Add*Command functions to RunCli(), which adds the
+// others as stand-ins that execv() their owner with the same argv, so usage, messages and exit
+// codes are those of the owner. Each area adds its subcommands in its own *_command.cc; a command's
+// callback throws on failure and RunCli turns that into one clear line on stderr and exit 1.
 #ifndef STEREODET_CLI_COMMANDS_H_
 #define STEREODET_CLI_COMMANDS_H_
 
 #include <CLI/CLI.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
 
 namespace stereodet::cli {
 
-void AddInfoCommand(CLI::App& app);  // info_command.cc (kitti helper)
-void AddSynthCommand(CLI::App& app);  // synth_command.cc
-void AddEvalCommand(CLI::App& app);   // eval_command.cc (eval, eval sweep, eval compare)
+// The executables of the CLI, all built into the same folder (build/bin/).
+enum class Program { kFrontEnd, kVision, kModels };
+
+// The file name of `program` ("stereodet", "stereodet-vision", "stereodet-models").
+std::string_view ProgramName(Program program);
+
+// Whether this build configured `program` (kModels needs STEREODET_BUILD_MODELS=ON and LibTorch).
+bool ProgramBuilt(Program program);
+
+struct Command {
+  std::string_view name;         // the first argument: `stereodet NAME ...`
+  Program program;               // the executable that implements it
+  std::string_view description;  // shown by `stereodet --help` and `stereodet NAME --help`
+};
+
+// Every top-level command, in the order `stereodet --help` lists them.
+std::span<const Command> CommandTable();
+
+// The description of the command `name` in CommandTable(). Requires: `name` is in the table
+// (throws std::logic_error otherwise).
+std::string CommandDescription(std::string_view name);
+
+// Adds one area's subcommands (each *_command.cc defines one of these).
+using AddCommandFn = void (*)(CLI::App&);
+void AddInfoCommand(CLI::App& app);    // info_command.cc (kitti helper)
+void AddEvalCommand(CLI::App& app);    // eval_command.cc (eval, eval sweep, eval compare)
+void AddSynthCommand(CLI::App& app);   // synth_command.cc
 void AddStereoCommand(CLI::App& app);  // stereo_command.cc
-#ifdef STEREODET_HAVE_MODELS
 void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect ssd)
-#endif
+
+// The whole main() of the executable `self`: `own` maps each command that `self` implements to the
+// function adding it (a function named twice, as train and detect, is called once). A command of
+// another executable is dispatched with execv() to that executable beside /proc/self/exe, with
+// argv unchanged; if it is missing, one line says so and the exit code is 1. Returns the exit
+// code: 0, CLI11's code for a usage error, or 1 for an error thrown by a command.
+int RunCli(int argc, char** argv, Program self,
+           std::span<const std::pair<std::string_view, AddCommandFn>> own);
 
 }  // namespace stereodet::cli
 

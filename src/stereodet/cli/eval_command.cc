@@ -361,8 +361,7 @@ void RunCompare(const EvalArgs& a, const CompareArgs& c) {
 
 void AddEvalCommand(CLI::App& app) {
   auto args = std::make_shared<EvalArgs>();
-  CLI::App* eval = app.add_subcommand("eval", "evaluate detections: KITTI-compatible AP, optimal "
-                                              "matching, filters, Brier, calibration, 3D error");
+  CLI::App* eval = app.add_subcommand("eval", CommandDescription("eval"));
   AddCommonOptions(eval, args.get(), true);
   eval->add_option(
       "--out", args->out,

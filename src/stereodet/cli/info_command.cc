@@ -169,10 +169,7 @@ void RunInfo(const InfoArgs& args) {
 
 void AddInfoCommand(CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "info",
-      "Summarize a KITTI-format dataset: frames, objects per class and difficulty, a distance "
-      "histogram, and any missing files or bad lines (non-zero exit if there are problems).");
+  CLI::App* cmd = app.add_subcommand("info", CommandDescription("info"));
   cmd->add_option("DIR", args->root, "dataset root (holds training/, testing/, ImageSets/)")
       ->required();
   cmd->add_option("--split", args->split,

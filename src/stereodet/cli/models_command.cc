@@ -20,11 +20,11 @@ namespace {
 
 // `train` and `detect` group one subcommand per detector; whichever area registers first makes the
 // group.
-CLI::App* Group(CLI::App& app, const std::string& name, const std::string& description) {
+CLI::App* Group(CLI::App& app, const std::string& name) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
     if (sub->get_name() == name) return sub;
   }
-  CLI::App* group = app.add_subcommand(name, description);
+  CLI::App* group = app.add_subcommand(name, CommandDescription(name));
   group->require_subcommand(1);
   return group;
 }
@@ -100,8 +100,8 @@ void RunDetect(const DetectArgs& a) {
 }  // namespace
 
 void AddModelsCommand(CLI::App& app) {
-  CLI::App* train = Group(app, "train", "train a detector on a KITTI-format split");
-  CLI::App* detect = Group(app, "detect", "run a trained detector, write KITTI detection files");
+  CLI::App* train = Group(app, "train");
+  CLI::App* detect = Group(app, "detect");
 
   auto targs = std::make_shared<TrainArgs>();
   CLI::App* ts = train->add_subcommand(

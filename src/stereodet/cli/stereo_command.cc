@@ -411,12 +411,7 @@ void RunScene(const SceneArgs& args) {
 
 void AddStereoCommand(CLI::App& app) {
   auto run = std::make_shared<RunArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "stereo",
-      "Compute stereo features for every frame of a KITTI-format dataset: RGB-H images (rgbh/), "
-      "depth and height codes for RGB-D (depth/, height/), stereo point clouds as velodyne .bin "
-      "(velodyne/), KITTI-format disparity (disparity/), and the ground plane (ground/). Parallel, "
-      "resumable (frames whose outputs exist are skipped), atomic writes. See docs/stereo.md.");
+  CLI::App* cmd = app.add_subcommand("stereo", CommandDescription("stereo"));
   AddSharedOptions(cmd, run->shared);
   cmd->add_option("--split", run->split,
                   "split file (one frame id per line), or a name under DATA/ImageSets such as val");

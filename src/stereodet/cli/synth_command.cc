@@ -14,12 +14,7 @@ void AddSynthCommand(CLI::App& app) {
   auto options = std::make_shared<DatasetOptions>();
   auto out = std::make_shared<std::string>();
   auto quiet = std::make_shared<bool>(false);
-  CLI::App* cmd = app.add_subcommand(
-      "synth",
-      "Write synthetic KITTI-format street scenes: "
-      "training/{image_2,image_3,label_2,calib,velodyne,"
-      "disp_noc_0} and ImageSets/{train,val,trainval}.txt. Resumable; the same seed gives the same "
-      "bytes on any number of threads.");
+  CLI::App* cmd = app.add_subcommand("synth", CommandDescription("synth"));
   cmd->add_option("--out", *out, "output folder (the data set root)")->required();
   cmd->add_option("--frames", options->frames, "number of frames")->capture_default_str();
   cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();

@@ -1,0 +1,134 @@
+// RunCli: the main() that the front end `stereodet` and its siblings share (see commands.h).
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "stereodet/cli/commands.h"
+
+#ifndef STEREODET_VERSION
+#define STEREODET_VERSION "unknown"
+#endif
+
+namespace stereodet::cli {
+namespace {
+
+// Why a program may be absent, for the error message.
+std::string HowToBuild(Program program) {
+  if (program == Program::kModels && !ProgramBuilt(program)) {
+    return "it was not built (this build has STEREODET_BUILD_MODELS=OFF or no LibTorch)";
+  }
+  if (!ProgramBuilt(program)) return "it was not built (its modules are not in this build)";
+  return "build it (cmake --build BUILD_DIR --target " + std::string(ProgramName(program)) +
+         ") and keep it beside stereodet";
+}
+
+// Replaces this process with `command`'s program from this executable's folder, passing `argv`
+// (argv[0] as the user typed it, so usage lines and messages name `stereodet`). Returns only by
+// throwing, when the program cannot be run.
+void ExecOwner(const Command& command, char** argv) {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) {
+    throw std::runtime_error("cannot find this executable's folder (/proc/self/exe: " +
+                             error.message() + ") to run `" + std::string(command.name) + "`");
+  }
+  const std::filesystem::path owner = self.parent_path() / ProgramName(command.program);
+  std::fflush(nullptr);
+  ::execv(owner.c_str(), argv);
+  const int exec_errno = errno;
+  if (exec_errno == ENOENT) {
+    throw std::runtime_error("the `" + std::string(command.name) + "` command is in " +
+                             owner.string() +
+                             ", which is not there: " + HowToBuild(command.program));
+  }
+  throw std::runtime_error("cannot run " + owner.string() + " for `" + std::string(command.name) +
+                           "`: " + std::strerror(exec_errno));
+}
+
+const Command* FindCommand(std::string_view name) {
+  for (const Command& command : CommandTable()) {
+    if (command.name == name) return &command;
+  }
+  return nullptr;
+}
+
+AddCommandFn FindOwn(std::span<const std::pair<std::string_view, AddCommandFn>> own,
+                     std::string_view name) {
+  for (const auto& [own_name, add] : own) {
+    if (own_name == name) return add;
+  }
+  return nullptr;
+}
+
+// A stand-in for a command of another executable: listed by --help with the table's description,
+// it parses nothing itself (no --help flag, every argument kept) and hands over to the owner.
+void AddStandIn(CLI::App& app, const Command& command, const char* argv0) {
+  std::string description(command.description);
+  if (!ProgramBuilt(command.program)) description += " [not built]";
+  CLI::App* stand_in = app.add_subcommand(std::string(command.name), description);
+  stand_in->set_help_flag();
+  stand_in->prefix_command();
+  stand_in->allow_extras();
+  stand_in->callback([stand_in, &command, argv0] {
+    std::vector<std::string> args = {argv0, std::string(command.name)};
+    for (const std::string& arg : stand_in->remaining()) args.push_back(arg);
+    std::vector<char*> c_args;
+    for (std::string& arg : args) c_args.push_back(arg.data());
+    c_args.push_back(nullptr);
+    ExecOwner(command, c_args.data());
+  });
+}
+
+}  // namespace
+
+int RunCli(int argc, char** argv, Program self,
+           std::span<const std::pair<std::string_view, AddCommandFn>> own) {
+  CLI::App app{"stereodet " STEREODET_VERSION
+               ": stereo features, detectors and safety-grade evaluation on KITTI-format data.\n"
+               "Run `stereodet COMMAND --help` for the options of a command."};
+  app.set_version_flag("--version", std::string("stereodet ") + STEREODET_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough();
+
+  try {
+    // `stereodet [FLAGS] NAME ...` with NAME another executable's command: hand over the untouched
+    // argv before parsing anything. The top level takes only flags (--help, --version), so the
+    // first argument without a leading '-' is the command, and the owner, whose top level is the
+    // same, parses argv exactly as a single binary would (`stereodet --help synth` included).
+    for (int i = 1; i < argc; ++i) {
+      if (argv[i][0] == '-') continue;
+      const Command* command = FindCommand(argv[i]);
+      if (command != nullptr && command->program != self) ExecOwner(*command, argv);
+      break;
+    }
+    std::set<AddCommandFn> added;
+    for (const Command& command : CommandTable()) {
+      if (command.program != self) {
+        AddStandIn(app, command, argv[0]);
+      } else if (AddCommandFn add = FindOwn(own, command.name); add == nullptr) {
+        throw std::logic_error(std::string(ProgramName(self)) + " does not implement `" +
+                               std::string(command.name) + "` that the command table gives it");
+      } else if (added.insert(add).second) {
+        add(app);
+      }
+    }
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);  // usage errors: message + hint, CLI11's exit codes (non-zero)
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stereodet: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace stereodet::cli
