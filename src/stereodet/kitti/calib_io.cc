@@ -130,7 +130,7 @@ Calibration ParseCalibration(std::string_view text, const std::string& source) {
 }
 
 Calibration ReadCalibration(const std::filesystem::path& path) {
-  return ParseCalibration(kitti_internal::ReadWholeFile(path), path.string());
+  return ParseCalibration(ReadFile(path), path.string());
 }
 
 std::string FormatCalibration(const Calibration& calib) {

@@ -85,7 +85,7 @@ std::vector<std::string> KittiDataset::ReadSplit(const fs::path& split) const {
         << " exists";
     path = in_image_sets;
   }
-  const std::string text = kitti_internal::ReadWholeFile(path);
+  const std::string text = ReadFile(path);
   std::vector<std::string> ids;
   int line_number = 0;
   size_t pos = 0;

@@ -11,6 +11,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/kitti/text_number.h"
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -34,7 +35,7 @@ TEST(FuzzCorpusTest, LabelInputsParseOrThrowParseError) {
   int parsed = 0, rejected = 0;
   for (const fs::path& path : files) {
     SCOPED_TRACE(path.filename().string());
-    const std::string text = kitti_internal::ReadWholeFile(path);
+    const std::string text = ReadFile(path);
     for (ObjectFileKind kind :
          {ObjectFileKind::kLabel, ObjectFileKind::kDetection, ObjectFileKind::kAny}) {
       ObjectParseOptions options;

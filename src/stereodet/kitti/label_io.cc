@@ -209,7 +209,7 @@ ObjectFile ParseObjects(std::string_view text, const std::string& source,
 }
 
 ObjectFile ReadObjects(const std::filesystem::path& path, const ObjectParseOptions& options) {
-  return ParseObjects(kitti_internal::ReadWholeFile(path), path.string(), options);
+  return ParseObjects(ReadFile(path), path.string(), options);
 }
 
 std::string FormatObject(const Object& object) {

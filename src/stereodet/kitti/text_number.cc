@@ -1,9 +1,5 @@
 #include "stereodet/kitti/text_number.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstring>
 
@@ -47,35 +43,6 @@ std::string QuoteToken(std::string_view token) {
   if (token.size() > kMaxShown) quoted.append("...");
   quoted.push_back('\'');
   return quoted;
-}
-
-std::string ReadWholeFile(const std::filesystem::path& path) {
-  // POSIX open/fstat/read rather than an ifstream: a KITTI split is thousands of small files and
-  // the stream set-up would cost more than the parsing.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  STEREODET_CHECK_IO(fd >= 0) << "cannot read " << path.string() << ": " << std::strerror(errno);
-  struct FdCloser {
-    int fd;
-    ~FdCloser() { ::close(fd); }
-  } closer{fd};
-  struct stat info {};
-  STEREODET_CHECK_IO(::fstat(fd, &info) == 0)
-      << "cannot read " << path.string() << ": " << std::strerror(errno);
-  STEREODET_CHECK_IO(S_ISREG(info.st_mode)) << "cannot read " << path.string() << ": not a file";
-  std::string contents;
-  // One byte more than the size, so a single read() both fills the file and sees its end.
-  contents.resize(static_cast<size_t>(info.st_size) + 1);
-  size_t used = 0;
-  while (true) {
-    if (used == contents.size()) contents.resize(contents.size() * 2);
-    const ssize_t got = ::read(fd, contents.data() + used, contents.size() - used);
-    if (got < 0 && errno == EINTR) continue;
-    STEREODET_CHECK_IO(got >= 0) << "cannot read " << path.string() << ": " << std::strerror(errno);
-    if (got == 0) break;
-    used += static_cast<size_t>(got);
-  }
-  contents.resize(used);
-  return contents;
 }
 
 }  // namespace stereodet::kitti_internal

@@ -72,9 +72,6 @@ void AppendRoundTrip(std::string* out, double value, std::chars_format format, i
 // non-printable bytes escaped, so a binary file cannot flood or garble the terminal.
 std::string QuoteToken(std::string_view token);
 
-// Reads a whole file with one read(). Throws std::runtime_error naming the path on failure.
-std::string ReadWholeFile(const std::filesystem::path& path);
-
 // The line of `text` that starts at *pos, without its '\n'; moves *pos past the '\n' (to
 // text.size() + 1 after a last line without one). Callers loop `while (pos < text.size())`.
 inline std::string_view NextLine(std::string_view text, size_t* pos) {

@@ -16,7 +16,7 @@ static_assert(std::endian::native == std::endian::little,
               "velodyne_io reads KITTI's little-endian floats by copying bytes");
 
 std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path) {
-  const std::string bytes = kitti_internal::ReadWholeFile(path);
+  const std::string bytes = ReadFile(path);
   STEREODET_CHECK_IO(bytes.size() % sizeof(VeloPoint) == 0)
       << path.string() << ": size " << bytes.size()
       << " bytes is not a multiple of 16 (4 float32 a point: x, y, z, reflectance); the file is "

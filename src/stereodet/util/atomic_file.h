@@ -74,7 +74,9 @@ class StagedFolder {
   bool committed_ = false;
 };
 
-// Reads a whole file. Throws std::runtime_error naming the path if it cannot be read.
+// Reads a whole regular file (one read() for a file of the size fstat reports). Throws
+// std::runtime_error naming the path if it cannot be read or is not a regular file (a FIFO, a
+// folder), so a reader never blocks.
 std::string ReadFile(const std::filesystem::path& path);
 
 }  // namespace stereodet

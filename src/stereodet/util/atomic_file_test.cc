@@ -1,10 +1,12 @@
 #include "stereodet/util/atomic_file.h"
-#include "stereodet/util/test_temp_dir.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
+
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -119,6 +121,23 @@ TEST_F(AtomicFileTest, StagedFolderRefusesAFolderOfSomethingElse) {
   StagedFolder ok(dir_ / "empty", "results.json");  // an empty folder is fine
   ok.Commit();
   EXPECT_TRUE(fs::is_directory(dir_ / "empty"));
+}
+
+TEST_F(AtomicFileTest, ReadFileRefusesAFifoAndAFolderWithoutBlocking) {
+  const fs::path fifo = dir_ / "label.txt";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    ReadFile(fifo);  // no writer: a blocking open would hang here
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ReadFile(dir_), std::runtime_error);
+  EXPECT_THROW(ReadFile(dir_ / "missing.txt"), std::runtime_error);
+}
+
+TEST_F(AtomicFileTest, ReadFileReadsProcFilesWhoseSizeIsZero) {
+  EXPECT_FALSE(ReadFile("/proc/self/cmdline").empty());
 }
 
 }  // namespace
