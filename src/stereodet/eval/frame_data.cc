@@ -190,17 +190,14 @@ double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection
       .value_or(overlap);
 }
 
-ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                             OverlapArithmetic arithmetic) {
-  ClassFrame cf;
-  const double tau = spec.min_overlap[static_cast<int>(kind)];
-  cf.min_overlap = tau;
-  const bool devkit = arithmetic == OverlapArithmetic::kDevkit;
-
+std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpec& spec,
+                                          bool exact_dontcare_name, ClassFrame* cf) {
   std::vector<const Object*> dontcares;
   for (size_t i = 0; i < frame.labels.size(); ++i) {
     const Object& label = frame.labels[i];
-    if (IsDontCare(label)) dontcares.push_back(&label);
+    if (exact_dontcare_name ? label.type == "DontCare" : IsDontCare(label)) {
+      dontcares.push_back(&label);
+    }
     const bool is_class = EqualsIgnoreCase(label.type, spec.name);
     bool is_neighbour = false;
     if (!is_class) {
@@ -217,11 +214,22 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
                           label.truncated > lim.max_truncation || height <= lim.min_height_px;
       if (!ignore) bits |= static_cast<uint8_t>(1u << d);
     }
-    cf.label_object.push_back(static_cast<int32_t>(i));
-    cf.label_neighbour.push_back(is_neighbour ? 1 : 0);
-    cf.label_difficulty.push_back(bits);
-    cf.label_alpha.push_back(label.alpha);
+    cf->label_object.push_back(static_cast<int32_t>(i));
+    cf->label_neighbour.push_back(is_neighbour ? 1 : 0);
+    cf->label_difficulty.push_back(bits);
+    cf->label_alpha.push_back(label.alpha);
   }
+  return dontcares;
+}
+
+ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
+                             OverlapArithmetic arithmetic) {
+  ClassFrame cf;
+  const double tau = spec.min_overlap[static_cast<int>(kind)];
+  cf.min_overlap = tau;
+  const bool devkit = arithmetic == OverlapArithmetic::kDevkit;
+
+  const std::vector<const Object*> dontcares = AddClassLabels(frame, spec, false, &cf);
 
   for (size_t j = 0; j < frame.detections.size(); ++j) {
     const Object& det = frame.detections[j];

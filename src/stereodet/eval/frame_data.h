@@ -101,6 +101,14 @@ struct ClassFrame {
   }
 };
 
+// The label side of PrepareClassFrame: appends to `cf` the labels of `spec`'s class and of its
+// neighbour classes (file order; neighbours always ignored; difficulty bits by the official
+// devkit's cleanData: ignored if occluded > max, truncated > max or 2D height <= min), and returns
+// the frame's DontCare regions, named "DontCare" exactly when `exact_dontcare_name` (OpenPCDet's
+// rule), in any case otherwise (the devkit's).
+std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpec& spec,
+                                          bool exact_dontcare_name, ClassFrame* cf);
+
 // Builds the ClassFrame of `frame` for `spec` and `kind`. With OverlapArithmetic::kDevkit, overlaps
 // and the DontCare test are KittiOverlapAtThreshold's and KittiDontCareOverlapAtThreshold's at the
 // class threshold, and in BEV and 3D two overlaps of one label (both >= the threshold) that lie

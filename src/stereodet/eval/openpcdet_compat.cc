@@ -271,29 +271,7 @@ ClassFrame PrepareClassFrameOpenPcdet(const EvalFrame& frame, const ClassSpec& s
 
   // clean_data: labels of the class (valid unless ignored at the difficulty) or of a neighbour
   // class (always ignored); DontCare regions by their exact name.
-  std::vector<const Object*> dontcares;
-  for (size_t i = 0; i < frame.labels.size(); ++i) {
-    const Object& label = frame.labels[i];
-    if (label.type == "DontCare") dontcares.push_back(&label);
-    const bool is_class = EqualsIgnoreCase(label.type, spec.name);
-    bool is_neighbour = false;
-    if (!is_class) {
-      for (const std::string& n : spec.neighbours) is_neighbour |= EqualsIgnoreCase(label.type, n);
-      if (!is_neighbour) continue;
-    }
-    uint8_t bits = 0;
-    const double height = label.box.bottom - label.box.top;
-    for (int d = 0; d < kNumDifficulties; ++d) {
-      const DifficultyLimits lim = KittiDifficultyLimits(static_cast<Difficulty>(d));
-      const bool ignore = label.occluded > lim.max_occlusion ||
-                          label.truncated > lim.max_truncation || height <= lim.min_height_px;
-      if (!ignore) bits |= static_cast<uint8_t>(1u << d);
-    }
-    cf.label_object.push_back(static_cast<int32_t>(i));
-    cf.label_neighbour.push_back(is_neighbour ? 1 : 0);
-    cf.label_difficulty.push_back(bits);
-    cf.label_alpha.push_back(label.alpha);
-  }
+  const std::vector<const Object*> dontcares = AddClassLabels(frame, spec, true, &cf);
 
   // Detections: the class, or lower than 40 px (ignored at Easy whatever the class), as the devkit.
   // The DontCare test (intersection over the detection's area > tau) exists for 2D only.
