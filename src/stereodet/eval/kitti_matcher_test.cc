@@ -1,13 +1,14 @@
 #include "stereodet/eval/kitti_matcher.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <numeric>
-
-#include <gtest/gtest.h>
 
 #include "stereodet/eval/devkit_overlap.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/random_frames.h"
+#include "stereodet/eval/test_objects.h"
 
 namespace stereodet {
 namespace {
@@ -209,26 +210,8 @@ KittiClassResult RunKitti(const std::vector<EvalFrame>& frames, const ClassSpec&
   return EvaluateKittiClass(cfs, difficulty, 2);
 }
 
-Object Label(const std::string& type, Box2D box, double truncated = 0, int occluded = 0) {
-  Object o;
-  o.type = type;
-  o.box = box;
-  o.truncated = truncated;
-  o.occluded = occluded;
-  o.box3d.h = 1.5;
-  o.box3d.w = 1.6;
-  o.box3d.l = 3.9;
-  o.box3d.location = Eigen::Vector3d(box.left / 100.0, 1.6, 20.0);
-  return o;
-}
-
-Object Det(const std::string& type, Box2D box, double score) {
-  Object o = Label(type, box);
-  o.truncated = -1;
-  o.occluded = -1;
-  o.score = score;
-  return o;
-}
+using testing_objects::Det;
+using testing_objects::Label;
 
 // ------------------------------------------------------------------------------------------------
 

@@ -9,28 +9,13 @@
 
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/random_frames.h"
+#include "stereodet/eval/test_objects.h"
 
 namespace stereodet {
 namespace {
 
-Object Label(const std::string& type, Box2D box) {
-  Object o;
-  o.type = type;
-  o.box = box;
-  o.box3d.h = 1.5;
-  o.box3d.w = 1.6;
-  o.box3d.l = 3.9;
-  o.box3d.location = Eigen::Vector3d(box.left / 100.0, 1.6, 20.0);
-  return o;
-}
-
-Object Det(const std::string& type, Box2D box, double score) {
-  Object o = Label(type, box);
-  o.truncated = -1;
-  o.occluded = -1;
-  o.score = score;
-  return o;
-}
+using testing_objects::Det;
+using testing_objects::Label;
 
 EvalOptions CarModerate2D(Matcher matcher) {
   EvalOptions o;

@@ -1,0 +1,37 @@
+// Test support (include from *_test.cc only): labels and detections with a 2D box and a fixed
+// KITTI-like car-sized 3D box (1.5 x 1.6 x 3.9 m, 20 m ahead, x from the box's left edge), so that
+// 2D cases can be written by hand and BEV / 3D fields are valid.
+#ifndef STEREODET_EVAL_TEST_OBJECTS_H_
+#define STEREODET_EVAL_TEST_OBJECTS_H_
+
+#include <string>
+
+#include "stereodet/kitti/object.h"
+
+namespace stereodet::testing_objects {
+
+inline Object Label(const std::string& type, Box2D box, double truncated = 0, int occluded = 0) {
+  Object o;
+  o.type = type;
+  o.box = box;
+  o.truncated = truncated;
+  o.occluded = occluded;
+  o.box3d.h = 1.5;
+  o.box3d.w = 1.6;
+  o.box3d.l = 3.9;
+  o.box3d.location = Eigen::Vector3d(box.left / 100.0, 1.6, 20.0);
+  return o;
+}
+
+// A detection: the label's fields, truncation and occlusion -1 (as detection files carry them).
+inline Object Det(const std::string& type, Box2D box, double score) {
+  Object o = Label(type, box);
+  o.truncated = -1;
+  o.occluded = -1;
+  o.score = score;
+  return o;
+}
+
+}  // namespace stereodet::testing_objects
+
+#endif  // STEREODET_EVAL_TEST_OBJECTS_H_
