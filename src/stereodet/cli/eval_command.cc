@@ -143,6 +143,10 @@ EvalOptions MakeOptions(const EvalArgs& a, OverlapSet overlaps) {
   o.compat = *compat;
   const bool loose = overlaps == OverlapSet::kLoose;
   for (const std::string& name : SplitList(a.classes)) {
+    for (const ClassSpec& c : o.classes) {
+      STEREODET_CHECK(!EqualsIgnoreCase(c.name, name))
+          << "--classes: '" << name << "' given twice (as '" << c.name << "')";
+    }
     o.classes.push_back(o.compat == EvalCompat::kOpenPcdet ? OpenPcdetClassSpec(name, loose)
                                                            : KittiClassSpec(name, loose));
   }

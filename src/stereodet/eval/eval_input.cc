@@ -157,6 +157,14 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options) {
           << in.label_dir.string();
     }
     const std::set<std::string> in_split(ids.begin(), ids.end());
+    if (in_split.size() != ids.size()) {
+      // A frame listed twice would be evaluated twice and weigh double in every figure.
+      std::set<std::string> seen;
+      for (const std::string& id : ids) {
+        STEREODET_CHECK_IO(seen.insert(id).second)
+            << "split " << options.split << ": frame " << id << " is listed more than once";
+      }
+    }
     std::vector<std::string> outside;
     for (const std::string& s : det_stems) {
       if (!in_split.count(s)) outside.push_back((in.det_dir / (s + ".txt")).string());

@@ -133,6 +133,26 @@ TEST(EvalInput, SplitFrameWithoutALabelFileIsAnError) {
   }
 }
 
+TEST(EvalInput, SplitListingAFrameTwiceIsAnError) {
+  Folders f;
+  Write(f.dir / "split.txt", "000000\n000001\n000000\n");
+  EvalInputOptions o = f.Options();
+  o.split = (f.dir / "split.txt").string();
+  EXPECT_THAT(ErrorOf(o), HasSubstr("frame 000000 is listed more than once"));
+}
+
+TEST(EvalInput, HashesTheBytesReadIndependentlyOfThreads) {
+  Folders f;
+  EvalInputOptions o = f.Options();
+  const EvalInput two = LoadEvalFrames(o);
+  o.num_threads = 1;
+  const EvalInput one = LoadEvalFrames(o);
+  EXPECT_EQ(two.input_hash.size(), 16u);
+  EXPECT_EQ(one.input_hash, two.input_hash);
+  Write(f.det / "000001.txt", std::string(kDetection) + kDetection);  // one more detection
+  EXPECT_NE(LoadEvalFrames(o).input_hash, one.input_hash);
+}
+
 TEST(EvalInput, SplitNameWithAPlainLabelFolderSaysWhereItLookedAndHowToPassAFile) {
   TestTempDir dir;
   Write(dir / "kitti/training/label_2/000007.txt", kLabel);
