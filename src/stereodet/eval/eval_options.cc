@@ -150,9 +150,10 @@ void EvalOptions::Check() const {
   STEREODET_CHECK(!std::isnan(score_threshold)) << "score_threshold is NaN";
   STEREODET_CHECK(calibration_bins >= 1 && calibration_bins <= 10000)
       << "calibration_bins must be in [1, 10000], got " << calibration_bins;
-  STEREODET_CHECK(distance_bin_m > 0 && max_distance_m > 0 && max_distance_m / distance_bin_m <= 100000)
-      << "distance bins: need distance_bin_m > 0 and max_distance_m > 0";
-  STEREODET_CHECK(num_threads >= 0) << "num_threads must be >= 0";
+  STEREODET_CHECK_GT(distance_bin_m, 0);
+  STEREODET_CHECK_GT(max_distance_m, 0);
+  STEREODET_CHECK_LE(max_distance_m / distance_bin_m, 100000) << " (localization bins)";
+  STEREODET_CHECK_GE(num_threads, 0);
   filter.Check();
 }
 

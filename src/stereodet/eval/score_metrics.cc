@@ -36,8 +36,9 @@ ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double di
       distance_bin_m_(distance_bin_m),
       max_distance_m_(max_distance_m),
       transform_(transform) {
-  STEREODET_CHECK(calibration_bins >= 1) << "calibration_bins must be >= 1";
-  STEREODET_CHECK(distance_bin_m > 0 && max_distance_m > 0) << "distance bins must be positive";
+  STEREODET_CHECK_GE(calibration_bins, 1);
+  STEREODET_CHECK_GT(distance_bin_m, 0);
+  STEREODET_CHECK_GT(max_distance_m, 0);
   const int num_distance_bins = static_cast<int>(std::ceil(max_distance_m / distance_bin_m));
   centre_errors_.resize(num_distance_bins);
   depth_errors_.resize(num_distance_bins);
