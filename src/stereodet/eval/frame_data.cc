@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <optional>
 #include <utility>
@@ -222,6 +223,24 @@ std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpe
   return dontcares;
 }
 
+void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFrame* cf,
+                        const std::function<bool(const Object&)>& in_dontcare) {
+  for (size_t j = 0; j < frame.detections.size(); ++j) {
+    const Object& det = frame.detections[j];
+    STEREODET_CHECK(det.score.has_value())
+        << "frame " << frame.id << ": detection " << j + 1 << " has no score";
+    const bool is_class = EqualsIgnoreCase(det.type, spec.name);
+    const double height = std::abs(det.box.top - det.box.bottom);
+    if (!is_class && !(height < kLargestMinHeightPx)) continue;
+    cf->det_object.push_back(static_cast<int32_t>(j));
+    cf->det_is_class.push_back(is_class ? 1 : 0);
+    cf->det_height.push_back(height);
+    cf->det_score.push_back(*det.score);
+    cf->det_alpha.push_back(det.alpha);
+    cf->det_dontcare.push_back(is_class && in_dontcare(det) ? 1 : 0);
+  }
+}
+
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic) {
   ClassFrame cf;
@@ -231,31 +250,14 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
 
   const std::vector<const Object*> dontcares = AddClassLabels(frame, spec, false, &cf);
 
-  for (size_t j = 0; j < frame.detections.size(); ++j) {
-    const Object& det = frame.detections[j];
-    STEREODET_CHECK(det.score.has_value())
-        << "frame " << frame.id << ": detection " << j + 1 << " has no score";
-    const bool is_class = EqualsIgnoreCase(det.type, spec.name);
-    const double height = std::abs(det.box.top - det.box.bottom);
-    if (!is_class && !(height < kLargestMinHeightPx)) continue;
-    bool in_dontcare = false;
-    if (is_class) {
-      for (const Object* dc : dontcares) {
-        const double overlap = devkit ? KittiDontCareOverlapAtThreshold(kind, det, *dc, tau)
-                                      : KittiDontCareOverlap(kind, det, *dc);
-        if (overlap > tau) {
-          in_dontcare = true;
-          break;
-        }
-      }
+  AddClassDetections(frame, spec, &cf, [&](const Object& det) {
+    for (const Object* dc : dontcares) {
+      const double overlap = devkit ? KittiDontCareOverlapAtThreshold(kind, det, *dc, tau)
+                                    : KittiDontCareOverlap(kind, det, *dc);
+      if (overlap > tau) return true;
     }
-    cf.det_object.push_back(static_cast<int32_t>(j));
-    cf.det_is_class.push_back(is_class ? 1 : 0);
-    cf.det_height.push_back(height);
-    cf.det_score.push_back(*det.score);
-    cf.det_alpha.push_back(det.alpha);
-    cf.det_dontcare.push_back(in_dontcare ? 1 : 0);
-  }
+    return false;
+  });
 
   cf.edge_begin.assign(1, 0);
   std::vector<std::pair<double, size_t>> scratch;

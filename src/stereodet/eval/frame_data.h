@@ -5,6 +5,7 @@
 #define STEREODET_EVAL_FRAME_DATA_H_
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,13 @@ struct ClassFrame {
 // rule), in any case otherwise (the devkit's).
 std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpec& spec,
                                           bool exact_dontcare_name, ClassFrame* cf);
+
+// The detection side of PrepareClassFrame: appends to `cf`, in file order, the detections of
+// `spec`'s class and those of any class lower than 40 px (the devkit's "ignored" detections), with
+// the DontCare flag `in_dontcare(detection)` for those of the class. Throws std::invalid_argument
+// naming the frame if a detection has no score.
+void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFrame* cf,
+                        const std::function<bool(const Object&)>& in_dontcare);
 
 // Builds the ClassFrame of `frame` for `spec` and `kind`. With OverlapArithmetic::kDevkit, overlaps
 // and the DontCare test are KittiOverlapAtThreshold's and KittiDontCareOverlapAtThreshold's at the

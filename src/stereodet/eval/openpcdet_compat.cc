@@ -275,30 +275,13 @@ ClassFrame PrepareClassFrameOpenPcdet(const EvalFrame& frame, const ClassSpec& s
 
   // Detections: the class, or lower than 40 px (ignored at Easy whatever the class), as the devkit.
   // The DontCare test (intersection over the detection's area > tau) exists for 2D only.
-  constexpr double kLargestMinHeightPx = 40.0;
-  for (size_t j = 0; j < frame.detections.size(); ++j) {
-    const Object& det = frame.detections[j];
-    STEREODET_CHECK(det.score.has_value())
-        << "frame " << frame.id << ": detection " << j + 1 << " has no score";
-    const bool is_class = EqualsIgnoreCase(det.type, spec.name);
-    const double height = std::abs(det.box.top - det.box.bottom);
-    if (!is_class && !(height < kLargestMinHeightPx)) continue;
-    bool in_dontcare = false;
-    if (is_class && kind == OverlapKind::k2D) {
-      for (const Object* dc : dontcares) {
-        if (KittiDontCareOverlap(OverlapKind::k2D, det, *dc) > tau) {
-          in_dontcare = true;
-          break;
-        }
-      }
+  AddClassDetections(frame, spec, &cf, [&](const Object& det) {
+    if (kind != OverlapKind::k2D) return false;
+    for (const Object* dc : dontcares) {
+      if (KittiDontCareOverlap(OverlapKind::k2D, det, *dc) > tau) return true;
     }
-    cf.det_object.push_back(static_cast<int32_t>(j));
-    cf.det_is_class.push_back(is_class ? 1 : 0);
-    cf.det_height.push_back(height);
-    cf.det_score.push_back(*det.score);
-    cf.det_alpha.push_back(det.alpha);
-    cf.det_dontcare.push_back(in_dontcare ? 1 : 0);
-  }
+    return false;
+  });
 
   cf.edge_begin.assign(1, 0);
   for (int i = 0; i < cf.num_labels(); ++i) {
