@@ -1,5 +1,7 @@
 #include "stereodet/kitti/calib_io.h"
 
+#include <fmt/format.h>
+
 #include <array>
 #include <cstring>
 
@@ -129,8 +131,52 @@ Calibration ParseCalibration(std::string_view text, const std::string& source) {
   return calib;
 }
 
+namespace {
+
+// Why the entry is checked: a rotation with a small error is KITTI's own rounding; anything
+// further off (an all-zero matrix, a scale) is a broken file, and would make every point NaN.
+void CheckRotation(const Eigen::Matrix3d& rotation, const char* key, const std::string& source) {
+  const double det = rotation.determinant();
+  const double error =
+      (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(det > 0) || !(error <= 1e-2)) {
+    throw ParseError(source, 0, key,
+                     fmt::format("not a rotation (det {:g}, max |R^T R - I| {:g}; must be a "
+                                 "rotation to 1e-2)",
+                                 det, error));
+  }
+}
+
+}  // namespace
+
+void CheckCalibration(const Calibration& calib, const std::string& source) {
+  constexpr double kMinFocalPx = 1, kMaxFocalPx = 1e6;
+  for (int camera : {2, 3}) {
+    for (int axis : {0, 1}) {
+      const double focal_px = calib.projection[camera](axis, axis);
+      if (!(focal_px >= kMinFocalPx && focal_px <= kMaxFocalPx)) {
+        throw ParseError(source, 0, EntryName(kP0 + camera, axis * 4 + axis),
+                         fmt::format("focal length {:g} px is outside [{:g}, {:g}]", focal_px,
+                                     kMinFocalPx, kMaxFocalPx));
+      }
+    }
+  }
+  constexpr double kMinBaselineM = 1e-3, kMaxBaselineM = 100;
+  const double baseline_m = calib.BaselineM();
+  if (!(baseline_m >= kMinBaselineM && baseline_m <= kMaxBaselineM)) {
+    throw ParseError(source, 0, "P3",
+                     fmt::format("stereo baseline {:g} m (camera 3 minus camera 2 along x) is "
+                                 "outside [{:g}, {:g}] m: camera 3 must be right of camera 2",
+                                 baseline_m, kMinBaselineM, kMaxBaselineM));
+  }
+  CheckRotation(calib.rect_from_cam0, kKeys[kR0Rect].name, source);
+  CheckRotation(calib.cam0_from_velo.linear(), kKeys[kTrVeloToCam].name, source);
+}
+
 Calibration ReadCalibration(const std::filesystem::path& path) {
-  return ParseCalibration(ReadFile(path), path.string());
+  Calibration calib = ParseCalibration(ReadFile(path), path.string());
+  CheckCalibration(calib, path.string());
+  return calib;
 }
 
 std::string FormatCalibration(const Calibration& calib) {

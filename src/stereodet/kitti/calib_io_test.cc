@@ -8,7 +8,9 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/test_temp_dir.h"
 
@@ -195,6 +197,91 @@ TEST(CalibIoTest, WriteAndRead) {
   ExpectSameCalibration(ReadCalibration(dir / "calib" / "000000.txt"), KittiLikeCalibration());
   EXPECT_THROW(ReadCalibration(dir / "calib" / "000001.txt"), std::runtime_error);
   EXPECT_THROW(ReadCalibration(dir / "calib"), std::runtime_error);  // a folder
+}
+
+// CheckCalibration: what a stereo pipeline cannot use is named by file and field.
+ParseError ExpectCheckError(const Calibration& calib) {
+  try {
+    CheckCalibration(calib, "calib/000042.txt");
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.file(), "calib/000042.txt");
+    return e;
+  }
+  ADD_FAILURE() << "no ParseError";
+  return ParseError("", 0, "", "");
+}
+
+TEST(CalibCheckTest, TheRealKittiFilePasses) {
+  EXPECT_NO_THROW(CheckCalibration(ParseCalibration(kKittiCalib000000, "x"), "x"));
+  EXPECT_NO_THROW(CheckCalibration(KittiLikeCalibration(), "x"));
+}
+
+TEST(CalibCheckTest, AllZeroRotationsAreRejected) {
+  Calibration calib = KittiLikeCalibration();
+  calib.rect_from_cam0.setZero();
+  ParseError e = ExpectCheckError(calib);
+  EXPECT_EQ(e.field(), "R0_rect");
+  EXPECT_THAT(e.message(), HasSubstr("not a rotation (det 0"));
+
+  calib = KittiLikeCalibration();
+  calib.cam0_from_velo.matrix().setZero();
+  EXPECT_EQ(ExpectCheckError(calib).field(), "Tr_velo_to_cam");
+
+  // A scale of 2 is not KITTI's rounding; a reflection (det -1) is not a rotation either.
+  calib = KittiLikeCalibration();
+  calib.rect_from_cam0 *= 2;
+  EXPECT_EQ(ExpectCheckError(calib).field(), "R0_rect");
+  calib = KittiLikeCalibration();
+  calib.rect_from_cam0 = Eigen::Vector3d(1, 1, -1).asDiagonal();
+  EXPECT_THAT(ExpectCheckError(calib).message(), HasSubstr("det -1"));
+  // KITTI's printed rotations are off by about 1e-6: accepted.
+  calib = KittiLikeCalibration();
+  calib.rect_from_cam0(0, 1) += 1e-4;
+  EXPECT_NO_THROW(CheckCalibration(calib, "x"));
+}
+
+TEST(CalibCheckTest, FocalLengthsOutsideTheRangeAreNamed) {
+  Calibration calib = KittiLikeCalibration();
+  calib.projection[2](0, 0) = 1e300;
+  ParseError e = ExpectCheckError(calib);
+  EXPECT_EQ(e.field(), "P2(0,0)");
+  EXPECT_THAT(e.message(), HasSubstr("focal length 1e+300 px is outside [1, 1e+06]"));
+
+  calib = KittiLikeCalibration();
+  calib.projection[3](1, 1) = 0;
+  EXPECT_EQ(ExpectCheckError(calib).field(), "P3(1,1)");
+  calib = KittiLikeCalibration();
+  calib.projection[2](1, 1) = -721.5377;
+  EXPECT_EQ(ExpectCheckError(calib).field(), "P2(1,1)");
+}
+
+TEST(CalibCheckTest, BaselineMustPutCamera3RightOfCamera2) {
+  Calibration calib = KittiLikeCalibration();
+  calib.projection[3] = calib.projection[2];  // one place: no baseline
+  ParseError e = ExpectCheckError(calib);
+  EXPECT_EQ(e.field(), "P3");
+  EXPECT_THAT(e.message(), HasSubstr("stereo baseline 0 m"));
+
+  calib = KittiLikeCalibration();
+  std::swap(calib.projection[2], calib.projection[3]);  // camera 3 on the left
+  EXPECT_THAT(ExpectCheckError(calib).message(), HasSubstr("camera 3 must be right of camera 2"));
+}
+
+TEST(CalibCheckTest, ReadCalibrationChecksAndNamesTheFile) {
+  const TestTempDir temp;
+  const fs::path path = temp / "000007.txt";
+  // R0_rect all zero, as the audit's file had it.
+  WriteFileAtomically(path, WithLine(4, "R0_rect: 0 0 0 0 0 0 0 0 0"));
+  try {
+    ReadCalibration(path);
+    ADD_FAILURE() << "no error";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.file(), path.string());
+    EXPECT_EQ(e.field(), "R0_rect");
+    EXPECT_THAT(e.what(), HasSubstr(path.string() + ": field R0_rect: not a rotation"));
+  }
+  // ParseCalibration alone checks the syntax only: the same text parses.
+  EXPECT_NO_THROW(ParseCalibration(WithLine(4, "R0_rect: 0 0 0 0 0 0 0 0 0"), "x"));
 }
 
 }  // namespace
