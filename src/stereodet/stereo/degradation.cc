@@ -19,13 +19,13 @@ BlurMode ParseBlurMode(const std::string& name) {
 }
 
 void BlurOptions::Check() const {
-  STEREODET_CHECK(std::isfinite(sigma_px) && sigma_px >= 0)
-      << "blur sigma must be a finite number >= 0, got " << sigma_px;
+  STEREODET_CHECK(sigma_px >= 0 && sigma_px <= kMaxBlurSigmaPx)
+      << "blur sigma must be in [0, " << kMaxBlurSigmaPx << "] px, got " << sigma_px;
 }
 
 int GaussianKernelSize(double sigma_px) {
-  STEREODET_CHECK(std::isfinite(sigma_px) && sigma_px >= 0)
-      << "blur sigma must be a finite number >= 0, got " << sigma_px;
+  STEREODET_CHECK(sigma_px >= 0 && sigma_px <= kMaxBlurSigmaPx)
+      << "blur sigma must be in [0, " << kMaxBlurSigmaPx << "] px, got " << sigma_px;
   if (sigma_px == 0) return 1;
   return 2 * static_cast<int>(std::ceil(3.0 * sigma_px)) + 1;
 }

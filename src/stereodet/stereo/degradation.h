@@ -17,8 +17,12 @@ enum class BlurMode {
 std::string BlurModeName(BlurMode mode);
 BlurMode ParseBlurMode(const std::string& name);
 
+// The largest blur sigma accepted (pixels): a 601-px kernel, far past any defocus study (the
+// paper's largest is 5 px); beyond it a blur only burns time.
+inline constexpr double kMaxBlurSigmaPx = 100;
+
 struct BlurOptions {
-  double sigma_px = 0.0;  // >= 0, Gaussian standard deviation in pixels; 0 = no blur
+  double sigma_px = 0.0;  // in [0, kMaxBlurSigmaPx], Gaussian standard deviation; 0 = no blur
   BlurMode mode = BlurMode::kNetworkImage;
   void Check() const;
 };
@@ -28,7 +32,7 @@ struct BlurOptions {
 int GaussianKernelSize(double sigma_px);
 
 // Blurs with a separable Gaussian of `sigma_px` (border: reflect-101). Sigma 0 returns an identical
-// copy. Throws std::invalid_argument for a negative or non-finite sigma.
+// copy. Throws std::invalid_argument for a sigma outside [0, kMaxBlurSigmaPx] (NaN included).
 cv::Mat GaussianBlurImage(const cv::Mat& image, double sigma_px);
 
 }  // namespace stereodet

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 
 namespace stereodet {
@@ -49,6 +51,19 @@ TEST(BlurTest, ModeNames) {
   BlurOptions options;
   options.sigma_px = -0.5;
   EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+TEST(BlurTest, SigmaIsBoundedSoNoRunTakesMinutes) {
+  // The audit's 1e300 applied no blur (a kernel size overflowed int) and 1e6 ran for minutes.
+  BlurOptions options;
+  options.sigma_px = kMaxBlurSigmaPx;
+  EXPECT_NO_THROW(options.Check());
+  EXPECT_EQ(GaussianKernelSize(kMaxBlurSigmaPx), 601);
+  for (double sigma : {100.5, 1e6, 1e300, std::numeric_limits<double>::infinity()}) {
+    options.sigma_px = sigma;
+    EXPECT_THROW(options.Check(), std::invalid_argument) << sigma;
+    EXPECT_THROW(GaussianKernelSize(sigma), std::invalid_argument) << sigma;
+  }
 }
 
 }  // namespace

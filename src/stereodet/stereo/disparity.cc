@@ -109,6 +109,12 @@ cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::
                                                                        : options_.sgbm.block_size;
   STEREODET_CHECK(block < min_side) << "block size " << block << " does not fit the "
                                     << left_grey.cols << "x" << left_grey.rows << " image";
+  // A search range as wide as the image leaves no column to match: OpenCV then marks every pixel
+  // invalid, and an empty point cloud would pass for a result.
+  STEREODET_CHECK(options_.min_disparity + options_.num_disparities < left_grey.cols)
+      << "min_disparity + num_disparities (" << options_.min_disparity << " + "
+      << options_.num_disparities << ") must be less than the image width " << left_grey.cols
+      << " px";
   cv::Mat fixed_point;
   matcher_.dynamicCast<cv::StereoMatcher>()->compute(left_grey, right_grey, fixed_point);
   return fixed_point;

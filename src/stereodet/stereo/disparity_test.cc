@@ -1,5 +1,6 @@
 #include "stereodet/stereo/disparity.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -147,6 +148,24 @@ TEST(DisparityTest, RejectsMismatchedImages) {
   EXPECT_THROW(matcher.Compute(a, b), std::invalid_argument);
   cv::Mat f(100, 200, CV_32FC1);
   EXPECT_THROW(matcher.Compute(f, f), std::invalid_argument);
+}
+
+TEST(DisparityTest, RejectsASearchRangeAsWideAsTheImage) {
+  // 128 disparities (the default) leave 72 columns of a 200-px image; 192 leave 8, 208 none.
+  cv::Mat image(100, 200, CV_8UC1, cv::Scalar(0));
+  DisparityOptions options;
+  EXPECT_NO_THROW(DisparityMatcher(options).Compute(image, image));
+  options.num_disparities = 192;
+  EXPECT_NO_THROW(DisparityMatcher(options).Compute(image, image));
+  options.num_disparities = 208;
+  try {
+    DisparityMatcher(options).Compute(image, image);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("(0 + 208) must be less than the image width 200"));
+  }
+  options.num_disparities = 100000;
+  EXPECT_THROW(DisparityMatcher(options).Compute(image, image), std::invalid_argument);
 }
 
 TEST(KittiDisparityFormatTest, RoundTripsWithinQuantization) {

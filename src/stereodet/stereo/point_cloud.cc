@@ -10,7 +10,8 @@
 namespace stereodet {
 
 void PointCloudOptions::Check() const {
-  STEREODET_CHECK(max_depth_m > 0) << "point cloud max_depth_m must be > 0, got " << max_depth_m;
+  STEREODET_CHECK(std::isfinite(max_depth_m) && max_depth_m > 0)
+      << "point cloud max_depth_m must be a finite number > 0, got " << max_depth_m;
   STEREODET_CHECK(min_height_m < max_height_m)
       << "point cloud height range is empty: [" << min_height_m << ", " << max_height_m << "]";
   STEREODET_CHECK(beams >= 0) << "point cloud beams must be >= 0, got " << beams;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/stereo/disparity.h"
@@ -68,6 +69,16 @@ TEST_F(PointCloudTest, TruncatesByDepthAndHeight) {
   EXPECT_EQ(StereoPointCloud(disparity, grey, geometry_, high_ground, options).size(), 0u);
   options.min_height_m = options.max_height_m;
   EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+TEST(PointCloudOptionsTest, MaxDepthMustBeFiniteAndPositive) {
+  PointCloudOptions options;
+  for (double depth : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    options.max_depth_m = depth;
+    EXPECT_THROW(options.Check(), std::invalid_argument) << depth;
+  }
+  options.max_depth_m = 0.5;
+  EXPECT_NO_THROW(options.Check());
 }
 
 TEST_F(PointCloudTest, RoundTripsThroughVelodyneBin) {
