@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
@@ -161,8 +162,7 @@ void WriteKittiDisparity(const std::filesystem::path& path, const cv::Mat& dispa
 }
 
 cv::Mat ReadKittiDisparity(const std::filesystem::path& path) {
-  cv::Mat encoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  STEREODET_CHECK_IO(!encoded.empty()) << "cannot read disparity image " << path;
+  cv::Mat encoded = ReadImage(path, cv::IMREAD_UNCHANGED, "disparity image");
   STEREODET_CHECK_IO(encoded.type() == CV_16UC1)
       << path << ": a KITTI disparity image must be a 16-bit grey PNG, got OpenCV type "
       << encoded.type();

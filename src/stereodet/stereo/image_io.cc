@@ -7,10 +7,19 @@
 
 namespace stereodet {
 
-cv::Mat ReadColourImage(const std::filesystem::path& path) {
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
-  STEREODET_CHECK_IO(!image.empty()) << "cannot read image " << path.string();
+cv::Mat ReadImage(const std::filesystem::path& path, int imread_flags, const char* what) {
+  cv::Mat image;
+  try {
+    image = cv::imread(path.string(), imread_flags);
+  } catch (const cv::Exception& e) {
+    STEREODET_THROW_IO() << "cannot read " << what << " " << path.string() << ": " << e.err;
+  }
+  STEREODET_CHECK_IO(!image.empty()) << "cannot read " << what << " " << path.string();
   return image;
+}
+
+cv::Mat ReadColourImage(const std::filesystem::path& path) {
+  return ReadImage(path, cv::IMREAD_COLOR);
 }
 
 void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& image) {

@@ -8,6 +8,11 @@
 
 namespace stereodet {
 
+// cv::imread(path, imread_flags), with every failure a std::runtime_error that names the path and
+// `what` ("image", "disparity image"): a missing or unreadable file, and OpenCV's own errors (a PNG
+// header claiming 100000 x 100000 px trips its 2^30-pixel limit inside imread).
+cv::Mat ReadImage(const std::filesystem::path& path, int imread_flags, const char* what = "image");
+
 // Reads an image as 8-bit, 3-channel BGR (grey files are expanded). Throws std::runtime_error naming
 // the path if it is missing or not a readable image.
 cv::Mat ReadColourImage(const std::filesystem::path& path);
