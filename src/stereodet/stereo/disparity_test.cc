@@ -11,18 +11,12 @@
 
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/planar_scene.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path TempDir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("stereodet_disparity_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 // A smooth random texture: noise blurred so that block matching has structure at several scales.
 cv::Mat Texture(int rows, int cols, unsigned seed) {
@@ -169,7 +163,8 @@ TEST(DisparityTest, RejectsASearchRangeAsWideAsTheImage) {
 }
 
 TEST(KittiDisparityFormatTest, RoundTripsWithinQuantization) {
-  const fs::path dir = TempDir("roundtrip");
+  const TestTempDir temp;
+  const fs::path& dir = temp.path();
   cv::Mat disparity = (cv::Mat_<float>(2, 3) << 0.5f, 100.25f, kInvalidDisparity,  //
                        0.001f, 255.99f, 300.0f);
   WriteKittiDisparity(dir / "d.png", disparity);
@@ -192,7 +187,8 @@ TEST(KittiDisparityFormatTest, RoundTripsWithinQuantization) {
 }
 
 TEST(KittiDisparityFormatTest, RejectsWrongFiles) {
-  const fs::path dir = TempDir("wrong");
+  const TestTempDir temp;
+  const fs::path& dir = temp.path();
   EXPECT_THROW(ReadKittiDisparity(dir / "missing.png"), std::runtime_error);
   cv::imwrite((dir / "eight.png").string(), cv::Mat(4, 4, CV_8UC1, cv::Scalar(3)));
   EXPECT_THROW(ReadKittiDisparity(dir / "eight.png"), std::runtime_error);

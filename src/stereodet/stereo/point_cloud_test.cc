@@ -8,6 +8,7 @@
 
 #include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/stereo/disparity.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -89,8 +90,8 @@ TEST_F(PointCloudTest, RoundTripsThroughVelodyneBin) {
   rng.fill(grey, cv::RNG::UNIFORM, 0, 256);
   const std::vector<VeloPoint> points = StereoPointCloud(disparity, grey, geometry_, ground_);
   ASSERT_GT(points.size(), 1000u);
-  const fs::path path = fs::temp_directory_path() / "stereodet_point_cloud_test" / "000001.bin";
-  fs::remove_all(path.parent_path());
+  const TestTempDir temp;
+  const fs::path path = temp / "000001.bin";
   WriteVelodyne(path, points);
   EXPECT_EQ(fs::file_size(path), points.size() * 16);
   EXPECT_EQ(ReadVelodyne(path), points);

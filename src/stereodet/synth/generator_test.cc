@@ -10,6 +10,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -24,21 +25,6 @@ SynthOptions TinyOptions() {
   options.lidar_options.azimuth_step_deg = 1.0;
   return options;
 }
-
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("synth_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-             "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 TEST(GeneratorTest, FramesAreDeterministicAndDifferBySeed) {
   const SynthOptions options = TinyOptions();
@@ -79,7 +65,7 @@ TEST(GeneratorTest, LabelsAreKittiLike) {
 }
 
 TEST(GeneratorTest, DatasetRoundTripsThroughTheKittiModule) {
-  TempDir dir;
+  const TestTempDir dir;
   DatasetOptions options;
   options.out = dir.path();
   options.frames = 2;
@@ -121,7 +107,7 @@ TEST(GeneratorTest, DatasetRoundTripsThroughTheKittiModule) {
 }
 
 TEST(GeneratorTest, SameSeedSameBytesWithOneAndTwoThreads) {
-  TempDir one, two;
+  const TestTempDir one("one"), two("two");
   DatasetOptions options;
   options.frames = 3;
   options.seed = 17;

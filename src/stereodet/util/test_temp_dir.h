@@ -1,8 +1,9 @@
 // Test support (include from *_test.cc only): a temporary folder unique to the running test.
 //
 // ctest runs the tests of one binary as separate processes in parallel, so a fixed folder name
-// shared by several tests makes them race. The folder is named after the test suite, the test and
-// the process id, created empty, and removed with everything in it when the object dies.
+// shared by several tests makes them race, and so do two builds on one host. The folder is named
+// after the test suite, the test, an optional suffix (for a test that needs two) and the process
+// id, created empty, and removed with everything in it when the object dies.
 #ifndef STEREODET_UTIL_TEST_TEMP_DIR_H_
 #define STEREODET_UTIL_TEST_TEMP_DIR_H_
 
@@ -11,16 +12,18 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 namespace stereodet {
 
 class TestTempDir {
  public:
-  TestTempDir() {
+  explicit TestTempDir(std::string_view suffix = "") {
     const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::string name = "stereodet_";
     if (info != nullptr) name.append(info->test_suite_name()).append("_").append(info->name());
+    if (!suffix.empty()) name.append("_").append(suffix);
     name.append("_").append(std::to_string(::getpid()));
     for (char& c : name) {
       if (c == '/') c = '_';  // parameterized test names contain '/'
