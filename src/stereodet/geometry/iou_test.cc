@@ -206,5 +206,71 @@ TEST(BevIouTest, MatchesDenseSamplingOnRandomPairs) {
   }
 }
 
+TEST(Iou2DTest, MatchesCellCountingOnRandomIntegerBoxes) {
+  // Boxes with integer corners in [0, 12]: the intersection and union are whole unit cells, counted
+  // one by one, so the reference is exact and shares nothing with iou.cc's interval arithmetic.
+  std::mt19937 rng(6);
+  std::uniform_int_distribution<int> coordinate(0, 12);
+  auto random_box = [&]() {
+    const int x1 = coordinate(rng), x2 = coordinate(rng), y1 = coordinate(rng),
+              y2 = coordinate(rng);
+    return Box2D{static_cast<double>(std::min(x1, x2)), static_cast<double>(std::min(y1, y2)),
+                 static_cast<double>(std::max(x1, x2)), static_cast<double>(std::max(y1, y2))};
+  };
+  auto inside = [](const Box2D& box, int x, int y) {  // the cell [x, x+1] x [y, y+1]
+    return x >= box.left && x + 1 <= box.right && y >= box.top && y + 1 <= box.bottom;
+  };
+  int overlapping = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Box2D a = random_box(), b = random_box();
+    int both = 0, either = 0;
+    for (int x = 0; x < 12; ++x) {
+      for (int y = 0; y < 12; ++y) {
+        both += inside(a, x, y) && inside(b, x, y);
+        either += inside(a, x, y) || inside(b, x, y);
+      }
+    }
+    ASSERT_EQ(IntersectionArea(a, b), both) << i;
+    ASSERT_EQ(IntersectionArea(b, a), both) << i;
+    const double expected = either == 0 ? 0.0 : static_cast<double>(both) / either;
+    ASSERT_NEAR(Iou2D(a, b), expected, 1e-15) << i;
+    overlapping += both > 0;
+  }
+  EXPECT_GT(overlapping, 500);
+}
+
+TEST(Iou3DTest, MatchesIndependentReferenceOnRandomPairs) {
+  // The polygon reference for the footprint times a y overlap counted on a fine grid of heights:
+  // y extents on a 1/64 m grid, so counting 1/64-m slabs is exact.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(-3, 3), size(0.2, 6), angle(-M_PI, M_PI);
+  std::uniform_int_distribution<int> slab(0, 160), slabs(1, 160);  // bottom and height, 1/64 m
+  int overlapping = 0;
+  for (int i = 0; i < 5000; ++i) {
+    const int bottom_a = slab(rng), height_a = slabs(rng), bottom_b = slab(rng),
+              height_b = slabs(rng);
+    // location.y is the bottom face (KITTI: y down), the box spans [y - h, y].
+    const Box3D a = MakeBox(pos(rng), pos(rng), size(rng), size(rng), angle(rng),
+                            (bottom_a + height_a) / 64.0, height_a / 64.0);
+    const Box3D b = MakeBox(pos(rng), pos(rng), size(rng), size(rng), angle(rng),
+                            (bottom_b + height_b) / 64.0, height_b / 64.0);
+    int common_slabs = 0;
+    for (int k = 0; k < 400; ++k) {
+      common_slabs +=
+          k >= bottom_a && k < bottom_a + height_a && k >= bottom_b && k < bottom_b + height_b;
+    }
+    const double intersection = ReferenceBevIntersection(a, b) * common_slabs / 64.0;
+    const double volume_a = a.l * a.w * a.h, volume_b = b.l * b.w * b.h;
+    ASSERT_NEAR(IntersectionVolume(a, b), intersection, 1e-9 * (1 + intersection)) << i;
+    const double expected = intersection / (volume_a + volume_b - intersection);
+    const double iou = Iou3D(a, b);
+    ASSERT_NEAR(iou, expected, 1e-9) << i;
+    ASSERT_NEAR(Iou3D(b, a), iou, 1e-12) << i;
+    ASSERT_LE(iou, BevIou(a, b) + 1e-12) << i;  // o <= min(h_a, h_b) gives IoU_3D <= IoU_BEV
+    overlapping += intersection > 0;
+  }
+  EXPECT_GT(overlapping, 1000);
+}
+
 }  // namespace
 }  // namespace stereodet
