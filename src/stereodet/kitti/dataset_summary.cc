@@ -6,6 +6,7 @@
 #include <system_error>
 
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/file_checks.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/util/check.h"
 
@@ -123,6 +124,19 @@ DatasetSummary SummarizeDataset(const KittiDataset& dataset, std::vector<std::st
         summary.bad_files.push_back(e.what());
       }
     }
+    // The binary files are checked without decoding (see file_checks.h): zero-byte and truncated
+    // images and scans of a wrong size are problems, not "none".
+    auto check = [&](bool wanted, const fs::path& path, void (*check_file)(const fs::path&)) {
+      if (!wanted || !fs::exists(path, ec)) return;
+      try {
+        check_file(path);
+      } catch (const std::exception& e) {
+        summary.bad_files.push_back(e.what());
+      }
+    };
+    check(required.image_left, paths.image_left, CheckPngFile);
+    check(required.image_right, paths.image_right, CheckPngFile);
+    check(required.velodyne, paths.velodyne, CheckVelodyneFile);
     progress.Add(1);
   }
   progress.Finish();

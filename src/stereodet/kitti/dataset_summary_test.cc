@@ -18,7 +18,7 @@ using ::testing::HasSubstr;
 
 void Write(const fs::path& path, const std::string& contents) {
   fs::create_directories(path.parent_path());
-  std::ofstream(path) << contents;
+  std::ofstream(path, std::ios::binary) << contents;
 }
 
 // Easy (h 165 px, occ 0, trunc 0), 8.41 m away.
@@ -102,6 +102,34 @@ TEST_F(DatasetSummaryTest, ReportsMissingFilesPerFrame) {
   EXPECT_EQ(s.frames, 3);
   EXPECT_EQ(s.frames_with_labels, 2);
   EXPECT_EQ(s.frames_with_calib, 1);
+}
+
+TEST_F(DatasetSummaryTest, ZeroByteAndTruncatedImagesAndOddScansAreProblems) {
+  // The audit: these passed `info` although the docs said they are rejected.
+  const fs::path training = root_ / "training";
+  const std::string png(
+      "\x89PNG\r\n\x1a\n"
+      "\0\0\0\x0dIHDR\0\0\0\x01\0\0\0\x01\x08\x06\0\0\0\x1f\x15\xc4\x89"
+      "\0\0\0\x0aIDAT\x78\x9c\x63\0\x01\0\0\x05\0\x01\x0d\x0a\x2d\xb4"
+      "\0\0\0\0IEND\xae\x42\x60\x82",
+      67);
+  for (const char* id : {"000000", "000001", "000002"}) {
+    Write(training / "image_2" / (std::string(id) + ".png"), png);
+    Write(training / "image_3" / (std::string(id) + ".png"), png);
+    Write(training / "velodyne" / (std::string(id) + ".bin"), std::string(32, '\0'));
+  }
+  const KittiDataset dataset(root_);
+  EXPECT_FALSE(SummarizeDataset(dataset, {}, options_).HasProblems());
+
+  Write(training / "image_2" / "000001.png", "");
+  Write(training / "image_3" / "000002.png", png.substr(0, 50));
+  Write(training / "velodyne" / "000002.bin", std::string(17, '\0'));
+  const DatasetSummary s = SummarizeDataset(dataset, {}, options_);
+  ASSERT_EQ(s.bad_files.size(), 3u);
+  EXPECT_THAT(s.bad_files[0], HasSubstr("image_2/000001.png: not a PNG image (0 bytes"));
+  EXPECT_THAT(s.bad_files[1], HasSubstr("image_3/000002.png: truncated PNG image (50 bytes"));
+  EXPECT_THAT(s.bad_files[2], HasSubstr("velodyne/000002.bin: a velodyne scan must be"));
+  EXPECT_TRUE(s.missing_files.empty());
 }
 
 TEST_F(DatasetSummaryTest, StrictReportsBadFilesLenientSkipsLines) {
