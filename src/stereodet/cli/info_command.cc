@@ -21,9 +21,8 @@ struct InfoArgs {
   std::string root;
   std::string split;
   std::string subset = "training";
-  bool lenient = false;
   bool json = false;
-  double distance_bin_m = 10.0;
+  DatasetSummaryOptions options;  // --lenient, --distance-bin
 };
 
 // Sets below this size finish in a blink; a progress line would only clutter the output.
@@ -146,9 +145,7 @@ void RunInfo(const InfoArgs& args) {
     split_path = args.split;
     STEREODET_CHECK_IO(!ids.empty()) << "split " << args.split << " lists no frames";
   }
-  DatasetSummaryOptions options;
-  options.lenient = args.lenient;
-  options.distance_bin_m = args.distance_bin_m;
+  DatasetSummaryOptions options = args.options;
   const size_t frames = ids.empty() ? dataset.ListIds().size() : ids.size();
   if (frames < kProgressMinFrames || args.json) options.progress.stream = nullptr;
   const DatasetSummary summary = SummarizeDataset(dataset, ids, options);
@@ -158,7 +155,7 @@ void RunInfo(const InfoArgs& args) {
     PrintText(summary, split_path);
   }
   std::fflush(stdout);
-  if (!args.lenient && summary.HasProblems()) {
+  if (!options.lenient && summary.HasProblems()) {
     STEREODET_THROW_IO() << summary.missing_files.size() + summary.bad_files.size()
                          << " problems found in " << summary.subset_dir
                          << " (listed above; --lenient skips bad label lines)";
@@ -177,10 +174,11 @@ void AddInfoCommand(CLI::App& app) {
   cmd->add_option("--subset", args->subset, "training or testing")
       ->check(CLI::IsMember({"training", "testing"}))
       ->capture_default_str();
-  cmd->add_flag("--lenient", args->lenient,
+  cmd->add_flag("--lenient", args->options.lenient,
                 "skip and count bad label lines; exit 0 even when problems are found");
   cmd->add_flag("--json", args->json, "print the summary as JSON on stdout");
-  cmd->add_option("--distance-bin", args->distance_bin_m, "distance histogram bin width, metres")
+  cmd->add_option("--distance-bin", args->options.distance_bin_m,
+                  "distance histogram bin width, metres")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->callback([args]() { RunInfo(*args); });

@@ -1,5 +1,6 @@
 // `stereodet synth`: writes a synthetic KITTI-format data set (stereo pairs, LiDAR scans, labels,
-// calibration, ground-truth disparity and splits).
+// calibration, ground-truth disparity and splits): one library call, GenerateDataset, whose
+// options the flags bind to.
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -12,10 +13,9 @@ namespace stereodet::cli {
 
 void AddSynthCommand(CLI::App& app) {
   auto options = std::make_shared<DatasetOptions>();
-  auto out = std::make_shared<std::string>();
   auto quiet = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand("synth", CommandDescription("synth"));
-  cmd->add_option("--out", *out, "output folder (the data set root)")->required();
+  cmd->add_option("--out", options->out, "output folder (the data set root)")->required();
   cmd->add_option("--frames", options->frames, "number of frames")->capture_default_str();
   cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();
   cmd->add_option("--width", options->synth.width, "image width, px")->capture_default_str();
@@ -33,8 +33,7 @@ void AddSynthCommand(CLI::App& app) {
       "--no-lidar", [options](int64_t) { options->synth.lidar = false; },
       "write empty velodyne scans (faster)");
   cmd->add_flag("--quiet", *quiet, "no progress output");
-  cmd->callback([options, out, quiet] {
-    options->out = *out;
+  cmd->callback([options, quiet] {
     if (*quiet) options->progress.stream = nullptr;
     const DatasetSummaryLine s = GenerateDataset(*options);
     if (!*quiet) {

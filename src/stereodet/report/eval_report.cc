@@ -574,4 +574,23 @@ std::string FormatCompareCsv(const std::vector<CompareRow>& rows) {
   return csv;
 }
 
+std::string FormatCompareTable(const std::vector<CompareRow>& rows) {
+  std::string text;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const CompareRow& r = rows[k];
+    if (k == 0 || rows[k - 1].class_name != r.class_name || rows[k - 1].metric != r.metric ||
+        rows[k - 1].difficulty != r.difficulty) {
+      text += fmt::format("\n{} {} {}: mean |depth error| of matched pairs (m)\n", r.class_name,
+                          OverlapKindName(r.metric), DifficultyName(r.difficulty));
+      text += fmt::format("  {:>11} {:>7} {:>8} {:>7} {:>8} {:>8} {:>8}\n", "depth", "n A", "A",
+                          "n B", "B", "B - A", "model");
+    }
+    text += fmt::format("  {:>4g}-{:<4g} m {:>7} {:>8} {:>7} {:>8} {:>8} {:>8.3f}\n", r.lower_m,
+                        r.upper_m, r.count_a, FormatNumber(r.abs_depth_error_mean_a_m, 3),
+                        r.count_b, FormatNumber(r.abs_depth_error_mean_b_m, 3),
+                        FormatNumber(r.difference_b_minus_a_m, 3), r.model_depth_error_m);
+  }
+  return text;
+}
+
 }  // namespace stereodet

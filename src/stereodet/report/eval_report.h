@@ -98,6 +98,11 @@ std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound)
 // centre_error_mean_b, model_dz (metres, 6 decimals; "-" for an empty bin).
 std::string FormatCompareCsv(const std::vector<CompareRow>& rows);
 
+// `stereodet eval compare` as text: per class x metric x difficulty an empty line, a title and a
+// header, then one line per distance bin: depth range, count and mean |depth error| (m) of A and
+// of B, B - A, and the stereo model's depth error.
+std::string FormatCompareTable(const std::vector<CompareRow>& rows);
+
 // "12.3457" (4 decimals) or "nan"/"-" for NaN.
 std::string FormatNumber(double value, int decimals = 4);
 

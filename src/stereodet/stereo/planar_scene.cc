@@ -4,7 +4,10 @@
 #include <cstdint>
 #include <opencv2/core/utility.hpp>
 
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
 #include "stereodet/stereo/disparity.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -130,6 +133,44 @@ PlanarScene RenderPlanarScene(const Calibration& calib, const PlanarSceneOptions
     }
   });
   return scene;
+}
+
+void PlanarSceneDatasetOptions::Check() const {
+  STEREODET_CHECK_GE(frames, 1);
+  STEREODET_CHECK(width_px >= 1 && width_px <= 1242 && height_px >= 1 && height_px <= 375)
+      << "scene dataset images must be at most KITTI's 1242x375, got " << width_px << "x"
+      << height_px;
+}
+
+std::vector<std::string> WritePlanarSceneDataset(const std::filesystem::path& root,
+                                                 const PlanarSceneDatasetOptions& options) {
+  options.Check();
+  Calibration calib = KittiLikeCalibration();
+  // Keep KITTI's principal point centred in a smaller image: shift every P_i in pixels.
+  Eigen::Matrix3d shift = Eigen::Matrix3d::Identity();
+  shift(0, 2) = -(1242 - options.width_px) / 2.0;
+  shift(1, 2) = -(375 - options.height_px) / 2.0;
+  for (Matrix34d& projection : calib.projection) projection = shift * projection;
+  const std::filesystem::path training = root / "training";
+  std::vector<std::string> ids;
+  for (int i = 0; i < options.frames; ++i) {
+    const std::string id = FrameId(i);
+    PlanarSceneOptions scene_options;
+    scene_options.width_px = options.width_px;
+    scene_options.height_px = options.height_px;
+    scene_options.seed = static_cast<unsigned>(i + 1);
+    scene_options.wall_depth_m = 15.0 + 10.0 * (i % 3);
+    scene_options.ground_pitch_deg = 0.5 * (i % 3) - 0.5;
+    const PlanarScene scene = RenderPlanarScene(calib, scene_options);
+    WriteImageAtomically(training / "image_2" / (id + ".png"), scene.left_bgr);
+    WriteImageAtomically(training / "image_3" / (id + ".png"), scene.right_bgr);
+    std::filesystem::create_directories(training / "disp_noc_0");
+    WriteKittiDisparity(training / "disp_noc_0" / (id + ".png"), scene.disparity_px);
+    WriteCalibration(training / "calib" / (id + ".txt"), calib);
+    ids.push_back(id);
+  }
+  WriteSplit(root / "ImageSets" / "all.txt", ids);
+  return ids;
 }
 
 }  // namespace stereodet

@@ -9,7 +9,10 @@
 #ifndef STEREODET_STEREO_PLANAR_SCENE_H_
 #define STEREODET_STEREO_PLANAR_SCENE_H_
 
+#include <filesystem>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/reprojection.h"
@@ -34,6 +37,23 @@ struct PlanarScene {
 };
 
 PlanarScene RenderPlanarScene(const Calibration& calib, const PlanarSceneOptions& options = {});
+
+// A tiny KITTI-layout dataset of such scenes (`stereodet stereo scene`), for trying the stereo
+// pipeline and for tests that should not depend on the full generator (`stereodet synth`).
+struct PlanarSceneDatasetOptions {
+  int frames = 2;
+  // Image size, px, at most KITTI's 1242 x 375: KITTI-like cameras whose principal point stays
+  // centred in the smaller image.
+  int width_px = 1242, height_px = 375;
+  void Check() const;  // throws std::invalid_argument
+};
+
+// Writes ROOT/training/{image_2,image_3,disp_noc_0}/ID.png (disparity exact, in KITTI's stereo
+// format), ROOT/training/calib/ID.txt and ROOT/ImageSets/all.txt, each file atomically. Frame i
+// (ID = FrameId(i)) has seed i + 1, its wall at 15 + 10 (i mod 3) m and its ground pitched by
+// 0.5 (i mod 3) - 0.5 deg. Returns the ids, in order.
+std::vector<std::string> WritePlanarSceneDataset(const std::filesystem::path& root,
+                                                 const PlanarSceneDatasetOptions& options = {});
 
 }  // namespace stereodet
 

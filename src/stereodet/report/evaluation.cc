@@ -1,0 +1,150 @@
+#include "stereodet/report/evaluation.h"
+
+#include <fmt/format.h>
+
+#include <optional>
+#include <utility>
+
+#include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+
+// What results.json records about the input, from what LoadEvalFrames read.
+EvalRunInfo MakeRunInfo(const EvalInputOptions& options, const EvalInput& input) {
+  EvalRunInfo info;
+  info.gt_path = options.gt.string();
+  info.det_path = options.det.string();
+  info.split_path = options.split;
+  info.frames_without_detections = input.frames_without_detections;
+  info.lenient = options.lenient;
+  info.ignored_files = input.ignored_files;
+  info.skipped_lines = input.skipped_lines;
+  info.input_hash = input.input_hash;
+  return info;
+}
+
+}  // namespace
+
+std::vector<EvalOptions> OverlapSetRuns(const EvalOptions& base,
+                                        const std::vector<OverlapSet>& sets) {
+  std::vector<EvalOptions> runs;
+  for (const OverlapSet set : sets) {
+    EvalOptions run = base;
+    const bool loose = set == OverlapSet::kLoose;
+    for (ClassSpec& spec : run.classes) {
+      spec = base.compat == EvalCompat::kOpenPcdet ? OpenPcdetClassSpec(spec.name, loose)
+                                                   : KittiClassSpec(spec.name, loose);
+    }
+    runs.push_back(std::move(run));
+  }
+  return runs;
+}
+
+void EvaluationOptions::Check() const {
+  input.Check();
+  STEREODET_CHECK(!runs.empty()) << "no evaluation run";
+  for (const EvalOptions& run : runs) {
+    run.Check();
+    STEREODET_CHECK(run.compat == runs.front().compat)
+        << "every run must have the same compat, got " << EvalCompatName(runs.front().compat)
+        << " and " << EvalCompatName(run.compat);
+  }
+  STEREODET_CHECK(!records || !out.empty()) << "records need an output folder (out)";
+}
+
+EvaluationResult RunEvaluation(const EvaluationOptions& options) {
+  options.Check();
+  EvaluationResult result;
+  for (const EvalOptions& run : options.runs) {
+    result.runs.push_back(EvalRun{run, {}});
+    if (options.records) result.runs.back().options.keep_records = true;
+  }
+  // Refuse a folder of something else before the work, not after it.
+  std::optional<StagedFolder> out;
+  if (!options.out.empty()) out.emplace(options.out, "results.json");
+  result.input = LoadEvalFrames(options.input);
+  result.info = MakeRunInfo(options.input, result.input);
+  result.info.tool_version = options.tool_version;
+  result.info.command_line = options.command_line;
+  for (EvalRun& run : result.runs) {
+    run.result = Evaluate(result.input.frames, run.options);
+    result.seconds += run.result.seconds;
+  }
+  if (!out) return result;
+
+  const fs::path& staging = out->path();
+  for (const fs::path& path : WriteEvalReport(staging, result.runs, result.info)) {
+    result.files.push_back(options.out / path.lexically_relative(staging));
+  }
+  if (options.records) {
+    for (const EvalRun& run : result.runs) {
+      // One file per overlap set when there are several, named as the curve files are.
+      const std::string name =
+          result.runs.size() == 1
+              ? std::string("matches.csv")
+              : fmt::format("matches_{}.csv", DescribeOverlaps(run.options.classes));
+      const int64_t rows = WriteMatchRecordsCsv(staging / name, run.result, result.input.frames);
+      result.files.push_back(options.out / name);
+      result.records.push_back({name, rows});
+    }
+  }
+  out->Commit();
+  return result;
+}
+
+void EvaluationSweepOptions::Check() const {
+  input.Check();
+  eval.Check();  // the sweep's range is FilterSweep's to check
+}
+
+EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) {
+  options.Check();
+  EvaluationSweepResult result;
+  result.input = LoadEvalFrames(options.input);
+  result.rows = FilterSweep(result.input.frames, options.eval, options.bound, options.from,
+                            options.to, options.step);
+  result.csv = FormatSweepCsv(result.rows, options.bound);
+  if (!options.out.empty()) {
+    result.csv_path = options.out / "sweep.csv";
+    WriteFileAtomically(result.csv_path, result.csv);
+  }
+  return result;
+}
+
+void EvaluationCompareOptions::Check() const {
+  input.Check();
+  STEREODET_CHECK(!det_b.empty()) << "compare: no second detection folder (det_b)";
+  eval.Check();
+}
+
+EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
+  options.Check();
+  EvaluationCompareResult result;
+  result.input_a = LoadEvalFrames(options.input);
+  EvalInputOptions input_b = options.input;
+  input_b.det = options.det_b;
+  result.input_b = LoadEvalFrames(input_b);
+  result.result_a = Evaluate(result.input_a.frames, options.eval);
+  result.result_b = Evaluate(result.input_b.frames, options.eval);
+  const Calibration calib =
+      options.calib.empty() ? KittiLikeCalibration() : ReadCalibration(options.calib);
+  result.compare.baseline_m = calib.BaselineM();
+  result.compare.focal_px = calib.FocalPx();
+  result.compare.disparity_error_px = options.disparity_error_px;
+  result.rows = CompareLocalization(result.result_a, result.result_b, result.compare);
+  result.csv = FormatCompareCsv(result.rows);
+  if (!options.out.empty()) {
+    result.csv_path = options.out / "compare.csv";
+    WriteFileAtomically(result.csv_path, result.csv);
+  }
+  return result;
+}
+
+}  // namespace stereodet

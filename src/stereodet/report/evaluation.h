@@ -1,0 +1,130 @@
+// The evaluation commands as library calls: "evaluate these folders with these options and write
+// this results folder" is one call. `stereodet eval` is RunEvaluation, `eval sweep`
+// RunEvaluationSweep, `eval compare` RunEvaluationCompare; the CLI binds its flags to the options
+// and prints the results, and the Python module can call the same.
+//
+//   EvaluationOptions options;
+//   options.input.gt = "kitti";  options.input.det = "results/data";  options.input.split = "val";
+//   options.out = "eval";  // results.json, summary.csv, curves/
+//   const EvaluationResult result = RunEvaluation(options);
+//   std::cout << FormatEvalTable(result.runs);
+#ifndef STEREODET_REPORT_EVALUATION_H_
+#define STEREODET_REPORT_EVALUATION_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "stereodet/eval/compare.h"
+#include "stereodet/eval/eval_input.h"
+#include "stereodet/eval/evaluator.h"
+#include "stereodet/report/eval_report.h"
+
+namespace stereodet {
+
+// The options of one evaluation per overlap set in `sets`, in that order: `base` with its classes
+// replaced by KITTI's specs (OpenPCDet's with compat kOpenPcdet) of the same names for that set
+// (KittiClassSpec, OpenPcdetClassSpec). Custom thresholds of `base` are not kept.
+std::vector<EvalOptions> OverlapSetRuns(const EvalOptions& base,
+                                        const std::vector<OverlapSet>& sets);
+
+struct EvaluationOptions {
+  EvalInputOptions input;  // the label and detection folders, the split, lenient reading
+  // One evaluation of the frames per entry, e.g. one per overlap set (OverlapSetRuns). Every entry
+  // has the same compat. Default: one run with EvalOptions' defaults.
+  std::vector<EvalOptions> runs = {EvalOptions()};
+  // The results folder, one run per folder (StagedFolder with marker results.json): results.json,
+  // summary.csv and curves/ (WriteEvalReport). A folder of other files is refused before anything
+  // is read. Empty: nothing is written.
+  std::filesystem::path out;
+  // Also write the per-detection records (WriteMatchRecordsCsv) as OUT/matches.csv, or with several
+  // runs OUT/matches_OVERLAPS.csv (DescribeOverlaps) per run; sets every run's keep_records.
+  // Requires out.
+  bool records = false;
+  // Provenance recorded in results.json (EvalRunInfo).
+  std::string tool_version;
+  std::string command_line;
+
+  // Throws std::invalid_argument for no runs, runs of different compat, records without out, or
+  // a bad input or run setting (EvalInputOptions::Check, EvalOptions::Check).
+  void Check() const;
+};
+
+struct EvaluationResult {
+  EvalInput input;  // the frames read, and what was ignored or skipped (EvalInput::Notices)
+  // The runs' options as evaluated (keep_records set with records) and their results, in the order
+  // of EvaluationOptions::runs.
+  std::vector<EvalRun> runs;
+  EvalRunInfo info;    // what results.json records about the input and the run
+  double seconds = 0;  // the runs' Evaluate() time, summed
+  // With out: every file written, as paths under out (the report's, then the records files).
+  std::vector<std::filesystem::path> files;
+  // With records: per run, the records file's name under out and its rows.
+  struct RecordsFile {
+    std::string name;
+    int64_t rows = 0;
+  };
+  std::vector<RecordsFile> records;
+};
+
+// Checks the options, claims `out` (refusing a folder of other files), reads the frames
+// (LoadEvalFrames), evaluates every run and writes the results folder, which replaces `out` whole
+// at the end (nothing is left there if a step throws). Throws what those steps throw:
+// std::invalid_argument for bad options, std::runtime_error or ParseError for bad inputs or a
+// failed write.
+EvaluationResult RunEvaluation(const EvaluationOptions& options);
+
+// `stereodet eval sweep`: precision and recall of the naive and the stable filter along a sweep of
+// one filter bound (FilterSweep).
+struct EvaluationSweepOptions {
+  EvalInputOptions input;
+  // One run; its filter's conditions are the fixed ones the swept bound is added to.
+  EvalOptions eval;
+  FilterBound bound = FilterBound::kMinArea;  // the swept bound
+  double from = 0, to = 200, step = 5;        // its values: from, from + step, ... <= to
+  // Where OUT/sweep.csv goes (written atomically; the folder is created). Empty: not written.
+  std::filesystem::path out;
+  // Throws std::invalid_argument for a bad input or eval setting (FilterSweep checks the range).
+  void Check() const;
+};
+
+struct EvaluationSweepResult {
+  EvalInput input;
+  std::vector<SweepRow> rows;
+  std::string csv;                 // FormatSweepCsv(rows, bound)
+  std::filesystem::path csv_path;  // OUT/sweep.csv; empty without out
+};
+
+EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options);
+
+// `stereodet eval compare`: the 3D localization error of two detection sets of the same frames
+// beside the stereo depth-error model (CompareLocalization).
+struct EvaluationCompareOptions {
+  EvalInputOptions input;       // input.det holds the detections A
+  std::filesystem::path det_b;  // the detections B, read like A (same labels, split, leniency)
+  EvalOptions eval;             // both are evaluated with these
+  // A KITTI calib file whose baseline and focal length the model uses. Empty: KittiLikeCalibration.
+  std::filesystem::path calib;
+  // The model's disparity error (the baseline and focal length are set from `calib`).
+  double disparity_error_px = 1.0;
+  // Where OUT/compare.csv goes (written atomically). Empty: not written.
+  std::filesystem::path out;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct EvaluationCompareResult {
+  EvalInput input_a, input_b;
+  EvalResult result_a, result_b;
+  CompareOptions compare;  // as used: baseline_m and focal_px from the calibration
+  std::vector<CompareRow> rows;
+  std::string csv;                 // FormatCompareCsv(rows)
+  std::filesystem::path csv_path;  // OUT/compare.csv; empty without out
+};
+
+// Reads A then B, evaluates both, then reads the calibration and compares.
+EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_REPORT_EVALUATION_H_

@@ -1,0 +1,238 @@
+#include "stereodet/report/evaluation.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_temp_dir.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+const fs::path kData = fs::path(STEREODET_SOURCE_DIR) / "tests/data";
+
+// tests/data/eval_small (README): KITTI's devkit gives Car 2D AP_R40 6.25 / 15.77 / 15.77.
+EvaluationOptions SmallCar2d() {
+  EvaluationOptions options;
+  options.input.gt = kData / "eval_small";
+  options.input.det = kData / "eval_small/det";
+  options.runs.front().classes = {KittiClassSpec("Car")};
+  options.runs.front().metrics = {OverlapKind::k2D};
+  return options;
+}
+
+int64_t CountLines(const std::string& text) { return std::count(text.begin(), text.end(), '\n'); }
+
+TEST(OverlapSetRunsTest, OneRunPerSetWithThatSetsThresholdsAndTheRestKept) {
+  EvalOptions base;
+  base.classes = {KittiClassSpec("Car"), KittiClassSpec("Pedestrian")};
+  base.classes[0].min_overlap = {0.9, 0.9, 0.9};  // custom: replaced
+  base.matcher = Matcher::kOptimal;
+  base.score_threshold = 0.3;
+  const std::vector<EvalOptions> runs =
+      OverlapSetRuns(base, {OverlapSet::kLoose, OverlapSet::kStrict});
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(DescribeOverlaps(runs[0].classes), "loose");
+  EXPECT_EQ(DescribeOverlaps(runs[1].classes), "strict");
+  EXPECT_EQ(runs[0].classes[0].min_overlap, KittiClassSpec("Car", true).min_overlap);
+  EXPECT_EQ(runs[1].classes[0].min_overlap, (std::array<double, 3>{0.7, 0.7, 0.7}));
+  EXPECT_EQ(runs[1].classes[1].name, "Pedestrian");
+  for (const EvalOptions& run : runs) {
+    EXPECT_EQ(run.matcher, Matcher::kOptimal);
+    EXPECT_EQ(run.score_threshold, 0.3);
+  }
+
+  base.matcher = Matcher::kKitti;
+  base.compat = EvalCompat::kOpenPcdet;
+  const std::vector<EvalOptions> openpcdet = OverlapSetRuns(base, {OverlapSet::kLoose});
+  EXPECT_EQ(openpcdet[0].classes[0].min_overlap, OpenPcdetClassSpec("Car", true).min_overlap);
+  EXPECT_TRUE(OverlapSetRuns(base, {}).empty());
+}
+
+TEST(EvaluationOptionsTest, Check) {
+  EXPECT_NO_THROW(SmallCar2d().Check());
+  EvaluationOptions no_gt = SmallCar2d();
+  no_gt.input.gt.clear();
+  EXPECT_THROW(no_gt.Check(), std::invalid_argument);
+  EvaluationOptions no_runs = SmallCar2d();
+  no_runs.runs.clear();
+  EXPECT_THROW(no_runs.Check(), std::invalid_argument);
+  EvaluationOptions records = SmallCar2d();
+  records.records = true;
+  EXPECT_THROW(records.Check(), std::invalid_argument);  // records without out
+  EvaluationOptions compat = SmallCar2d();
+  compat.runs.push_back(compat.runs.front());
+  compat.runs.back().compat = EvalCompat::kOpenPcdet;
+  EXPECT_THROW(compat.Check(), std::invalid_argument);
+  EvaluationOptions bad_run = SmallCar2d();
+  bad_run.runs.front().calibration_bins = 0;
+  EXPECT_THROW(bad_run.Check(), std::invalid_argument);
+}
+
+TEST(RunEvaluationTest, GivesTheDevkitNumbersAndWhatTheSeparateCallsGive) {
+  const EvaluationOptions options = SmallCar2d();
+  const EvaluationResult result = RunEvaluation(options);
+  ASSERT_EQ(result.runs.size(), 1u);
+  const EvalResult& r = result.runs[0].result;
+  const ClassResult* easy = r.Find("Car", OverlapKind::k2D, Difficulty::kEasy);
+  const ClassResult* moderate = r.Find("Car", OverlapKind::k2D, Difficulty::kModerate);
+  ASSERT_NE(easy, nullptr);
+  ASSERT_NE(moderate, nullptr);
+  EXPECT_NEAR(easy->ap_r40, 6.25, 0.005);
+  EXPECT_NEAR(moderate->ap_r40, 15.77, 0.005);
+  EXPECT_EQ(result.seconds, r.seconds);
+  EXPECT_TRUE(result.files.empty());  // no out
+  EXPECT_TRUE(result.records.empty());
+
+  // The same as LoadEvalFrames + Evaluate + the table.
+  const EvalInput input = LoadEvalFrames(options.input);
+  EXPECT_EQ(result.input.frames.size(), input.frames.size());
+  EXPECT_EQ(result.input.input_hash, input.input_hash);
+  const EvalResult direct = Evaluate(input.frames, options.runs[0]);
+  EXPECT_EQ(FormatEvalTable(result.runs), FormatEvalTable({EvalRun{options.runs[0], direct}}));
+
+  // What results.json records about the input.
+  EXPECT_EQ(result.info.gt_path, options.input.gt.string());
+  EXPECT_EQ(result.info.det_path, options.input.det.string());
+  EXPECT_EQ(result.info.input_hash, input.input_hash);
+}
+
+TEST(RunEvaluationTest, WritesOneResultsFolderWithRecordsPerOverlapSet) {
+  TestTempDir dir;
+  EvaluationOptions options = SmallCar2d();
+  options.runs = OverlapSetRuns(options.runs.front(), {OverlapSet::kStrict, OverlapSet::kLoose});
+  options.out = dir / "eval";
+  options.records = true;
+  options.tool_version = "test-version";
+  options.command_line = "stereodet eval ...";
+  const EvaluationResult result = RunEvaluation(options);
+
+  ASSERT_EQ(result.records.size(), 2u);
+  EXPECT_EQ(result.records[0].name, "matches_strict.csv");
+  EXPECT_EQ(result.records[1].name, "matches_loose.csv");
+  for (const EvaluationResult::RecordsFile& records : result.records) {
+    EXPECT_GT(records.rows, 0);
+    EXPECT_EQ(CountLines(ReadFile(options.out / records.name)), records.rows + 1) << records.name;
+  }
+  for (const EvalRun& run : result.runs) EXPECT_TRUE(run.options.keep_records);
+  // Every file listed is there, under out, and nothing else is.
+  std::vector<fs::path> listed = result.files, found;
+  for (const auto& entry : fs::recursive_directory_iterator(options.out)) {
+    if (entry.is_regular_file()) found.push_back(entry.path());
+  }
+  std::sort(listed.begin(), listed.end());
+  std::sort(found.begin(), found.end());
+  EXPECT_EQ(listed, found);
+  EXPECT_NE(std::find(listed.begin(), listed.end(), options.out / "results.json"), listed.end());
+  // Only the folder itself beside it: no staging folder left.
+  int entries = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++entries;
+  EXPECT_EQ(entries, 1);
+
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  EXPECT_EQ(j["command_line"], "stereodet eval ...");
+  EXPECT_EQ(j["input_hash"], result.info.input_hash);
+  EXPECT_THAT(j.dump(), HasSubstr("test-version"));
+
+  // A second run replaces the folder whole: one records file now.
+  options.runs.resize(1);
+  const EvaluationResult again = RunEvaluation(options);
+  EXPECT_EQ(again.records.size(), 1u);
+  EXPECT_TRUE(fs::exists(options.out / "matches.csv"));
+  EXPECT_FALSE(fs::exists(options.out / "matches_loose.csv"));
+}
+
+TEST(RunEvaluationTest, RefusesAFolderOfOtherFilesBeforeReadingAnything) {
+  TestTempDir dir;
+  WriteFileAtomically(dir / "mine/notes.txt", "keep me\n");
+  EvaluationOptions options = SmallCar2d();
+  options.input.gt = dir / "no_such_labels";  // reading it would fail with another message
+  options.out = dir / "mine";
+  try {
+    RunEvaluation(options);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("results.json"));
+    EXPECT_THAT(e.what(), ::testing::Not(HasSubstr("no_such_labels")));
+  }
+  EXPECT_EQ(ReadFile(dir / "mine/notes.txt"), "keep me\n");
+}
+
+TEST(RunEvaluationSweepTest, IsFilterSweepOnTheFramesAndWritesItsCsv) {
+  TestTempDir dir;
+  EvaluationSweepOptions options;
+  options.input = SmallCar2d().input;
+  options.eval = SmallCar2d().runs.front();
+  options.bound = FilterBound::kMinArea;
+  options.from = 0;
+  options.to = 200;
+  options.step = 50;
+  options.out = dir / "sweep";
+  const EvaluationSweepResult result = RunEvaluationSweep(options);
+  const std::vector<SweepRow> direct =
+      FilterSweep(LoadEvalFrames(options.input).frames, options.eval, options.bound, 0, 200, 50);
+  EXPECT_EQ(result.csv, FormatSweepCsv(direct, options.bound));
+  EXPECT_EQ(result.rows.size(), direct.size());
+  // 5 values (0, 50, ..., 200) for each of Car 2D x 3 difficulties, and a header.
+  EXPECT_EQ(CountLines(result.csv), 1 + 5 * 3);
+  EXPECT_EQ(result.csv_path, options.out / "sweep.csv");
+  EXPECT_EQ(ReadFile(result.csv_path), result.csv);
+  options.out.clear();
+  EXPECT_TRUE(RunEvaluationSweep(options).csv_path.empty());
+}
+
+// tests/data/eval_compare (README): per 5 m bin, mean |dz| A 0.500 / B 0.200 (10-15 m) and
+// 1.000 / 2.000 (20-25 m).
+TEST(RunEvaluationCompareTest, GivesTheKnownDepthErrorsPerBin) {
+  TestTempDir dir;
+  EvaluationCompareOptions options;
+  options.input.gt = kData / "eval_compare";
+  options.input.det = kData / "eval_compare/det_a";
+  options.det_b = kData / "eval_compare/det_b";
+  options.eval.classes = {KittiClassSpec("Car")};
+  options.eval.metrics = {OverlapKind::k2D};
+  options.eval.difficulties = {Difficulty::kModerate};
+  options.out = dir / "compare";
+  const EvaluationCompareResult result = RunEvaluationCompare(options);
+  EXPECT_EQ(result.compare.baseline_m, KittiLikeCalibration().BaselineM());
+  EXPECT_EQ(result.compare.focal_px, KittiLikeCalibration().FocalPx());
+  EXPECT_EQ(result.compare.disparity_error_px, 1.0);
+  int checked = 0;
+  for (const CompareRow& row : result.rows) {
+    if (row.lower_m == 10) {
+      EXPECT_EQ(row.count_a, 1);
+      EXPECT_NEAR(row.abs_depth_error_mean_a_m, 0.5, 1e-9);
+      EXPECT_NEAR(row.abs_depth_error_mean_b_m, 0.2, 1e-9);
+      ++checked;
+    } else if (row.lower_m == 20) {
+      EXPECT_NEAR(row.abs_depth_error_mean_a_m, 1.0, 1e-9);
+      EXPECT_NEAR(row.abs_depth_error_mean_b_m, 2.0, 1e-9);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 2);
+  const std::string table = FormatCompareTable(result.rows);
+  EXPECT_THAT(table, HasSubstr("\nCar 2d Moderate: mean |depth error| of matched pairs (m)\n"));
+  EXPECT_THAT(table, ::testing::ContainsRegex("10-15 +m +1 +0.500 +1 +0.200 +-0.300"));
+  EXPECT_EQ(ReadFile(result.csv_path), result.csv);
+  EXPECT_EQ(result.csv, FormatCompareCsv(result.rows));
+
+  EvaluationCompareOptions no_b = options;
+  no_b.det_b.clear();
+  EXPECT_THROW(RunEvaluationCompare(no_b), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,107 @@
+// A whole KITTI-format dataset turned into the stereo inputs the detectors read: `stereodet stereo`
+// is this one call.
+//
+//   const KittiDataset dataset("data/kitti", "training");
+//   EncodeDatasetOptions options;
+//   options.outputs.points = true;
+//   const EncodeDatasetResult result = EncodeDataset(dataset, dataset.ReadSplit("val"), "out",
+//                                                    options);
+//
+// Per frame ID it writes under OUT (each file atomically):
+//   rgbh/ID.png        the packed RGB-H image (outputs.rgbh)
+//   depth/ID.png, height/ID.png   the RGB-D depth and height codes (outputs.rgbd), and
+//   image_2/ID.png     the blurred image the network sees, with outputs.rgbd and a blur
+//   velodyne/ID.bin    the stereo point cloud in KITTI's velodyne format (outputs.points)
+//   disparity/ID.png   KITTI-format disparity (outputs.disparity)
+//   ground/ID.txt      the ground plane (always; written last, so it marks the frame done)
+// and OUT/stereo.json, the manifest of every setting that changes those bytes (DatasetManifest).
+// Resumable: a frame whose files are all there is skipped, and a folder whose manifest records
+// other settings is refused, so one folder never mixes two settings.
+#ifndef STEREODET_STEREO_DATASET_ENCODER_H_
+#define STEREODET_STEREO_DATASET_ENCODER_H_
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/stereo/disparity.h"
+#include "stereodet/stereo/reprojection.h"
+#include "stereodet/stereo/stereo_encoder.h"
+#include "stereodet/util/progress.h"
+
+namespace stereodet {
+
+// Which files EncodeDataset writes per frame besides ground/ID.txt (see the header comment).
+struct DatasetOutputs {
+  bool rgbh = true;
+  bool rgbd = false;
+  bool points = false;
+  bool disparity = false;
+
+  bool Any() const { return rgbh || rgbd || points || disparity; }
+};
+
+// The chosen outputs' names joined by commas, always in the order "rgbh,rgbd,points,disparity"
+// (the manifest's "encode"). Empty when none is chosen.
+std::string DatasetOutputsName(const DatasetOutputs& outputs);
+
+// Parses a comma-separated list of output names (rgbh, rgbd, points, disparity), in any order,
+// spaces around a name ignored. Throws std::invalid_argument naming an unknown name
+// ("unknown output 'lidar' (expected rgbh, rgbd, points, disparity)"), or when the list names none.
+DatasetOutputs ParseDatasetOutputs(std::string_view text);
+
+struct EncodeDatasetOptions {
+  StereoOptions stereo;    // disparity, ground plane, codes, point cloud, blur
+  DatasetOutputs outputs;  // default: RGB-H only
+  // Recompute every frame, and accept (and rewrite) a manifest with other settings.
+  bool force = false;
+  // Also compare every frame's disparity with the dataset's ground truth (FramePaths::disparity,
+  // disp_noc_0/ as `stereodet synth` writes it); every frame is recomputed, none skipped.
+  bool evaluate = false;
+  int num_threads = 0;       // frames in parallel (0 = all cores); results do not depend on it
+  ProgressOptions progress;  // the "stereo" progress line (stream nullptr: silent)
+
+  // Throws std::invalid_argument for a bad stereo setting, no output chosen or num_threads < 0.
+  void Check() const;
+};
+
+struct EncodeDatasetResult {
+  int encoded = 0;  // frames computed by this call
+  int skipped = 0;  // frames whose files were all there already (resumed)
+  // Of the encoded frames: those whose RANSAC ground fit was accepted, and for the others, the
+  // fallback's reason (GroundPlaneFit::reason without its parenthesised detail) -> frames.
+  int ground_fitted = 0;
+  std::map<std::string, int> ground_fallbacks;
+  std::string stage_times;  // StageTimes::Format(): decode, the encoder's stages, write
+  // With evaluate: the encoded frames' disparity against ground truth, pooled over pixels (counts
+  // summed; density = estimated / ground truth; rates and mean error weighted by each frame's
+  // estimated pixels). All zero without evaluate or when no pixel was estimated.
+  DisparityErrorStats disparity_error;
+};
+
+// The text of OUT/stereo.json for these options (pretty JSON, 2 spaces, trailing newline): the
+// outputs ("encode", DatasetOutputsName) and every stereo setting that changes the outputs' bytes.
+// Not in it: force, evaluate, threads, progress.
+std::string DatasetManifest(const EncodeDatasetOptions& options);
+
+// The line of ground/ID.txt after its comment line, newline included: "fitted F normal NX NY NZ
+// offset_m O inliers I samples S tilt_deg T reason R" (normal to 6 decimals, offset to 4, tilt to
+// 3; F = 1 for a RANSAC fit, 0 for the nominal fallback).
+std::string GroundFitLine(const GroundPlaneFit& fit);
+
+// Encodes the frames `ids` of `dataset` into `out` (created), in parallel. Checks options first,
+// then that `ids` is not empty and that every frame has both images and a calibration, then the
+// manifest: if OUT/stereo.json exists with other settings it throws std::runtime_error naming it
+// (unless force). Throws std::runtime_error naming the file for an unreadable input, and with
+// evaluate for a frame without ground-truth disparity. An interrupted call leaves only whole
+// files; the next one resumes.
+EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                                  const std::filesystem::path& out,
+                                  const EncodeDatasetOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_STEREO_DATASET_ENCODER_H_

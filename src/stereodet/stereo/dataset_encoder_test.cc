@@ -1,0 +1,344 @@
+#include "stereodet/stereo/dataset_encoder.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/stereo/frame_pictures.h"
+#include "stereodet/stereo/image_io.h"
+#include "stereodet/stereo/planar_scene.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_temp_dir.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// A small scene dataset and options that keep the matcher quick on it.
+constexpr int kWidth = 256, kHeight = 96;
+
+std::vector<std::string> WriteScenes(const fs::path& root, int frames = 2) {
+  PlanarSceneDatasetOptions options;
+  options.frames = frames;
+  options.width_px = kWidth;
+  options.height_px = kHeight;
+  return WritePlanarSceneDataset(root, options);
+}
+
+EncodeDatasetOptions SmallOptions() {
+  EncodeDatasetOptions options;
+  options.stereo.disparity.num_disparities = 64;
+  options.progress.stream = nullptr;
+  return options;
+}
+
+// Every regular file under `dir`, relative, in name order.
+std::vector<fs::path> ListFiles(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file()) files.push_back(fs::relative(entry.path(), dir));
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+TEST(DatasetOutputsTest, ParsesAnyOrderAndNamesInOneOrder) {
+  const DatasetOutputs outputs = ParseDatasetOutputs(" disparity, rgbh ,points");
+  EXPECT_TRUE(outputs.rgbh);
+  EXPECT_FALSE(outputs.rgbd);
+  EXPECT_TRUE(outputs.points);
+  EXPECT_TRUE(outputs.disparity);
+  EXPECT_EQ(DatasetOutputsName(outputs), "rgbh,points,disparity");
+  EXPECT_EQ(DatasetOutputsName(ParseDatasetOutputs("rgbd,rgbd")), "rgbd");
+  EXPECT_EQ(DatasetOutputsName(DatasetOutputs()), "rgbh");  // the default
+  EXPECT_EQ(DatasetOutputsName(DatasetOutputs{.rgbh = false}), "");
+}
+
+TEST(DatasetOutputsTest, RejectsUnknownNamesAndEmptyLists) {
+  try {
+    ParseDatasetOutputs("rgbh,lidar");
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unknown output 'lidar'"));
+  }
+  EXPECT_THROW(ParseDatasetOutputs(""), std::invalid_argument);
+  EXPECT_THROW(ParseDatasetOutputs(" , "), std::invalid_argument);
+}
+
+TEST(EncodeDatasetOptionsTest, Check) {
+  EXPECT_NO_THROW(EncodeDatasetOptions().Check());
+  EncodeDatasetOptions none;
+  none.outputs.rgbh = false;
+  EXPECT_THROW(none.Check(), std::invalid_argument);
+  EncodeDatasetOptions threads;
+  threads.num_threads = -1;
+  EXPECT_THROW(threads.Check(), std::invalid_argument);
+  EncodeDatasetOptions stereo;
+  stereo.stereo.disparity.num_disparities = 20;  // not a multiple of 16
+  EXPECT_THROW(stereo.Check(), std::invalid_argument);
+}
+
+TEST(GroundFitLineTest, FormatsEveryField) {
+  GroundPlaneFit fit;
+  fit.fitted = true;
+  fit.plane.normal_in_rect = {0.0, -1.0, 0.0};
+  fit.plane.offset_m = 1.65;
+  fit.inliers = 10;
+  fit.samples = 20;
+  fit.tilt_deg = 0.5;
+  fit.reason = "fitted";
+  EXPECT_EQ(GroundFitLine(fit),
+            "fitted 1 normal 0.000000 -1.000000 0.000000 offset_m 1.6500 inliers 10 samples 20 "
+            "tilt_deg 0.500 reason fitted\n");
+}
+
+TEST(DatasetManifestTest, RecordsOutputsAndSettingsButNotHowTheRunGoes) {
+  EncodeDatasetOptions options;
+  options.outputs = ParseDatasetOutputs("points,rgbh");
+  options.stereo.disparity.num_disparities = 64;
+  const std::string manifest = DatasetManifest(options);
+  EXPECT_THAT(manifest, HasSubstr("\"encode\": \"rgbh,points\""));
+  EXPECT_THAT(manifest, HasSubstr("\"num_disparities\": 64"));
+  EXPECT_EQ(manifest.back(), '\n');
+  EncodeDatasetOptions run = options;
+  run.force = true;
+  run.evaluate = true;
+  run.num_threads = 3;
+  run.progress.stream = nullptr;
+  EXPECT_EQ(DatasetManifest(run), manifest);
+  run.stereo.blur.sigma_px = 1.0;
+  EXPECT_NE(DatasetManifest(run), manifest);
+}
+
+TEST(PlanarSceneDatasetTest, WritesTheKittiLayoutWithACentredPrincipalPoint) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir.path(), 3);
+  EXPECT_EQ(ids, (std::vector<std::string>{"000000", "000001", "000002"}));
+  EXPECT_EQ(ReadFile(dir / "ImageSets/all.txt"), "000000\n000001\n000002\n");
+  for (const std::string& id : ids) {
+    for (const char* folder : {"image_2", "image_3", "disp_noc_0"}) {
+      EXPECT_TRUE(fs::exists(dir / "training" / folder / (id + ".png"))) << folder << " " << id;
+    }
+  }
+  const cv::Mat left = ReadColourImage(dir / "training/image_2/000001.png");
+  EXPECT_EQ(left.cols, kWidth);
+  EXPECT_EQ(left.rows, kHeight);
+  // KITTI's principal point moved by half the pixels cut off on each axis.
+  const Calibration kitti = KittiLikeCalibration();
+  const Calibration calib = ReadCalibration(dir / "training/calib/000001.txt");
+  EXPECT_NEAR(calib.PrincipalPointPx().x(), kitti.PrincipalPointPx().x() - (1242 - kWidth) / 2.0,
+              1e-6);
+  EXPECT_NEAR(calib.PrincipalPointPx().y(), kitti.PrincipalPointPx().y() - (375 - kHeight) / 2.0,
+              1e-6);
+  EXPECT_NEAR(calib.FocalPx(), kitti.FocalPx(), 1e-6);
+
+  PlanarSceneDatasetOptions bad;
+  bad.frames = 0;
+  EXPECT_THROW(WritePlanarSceneDataset(dir / "bad", bad), std::invalid_argument);
+}
+
+TEST(EncodeDatasetTest, EncodesEveryFrameThenResumesWhereFilesAreMissing) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data");
+  const KittiDataset dataset(dir / "data");
+  EncodeDatasetOptions options = SmallOptions();
+  options.outputs = ParseDatasetOutputs("rgbh,points,disparity");
+  const fs::path out = dir / "out";
+
+  const EncodeDatasetResult first = EncodeDataset(dataset, ids, out, options);
+  EXPECT_EQ(first.encoded, 2);
+  EXPECT_EQ(first.skipped, 0);
+  int fallbacks = 0;
+  for (const auto& [reason, count] : first.ground_fallbacks) fallbacks += count;
+  EXPECT_EQ(first.ground_fitted + fallbacks, 2);
+  EXPECT_THAT(first.stage_times, HasSubstr("disparity"));
+  EXPECT_EQ(first.disparity_error.estimated_pixels, 0);  // not asked to evaluate
+  EXPECT_EQ(ListFiles(out), (std::vector<fs::path>{
+                                "disparity/000000.png", "disparity/000001.png", "ground/000000.txt",
+                                "ground/000001.txt", "rgbh/000000.png", "rgbh/000001.png",
+                                "stereo.json", "velodyne/000000.bin", "velodyne/000001.bin"}));
+  EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(options));
+  const std::string ground = ReadFile(out / "ground/000000.txt");
+  EXPECT_EQ(ground.substr(0, 1), "#");
+  EXPECT_THAT(ground, HasSubstr("\nfitted "));
+
+  // Everything there: nothing recomputed.
+  const EncodeDatasetResult again = EncodeDataset(dataset, ids, out, options);
+  EXPECT_EQ(again.encoded, 0);
+  EXPECT_EQ(again.skipped, 2);
+
+  // One frame lost a file: only that frame is recomputed.
+  fs::remove(out / "velodyne/000001.bin");
+  const EncodeDatasetResult resumed = EncodeDataset(dataset, ids, out, options);
+  EXPECT_EQ(resumed.encoded, 1);
+  EXPECT_EQ(resumed.skipped, 1);
+  EXPECT_TRUE(fs::exists(out / "velodyne/000001.bin"));
+
+  // force recomputes every frame.
+  options.force = true;
+  EXPECT_EQ(EncodeDataset(dataset, ids, out, options).encoded, 2);
+}
+
+TEST(EncodeDatasetTest, RefusesAFolderMadeWithOtherSettingsUnlessForced) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data");
+  const KittiDataset dataset(dir / "data");
+  const fs::path out = dir / "out";
+  EncodeDatasetOptions options = SmallOptions();
+  EncodeDataset(dataset, ids, out, options);
+  const std::string manifest = ReadFile(out / "stereo.json");
+
+  EncodeDatasetOptions other = options;
+  other.stereo.disparity.method = DisparityMethod::kSemiGlobal;
+  try {
+    EncodeDataset(dataset, ids, out, other);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("stereo.json"));
+    EXPECT_THAT(e.what(), HasSubstr("records different settings"));
+  }
+  EXPECT_EQ(ReadFile(out / "stereo.json"), manifest);  // left as it was
+
+  // The outputs are part of the settings too.
+  EncodeDatasetOptions more = options;
+  more.outputs.points = true;
+  EXPECT_THROW(EncodeDataset(dataset, ids, out, more), std::runtime_error);
+
+  other.force = true;
+  const EncodeDatasetResult forced = EncodeDataset(dataset, ids, out, other);
+  EXPECT_EQ(forced.encoded, 2);
+  EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(other));
+}
+
+TEST(EncodeDatasetTest, BlurredRgbdAlsoWritesTheNetworkImage) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data", 1);
+  const KittiDataset dataset(dir / "data");
+  EncodeDatasetOptions options = SmallOptions();
+  options.outputs = ParseDatasetOutputs("rgbd");
+  EncodeDataset(dataset, ids, dir / "sharp", options);
+  EXPECT_EQ(ListFiles(dir / "sharp"),
+            (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "height/000000.png",
+                                   "stereo.json"}));
+  options.stereo.blur.sigma_px = 1.5;
+  EncodeDataset(dataset, ids, dir / "blurred", options);
+  EXPECT_EQ(ListFiles(dir / "blurred"),
+            (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "height/000000.png",
+                                   "image_2/000000.png", "stereo.json"}));
+}
+
+TEST(EncodeDatasetTest, OutputsDoNotDependOnTheThreadCount) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data", 3);
+  const KittiDataset dataset(dir / "data");
+  EncodeDatasetOptions options = SmallOptions();
+  options.outputs = ParseDatasetOutputs("rgbh,rgbd,points,disparity");
+  options.num_threads = 1;
+  EncodeDataset(dataset, ids, dir / "one", options);
+  options.num_threads = 3;
+  EncodeDataset(dataset, ids, dir / "three", options);
+  const std::vector<fs::path> files = ListFiles(dir / "one");
+  ASSERT_EQ(files, ListFiles(dir / "three"));
+  for (const fs::path& file : files) {
+    EXPECT_EQ(ReadFile(dir / "one" / file), ReadFile(dir / "three" / file)) << file;
+  }
+}
+
+// The pooled disparity error against the per-frame reference: counts summed, rates weighted by
+// each frame's estimated pixels.
+TEST(EncodeDatasetTest, EvaluatePoolsTheFramesDisparityError) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data", 3);
+  const KittiDataset dataset(dir / "data");
+  EncodeDatasetOptions options = SmallOptions();
+  options.evaluate = true;
+  const EncodeDatasetResult result = EncodeDataset(dataset, ids, dir / "out", options);
+  EXPECT_EQ(result.encoded, 3);
+
+  long truth = 0, estimated = 0;
+  double bad = 0, d1 = 0, abs_error = 0;
+  for (const std::string& id : ids) {
+    const FramePaths in = dataset.Paths(id);
+    StereoEncoder encoder(options.stereo);
+    const StereoEncoding encoding =
+        encoder.Encode(ReadColourImage(in.image_left), ReadColourImage(in.image_right),
+                       StereoGeometry::FromCalibration(ReadCalibration(in.calib)));
+    const DisparityErrorStats stats =
+        EvaluateDisparity(encoding.disparity_px, ReadKittiDisparity(in.disparity));
+    truth += stats.ground_truth_pixels;
+    estimated += stats.estimated_pixels;
+    bad += stats.bad_rate * stats.estimated_pixels;
+    d1 += stats.d1_rate * stats.estimated_pixels;
+    abs_error += stats.mean_abs_error_px * stats.estimated_pixels;
+  }
+  ASSERT_GT(estimated, 0);
+  const DisparityErrorStats& pooled = result.disparity_error;
+  EXPECT_EQ(pooled.ground_truth_pixels, truth);
+  EXPECT_EQ(pooled.estimated_pixels, estimated);
+  EXPECT_NEAR(pooled.density, static_cast<double>(estimated) / truth, 1e-12);
+  EXPECT_NEAR(pooled.bad_rate, bad / estimated, 1e-12);
+  EXPECT_NEAR(pooled.d1_rate, d1 / estimated, 1e-12);
+  EXPECT_NEAR(pooled.mean_abs_error_px, abs_error / estimated, 1e-12);
+  // The scenes' disparity is exact, so BM is close to it almost everywhere.
+  EXPECT_LT(pooled.d1_rate, 0.05);
+
+  // Evaluating again recomputes every frame (nothing is skipped).
+  EXPECT_EQ(EncodeDataset(dataset, ids, dir / "out", options).encoded, 3);
+  // Without ground truth it is an error naming the file.
+  fs::remove(dir / "data/training/disp_noc_0/000002.png");
+  try {
+    EncodeDataset(dataset, ids, dir / "out", options);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("000002.png"));
+  }
+}
+
+TEST(EncodeDatasetTest, RefusesMissingInputsAndNoFramesBeforeWriting) {
+  TestTempDir dir;
+  std::vector<std::string> ids = WriteScenes(dir / "data");
+  const KittiDataset dataset(dir / "data");
+  fs::remove(dir / "data/training/image_3/000001.png");
+  try {
+    EncodeDataset(dataset, ids, dir / "out", SmallOptions());
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("1 input files are missing, first: 000001"));
+  }
+  EXPECT_THROW(EncodeDataset(dataset, {}, dir / "out", SmallOptions()), std::runtime_error);
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(FramePicturesTest, WritesFourPicturesOfTheImageSize) {
+  TestTempDir dir;
+  WriteScenes(dir / "data", 1);
+  const KittiDataset dataset(dir / "data");
+  StereoOptions options;
+  options.disparity.num_disparities = 64;
+  const FramePicturesResult result = WriteFramePictures(dataset, "000000", dir / "out", options);
+  ASSERT_EQ(result.files.size(), 4u);
+  EXPECT_EQ(result.files[0], dir / "out/000000_disparity.png");
+  EXPECT_EQ(result.files[3], dir / "out/000000_bev.png");
+  for (size_t i = 0; i < 3; ++i) {
+    const cv::Mat picture = ReadColourImage(result.files[i]);
+    EXPECT_EQ(picture.cols, kWidth) << result.files[i];
+    EXPECT_EQ(picture.rows, kHeight) << result.files[i];
+  }
+  EXPECT_TRUE(fs::exists(result.files[3]));
+  EXPECT_EQ(result.total_pixels, int64_t{kWidth} * kHeight);
+  EXPECT_GT(result.stereo_pixels, 0);
+  EXPECT_LE(result.stereo_pixels, result.total_pixels);
+  EXPECT_GT(result.points, 0);
+  EXPECT_THROW(WriteFramePictures(dataset, "000009", dir / "out", options), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace stereodet
