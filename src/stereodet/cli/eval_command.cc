@@ -26,10 +26,7 @@
 #include "stereodet/report/evaluation.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/strings.h"
-
-#ifndef STEREODET_VERSION
-#define STEREODET_VERSION "unknown"
-#endif
+#include "stereodet/util/version.h"
 
 namespace stereodet::cli {
 
@@ -260,7 +257,7 @@ void RunEval(const EvalArgs& a) {
   options.input = MakeInputOptions(a);
   options.out = a.out;
   options.records = a.records;
-  options.tool_version = STEREODET_VERSION;
+  options.tool_version = StereodetVersion();
   options.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluation(options);
 

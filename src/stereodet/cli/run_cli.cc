@@ -13,10 +13,7 @@
 #include <vector>
 
 #include "stereodet/cli/commands.h"
-
-#ifndef STEREODET_VERSION
-#define STEREODET_VERSION "unknown"
-#endif
+#include "stereodet/util/version.h"
 
 namespace stereodet::cli {
 namespace {
@@ -92,10 +89,10 @@ void AddStandIn(CLI::App& app, const Command& command, const char* argv0) {
 
 int RunCli(int argc, char** argv, Program self,
            std::span<const std::pair<std::string_view, AddCommandFn>> own) {
-  CLI::App app{"stereodet " STEREODET_VERSION
+  CLI::App app{std::string("stereodet ") + StereodetVersion() +
                ": stereo features, detectors and safety-grade evaluation on KITTI-format data.\n"
                "Run `stereodet COMMAND --help` for the options of a command."};
-  app.set_version_flag("--version", std::string("stereodet ") + STEREODET_VERSION);
+  app.set_version_flag("--version", std::string("stereodet ") + StereodetVersion());
   app.require_subcommand(1);
   app.fallthrough();
 
