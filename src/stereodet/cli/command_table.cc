@@ -6,7 +6,7 @@
 
 namespace stereodet::cli {
 
-std::string_view ProgramName(Program program) {
+const char* ProgramName(Program program) {
   switch (program) {
     case Program::kFrontEnd:
       return "stereodet";
@@ -16,6 +16,13 @@ std::string_view ProgramName(Program program) {
       return "stereodet-models";
   }
   return "stereodet";
+}
+
+std::optional<Program> ParseProgram(std::string_view text) {
+  for (Program program : {Program::kFrontEnd, Program::kVision, Program::kModels}) {
+    if (text == ProgramName(program)) return program;
+  }
+  return std::nullopt;
 }
 
 bool ProgramBuilt(Program program) {

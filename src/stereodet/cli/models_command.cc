@@ -50,7 +50,10 @@ void RunTrain(const TrainArgs& a) {
   options.data_root = a.data;
   options.split = a.split;
   options.out_dir = a.out;
-  options.model.encoding = ParseInputEncoding(a.input);
+  const auto encoding = ParseInputEncoding(a.input);
+  STEREODET_CHECK(encoding.has_value())
+      << "unknown input encoding '" << a.input << "' (expected rgb, rgbh-fixed or rgbh-learned)";
+  options.model.encoding = *encoding;
   options.model.boxes.input_width = a.width;
   options.model.boxes.input_height = a.height;
   options.epochs = a.epochs;

@@ -53,14 +53,20 @@ struct StereoArgs {
 
   StereoOptions ToOptions() const {
     StereoOptions options;
-    options.disparity.method = ParseDisparityMethod(method);
+    const auto parsed_method = ParseDisparityMethod(method);
+    STEREODET_CHECK(parsed_method.has_value())
+        << "disparity method must be 'bm' or 'sgbm', got '" << method << "'";
+    options.disparity.method = *parsed_method;
     if (num_disparities >= 0) options.disparity.num_disparities = num_disparities;
     if (block_size >= 0) {
       options.disparity.bm.block_size = block_size;
       options.disparity.sgbm.block_size = block_size;
     }
     options.blur.sigma_px = blur_sigma;
-    options.blur.mode = ParseBlurMode(blur_mode);
+    const auto parsed_blur_mode = ParseBlurMode(blur_mode);
+    STEREODET_CHECK(parsed_blur_mode.has_value())
+        << "blur mode must be 'image' or 'both', got '" << blur_mode << "'";
+    options.blur.mode = *parsed_blur_mode;
     options.points.beams = beams;
     if (max_depth_m > 0) options.points.max_depth_m = max_depth_m;
     options.ground.enabled = !no_ground_fit;
