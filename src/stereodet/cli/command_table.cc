@@ -28,13 +28,8 @@ std::optional<Program> ParseProgram(std::string_view text) {
 bool ProgramBuilt(Program program) {
   switch (program) {
     case Program::kFrontEnd:
-      return true;
     case Program::kVision:
-#ifdef STEREODET_BUILT_VISION
       return true;
-#else
-      return false;
-#endif
     case Program::kModels:
 #ifdef STEREODET_BUILT_MODELS
       return true;

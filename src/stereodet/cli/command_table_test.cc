@@ -29,6 +29,7 @@ TEST(CommandTableTest, OwnersKeepHeavyLibrariesOutOfTheFrontEnd) {
   EXPECT_STREQ(ProgramName(Program::kVision), "stereodet-vision");
   EXPECT_STREQ(ProgramName(Program::kModels), "stereodet-models");
   EXPECT_TRUE(ProgramBuilt(Program::kFrontEnd));
+  EXPECT_TRUE(ProgramBuilt(Program::kVision));  // stereo and synth are not optional
 }
 
 TEST(CommandTableTest, ProgramNamesParseBack) {
