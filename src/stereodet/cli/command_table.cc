@@ -6,7 +6,7 @@
 
 namespace stereodet::cli {
 
-std::string_view ProgramName(Program program) {
+const char* ProgramName(Program program) {
   switch (program) {
     case Program::kFrontEnd:
       return "stereodet";
@@ -18,16 +18,18 @@ std::string_view ProgramName(Program program) {
   return "stereodet";
 }
 
+std::optional<Program> ParseProgram(std::string_view text) {
+  for (Program program : {Program::kFrontEnd, Program::kVision, Program::kModels}) {
+    if (text == ProgramName(program)) return program;
+  }
+  return std::nullopt;
+}
+
 bool ProgramBuilt(Program program) {
   switch (program) {
     case Program::kFrontEnd:
-      return true;
     case Program::kVision:
-#ifdef STEREODET_BUILT_VISION
       return true;
-#else
-      return false;
-#endif
     case Program::kModels:
 #ifdef STEREODET_BUILT_MODELS
       return true;

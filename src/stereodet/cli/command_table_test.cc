@@ -25,10 +25,19 @@ TEST(CommandTableTest, OwnersKeepHeavyLibrariesOutOfTheFrontEnd) {
     const bool light = command.name == "info" || command.name == "eval";
     EXPECT_EQ(command.program == Program::kFrontEnd, light) << command.name;
   }
-  EXPECT_EQ(ProgramName(Program::kFrontEnd), "stereodet");
-  EXPECT_EQ(ProgramName(Program::kVision), "stereodet-vision");
-  EXPECT_EQ(ProgramName(Program::kModels), "stereodet-models");
+  EXPECT_STREQ(ProgramName(Program::kFrontEnd), "stereodet");
+  EXPECT_STREQ(ProgramName(Program::kVision), "stereodet-vision");
+  EXPECT_STREQ(ProgramName(Program::kModels), "stereodet-models");
   EXPECT_TRUE(ProgramBuilt(Program::kFrontEnd));
+  EXPECT_TRUE(ProgramBuilt(Program::kVision));  // stereo and synth are not optional
+}
+
+TEST(CommandTableTest, ProgramNamesParseBack) {
+  for (Program program : {Program::kFrontEnd, Program::kVision, Program::kModels}) {
+    EXPECT_EQ(ParseProgram(ProgramName(program)), program) << ProgramName(program);
+  }
+  EXPECT_EQ(ParseProgram("stereodet-train"), std::nullopt);
+  EXPECT_EQ(ParseProgram("./stereodet"), std::nullopt);  // a file name, not a path
 }
 
 TEST(CommandTableTest, DescriptionOfKnownAndUnknownCommands) {

@@ -15,6 +15,7 @@
 #define STEREODET_CLI_COMMANDS_H_
 
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -26,7 +27,8 @@ namespace stereodet::cli {
 enum class Program { kFrontEnd, kVision, kModels };
 
 // The file name of `program` ("stereodet", "stereodet-vision", "stereodet-models").
-std::string_view ProgramName(Program program);
+const char* ProgramName(Program program);
+std::optional<Program> ParseProgram(std::string_view text);
 
 // Whether this build configured `program` (kModels needs STEREODET_BUILD_MODELS=ON and LibTorch).
 bool ProgramBuilt(Program program);

@@ -177,10 +177,10 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   }
   o.difficulties.clear();
   for (const std::string& d : SplitList(a.difficulties)) {
-    if (EqualsIgnoreCase(d, "easy")) o.difficulties.push_back(Difficulty::kEasy);
-    else if (EqualsIgnoreCase(d, "moderate")) o.difficulties.push_back(Difficulty::kModerate);
-    else if (EqualsIgnoreCase(d, "hard")) o.difficulties.push_back(Difficulty::kHard);
-    else STEREODET_THROW_ARG() << "--difficulties: unknown '" << d << "' (easy, moderate, hard)";
+    const auto difficulty = ParseDifficulty(d);
+    STEREODET_CHECK(difficulty.has_value())
+        << "--difficulties: unknown '" << d << "' (easy, moderate, hard)";
+    o.difficulties.push_back(*difficulty);
   }
   const auto matcher = ParseMatcher(a.matcher);
   STEREODET_CHECK(matcher.has_value()) << "--matcher: unknown '" << a.matcher << "' (kitti, optimal, voc)";

@@ -45,7 +45,10 @@ struct DetectArgs {
 
 void RunTrain(TrainArgs& a) {
   TrainSsdOptions& options = a.options;
-  options.model.encoding = ParseInputEncoding(a.input);
+  const auto encoding = ParseInputEncoding(a.input);
+  STEREODET_CHECK(encoding.has_value())
+      << "unknown input encoding '" << a.input << "' (expected rgb, rgbh-fixed or rgbh-learned)";
+  options.model.encoding = *encoding;
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
   const TrainSsdSummary s = TrainSsd(options);

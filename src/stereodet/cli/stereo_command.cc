@@ -76,8 +76,14 @@ void AddSharedOptions(CLI::App* cmd, StereoArgs& args, StereoOptions& options) {
 
 // The named settings into `options`, then its Check().
 void FinishOptions(const StereoArgs& args, StereoOptions& options) {
-  options.disparity.method = ParseDisparityMethod(args.method);
-  options.blur.mode = ParseBlurMode(args.blur_mode);
+  const auto method = ParseDisparityMethod(args.method);
+  STEREODET_CHECK(method.has_value())
+      << "disparity method must be 'bm' or 'sgbm', got '" << args.method << "'";
+  options.disparity.method = *method;
+  const auto blur_mode = ParseBlurMode(args.blur_mode);
+  STEREODET_CHECK(blur_mode.has_value())
+      << "blur mode must be 'image' or 'both', got '" << args.blur_mode << "'";
+  options.blur.mode = *blur_mode;
   options.Check();
 }
 

@@ -22,6 +22,14 @@ const char* OutcomeName(Outcome outcome) {
   return "none";
 }
 
+std::optional<Outcome> ParseOutcome(std::string_view text) {
+  for (Outcome o : {Outcome::kNone, Outcome::kTp, Outcome::kFp, Outcome::kFn, Outcome::kIgnored,
+                    Outcome::kDontCare}) {
+    if (text == OutcomeName(o)) return o;
+  }
+  return std::nullopt;
+}
+
 int64_t FrameAssociation::CountLabels(Outcome o) const {
   return std::count(label_outcome.begin(), label_outcome.end(), o);
 }

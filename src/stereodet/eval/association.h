@@ -5,6 +5,8 @@
 #define STEREODET_EVAL_ASSOCIATION_H_
 
 #include <cstdint>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 namespace stereodet {
@@ -19,6 +21,7 @@ enum class Outcome : int8_t {
 };
 // "none", "tp", "fp", "fn", "ignored", "dontcare".
 const char* OutcomeName(Outcome outcome);
+std::optional<Outcome> ParseOutcome(std::string_view text);
 
 // Indices are those of the ClassFrame the association was computed on.
 struct FrameAssociation {

@@ -72,10 +72,10 @@ std::vector<FilterCondition> ParseFilterConditions(std::string_view text) {
     FilterCondition condition;
     condition.bound = *bound;
     if (*bound == FilterBound::kDifficulty && !ParseDouble(value_text)) {
-      if (value_text == "easy") condition.value = 0;
-      else if (value_text == "moderate") condition.value = 1;
-      else if (value_text == "hard") condition.value = 2;
-      else STEREODET_THROW_ARG() << "filter '" << part << "': difficulty must be easy, moderate or hard";
+      const std::optional<Difficulty> difficulty = ParseDifficulty(value_text);
+      STEREODET_CHECK(difficulty.has_value())
+          << "filter '" << part << "': difficulty must be easy, moderate or hard";
+      condition.value = static_cast<int>(*difficulty);
     } else {
       const std::optional<double> value = ParseDouble(value_text);
       STEREODET_CHECK(value.has_value() && std::isfinite(*value))

@@ -47,7 +47,8 @@ struct FilterOptions {
   void Check() const;  // throws std::invalid_argument on a NaN value or a bad difficulty
 };
 
-// Parses "min-area=100,max-distance=40" (names as above, difficulty=easy|moderate|hard|0|1|2).
+// Parses "min-area=100,max-distance=40" (names as above; difficulty=easy|moderate|hard in any case,
+// as ParseDifficulty, or 0|1|2).
 // Throws std::invalid_argument naming the bad part.
 std::vector<FilterCondition> ParseFilterConditions(std::string_view text);
 

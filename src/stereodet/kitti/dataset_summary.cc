@@ -33,6 +33,14 @@ const char* DifficultyBucketName(DifficultyBucket bucket) {
   return "?";
 }
 
+std::optional<DifficultyBucket> ParseDifficultyBucket(std::string_view text) {
+  for (int i = 0; i < kNumDifficultyBuckets; ++i) {
+    const auto bucket = static_cast<DifficultyBucket>(i);
+    if (text == DifficultyBucketName(bucket)) return bucket;
+  }
+  return std::nullopt;
+}
+
 namespace {
 
 DifficultyBucket BucketOf(const Object& label) {

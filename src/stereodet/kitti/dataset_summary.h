@@ -5,7 +5,9 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
@@ -29,6 +31,7 @@ struct DatasetSummaryOptions {
 enum class DifficultyBucket { kEasy = 0, kModerateOnly = 1, kHardOnly = 2, kNone = 3 };
 inline constexpr int kNumDifficultyBuckets = 4;
 const char* DifficultyBucketName(DifficultyBucket bucket);  // "easy", "moderate_only", ...
+std::optional<DifficultyBucket> ParseDifficultyBucket(std::string_view text);
 
 struct ClassCounts {
   int64_t objects = 0;

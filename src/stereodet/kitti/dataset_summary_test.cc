@@ -170,5 +170,17 @@ TEST_F(DatasetSummaryTest, FarAwayLabelsDoNotBlowUpTheHistogram) {
   EXPECT_EQ(s.distance_histogram.back(), 1);
 }
 
+TEST(DifficultyBucketTest, NamesParseBack) {
+  for (int i = 0; i < kNumDifficultyBuckets; ++i) {
+    const auto bucket = static_cast<DifficultyBucket>(i);
+    EXPECT_EQ(ParseDifficultyBucket(DifficultyBucketName(bucket)), bucket)
+        << DifficultyBucketName(bucket);
+  }
+  EXPECT_STREQ(DifficultyBucketName(DifficultyBucket::kModerateOnly), "moderate_only");
+  for (const char* bad : {"", "moderate", "Easy", "hard only", "?"}) {
+    EXPECT_EQ(ParseDifficultyBucket(bad), std::nullopt) << "'" << bad << "'";
+  }
+}
+
 }  // namespace
 }  // namespace stereodet

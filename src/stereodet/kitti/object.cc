@@ -1,5 +1,8 @@
 #include "stereodet/kitti/object.h"
 
+#include <algorithm>
+#include <cctype>
+
 namespace stereodet {
 
 void Object::SetNot3DEstimated() {
@@ -16,6 +19,20 @@ const char* DifficultyName(Difficulty difficulty) {
     case Difficulty::kHard: return "Hard";
   }
   return "?";
+}
+
+std::optional<Difficulty> ParseDifficulty(std::string_view text) {
+  for (Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+    const std::string_view name = DifficultyName(d);
+    if (text.size() == name.size() &&
+        std::equal(text.begin(), text.end(), name.begin(), [](char a, char b) {
+          return std::tolower(static_cast<unsigned char>(a)) ==
+                 std::tolower(static_cast<unsigned char>(b));
+        })) {
+      return d;
+    }
+  }
+  return std::nullopt;
 }
 
 DifficultyLimits KittiDifficultyLimits(Difficulty difficulty) {

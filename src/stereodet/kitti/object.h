@@ -4,6 +4,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "stereodet/geometry/box.h"
 
@@ -37,6 +38,8 @@ struct Object {
 enum class Difficulty { kEasy = 0, kModerate = 1, kHard = 2 };
 inline constexpr int kNumDifficulties = 3;
 const char* DifficultyName(Difficulty difficulty);  // "Easy", "Moderate", "Hard"
+// The difficulty named `text`, in any case ("easy", "Moderate", "HARD"), or nullopt.
+std::optional<Difficulty> ParseDifficulty(std::string_view text);
 
 // KITTI's per-level limits: minimum 2D box height (px), maximum occlusion level and truncation.
 struct DifficultyLimits {

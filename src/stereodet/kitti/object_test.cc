@@ -29,6 +29,18 @@ TEST(ObjectTest, DifficultyNamesAndLimits) {
   EXPECT_EQ(hard.max_truncation, 0.50);
 }
 
+TEST(ObjectTest, DifficultyNamesParseBackInAnyCase) {
+  for (Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+    EXPECT_EQ(ParseDifficulty(DifficultyName(d)), d) << DifficultyName(d);
+  }
+  EXPECT_EQ(ParseDifficulty("easy"), Difficulty::kEasy);
+  EXPECT_EQ(ParseDifficulty("MODERATE"), Difficulty::kModerate);
+  EXPECT_EQ(ParseDifficulty("hArD"), Difficulty::kHard);
+  for (const char* bad : {"", "Eas", "Easy ", "medium", "0", "Easiest"}) {
+    EXPECT_EQ(ParseDifficulty(bad), std::nullopt) << "'" << bad << "'";
+  }
+}
+
 // The official devkit's rule: a label is ignored when height <= the minimum (40 / 25 / 25 px),
 // occluded > max or truncated > max; so exactly 40.00 px is not Easy and exactly 25.00 px is
 // nothing.

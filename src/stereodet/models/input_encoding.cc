@@ -4,7 +4,7 @@
 
 namespace stereodet {
 
-std::string InputEncodingName(InputEncoding encoding) {
+const char* InputEncodingName(InputEncoding encoding) {
   switch (encoding) {
     case InputEncoding::kRgb:
       return "rgb";
@@ -16,14 +16,12 @@ std::string InputEncodingName(InputEncoding encoding) {
   return "unknown";
 }
 
-InputEncoding ParseInputEncoding(const std::string& name) {
+std::optional<InputEncoding> ParseInputEncoding(std::string_view text) {
   for (InputEncoding e :
        {InputEncoding::kRgb, InputEncoding::kRgbhFixed, InputEncoding::kRgbhLearned}) {
-    if (name == InputEncodingName(e)) return e;
+    if (text == InputEncodingName(e)) return e;
   }
-  STEREODET_THROW_ARG() << "unknown input encoding '" << name
-                        << "' (expected rgb, rgbh-fixed or rgbh-learned)";
-  return InputEncoding::kRgb;
+  return std::nullopt;
 }
 
 NetworkInput NetworkLayout(InputEncoding encoding) {

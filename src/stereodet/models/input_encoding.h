@@ -8,7 +8,9 @@
 #define STEREODET_MODELS_INPUT_ENCODING_H_
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "stereodet/stereo/rgbh.h"
 
@@ -21,9 +23,8 @@ enum class InputEncoding {
                  // channels
 };
 
-std::string InputEncodingName(InputEncoding encoding);  // "rgb", "rgbh-fixed", "rgbh-learned"
-// Throws std::invalid_argument listing the valid names.
-InputEncoding ParseInputEncoding(const std::string& name);
+const char* InputEncodingName(InputEncoding encoding);  // "rgb", "rgbh-fixed", "rgbh-learned"
+std::optional<InputEncoding> ParseInputEncoding(std::string_view text);
 
 // The stereo module's planar layout each encoding uses: kRgb, kRgbhFixed, kRgbh.
 NetworkInput NetworkLayout(InputEncoding encoding);

@@ -32,7 +32,8 @@ TEST(InputEncodingTest, NamesRoundTrip) {
        {InputEncoding::kRgb, InputEncoding::kRgbhFixed, InputEncoding::kRgbhLearned}) {
     EXPECT_EQ(ParseInputEncoding(InputEncodingName(e)), e);
   }
-  EXPECT_THROW(ParseInputEncoding("rgbd"), std::invalid_argument);
+  EXPECT_EQ(ParseInputEncoding("rgbd"), std::nullopt);
+  EXPECT_EQ(ParseInputEncoding("RGB"), std::nullopt);
   EXPECT_EQ(NetworkInputChannels(InputEncoding::kRgb), 3);
   EXPECT_EQ(NetworkInputChannels(InputEncoding::kRgbhFixed), 3);
   EXPECT_EQ(NetworkInputChannels(InputEncoding::kRgbhLearned), 4);

@@ -70,7 +70,14 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
       throw ParseError(source, 0, field, "expected \"ssd\"");
     }
     field = "encoding";
-    config.encoding = ParseInputEncoding(j.at(field).get<std::string>());
+    const std::string encoding = j.at(field).get<std::string>();
+    const std::optional<InputEncoding> parsed = ParseInputEncoding(encoding);
+    if (!parsed) {
+      throw ParseError(
+          source, 0, field,
+          "unknown input encoding '" + encoding + "' (expected rgb, rgbh-fixed or rgbh-learned)");
+    }
+    config.encoding = *parsed;
     field = "classes";
     config.classes = j.at(field).get<std::vector<std::string>>();
     field = "input_width";

@@ -160,6 +160,21 @@ TEST(SsdTest, ConfigJsonRoundTrip) {
   EXPECT_THROW(SsdConfigFromJson("not json", "model.json"), ParseError);
 }
 
+TEST(SsdTest, ConfigWithAnUnknownEncodingNamesTheField) {
+  std::string json = SsdConfigToJson(TinyConfig(InputEncoding::kRgb));
+  const size_t at = json.find("\"rgb\"");
+  ASSERT_NE(at, std::string::npos) << json;
+  json.replace(at, 5, "\"rgbd\"");
+  try {
+    SsdConfigFromJson(json, "model.json");
+    FAIL() << "an unknown encoding was accepted";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.file(), "model.json");
+    EXPECT_EQ(e.field(), "encoding");
+    EXPECT_NE(e.message().find("unknown input encoding 'rgbd'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SsdTest, AFewStepsLowerTheLoss) {
   SetTorchThreads(1);
   SsdModel model(TinyConfig(InputEncoding::kRgb), 21);

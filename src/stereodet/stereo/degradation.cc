@@ -7,15 +7,15 @@
 
 namespace stereodet {
 
-std::string BlurModeName(BlurMode mode) {
+const char* BlurModeName(BlurMode mode) {
   return mode == BlurMode::kNetworkImage ? "image" : "both";
 }
 
-BlurMode ParseBlurMode(const std::string& name) {
-  if (name == "image") return BlurMode::kNetworkImage;
-  if (name == "both") return BlurMode::kBothBeforeMatching;
-  STEREODET_THROW_ARG() << "blur mode must be 'image' or 'both', got '" << name << "'";
-  return BlurMode::kNetworkImage;  // not reached
+std::optional<BlurMode> ParseBlurMode(std::string_view text) {
+  for (BlurMode mode : {BlurMode::kNetworkImage, BlurMode::kBothBeforeMatching}) {
+    if (text == BlurModeName(mode)) return mode;
+  }
+  return std::nullopt;
 }
 
 void BlurOptions::Check() const {

@@ -4,7 +4,8 @@
 #define STEREODET_STEREO_DEGRADATION_H_
 
 #include <opencv2/core.hpp>
-#include <string>
+#include <optional>
+#include <string_view>
 
 namespace stereodet {
 
@@ -13,9 +14,8 @@ enum class BlurMode {
   kBothBeforeMatching,  // blur both images before matching: degraded stereo too (correlated
                         // defocus)
 };
-// "image" / "both"; ParseBlurMode throws std::invalid_argument for anything else.
-std::string BlurModeName(BlurMode mode);
-BlurMode ParseBlurMode(const std::string& name);
+const char* BlurModeName(BlurMode mode);  // "image", "both"
+std::optional<BlurMode> ParseBlurMode(std::string_view text);
 
 // The largest blur sigma accepted (pixels): a 601-px kernel, far past any defocus study (the
 // paper's largest is 5 px); beyond it a blur only burns time.

@@ -46,8 +46,11 @@ TEST(BlurTest, BlurSmoothsNoiseAndKeepsConstants) {
 TEST(BlurTest, ModeNames) {
   EXPECT_EQ(ParseBlurMode("image"), BlurMode::kNetworkImage);
   EXPECT_EQ(ParseBlurMode("both"), BlurMode::kBothBeforeMatching);
-  EXPECT_EQ(BlurModeName(BlurMode::kBothBeforeMatching), "both");
-  EXPECT_THROW(ParseBlurMode("left"), std::invalid_argument);
+  EXPECT_STREQ(BlurModeName(BlurMode::kBothBeforeMatching), "both");
+  for (BlurMode mode : {BlurMode::kNetworkImage, BlurMode::kBothBeforeMatching}) {
+    EXPECT_EQ(ParseBlurMode(BlurModeName(mode)), mode);
+  }
+  EXPECT_EQ(ParseBlurMode("left"), std::nullopt);
   BlurOptions options;
   options.sigma_px = -0.5;
   EXPECT_THROW(options.Check(), std::invalid_argument);

@@ -12,15 +12,15 @@
 
 namespace stereodet {
 
-std::string DisparityMethodName(DisparityMethod method) {
+const char* DisparityMethodName(DisparityMethod method) {
   return method == DisparityMethod::kBlockMatching ? "bm" : "sgbm";
 }
 
-DisparityMethod ParseDisparityMethod(const std::string& name) {
-  if (name == "bm") return DisparityMethod::kBlockMatching;
-  if (name == "sgbm") return DisparityMethod::kSemiGlobal;
-  STEREODET_THROW_ARG() << "disparity method must be 'bm' or 'sgbm', got '" << name << "'";
-  return DisparityMethod::kBlockMatching;  // not reached
+std::optional<DisparityMethod> ParseDisparityMethod(std::string_view text) {
+  for (DisparityMethod method : {DisparityMethod::kBlockMatching, DisparityMethod::kSemiGlobal}) {
+    if (text == DisparityMethodName(method)) return method;
+  }
+  return std::nullopt;
 }
 
 void BlockMatchingOptions::Check() const {

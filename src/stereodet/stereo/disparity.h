@@ -11,7 +11,9 @@
 
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace stereodet {
 
@@ -21,10 +23,8 @@ inline constexpr float kInvalidDisparity = -1.0f;
 inline bool IsValidDisparity(float disparity_px) { return disparity_px > 0.0f; }
 
 enum class DisparityMethod { kBlockMatching, kSemiGlobal };
-// "bm" / "sgbm".
-std::string DisparityMethodName(DisparityMethod method);
-// Parses "bm" or "sgbm"; throws std::invalid_argument for anything else.
-DisparityMethod ParseDisparityMethod(const std::string& name);
+const char* DisparityMethodName(DisparityMethod method);  // "bm", "sgbm"
+std::optional<DisparityMethod> ParseDisparityMethod(std::string_view text);
 
 // StereoBM settings. Defaults measured on KITTI-like frames and the Middlebury Aloe pair
 // (docs/stereo.md).

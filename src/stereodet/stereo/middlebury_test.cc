@@ -64,7 +64,7 @@ TEST_P(AloeTest, BadPixelRateAndDensityHoldTheMeasuredFigures) {
   RecordProperty("bad_rate", std::to_string(stats.bad_rate));
   RecordProperty("density", std::to_string(stats.density));
   std::printf("%s: bad-2.0 %.4f  density %.4f  mean |error| %.3f px  (%ld of %ld pixels)\n",
-              DisparityMethodName(options.method).c_str(), stats.bad_rate, stats.density,
+              DisparityMethodName(options.method), stats.bad_rate, stats.density,
               stats.mean_abs_error_px, stats.estimated_pixels, stats.ground_truth_pixels);
   EXPECT_GT(stats.ground_truth_pixels, 300000);
   EXPECT_LE(stats.bad_rate, GetParam().max_bad_rate);

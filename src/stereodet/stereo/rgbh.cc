@@ -67,7 +67,7 @@ UnpackedRgbh UnpackRgbh(const cv::Mat& packed) {
   return out;
 }
 
-std::string NetworkInputName(NetworkInput input) {
+const char* NetworkInputName(NetworkInput input) {
   switch (input) {
     case NetworkInput::kRgb:
       return "rgb";
@@ -81,14 +81,12 @@ std::string NetworkInputName(NetworkInput input) {
   return "?";
 }
 
-NetworkInput ParseNetworkInput(const std::string& name) {
+std::optional<NetworkInput> ParseNetworkInput(std::string_view text) {
   for (NetworkInput input :
        {NetworkInput::kRgb, NetworkInput::kRgbh, NetworkInput::kRgbhFixed, NetworkInput::kRgbd}) {
-    if (NetworkInputName(input) == name) return input;
+    if (text == NetworkInputName(input)) return input;
   }
-  STEREODET_THROW_ARG() << "network input must be rgb, rgbh, rgbh-fixed or rgbd, got '" << name
-                        << "'";
-  return NetworkInput::kRgb;  // not reached
+  return std::nullopt;
 }
 
 int NetworkInputChannels(NetworkInput input) {

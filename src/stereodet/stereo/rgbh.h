@@ -20,7 +20,9 @@
 
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/stereo/reprojection.h"
@@ -58,9 +60,8 @@ enum class NetworkInput {
   kRgbhFixed,  // 3 channels: Y, C, H/511 with the fixed colour conversion of 5-bit colour below
   kRgbd,       // 5 channels: R, G, B (8-bit / 255), depth code / max code, H/511 (late fusion)
 };
-// "rgb", "rgbh", "rgbh-fixed", "rgbd"; ParseNetworkInput throws std::invalid_argument.
-std::string NetworkInputName(NetworkInput input);
-NetworkInput ParseNetworkInput(const std::string& name);
+const char* NetworkInputName(NetworkInput input);  // "rgb", "rgbh", "rgbh-fixed", "rgbd"
+std::optional<NetworkInput> ParseNetworkInput(std::string_view text);
 int NetworkInputChannels(NetworkInput input);
 
 // The fixed two-channel colour compression of kRgbhFixed, on r, g, b = 5-bit values / 31 in [0, 1]:

@@ -95,7 +95,8 @@ TEST(RgbhTest, NetworkInputNames) {
     EXPECT_EQ(ParseNetworkInput(NetworkInputName(input)), input);
   }
   EXPECT_EQ(NetworkInputChannels(NetworkInput::kRgbd), 5);
-  EXPECT_THROW(ParseNetworkInput("rgb-h"), std::invalid_argument);
+  EXPECT_EQ(ParseNetworkInput("rgb-h"), std::nullopt);
+  EXPECT_EQ(ParseNetworkInput("RGB"), std::nullopt);
 }
 
 }  // namespace

@@ -6,7 +6,8 @@
 // pedestrians), "residential" (houses behind front yards with fences and hedges, trees, parked
 // cars) and "road" (few buildings, vegetation, guard rails, moving traffic). Object counts are
 // tuned so that, after labelling, a frame has about KITTI's 5.4 labelled objects and 1.5 DontCare
-// regions (docs/synth.md compares the statistics).
+// regions (docs/synth.md compares the statistics). The objects themselves are built by objects.h,
+// their colours and materials come from materials.h.
 #ifndef STEREODET_SYNTH_SCENE_SAMPLER_H_
 #define STEREODET_SYNTH_SCENE_SAMPLER_H_
 
@@ -38,14 +39,6 @@ struct SceneOptions {
 // finalises it (builds the BVH). Object boxes and poses are rounded to KITTI's 0.01 precision
 // before the geometry is built from them, so the labels written with two decimals are exact.
 Scene SampleScene(const SceneOptions& options, uint64_t seed);
-
-// --- Building blocks, exposed for tests. ---
-
-// Appends a labelled object of `type` with the given label box; the parts are built to fit the box
-// exactly (its h, w, l are the extents of the parts). Material indices are added to `scene`.
-// `type` is one of Car, Van, Truck, Tram, Misc, Pedestrian, Person_sitting, Cyclist.
-// Returns the object's index in scene.objects.
-int AddSimpleObject(Scene& scene, const std::string& type, const Box3D& box, uint64_t seed);
 
 }  // namespace stereodet
 

@@ -1,0 +1,75 @@
+#include "stereodet/synth/materials.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace stereodet {
+namespace {
+
+TEST(MaterialsTest, LumaWeighsTheChannelsAsRec709) {
+  EXPECT_FLOAT_EQ(Luma(Rgb(1, 0, 0)), 0.2126f);
+  EXPECT_FLOAT_EQ(Luma(Rgb(0, 1, 0)), 0.7152f);
+  EXPECT_FLOAT_EQ(Luma(Rgb(0, 0, 1)), 0.0722f);
+  EXPECT_FLOAT_EQ(Luma(Rgb(1, 1, 1)), 1.0f);
+}
+
+TEST(MaterialsTest, MakeMaterialDerivesTheLidarReflectanceFromBrightness) {
+  // White: 0.08 + 0.5 * 1; a mid grey of luma 0.4: 0.08 + 0.2.
+  const Material white = MakeMaterial(Pattern::kPaving, Rgb(1, 1, 1), 0.25f);
+  EXPECT_EQ(white.pattern, Pattern::kPaving);
+  EXPECT_EQ(white.albedo, Rgb(1, 1, 1));
+  EXPECT_FLOAT_EQ(white.contrast, 0.25f);
+  EXPECT_FLOAT_EQ(white.lidar_reflectance, 0.58f);
+  EXPECT_FLOAT_EQ(MakeMaterial(Pattern::kPlain, Rgb(0.4, 0.4, 0.4), 0.1f).lidar_reflectance, 0.28f);
+  // An explicit reflectance (glass, tyres) is kept, and the other fields keep their defaults.
+  const Material glass = MakeMaterial(Pattern::kGlass, Rgb(1, 1, 1), 0.15f, 0.05f);
+  EXPECT_FLOAT_EQ(glass.lidar_reflectance, 0.05f);
+  const Material defaults;
+  EXPECT_EQ(glass.albedo2, defaults.albedo2);
+  EXPECT_EQ(glass.scale_m, defaults.scale_m);
+  EXPECT_EQ(glass.specular, defaults.specular);
+}
+
+TEST(MaterialsTest, VaryScalesBrightnessWithinTheAmountAndClipsAtOne) {
+  Rng rng(7);
+  const Eigen::Vector3f c = Rgb(0.2, 0.4, 0.8);
+  float lowest = 2.0f, highest = 0.0f;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3f v = Vary(rng, c, 0.3);
+    // One factor for all channels: the hue is kept (until the blue channel clips at 1).
+    const float factor = v.x() / c.x();
+    EXPECT_GE(factor, 0.7f - 1e-6f);
+    EXPECT_LT(factor, 1.3f + 1e-6f);
+    EXPECT_NEAR(v.y(), factor * c.y(), 1e-6f);
+    EXPECT_NEAR(v.z(), std::min(1.0f, factor * c.z()), 1e-6f);
+    lowest = std::min(lowest, factor);
+    highest = std::max(highest, factor);
+  }
+  // The draws cover the range (2000 uniform draws: the gaps at the ends are ~0.0003 on average).
+  EXPECT_LT(lowest, 0.71f);
+  EXPECT_GT(highest, 1.29f);
+  EXPECT_EQ(Vary(rng, c, 0.0), c);
+}
+
+TEST(MaterialsTest, PaletteColoursAreValidAndVaried) {
+  Rng rng(11);
+  Eigen::Vector3f car_sum = Eigen::Vector3f::Zero();
+  int dark_cars = 0;
+  for (int i = 0; i < 1000; ++i) {
+    for (const Eigen::Vector3f& c : {CarColour(rng), ClothColour(rng)}) {
+      EXPECT_TRUE((c.array() >= 0.0f).all() && (c.array() <= 1.0f).all()) << c.transpose();
+    }
+    const Eigen::Vector3f car = CarColour(rng);
+    car_sum += car;
+    dark_cars += Luma(car) < 0.05f ? 1 : 0;
+  }
+  // Black is 18 % of the mix (luma 0.025 x [0.7, 1.3]); white and silver keep the mean well above
+  // it.
+  EXPECT_GT(dark_cars, 120);
+  EXPECT_LT(dark_cars, 250);
+  EXPECT_GT(Luma(car_sum / 1000.0f), 0.15f);
+}
+
+}  // namespace
+}  // namespace stereodet
