@@ -1,0 +1,17 @@
+"""stereodet: KITTI I/O, KITTI evaluation and stereo features, at C++ speed.
+
+The C++ toolkit's Python module. Everything runs in C++ with the GIL released, so threads run in
+parallel; bad input raises ValueError (stereodet.ParseError for a bad line of a file, with the same
+"FILE:LINE: field F: message" text as the command line) or OSError (files), never a crash.
+
+    import stereodet
+    stereodet.__version__
+
+Submodules: stereodet.kitti (labels, detections, calibrations, velodyne scans to and from numpy),
+stereodet.stereo (disparity, depth, height, RGB-H / RGB-D, point clouds from numpy images; loads
+OpenCV on first use). The evaluation functions are at the top level. docs/python.md is the guide.
+"""
+
+from ._core import ParseError, __version__
+
+__all__ = ["ParseError", "__version__"]

@@ -1,0 +1,3 @@
+# Type stubs of the C++ extension stereodet._stereo (python/src/stereo_module.cc), used through
+# stereodet.stereo.
+def _calls_in_progress() -> int: ...
