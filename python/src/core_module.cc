@@ -3,6 +3,10 @@
 // internals.
 #include "common.h"
 
+namespace stereodet::python {
+void BindKitti(py::module_& m);
+}  // namespace stereodet::python
+
 PYBIND11_MODULE(_core, m) {
   namespace py = pybind11;
   using namespace stereodet::python;
@@ -18,6 +22,7 @@ PYBIND11_MODULE(_core, m) {
                                 PyExc_ValueError, nullptr));
   m.attr("ParseError") = parse_error;
   RegisterErrorTranslation(parse_error);
+  BindKitti(m);
 
   m.def("_calls_in_progress", &CallsInProgress,
         "The number of threads now inside C++ work with the GIL released (for the tests).");

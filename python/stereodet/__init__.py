@@ -12,6 +12,7 @@ stereodet.stereo (disparity, depth, height, RGB-H / RGB-D, point clouds from num
 OpenCV on first use). The evaluation functions are at the top level. docs/python.md is the guide.
 """
 
+from . import kitti
 from ._core import ParseError, __version__
 
-__all__ = ["ParseError", "__version__"]
+__all__ = ["ParseError", "__version__", "kitti"]
