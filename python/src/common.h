@@ -63,14 +63,18 @@ py::array_t<T, py::array::c_style> ExactArray(py::handle value, const std::strin
                                               const std::vector<py::ssize_t>& shape,
                                               const std::string& expected);
 
+template <typename T>
+struct IsOptional : std::false_type {};
+template <typename T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+
 // A name parsed by one of the library's ParseX functions, whether it returns std::optional<X> or
 // X (throwing std::invalid_argument itself): ValueError "what: unknown 'text' (choices)" if none.
 template <typename Parse>
 auto ParseChoice(Parse parse, const std::string& text, const std::string& what,
                  const std::string& choices) {
   auto parsed = parse(text);
-  using R = decltype(parsed);
-  if constexpr (std::is_same_v<R, std::optional<typename R::value_type>>) {
+  if constexpr (IsOptional<decltype(parsed)>::value) {
     if (!parsed.has_value()) {
       ThrowValueError(what + ": unknown '" + text + "' (" + choices + ")");
     }

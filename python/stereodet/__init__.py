@@ -15,4 +15,17 @@ OpenCV on first use). The evaluation functions are at the top level. docs/python
 from . import kitti
 from ._core import ParseError, __version__
 
-__all__ = ["ParseError", "__version__", "kitti"]
+__all__ = ["ParseError", "__version__", "kitti", "stereo"]
+
+
+def __getattr__(name: str):
+    # stereodet.stereo loads OpenCV: only when first used.
+    if name == "stereo":
+        import importlib
+
+        return importlib.import_module(".stereo", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | {"stereo"})

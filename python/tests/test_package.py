@@ -48,6 +48,7 @@ def test_import_loads_neither_opencv_nor_libtorch():
     assert "libtorch" not in maps and "libc10" not in maps
 
 
-def test_stereo_extension_does_not_load_libtorch():
-    maps = loaded_libraries("import stereodet._stereo")
+def test_stereo_loads_opencv_on_first_use_but_never_libtorch():
+    maps = loaded_libraries("import stereodet; stereodet.stereo.disparity")
+    assert "libopencv_core" in maps and "_stereo" in maps
     assert "libtorch" not in maps and "libc10" not in maps
