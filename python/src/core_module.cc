@@ -5,6 +5,7 @@
 
 namespace stereodet::python {
 void BindKitti(py::module_& m);
+void BindEval(py::module_& m);
 }  // namespace stereodet::python
 
 PYBIND11_MODULE(_core, m) {
@@ -23,6 +24,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("ParseError") = parse_error;
   RegisterErrorTranslation(parse_error);
   BindKitti(m);
+  BindEval(m);
 
   m.def("_calls_in_progress", &CallsInProgress,
         "The number of threads now inside C++ work with the GIL released (for the tests).");

@@ -7,6 +7,10 @@ parallel; bad input raises ValueError (stereodet.ParseError for a bad line of a 
     import stereodet
     stereodet.__version__
 
+Evaluation (stereodet.evaluation, re-exported here): evaluate() on folders or on the annotation
+dicts of OpenPCDet / mmdetection3d, get_official_eval_result() (a drop-in for OpenPCDet's),
+filter_sweep(), compare().
+
 Submodules: stereodet.kitti (labels, detections, calibrations, velodyne scans to and from numpy),
 stereodet.stereo (disparity, depth, height, RGB-H / RGB-D, point clouds from numpy images; loads
 OpenCV on first use). The evaluation functions are at the top level. docs/python.md is the guide.
@@ -14,8 +18,11 @@ OpenCV on first use). The evaluation functions are at the top level. docs/python
 
 from . import kitti
 from ._core import ParseError, __version__
+from .evaluation import (ClassResult, ClassSpec, EvalOptions, EvalResult, compare, evaluate,
+                         filter_sweep, get_official_eval_result)
 
-__all__ = ["ParseError", "__version__", "kitti", "stereo"]
+__all__ = ["ClassResult", "ClassSpec", "EvalOptions", "EvalResult", "ParseError", "__version__",
+           "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti", "stereo"]
 
 
 def __getattr__(name: str):

@@ -1,6 +1,6 @@
 # Type stubs of the C++ extension stereodet._core (python/src/*.cc). The documented interface is the
 # pure-Python package; these names are its internals unless re-exported there.
-from typing import Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -57,3 +57,91 @@ def _format_calib(calib: Calibration) -> str: ...
 def _write_calib(path: str, calib: Calibration) -> None: ...
 def _read_velodyne(path: str) -> np.ndarray: ...
 def _write_velodyne(path: str, points: np.ndarray) -> None: ...
+
+# --- Evaluation (python/src/eval_bindings.cc; documented in stereodet.evaluation) ---
+class ClassSpec:
+    name: str
+    neighbours: List[str]
+    min_overlap: Tuple[float, float, float]
+    def __init__(self, name: str, neighbours: List[str] = ...,
+                 min_overlap: Tuple[float, float, float] = ...) -> None: ...
+
+def _kitti_class_spec(name: str, loose: bool = False) -> ClassSpec: ...
+def _openpcdet_class_spec(name: str, loose: bool = False) -> ClassSpec: ...
+
+class EvalOptions:
+    classes: List[ClassSpec]
+    metrics: List[str]
+    difficulties: List[str]
+    matcher: str
+    compat: str
+    score_transform: str
+    filters: Any  # set: str, dict or (bound, value) pairs; get: the CLI's text
+    filter_mode: str
+    score_threshold: float
+    require_detections: bool
+    compute_aos: bool
+    calibration_bins: int
+    distance_bin_m: float
+    max_distance_m: float
+    keep_records: bool
+    num_threads: int
+    def __init__(self) -> None: ...
+    def check(self) -> None: ...
+
+class ClassResult:
+    class_name: str
+    metric: str
+    difficulty: str
+    min_overlap: float
+    evaluated: bool
+    num_valid_labels: int
+    num_detections: int
+    ap_r40: float
+    ap_r11: float
+    ap_voc: float
+    aos_r40: float
+    aos_r11: float
+    has_aos: bool
+    small_sample: bool
+    at_threshold: Dict[str, float]
+    best_f1: Dict[str, float]
+    curve: Dict[str, np.ndarray]
+    kitti_precision: np.ndarray
+    kitti_aos: np.ndarray
+    kitti_thresholds: np.ndarray
+    filtered: Optional[Dict[str, Any]]
+    brier: Dict[str, float]
+    ece: float
+
+class EvalResult:
+    num_frames: int
+    aos_computed: bool
+    probability_metrics: bool
+    seconds: float
+    options: EvalOptions
+    cells: List[ClassResult]
+    def find(self, class_name: str, metric: str = "3d",
+             difficulty: Any = "moderate") -> Optional[ClassResult]: ...
+    def ap(self, class_name: str, metric: str = "3d", difficulty: Any = "moderate",
+           recall: str = "r40") -> float: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def rows(self) -> List[Dict[str, Any]]: ...
+    def records(self) -> Dict[str, np.ndarray]: ...
+    def table(self) -> str: ...
+
+class _Frames:
+    num_frames: int
+    notices: List[str]
+    ids: List[str]
+
+def _frames_from_annos(gt_annos: Sequence[Annos], dt_annos: Sequence[Annos]) -> _Frames: ...
+def _frames_from_folders(gt: str, det: str, split: str, lenient: bool,
+                         num_threads: int) -> _Frames: ...
+def _evaluate(frames: _Frames, options: EvalOptions) -> EvalResult: ...
+def _openpcdet_eval(frames: _Frames, class_names: List[str],
+                    num_threads: int) -> Tuple[str, EvalResult, EvalResult]: ...
+def _filter_sweep(frames: _Frames, options: EvalOptions, bound: str, start: float, stop: float,
+                  step: float) -> List[Dict[str, Any]]: ...
+def _compare(a: EvalResult, b: EvalResult, baseline_m: float, focal_px: float,
+             disparity_error_px: float) -> List[Dict[str, Any]]: ...

@@ -51,3 +51,28 @@ def test_kitti_parsing_releases_the_gil():
     line = "Car 0.00 0 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n"
     text = line * 20000
     assert seen_inside(stereodet._core, lambda: kitti.parse_objects(text))
+
+
+def test_evaluation_releases_the_gil():
+    from conftest import random_annos
+
+    gt, dt = random_annos(400, seed=3)
+    assert seen_inside(stereodet._core, lambda: stereodet.evaluate(gt, dt, num_threads=1))
+
+
+def test_two_threads_evaluate_at_once_to_the_same_numbers():
+    from conftest import random_annos
+
+    gt, dt = random_annos(100, seed=4)
+    expected = stereodet.evaluate(gt, dt).to_dict()["results"]
+    results = [None, None]
+
+    def run(i):
+        results[i] = stereodet.evaluate(gt, dt, num_threads=1).to_dict()["results"]
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert results[0] == expected and results[1] == expected
