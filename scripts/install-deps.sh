@@ -19,7 +19,9 @@ packages=(
   libcli11-dev            # cli: the stereodet command line
   libgtest-dev libgmock-dev  # tests
   libbenchmark-dev        # benchmarks
-  pybind11-dev            # Python bindings of eval
+  pybind11-dev python3-dev   # the stereodet Python module (python/)
+  python3-numpy python3-pytest  # ... its arrays and its tests
+  python3-pip python3-setuptools python3-wheel python3-venv  # ... `pip install .` (docs/python.md)
 )
 # shellcheck disable=SC2206
 extra=(${STEREODET_DEPS_EXTRA:-})

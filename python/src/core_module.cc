@@ -1,0 +1,31 @@
+// stereodet._core: KITTI I/O and evaluation (no OpenCV, no LibTorch). The pure-Python package
+// (python/stereodet/) is the documented interface; names here with a leading underscore are its
+// internals.
+#include "common.h"
+
+namespace stereodet::python {
+void BindKitti(py::module_& m);
+void BindEval(py::module_& m);
+}  // namespace stereodet::python
+
+PYBIND11_MODULE(_core, m) {
+  namespace py = pybind11;
+  using namespace stereodet::python;
+  m.doc() = "stereodet's C++ core: KITTI I/O and evaluation (use the stereodet package).";
+  m.attr("__version__") = STEREODET_VERSION;
+
+  // stereodet.ParseError: a bad line of an input file, with its file, line and field.
+  py::object parse_error = py::reinterpret_steal<py::object>(
+      PyErr_NewExceptionWithDoc("stereodet.ParseError",
+                                "A bad line in an input file: a ValueError whose message is the "
+                                "library's 'FILE:LINE: field F: message', with the parts in .file, "
+                                ".line (1-based; 0 if not line-based), .field and .message.",
+                                PyExc_ValueError, nullptr));
+  m.attr("ParseError") = parse_error;
+  RegisterErrorTranslation(parse_error);
+  BindKitti(m);
+  BindEval(m);
+
+  m.def("_calls_in_progress", &CallsInProgress,
+        "The number of threads now inside C++ work with the GIL released (for the tests).");
+}
