@@ -218,6 +218,7 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
 
   CheckOutputDoesNotOverlapInputs(
       "--out", out, {{"--data", dataset.SubsetDir()}, {"--data", dataset.root() / "ImageSets"}});
+  const OutputLock lock(out);  // two runs into one folder would interleave
   const std::string data_dir = fs::weakly_canonical(fs::absolute(dataset.SubsetDir())).string();
   // Resuming with other settings would mix outputs; refuse, naming the settings, unless force
   // recomputes everything. Other outputs ("encode") are added to the folder's.

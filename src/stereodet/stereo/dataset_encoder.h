@@ -108,7 +108,8 @@ std::string GroundFitLine(const GroundPlaneFit& fit);
 // then that `ids` is not empty and that every frame has both images and a calibration, that `out`
 // does not overlap the dataset's subset folder or ImageSets/ (std::invalid_argument), then the
 // manifests: if OUT/stereo.json records other settings (besides "encode") or OUT/run.json other
-// data it throws std::runtime_error naming the file and the settings (unless force). Throws
+// data it throws std::runtime_error naming the file and the settings (unless force). While it
+// runs it holds OutputLock(out): a second run into the same folder is refused. Throws
 // std::runtime_error naming the file for an unreadable input, and with evaluate for a frame without
 // ground-truth disparity. An interrupted call leaves only whole files; the next one resumes.
 EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector<std::string>& ids,

@@ -14,6 +14,7 @@
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/planar_scene.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -282,6 +283,17 @@ TEST(EncodeDatasetTest, RefusesOutputsFromOtherDataAndOutputsInsideTheInput) {
     EXPECT_THAT(e.what(), HasSubstr("holds outputs computed from --data"));
     EXPECT_THAT(e.what(), HasSubstr("other/training"));
   }
+  // Two runs into one folder cannot interleave: the second is refused while the first runs.
+  {
+    const OutputLock running(dir / "out");
+    try {
+      EncodeDataset(dataset, ids, dir / "out", SmallOptions());
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("another run is writing into"));
+    }
+  }
+  EXPECT_EQ(EncodeDataset(dataset, ids, dir / "out", SmallOptions()).skipped, 1);
   // --out inside the data (or the data itself) would overwrite it: refused before any write.
   const std::string left = ReadFile(dir / "data/training/image_2/000000.png");
   EXPECT_THROW(EncodeDataset(dataset, ids, dir / "data/training", SmallOptions()),

@@ -1,5 +1,12 @@
 #include "stereodet/util/run_manifest.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <nlohmann/json.hpp>
 #include <system_error>
 
@@ -131,6 +138,44 @@ void CheckFolderWritable(const fs::path& dir) {
                          << " (read-only or not permitted)";
   }
   fs::remove(dir / ".write-probe", ec);
+}
+
+OutputLock::OutputLock(const fs::path& dir) {
+  fs::path folder = dir.lexically_normal();
+  if (!folder.has_filename() && folder.has_parent_path()) folder = folder.parent_path();
+  path_ = folder.parent_path() / ("." + folder.filename().string() + ".lock");
+  std::error_code ec;
+  if (!path_.parent_path().empty()) fs::create_directories(path_.parent_path(), ec);
+  // The file may be unlinked by the holder between our open and our flock: then we hold a lock on
+  // a file nobody else sees, so check that the path still names the file we locked, and retry.
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const int fd = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    STEREODET_CHECK_IO(fd >= 0) << "cannot create the lock " << path_.string() << " for "
+                                << folder.string() << ": " << std::strerror(errno);
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      ::close(fd);
+      STEREODET_CHECK_IO(error != EWOULDBLOCK)
+          << "another run is writing into " << folder.string() << " (lock " << path_.string()
+          << " held); wait for it or use another --out";
+      STEREODET_THROW_IO() << "cannot lock " << path_.string() << ": " << std::strerror(error);
+    }
+    struct stat locked {
+    }, named{};
+    if (::fstat(fd, &locked) == 0 && ::stat(path_.c_str(), &named) == 0 &&
+        locked.st_ino == named.st_ino && locked.st_dev == named.st_dev) {
+      fd_ = fd;
+      return;
+    }
+    ::close(fd);
+  }
+  STEREODET_THROW_IO() << "cannot lock " << path_.string() << ": it keeps being replaced";
+}
+
+OutputLock::~OutputLock() {
+  if (fd_ < 0) return;
+  ::unlink(path_.c_str());  // while still holding the lock (see the constructor)
+  ::close(fd_);
 }
 
 }  // namespace stereodet

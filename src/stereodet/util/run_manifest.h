@@ -62,6 +62,24 @@ std::string HashFileHex(const std::filesystem::path& path);
 // commands whose writer (LibTorch) would otherwise fail late with a long trace.
 void CheckFolderWritable(const std::filesystem::path& dir);
 
+// Holds an exclusive lock on an output folder for as long as it lives, so that two runs writing
+// into one folder (stereo, train: they write in place, resuming) cannot interleave. The lock is a
+// hidden sibling file `.NAME.lock` (flock; released, and the file removed, by the destructor or
+// when the process dies), so it never shows among the folder's outputs. Throws
+// std::runtime_error naming the folder when another process holds it: "another run is writing
+// into OUT (lock .OUT.lock held); wait for it or use another --out".
+class OutputLock {
+ public:
+  explicit OutputLock(const std::filesystem::path& dir);
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+  ~OutputLock();
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+};
+
 }  // namespace stereodet
 
 #endif  // STEREODET_UTIL_RUN_MANIFEST_H_

@@ -126,5 +126,25 @@ TEST(CheckFolderWritableTest, RefusesAReadOnlyFolder) {
   fs::permissions(dir / "ro", fs::perms::owner_all);
 }
 
+TEST(OutputLockTest, OneHolderAtATimeAndNoFileLeft) {
+  TestTempDir dir;
+  const fs::path out = dir / "out";
+  {
+    const OutputLock lock(out / "");
+    EXPECT_TRUE(fs::exists(dir / ".out.lock"));
+    // flock locks belong to the open file, so a second open in this process is refused as well.
+    try {
+      const OutputLock second(out);
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("another run is writing into"));
+      EXPECT_THAT(e.what(), HasSubstr("/out"));
+    }
+    EXPECT_NO_THROW(OutputLock(dir / "other"));
+  }
+  EXPECT_FALSE(fs::exists(dir / ".out.lock"));
+  EXPECT_NO_THROW(OutputLock{out});
+}
+
 }  // namespace
 }  // namespace stereodet
