@@ -1,7 +1,8 @@
 // `stereodet train ssd` and `stereodet detect ssd`: the single-shot image detector (issue 6).
 //   stereodet train ssd --data DIR --split train --input rgb|rgbh-fixed|rgbh-learned --out
 //   MODEL_DIR
-//                       [--epochs N] [--resume] [--seed S] [--threads N] [--width W --height H]
+//                       [--epochs N] [--resume | --force] [--seed S] [--threads N]
+//                       [--width W --height H]
 //   stereodet detect ssd --model MODEL_DIR --data DIR --split val --out DIR [--blur-sigma S]
 // Each is one library call (TrainSsd, DetectSsd); the flags bind to their options' fields.
 #include <fmt/format.h>

@@ -243,6 +243,29 @@ TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
   options.model.encoding = InputEncoding::kRgb;
   options.epochs = 1;
   EXPECT_EQ(TrainSsd(options).epochs_done, 1);
+  // --resume with a model but no checkpoint has nothing to resume: refused, not trained over.
+  fs::remove(options.out_dir / "checkpoint.pt");
+  const std::string weights = ReadFile(options.out_dir / "model.pt");
+  TrainSsdOptions resume = options;
+  resume.resume = true;
+  try {
+    TrainSsd(resume);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("but no checkpoint.pt to resume from"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(options.out_dir / "model.pt"), weights);
+  // --force trains a new model over it (another seed: other weights), its log restarted.
+  TrainSsdOptions force = options;
+  force.force = true;
+  force.seed = 2;
+  EXPECT_EQ(TrainSsd(force).epochs_done, 1);
+  EXPECT_NE(ReadFile(options.out_dir / "model.pt"), weights);
+  EXPECT_EQ(CountLines(options.out_dir / "train_log.csv"), 2);
+  EXPECT_NO_THROW(SsdModel::Load(options.out_dir));
+  force.resume = true;
+  EXPECT_THROW(TrainSsd(force), std::invalid_argument);  // the two exclude each other
   // ... but RGB-H does, and says which are missing.
   options.model.encoding = InputEncoding::kRgbhFixed;
   options.out_dir = TempDir("rgbh_model");
