@@ -59,6 +59,10 @@ void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect s
 // another executable is dispatched with execv() to that executable beside /proc/self/exe, with
 // argv unchanged; if it is missing, one line says so and the exit code is 1. Returns the exit
 // code: 0, CLI11's code for a usage error, or 1 for an error thrown by a command.
+// The command line of this process (/proc/self/cmdline), arguments joined by spaces, those with
+// spaces or quotes in single quotes, for provenance records. Empty where /proc is not there.
+std::string ProcessCommandLine();
+
 int RunCli(int argc, char** argv, Program self,
            std::span<const std::pair<std::string_view, AddCommandFn>> own);
 

@@ -226,28 +226,6 @@ void PrintNotices(const EvalInput& input, std::FILE* stream = stdout) {
   }
 }
 
-// The command line of this process (/proc/self/cmdline), arguments joined by spaces, those with
-// spaces or quotes in single quotes. Empty where /proc is not there.
-std::string ProcessCommandLine() {
-  // /proc files report size 0, so read to the end rather than by size.
-  std::ifstream in("/proc/self/cmdline", std::ios::binary);
-  if (!in) return {};
-  const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::string out;
-  for (std::string_view arg : Split(raw, '\0')) {
-    if (arg.empty()) continue;
-    if (!out.empty()) out += ' ';
-    if (arg.find_first_of(" \t'\"") == std::string_view::npos) {
-      out += arg;
-    } else {
-      out += '\'';
-      for (const char c : arg) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-      out += '\'';
-    }
-  }
-  return out;
-}
-
 void RunEval(const EvalArgs& a) {
   STEREODET_CHECK(!a.records || !a.out.empty())
       << "--records needs --out (it writes OUT/matches.csv)";

@@ -1,7 +1,8 @@
 // `stereodet train ssd` and `stereodet detect ssd`: the single-shot image detector (issue 6).
 //   stereodet train ssd --data DIR --split train --input rgb|rgbh-fixed|rgbh-learned --out
 //   MODEL_DIR
-//                       [--epochs N] [--resume] [--seed S] [--threads N] [--width W --height H]
+//                       [--epochs N] [--resume | --force] [--seed S] [--threads N]
+//                       [--width W --height H]
 //   stereodet detect ssd --model MODEL_DIR --data DIR --split val --out DIR [--blur-sigma S]
 // Each is one library call (TrainSsd, DetectSsd); the flags bind to their options' fields.
 #include <fmt/format.h>
@@ -51,6 +52,7 @@ void RunTrain(TrainArgs& a) {
   options.model.encoding = *encoding;
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
   const TrainSsdSummary s = TrainSsd(options);
   if (!a.quiet) {
     std::fprintf(
@@ -67,6 +69,7 @@ void RunTrain(TrainArgs& a) {
 void RunDetect(DetectArgs& a) {
   DetectSsdOptions& options = a.options;
   if (a.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
   const DetectSsdSummary s = DetectSsd(options);
   if (!a.quiet) {
     std::fprintf(stderr, "detected %lld objects in %d frames, %.1f images/s; wrote %s\n%s",
@@ -100,6 +103,8 @@ void AddModelsCommand(CLI::App& app) {
   ts->add_option("--lr", t.learning_rate, "peak learning rate (AdamW, warm-up then cosine)")
       ->capture_default_str();
   ts->add_flag("--resume", t.resume, "continue from MODEL_DIR/checkpoint.pt if present");
+  ts->add_flag("--force", t.force,
+               "train a new model over one already in MODEL_DIR (its files are removed)");
   ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
       ->capture_default_str();
   ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
@@ -125,7 +130,9 @@ void AddModelsCommand(CLI::App& app) {
       ->capture_default_str();
   ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
       ->capture_default_str();
-  ds->add_option("--out", d.out_dir, "folder for ID.txt detection files")->required();
+  ds->add_option("--out", d.out_dir,
+                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
+      ->required();
   ds->add_option("--blur-sigma", d.blur_sigma_px,
                  "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
       ->check(CLI::NonNegativeNumber)

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/util/strings.h"
 #include "stereodet/util/version.h"
 
 namespace stereodet::cli {
@@ -126,6 +129,26 @@ int RunCli(int argc, char** argv, Program self,
     return 1;
   }
   return 0;
+}
+
+std::string ProcessCommandLine() {
+  // /proc files report size 0, so read to the end rather than by size.
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  if (!in) return {};
+  const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string out;
+  for (std::string_view arg : Split(raw, '\0')) {
+    if (arg.empty()) continue;
+    if (!out.empty()) out += ' ';
+    if (arg.find_first_of(" \t'\"") == std::string_view::npos) {
+      out += arg;
+    } else {
+      out += '\'';
+      for (const char c : arg) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      out += '\'';
+    }
+  }
+  return out;
 }
 
 }  // namespace stereodet::cli

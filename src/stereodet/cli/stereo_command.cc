@@ -105,14 +105,19 @@ void RunStereo(RunArgs& args) {
     throw std::invalid_argument(std::string("--encode: ") + e.what());
   }
   if (args.shared.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
   const KittiDataset dataset(args.shared.data, args.shared.subset);
   const std::vector<std::string> ids =
       args.split.empty() ? dataset.ListIds() : dataset.ReadSplit(args.split);
   const EncodeDatasetResult result = EncodeDataset(dataset, ids, args.shared.out, options);
 
   if (args.shared.quiet) return;
-  fmt::print("stereo: {} frames encoded, {} already done; outputs in {}\n", result.encoded,
-             result.skipped, args.shared.out);
+  fmt::print("stereo: {} frames encoded, {} already done; outputs in {}\n",
+             result.encoded - result.kept, result.skipped + result.kept, args.shared.out);
+  if (result.kept > 0) {
+    fmt::print("  {} of the frames already done were recomputed for --evaluate only (files kept)\n",
+               result.kept);
+  }
   if (result.encoded > 0) {
     fmt::print("ground plane: fitted in {} frames, nominal fallback in {}\n", result.ground_fitted,
                result.encoded - result.ground_fitted);
@@ -180,7 +185,9 @@ void AddStereoCommand(CLI::App& app) {
   cmd->add_option("--threads", run->options.num_threads, "frames in parallel, 0 = all cores")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_flag("--force", run->options.force, "recompute frames that are already done");
+  cmd->add_flag("--force", run->options.force,
+                "recompute every frame, accept other settings or --data, and remove the outputs "
+                "not chosen this time");
   cmd->add_flag("--evaluate", run->options.evaluate,
                 "compare the disparity with the dataset's ground truth (disp_noc_0/, written by "
                 "`stereodet synth`) and print density and KITTI D1");

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <system_error>
@@ -13,6 +15,7 @@
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/parallel.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/strings.h"
 
 namespace stereodet {
@@ -106,6 +109,24 @@ std::vector<std::string> ReadIds(const fs::path& gt, const std::string& split) {
   return ReadSplitFile(gt, split);
 }
 
+// Fills det_run and det_not_from_run from DET/run.json, when there is one.
+void CheckDetectionRun(EvalInput& in) {
+  const std::optional<RunManifest> manifest = ReadRunManifest(in.det_dir);
+  if (!manifest) return;
+  in.det_run = manifest->tool + " " + manifest->version + ": " + manifest->command_line;
+  std::map<std::string, std::string> listed(manifest->frames.begin(), manifest->frames.end());
+  std::set<std::string> without(in.frames_without_detections.begin(),
+                                in.frames_without_detections.end());
+  for (const EvalFrame& frame : in.frames) {
+    if (without.count(frame.id)) continue;
+    const fs::path path = in.det_dir / (frame.id + ".txt");
+    const auto it = listed.find(frame.id);
+    if (it == listed.end() || it->second != HashFileHex(path)) {
+      in.det_not_from_run.push_back(path.string());
+    }
+  }
+}
+
 }  // namespace
 
 void EvalInputOptions::Check() const {
@@ -128,6 +149,13 @@ std::vector<std::string> EvalInput::Notices() const {
   }
   if (!skipped_lines.empty()) {
     out.push_back("skipped bad lines (--lenient): " + std::to_string(skipped_lines.size()));
+  }
+  if (!det_not_from_run.empty()) {
+    out.push_back("warning: " + std::to_string(det_not_from_run.size()) +
+                  " detection file(s) are not from the run in " +
+                  (det_dir / kRunManifestFile).string() +
+                  " (written or changed by another run; the scores mix runs), first: " +
+                  det_not_from_run.front());
   }
   return out;
 }
@@ -216,6 +244,7 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options) {
     input_hash = Fnv1a64(std::string_view(bytes, 8), input_hash);
   }
   in.input_hash = HashHex(input_hash);
+  CheckDetectionRun(in);
   return in;
 }
 

@@ -53,9 +53,16 @@ struct EvalInput {
   // file's bytes, a NUL and its detection file's bytes (none when the file is missing). Equal inputs
   // give equal hashes whatever the thread count.
   std::string input_hash;
+  // The detection folder's run manifest (DET/run.json, written by `stereodet detect`), when it has
+  // one (KITTI's own results have none): "TOOL VERSION: COMMAND LINE", else empty.
+  std::string det_run;
+  // With a manifest: the evaluated detection files (full paths, frame order) that it does not list
+  // with their content hash, i.e. files another run wrote or changed. Empty without a manifest.
+  std::vector<std::string> det_not_from_run;
 
   // One line each (no newline) for the user: frames without detections, ignored files (count and
-  // the first), skipped lines (count). Empty when there is nothing to say.
+  // the first), skipped lines (count), detection files not from the folder's run (count and the
+  // first). Empty when there is nothing to say.
   std::vector<std::string> Notices() const;
 };
 

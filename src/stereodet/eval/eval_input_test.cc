@@ -8,6 +8,8 @@
 #include <string>
 
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -16,6 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 constexpr char kLabel[] =
     "Car 0.00 0 -1.57 100.00 100.00 200.00 200.00 1.5 1.6 3.9 1 1.6 20 -1.57\n";
@@ -67,6 +70,36 @@ TEST(EvalInput, ReadsEveryLabelFileAndNotesFramesWithoutDetections) {
   EXPECT_THAT(in.frames_without_detections, ElementsAre("000002"));
   EXPECT_TRUE(in.ignored_files.empty());
   EXPECT_THAT(in.Notices(), ElementsAre("frames without a detection file (no detections): 1"));
+}
+
+TEST(EvalInput, WarnsAboutDetectionFilesThatTheFoldersRunDidNotWrite) {
+  Folders f;
+  // No run.json (KITTI's own results): nothing to check, nothing said.
+  EvalInput in = LoadEvalFrames(f.Options());
+  EXPECT_TRUE(in.det_run.empty());
+  EXPECT_TRUE(in.det_not_from_run.empty());
+
+  RunManifest manifest;
+  manifest.tool = "detect ssd";
+  manifest.version = "0.1.0";
+  manifest.command_line = "stereodet detect ssd --out det";
+  manifest.frames = {{"000000", HashHex(Fnv1a64(kDetection))},
+                     {"000001", HashHex(Fnv1a64(kDetection))}};
+  WriteRunManifest(f.det, manifest);
+  in = LoadEvalFrames(f.Options());
+  EXPECT_EQ(in.det_run, "detect ssd 0.1.0: stereodet detect ssd --out det");
+  EXPECT_TRUE(in.det_not_from_run.empty());
+  for (const std::string& notice : in.Notices()) EXPECT_THAT(notice, Not(HasSubstr("run.json")));
+
+  // Another run changed one file and added another: both are named, in frame order.
+  Write(f.det / "000001.txt", "Car -1 -1 -1.57 100 100 200 200 1.5 1.6 3.9 1 1.6 20 -1.57 0.5\n");
+  Write(f.det / "000002.txt", kDetection);
+  in = LoadEvalFrames(f.Options());
+  EXPECT_THAT(in.det_not_from_run,
+              ElementsAre((f.det / "000001.txt").string(), (f.det / "000002.txt").string()));
+  EXPECT_THAT(in.Notices().back(),
+              HasSubstr("warning: 2 detection file(s) are not from the run in"));
+  EXPECT_THAT(in.Notices().back(), HasSubstr("det/000001.txt"));
 }
 
 TEST(EvalInput, KittiRootAndDevkitDataFolderAreFound) {

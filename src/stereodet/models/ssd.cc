@@ -6,6 +6,8 @@
 #include "stereodet/models/ssd_net.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
 
@@ -34,7 +36,7 @@ void SsdConfig::Check() const {
       << "base_channels must be in [4, 256], got " << base_channels;
 }
 
-std::string SsdConfigToJson(const SsdConfig& config) {
+std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights) {
   nlohmann::json j;
   j["version"] = kConfigVersion;
   j["architecture"] = "ssd";
@@ -47,6 +49,12 @@ std::string SsdConfigToJson(const SsdConfig& config) {
   j["min_size_fraction"] = config.boxes.min_size_fraction;
   j["aspect_ratios"] = config.boxes.aspect_ratios;
   j["base_channels"] = config.base_channels;
+  if (!weights.fnv1a64.empty()) {
+    j["weights"] = {{"file", kWeightsFile},
+                    {"fnv1a64", weights.fnv1a64},
+                    {"input_channels", weights.input_channels},
+                    {"parameters", weights.parameters}};
+  }
   return j.dump(2) + "\n";
 }
 
@@ -102,6 +110,22 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
   } catch (const std::invalid_argument& e) {
     throw ParseError(source, 0, field, e.what());
   }
+}
+
+WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source) {
+  WeightsRecord record;
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+    if (!j.contains("weights")) return record;
+    const nlohmann::json& w = j.at("weights");
+    record.fnv1a64 = w.at("fnv1a64").get<std::string>();
+    record.input_channels = w.at("input_channels").get<int>();
+    record.parameters = w.at("parameters").get<int64_t>();
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, "weights", e.what());
+  }
+  return record;
 }
 
 std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
@@ -161,11 +185,23 @@ SsdModel& SsdModel::operator=(SsdModel&&) noexcept = default;
 
 SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
   const std::filesystem::path config_path = model_dir / kConfigFile;
-  const SsdConfig config = SsdConfigFromJson(ReadFile(config_path), config_path.string());
+  const std::string config_text = ReadFile(config_path);
+  const SsdConfig config = SsdConfigFromJson(config_text, config_path.string());
   auto impl = std::make_unique<Impl>(config);
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
   STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
       << "missing weights file " << weights_path.string();
+  // The weights must be the ones model.json was written with: another training's model.pt of the
+  // same shapes would load and detect garbage. A model.json without "weights" (written before
+  // they were recorded) is loaded unchecked.
+  const WeightsRecord record = ReadWeightsRecord(config_text, config_path.string());
+  if (!record.fnv1a64.empty()) {
+    const std::string hash = HashFileHex(weights_path);
+    STEREODET_CHECK_IO(hash == record.fnv1a64)
+        << weights_path.string() << " does not belong to " << config_path.string()
+        << ": its hash is " << hash << ", model.json records " << record.fnv1a64
+        << " (weights of another training?); copy the model folder whole";
+  }
   try {
     torch::serialize::InputArchive archive;
     archive.load_from(weights_path.string());
@@ -174,7 +210,13 @@ SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
     STEREODET_THROW_IO() << "cannot load weights " << weights_path.string() << " for the model in "
                          << config_path.string() << ": " << e.what_without_backtrace();
   }
-  return SsdModel(std::move(impl));
+  SsdModel model(std::move(impl));
+  if (record.parameters >= 0) {
+    STEREODET_CHECK_IO(model.ParameterCount() == record.parameters)
+        << weights_path.string() << " holds " << model.ParameterCount() << " parameters, "
+        << config_path.string() << " records " << record.parameters;
+  }
+  return model;
 }
 
 void SsdModel::Save(const std::filesystem::path& model_dir) const {
@@ -183,8 +225,16 @@ void SsdModel::Save(const std::filesystem::path& model_dir) const {
   torch::serialize::OutputArchive archive;
   impl_->net->save(archive);
   archive.save_to(weights.temp_path().string());
+  const std::string hash = HashFileHex(weights.temp_path());
   weights.Commit();
-  WriteFileAtomically(model_dir / kConfigFile, SsdConfigToJson(impl_->config));
+  // Written second, with the weights' hash: until it is in place, model.json still names the
+  // previous weights, and Load refuses the pair rather than mixing them.
+  WriteFileAtomically(
+      model_dir / kConfigFile,
+      SsdConfigToJson(impl_->config,
+                      {.fnv1a64 = hash,
+                       .input_channels = NetworkInputChannels(impl_->config.encoding),
+                       .parameters = ParameterCount()}));
 }
 
 const SsdConfig& SsdModel::config() const { return impl_->config; }

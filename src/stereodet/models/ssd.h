@@ -4,10 +4,13 @@
 // mining, per-class NMS. LibTorch is an implementation detail: nothing here exposes a torch type.
 //
 // A model folder holds:
-//   model.json      the SsdConfig (input encoding, classes, input size, default boxes, width)
+//   model.json      the SsdConfig (input encoding, classes, input size, default boxes, width) and
+//                   the hash, input channels and parameter count of its model.pt (WeightsRecord)
 //   model.pt        the weights (LibTorch archive)
+//   run.json        the run manifest (util/run_manifest.h): command line, version, data, settings
 //   checkpoint.pt   training state for --resume (weights, optimizer, epochs done); not needed to
-//   detect train_log.csv   one line per epoch (ssd_train.h)
+//                   detect
+//   train_log.csv   one line per epoch (ssd_train.h)
 #ifndef STEREODET_MODELS_SSD_H_
 #define STEREODET_MODELS_SSD_H_
 
@@ -39,9 +42,21 @@ struct SsdConfig {
   int InputHeight() const { return boxes.input_height; }
 };
 
-// JSON text of a config, and back. Parse errors throw ParseError naming `source`.
-std::string SsdConfigToJson(const SsdConfig& config);
+// What model.json records about its model.pt, so that weights from another training (another
+// input encoding, other shapes) are refused instead of loading silently.
+struct WeightsRecord {
+  std::string fnv1a64;      // FNV-1a 64 of model.pt's bytes, 16 hex digits; empty = not recorded
+  int input_channels = 0;   // NetworkInputChannels(encoding)
+  int64_t parameters = -1;  // SsdModel::ParameterCount(); -1 = not recorded
+};
+
+// JSON text of a config, and back. Parse errors throw ParseError naming `source`. With a
+// non-empty `weights.fnv1a64` the text has a "weights" object {file, fnv1a64, input_channels,
+// parameters}, which SsdConfigFromJson ignores and ReadWeightsRecord reads (empty record when
+// absent).
+std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights = {});
 SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source);
+WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source);
 
 // Raw network outputs for a batch, row-major: deltas [image][default box][4], probabilities
 // [image][default box][class] (softmax over background + classes).
@@ -79,9 +94,11 @@ class SsdModel {
   SsdModel(SsdModel&&) noexcept;
   SsdModel& operator=(SsdModel&&) noexcept;
 
-  // Reads model.json and model.pt from `model_dir`. Throws std::runtime_error naming the file.
+  // Reads model.json and model.pt from `model_dir`. Throws std::runtime_error naming the file, and
+  // naming both when model.json records another model.pt (its hash or parameter count differ).
   static SsdModel Load(const std::filesystem::path& model_dir);
-  // Writes model.json and model.pt into `model_dir` (created if missing), each atomically.
+  // Writes model.pt, then model.json with the weights' hash (WeightsRecord), into `model_dir`
+  // (created if missing), each atomically.
   void Save(const std::filesystem::path& model_dir) const;
 
   const SsdConfig& config() const;

@@ -1,5 +1,7 @@
 #include "stereodet/models/ssd_detect.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
@@ -9,11 +11,14 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_data.h"
-#include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/degradation.h"
+#include "stereodet/stereo/image_io.h"
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
+#include "stereodet/util/version.h"
 
 namespace stereodet {
 
@@ -59,6 +64,12 @@ std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   options.Check();
   const Timer timer;
+  CheckOutputDoesNotOverlapInputs("--out", options.out_dir,
+                                  {{"--data", options.data_root / options.subset},
+                                   {"--data", options.data_root / "ImageSets"},
+                                   {"--model", options.model_dir}});
+  // Refuse a folder of something else before the work, not after it.
+  StagedFolder out(options.out_dir, kRunManifestFile);
   SetTorchThreads(options.threads);
   const SsdModel model = SsdModel::Load(options.model_dir);
   const SsdConfig& config = model.config();
@@ -77,7 +88,6 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
     STEREODET_THROW_IO() << missing.size() << " required files are missing under "
                          << dataset.SubsetDir().string() << ", e.g. " << missing.front();
   }
-  std::filesystem::create_directories(options.out_dir);
 
   StereoOptions stereo = options.stereo;
   stereo.blur.sigma_px = options.blur_sigma_px;
@@ -136,12 +146,32 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
       const double sy = static_cast<double>(sizes[i].height) / config.InputHeight();
       const std::vector<Object> objects =
           ToKittiDetections(boxes[i], config.classes, sx, sy, sizes[i].width, sizes[i].height);
-      WriteObjects(options.out_dir / (ids[begin + i] + ".txt"), objects);
+      WriteObjects(out.path() / (ids[begin + i] + ".txt"), objects);
       summary.detections += static_cast<int64_t>(objects.size());
     }
     progress.Add(static_cast<int64_t>(n));
   }
   progress.Finish();
+
+  RunManifest manifest;
+  manifest.tool = "detect ssd";
+  manifest.version = StereodetVersion();
+  manifest.command_line = options.command_line;
+  manifest.inputs = {{"model", options.model_dir.string()},
+                     {"data", options.data_root.string()},
+                     {"subset", options.subset},
+                     {"split", options.split}};
+  manifest.settings_json = fmt::format(
+      R"({{"model_weights_fnv1a64": "{}", "encoding": "{}", "blur_sigma_px": {}, )"
+      R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}}})",
+      HashFileHex(options.model_dir / "model.pt"), InputEncodingName(config.encoding),
+      options.blur_sigma_px, options.decode.score_threshold, options.decode.nms.iou_threshold,
+      options.decode.nms.max_detections, options.max_frames);
+  for (const std::string& id : ids) {
+    manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
+  }
+  WriteRunManifest(out.path(), manifest);
+  out.Commit();
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();
   summary.images_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;

@@ -1,6 +1,9 @@
 // Running a trained SSD over a KITTI-format split: `stereodet detect ssd`. Writes one KITTI
 // detection file per frame (OUT/ID.txt, also for frames without detections), which `stereodet eval
-// --det OUT` and KITTI's devkit read.
+// --det OUT` and KITTI's devkit read, and OUT/run.json (util/run_manifest.h): the model (path and
+// the hash of its model.pt), the data, the settings and every frame written with its file's hash.
+// OUT holds one run: it is written as a StagedFolder (a hidden sibling, swapped in at the end), so
+// no detection file of an earlier run survives beside the new ones.
 #ifndef STEREODET_MODELS_SSD_DETECT_H_
 #define STEREODET_MODELS_SSD_DETECT_H_
 
@@ -32,6 +35,7 @@ struct DetectSsdOptions {
   // Stereo pipeline for RGB-H models. Must be what the model was trained with (the defaults).
   StereoOptions stereo;
   ProgressOptions progress;
+  std::string command_line;  // for OUT/run.json (empty from a library call)
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -43,6 +47,10 @@ struct DetectSsdSummary {
   std::string stage_times;       // StageTimes::Format(): read, stereo, encode, network, write
 };
 
+// Before any work it throws std::invalid_argument when out_dir overlaps the data's subset folder,
+// its ImageSets/ or the model folder, and std::runtime_error when out_dir is a non-empty folder
+// without run.json (not an earlier detection folder); an earlier run's folder is replaced whole
+// at the end. An interrupted call leaves the previous folder as it was.
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options);
 
 // Network-input boxes -> KITTI detections in the original image: scaled by (scale_x, scale_y),

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <random>
 
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -140,6 +141,34 @@ TEST(SsdTest, SaveThenLoadGivesIdenticalOutputs) {
     ++files;
   }
   EXPECT_EQ(files, 2);
+}
+
+TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "tied";
+  fs::remove_all(dir);
+  // Same encoding and shapes, other weights: LibTorch alone would load them silently.
+  SsdModel(TinyConfig(InputEncoding::kRgb), 1).Save(dir / "a");
+  SsdModel(TinyConfig(InputEncoding::kRgb), 2).Save(dir / "b");
+  const std::string json = ReadFile(dir / "a/model.json");
+  const WeightsRecord record = ReadWeightsRecord(json, "model.json");
+  EXPECT_EQ(record.fnv1a64.size(), 16u);
+  EXPECT_EQ(record.input_channels, 3);
+  EXPECT_EQ(record.parameters, SsdModel::Load(dir / "a").ParameterCount());
+  EXPECT_EQ(SsdConfigFromJson(json, "model.json").encoding, InputEncoding::kRgb);
+  fs::copy_file(dir / "b/model.pt", dir / "a/model.pt", fs::copy_options::overwrite_existing);
+  try {
+    SsdModel::Load(dir / "a");
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("a/model.pt does not belong to"), std::string::npos) << what;
+    EXPECT_NE(what.find("a/model.json"), std::string::npos) << what;
+  }
+  // A model.json written before the record existed loads unchecked.
+  WriteFileAtomically(dir / "a/model.json", SsdConfigToJson(TinyConfig(InputEncoding::kRgb)));
+  EXPECT_TRUE(ReadWeightsRecord(ReadFile(dir / "a/model.json"), "m").fnv1a64.empty());
+  EXPECT_NO_THROW(SsdModel::Load(dir / "a"));
 }
 
 TEST(SsdTest, LoadReportsMissingFiles) {

@@ -8,8 +8,10 @@
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/strings.h"
 #include "stereodet/util/timer.h"
+#include "stereodet/util/version.h"
 
 namespace stereodet {
 
@@ -56,6 +58,7 @@ void TrainSsdOptions::Check() const {
   STEREODET_CHECK(max_epochs_this_run >= 0)
       << "max_epochs_this_run must be >= 0, got " << max_epochs_this_run;
   STEREODET_CHECK(loader_capacity >= 1) << "loader_capacity must be >= 1, got " << loader_capacity;
+  STEREODET_CHECK(!(resume && force)) << "--resume and --force exclude each other";
 }
 
 double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps) {
@@ -74,11 +77,33 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   SetTorchThreads(options.threads);
   TrainSsdSummary summary;
 
+  namespace fs = std::filesystem;
+  CheckOutputDoesNotOverlapInputs(
+      "--out", options.out_dir,
+      {{"--data", options.data_root / "training"}, {"--data", options.data_root / "ImageSets"}});
+  const OutputLock lock(options.out_dir);  // two trainings into one folder would interleave
   // With --resume the model folder's settings win; asking for different ones is a mistake.
   SsdConfig config = options.model;
-  const std::filesystem::path config_path = options.out_dir / "model.json";
-  const std::filesystem::path checkpoint_path = options.out_dir / kCheckpointFile;
-  const bool resuming = options.resume && std::filesystem::exists(checkpoint_path);
+  const fs::path config_path = options.out_dir / "model.json";
+  const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
+  const fs::path weights_path = options.out_dir / "model.pt";
+  const bool resuming = options.resume && fs::exists(checkpoint_path);
+  // Never train over a model silently: it is resumed (with its checkpoint) or replaced on request.
+  const bool has_model = fs::exists(weights_path) || fs::exists(checkpoint_path);
+  if (has_model && !resuming && !options.force) {
+    STEREODET_THROW_ARG() << options.out_dir.string() << " holds a trained model ("
+                          << (fs::exists(weights_path) ? "model.pt" : "checkpoint.pt") << ")"
+                          << (options.resume ? " but no checkpoint.pt to resume from" : "")
+                          << "; use --resume to continue its training, --force to train a new "
+                             "model over it, or another --out";
+  }
+  CheckFolderWritable(options.out_dir);
+  if (has_model && options.force) {
+    for (const char* file :
+         {"model.pt", "model.json", kCheckpointFile, kLogFile, kRunManifestFile}) {
+      fs::remove(options.out_dir / file);
+    }
+  }
   if (resuming) {
     const SsdConfig saved = SsdConfigFromJson(ReadFile(config_path), config_path.string());
     STEREODET_CHECK(saved.encoding == config.encoding)
@@ -115,7 +140,23 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   summary.stereo_seconds = data_timer.ElapsedSeconds();
   summary.frames = data.size();
 
-  std::filesystem::create_directories(options.out_dir);
+  RunManifest manifest;
+  manifest.tool = "train ssd";
+  manifest.version = StereodetVersion();
+  manifest.command_line = options.command_line;
+  manifest.inputs = {{"data", options.data_root.string()}, {"split", options.split}};
+  auto write_manifest = [&](int epochs_done) {
+    manifest.settings_json = fmt::format(
+        R"({{"encoding": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
+        R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
+        R"("max_frames": {}, "frames": {}, "width": {}, "height": {}, "base_channels": {}}})",
+        InputEncodingName(config.encoding), options.epochs, epochs_done, options.batch_size,
+        options.learning_rate, options.warmup_steps, options.final_lr_fraction, options.seed,
+        options.max_frames, ids.size(), config.InputWidth(), config.InputHeight(),
+        config.base_channels);
+    WriteRunManifest(options.out_dir, manifest);
+  };
+  write_manifest(start_epoch);
   const std::filesystem::path log_path = options.out_dir / kLogFile;
   std::string log = KeptLogLines(log_path, start_epoch);
 
@@ -164,6 +205,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
                        images, loss_sum / steps, loc_sum / steps, conf_sum / steps, lr,
                        images / epoch_seconds, epoch_seconds);
     WriteFileAtomically(log_path, log);
+    write_manifest(epoch + 1);
     summary.epochs_done = epoch + 1;
     ++summary.epochs_run;
     summary.final_loss = loss_sum / steps;

@@ -32,6 +32,10 @@ struct TrainSsdOptions {
   double final_lr_fraction = 0.05;  // the cosine ends at learning_rate * this
   uint64_t seed = 1;                // weights, data order and augmentation
   bool resume = false;              // continue from out_dir/checkpoint.pt
+  // Train a new model over one already in out_dir (its files are removed first). Without it (or
+  // resume), a folder that holds a trained model is refused.
+  bool force = false;
+  std::string command_line;         // for out_dir/run.json (empty from a library call)
   int threads = 0;                  // LibTorch threads (0 = all cores)
   int max_frames = 0;               // use only the first N frames of the split (0 = all)
   // Stop after this many epochs in this call (0 = run to `epochs`); --resume continues. The
@@ -60,9 +64,14 @@ struct TrainSsdSummary {
 // Learning rate at `step` of `total_steps` (0-based): warm-up, then cosine to the final fraction.
 double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps);
 
-// Trains and writes out_dir/{model.json, model.pt, checkpoint.pt, train_log.csv}. With resume, the
-// model settings come from out_dir/model.json (a mismatching --input is an error) and training
-// continues after the checkpoint's epoch; if that is already `epochs`, nothing is trained.
+// Trains and writes out_dir/{model.json, model.pt, checkpoint.pt, train_log.csv, run.json}. With
+// resume, the model settings come from out_dir/model.json (a mismatching --input is an error) and
+// training continues after the checkpoint's epoch; if that is already `epochs`, nothing is
+// trained. Before any work it throws: std::invalid_argument when out_dir overlaps the data
+// (ROOT/training, ROOT/ImageSets), or when out_dir holds a trained model (model.pt or
+// checkpoint.pt) and neither resume (with a checkpoint to resume) nor force is set;
+// std::runtime_error naming out_dir in one line when it cannot be written, or when another run
+// holds its OutputLock (two trainings into one folder).
 TrainSsdSummary TrainSsd(const TrainSsdOptions& options);
 
 }  // namespace stereodet

@@ -16,6 +16,7 @@
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
 namespace {
@@ -145,6 +146,26 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
   wrong.model.encoding = InputEncoding::kRgb;
   EXPECT_THROW(TrainSsd(wrong), std::invalid_argument);
 
+  // Training again into a folder that holds a model is refused unless --resume or --force ...
+  const std::string weights = ReadFile(straight / "model.pt");
+  try {
+    TrainSsd(direct);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("holds a trained model (model.pt); use --resume"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(straight / "model.pt"), weights);  // untouched
+  // ... and an --out inside the data is refused before any work.
+  TrainSsdOptions inside = TinyTraining(root, root / "training" / "model");
+  EXPECT_THROW(TrainSsd(inside), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(root / "training" / "model"));
+  // run.json records the run.
+  const std::string run = ReadFile(out / "run.json");
+  EXPECT_NE(run.find("\"tool\": \"train ssd\""), std::string::npos) << run;
+  EXPECT_NE(run.find("\"epochs_done\": 3"), std::string::npos) << run;
+
   // Detection writes one parseable file per frame, also with blur.
   for (double sigma : {0.0, 3.0}) {
     DetectSsdOptions detect;
@@ -156,8 +177,19 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
     detect.threads = 1;
     detect.batch_size = 3;
     detect.progress.stream = nullptr;
+    // A stale file of another run in the folder does not survive the new run.
+    WriteFileAtomically(detect.out_dir / "run.json", "{}");
+    WriteFileAtomically(detect.out_dir / "000099.txt",
+                        "Car -1 -1 -10 0 0 1 1 -1 -1 -1 -1000 -1000 -1000 -10 0.5\n");
     const DetectSsdSummary d = DetectSsd(detect);
     EXPECT_EQ(d.frames, 4);
+    EXPECT_FALSE(fs::exists(detect.out_dir / "000099.txt"));
+    const std::optional<RunManifest> manifest = ReadRunManifest(detect.out_dir);
+    ASSERT_TRUE(manifest.has_value());
+    EXPECT_EQ(manifest->tool, "detect ssd");
+    ASSERT_EQ(manifest->frames.size(), 4u);
+    EXPECT_EQ(manifest->frames[3].first, FrameId(3));
+    EXPECT_EQ(manifest->frames[3].second, HashFileHex(detect.out_dir / (FrameId(3) + ".txt")));
     for (int i = 0; i < 4; ++i) {
       const fs::path file = detect.out_dir / (FrameId(i) + ".txt");
       ASSERT_TRUE(fs::exists(file));
@@ -173,6 +205,36 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
   }
 }
 
+TEST(SsdDetectTest, RefusesAnOutputInsideTheInputsOrAForeignFolder) {
+  const fs::path root = WriteTinyDataset("refuse_data", 1);
+  DetectSsdOptions detect;
+  detect.model_dir = root / "no_model_needed";  // refused before the model is read
+  detect.data_root = root;
+  detect.progress.stream = nullptr;
+  const std::string labels = ReadFile(root / "training/label_2/000000.txt");
+  detect.out_dir = root / "training/label_2";
+  try {
+    DetectSsd(detect);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("label_2 is inside the input --data"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(root / "training/label_2/000000.txt"), labels);
+  detect.out_dir = detect.model_dir / "det";
+  EXPECT_THROW(DetectSsd(detect), std::invalid_argument);
+  // A folder of other files (no run.json) is not an earlier detection folder.
+  detect.out_dir = TempDir("refuse_foreign");
+  WriteFileAtomically(detect.out_dir / "notes.txt", "mine");
+  try {
+    DetectSsd(detect);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds no run.json"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadFile(detect.out_dir / "notes.txt"), "mine");
+}
+
 TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
   const fs::path root = WriteTinyDataset("rgb_data", 2);
   fs::remove_all(root / "training/image_3");
@@ -181,6 +243,29 @@ TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
   options.model.encoding = InputEncoding::kRgb;
   options.epochs = 1;
   EXPECT_EQ(TrainSsd(options).epochs_done, 1);
+  // --resume with a model but no checkpoint has nothing to resume: refused, not trained over.
+  fs::remove(options.out_dir / "checkpoint.pt");
+  const std::string weights = ReadFile(options.out_dir / "model.pt");
+  TrainSsdOptions resume = options;
+  resume.resume = true;
+  try {
+    TrainSsd(resume);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("but no checkpoint.pt to resume from"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(options.out_dir / "model.pt"), weights);
+  // --force trains a new model over it (another seed: other weights), its log restarted.
+  TrainSsdOptions force = options;
+  force.force = true;
+  force.seed = 2;
+  EXPECT_EQ(TrainSsd(force).epochs_done, 1);
+  EXPECT_NE(ReadFile(options.out_dir / "model.pt"), weights);
+  EXPECT_EQ(CountLines(options.out_dir / "train_log.csv"), 2);
+  EXPECT_NO_THROW(SsdModel::Load(options.out_dir));
+  force.resume = true;
+  EXPECT_THROW(TrainSsd(force), std::invalid_argument);  // the two exclude each other
   // ... but RGB-H does, and says which are missing.
   options.model.encoding = InputEncoding::kRgbhFixed;
   options.out_dir = TempDir("rgbh_model");

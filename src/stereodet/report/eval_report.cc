@@ -237,7 +237,9 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
                 {"ignored_files", info.ignored_files},
                 {"lenient", info.lenient},
                 {"num_skipped_lines", info.skipped_lines.size()},
-                {"skipped_lines", info.skipped_lines}};
+                {"skipped_lines", info.skipped_lines},
+                {"det_run", info.det_run.empty() ? json() : json(info.det_run)},
+                {"det_files_not_from_run", info.det_not_from_run}};
   j["options"] = OptionsJson(first.options);
   json overlaps = json::array(), overlap_sets = json::array();
   double seconds = 0.0;

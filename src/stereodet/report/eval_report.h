@@ -26,6 +26,8 @@ struct EvalRunInfo {
   bool lenient = false;
   std::vector<std::string> ignored_files;  // EvalInput::ignored_files
   std::vector<std::string> skipped_lines;  // EvalInput::skipped_lines ("FILE:LINE: field F: ...")
+  std::string det_run;                     // EvalInput::det_run (empty: no DET/run.json)
+  std::vector<std::string> det_not_from_run;  // EvalInput::det_not_from_run
 };
 
 // One evaluation of the same frames under one set of options, e.g. one overlap set of

@@ -27,6 +27,8 @@ EvalRunInfo MakeRunInfo(const EvalInputOptions& options, const EvalInput& input)
   info.ignored_files = input.ignored_files;
   info.skipped_lines = input.skipped_lines;
   info.input_hash = input.input_hash;
+  info.det_run = input.det_run;
+  info.det_not_from_run = input.det_not_from_run;
   return info;
 }
 

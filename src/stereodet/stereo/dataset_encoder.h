@@ -14,9 +14,15 @@
 //   velodyne/ID.bin    the stereo point cloud in KITTI's velodyne format (outputs.points)
 //   disparity/ID.png   KITTI-format disparity (outputs.disparity)
 //   ground/ID.txt      the ground plane (always; written last, so it marks the frame done)
-// and OUT/stereo.json, the manifest of every setting that changes those bytes (DatasetManifest).
-// Resumable: a frame whose files are all there is skipped, and a folder whose manifest records
-// other settings is refused, so one folder never mixes two settings.
+// and OUT/stereo.json, the manifest of every setting that changes those bytes (DatasetManifest),
+// and OUT/run.json (util/run_manifest.h: version, command line, the data folder, every frame with
+// the hash of the settings and data that produced it).
+// Resumable: ground/ID.txt, written last, records the frame's settings hash ("settings HASH"), and
+// a frame is done only when its files are all there and that hash is this run's; other frames are
+// redone (so an interrupted --force with new settings resumes correctly). A folder whose
+// stereo.json records other settings, or whose run.json another --data, is refused with the
+// differing settings named; other outputs ("encode") are added to the folder's, writing only the
+// missing files of each frame.
 #ifndef STEREODET_STEREO_DATASET_ENCODER_H_
 #define STEREODET_STEREO_DATASET_ENCODER_H_
 
@@ -56,13 +62,16 @@ DatasetOutputs ParseDatasetOutputs(std::string_view text);
 struct EncodeDatasetOptions {
   StereoOptions stereo;    // disparity, ground plane, codes, point cloud, blur
   DatasetOutputs outputs;  // default: RGB-H only
-  // Recompute every frame, and accept (and rewrite) a manifest with other settings.
+  // Recompute every frame, accept (and rewrite) a manifest with other settings or other data, and
+  // remove the output folders of outputs not chosen this time.
   bool force = false;
   // Also compare every frame's disparity with the dataset's ground truth (FramePaths::disparity,
-  // disp_noc_0/ as `stereodet synth` writes it); every frame is recomputed, none skipped.
+  // disp_noc_0/ as `stereodet synth` writes it). Every frame is computed for the comparison, but
+  // the files of frames already done are kept (resume holds; EncodeDatasetResult::kept).
   bool evaluate = false;
   int num_threads = 0;       // frames in parallel (0 = all cores); results do not depend on it
   ProgressOptions progress;  // the "stereo" progress line (stream nullptr: silent)
+  std::string command_line;  // for OUT/run.json (empty from a library call)
 
   // Throws std::invalid_argument for a bad stereo setting, no output chosen or num_threads < 0.
   void Check() const;
@@ -71,6 +80,9 @@ struct EncodeDatasetOptions {
 struct EncodeDatasetResult {
   int encoded = 0;  // frames computed by this call
   int skipped = 0;  // frames whose files were all there already (resumed)
+  // Of the encoded frames: those that were already done and were recomputed only for evaluate
+  // (their files kept as they were). Frames written = encoded - kept.
+  int kept = 0;
   // Of the encoded frames: those whose RANSAC ground fit was accepted, and for the others, the
   // fallback's reason (GroundPlaneFit::reason without its parenthesised detail) -> frames.
   int ground_fitted = 0;
@@ -93,11 +105,13 @@ std::string DatasetManifest(const EncodeDatasetOptions& options);
 std::string GroundFitLine(const GroundPlaneFit& fit);
 
 // Encodes the frames `ids` of `dataset` into `out` (created), in parallel. Checks options first,
-// then that `ids` is not empty and that every frame has both images and a calibration, then the
-// manifest: if OUT/stereo.json exists with other settings it throws std::runtime_error naming it
-// (unless force). Throws std::runtime_error naming the file for an unreadable input, and with
-// evaluate for a frame without ground-truth disparity. An interrupted call leaves only whole
-// files; the next one resumes.
+// then that `ids` is not empty and that every frame has both images and a calibration, that `out`
+// does not overlap the dataset's subset folder or ImageSets/ (std::invalid_argument), then the
+// manifests: if OUT/stereo.json records other settings (besides "encode") or OUT/run.json other
+// data it throws std::runtime_error naming the file and the settings (unless force). While it
+// runs it holds OutputLock(out): a second run into the same folder is refused. Throws
+// std::runtime_error naming the file for an unreadable input, and with evaluate for a frame without
+// ground-truth disparity. An interrupted call leaves only whole files; the next one resumes.
 EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector<std::string>& ids,
                                   const std::filesystem::path& out,
                                   const EncodeDatasetOptions& options);

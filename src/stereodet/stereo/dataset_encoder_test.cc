@@ -14,6 +14,7 @@
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/planar_scene.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -161,10 +162,11 @@ TEST(EncodeDatasetTest, EncodesEveryFrameThenResumesWhereFilesAreMissing) {
   EXPECT_EQ(first.ground_fitted + fallbacks, 2);
   EXPECT_THAT(first.stage_times, HasSubstr("disparity"));
   EXPECT_EQ(first.disparity_error.estimated_pixels, 0);  // not asked to evaluate
-  EXPECT_EQ(ListFiles(out), (std::vector<fs::path>{
-                                "disparity/000000.png", "disparity/000001.png", "ground/000000.txt",
-                                "ground/000001.txt", "rgbh/000000.png", "rgbh/000001.png",
-                                "stereo.json", "velodyne/000000.bin", "velodyne/000001.bin"}));
+  EXPECT_EQ(
+      ListFiles(out),
+      (std::vector<fs::path>{"disparity/000000.png", "disparity/000001.png", "ground/000000.txt",
+                             "ground/000001.txt", "rgbh/000000.png", "rgbh/000001.png", "run.json",
+                             "stereo.json", "velodyne/000000.bin", "velodyne/000001.bin"}));
   EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(options));
   const std::string ground = ReadFile(out / "ground/000000.txt");
   EXPECT_EQ(ground.substr(0, 1), "#");
@@ -204,18 +206,101 @@ TEST(EncodeDatasetTest, RefusesAFolderMadeWithOtherSettingsUnlessForced) {
   } catch (const std::runtime_error& e) {
     EXPECT_THAT(e.what(), HasSubstr("stereo.json"));
     EXPECT_THAT(e.what(), HasSubstr("records different settings"));
+    // The message names the setting, with both values.
+    EXPECT_THAT(e.what(), HasSubstr("disparity.method: \"bm\" (this run: \"sgbm\")"));
   }
   EXPECT_EQ(ReadFile(out / "stereo.json"), manifest);  // left as it was
 
-  // The outputs are part of the settings too.
+  // Another output is added to the folder's: only its files are written, the others kept.
+  const std::string rgbh = ReadFile(out / "rgbh/000000.png");
+  const auto rgbh_time = fs::last_write_time(out / "rgbh/000000.png");
   EncodeDatasetOptions more = options;
-  more.outputs.points = true;
-  EXPECT_THROW(EncodeDataset(dataset, ids, out, more), std::runtime_error);
+  more.outputs = ParseDatasetOutputs("points");
+  const EncodeDatasetResult added = EncodeDataset(dataset, ids, out, more);
+  EXPECT_EQ(added.encoded, 2);
+  EXPECT_TRUE(fs::exists(out / "velodyne/000001.bin"));
+  EXPECT_EQ(fs::last_write_time(out / "rgbh/000000.png"), rgbh_time);
+  EXPECT_EQ(ReadFile(out / "rgbh/000000.png"), rgbh);
+  EncodeDatasetOptions both = options;
+  both.outputs = ParseDatasetOutputs("rgbh,points");
+  EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(both));
+  EXPECT_EQ(EncodeDataset(dataset, ids, out, both).skipped, 2);  // all there now
 
+  // force recomputes every frame and removes the outputs not asked for.
   other.force = true;
   const EncodeDatasetResult forced = EncodeDataset(dataset, ids, out, other);
   EXPECT_EQ(forced.encoded, 2);
   EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(other));
+  EXPECT_FALSE(fs::exists(out / "velodyne"));
+}
+
+TEST(EncodeDatasetTest, ResumeRedoesFramesMadeWithOtherSettingsAfterAnInterruptedForce) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data", 3);
+  const KittiDataset dataset(dir / "data");
+  const fs::path out = dir / "out";
+  EncodeDatasetOptions old_settings = SmallOptions();
+  EXPECT_EQ(EncodeDataset(dataset, ids, out, old_settings).encoded, 3);
+
+  // --force with new settings, interrupted after the first frame: stereo.json already holds the
+  // new settings, frames 000001 and 000002 the old ones.
+  EncodeDatasetOptions new_settings = SmallOptions();
+  new_settings.stereo.disparity.num_disparities = 32;
+  new_settings.force = true;
+  EXPECT_EQ(EncodeDataset(dataset, {ids[0]}, out, new_settings).encoded, 1);
+  EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(new_settings));
+
+  // The rerun without --force redoes exactly the two frames of the old settings.
+  new_settings.force = false;
+  const EncodeDatasetResult resumed = EncodeDataset(dataset, ids, out, new_settings);
+  EXPECT_EQ(resumed.encoded, 2);
+  EXPECT_EQ(resumed.skipped, 1);
+  // Every frame now holds what an uninterrupted run with the new settings writes.
+  EncodeDataset(dataset, ids, dir / "fresh", new_settings);
+  for (const std::string& id : ids) {
+    EXPECT_EQ(ReadFile(out / "rgbh" / (id + ".png")), ReadFile(dir / "fresh/rgbh" / (id + ".png")))
+        << id;
+    EXPECT_EQ(ReadFile(out / "ground" / (id + ".txt")),
+              ReadFile(dir / "fresh/ground" / (id + ".txt")))
+        << id;
+  }
+  // run.json lists every frame with one settings hash.
+  const std::string run = ReadFile(out / "run.json");
+  EXPECT_THAT(run, HasSubstr("\"tool\": \"stereo\""));
+  EXPECT_THAT(run, HasSubstr("\"000002\": \""));
+}
+
+TEST(EncodeDatasetTest, RefusesOutputsFromOtherDataAndOutputsInsideTheInput) {
+  TestTempDir dir;
+  const std::vector<std::string> ids = WriteScenes(dir / "data", 1);
+  WriteScenes(dir / "other", 1);
+  const KittiDataset dataset(dir / "data");
+  EncodeDataset(dataset, ids, dir / "out", SmallOptions());
+  try {
+    EncodeDataset(KittiDataset(dir / "other"), ids, dir / "out", SmallOptions());
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("holds outputs computed from --data"));
+    EXPECT_THAT(e.what(), HasSubstr("other/training"));
+  }
+  // Two runs into one folder cannot interleave: the second is refused while the first runs.
+  {
+    const OutputLock running(dir / "out");
+    try {
+      EncodeDataset(dataset, ids, dir / "out", SmallOptions());
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("another run is writing into"));
+    }
+  }
+  EXPECT_EQ(EncodeDataset(dataset, ids, dir / "out", SmallOptions()).skipped, 1);
+  // --out inside the data (or the data itself) would overwrite it: refused before any write.
+  const std::string left = ReadFile(dir / "data/training/image_2/000000.png");
+  EXPECT_THROW(EncodeDataset(dataset, ids, dir / "data/training", SmallOptions()),
+               std::invalid_argument);
+  EXPECT_THROW(EncodeDataset(dataset, ids, dir / "data", SmallOptions()), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(dir / "data/training/rgbh"));
+  EXPECT_EQ(ReadFile(dir / "data/training/image_2/000000.png"), left);
 }
 
 TEST(EncodeDatasetTest, BlurredRgbdAlsoWritesTheNetworkImage) {
@@ -227,12 +312,12 @@ TEST(EncodeDatasetTest, BlurredRgbdAlsoWritesTheNetworkImage) {
   EncodeDataset(dataset, ids, dir / "sharp", options);
   EXPECT_EQ(ListFiles(dir / "sharp"),
             (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "height/000000.png",
-                                   "stereo.json"}));
+                                   "run.json", "stereo.json"}));
   options.stereo.blur.sigma_px = 1.5;
   EncodeDataset(dataset, ids, dir / "blurred", options);
   EXPECT_EQ(ListFiles(dir / "blurred"),
             (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "height/000000.png",
-                                   "image_2/000000.png", "stereo.json"}));
+                                   "image_2/000000.png", "run.json", "stereo.json"}));
 }
 
 TEST(EncodeDatasetTest, OutputsDoNotDependOnTheThreadCount) {
@@ -290,8 +375,14 @@ TEST(EncodeDatasetTest, EvaluatePoolsTheFramesDisparityError) {
   // The scenes' disparity is exact, so BM is close to it almost everywhere.
   EXPECT_LT(pooled.d1_rate, 0.05);
 
-  // Evaluating again recomputes every frame (nothing is skipped).
-  EXPECT_EQ(EncodeDataset(dataset, ids, dir / "out", options).encoded, 3);
+  // Evaluating again recomputes every frame (nothing is skipped) for the comparison, but keeps the
+  // files of the frames already done.
+  const auto rgbh_time = fs::last_write_time(dir / "out/rgbh/000001.png");
+  const EncodeDatasetResult again = EncodeDataset(dataset, ids, dir / "out", options);
+  EXPECT_EQ(again.encoded, 3);
+  EXPECT_EQ(again.kept, 3);
+  EXPECT_EQ(again.disparity_error.estimated_pixels, estimated);
+  EXPECT_EQ(fs::last_write_time(dir / "out/rgbh/000001.png"), rgbh_time);
   // Without ground truth it is an error naming the file.
   fs::remove(dir / "data/training/disp_noc_0/000002.png");
   try {
