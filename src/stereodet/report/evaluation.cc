@@ -8,6 +8,7 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
@@ -57,6 +58,7 @@ void EvaluationOptions::Check() const {
         << " and " << EvalCompatName(run.compat);
   }
   STEREODET_CHECK(!records || !out.empty()) << "records need an output folder (out)";
+  STEREODET_CHECK(!report || !out.empty()) << "report needs an output folder (out)";
 }
 
 EvaluationResult RunEvaluation(const EvaluationOptions& options) {
@@ -94,6 +96,17 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
       result.files.push_back(options.out / name);
       result.records.push_back({name, rows});
     }
+  }
+  if (options.report) {
+    const std::vector<ReportSource> sources = {
+        ReadReportSource(staging, options.out.lexically_normal().filename().string())};
+    const ReportResult report = WriteReportFiles(staging / "report", sources, options.report_png,
+                                                 ReportOptions().png_scale);
+    for (const fs::path& path : report.files) {
+      result.files.push_back(options.out / path.lexically_relative(staging));
+    }
+    result.report_index = options.out / "report" / "index.html";
+    result.report_notes = report.notes;
   }
   out->Commit();
   return result;

@@ -42,12 +42,17 @@ struct EvaluationOptions {
   // runs OUT/matches_OVERLAPS.csv (DescribeOverlaps) per run; sets every run's keep_records.
   // Requires out.
   bool records = false;
+  // Also write OUT/report/: index.html and figures/ (WriteReportFiles on the results.json just
+  // written, as `stereodet report OUT` would). Requires out.
+  bool report = false;
+  bool report_png = true;  // the report's PNG figures too (where the build has librsvg)
   // Provenance recorded in results.json (EvalRunInfo).
   std::string tool_version;
   std::string command_line;
 
   // Throws std::invalid_argument for no runs, runs of different compat, records without out, or
-  // a bad input or run setting (EvalInputOptions::Check, EvalOptions::Check).
+  // report without out, or a bad input or run setting (EvalInputOptions::Check,
+  // EvalOptions::Check).
   void Check() const;
 };
 
@@ -66,6 +71,9 @@ struct EvaluationResult {
     int64_t rows = 0;
   };
   std::vector<RecordsFile> records;
+  // With report: OUT/report/index.html, and notes of the report (e.g. PNG files not written).
+  std::filesystem::path report_index;
+  std::vector<std::string> report_notes;
 };
 
 // Checks the options, claims `out` (refusing a folder of other files), reads the frames
