@@ -98,8 +98,9 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
     }
   }
   if (options.report) {
-    const std::vector<ReportSource> sources = {
+    std::vector<ReportSource> sources = {
         ReadReportSource(staging, options.out.lexically_normal().filename().string())};
+    sources.front().folder = options.out;  // where it will be, not the staging folder
     const ReportResult report = WriteReportFiles(staging / "report", sources, options.report_png,
                                                  ReportOptions().png_scale);
     for (const fs::path& path : report.files) {
