@@ -9,7 +9,7 @@
 
 namespace stereodet {
 
-// Whether this build can write PNG files (it was built with librsvg).
+// Whether PNG files can be written: built with librsvg's headers and librsvg-2.so.2 loads.
 bool PngFromSvgAvailable();
 
 // Rasterizes the SVG document `svg` at `scale` times its size in px (2: 960 x 680 px for a 480 x
