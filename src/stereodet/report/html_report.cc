@@ -123,7 +123,7 @@ Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const 
     const std::string matcher = Str(sources[i].results["options"], "matcher");
     PlotSeries exact;
     exact.name =
-        st.Name(sources[i], fmt::format("{} matcher, exact curve: AP_R40 {}, AP_R11 {}", matcher,
+        st.Name(sources[i], fmt::format("{}, exact curve: AP_R40 {}, AP_R11 {}", matcher,
                                         Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2)));
     exact.x = Numbers(e["curve"], "recall");
     exact.y = Numbers(e["curve"], "precision");

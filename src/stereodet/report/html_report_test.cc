@@ -261,8 +261,9 @@ TEST(Report, SeveralResultsAreOverlaidOneColourEach) {
   EXPECT_EQ(report.index, dir.path() / "both/index.html");
   const json pr = SvgData(dir.path() / "both/figures/pr_car_2d_moderate.svg");
   ASSERT_EQ(pr["series"].size(), 3u);  // kitti exact + devkit slots, optimal exact
-  EXPECT_THAT(pr["series"][0]["name"].get<std::string>(), HasSubstr("kitti: kitti matcher"));
-  EXPECT_THAT(pr["series"][2]["name"].get<std::string>(), HasSubstr("optimal: optimal matcher"));
+  EXPECT_THAT(pr["series"][0]["name"].get<std::string>(), HasSubstr("kitti: kitti, exact curve"));
+  EXPECT_THAT(pr["series"][2]["name"].get<std::string>(),
+              HasSubstr("optimal: optimal, exact curve"));
   const std::string svg = ReadFile(dir.path() / "both/figures/pr_car_2d_moderate.svg");
   EXPECT_THAT(svg, HasSubstr("stroke=\"#0072B2\""));  // the first folder's colour
   EXPECT_THAT(svg, HasSubstr("stroke=\"#D55E00\""));  // the second's

@@ -30,6 +30,31 @@ std::string TickText(double v, double step) {
 
 std::string Px(double v) { return fmt::format("{:.2f}", v); }
 
+// A legend entry's lines: words joined up to `max_chars` a line (DejaVu Sans at 12 px is about 7 px
+// a character), so that a long entry wraps instead of running off the figure.
+std::vector<std::string> WrapLegend(const std::string& text, size_t max_chars) {
+  std::vector<std::string> lines(1);
+  size_t begin = 0;
+  while (begin < text.size()) {
+    size_t end = text.find(' ', begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(begin, end - begin);
+    if (!lines.back().empty() && lines.back().size() + 1 + word.size() > max_chars) {
+      lines.emplace_back();
+    }
+    if (!lines.back().empty()) lines.back() += ' ';
+    lines.back() += word;
+    begin = end + 1;
+  }
+  return lines;
+}
+
+constexpr double kLegendLeft = 8, kLegendText = kLegendLeft + 28, kCharPx = 7;
+
+size_t LegendChars(const Plot& plot) {
+  return static_cast<size_t>(std::max(10.0, (plot.width_px - kLegendText - 8) / kCharPx));
+}
+
 void Extend(double v, double& lo, double& hi) {
   if (!std::isfinite(v)) return;
   lo = std::min(lo, v);
@@ -186,9 +211,12 @@ nlohmann::json PlotToJson(const Plot& plot) {
 std::string RenderSvg(const Plot& plot) {
   plot.Check();
   const PlotFrame f = LayOutPlot(plot);
-  int legend_rows = 0;
-  for (const PlotSeries& s : plot.series) legend_rows += s.name.empty() ? 0 : 1;
-  const double height = plot.height_px + (legend_rows > 0 ? legend_rows * kLegendRow + 6 : 0);
+  size_t legend_rows = 0;
+  for (const PlotSeries& s : plot.series) {
+    legend_rows += s.name.empty() ? 0 : WrapLegend(s.name, LegendChars(plot)).size();
+  }
+  const double height =
+      plot.height_px + (legend_rows > 0 ? static_cast<double>(legend_rows) * kLegendRow + 6 : 0);
   std::string svg = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" id=\"{0}\" class=\"plot\" "
       "width=\"{1}\" height=\"{2}\" viewBox=\"0 0 {1} {2}\" font-family=\"{3}\" "
@@ -317,7 +345,7 @@ std::string RenderSvg(const Plot& plot) {
     svg += "</g>\n";
   }
 
-  // The legend, below the plot, one row per named series.
+  // The legend, below the plot, one row per named series (more where its name wraps).
   double y = plot.height_px + 4;
   for (size_t si = 0; si < plot.series.size(); ++si) {
     const PlotSeries& s = plot.series[si];
@@ -327,23 +355,26 @@ std::string RenderSvg(const Plot& plot) {
     svg += "<g class=\"legend\">";
     if (s.style == SeriesStyle::kBars) {
       svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"18\" height=\"10\" fill=\"{}\"/>",
-                         Px(f.left), Px(mid - 5), colour);
+                         Px(kLegendLeft), Px(mid - 5), colour);
     } else {
       if (s.style != SeriesStyle::kMarkers) {
         svg += fmt::format(
             "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" "
             "stroke-width=\"1.8\"{4}/>",
-            Px(f.left), Px(mid), Px(f.left + 22), colour,
+            Px(kLegendLeft), Px(mid), Px(kLegendLeft + 22), colour,
             s.dashed ? " stroke-dasharray=\"5,3\"" : "");
       }
       if (s.style != SeriesStyle::kLine) {
-        svg += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"2.6\" fill=\"{}\"/>", Px(f.left + 11),
-                           Px(mid), colour);
+        svg += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"2.6\" fill=\"{}\"/>",
+                           Px(kLegendLeft + 11), Px(mid), colour);
       }
     }
-    svg += fmt::format("<text x=\"{}\" y=\"{}\">{}</text></g>\n", Px(f.left + 28), Px(mid + 4),
-                       XmlEscape(s.name));
-    y += kLegendRow;
+    for (const std::string& line : WrapLegend(s.name, LegendChars(plot))) {
+      svg += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>", Px(kLegendText),
+                         Px(y + kLegendRow / 2 + 4), XmlEscape(line));
+      y += kLegendRow;
+    }
+    svg += "</g>\n";
   }
   svg += "</svg>\n";
   return svg;

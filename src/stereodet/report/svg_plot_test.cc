@@ -125,6 +125,19 @@ TEST(RenderSvg, BarsStartAtZeroAndCategoriesLabelTheAxis) {
   EXPECT_THAT(svg, HasSubstr(" y=\"30.00\" width="));
 }
 
+// A legend entry longer than the figure is wide wraps at spaces: (480 - 44) / 7 = 62 characters a
+// line, one 17 px row each, and the SVG grows by the rows.
+TEST(RenderSvg, LongLegendEntriesWrapAndTheFigureGrows) {
+  Plot p = UnitPlot();
+  p.series[0].name = std::string(40, 'a') + " " + std::string(40, 'b') + " c";
+  const std::string svg = RenderSvg(p);
+  EXPECT_THAT(svg, HasSubstr(">" + std::string(40, 'a') + "</text>"));
+  EXPECT_THAT(svg, HasSubstr(">" + std::string(40, 'b') + " c</text>"));
+  EXPECT_THAT(svg, HasSubstr("height=\"380.00\""));  // 340 + 2 x 17 + 6
+  p.series[0].name = "short";
+  EXPECT_THAT(RenderSvg(p), HasSubstr("height=\"363.00\""));  // 340 + 17 + 6
+}
+
 TEST(RenderSvg, EscapesTextAndChecksItsInput) {
   Plot p = UnitPlot();
   p.series[0].name = "A<B & \"C\"";
