@@ -318,6 +318,19 @@ Plot BrierFigure(const std::vector<ReportSource>& sources,
   return p;
 }
 
+// "Car 2d, loose overlaps" -> "car-2d-loose-overlaps": the section's anchor.
+std::string Slug(const std::string& text) {
+  std::string slug;
+  for (char c : text) {
+    if (std::isalnum(static_cast<unsigned char>(c))) {
+      slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else if (!slug.empty() && slug.back() != '-') {
+      slug += '-';
+    }
+  }
+  return slug;
+}
+
 std::string ScriptJson(const json& j) {
   std::string text = j.dump();
   for (size_t p = 0; (p = text.find("</", p)) != std::string::npos; p += 3)
@@ -420,7 +433,15 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
       }
     }
   }
-  html += "</dl>\n<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
+  html += "</dl>\n<p>Figures: ";
+  std::string last;
+  for (const ReportFigure& figure : figures) {
+    if (figure.section == last) continue;
+    html += fmt::format("{}<a href=\"#{}\">{}</a>", last.empty() ? "" : " | ", Slug(figure.section),
+                        XmlEscape(figure.section));
+    last = figure.section;
+  }
+  html += "</p>\n<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
   for (const char* h : {"results", "class", "metric", "difficulty", "overlaps", "min overlap",
                         "labels", "detections", "AP_R40", "AP_R11", "AOS_R40", "best F1",
                         "Brier labels", "Brier detections", "Brier all", "ECE"}) {
@@ -457,7 +478,8 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
     if (figure.section != section) {
       if (!section.empty()) html += "</div>\n";
       section = figure.section;
-      html += fmt::format("<h2>{}</h2>\n<div class=\"figures\">\n", XmlEscape(section));
+      html += fmt::format("<h2 id=\"{}\">{}</h2>\n<div class=\"figures\">\n", Slug(section),
+                          XmlEscape(section));
     }
     html += fmt::format("<figure class=\"stereodet-figure\" id=\"fig-{}\">\n", p.id);
     html += RenderSvg(p);
