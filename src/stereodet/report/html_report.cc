@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
@@ -338,16 +339,196 @@ std::string ScriptJson(const json& j) {
   return text;
 }
 
+const std::vector<std::string> kSweepColumns = {
+    "class",           "metric",       "difficulty",       "filter",       "value",
+    "naive_precision", "naive_recall", "stable_precision", "stable_recall"};
+const std::vector<std::string> kCompareColumns = {
+    "class",   "metric",        "difficulty", "lower_m",       "upper_m",
+    "count_a", "abs_dz_mean_a", "count_b",    "abs_dz_mean_b", "difference_b_minus_a",
+    "model_dz"};
+const std::set<std::string> kTextColumns = {"class", "metric", "difficulty", "filter"};
+
+// A CSV of FormatSweepCsv or FormatCompareCsv: a header, then rows of plain fields (no quoting).
+std::vector<ReportSource::Row> ReadCsvRows(const fs::path& path,
+                                           const std::vector<std::string>& required) {
+  std::istringstream in(ReadFile(path));
+  std::string line;
+  STEREODET_CHECK_IO(static_cast<bool>(std::getline(in, line))) << path.string() << " is empty";
+  std::vector<std::string> names;
+  std::stringstream header(line);
+  for (std::string name; std::getline(header, name, ',');) names.push_back(name);
+  for (const std::string& r : required) {
+    STEREODET_CHECK_IO(std::find(names.begin(), names.end(), r) != names.end())
+        << path.string() << " has no column " << r << " (is it stereodet's?)";
+  }
+  std::vector<ReportSource::Row> rows;
+  for (int line_number = 2; std::getline(in, line); ++line_number) {
+    if (line.empty()) continue;
+    ReportSource::Row row;
+    std::stringstream fields(line);
+    size_t i = 0;
+    for (std::string field; std::getline(fields, field, ','); ++i) {
+      STEREODET_CHECK_IO(i < names.size()) << path.string() << ":" << line_number
+                                           << ": more fields than the header's " << names.size();
+      if (kTextColumns.count(names[i]) != 0) {
+        row.text[names[i]] = field;
+      } else {
+        char* end = nullptr;
+        const double v = std::strtod(field.c_str(), &end);
+        row.number[names[i]] = field.empty() || field == "-" || *end != '\0' ? kNaN : v;
+      }
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+double RowNumber(const ReportSource::Row& row, const std::string& name) {
+  auto it = row.number.find(name);
+  return it == row.number.end() ? kNaN : it->second;
+}
+
+CellKey RowKey(const ReportSource::Row& row) {
+  auto text = [&](const char* n) {
+    auto it = row.text.find(n);
+    return it == row.text.end() ? std::string() : it->second;
+  };
+  return {text("class"), text("metric"), text("difficulty"), ""};
+}
+
+// The cells of CSV sources in the first source's order, with every source's rows of each.
+std::vector<std::pair<CellKey, std::vector<std::vector<const ReportSource::Row*>>>> RowCells(
+    const std::vector<ReportSource>& sources) {
+  std::vector<std::pair<CellKey, std::vector<std::vector<const ReportSource::Row*>>>> cells;
+  std::map<CellKey, size_t> index;
+  for (const ReportSource::Row& row : sources.front().rows) {
+    const CellKey key = RowKey(row);
+    if (index.emplace(key, cells.size()).second) {
+      cells.push_back({key, std::vector<std::vector<const ReportSource::Row*>>(sources.size())});
+    }
+  }
+  for (size_t s = 0; s < sources.size(); ++s) {
+    for (const ReportSource::Row& row : sources[s].rows) {
+      auto it = index.find(RowKey(row));
+      if (it != index.end()) cells[it->second].second[s].push_back(&row);
+    }
+  }
+  return cells;
+}
+
+std::string RowCellStem(const CellKey& k) {
+  return Lower(k.class_name) + "_" + k.metric + "_" + Lower(k.difficulty);
+}
+
+Plot SweepFigure(const std::vector<ReportSource>& sources,
+                 const std::vector<std::vector<const ReportSource::Row*>>& rows, const CellKey& key,
+                 const Styler& st) {
+  Plot p;
+  p.id = "sweep_" + RowCellStem(key);
+  std::string filter;
+  for (const auto& source_rows : rows) {
+    if (!source_rows.empty()) filter = source_rows.front()->text.at("filter");
+  }
+  p.title = fmt::format("{} {} {}: filter sweep ({})", key.class_name, key.metric, key.difficulty,
+                        filter);
+  p.x_label = "filter value: " + filter;
+  p.y_label = "precision, recall";
+  p.y_min = 0, p.y_max = 1;
+  static constexpr const char* kSeries[][2] = {{"naive_precision", "naive filter: precision"},
+                                               {"stable_precision", "stable filter: precision"},
+                                               {"naive_recall", "naive filter: recall"},
+                                               {"stable_recall", "stable filter: recall"}};
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (rows[i].empty()) continue;
+    for (size_t k = 0; k < 4; ++k) {
+      PlotSeries s;
+      s.name = st.Name(sources[i], kSeries[k][1]);
+      for (const ReportSource::Row* row : rows[i]) {
+        s.x.push_back(RowNumber(*row, "value"));
+        s.y.push_back(RowNumber(*row, kSeries[k][0]));
+      }
+      s.colour = st.Colour(i, k);
+      s.dashed = k % 2 == 1;  // stable
+      s.style = k < 2 ? SeriesStyle::kLine : SeriesStyle::kLineMarkers;
+      p.series.push_back(std::move(s));
+    }
+    const ReportSource::Row& last = *rows[i].back();
+    caption.push_back(fmt::format(
+        "{}at {} = {}: precision {} naive / {} stable, recall {} naive / {} stable",
+        sources.size() > 1 ? sources[i].label + ": " : "", filter,
+        fmt::format("{:g}", RowNumber(last, "value")), Fixed(RowNumber(last, "naive_precision"), 3),
+        Fixed(RowNumber(last, "stable_precision"), 3), Fixed(RowNumber(last, "naive_recall"), 3),
+        Fixed(RowNumber(last, "stable_recall"), 3)));
+  }
+  p.caption = fmt::format("{}.", fmt::join(caption, "; "));
+  return p;
+}
+
+Plot CompareFigure(const std::vector<ReportSource>& sources,
+                   const std::vector<std::vector<const ReportSource::Row*>>& rows,
+                   const CellKey& key, const Styler& st) {
+  Plot p;
+  p.id = "compare_" + RowCellStem(key);
+  p.title = fmt::format("{} {} {}: depth error of A and B vs distance", key.class_name, key.metric,
+                        key.difficulty);
+  p.x_label = "label depth z (m), bin centre";
+  p.y_label = "depth error (m)";
+  p.x_min = 0;
+  static constexpr const char* kSeries[][2] = {{"abs_dz_mean_a", "A: mean |depth error|"},
+                                               {"abs_dz_mean_b", "B: mean |depth error|"},
+                                               {"difference_b_minus_a", "B - A"},
+                                               {"model_dz", "stereo model dz = z^2 / (b f) dd"}};
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (rows[i].empty()) continue;
+    int64_t pairs_a = 0, pairs_b = 0;
+    for (size_t k = 0; k < 4; ++k) {
+      PlotSeries s;
+      s.name = st.Name(sources[i], kSeries[k][1]);
+      for (const ReportSource::Row* row : rows[i]) {
+        s.x.push_back((RowNumber(*row, "lower_m") + RowNumber(*row, "upper_m")) / 2);
+        s.y.push_back(RowNumber(*row, kSeries[k][0]));
+      }
+      s.colour = k == 3 ? "#777777" : st.Colour(i, k);
+      s.dashed = k >= 2;
+      s.style = k == 3 ? SeriesStyle::kLine : SeriesStyle::kLineMarkers;
+      p.series.push_back(std::move(s));
+    }
+    for (const ReportSource::Row* row : rows[i]) {
+      pairs_a += static_cast<int64_t>(RowNumber(*row, "count_a"));
+      pairs_b += static_cast<int64_t>(RowNumber(*row, "count_b"));
+    }
+    caption.push_back(fmt::format("{}{} matched pairs of A, {} of B",
+                                  sources.size() > 1 ? sources[i].label + ": " : "", pairs_a,
+                                  pairs_b));
+  }
+  p.caption = fmt::format("{}; empty bins are not drawn; the model at the bin centre.",
+                          fmt::join(caption, "; "));
+  return p;
+}
+
 }  // namespace
 
 ReportSource ReadReportSource(const fs::path& folder, const std::string& label) {
   const fs::path path = folder / "results.json";
-  STEREODET_CHECK_IO(fs::is_regular_file(path))
-      << path.string() << " is not there: is " << folder.string()
-      << " a results folder of `stereodet eval --out`?";
   ReportSource source;
   source.folder = folder;
   source.label = label;
+  if (!fs::is_regular_file(path)) {
+    for (const auto& [name, kind] :
+         {std::pair<const char*, ReportKind>{"sweep.csv", ReportKind::kSweep},
+          {"compare.csv", ReportKind::kCompare}}) {
+      if (!fs::is_regular_file(folder / name)) continue;
+      source.kind = kind;
+      source.rows =
+          ReadCsvRows(folder / name, kind == ReportKind::kSweep ? kSweepColumns : kCompareColumns);
+      return source;
+    }
+    STEREODET_THROW_IO() << path.string() << " is not there: is " << folder.string()
+                         << " a results folder of `stereodet eval --out`? (nor is there a "
+                            "sweep.csv of eval sweep or a compare.csv of eval compare)";
+  }
   try {
     source.results = json::parse(ReadFile(path));
   } catch (const json::exception& e) {
@@ -361,11 +542,25 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
 
 std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources) {
   STEREODET_CHECK(!sources.empty()) << "a report needs at least one results folder";
+  for (const ReportSource& s : sources) {
+    STEREODET_CHECK(s.kind == sources.front().kind)
+        << "report: " << s.folder.string() << " holds another kind of results than "
+        << sources.front().folder.string() << " (eval, eval sweep and eval compare do not mix)";
+  }
+  const Styler st{sources.size()};
+  std::vector<ReportFigure> figures;
+  if (sources.front().kind != ReportKind::kEval) {
+    for (const auto& [key, rows] : RowCells(sources)) {
+      const std::string section = key.class_name + " " + key.metric;
+      figures.push_back({section, sources.front().kind == ReportKind::kSweep
+                                      ? SweepFigure(sources, rows, key, st)
+                                      : CompareFigure(sources, rows, key, st)});
+    }
+    return figures;
+  }
   std::vector<std::map<CellKey, const json*>> cells;
   for (const ReportSource& s : sources) cells.push_back(Cells(s));
   const bool with_overlaps = SeveralOverlapSets(sources.front());
-  const Styler st{sources.size()};
-  std::vector<ReportFigure> figures;
   // Groups (class x metric x overlaps) in the first source's result order, with their difficulties.
   std::vector<std::pair<CellKey, std::vector<std::string>>> groups;
   for (const json& e : sources.front().results["results"]) {
@@ -418,6 +613,14 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
       "code{font-size:12px}dl{font-size:13px}dt{font-weight:bold;margin-top:8px}\n"
       "</style>\n</head>\n<body>\n<h1>stereodet evaluation report</h1>\n<dl>\n";
   for (const ReportSource& s : sources) {
+    if (s.kind != ReportKind::kEval) {
+      html += fmt::format(
+          "<dt>{}</dt><dd>folder <code>{}</code>; {} ({} rows)</dd>\n", XmlEscape(s.label),
+          XmlEscape(s.folder.string()),
+          s.kind == ReportKind::kSweep ? "eval sweep: sweep.csv" : "eval compare: compare.csv",
+          s.rows.size());
+      continue;
+    }
     const json& r = s.results;
     const json tool = r.value("tool", json::object());
     html += fmt::format(
@@ -441,34 +644,38 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
                         XmlEscape(figure.section));
     last = figure.section;
   }
-  html += "</p>\n<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
-  for (const char* h : {"results", "class", "metric", "difficulty", "overlaps", "min overlap",
-                        "labels", "detections", "AP_R40", "AP_R11", "AOS_R40", "best F1",
-                        "Brier labels", "Brier detections", "Brier all", "ECE"}) {
-    html += fmt::format("<th>{}</th>", h);
-  }
-  html += "</tr>\n";
-  for (const ReportSource& s : sources) {
-    for (const json& e : s.results["results"]) {
-      if (!e.value("evaluated", false)) continue;
-      const json& b = e["brier"];
-      html += fmt::format(
-          "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
-          "<td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}</td><td>{}{}</td><td>{}</td>"
-          "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
-          "<td>{}</td></tr>\n",
-          XmlEscape(s.label), XmlEscape(Str(e, "class")), Str(e, "metric"), Str(e, "difficulty"),
-          Str(e, "overlaps"), Fixed(Num(e, "min_overlap"), 2), e.value("num_valid_labels", 0),
-          e.value("small_sample", false) ? "*" : "", e.value("num_detections", 0),
-          Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2), Fixed(Num(e, "aos_r40"), 2),
-          Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(b, "over_labels"), 4),
-          Fixed(Num(b, "over_detections"), 4), Fixed(Num(b, "over_all"), 4),
-          Fixed(Num(e["calibration"], "ece"), 4));
+  html += "</p>\n";
+  const bool eval = sources.front().kind == ReportKind::kEval;
+  if (eval) html += "<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
+  if (eval) {
+    for (const char* h : {"results", "class", "metric", "difficulty", "overlaps", "min overlap",
+                          "labels", "detections", "AP_R40", "AP_R11", "AOS_R40", "best F1",
+                          "Brier labels", "Brier detections", "Brier all", "ECE"}) {
+      html += fmt::format("<th>{}</th>", h);
     }
+    html += "</tr>\n";
+    for (const ReportSource& s : sources) {
+      for (const json& e : s.results["results"]) {
+        if (!e.value("evaluated", false)) continue;
+        const json& b = e["brier"];
+        html += fmt::format(
+            "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
+            "<td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}</td><td>{}{}</td><td>{}</td>"
+            "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+            "<td>{}</td></tr>\n",
+            XmlEscape(s.label), XmlEscape(Str(e, "class")), Str(e, "metric"), Str(e, "difficulty"),
+            Str(e, "overlaps"), Fixed(Num(e, "min_overlap"), 2), e.value("num_valid_labels", 0),
+            e.value("small_sample", false) ? "*" : "", e.value("num_detections", 0),
+            Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2), Fixed(Num(e, "aos_r40"), 2),
+            Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(b, "over_labels"), 4),
+            Fixed(Num(b, "over_detections"), 4), Fixed(Num(b, "over_all"), 4),
+            Fixed(Num(e["calibration"], "ece"), 4));
+      }
+    }
+    html +=
+        "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
+        "(docs/metrics.md, small samples).</p>\n";
   }
-  html +=
-      "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
-      "(docs/metrics.md, small samples).</p>\n";
 
   // Figures, one section per class x metric (x overlap set).
   json data = json::array();

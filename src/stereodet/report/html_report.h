@@ -12,6 +12,7 @@
 #define STEREODET_REPORT_HTML_REPORT_H_
 
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -20,15 +21,28 @@
 
 namespace stereodet {
 
-// One results folder's results.json and the name its series carry in legends and tables.
+// What a results folder holds: `eval --out` (results.json), `eval sweep --out` (sweep.csv) or
+// `eval compare --out` (compare.csv).
+enum class ReportKind { kEval, kSweep, kCompare };
+
+// One results folder and the name its series carry in legends and tables.
 struct ReportSource {
   std::string label;
-  nlohmann::json results;        // as written by WriteEvalReport
+  ReportKind kind = ReportKind::kEval;
+  nlohmann::json results;  // kEval: results.json as written by WriteEvalReport
+  // kSweep, kCompare: the CSV's rows, each column as a number (NaN for "-" or empty), the text
+  // columns (class, metric, difficulty, filter) as text.
+  struct Row {
+    std::map<std::string, double> number;
+    std::map<std::string, std::string> text;
+  };
+  std::vector<Row> rows;
   std::filesystem::path folder;  // where it was read from (shown in the page; may be empty)
 };
 
-// Reads FOLDER/results.json. Throws std::runtime_error naming the file if it is missing or is not
-// a stereodet results.json (no "results" array).
+// Reads FOLDER/results.json, or else FOLDER/sweep.csv, or else FOLDER/compare.csv. Throws
+// std::runtime_error naming the folder if it holds none of them, or the file if it is not one of
+// stereodet's (results.json without a "results" array, a CSV without its columns).
 ReportSource ReadReportSource(const std::filesystem::path& folder, const std::string& label);
 
 // The figures of `sources`, per evaluated cell (class x metric x difficulty x overlap set) of the
@@ -39,14 +53,18 @@ ReportSource ReadReportSource(const std::filesystem::path& folder, const std::st
 //   roc_CELL          recall vs false positives per frame (the same curve points)
 //   reliability_CELL  fraction of TPs vs mean score per calibration bin (bins with detections), the
 //                     diagonal, the ECE in the legend
-//   localization_CELL median 3D centre error and median |depth error| per distance bin (m),
-//   whiskers
-//                     up to the 90th percentile; only where some bin has a TP with 3D boxes
+//   localization_CELL median 3D centre error and median |depth error| per distance bin (m);
+//                     whiskers up to the 90th percentile; only where a bin has a TP with 3D boxes
 // and per class x metric x overlap set:
 //   brier_CLASS_METRIC  the Brier scores over labels, detections and all, side by side per
 //   difficulty
 // CELL is class_metric_difficulty in lower case, with _OVERLAPS when the first source has several
-// overlap sets (the curve CSV names of WriteEvalReport). Requires: at least one source.
+// overlap sets (the curve CSV names of WriteEvalReport).
+// For `eval sweep` folders, per cell: sweep_CELL, precision and recall of the naive and the stable
+// filter against the filter value. For `eval compare` folders, per cell: compare_CELL, the mean
+// |depth error| of A and of B, their difference B - A and the stereo model dz = z^2 / (b f) dd
+// against the bin centre (m).
+// Requires: at least one source, all of one kind (throws std::invalid_argument).
 struct ReportFigure {
   std::string section;  // the page's heading it goes under: "Car 2d" ("Car 2d, loose overlaps")
   Plot plot;
@@ -64,7 +82,8 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
                        const std::vector<ReportFigure>& figures, bool with_png);
 
 struct ReportOptions {
-  std::vector<std::filesystem::path> results;  // results folders, each holding results.json
+  // Results folders, all of one kind: each holds results.json, sweep.csv or compare.csv.
+  std::vector<std::filesystem::path> results;
   std::vector<std::string> labels;  // one per folder for legends; empty: the folders' names
   // The report folder (one run per folder, StagedFolder with marker index.html). Empty: with one
   // results folder RESULTS/report, with several required.

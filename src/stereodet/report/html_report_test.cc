@@ -4,7 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <regex>
@@ -60,7 +62,20 @@ std::vector<double> Column(const json& j) {
   return v;
 }
 
-// The columns of a CSV file with a header row.
+// Equal element for element, NaN equal to NaN (not computed on both sides).
+::testing::AssertionResult SameNumbers(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size()) {
+    return ::testing::AssertionFailure() << a.size() << " vs " << b.size() << " numbers";
+  }
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i])))) {
+      return ::testing::AssertionFailure() << "at " << i << ": " << a[i] << " vs " << b[i];
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// The columns of a CSV file with a header row, as numbers.
 std::map<std::string, std::vector<double>> ReadCsv(const fs::path& path) {
   std::istringstream in(ReadFile(path));
   std::string line;
@@ -73,7 +88,10 @@ std::map<std::string, std::vector<double>> ReadCsv(const fs::path& path) {
     std::stringstream row(line);
     size_t i = 0;
     for (std::string cell; std::getline(row, cell, ','); ++i) {
-      columns[names.at(i)].push_back(cell.empty() ? NAN : std::stod(cell));
+      // Text (a class name), "-" and empty cells are NaN here.
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      columns[names.at(i)].push_back(cell.empty() || *end != '\0' ? NAN : v);
     }
   }
   return columns;
@@ -285,6 +303,85 @@ TEST(Report, SeveralResultsAreOverlaidOneColourEach) {
     EXPECT_THAT(e.what(), HasSubstr("eval_small/results.json is not there"));
   }
   EXPECT_FALSE(fs::exists(dir.path() / "never"));
+}
+
+// `eval compare` (tests/data/eval_compare, README): A errs +0.5 m / +1.0 m, B +0.2 m / -2.0 m at
+// 12 m / 22 m, so B - A is -0.3 m in the 10-15 m bin and +1.0 m in the 20-25 m bin; the model's
+// line is compare.csv's model_dz at every bin centre.
+TEST(Report, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
+  TestTempDir dir;
+  EvaluationCompareOptions compare;
+  compare.input.gt = kData / "eval_compare";
+  compare.input.det = kData / "eval_compare/det_a";
+  compare.det_b = kData / "eval_compare/det_b";
+  compare.eval.classes = {KittiClassSpec("Car")};
+  compare.eval.metrics = {OverlapKind::k2D};
+  compare.out = dir.path() / "compare";
+  RunEvaluationCompare(compare);
+  ReportOptions options;
+  options.results = {dir.path() / "compare"};
+  options.png = false;
+  const ReportResult report = WriteReport(options);
+  EXPECT_EQ(report.num_figures, 3);  // Easy, Moderate, Hard
+  const json fig = SvgData(dir.path() / "compare/report/figures/compare_car_2d_easy.svg");
+  ASSERT_EQ(fig["series"].size(), 4u);
+  EXPECT_EQ(fig["series"][2]["name"], "B - A");
+  const std::vector<double> x = Column(fig["series"][2]["x"]);
+  const std::vector<double> diff = Column(fig["series"][2]["y"]);
+  const auto at = [&](double centre) {
+    return diff[static_cast<size_t>(std::find(x.begin(), x.end(), centre) - x.begin())];
+  };
+  EXPECT_NEAR(at(12.5), -0.3, 1e-9);
+  EXPECT_NEAR(at(22.5), 1.0, 1e-9);
+  EXPECT_TRUE(std::isnan(at(2.5)));                          // an empty bin: not drawn
+  EXPECT_NEAR(Column(fig["series"][0]["y"])[2], 0.5, 1e-9);  // A at 10-15 m
+  EXPECT_NEAR(Column(fig["series"][1]["y"])[4], 2.0, 1e-9);  // |B| at 20-25 m
+  auto csv = ReadCsv(dir.path() / "compare/compare.csv");
+  std::vector<double> model = Column(fig["series"][3]["y"]);
+  ASSERT_LE(model.size(), csv["model_dz"].size());
+  csv["model_dz"].resize(model.size());  // the Easy rows come first
+  EXPECT_TRUE(SameNumbers(model, csv["model_dz"]));
+}
+
+// `eval sweep`: the naive and the stable precision and recall of sweep.csv against the value.
+TEST(Report, SweepFigurePlotsSweepCsv) {
+  TestTempDir dir;
+  EvaluationSweepOptions sweep;
+  sweep.input.gt = kData / "eval_small";
+  sweep.input.det = kData / "eval_small/det";
+  sweep.eval.classes = {KittiClassSpec("Car")};
+  sweep.eval.metrics = {OverlapKind::k2D};
+  sweep.from = 0, sweep.to = 2000, sweep.step = 250;
+  sweep.out = dir.path() / "sweep";
+  const EvaluationSweepResult result = RunEvaluationSweep(sweep);
+  ReportOptions options;
+  options.results = {dir.path() / "sweep"};
+  options.png = false;
+  EXPECT_EQ(WriteReport(options).num_figures, 3);
+  const json fig = SvgData(dir.path() / "sweep/report/figures/sweep_car_2d_moderate.svg");
+  ASSERT_EQ(fig["series"].size(), 4u);
+  std::vector<double> value, naive_p, stable_p, naive_r, stable_r;
+  for (const SweepRow& row : result.rows) {
+    if (row.difficulty != Difficulty::kModerate) continue;
+    value.push_back(row.value);
+    naive_p.push_back(row.stats.naive.precision);
+    stable_p.push_back(row.stats.stable.precision);
+    naive_r.push_back(row.stats.naive.recall);
+    stable_r.push_back(row.stats.stable.recall);
+  }
+  ASSERT_EQ(value.size(), 9u);  // 0, 250, ..., 2000
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][0]["x"]), value));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][0]["y"]), naive_p));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][1]["y"]), stable_p));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][2]["y"]), naive_r));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][3]["y"]), stable_r));
+
+  // A sweep and an evaluation do not mix in one report.
+  EvaluateSmall(dir.path() / "eval", Matcher::kKitti);
+  ReportOptions mixed;
+  mixed.results = {dir.path() / "eval", dir.path() / "sweep"};
+  mixed.out = dir.path() / "mixed";
+  EXPECT_THROW(WriteReport(mixed), std::invalid_argument);
 }
 
 TEST(Report, PngFilesAreTheSvgRasterizedAtTwiceTheSize) {
