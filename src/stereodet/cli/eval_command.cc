@@ -296,6 +296,7 @@ void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOption
   } else {
     fmt::print("wrote {} rows to {}\n", result.rows.size(), result.csv_path.string());
   }
+  if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
 void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
@@ -313,6 +314,7 @@ void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
       options.calib.empty() ? " (KITTI-like calibration)" : "");
   fmt::print("{}", FormatCompareTable(result.rows));
   if (!a.out.empty()) fmt::print("\nwrote {}\n", result.csv_path.string());
+  if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
 }  // namespace
@@ -347,6 +349,8 @@ void AddEvalCommand(CLI::App& app) {
   sweep->add_option("--step", sweep_options->step)->capture_default_str();
   sweep->add_option("--where", sweep_common->filter, "fixed extra filter, e.g. max-distance=40");
   sweep->add_option("--out", sweep_common->out, "write sweep.csv here (default: stdout)");
+  sweep->add_flag("--report", sweep_options->report,
+                  "also write OUT/report/: the sweep's figures and index.html (docs/report.md)");
   sweep->callback([sweep_common, sweep_options, sweep_bound] {
     RunSweep(*sweep_common, *sweep_bound, *sweep_options);
   });
@@ -362,6 +366,9 @@ void AddEvalCommand(CLI::App& app) {
   compare->add_option("--disparity-error-px", compare_options->disparity_error_px)
       ->capture_default_str();
   compare->add_option("--out", compare_common->out, "write compare.csv here");
+  compare->add_flag("--report", compare_options->report,
+                    "also write OUT/report/: the comparison's figures and index.html "
+                    "(docs/report.md)");
   compare->callback(
       [compare_common, compare_options] { RunCompare(*compare_common, *compare_options); });
 

@@ -116,6 +116,7 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
 void EvaluationSweepOptions::Check() const {
   input.Check();
   eval.Check();  // the sweep's range is FilterSweep's to check
+  STEREODET_CHECK(!report || !out.empty()) << "sweep: report needs an output folder (out)";
 }
 
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) {
@@ -129,6 +130,11 @@ EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) 
     result.csv_path = options.out / "sweep.csv";
     WriteFileAtomically(result.csv_path, result.csv);
   }
+  if (options.report) {
+    ReportOptions report;
+    report.results = {options.out};
+    result.report_index = WriteReport(report).index;
+  }
   return result;
 }
 
@@ -136,6 +142,7 @@ void EvaluationCompareOptions::Check() const {
   input.Check();
   STEREODET_CHECK(!det_b.empty()) << "compare: no second detection folder (det_b)";
   eval.Check();
+  STEREODET_CHECK(!report || !out.empty()) << "compare: report needs an output folder (out)";
 }
 
 EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
@@ -157,6 +164,11 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
   if (!options.out.empty()) {
     result.csv_path = options.out / "compare.csv";
     WriteFileAtomically(result.csv_path, result.csv);
+  }
+  if (options.report) {
+    ReportOptions report;
+    report.results = {options.out};
+    result.report_index = WriteReport(report).index;
   }
   return result;
 }

@@ -93,6 +93,8 @@ struct EvaluationSweepOptions {
   double from = 0, to = 200, step = 5;        // its values: from, from + step, ... <= to
   // Where OUT/sweep.csv goes (written atomically; the folder is created). Empty: not written.
   std::filesystem::path out;
+  // Also write OUT/report/ (WriteReport on OUT: the sweep figures, SVG and PNG). Requires out.
+  bool report = false;
   // Throws std::invalid_argument for a bad input or eval setting (FilterSweep checks the range).
   void Check() const;
 };
@@ -102,6 +104,7 @@ struct EvaluationSweepResult {
   std::vector<SweepRow> rows;
   std::string csv;                 // FormatSweepCsv(rows, bound)
   std::filesystem::path csv_path;  // OUT/sweep.csv; empty without out
+  std::filesystem::path report_index;  // with report: OUT/report/index.html
 };
 
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options);
@@ -118,6 +121,8 @@ struct EvaluationCompareOptions {
   double disparity_error_px = 1.0;
   // Where OUT/compare.csv goes (written atomically). Empty: not written.
   std::filesystem::path out;
+  // Also write OUT/report/ (WriteReport on OUT: the compare figures, SVG and PNG). Requires out.
+  bool report = false;
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -128,6 +133,7 @@ struct EvaluationCompareResult {
   std::vector<CompareRow> rows;
   std::string csv;                 // FormatCompareCsv(rows)
   std::filesystem::path csv_path;  // OUT/compare.csv; empty without out
+  std::filesystem::path report_index;  // with report: OUT/report/index.html
 };
 
 // Reads A then B, evaluates both, then reads the calibration and compares.
