@@ -2,7 +2,8 @@
 # The main job on synthetic data, end to end:
 #   synthetic KITTI-format data -> dataset summary -> stereo features (RGB-H, RGB-D, pseudo-LiDAR,
 #   disparity) -> the committed single-shot detectors (models/ssd-rgb, models/ssd-rgbh-learned) ->
-#   detections -> evaluation with the KITTI-compatible and the optimal matcher.
+#   detections -> evaluation with the KITTI-compatible and the optimal matcher -> the report: figures
+#   (SVG, PNG) and one HTML page of every detector's evaluation, overlaid (docs/report.md).
 # Without committed models (or with DEMO_TRAIN=1) a smoke-sized detector (a few epochs on a few
 # frames) is trained instead; `make models` reproduces the committed ones (docs/models.md).
 # Usage: scripts/demo.sh BUILD_DIR DEMO_DIR
@@ -35,6 +36,7 @@ step "Pictures of one frame: disparity, depth, height, point cloud from above ($
 "$bin" stereo frame --data "$data" --id 000000 --out "$demo_dir/stereo_frame"
 
 models_dir=${DEMO_MODELS:-models}
+evals=()
 if ! "$bin" train ssd --help >/dev/null 2>&1; then
   echo "demo: this build has no LibTorch detectors (STEREODET_BUILD_MODELS=OFF); skipping detection"
 else
@@ -58,8 +60,18 @@ else
 
     step "$name: optimal matching, with results.json and curves ($demo_dir/eval-$name)"
     "$bin" eval --gt "$data" --det "$demo_dir/detections-$name" --split val --metrics 2d --matcher optimal \
-      --out "$demo_dir/eval-$name"
+      --out "$demo_dir/eval-$name" --report
+    evals+=("$demo_dir/eval-$name")
   done
 fi
 
-printf '\ndemo: done; everything is under %s\n' "$demo_dir"
+if [[ ${#evals[@]} -gt 0 ]]; then
+  step "The report: every detector's evaluation overlaid, one colour each ($demo_dir/report)"
+  labels=$(for e in "${evals[@]}"; do basename "$e" | sed 's/^eval-//'; done | paste -sd, -)
+  "$bin" report "${evals[@]}" --labels "$labels" --out "$demo_dir/report"
+  printf '\ndemo: done; everything is under %s\n' "$demo_dir"
+  printf 'demo: the report of this run: %s\n' "$(realpath "$demo_dir/report/index.html")"
+else
+  printf '\ndemo: done; everything is under %s\n' "$demo_dir"
+  echo "demo: no detector evaluated, so no report (build with LibTorch for the detection steps)"
+fi

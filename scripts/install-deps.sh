@@ -16,6 +16,9 @@ packages=(
   opencv-doc              # stereo tests: Middlebury "Aloe" pair with ground truth
   libtorch-dev            # models: LibTorch detectors (CPU)
   nlohmann-json3-dev      # report: results.json
+  librsvg2-dev            # report: PNG figures, rasterized from their SVG (librsvg + cairo)
+  fonts-dejavu-core       # report: the figures' font, in PNG and in the browser test
+  chromium                # tests: the report opened in headless Chromium (cli.report.browser)
   libcli11-dev            # cli: the stereodet command line
   libgtest-dev libgmock-dev  # tests
   libbenchmark-dev        # benchmarks

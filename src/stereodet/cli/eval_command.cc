@@ -2,7 +2,7 @@
 //   stereodet eval --gt DIR --det DIR [--split FILE] [--classes ..] [--metrics 2d,bev,3d]
 //                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable]
 //                  [--overlaps strict,loose] [--score-transform none|sigmoid] [--lenient]
-//                  [--out DIR [--records]]
+//                  [--out DIR [--records] [--report]]
 //   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5
 //                  [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
@@ -72,6 +72,7 @@ struct EvalArgs {
   bool all_classes = false;
   std::string out;
   bool records = false;
+  bool report = false;
 };
 
 // The common options of eval, eval sweep and eval compare.
@@ -229,12 +230,14 @@ void PrintNotices(const EvalInput& input, std::FILE* stream = stdout) {
 void RunEval(const EvalArgs& a) {
   STEREODET_CHECK(!a.records || !a.out.empty())
       << "--records needs --out (it writes OUT/matches.csv)";
+  STEREODET_CHECK(!a.report || !a.out.empty()) << "--report needs --out (it writes OUT/report/)";
   EvaluationOptions options;
   const std::vector<OverlapSet> sets = OverlapSets(a);
   options.runs = OverlapSetRuns(MakeOptions(a), sets);
   options.input = MakeInputOptions(a);
   options.out = a.out;
   options.records = a.records;
+  options.report = a.report;
   options.tool_version = StereodetVersion();
   options.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluation(options);
@@ -252,6 +255,8 @@ void RunEval(const EvalArgs& a) {
     fmt::print("per-detection records: {} rows in {}\n", records.rows, records.name);
   }
   fmt::print("wrote {} files to {}\n", result.files.size(), a.out);
+  for (const std::string& note : result.report_notes) fmt::print("note: {}\n", note);
+  if (a.report) fmt::print("report: open {}\n", result.report_index.string());
 }
 
 void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOptions options) {
@@ -269,6 +274,7 @@ void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOption
   } else {
     fmt::print("wrote {} rows to {}\n", result.rows.size(), result.csv_path.string());
   }
+  if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
 void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
@@ -286,6 +292,7 @@ void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
       options.calib.empty() ? " (KITTI-like calibration)" : "");
   fmt::print("{}", FormatCompareTable(result.rows));
   if (!a.out.empty()) fmt::print("\nwrote {}\n", result.csv_path.string());
+  if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
 }  // namespace
@@ -301,6 +308,9 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--records", args->records,
                  "also write OUT/matches.csv: what every detection and label counts as, per class, "
                  "metric and difficulty (docs/metrics.md)");
+  eval->add_flag("--report", args->report,
+                 "also write OUT/report/: index.html and figures/ as SVG and PNG, as `stereodet "
+                 "report OUT` does (docs/report.md)");
   eval->require_subcommand(0, 1);
   // Options of eval itself must come before a sub-subcommand; the sub-subcommands have their own.
   eval->fallthrough(false);
@@ -317,6 +327,8 @@ void AddEvalCommand(CLI::App& app) {
   sweep->add_option("--step", sweep_options->step)->capture_default_str();
   sweep->add_option("--where", sweep_common->filter, "fixed extra filter, e.g. max-distance=40");
   sweep->add_option("--out", sweep_common->out, "write sweep.csv here (default: stdout)");
+  sweep->add_flag("--report", sweep_options->report,
+                  "also write OUT/report/: the sweep's figures and index.html (docs/report.md)");
   sweep->callback([sweep_common, sweep_options, sweep_bound] {
     RunSweep(*sweep_common, *sweep_bound, *sweep_options);
   });
@@ -332,6 +344,9 @@ void AddEvalCommand(CLI::App& app) {
   compare->add_option("--disparity-error-px", compare_options->disparity_error_px)
       ->capture_default_str();
   compare->add_option("--out", compare_common->out, "write compare.csv here");
+  compare->add_flag("--report", compare_options->report,
+                    "also write OUT/report/: the comparison's figures and index.html "
+                    "(docs/report.md)");
   compare->callback(
       [compare_common, compare_options] { RunCompare(*compare_common, *compare_options); });
 

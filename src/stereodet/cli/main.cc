@@ -1,6 +1,6 @@
 // stereodet: stereo features, detectors and safety-grade evaluation for KITTI-format data.
-// The front end: runs info and eval itself (no OpenCV, no LibTorch loaded) and hands every other
-// command to its sibling executable (see commands.h).
+// The front end: runs info, eval and report itself (no OpenCV, no LibTorch loaded) and hands every
+// other command to its sibling executable (see commands.h).
 #include <string_view>
 #include <utility>
 
@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   static constexpr std::pair<std::string_view, AddCommandFn> kOwn[] = {
       {"info", AddInfoCommand},
       {"eval", AddEvalCommand},
+      {"report", AddReportCommand},
   };
   return RunCli(argc, argv, Program::kFrontEnd, kOwn);
 }

@@ -8,6 +8,7 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
@@ -59,6 +60,7 @@ void EvaluationOptions::Check() const {
         << " and " << EvalCompatName(run.compat);
   }
   STEREODET_CHECK(!records || !out.empty()) << "records need an output folder (out)";
+  STEREODET_CHECK(!report || !out.empty()) << "report needs an output folder (out)";
 }
 
 EvaluationResult RunEvaluation(const EvaluationOptions& options) {
@@ -97,6 +99,18 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
       result.records.push_back({name, rows});
     }
   }
+  if (options.report) {
+    std::vector<ReportSource> sources = {
+        ReadReportSource(staging, options.out.lexically_normal().filename().string())};
+    sources.front().folder = options.out;  // where it will be, not the staging folder
+    const ReportResult report = WriteReportFiles(staging / "report", sources, options.report_png,
+                                                 ReportOptions().png_scale);
+    for (const fs::path& path : report.files) {
+      result.files.push_back(options.out / path.lexically_relative(staging));
+    }
+    result.report_index = options.out / "report" / "index.html";
+    result.report_notes = report.notes;
+  }
   out->Commit();
   return result;
 }
@@ -104,6 +118,7 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
 void EvaluationSweepOptions::Check() const {
   input.Check();
   eval.Check();  // the sweep's range is FilterSweep's to check
+  STEREODET_CHECK(!report || !out.empty()) << "sweep: report needs an output folder (out)";
 }
 
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) {
@@ -117,6 +132,11 @@ EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) 
     result.csv_path = options.out / "sweep.csv";
     WriteFileAtomically(result.csv_path, result.csv);
   }
+  if (options.report) {
+    ReportOptions report;
+    report.results = {options.out};
+    result.report_index = WriteReport(report).index;
+  }
   return result;
 }
 
@@ -124,6 +144,7 @@ void EvaluationCompareOptions::Check() const {
   input.Check();
   STEREODET_CHECK(!det_b.empty()) << "compare: no second detection folder (det_b)";
   eval.Check();
+  STEREODET_CHECK(!report || !out.empty()) << "compare: report needs an output folder (out)";
 }
 
 EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
@@ -145,6 +166,11 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
   if (!options.out.empty()) {
     result.csv_path = options.out / "compare.csv";
     WriteFileAtomically(result.csv_path, result.csv);
+  }
+  if (options.report) {
+    ReportOptions report;
+    report.results = {options.out};
+    result.report_index = WriteReport(report).index;
   }
   return result;
 }

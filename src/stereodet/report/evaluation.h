@@ -42,12 +42,17 @@ struct EvaluationOptions {
   // runs OUT/matches_OVERLAPS.csv (DescribeOverlaps) per run; sets every run's keep_records.
   // Requires out.
   bool records = false;
+  // Also write OUT/report/: index.html and figures/ (WriteReportFiles on the results.json just
+  // written, as `stereodet report OUT` would). Requires out.
+  bool report = false;
+  bool report_png = true;  // the report's PNG figures too (where the build has librsvg)
   // Provenance recorded in results.json (EvalRunInfo).
   std::string tool_version;
   std::string command_line;
 
   // Throws std::invalid_argument for no runs, runs of different compat, records without out, or
-  // a bad input or run setting (EvalInputOptions::Check, EvalOptions::Check).
+  // report without out, or a bad input or run setting (EvalInputOptions::Check,
+  // EvalOptions::Check).
   void Check() const;
 };
 
@@ -66,6 +71,9 @@ struct EvaluationResult {
     int64_t rows = 0;
   };
   std::vector<RecordsFile> records;
+  // With report: OUT/report/index.html, and notes of the report (e.g. PNG files not written).
+  std::filesystem::path report_index;
+  std::vector<std::string> report_notes;
 };
 
 // Checks the options, claims `out` (refusing a folder of other files), reads the frames
@@ -85,6 +93,8 @@ struct EvaluationSweepOptions {
   double from = 0, to = 200, step = 5;        // its values: from, from + step, ... <= to
   // Where OUT/sweep.csv goes (written atomically; the folder is created). Empty: not written.
   std::filesystem::path out;
+  // Also write OUT/report/ (WriteReport on OUT: the sweep figures, SVG and PNG). Requires out.
+  bool report = false;
   // Throws std::invalid_argument for a bad input or eval setting (FilterSweep checks the range).
   void Check() const;
 };
@@ -94,6 +104,7 @@ struct EvaluationSweepResult {
   std::vector<SweepRow> rows;
   std::string csv;                 // FormatSweepCsv(rows, bound)
   std::filesystem::path csv_path;  // OUT/sweep.csv; empty without out
+  std::filesystem::path report_index;  // with report: OUT/report/index.html
 };
 
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options);
@@ -110,6 +121,8 @@ struct EvaluationCompareOptions {
   double disparity_error_px = 1.0;
   // Where OUT/compare.csv goes (written atomically). Empty: not written.
   std::filesystem::path out;
+  // Also write OUT/report/ (WriteReport on OUT: the compare figures, SVG and PNG). Requires out.
+  bool report = false;
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -120,6 +133,7 @@ struct EvaluationCompareResult {
   std::vector<CompareRow> rows;
   std::string csv;                 // FormatCompareCsv(rows)
   std::filesystem::path csv_path;  // OUT/compare.csv; empty without out
+  std::filesystem::path report_index;  // with report: OUT/report/index.html
 };
 
 // Reads A then B, evaluates both, then reads the calibration and compares.

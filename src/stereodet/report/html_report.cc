@@ -1,0 +1,776 @@
+#include "stereodet/report/html_report.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "stereodet/report/raster.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                    "#E69F00", "#56B4E9", "#000000"};
+
+double Num(const json& j) { return j.is_number() ? j.get<double>() : kNaN; }
+double Num(const json& j, const char* key) {
+  return j.is_object() && j.contains(key) ? Num(j[key]) : kNaN;
+}
+
+std::vector<double> Numbers(const json& j, const char* key) {
+  std::vector<double> out;
+  if (!j.is_object() || !j.contains(key) || !j[key].is_array()) return out;
+  for (const json& v : j[key]) out.push_back(Num(v));
+  return out;
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string Fixed(double v, int decimals) {
+  return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : std::string("-");
+}
+
+std::string Str(const json& j, const char* key) {
+  return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : "";
+}
+
+// A cell of the results: class x metric x difficulty x overlap set.
+struct CellKey {
+  std::string class_name, metric, difficulty, overlaps;
+  auto operator<=>(const CellKey&) const = default;
+};
+
+CellKey KeyOf(const json& e) {
+  return {Str(e, "class"), Str(e, "metric"), Str(e, "difficulty"), Str(e, "overlaps")};
+}
+
+// The evaluated entries of a source by cell.
+std::map<CellKey, const json*> Cells(const ReportSource& source) {
+  std::map<CellKey, const json*> cells;
+  for (const json& e : source.results["results"]) {
+    if (e.value("evaluated", false)) cells.emplace(KeyOf(e), &e);
+  }
+  return cells;
+}
+
+bool SeveralOverlapSets(const ReportSource& source) {
+  std::set<std::string> sets;
+  for (const json& e : source.results["results"]) sets.insert(Str(e, "overlaps"));
+  return sets.size() > 1;
+}
+
+std::string GroupStem(const CellKey& k, bool with_overlaps) {
+  return Lower(k.class_name) + "_" + k.metric + (with_overlaps ? "_" + k.overlaps : "");
+}
+std::string CellStem(const CellKey& k, bool with_overlaps) {
+  return Lower(k.class_name) + "_" + k.metric + "_" + Lower(k.difficulty) +
+         (with_overlaps ? "_" + k.overlaps : "");
+}
+
+std::string CellTitle(const CellKey& k, const json& e) {
+  return fmt::format("{} {} {}, overlap {}", k.class_name, k.metric, k.difficulty,
+                     Fixed(Num(e, "min_overlap"), 2));
+}
+
+// Series colours: by role with one source, by source (and dashed by role) with several.
+struct Styler {
+  size_t num_sources;
+  std::string Colour(size_t source, size_t role) const {
+    return kPalette[(num_sources > 1 ? source : role) % std::size(kPalette)];
+  }
+  std::string Name(const ReportSource& s, const std::string& name) const {
+    return num_sources > 1 ? s.label + ": " + name : name;
+  }
+};
+
+// The sources' entries for `key` (nullptr where a source lacks the cell).
+std::vector<const json*> EntriesFor(const std::vector<std::map<CellKey, const json*>>& cells,
+                                    const CellKey& key) {
+  std::vector<const json*> out;
+  for (const auto& c : cells) {
+    auto it = c.find(key);
+    out.push_back(it == c.end() ? nullptr : it->second);
+  }
+  return out;
+}
+
+Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const json*>& entries,
+              const CellKey& key, const std::string& stem, const Styler& st) {
+  Plot p;
+  p.id = "pr_" + stem;
+  p.title = CellTitle(key, *entries.front()) + ": precision vs recall";
+  p.x_label = "recall";
+  p.y_label = "precision";
+  p.x_min = 0, p.x_max = 1, p.y_min = 0, p.y_max = 1;
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (entries[i] == nullptr) continue;
+    const json& e = *entries[i];
+    const std::string matcher = Str(sources[i].results["options"], "matcher");
+    PlotSeries exact;
+    exact.name =
+        st.Name(sources[i], fmt::format("{}, exact curve: AP_R40 {}, AP_R11 {}", matcher,
+                                        Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2)));
+    exact.x = Numbers(e["curve"], "recall");
+    exact.y = Numbers(e["curve"], "precision");
+    exact.colour = st.Colour(i, 0);
+    exact.style = exact.x.size() <= 60 ? SeriesStyle::kLineMarkers : SeriesStyle::kLine;
+    p.series.push_back(std::move(exact));
+    if (e.contains("kitti")) {
+      PlotSeries devkit;
+      devkit.name =
+          st.Name(sources[i], "devkit's 41 slots, read as recall i/40 (as its AP_R40 is)");
+      devkit.y = Numbers(e["kitti"], "precision");
+      for (size_t s = 0; s < devkit.y.size(); ++s)
+        devkit.x.push_back(static_cast<double>(s) / 40.0);
+      devkit.colour = st.Colour(i, 1);
+      devkit.dashed = true;
+      devkit.style = SeriesStyle::kLineMarkers;
+      p.series.push_back(std::move(devkit));
+    }
+    caption.push_back(fmt::format(
+        "{}{} valid labels, {} detections; AP_R40 {} / AP_R11 {}; best F1 {} (precision {}, "
+        "recall {} at score {})",
+        sources.size() > 1 ? sources[i].label + ": " : "", e.value("num_valid_labels", 0),
+        e.value("num_detections", 0), Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2),
+        Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(e["best_f1"], "precision"), 3),
+        Fixed(Num(e["best_f1"], "recall"), 3), Fixed(Num(e["best_f1"], "threshold"), 3)));
+  }
+  p.caption = fmt::format("{}.", fmt::join(caption, "; "));
+  return p;
+}
+
+Plot RocFigure(const std::vector<ReportSource>& sources, const std::vector<const json*>& entries,
+               const CellKey& key, const std::string& stem, const Styler& st) {
+  Plot p;
+  p.id = "roc_" + stem;
+  p.title = CellTitle(key, *entries.front()) + ": recall vs false positives";
+  p.x_label = "false positives per frame";
+  p.y_label = "recall";
+  p.x_min = 0, p.y_min = 0, p.y_max = 1;
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (entries[i] == nullptr) continue;
+    const json& e = *entries[i];
+    PlotSeries s;
+    s.x = Numbers(e["curve"], "fp_per_frame");
+    s.y = Numbers(e["curve"], "recall");
+    const double frames = Num(sources[i].results["input"], "num_frames");
+    s.name = st.Name(sources[i],
+                     fmt::format("recall at each score threshold ({} frames)", Fixed(frames, 0)));
+    s.colour = st.Colour(i, 0);
+    s.style = s.x.size() <= 60 ? SeriesStyle::kLineMarkers : SeriesStyle::kLine;
+    const double max_recall = s.y.empty() ? kNaN : *std::max_element(s.y.begin(), s.y.end());
+    const double max_fppf = s.x.empty() ? kNaN : *std::max_element(s.x.begin(), s.x.end());
+    caption.push_back(fmt::format("{}recall reaches {} at {} false positives per frame",
+                                  sources.size() > 1 ? sources[i].label + ": " : "",
+                                  Fixed(max_recall, 3), Fixed(max_fppf, 3)));
+    p.series.push_back(std::move(s));
+  }
+  p.caption = fmt::format("{}.", fmt::join(caption, "; "));
+  return p;
+}
+
+Plot ReliabilityFigure(const std::vector<ReportSource>& sources,
+                       const std::vector<const json*>& entries, const CellKey& key,
+                       const std::string& stem, const Styler& st) {
+  Plot p;
+  p.id = "reliability_" + stem;
+  p.title = CellTitle(key, *entries.front()) + ": reliability";
+  p.x_label = "mean score in bin";
+  p.y_label = "fraction of TPs in bin";
+  p.x_min = 0, p.x_max = 1, p.y_min = 0, p.y_max = 1;
+  PlotSeries diagonal;
+  diagonal.name = "perfect calibration";
+  diagonal.x = {0, 1};
+  diagonal.y = {0, 1};
+  diagonal.colour = "#999999";
+  diagonal.dashed = true;
+  p.series.push_back(diagonal);
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (entries[i] == nullptr) continue;
+    const json& cal = (*entries[i])["calibration"];
+    PlotSeries s;
+    std::vector<std::string> counts;
+    for (const json& b : cal["bins"]) {
+      const bool filled = b.value("count", 0) > 0;
+      s.x.push_back(filled ? Num(b, "mean_score") : kNaN);
+      s.y.push_back(filled ? Num(b, "tp_fraction") : kNaN);
+      counts.push_back(fmt::format("{}", b.value("count", 0)));
+    }
+    s.name = st.Name(sources[i], fmt::format("ECE {} ({} detections)", Fixed(Num(cal, "ece"), 4),
+                                             cal.value("num_detections", 0)));
+    s.colour = st.Colour(i, 1);
+    s.style = SeriesStyle::kLineMarkers;
+    caption.push_back(fmt::format("{}ECE {}; detections per bin {}",
+                                  sources.size() > 1 ? sources[i].label + ": " : "",
+                                  Fixed(Num(cal, "ece"), 4), fmt::join(counts, ", ")));
+    p.series.push_back(std::move(s));
+  }
+  p.caption = fmt::format("{} (empty bins are not drawn).", fmt::join(caption, "; "));
+  return p;
+}
+
+bool HasLocalization(const json* e) {
+  if (e == nullptr || !e->contains("localization")) return false;
+  for (const json& b : (*e)["localization"]) {
+    if (b.value("count", 0) > 0 && std::isfinite(Num(b, "centre_error_median_m"))) return true;
+  }
+  return false;
+}
+
+Plot LocalizationFigure(const std::vector<ReportSource>& sources,
+                        const std::vector<const json*>& entries, const CellKey& key,
+                        const std::string& stem, const Styler& st) {
+  Plot p;
+  p.id = "localization_" + stem;
+  p.title = CellTitle(key, *entries.front()) + ": 3D error vs distance";
+  p.x_label = "label depth z (m), bin centre";
+  p.y_label = "error (m)";
+  p.x_min = 0, p.y_min = 0;
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (!HasLocalization(entries[i])) continue;
+    PlotSeries centre, depth;
+    int64_t pairs = 0;
+    for (const json& b : (*entries[i])["localization"]) {
+      const double mid = (Num(b, "lower_m") + Num(b, "upper_m")) / 2;
+      const bool filled = b.value("count", 0) > 0;
+      pairs += b.value("count", 0);
+      centre.x.push_back(mid);
+      centre.y.push_back(filled ? Num(b, "centre_error_median_m") : kNaN);
+      centre.y_low.push_back(filled ? Num(b, "centre_error_median_m") : kNaN);
+      centre.y_high.push_back(filled ? Num(b, "centre_error_p90_m") : kNaN);
+      depth.x.push_back(mid);
+      depth.y.push_back(filled ? Num(b, "abs_depth_error_median_m") : kNaN);
+      depth.y_low.push_back(filled ? Num(b, "abs_depth_error_median_m") : kNaN);
+      depth.y_high.push_back(filled ? Num(b, "abs_depth_error_p90_m") : kNaN);
+    }
+    centre.name = st.Name(sources[i], "median 3D centre error |c_det - c_label| (whisker: p90)");
+    depth.name = st.Name(sources[i], "median |depth error| |z_det - z_label| (whisker: p90)");
+    centre.colour = st.Colour(i, 0);
+    depth.colour = st.Colour(i, 1);
+    depth.dashed = true;
+    centre.style = depth.style = SeriesStyle::kLineMarkers;
+    caption.push_back(fmt::format("{}{} TP pairs with 3D boxes",
+                                  sources.size() > 1 ? sources[i].label + ": " : "", pairs));
+    p.series.push_back(std::move(centre));
+    p.series.push_back(std::move(depth));
+  }
+  p.caption = fmt::format("{}; bins of {} m; empty bins are not drawn.", fmt::join(caption, "; "),
+                          Fixed(Num(sources.front().results["options"], "distance_bin_m"), 1));
+  return p;
+}
+
+Plot BrierFigure(const std::vector<ReportSource>& sources,
+                 const std::vector<std::map<CellKey, const json*>>& cells, const CellKey& group,
+                 const std::vector<std::string>& difficulties, const std::string& stem,
+                 const Styler& st) {
+  Plot p;
+  p.id = "brier_" + stem;
+  p.title = fmt::format("{} {}: Brier scores", group.class_name, group.metric);
+  p.x_label = "difficulty";
+  p.y_label = "Brier score (lower is better)";
+  p.categories = difficulties;
+  p.y_min = 0;
+  static constexpr const char* kKinds[][2] = {{"over_labels", "over labels"},
+                                              {"over_detections", "over detections"},
+                                              {"over_all", "over all"}};
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    for (size_t k = 0; k < 3; ++k) {
+      PlotSeries s;
+      s.style = SeriesStyle::kBars;
+      s.name = st.Name(sources[i], std::string("Brier ") + kKinds[k][1]);
+      s.colour = kPalette[(i * 3 + k) % std::size(kPalette)];
+      std::vector<std::string> values;
+      for (size_t d = 0; d < difficulties.size(); ++d) {
+        CellKey key = group;
+        key.difficulty = difficulties[d];
+        auto it = cells[i].find(key);
+        const double v = it == cells[i].end() ? kNaN : Num((*it->second)["brier"], kKinds[k][0]);
+        s.x.push_back(static_cast<double>(d));
+        s.y.push_back(v);
+        values.push_back(Fixed(v, 4));
+      }
+      caption.push_back(fmt::format("{}Brier {} {}",
+                                    sources.size() > 1 ? sources[i].label + " " : "", kKinds[k][1],
+                                    fmt::join(values, " / ")));
+      p.series.push_back(std::move(s));
+    }
+  }
+  p.caption = fmt::format("{} ({}).", fmt::join(caption, "; "), fmt::join(difficulties, " / "));
+  return p;
+}
+
+// "Car 2d, loose overlaps" -> "car-2d-loose-overlaps": the section's anchor.
+std::string Slug(const std::string& text) {
+  std::string slug;
+  for (char c : text) {
+    if (std::isalnum(static_cast<unsigned char>(c))) {
+      slug += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else if (!slug.empty() && slug.back() != '-') {
+      slug += '-';
+    }
+  }
+  return slug;
+}
+
+std::string ScriptJson(const json& j) {
+  std::string text = j.dump();
+  for (size_t p = 0; (p = text.find("</", p)) != std::string::npos; p += 3)
+    text.replace(p, 2, "<\\/");
+  return text;
+}
+
+const std::vector<std::string> kSweepColumns = {
+    "class",           "metric",       "difficulty",       "filter",       "value",
+    "naive_precision", "naive_recall", "stable_precision", "stable_recall"};
+const std::vector<std::string> kCompareColumns = {
+    "class",   "metric",        "difficulty", "lower_m",       "upper_m",
+    "count_a", "abs_dz_mean_a", "count_b",    "abs_dz_mean_b", "difference_b_minus_a",
+    "model_dz"};
+const std::set<std::string> kTextColumns = {"class", "metric", "difficulty", "filter"};
+
+// A CSV of FormatSweepCsv or FormatCompareCsv: a header, then rows of plain fields (no quoting).
+std::vector<ReportSource::Row> ReadCsvRows(const fs::path& path,
+                                           const std::vector<std::string>& required) {
+  std::istringstream in(ReadFile(path));
+  std::string line;
+  STEREODET_CHECK_IO(static_cast<bool>(std::getline(in, line))) << path.string() << " is empty";
+  std::vector<std::string> names;
+  std::stringstream header(line);
+  for (std::string name; std::getline(header, name, ',');) names.push_back(name);
+  for (const std::string& r : required) {
+    STEREODET_CHECK_IO(std::find(names.begin(), names.end(), r) != names.end())
+        << path.string() << " has no column " << r << " (is it stereodet's?)";
+  }
+  std::vector<ReportSource::Row> rows;
+  for (int line_number = 2; std::getline(in, line); ++line_number) {
+    if (line.empty()) continue;
+    ReportSource::Row row;
+    std::stringstream fields(line);
+    size_t i = 0;
+    for (std::string field; std::getline(fields, field, ','); ++i) {
+      STEREODET_CHECK_IO(i < names.size()) << path.string() << ":" << line_number
+                                           << ": more fields than the header's " << names.size();
+      if (kTextColumns.count(names[i]) != 0) {
+        row.text[names[i]] = field;
+      } else {
+        char* end = nullptr;
+        const double v = std::strtod(field.c_str(), &end);
+        row.number[names[i]] = field.empty() || field == "-" || *end != '\0' ? kNaN : v;
+      }
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+double RowNumber(const ReportSource::Row& row, const std::string& name) {
+  auto it = row.number.find(name);
+  return it == row.number.end() ? kNaN : it->second;
+}
+
+CellKey RowKey(const ReportSource::Row& row) {
+  auto text = [&](const char* n) {
+    auto it = row.text.find(n);
+    return it == row.text.end() ? std::string() : it->second;
+  };
+  return {text("class"), text("metric"), text("difficulty"), ""};
+}
+
+// The cells of CSV sources in the first source's order, with every source's rows of each.
+std::vector<std::pair<CellKey, std::vector<std::vector<const ReportSource::Row*>>>> RowCells(
+    const std::vector<ReportSource>& sources) {
+  std::vector<std::pair<CellKey, std::vector<std::vector<const ReportSource::Row*>>>> cells;
+  std::map<CellKey, size_t> index;
+  for (const ReportSource::Row& row : sources.front().rows) {
+    const CellKey key = RowKey(row);
+    if (index.emplace(key, cells.size()).second) {
+      cells.push_back({key, std::vector<std::vector<const ReportSource::Row*>>(sources.size())});
+    }
+  }
+  for (size_t s = 0; s < sources.size(); ++s) {
+    for (const ReportSource::Row& row : sources[s].rows) {
+      auto it = index.find(RowKey(row));
+      if (it != index.end()) cells[it->second].second[s].push_back(&row);
+    }
+  }
+  return cells;
+}
+
+std::string RowCellStem(const CellKey& k) {
+  return Lower(k.class_name) + "_" + k.metric + "_" + Lower(k.difficulty);
+}
+
+Plot SweepFigure(const std::vector<ReportSource>& sources,
+                 const std::vector<std::vector<const ReportSource::Row*>>& rows, const CellKey& key,
+                 const Styler& st) {
+  Plot p;
+  p.id = "sweep_" + RowCellStem(key);
+  std::string filter;
+  for (const auto& source_rows : rows) {
+    if (!source_rows.empty()) filter = source_rows.front()->text.at("filter");
+  }
+  p.title = fmt::format("{} {} {}: filter sweep ({})", key.class_name, key.metric, key.difficulty,
+                        filter);
+  p.x_label = "filter value: " + filter;
+  p.y_label = "precision, recall";
+  p.y_min = 0, p.y_max = 1;
+  static constexpr const char* kSeries[][2] = {{"naive_precision", "naive filter: precision"},
+                                               {"stable_precision", "stable filter: precision"},
+                                               {"naive_recall", "naive filter: recall"},
+                                               {"stable_recall", "stable filter: recall"}};
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (rows[i].empty()) continue;
+    for (size_t k = 0; k < 4; ++k) {
+      PlotSeries s;
+      s.name = st.Name(sources[i], kSeries[k][1]);
+      for (const ReportSource::Row* row : rows[i]) {
+        s.x.push_back(RowNumber(*row, "value"));
+        s.y.push_back(RowNumber(*row, kSeries[k][0]));
+      }
+      s.colour = st.Colour(i, k);
+      s.dashed = k % 2 == 1;  // stable
+      s.style = k < 2 ? SeriesStyle::kLine : SeriesStyle::kLineMarkers;
+      p.series.push_back(std::move(s));
+    }
+    const ReportSource::Row& last = *rows[i].back();
+    caption.push_back(fmt::format(
+        "{}at {} = {}: precision {} naive / {} stable, recall {} naive / {} stable",
+        sources.size() > 1 ? sources[i].label + ": " : "", filter,
+        fmt::format("{:g}", RowNumber(last, "value")), Fixed(RowNumber(last, "naive_precision"), 3),
+        Fixed(RowNumber(last, "stable_precision"), 3), Fixed(RowNumber(last, "naive_recall"), 3),
+        Fixed(RowNumber(last, "stable_recall"), 3)));
+  }
+  p.caption = fmt::format("{}.", fmt::join(caption, "; "));
+  return p;
+}
+
+Plot CompareFigure(const std::vector<ReportSource>& sources,
+                   const std::vector<std::vector<const ReportSource::Row*>>& rows,
+                   const CellKey& key, const Styler& st) {
+  Plot p;
+  p.id = "compare_" + RowCellStem(key);
+  p.title = fmt::format("{} {} {}: depth error of A and B vs distance", key.class_name, key.metric,
+                        key.difficulty);
+  p.x_label = "label depth z (m), bin centre";
+  p.y_label = "depth error (m)";
+  p.x_min = 0;
+  static constexpr const char* kSeries[][2] = {{"abs_dz_mean_a", "A: mean |depth error|"},
+                                               {"abs_dz_mean_b", "B: mean |depth error|"},
+                                               {"difference_b_minus_a", "B - A"},
+                                               {"model_dz", "stereo model dz = z^2 / (b f) dd"}};
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (rows[i].empty()) continue;
+    int64_t pairs_a = 0, pairs_b = 0;
+    for (size_t k = 0; k < 4; ++k) {
+      PlotSeries s;
+      s.name = st.Name(sources[i], kSeries[k][1]);
+      for (const ReportSource::Row* row : rows[i]) {
+        s.x.push_back((RowNumber(*row, "lower_m") + RowNumber(*row, "upper_m")) / 2);
+        s.y.push_back(RowNumber(*row, kSeries[k][0]));
+      }
+      s.colour = k == 3 ? "#777777" : st.Colour(i, k);
+      s.dashed = k >= 2;
+      s.style = k == 3 ? SeriesStyle::kLine : SeriesStyle::kLineMarkers;
+      p.series.push_back(std::move(s));
+    }
+    for (const ReportSource::Row* row : rows[i]) {
+      pairs_a += static_cast<int64_t>(RowNumber(*row, "count_a"));
+      pairs_b += static_cast<int64_t>(RowNumber(*row, "count_b"));
+    }
+    caption.push_back(fmt::format("{}{} matched pairs of A, {} of B",
+                                  sources.size() > 1 ? sources[i].label + ": " : "", pairs_a,
+                                  pairs_b));
+  }
+  p.caption = fmt::format("{}; empty bins are not drawn; the model at the bin centre.",
+                          fmt::join(caption, "; "));
+  return p;
+}
+
+}  // namespace
+
+ReportSource ReadReportSource(const fs::path& folder, const std::string& label) {
+  const fs::path path = folder / "results.json";
+  ReportSource source;
+  source.folder = folder;
+  source.label = label;
+  if (!fs::is_regular_file(path)) {
+    for (const auto& [name, kind] :
+         {std::pair<const char*, ReportKind>{"sweep.csv", ReportKind::kSweep},
+          {"compare.csv", ReportKind::kCompare}}) {
+      if (!fs::is_regular_file(folder / name)) continue;
+      source.kind = kind;
+      source.rows =
+          ReadCsvRows(folder / name, kind == ReportKind::kSweep ? kSweepColumns : kCompareColumns);
+      return source;
+    }
+    STEREODET_THROW_IO() << path.string() << " is not there: is " << folder.string()
+                         << " a results folder of `stereodet eval --out`? (nor is there a "
+                            "sweep.csv of eval sweep or a compare.csv of eval compare)";
+  }
+  try {
+    source.results = json::parse(ReadFile(path));
+  } catch (const json::exception& e) {
+    STEREODET_THROW_IO() << path.string() << ": not JSON: " << e.what();
+  }
+  STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
+                     source.results["results"].is_array())
+      << path.string() << " is not a stereodet results.json (it has no \"results\" array)";
+  return source;
+}
+
+std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources) {
+  STEREODET_CHECK(!sources.empty()) << "a report needs at least one results folder";
+  for (const ReportSource& s : sources) {
+    STEREODET_CHECK(s.kind == sources.front().kind)
+        << "report: " << s.folder.string() << " holds another kind of results than "
+        << sources.front().folder.string() << " (eval, eval sweep and eval compare do not mix)";
+  }
+  const Styler st{sources.size()};
+  std::vector<ReportFigure> figures;
+  if (sources.front().kind != ReportKind::kEval) {
+    for (const auto& [key, rows] : RowCells(sources)) {
+      const std::string section = key.class_name + " " + key.metric;
+      figures.push_back({section, sources.front().kind == ReportKind::kSweep
+                                      ? SweepFigure(sources, rows, key, st)
+                                      : CompareFigure(sources, rows, key, st)});
+    }
+    return figures;
+  }
+  std::vector<std::map<CellKey, const json*>> cells;
+  for (const ReportSource& s : sources) cells.push_back(Cells(s));
+  const bool with_overlaps = SeveralOverlapSets(sources.front());
+  // Groups (class x metric x overlaps) in the first source's result order, with their difficulties.
+  std::vector<std::pair<CellKey, std::vector<std::string>>> groups;
+  for (const json& e : sources.front().results["results"]) {
+    if (!e.value("evaluated", false)) continue;
+    CellKey key = KeyOf(e);
+    CellKey group = key;
+    group.difficulty.clear();
+    if (groups.empty() || groups.back().first != group) groups.push_back({group, {}});
+    groups.back().second.push_back(key.difficulty);
+    const std::string stem = CellStem(key, with_overlaps);
+    const std::string section = key.class_name + " " + key.metric +
+                                (with_overlaps ? ", " + key.overlaps + " overlaps" : "");
+    const std::vector<const json*> entries = EntriesFor(cells, key);
+    figures.push_back({section, PrFigure(sources, entries, key, stem, st)});
+    figures.push_back({section, RocFigure(sources, entries, key, stem, st)});
+    figures.push_back({section, ReliabilityFigure(sources, entries, key, stem, st)});
+    if (std::any_of(entries.begin(), entries.end(), HasLocalization)) {
+      figures.push_back({section, LocalizationFigure(sources, entries, key, stem, st)});
+    }
+    // The group's Brier figure after its last difficulty.
+    const json& results = sources.front().results["results"];
+    const size_t index = static_cast<size_t>(&e - &results[0]);
+    bool last = true;
+    for (size_t j = index + 1; j < results.size(); ++j) {
+      if (!results[j].value("evaluated", false)) continue;
+      CellKey next = KeyOf(results[j]);
+      next.difficulty.clear();
+      last = next != group;
+      break;
+    }
+    if (last) {
+      figures.push_back({section, BrierFigure(sources, cells, group, groups.back().second,
+                                              GroupStem(group, with_overlaps), st)});
+    }
+  }
+  return figures;
+}
+
+std::string ReportHtml(const std::vector<ReportSource>& sources,
+                       const std::vector<ReportFigure>& figures, bool with_png) {
+  std::string html =
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<title>stereodet evaluation report</title>\n<style>\n"
+      "body{font-family:'DejaVu Sans',Arial,sans-serif;margin:24px;color:#111;max-width:1600px}\n"
+      "h1{font-size:22px}h2{font-size:18px;margin-top:32px;border-bottom:1px solid #ccc}\n"
+      "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;"
+      "text-align:right}th{background:#f2f2f2}td.t{text-align:left}\n"
+      ".figures{display:flex;flex-wrap:wrap;gap:12px}\n"
+      "figure.stereodet-figure{margin:0;width:480px}figcaption{font-size:12px;color:#333}\n"
+      "code{font-size:12px}dl{font-size:13px}dt{font-weight:bold;margin-top:8px}\n"
+      "</style>\n</head>\n<body>\n<h1>stereodet evaluation report</h1>\n<dl>\n";
+  for (const ReportSource& s : sources) {
+    if (s.kind != ReportKind::kEval) {
+      html += fmt::format(
+          "<dt>{}</dt><dd>folder <code>{}</code>; {} ({} rows)</dd>\n", XmlEscape(s.label),
+          XmlEscape(s.folder.string()),
+          s.kind == ReportKind::kSweep ? "eval sweep: sweep.csv" : "eval compare: compare.csv",
+          s.rows.size());
+      continue;
+    }
+    const json& r = s.results;
+    const json tool = r.value("tool", json::object());
+    html += fmt::format(
+        "<dt>{}</dt><dd>folder <code>{}</code>; {} {}; matcher {}; {} frames; input hash "
+        "<code>{}</code><br>command line: <code>{}</code></dd>\n",
+        XmlEscape(s.label), XmlEscape(s.folder.string()), XmlEscape(Str(tool, "name")),
+        XmlEscape(Str(tool, "version")), XmlEscape(Str(r["options"], "matcher")),
+        Fixed(Num(r["input"], "num_frames"), 0), XmlEscape(Str(r, "input_hash")),
+        XmlEscape(Str(r, "command_line")));
+    if (r.contains("notes")) {
+      for (const json& n : r["notes"]) {
+        if (n.is_string()) html += "<dd>note: " + XmlEscape(n.get<std::string>()) + "</dd>\n";
+      }
+    }
+  }
+  html += "</dl>\n<p>Figures: ";
+  std::string last;
+  for (const ReportFigure& figure : figures) {
+    if (figure.section == last) continue;
+    html += fmt::format("{}<a href=\"#{}\">{}</a>", last.empty() ? "" : " | ", Slug(figure.section),
+                        XmlEscape(figure.section));
+    last = figure.section;
+  }
+  html += "</p>\n";
+  const bool eval = sources.front().kind == ReportKind::kEval;
+  if (eval) html += "<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
+  if (eval) {
+    for (const char* h : {"results", "class", "metric", "difficulty", "overlaps", "min overlap",
+                          "labels", "detections", "AP_R40", "AP_R11", "AOS_R40", "best F1",
+                          "Brier labels", "Brier detections", "Brier all", "ECE"}) {
+      html += fmt::format("<th>{}</th>", h);
+    }
+    html += "</tr>\n";
+    for (const ReportSource& s : sources) {
+      for (const json& e : s.results["results"]) {
+        if (!e.value("evaluated", false)) continue;
+        const json& b = e["brier"];
+        html += fmt::format(
+            "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
+            "<td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}</td><td>{}{}</td><td>{}</td>"
+            "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+            "<td>{}</td></tr>\n",
+            XmlEscape(s.label), XmlEscape(Str(e, "class")), Str(e, "metric"), Str(e, "difficulty"),
+            Str(e, "overlaps"), Fixed(Num(e, "min_overlap"), 2), e.value("num_valid_labels", 0),
+            e.value("small_sample", false) ? "*" : "", e.value("num_detections", 0),
+            Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2), Fixed(Num(e, "aos_r40"), 2),
+            Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(b, "over_labels"), 4),
+            Fixed(Num(b, "over_detections"), 4), Fixed(Num(b, "over_all"), 4),
+            Fixed(Num(e["calibration"], "ece"), 4));
+      }
+    }
+    html +=
+        "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
+        "(docs/metrics.md, small samples).</p>\n";
+  }
+
+  // Figures, one section per class x metric (x overlap set).
+  json data = json::array();
+  std::string section;
+  for (const ReportFigure& figure : figures) {
+    const Plot& p = figure.plot;
+    if (figure.section != section) {
+      if (!section.empty()) html += "</div>\n";
+      section = figure.section;
+      html += fmt::format("<h2 id=\"{}\">{}</h2>\n<div class=\"figures\">\n", Slug(section),
+                          XmlEscape(section));
+    }
+    html += fmt::format("<figure class=\"stereodet-figure\" id=\"fig-{}\">\n", p.id);
+    html += RenderSvg(p);
+    html += fmt::format("<figcaption>{} <a href=\"figures/{}.svg\">SVG</a>", XmlEscape(p.caption),
+                        p.id);
+    if (with_png) html += fmt::format(" <a href=\"figures/{}.png\">PNG</a>", p.id);
+    html += "</figcaption>\n</figure>\n";
+    data.push_back(PlotToJson(p));
+  }
+  if (!section.empty()) html += "</div>\n";
+  html += "<script type=\"application/json\" id=\"stereodet-figures\">" + ScriptJson(data) +
+          "</script>\n";
+  html +=
+      "<script>\n"
+      "(function () {\n"
+      "  var data = JSON.parse(document.getElementById('stereodet-figures').textContent);\n"
+      "  var drawn = document.querySelectorAll('figure.stereodet-figure svg').length;\n"
+      "  console.log('stereodet-report: ' + drawn + ' figures drawn, ' + data.length + ' in "
+      "data');\n"
+      "  if (drawn !== data.length) console.error('stereodet-report: figures missing');\n"
+      "  document.body.setAttribute('data-figures', String(drawn));\n"
+      "})();\n"
+      "</script>\n</body>\n</html>\n";
+  return html;
+}
+
+ReportResult WriteReportFiles(const fs::path& dir, const std::vector<ReportSource>& sources,
+                              bool png, double png_scale) {
+  const std::vector<ReportFigure> figures = ReportFigures(sources);
+  ReportResult result;
+  result.png = png && PngFromSvgAvailable();
+  if (png && !result.png) {
+    result.notes.push_back(
+        "PNG files not written: this build has no librsvg (install librsvg2-dev "
+        "and rebuild); the SVG files are complete");
+  }
+  fs::create_directories(dir / "figures");
+  for (const ReportFigure& figure : figures) {
+    const Plot& p = figure.plot;
+    const std::string svg = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + RenderSvg(p);
+    const fs::path svg_path = dir / "figures" / (p.id + ".svg");
+    WriteFileAtomically(svg_path, svg);
+    result.files.push_back(svg_path);
+    if (result.png) {
+      const fs::path png_path = dir / "figures" / (p.id + ".png");
+      WritePngFromSvg(png_path, svg, png_scale);
+      result.files.push_back(png_path);
+    }
+  }
+  result.index = dir / "index.html";
+  WriteFileAtomically(result.index, ReportHtml(sources, figures, result.png));
+  result.files.push_back(result.index);
+  result.num_figures = static_cast<int>(figures.size());
+  return result;
+}
+
+void ReportOptions::Check() const {
+  STEREODET_CHECK(!results.empty()) << "report: no results folder given";
+  STEREODET_CHECK(labels.empty() || labels.size() == results.size())
+      << "report: " << labels.size() << " labels for " << results.size() << " results folders";
+  STEREODET_CHECK(results.size() == 1 || !out.empty())
+      << "report: with several results folders, say where the report goes (out)";
+  STEREODET_CHECK(png_scale > 0 && png_scale <= 8)
+      << "report: png_scale " << png_scale << " is not in (0, 8]";
+}
+
+ReportResult WriteReport(const ReportOptions& options) {
+  options.Check();
+  std::vector<ReportSource> sources;
+  for (size_t i = 0; i < options.results.size(); ++i) {
+    std::string label = options.labels.empty() ? "" : options.labels[i];
+    if (label.empty()) {
+      const fs::path p = options.results[i].lexically_normal();
+      label = (p.has_filename() ? p.filename() : p.parent_path().filename()).string();
+    }
+    sources.push_back(ReadReportSource(options.results[i], label));
+  }
+  const fs::path out = options.out.empty() ? options.results.front() / "report" : options.out;
+  StagedFolder staged(out, "index.html");
+  ReportResult result = WriteReportFiles(staged.path(), sources, options.png, options.png_scale);
+  staged.Commit();
+  for (fs::path& f : result.files) f = out / f.lexically_relative(staged.path());
+  result.index = out / "index.html";
+  return result;
+}
+
+}  // namespace stereodet

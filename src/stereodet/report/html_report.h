@@ -1,0 +1,114 @@
+// The evaluation report: figures of one or several results folders (results.json of `stereodet
+// eval --out`) as SVG and PNG files, and report/index.html, one self-contained page (inline SVG,
+// inline CSS, the plotted numbers as JSON; nothing is fetched when it is opened). `stereodet
+// report DIR...` is WriteReport; `stereodet eval --out DIR --report` writes DIR/report/ the same
+// way (EvaluationOptions::report). See docs/report.md.
+//
+//   ReportOptions options;
+//   options.results = {"eval-rgb", "eval-rgbh"};  // one colour per folder
+//   options.out = "report-rgb-vs-rgbh";
+//   const ReportResult report = WriteReport(options);  // report.index: .../index.html
+#ifndef STEREODET_REPORT_HTML_REPORT_H_
+#define STEREODET_REPORT_HTML_REPORT_H_
+
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "stereodet/report/svg_plot.h"
+
+namespace stereodet {
+
+// What a results folder holds: `eval --out` (results.json), `eval sweep --out` (sweep.csv) or
+// `eval compare --out` (compare.csv).
+enum class ReportKind { kEval, kSweep, kCompare };
+
+// One results folder and the name its series carry in legends and tables.
+struct ReportSource {
+  std::string label;
+  ReportKind kind = ReportKind::kEval;
+  nlohmann::json results;  // kEval: results.json as written by WriteEvalReport
+  // kSweep, kCompare: the CSV's rows, each column as a number (NaN for "-" or empty), the text
+  // columns (class, metric, difficulty, filter) as text.
+  struct Row {
+    std::map<std::string, double> number;
+    std::map<std::string, std::string> text;
+  };
+  std::vector<Row> rows;
+  std::filesystem::path folder;  // where it was read from (shown in the page; may be empty)
+};
+
+// Reads FOLDER/results.json, or else FOLDER/sweep.csv, or else FOLDER/compare.csv. Throws
+// std::runtime_error naming the folder if it holds none of them, or the file if it is not one of
+// stereodet's (results.json without a "results" array, a CSV without its columns).
+ReportSource ReadReportSource(const std::filesystem::path& folder, const std::string& label);
+
+// The figures of `sources`, per evaluated cell (class x metric x difficulty x overlap set) of the
+// first source, each source's series overlaid (one colour per source with several):
+//   pr_CELL           precision vs recall: the exact curve ("curve" in results.json) and, for the
+//                     KITTI matcher, the devkit's 41 slots ("kitti.precision" at recall i/40);
+//                     AP_R40 / AP_R11 in the legend
+//   roc_CELL          recall vs false positives per frame (the same curve points)
+//   reliability_CELL  fraction of TPs vs mean score per calibration bin (bins with detections), the
+//                     diagonal, the ECE in the legend
+//   localization_CELL median 3D centre error and median |depth error| per distance bin (m);
+//                     whiskers up to the 90th percentile; only where a bin has a TP with 3D boxes
+// and per class x metric x overlap set:
+//   brier_CLASS_METRIC  the Brier scores over labels, detections and all, side by side per
+//   difficulty
+// CELL is class_metric_difficulty in lower case, with _OVERLAPS when the first source has several
+// overlap sets (the curve CSV names of WriteEvalReport).
+// For `eval sweep` folders, per cell: sweep_CELL, precision and recall of the naive and the stable
+// filter against the filter value. For `eval compare` folders, per cell: compare_CELL, the mean
+// |depth error| of A and of B, their difference B - A and the stereo model dz = z^2 / (b f) dd
+// against the bin centre (m).
+// Requires: at least one source, all of one kind (throws std::invalid_argument).
+struct ReportFigure {
+  std::string section;  // the page's heading it goes under: "Car 2d" ("Car 2d, loose overlaps")
+  Plot plot;
+};
+std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources);
+
+// The page: a header per source (folder, tool, matcher, frames, input hash, command line), a
+// summary table (per source and cell: labels, detections, AP_R40, AP_R11, AOS_R40, best F1,
+// Brier over labels / detections / all, ECE), then the figures by section, each
+// as inline SVG in a <figure class="stereodet-figure" id="fig-ID"> with its caption and links to
+// figures/ID.svg and figures/ID.png (when `with_png`); a <script type="application/json"
+// id="stereodet-figures"> with every PlotToJson; and a few lines of script that log the number of
+// figures to the console (the browser test's control).
+std::string ReportHtml(const std::vector<ReportSource>& sources,
+                       const std::vector<ReportFigure>& figures, bool with_png);
+
+struct ReportOptions {
+  // Results folders, all of one kind: each holds results.json, sweep.csv or compare.csv.
+  std::vector<std::filesystem::path> results;
+  std::vector<std::string> labels;  // one per folder for legends; empty: the folders' names
+  // The report folder (one run per folder, StagedFolder with marker index.html). Empty: with one
+  // results folder RESULTS/report, with several required.
+  std::filesystem::path out;
+  bool png = true;  // also figures/*.png (skipped with a note where PngFromSvgAvailable() is false)
+  double png_scale = 2.0;  // PNG pixels per SVG px
+  void Check() const;      // throws std::invalid_argument
+};
+
+struct ReportResult {
+  std::filesystem::path index;               // OUT/index.html
+  std::vector<std::filesystem::path> files;  // every file written, under OUT
+  int num_figures = 0;
+  bool png = false;                // PNG files were written
+  std::vector<std::string> notes;  // e.g. why PNG files are missing
+};
+
+// Writes index.html and figures/ID.svg (and .png) for `sources` into `dir` (created; files written
+// atomically). WriteReport and RunEvaluation's report call this.
+ReportResult WriteReportFiles(const std::filesystem::path& dir,
+                              const std::vector<ReportSource>& sources, bool png, double png_scale);
+
+// `stereodet report`: reads the folders and writes the report folder, replacing it whole.
+ReportResult WriteReport(const ReportOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_REPORT_HTML_REPORT_H_

@@ -1,0 +1,408 @@
+#include "stereodet/report/html_report.h"
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stereodet/report/evaluation.h"
+#include "stereodet/report/raster.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_temp_dir.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+const fs::path kData = fs::path(STEREODET_SOURCE_DIR) / "tests/data";
+
+// tests/data/eval_small with the KITTI matcher (41-slot arrays) or the optimal one, every class,
+// metric and difficulty (or Car 2D only), written with its report (SVG only unless `png`).
+EvaluationResult EvaluateSmall(const fs::path& out, Matcher matcher, bool png = false,
+                               bool car_2d_only = false) {
+  EvaluationOptions options;
+  options.input.gt = kData / "eval_small";
+  options.input.det = kData / "eval_small/det";
+  options.runs.front().matcher = matcher;
+  options.out = out;
+  options.report = true;
+  options.report_png = png;
+  if (car_2d_only) {
+    options.runs.front().classes = {KittiClassSpec("Car")};
+    options.runs.front().metrics = {OverlapKind::k2D};
+  }
+  return RunEvaluation(options);
+}
+
+json SvgData(const fs::path& svg_path) {
+  const std::string svg = ReadFile(svg_path);
+  const size_t begin = svg.find("<![CDATA[") + 9;
+  const size_t end = svg.find("]]></metadata>");
+  return json::parse(svg.substr(begin, end - begin));
+}
+
+std::vector<double> Column(const json& j) {
+  std::vector<double> v;
+  for (const json& x : j) v.push_back(x.is_null() ? NAN : x.get<double>());
+  return v;
+}
+
+// Equal element for element, NaN equal to NaN (not computed on both sides).
+::testing::AssertionResult SameNumbers(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size()) {
+    return ::testing::AssertionFailure() << a.size() << " vs " << b.size() << " numbers";
+  }
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i])))) {
+      return ::testing::AssertionFailure() << "at " << i << ": " << a[i] << " vs " << b[i];
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// The columns of a CSV file with a header row, as numbers.
+std::map<std::string, std::vector<double>> ReadCsv(const fs::path& path) {
+  std::istringstream in(ReadFile(path));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  std::stringstream header(line);
+  for (std::string name; std::getline(header, name, ',');) names.push_back(name);
+  std::map<std::string, std::vector<double>> columns;
+  while (std::getline(in, line)) {
+    std::stringstream row(line);
+    size_t i = 0;
+    for (std::string cell; std::getline(row, cell, ','); ++i) {
+      // Text (a class name), "-" and empty cells are NaN here.
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      columns[names.at(i)].push_back(cell.empty() || *end != '\0' ? NAN : v);
+    }
+  }
+  return columns;
+}
+
+// As the figures print a number: fixed decimals, "-" for null (not computed).
+std::string Fixed(const json& v, int decimals) {
+  return v.is_number() ? fmt::format("{:.{}f}", v.get<double>(), decimals) : "-";
+}
+
+const json& Entry(const json& results, const std::string& cls, const std::string& metric,
+                  const std::string& difficulty) {
+  for (const json& e : results["results"]) {
+    if (e["class"] == cls && e["metric"] == metric && e["difficulty"] == difficulty) return e;
+  }
+  throw std::logic_error("no entry " + cls + " " + metric + " " + difficulty);
+}
+
+// Every figure's plotted numbers are results.json's: the PR and ROC curves point for point, the
+// devkit's 41 slots, the reliability bins, the Brier scores and the localization medians.
+TEST(Report, FiguresPlotTheCurvesOfResultsJson) {
+  TestTempDir dir;
+  const fs::path out = dir.path() / "eval";
+  const EvaluationResult evaluation = EvaluateSmall(out, Matcher::kKitti);
+  EXPECT_EQ(evaluation.report_index, out / "report/index.html");
+  const json results = json::parse(ReadFile(out / "results.json"));
+  int checked_pr = 0, checked_devkit = 0, checked_reliability = 0, checked_localization = 0;
+  for (const json& e : results["results"]) {
+    if (!e["evaluated"].get<bool>()) continue;
+    std::string stem = e["class"].get<std::string>() + "_" + e["metric"].get<std::string>() + "_" +
+                       e["difficulty"].get<std::string>();
+    for (char& c : stem) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const fs::path figures = out / "report/figures";
+    const json pr = SvgData(figures / ("pr_" + stem + ".svg"));
+    EXPECT_EQ(pr["series"][0]["x"], e["curve"]["recall"]) << stem;
+    EXPECT_EQ(pr["series"][0]["y"], e["curve"]["precision"]) << stem;
+    // The devkit's slots, at recall i/40.
+    ASSERT_EQ(pr["series"].size(), 2u) << stem;
+    EXPECT_EQ(pr["series"][1]["y"], e["kitti"]["precision"]) << stem;
+    ASSERT_EQ(pr["series"][1]["x"].size(), 41u);
+    EXPECT_EQ(pr["series"][1]["x"][40], 1.0);
+    EXPECT_EQ(pr["series"][1]["x"][10], 0.25);
+    ++checked_devkit;
+    // The legend carries the APs of results.json.
+    EXPECT_THAT(pr["series"][0]["name"].get<std::string>(),
+                HasSubstr("AP_R40 " + Fixed(e["ap_r40"], 2)));
+    // And the curve CSV has the same numbers (full precision in both).
+    auto csv = ReadCsv(out / "curves" / ("pr_" + stem + ".csv"));  // no rows: no columns
+    EXPECT_EQ(csv["recall"], Column(pr["series"][0]["x"])) << stem;
+    EXPECT_EQ(csv["precision"], Column(pr["series"][0]["y"])) << stem;
+    ++checked_pr;
+
+    const json roc = SvgData(figures / ("roc_" + stem + ".svg"));
+    EXPECT_EQ(roc["series"][0]["x"], e["curve"]["fp_per_frame"]) << stem;
+    EXPECT_EQ(roc["series"][0]["y"], e["curve"]["recall"]) << stem;
+
+    const json rel = SvgData(figures / ("reliability_" + stem + ".svg"));
+    ASSERT_EQ(rel["series"].size(), 2u);  // the diagonal, then the bins
+    const json& bins = e["calibration"]["bins"];
+    ASSERT_EQ(rel["series"][1]["x"].size(), bins.size());
+    for (size_t b = 0; b < bins.size(); ++b) {
+      if (bins[b]["count"].get<int>() == 0) {
+        EXPECT_TRUE(rel["series"][1]["y"][b].is_null());
+      } else {
+        EXPECT_EQ(rel["series"][1]["x"][b], bins[b]["mean_score"]);
+        EXPECT_EQ(rel["series"][1]["y"][b], bins[b]["tp_fraction"]);
+      }
+    }
+    EXPECT_THAT(rel["series"][1]["name"].get<std::string>(),
+                HasSubstr("ECE " + Fixed(e["calibration"]["ece"], 4)));
+    ++checked_reliability;
+
+    const fs::path loc_path = figures / ("localization_" + stem + ".svg");
+    bool has_pairs = false;
+    for (const json& b : e["localization"]) has_pairs |= b["count"].get<int>() > 0;
+    EXPECT_EQ(fs::exists(loc_path), has_pairs) << stem;
+    if (has_pairs) {
+      const json loc = SvgData(loc_path);
+      for (size_t b = 0; b < e["localization"].size(); ++b) {
+        const json& bin = e["localization"][b];
+        EXPECT_EQ(loc["series"][0]["x"][b],
+                  (bin["lower_m"].get<double>() + bin["upper_m"].get<double>()) / 2);
+        if (bin["count"].get<int>() > 0) {
+          EXPECT_EQ(loc["series"][0]["y"][b], bin["centre_error_median_m"]);
+          EXPECT_EQ(loc["series"][0]["y_high"][b], bin["centre_error_p90_m"]);
+          EXPECT_EQ(loc["series"][1]["y"][b], bin["abs_depth_error_median_m"]);
+        }
+      }
+      ++checked_localization;
+    }
+  }
+  EXPECT_EQ(checked_pr, 27);  // 3 classes x 3 metrics x 3 difficulties, all evaluated here
+  EXPECT_EQ(checked_devkit, 27);
+  EXPECT_EQ(checked_reliability, 27);
+  EXPECT_GT(checked_localization, 0);
+
+  // Brier: per class and metric, three bars per difficulty.
+  const json brier = SvgData(out / "report/figures/brier_car_2d.svg");
+  ASSERT_EQ(brier["series"].size(), 3u);
+  EXPECT_EQ(brier["categories"], json({"Easy", "Moderate", "Hard"}));
+  const std::vector<std::string> difficulties = {"Easy", "Moderate", "Hard"};
+  for (size_t d = 0; d < 3; ++d) {
+    const json& b = Entry(results, "Car", "2d", difficulties[d])["brier"];
+    EXPECT_EQ(brier["series"][0]["y"][d], b["over_labels"]);
+    EXPECT_EQ(brier["series"][1]["y"][d], b["over_detections"]);
+    EXPECT_EQ(brier["series"][2]["y"][d], b["over_all"]);
+  }
+}
+
+// The pixels agree with the data too: every polyline vertex of the exact PR curve maps back, with
+// the figure's frame, to the curve's (recall, precision) within the SVG's 0.01 px rounding.
+TEST(Report, PolylineVerticesMapBackToTheCurve) {
+  TestTempDir dir;
+  EvaluateSmall(dir.path() / "eval", Matcher::kOptimal);
+  const ReportSource source = ReadReportSource(dir.path() / "eval", "optimal");
+  const std::vector<ReportFigure> figures = ReportFigures({source});
+  const json& e = Entry(source.results, "Car", "2d", "Moderate");
+  const Plot* pr = nullptr;
+  for (const ReportFigure& f : figures) {
+    if (f.plot.id == "pr_car_2d_moderate") pr = &f.plot;
+  }
+  ASSERT_NE(pr, nullptr);
+  EXPECT_EQ(pr->series.size(), 1u);  // the optimal matcher has no 41-slot arrays
+  const PlotFrame frame = LayOutPlot(*pr);
+  const std::string svg = RenderSvg(*pr);
+  const std::regex polyline("<polyline[^>]* points=\"([^\"]*)\"");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(svg, m, polyline));
+  const std::string points = m[1];
+  const std::regex pair("(-?[0-9.]+),(-?[0-9.]+)");
+  size_t i = 0;
+  const std::vector<double> recall = Column(e["curve"]["recall"]);
+  const std::vector<double> precision = Column(e["curve"]["precision"]);
+  for (std::sregex_iterator p(points.begin(), points.end(), pair), end; p != end; ++p, ++i) {
+    ASSERT_LT(i, recall.size());
+    const double x = frame.x_min + (std::stod((*p)[1]) - frame.left) / (frame.right - frame.left) *
+                                       (frame.x_max - frame.x_min);
+    const double y = frame.y_min + (frame.bottom - std::stod((*p)[2])) /
+                                       (frame.bottom - frame.top) * (frame.y_max - frame.y_min);
+    EXPECT_NEAR(x, recall[i], 0.01 / 400) << i;
+    EXPECT_NEAR(y, precision[i], 0.01 / 264) << i;
+  }
+  EXPECT_EQ(i, recall.size());
+}
+
+// The page holds every figure inline, its data as JSON, and nothing it would fetch.
+TEST(Report, PageIsSelfContainedAndHoldsEveryFigure) {
+  TestTempDir dir;
+  EvaluateSmall(dir.path() / "eval", Matcher::kKitti);
+  const std::string html = ReadFile(dir.path() / "eval/report/index.html");
+  std::set<std::string> svg_files;
+  for (const auto& f : fs::directory_iterator(dir.path() / "eval/report/figures")) {
+    if (f.path().extension() == ".svg") svg_files.insert(f.path().stem().string());
+  }
+  ASSERT_GT(svg_files.size(), 100u);
+  for (const std::string& id : svg_files) {
+    EXPECT_THAT(html, HasSubstr("<figure class=\"stereodet-figure\" id=\"fig-" + id + "\">"));
+    EXPECT_THAT(html, HasSubstr("id=\"" + id + "\" class=\"plot\""));
+  }
+  const size_t begin = html.find("id=\"stereodet-figures\">") + 23;
+  const json data = json::parse(html.substr(begin, html.find("</script>", begin) - begin));
+  EXPECT_EQ(data.size(), svg_files.size());
+  // Nothing to fetch: no src= attribute, no stylesheet link, no URL but the SVG namespace.
+  EXPECT_THAT(html, Not(HasSubstr("src=")));
+  EXPECT_THAT(html, Not(HasSubstr("<link")));
+  std::string without_namespace = html;
+  const std::string ns = "http://www.w3.org/2000/svg";
+  for (size_t p; (p = without_namespace.find(ns)) != std::string::npos;) {
+    without_namespace.erase(p, ns.size());
+  }
+  EXPECT_THAT(without_namespace, Not(HasSubstr("http")));
+  EXPECT_THAT(html, HasSubstr("<table id=\"summary-table\">"));
+}
+
+// Two results folders: each series twice, one colour per folder, names in the legend.
+TEST(Report, SeveralResultsAreOverlaidOneColourEach) {
+  TestTempDir dir;
+  EvaluateSmall(dir.path() / "kitti", Matcher::kKitti);
+  EvaluateSmall(dir.path() / "optimal", Matcher::kOptimal);
+  ReportOptions options;
+  options.results = {dir.path() / "kitti", dir.path() / "optimal"};
+  options.out = dir.path() / "both";
+  options.png = false;
+  const ReportResult report = WriteReport(options);
+  EXPECT_EQ(report.index, dir.path() / "both/index.html");
+  const json pr = SvgData(dir.path() / "both/figures/pr_car_2d_moderate.svg");
+  ASSERT_EQ(pr["series"].size(), 3u);  // kitti exact + devkit slots, optimal exact
+  EXPECT_THAT(pr["series"][0]["name"].get<std::string>(), HasSubstr("kitti: kitti, exact curve"));
+  EXPECT_THAT(pr["series"][2]["name"].get<std::string>(),
+              HasSubstr("optimal: optimal, exact curve"));
+  const std::string svg = ReadFile(dir.path() / "both/figures/pr_car_2d_moderate.svg");
+  EXPECT_THAT(svg, HasSubstr("stroke=\"#0072B2\""));  // the first folder's colour
+  EXPECT_THAT(svg, HasSubstr("stroke=\"#D55E00\""));  // the second's
+  const std::string html = ReadFile(report.index);
+  EXPECT_THAT(html, HasSubstr("<td class=\"t\">kitti</td>"));
+  EXPECT_THAT(html, HasSubstr("<td class=\"t\">optimal</td>"));
+
+  // Several folders need an out; a folder without results.json is refused with its name.
+  ReportOptions no_out = options;
+  no_out.out.clear();
+  EXPECT_THROW(WriteReport(no_out), std::invalid_argument);
+  ReportOptions not_results;
+  not_results.results = {kData / "eval_small"};
+  not_results.out = dir.path() / "never";
+  try {
+    WriteReport(not_results);
+    ADD_FAILURE() << "no results.json, no report";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("eval_small/results.json is not there"));
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "never"));
+}
+
+// `eval compare` (tests/data/eval_compare, README): A errs +0.5 m / +1.0 m, B +0.2 m / -2.0 m at
+// 12 m / 22 m, so B - A is -0.3 m in the 10-15 m bin and +1.0 m in the 20-25 m bin; the model's
+// line is compare.csv's model_dz at every bin centre.
+TEST(Report, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
+  TestTempDir dir;
+  EvaluationCompareOptions compare;
+  compare.input.gt = kData / "eval_compare";
+  compare.input.det = kData / "eval_compare/det_a";
+  compare.det_b = kData / "eval_compare/det_b";
+  compare.eval.classes = {KittiClassSpec("Car")};
+  compare.eval.metrics = {OverlapKind::k2D};
+  compare.out = dir.path() / "compare";
+  RunEvaluationCompare(compare);
+  ReportOptions options;
+  options.results = {dir.path() / "compare"};
+  options.png = false;
+  const ReportResult report = WriteReport(options);
+  EXPECT_EQ(report.num_figures, 3);  // Easy, Moderate, Hard
+  const json fig = SvgData(dir.path() / "compare/report/figures/compare_car_2d_easy.svg");
+  ASSERT_EQ(fig["series"].size(), 4u);
+  EXPECT_EQ(fig["series"][2]["name"], "B - A");
+  const std::vector<double> x = Column(fig["series"][2]["x"]);
+  const std::vector<double> diff = Column(fig["series"][2]["y"]);
+  const auto at = [&](double centre) {
+    return diff[static_cast<size_t>(std::find(x.begin(), x.end(), centre) - x.begin())];
+  };
+  EXPECT_NEAR(at(12.5), -0.3, 1e-9);
+  EXPECT_NEAR(at(22.5), 1.0, 1e-9);
+  EXPECT_TRUE(std::isnan(at(2.5)));                          // an empty bin: not drawn
+  EXPECT_NEAR(Column(fig["series"][0]["y"])[2], 0.5, 1e-9);  // A at 10-15 m
+  EXPECT_NEAR(Column(fig["series"][1]["y"])[4], 2.0, 1e-9);  // |B| at 20-25 m
+  auto csv = ReadCsv(dir.path() / "compare/compare.csv");
+  std::vector<double> model = Column(fig["series"][3]["y"]);
+  ASSERT_LE(model.size(), csv["model_dz"].size());
+  csv["model_dz"].resize(model.size());  // the Easy rows come first
+  EXPECT_TRUE(SameNumbers(model, csv["model_dz"]));
+}
+
+// `eval sweep`: the naive and the stable precision and recall of sweep.csv against the value.
+TEST(Report, SweepFigurePlotsSweepCsv) {
+  TestTempDir dir;
+  EvaluationSweepOptions sweep;
+  sweep.input.gt = kData / "eval_small";
+  sweep.input.det = kData / "eval_small/det";
+  sweep.eval.classes = {KittiClassSpec("Car")};
+  sweep.eval.metrics = {OverlapKind::k2D};
+  sweep.from = 0, sweep.to = 2000, sweep.step = 250;
+  sweep.out = dir.path() / "sweep";
+  const EvaluationSweepResult result = RunEvaluationSweep(sweep);
+  ReportOptions options;
+  options.results = {dir.path() / "sweep"};
+  options.png = false;
+  EXPECT_EQ(WriteReport(options).num_figures, 3);
+  const json fig = SvgData(dir.path() / "sweep/report/figures/sweep_car_2d_moderate.svg");
+  ASSERT_EQ(fig["series"].size(), 4u);
+  std::vector<double> value, naive_p, stable_p, naive_r, stable_r;
+  for (const SweepRow& row : result.rows) {
+    if (row.difficulty != Difficulty::kModerate) continue;
+    value.push_back(row.value);
+    naive_p.push_back(row.stats.naive.precision);
+    stable_p.push_back(row.stats.stable.precision);
+    naive_r.push_back(row.stats.naive.recall);
+    stable_r.push_back(row.stats.stable.recall);
+  }
+  ASSERT_EQ(value.size(), 9u);  // 0, 250, ..., 2000
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][0]["x"]), value));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][0]["y"]), naive_p));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][1]["y"]), stable_p));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][2]["y"]), naive_r));
+  EXPECT_TRUE(SameNumbers(Column(fig["series"][3]["y"]), stable_r));
+
+  // A sweep and an evaluation do not mix in one report.
+  EvaluateSmall(dir.path() / "eval", Matcher::kKitti);
+  ReportOptions mixed;
+  mixed.results = {dir.path() / "eval", dir.path() / "sweep"};
+  mixed.out = dir.path() / "mixed";
+  EXPECT_THROW(WriteReport(mixed), std::invalid_argument);
+}
+
+TEST(Report, PngFilesAreTheSvgRasterizedAtTwiceTheSize) {
+  if (!PngFromSvgAvailable()) GTEST_SKIP() << "built without librsvg: no PNG output";
+  TestTempDir dir;
+  EvaluateSmall(dir.path() / "eval", Matcher::kKitti, /*png=*/true, /*car_2d_only=*/true);
+  const std::string png = ReadFile(dir.path() / "eval/report/figures/pr_car_2d_moderate.png");
+  ASSERT_GT(png.size(), 24u);
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  auto be32 = [&](size_t at) {
+    return (static_cast<uint32_t>(static_cast<unsigned char>(png[at])) << 24) |
+           (static_cast<uint32_t>(static_cast<unsigned char>(png[at + 1])) << 16) |
+           (static_cast<uint32_t>(static_cast<unsigned char>(png[at + 2])) << 8) |
+           static_cast<uint32_t>(static_cast<unsigned char>(png[at + 3]));
+  };
+  EXPECT_EQ(be32(16), 960u);  // IHDR width: 2 x 480 px
+  // Height: 2 x (340 px + two legend rows of 17 px + 6).
+  EXPECT_EQ(be32(20), 2u * (340 + 2 * 17 + 6));
+  EXPECT_THROW(WritePngFromSvg(dir.path() / "bad.png", "not svg"), std::runtime_error);
+  EXPECT_FALSE(fs::exists(dir.path() / "bad.png"));
+}
+
+}  // namespace
+}  // namespace stereodet
