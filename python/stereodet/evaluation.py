@@ -5,11 +5,15 @@
     result.ap("Car", "3d", "moderate")         # AP_R40 in percent
     result.to_dict()                           # the CLI's results.json
     pandas.DataFrame(result.rows())            # one row per class x metric x difficulty
+    stereodet.evaluate("kitti", "results/data", out="eval")   # + the CLI's results folder
+    strict, loose = stereodet.evaluate(gt_annos, dt_annos, overlaps="strict,loose").runs
     text, figures = stereodet.get_official_eval_result(gt_annos, dt_annos, ["Car"])  # OpenPCDet's
 
 Annotation dicts are those of stereodet.kitti (OpenPCDet's and mmdetection3d's layout, dimensions
 l, h, w): gt_annos and dt_annos are lists of them, one per frame, in the same order. The numbers
-are those of `stereodet eval` on the same data, to the last digit (docs/metrics.md defines them).
+are those of `stereodet eval` on the same data, to the last digit (docs/metrics.md defines them):
+folders go through the CLI's library calls (report/evaluation.h), and the options of every overlap
+set come from its OverlapSetRuns.
 """
 
 from __future__ import annotations
