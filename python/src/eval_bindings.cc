@@ -276,13 +276,17 @@ void WriteReport(PyEvalResult& r, const fs::path& out, bool records) {
   const std::span<const EvalRun> selected = r.Selected();
   if (records) {
     for (const EvalRun& run : selected) {
-      if (!run.options.keep_records)
+      if (!run.options.keep_records) {
         ThrowValueError("out with records: evaluate with records=True");
+      }
     }
   }
   ReleaseGil release;
   StagedFolder folder(out, "results.json");
-  const std::vector<EvalRun> runs(selected.begin(), selected.end());
+  // Every run as evaluated (what evaluate() writes), or a copy of the one selected.
+  std::vector<EvalRun> one;
+  if (r.index >= 0) one.assign(selected.begin(), selected.end());
+  const std::vector<EvalRun>& runs = r.index < 0 ? *r.runs : one;
   std::vector<fs::path> files;
   for (const fs::path& path : WriteEvalReport(folder.path(), runs, r.info)) {
     files.push_back(out / path.lexically_relative(folder.path()));
