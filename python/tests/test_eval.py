@@ -157,6 +157,9 @@ def test_overlap_sets_refuse_what_is_ambiguous(small):
     custom = stereodet.evaluate(gt, dt, classes=[spec, "Pedestrian"], overlaps="loose")
     assert custom.find("Car", "3d").min_overlap == 0.6
     assert custom.find("Pedestrian", "3d").min_overlap == 0.25
+    truck = stereodet.ClassSpec("Truck", [], [0.4, 0.3, 0.2])
+    assert stereodet.evaluate(gt, dt, classes=[truck], all_classes=True).options.classes[0] \
+        .min_overlap == [0.4, 0.3, 0.2]
     with pytest.raises(ValueError, match="filter_sweep takes one overlap set"):
         stereodet.filter_sweep(label_dir, det_dir, "min-area", overlaps="strict,loose")
     with pytest.raises(ValueError, match="compare takes one overlap set"):
@@ -251,6 +254,14 @@ def test_sweep_and_compare_out_are_the_clis_csvs(cli, small, data, tmp_path):
                       disparity_error_px=0.5, out=tmp_path / "py_compare")
     assert (tmp_path / "py_compare" / "compare.csv").read_bytes() == \
         (tmp_path / "cli_compare" / "compare.csv").read_bytes()
+    # A Calibration object is the in-memory path: the same rows as the CLI's call.
+    in_memory = stereodet.compare(root / "label_2", root / "det_a", root / "det_b",
+                                  classes="Car", disparity_error_px=0.5,
+                                  calib=kitti.Calibration.kitti_like())
+    through_cli = stereodet.compare(root / "label_2", root / "det_a", root / "det_b",
+                                    classes="Car", disparity_error_px=0.5)
+    assert len(in_memory) == len(through_cli) > 0
+    assert repr(in_memory) == repr(through_cli)  # exact, NaN of empty bins included
     with pytest.raises(ValueError, match="only for folders"):
         stereodet.filter_sweep(small[2], small[3], "min-area", out=tmp_path / "x")
 
