@@ -2,6 +2,7 @@
 // (python/stereodet/) is the documented interface; names here with a leading underscore are its
 // internals.
 #include "common.h"
+#include "stereodet/util/version.h"
 
 namespace stereodet::python {
 void BindKitti(py::module_& m);
@@ -12,7 +13,7 @@ PYBIND11_MODULE(_core, m) {
   namespace py = pybind11;
   using namespace stereodet::python;
   m.doc() = "stereodet's C++ core: KITTI I/O and evaluation (use the stereodet package).";
-  m.attr("__version__") = STEREODET_VERSION;
+  m.attr("__version__") = stereodet::StereodetVersion();
 
   // stereodet.ParseError: a bad line of an input file, with its file, line and field.
   py::object parse_error = py::reinterpret_steal<py::object>(

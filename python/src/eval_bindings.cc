@@ -1,12 +1,15 @@
 // stereodet._core's evaluation: options, frames from annotation dicts or folders, Evaluate(), the
 // result object (attributes, the CLI's results.json as a dict, flat rows, per-detection records
-// as numpy arrays), OpenPCDet's get_official_eval_result, the filter sweep and compare.
+// as numpy arrays), OpenPCDet's get_official_eval_result, the filter sweep and compare. Folders go
+// through the library's evaluation calls (report/evaluation.h: RunEvaluation, RunEvaluationSweep,
+// RunEvaluationCompare), so that a results folder is the CLI's.
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +23,9 @@
 #include "stereodet/eval/filter.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/report/eval_report.h"
+#include "stereodet/report/evaluation.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/version.h"
 
 namespace stereodet::python {
 
@@ -29,14 +35,33 @@ namespace fs = std::filesystem;
 
 using Frames = std::shared_ptr<const std::vector<EvalFrame>>;
 
-// An evaluation as Python holds it: the result and what it was computed from (the records refer
-// to the frames; to_dict() writes the options and the inputs, as results.json does).
+using Runs = std::shared_ptr<const std::vector<EvalRun>>;
+
+// An evaluation as Python holds it: its runs (one per overlap set), and what they were computed
+// from (the records refer to the frames; to_dict() writes the options and the inputs, as
+// results.json does). EvalResult.runs[i] shares the runs and selects one.
 struct PyEvalResult {
-  EvalResult result;
-  EvalOptions options;
+  Runs runs;
+  int index = -1;  // -1: every run; else the run `index` alone
   EvalRunInfo info;
   Frames frames;
+  std::vector<fs::path> files;  // what RunEvaluation / WriteReport wrote; empty without out
+
+  std::span<const EvalRun> Selected() const {
+    if (index < 0) return {runs->data(), runs->size()};
+    return {runs->data() + index, 1};
+  }
+  const EvalRun& First() const { return Selected().front(); }
+  bool Several() const { return Selected().size() > 1; }
 };
+
+PyEvalResult MakeResult(std::vector<EvalRun> runs, EvalRunInfo info, Frames frames) {
+  PyEvalResult out;
+  out.runs = std::make_shared<const std::vector<EvalRun>>(std::move(runs));
+  out.info = std::move(info);
+  out.frames = std::move(frames);
+  return out;
+}
 
 // A frame set: converted once, evaluated any number of times.
 struct PyFrames {
@@ -145,7 +170,7 @@ PyFrames FramesFromAnnos(py::handle gt_annos, py::handle dt_annos) {
   }
   PyFrames out;
   out.frames = std::move(frames);
-  out.info.tool_version = STEREODET_VERSION;
+  out.info.tool_version = StereodetVersion();
   return out;
 }
 
@@ -164,7 +189,7 @@ PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const 
   }
   PyFrames out;
   out.notices = input.Notices();
-  out.info.tool_version = STEREODET_VERSION;
+  out.info.tool_version = StereodetVersion();
   out.info.gt_path = gt;
   out.info.det_path = det;
   out.info.split_path = split;
@@ -177,15 +202,106 @@ PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const 
   return out;
 }
 
-PyEvalResult EvaluateFrames(const PyFrames& frames, const EvalOptions& options) {
-  PyEvalResult out;
-  out.options = options;
-  out.info = frames.info;
-  out.frames = frames.frames;
+// Every run on the frames, in order (the in-memory path of annotation dicts).
+PyEvalResult EvaluateFrames(const PyFrames& frames, const std::vector<EvalOptions>& options) {
+  std::vector<EvalRun> runs;
+  {
+    ReleaseGil release;
+    if (options.empty()) throw std::invalid_argument("no evaluation run");
+    for (const EvalOptions& o : options) {
+      o.Check();
+      runs.push_back(EvalRun{o, Evaluate(*frames.frames, o)});
+    }
+  }
+  return MakeResult(std::move(runs), frames.info, frames.frames);
+}
+
+// The runs of one set of options per overlap set (OverlapSetRuns), from their names.
+std::vector<EvalOptions> OverlapRuns(const EvalOptions& base,
+                                     const std::vector<std::string>& names) {
+  std::vector<OverlapSet> sets;
+  for (const std::string& name : names) {
+    const OverlapSet set = ParseChoice([](const std::string& t) { return ParseOverlapSet(t); },
+                                       name, "overlaps", "strict, loose");
+    if (std::find(sets.begin(), sets.end(), set) != sets.end()) {
+      ThrowValueError("overlaps: '" + name + "' given twice");
+    }
+    sets.push_back(set);
+  }
+  if (sets.empty()) ThrowValueError("overlaps: no overlap set (strict, loose)");
+  return OverlapSetRuns(base, sets);
+}
+
+EvalInputOptions InputOptions(const fs::path& gt, const fs::path& det, const std::string& split,
+                              bool lenient, int num_threads) {
+  EvalInputOptions input;
+  input.gt = gt;
+  input.det = det;
+  input.split = split;
+  input.lenient = lenient;
+  input.num_threads = num_threads;
+  return input;
+}
+
+// `stereodet eval` on folders: RunEvaluation, which with `out` writes the CLI's results folder
+// (and with `records` its matches*.csv). Records without out are kept in memory only.
+PyEvalResult RunFolders(const fs::path& gt, const fs::path& det, const std::string& split,
+                        bool lenient, int num_threads, std::vector<EvalOptions> runs,
+                        const fs::path& out, bool records) {
+  EvaluationOptions options;
+  options.input = InputOptions(gt, det, split, lenient, num_threads);
+  if (records && out.empty()) {
+    for (EvalOptions& run : runs) run.keep_records = true;
+  }
+  options.runs = std::move(runs);
+  options.out = out;
+  options.records = records && !out.empty();
+  options.tool_version = StereodetVersion();
+  EvaluationResult result;
+  {
+    ReleaseGil release;
+    result = RunEvaluation(options);
+  }
+  PyEvalResult py_result =
+      MakeResult(std::move(result.runs), std::move(result.info),
+                 std::make_shared<const std::vector<EvalFrame>>(std::move(result.input.frames)));
+  py_result.files = std::move(result.files);
+  return py_result;
+}
+
+// The results folder of an in-memory evaluation, as RunEvaluation writes it: the report
+// (WriteEvalReport) and with `records` matches.csv (matches_OVERLAPS.csv per run with several),
+// staged and replacing `out` whole.
+void WriteReport(PyEvalResult& r, const fs::path& out, bool records) {
+  const std::span<const EvalRun> selected = r.Selected();
+  if (records) {
+    for (const EvalRun& run : selected) {
+      if (!run.options.keep_records) {
+        ThrowValueError("out with records: evaluate with records=True");
+      }
+    }
+  }
   ReleaseGil release;
-  options.Check();
-  out.result = Evaluate(*frames.frames, options);
-  return out;
+  StagedFolder folder(out, "results.json");
+  // Every run as evaluated (what evaluate() writes), or a copy of the one selected.
+  std::vector<EvalRun> one;
+  if (r.index >= 0) one.assign(selected.begin(), selected.end());
+  const std::vector<EvalRun>& runs = r.index < 0 ? *r.runs : one;
+  std::vector<fs::path> files;
+  for (const fs::path& path : WriteEvalReport(folder.path(), runs, r.info)) {
+    files.push_back(out / path.lexically_relative(folder.path()));
+  }
+  if (records) {
+    for (const EvalRun& run : runs) {
+      const std::string name = runs.size() == 1
+                                   ? std::string("matches.csv")
+                                   : "matches_" + DescribeOverlaps(run.options.classes) + ".csv";
+      WriteMatchRecordsCsv(folder.path() / name, run.result, *r.frames);
+      files.push_back(out / name);
+    }
+  }
+  folder.Commit();
+  r.files = std::move(files);
 }
 
 // --- Results to Python ---
@@ -265,46 +381,52 @@ py::array StringColumn(size_t n, GetText text) {
 // One row per cell, with the headline numbers: what pandas.DataFrame(rows) takes.
 py::list Rows(const PyEvalResult& r) {
   py::list rows;
-  const std::string overlaps = DescribeOverlaps(r.options.classes);
-  for (const ClassResult& c : r.result.results) {
-    py::dict row;
-    row["class"] = c.class_name;
-    row["metric"] = OverlapKindName(c.metric);
-    row["difficulty"] = DifficultyName(c.difficulty);
-    row["overlaps"] = overlaps;
-    row["min_overlap"] = c.min_overlap;
-    row["evaluated"] = c.evaluated;
-    const double nan = std::nan("");
-    auto v = [&](double x) { return c.evaluated ? x : nan; };
-    row["num_valid_labels"] = c.num_valid_labels;
-    row["small_sample"] = IsSmallSample(c);
-    row["num_detections"] = c.num_detections;
-    row["ap_r40"] = v(c.ap_r40);
-    row["ap_r11"] = v(c.ap_r11);
-    row["ap_voc"] = v(c.ap_voc);
-    row["aos_r40"] = v(c.aos_r40);
-    row["aos_r11"] = v(c.aos_r11);
-    row["threshold"] = v(c.at_threshold.threshold);
-    row["tp"] = c.at_threshold.tp;
-    row["fp"] = c.at_threshold.fp;
-    row["fn"] = c.at_threshold.fn;
-    row["precision"] = v(c.at_threshold.precision);
-    row["recall"] = v(c.at_threshold.recall);
-    row["f1"] = v(c.at_threshold.f1);
-    row["best_f1"] = v(c.best_f1.f1);
-    row["best_f1_threshold"] = v(c.best_f1.threshold);
-    row["brier_over_labels"] = v(c.brier.over_labels);
-    row["brier_over_detections"] = v(c.brier.over_detections);
-    row["brier_over_all"] = v(c.brier.over_all);
-    row["ece"] = v(c.calibration.ece);
-    rows.append(row);
+  for (const EvalRun& run : r.Selected()) {
+    const std::string overlaps = DescribeOverlaps(run.options.classes);
+    for (const ClassResult& c : run.result.results) {
+      py::dict row;
+      row["class"] = c.class_name;
+      row["metric"] = OverlapKindName(c.metric);
+      row["difficulty"] = DifficultyName(c.difficulty);
+      row["overlaps"] = overlaps;
+      row["min_overlap"] = c.min_overlap;
+      row["evaluated"] = c.evaluated;
+      const double nan = std::nan("");
+      auto v = [&](double x) { return c.evaluated ? x : nan; };
+      row["num_valid_labels"] = c.num_valid_labels;
+      row["small_sample"] = IsSmallSample(c);
+      row["num_detections"] = c.num_detections;
+      row["ap_r40"] = v(c.ap_r40);
+      row["ap_r11"] = v(c.ap_r11);
+      row["ap_voc"] = v(c.ap_voc);
+      row["aos_r40"] = v(c.aos_r40);
+      row["aos_r11"] = v(c.aos_r11);
+      row["threshold"] = v(c.at_threshold.threshold);
+      row["tp"] = c.at_threshold.tp;
+      row["fp"] = c.at_threshold.fp;
+      row["fn"] = c.at_threshold.fn;
+      row["precision"] = v(c.at_threshold.precision);
+      row["recall"] = v(c.at_threshold.recall);
+      row["f1"] = v(c.at_threshold.f1);
+      row["best_f1"] = v(c.best_f1.f1);
+      row["best_f1_threshold"] = v(c.best_f1.threshold);
+      row["brier_over_labels"] = v(c.brier.over_labels);
+      row["brier_over_detections"] = v(c.brier.over_detections);
+      row["brier_over_all"] = v(c.brier.over_all);
+      row["ece"] = v(c.calibration.ece);
+      rows.append(row);
+    }
   }
   return rows;
 }
 
 // Every cell's records (EvalOptions::keep_records) as columns of equal length.
 py::dict Records(const PyEvalResult& r) {
-  if (!r.options.keep_records) {
+  if (r.Several()) {
+    ThrowValueError("records: one per overlap set; take result.runs[i].records()");
+  }
+  const EvalRun& run = r.First();
+  if (!run.options.keep_records) {
     ThrowValueError("no records: evaluate with records=True to keep them");
   }
   struct Row {
@@ -312,7 +434,7 @@ py::dict Records(const PyEvalResult& r) {
     const MatchRecord* record;
   };
   std::vector<Row> rows;
-  for (const ClassResult& c : r.result.results) {
+  for (const ClassResult& c : run.result.results) {
     for (const MatchRecord& m : c.records) rows.push_back({&c, &m});
   }
   const auto n = static_cast<py::ssize_t>(rows.size());
@@ -360,9 +482,86 @@ py::object ToDict(const PyEvalResult& r) {
   std::string text;
   {
     ReleaseGil release;
-    text = EvalResultToJson(r.result, r.options, r.info).dump();
+    const std::span<const EvalRun> runs = r.Selected();
+    text = (runs.size() == 1 ? EvalResultToJson(runs[0].result, runs[0].options, r.info)
+                             : EvalResultToJson(*r.runs, r.info))
+               .dump();
   }
   return py::module_::import("json").attr("loads")(text);
+}
+
+py::list SweepRowsList(const std::vector<SweepRow>& rows, FilterBound b) {
+  py::list out;
+  for (const SweepRow& r : rows) {
+    py::dict d;
+    d["class"] = r.class_name;
+    d["metric"] = OverlapKindName(r.metric);
+    d["difficulty"] = DifficultyName(r.difficulty);
+    d["filter"] = FilterBoundName(b);
+    d["value"] = r.value;
+    for (const auto& [name, p] :
+         {std::pair{"naive", &r.stats.naive}, std::pair{"stable", &r.stats.stable}}) {
+      const std::string prefix = name;
+      d[py::str(prefix + "_tp")] = p->tp;
+      d[py::str(prefix + "_fp")] = p->fp;
+      d[py::str(prefix + "_fn")] = p->fn;
+      d[py::str(prefix + "_precision")] = p->precision;
+      d[py::str(prefix + "_recall")] = p->recall;
+    }
+    out.append(d);
+  }
+  return out;
+}
+
+py::list CompareRowsList(const std::vector<CompareRow>& rows) {
+  py::list out;
+  for (const CompareRow& r : rows) {
+    py::dict d;
+    d["class"] = r.class_name;
+    d["metric"] = OverlapKindName(r.metric);
+    d["difficulty"] = DifficultyName(r.difficulty);
+    d["lower_m"] = r.lower_m;
+    d["upper_m"] = r.upper_m;
+    d["count_a"] = r.count_a;
+    d["count_b"] = r.count_b;
+    d["abs_depth_error_mean_a_m"] = r.abs_depth_error_mean_a_m;
+    d["abs_depth_error_mean_b_m"] = r.abs_depth_error_mean_b_m;
+    d["difference_b_minus_a_m"] = r.difference_b_minus_a_m;
+    d["centre_error_mean_a_m"] = r.centre_error_mean_a_m;
+    d["centre_error_mean_b_m"] = r.centre_error_mean_b_m;
+    d["model_depth_error_m"] = r.model_depth_error_m;
+    out.append(d);
+  }
+  return out;
+}
+
+std::string Table(const PyEvalResult& r) {
+  const std::span<const EvalRun> runs = r.Selected();
+  ReleaseGil release;
+  return runs.size() == 1 ? FormatEvalTable(runs[0].result, runs[0].options)
+                          : FormatEvalTable(*r.runs);
+}
+
+// The cell of the run of `overlaps` (DescribeOverlaps' name; with one run, optional).
+const ClassResult* FindCell(const PyEvalResult& r, const std::string& class_name,
+                            const std::string& metric, py::handle difficulty,
+                            const std::optional<std::string>& overlaps) {
+  const OverlapKind kind = ParseKind(metric);
+  const Difficulty d = ParseDifficulty(difficulty);
+  if (!overlaps.has_value()) {
+    if (r.Several()) {
+      ThrowValueError("several overlap sets: give overlaps= (one of the result's overlaps)");
+    }
+    return r.First().result.Find(class_name, kind, d);
+  }
+  std::string names;
+  for (const EvalRun& run : r.Selected()) {
+    const std::string name = DescribeOverlaps(run.options.classes);
+    if (EqualsIgnoreCase(name, *overlaps)) return run.result.Find(class_name, kind, d);
+    if (!names.empty()) names += ", ";
+    names += name;
+  }
+  ThrowValueError("overlaps: no run '" + *overlaps + "' (" + names + ")");
 }
 
 void BindClassSpec(py::module_& m) {
@@ -528,52 +727,92 @@ filled). docs/metrics.md defines every number.)")
       });
 
   py::class_<PyEvalResult>(m, "EvalResult",
-                           R"(The result of stereodet.evaluate() / evaluate_annos().
+                           R"(The result of stereodet.evaluate(): one run per overlap set.
 
   cells            every class x overlap kind x difficulty (ClassResult), in option order
-  find(c, m, d)    one of them, or None; ap(c, m, d) its AP
+                   (with several overlap sets: every run's, in run order)
+  find(c, m, d)    one of them, or None; ap(c, m, d) its AP (overlaps= picks the run)
+  runs             one EvalResult per overlap set (the CLI's --overlaps strict,loose)
   to_dict()        the CLI's results.json, as plain Python (NaN as None)
   rows()           one flat dict per cell: pandas.DataFrame(result.rows())
   records()        with records=True: what every detection and label counts as, numpy columns
-  table()          the CLI's text table (also str(result)))")
+  table()          the CLI's text table (also str(result))
+  files            with out=: the files written)")
       .def_property_readonly("num_frames",
-                             [](const PyEvalResult& r) { return r.result.num_frames; })
+                             [](const PyEvalResult& r) { return r.First().result.num_frames; })
       .def_property_readonly("aos_computed",
-                             [](const PyEvalResult& r) { return r.result.aos_computed; })
-      .def_property_readonly("probability_metrics",
-                             [](const PyEvalResult& r) { return r.result.probability_metrics; })
+                             [](const PyEvalResult& r) { return r.First().result.aos_computed; })
       .def_property_readonly(
-          "seconds", [](const PyEvalResult& r) { return r.result.seconds; },
-          "wall time of the evaluation (the C++ Evaluate())")
-      .def_property_readonly("options", [](const PyEvalResult& r) { return r.options; })
+          "probability_metrics",
+          [](const PyEvalResult& r) { return r.First().result.probability_metrics; })
+      .def_property_readonly(
+          "seconds",
+          [](const PyEvalResult& r) {
+            double seconds = 0;
+            for (const EvalRun& run : r.Selected()) seconds += run.result.seconds;
+            return seconds;
+          },
+          "wall time of the evaluation (the C++ Evaluate(), summed over the runs)")
+      .def_property_readonly(
+          "options", [](const PyEvalResult& r) { return r.First().options; },
+          "the options (with several runs the first run's; runs[i].options each)")
+      .def_property_readonly(
+          "overlaps",
+          [](const PyEvalResult& r) {
+            std::vector<std::string> out;
+            for (const EvalRun& run : r.Selected()) {
+              out.push_back(DescribeOverlaps(run.options.classes));
+            }
+            return out;
+          },
+          "the overlap set of each run: ['strict'], ['strict', 'loose'] (or 'custom')")
+      .def_property_readonly(
+          "runs",
+          [](const PyEvalResult& r) {
+            std::vector<PyEvalResult> out;
+            const int first = r.index < 0 ? 0 : r.index;
+            for (int i = 0; i < static_cast<int>(r.Selected().size()); ++i) {
+              PyEvalResult one = r;
+              one.index = first + i;
+              out.push_back(std::move(one));
+            }
+            return out;
+          },
+          "one EvalResult per overlap set, in the order given (one: [a result equal to this])")
+      .def_property_readonly(
+          "files", [](const PyEvalResult& r) { return r.files; },
+          "the files written with out= (empty without)")
       .def_property_readonly(
           "cells",
           [](py::object self) {
             const PyEvalResult& r = self.cast<const PyEvalResult&>();
             py::list out;
-            for (const ClassResult& c : r.result.results) {
-              out.append(py::cast(&c, py::return_value_policy::reference_internal, self));
+            for (const EvalRun& run : r.Selected()) {
+              for (const ClassResult& c : run.result.results) {
+                out.append(py::cast(&c, py::return_value_policy::reference_internal, self));
+              }
             }
             return out;
           })
       .def(
           "find",
           [](py::object self, const std::string& class_name, const std::string& metric,
-             py::handle difficulty) -> py::object {
+             py::handle difficulty, const std::optional<std::string>& overlaps) -> py::object {
             const PyEvalResult& r = self.cast<const PyEvalResult&>();
-            const ClassResult* c =
-                r.result.Find(class_name, ParseKind(metric), ParseDifficulty(difficulty));
+            const ClassResult* c = FindCell(r, class_name, metric, difficulty, overlaps);
             if (c == nullptr) return py::none();
             return py::cast(c, py::return_value_policy::reference_internal, self);
           },
           py::arg("class_name"), py::arg("metric") = "3d", py::arg("difficulty") = "moderate",
-          "The cell of a class (case-insensitive), metric (2d, bev, 3d) and difficulty, or None.")
+          py::kw_only(), py::arg("overlaps") = py::none(),
+          "The cell of a class (case-insensitive), metric (2d, bev, 3d) and difficulty, or None; "
+          "with several overlap sets, overlaps= says of which run.")
       .def(
           "ap",
           [](const PyEvalResult& r, const std::string& class_name, const std::string& metric,
-             py::handle difficulty, const std::string& recall) {
-            const ClassResult* c =
-                r.result.Find(class_name, ParseKind(metric), ParseDifficulty(difficulty));
+             py::handle difficulty, const std::string& recall,
+             const std::optional<std::string>& overlaps) {
+            const ClassResult* c = FindCell(r, class_name, metric, difficulty, overlaps);
             if (c == nullptr) {
               ThrowValueError("no result for " + class_name + " " + metric + " " +
                               py::str(difficulty).cast<std::string>());
@@ -585,7 +824,8 @@ filled). docs/metrics.md defines every number.)")
             ThrowValueError("recall: unknown '" + recall + "' (r40, r11, voc)");
           },
           py::arg("class_name"), py::arg("metric") = "3d", py::arg("difficulty") = "moderate",
-          py::arg("recall") = "r40", "AP in percent (NaN where the class was not evaluated).")
+          py::arg("recall") = "r40", py::kw_only(), py::arg("overlaps") = py::none(),
+          "AP in percent (NaN where the class was not evaluated).")
       .def("to_dict", &ToDict,
            "The CLI's results.json as plain Python: the same keys and numbers (NaN as None).")
       .def("rows", &Rows, "One flat dict per cell (pandas.DataFrame(result.rows())).")
@@ -593,15 +833,22 @@ filled). docs/metrics.md defines every number.)")
            "Per-detection records (evaluate with records=True): a dict of numpy columns frame, "
            "frame_id, class, metric, difficulty, min_overlap, outcome (tp, fp, fn, ignored, "
            "dontcare), detection and label (indices in file order, -1 for none), score, iou, "
-           "label_valid; one row per record, cells in result order.")
-      .def(
-          "table", [](const PyEvalResult& r) { return FormatEvalTable(r.result, r.options); },
-          "The CLI's text table.")
-      .def("__str__", [](const PyEvalResult& r) { return FormatEvalTable(r.result, r.options); })
+           "label_valid; one row per record, cells in result order. One overlap set at a time "
+           "(runs[i].records()).")
+      .def("table", &Table, "The CLI's text table.")
+      .def("__str__", &Table)
       .def("__repr__", [](const PyEvalResult& r) {
-        return "<stereodet.EvalResult " + std::to_string(r.result.num_frames) + " frames, " +
-               std::to_string(r.result.results.size()) + " cells, matcher " +
-               MatcherName(r.options.matcher) + ">";
+        const EvalRun& run = r.First();
+        size_t cells = 0;
+        for (const EvalRun& one : r.Selected()) cells += one.result.results.size();
+        std::string overlaps;
+        for (const EvalRun& one : r.Selected()) {
+          if (!overlaps.empty()) overlaps += ',';
+          overlaps += DescribeOverlaps(one.options.classes);
+        }
+        return "<stereodet.EvalResult " + std::to_string(run.result.num_frames) + " frames, " +
+               std::to_string(cells) + " cells, matcher " + MatcherName(run.options.matcher) +
+               (r.Several() ? ", overlaps " + overlaps : std::string()) + ">";
       });
 }
 
@@ -642,15 +889,22 @@ void BindEval(py::module_& m) {
           strict.classes.push_back(OpenPcdetClassSpec(name, false));
           loose.classes.push_back(OpenPcdetClassSpec(name, true));
         }
-        PyEvalResult s = EvaluateFrames(frames, strict), l = EvaluateFrames(frames, loose);
+        PyEvalResult s = EvaluateFrames(frames, {strict}), l = EvaluateFrames(frames, {loose});
         std::string text;
         {
           ReleaseGil release;
-          text = FormatOpenPcdetResult(s.result, l.result);
+          text = FormatOpenPcdetResult(s.First().result, l.First().result);
         }
         return py::make_tuple(text, std::move(s), std::move(l));
       },
       py::arg("frames"), py::arg("class_names"), py::arg("num_threads"));
+
+  m.def("_overlap_set_runs", &OverlapRuns, py::arg("base"), py::arg("overlaps"),
+        "OverlapSetRuns: base once per overlap set (names), with that set's class specs.");
+  m.def("_run_evaluation", &RunFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
+        py::arg("lenient"), py::arg("num_threads"), py::arg("runs"), py::arg("out"),
+        py::arg("records"));
+  m.def("_write_report", &WriteReport, py::arg("result"), py::arg("out"), py::arg("records"));
 
   m.def(
       "_filter_sweep",
@@ -663,29 +917,32 @@ void BindEval(py::module_& m) {
           options.Check();
           rows = FilterSweep(*frames.frames, options, b, from, to, step);
         }
-        py::list out;
-        for (const SweepRow& r : rows) {
-          py::dict d;
-          d["class"] = r.class_name;
-          d["metric"] = OverlapKindName(r.metric);
-          d["difficulty"] = DifficultyName(r.difficulty);
-          d["filter"] = FilterBoundName(b);
-          d["value"] = r.value;
-          for (const auto& [name, p] :
-               {std::pair{"naive", &r.stats.naive}, std::pair{"stable", &r.stats.stable}}) {
-            const std::string prefix = name;
-            d[py::str(prefix + "_tp")] = p->tp;
-            d[py::str(prefix + "_fp")] = p->fp;
-            d[py::str(prefix + "_fn")] = p->fn;
-            d[py::str(prefix + "_precision")] = p->precision;
-            d[py::str(prefix + "_recall")] = p->recall;
-          }
-          out.append(d);
-        }
-        return out;
+        return SweepRowsList(rows, b);
       },
       py::arg("frames"), py::arg("options"), py::arg("bound"), py::arg("start"), py::arg("stop"),
       py::arg("step"));
+  m.def(
+      "_run_sweep",
+      [](const fs::path& gt, const fs::path& det, const std::string& split, bool lenient,
+         const EvalOptions& eval, const std::string& bound, double from, double to, double step,
+         const fs::path& out) {
+        EvaluationSweepOptions options;
+        options.input = InputOptions(gt, det, split, lenient, eval.num_threads);
+        options.eval = eval;
+        options.bound = ParseBound(bound);
+        options.from = from;
+        options.to = to;
+        options.step = step;
+        options.out = out;
+        EvaluationSweepResult result;
+        {
+          ReleaseGil release;
+          result = RunEvaluationSweep(options);
+        }
+        return SweepRowsList(result.rows, options.bound);
+      },
+      py::arg("gt"), py::arg("det"), py::arg("split"), py::arg("lenient"), py::arg("options"),
+      py::arg("bound"), py::arg("start"), py::arg("stop"), py::arg("step"), py::arg("out"));
 
   m.def(
       "_compare",
@@ -699,30 +956,33 @@ void BindEval(py::module_& m) {
         {
           ReleaseGil release;
           options.Check();
-          rows = CompareLocalization(a.result, b.result, options);
+          rows = CompareLocalization(a.First().result, b.First().result, options);
         }
-        py::list out;
-        for (const CompareRow& r : rows) {
-          py::dict d;
-          d["class"] = r.class_name;
-          d["metric"] = OverlapKindName(r.metric);
-          d["difficulty"] = DifficultyName(r.difficulty);
-          d["lower_m"] = r.lower_m;
-          d["upper_m"] = r.upper_m;
-          d["count_a"] = r.count_a;
-          d["count_b"] = r.count_b;
-          d["abs_depth_error_mean_a_m"] = r.abs_depth_error_mean_a_m;
-          d["abs_depth_error_mean_b_m"] = r.abs_depth_error_mean_b_m;
-          d["difference_b_minus_a_m"] = r.difference_b_minus_a_m;
-          d["centre_error_mean_a_m"] = r.centre_error_mean_a_m;
-          d["centre_error_mean_b_m"] = r.centre_error_mean_b_m;
-          d["model_depth_error_m"] = r.model_depth_error_m;
-          out.append(d);
-        }
-        return out;
+        return CompareRowsList(rows);
       },
       py::arg("a"), py::arg("b"), py::arg("baseline_m"), py::arg("focal_px"),
       py::arg("disparity_error_px"));
+  m.def(
+      "_run_compare",
+      [](const fs::path& gt, const fs::path& det_a, const fs::path& det_b, const std::string& split,
+         bool lenient, const EvalOptions& eval, const fs::path& calib, double disparity_error_px,
+         const fs::path& out) {
+        EvaluationCompareOptions options;
+        options.input = InputOptions(gt, det_a, split, lenient, eval.num_threads);
+        options.det_b = det_b;
+        options.eval = eval;
+        options.calib = calib;
+        options.disparity_error_px = disparity_error_px;
+        options.out = out;
+        EvaluationCompareResult result;
+        {
+          ReleaseGil release;
+          result = RunEvaluationCompare(options);
+        }
+        return CompareRowsList(result.rows);
+      },
+      py::arg("gt"), py::arg("det_a"), py::arg("det_b"), py::arg("split"), py::arg("lenient"),
+      py::arg("options"), py::arg("calib"), py::arg("disparity_error_px"), py::arg("out"));
 }
 
 }  // namespace stereodet::python

@@ -5,11 +5,15 @@
     result.ap("Car", "3d", "moderate")         # AP_R40 in percent
     result.to_dict()                           # the CLI's results.json
     pandas.DataFrame(result.rows())            # one row per class x metric x difficulty
+    stereodet.evaluate("kitti", "results/data", out="eval")   # + the CLI's results folder
+    strict, loose = stereodet.evaluate(gt_annos, dt_annos, overlaps="strict,loose").runs
     text, figures = stereodet.get_official_eval_result(gt_annos, dt_annos, ["Car"])  # OpenPCDet's
 
 Annotation dicts are those of stereodet.kitti (OpenPCDet's and mmdetection3d's layout, dimensions
 l, h, w): gt_annos and dt_annos are lists of them, one per frame, in the same order. The numbers
-are those of `stereodet eval` on the same data, to the last digit (docs/metrics.md defines them).
+are those of `stereodet eval` on the same data, to the last digit (docs/metrics.md defines them):
+folders go through the CLI's library calls (report/evaluation.h), and the options of every overlap
+set come from its OverlapSetRuns.
 """
 
 from __future__ import annotations
@@ -55,29 +59,37 @@ def _frames(gt: Source, det: Source, split: Optional[PathLike], lenient: bool,
     return _core._frames_from_annos(gt, det)
 
 
-# TO BE SWITCHED to the library's evaluation pipeline (issue 12: the CLI's option building, overlap
-# sets and score transform are moving out of cli/eval_command.cc into one library call). Until then
-# this maps the keyword arguments onto EvalOptions field by field, with the CLI's rules for class
-# specs (KittiClassSpec, or OpenPcdetClassSpec with compat="openpcdet") and one overlap set.
-def _options(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str],
-             difficulties: Iterable[Union[str, int]], matcher: str, compat: str, overlaps: str,
-             filters: Any, filter_mode: str, score_threshold: float, score_transform: str,
-             all_classes: bool, calibration_bins: int, distance_bin_m: float,
-             max_distance_m: float, records: bool, num_threads: int) -> EvalOptions:
+def _overlap_names(overlaps: Union[str, Iterable[str]]) -> List[str]:
+    """"strict,loose" or ["strict", "loose"]: the names, in order (checked by _overlap_set_runs)."""
+    if isinstance(overlaps, str):
+        return [part.strip() for part in overlaps.split(",") if part.strip()]
+    return [str(name) for name in overlaps]
+
+
+def _runs(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str],
+          difficulties: Iterable[Union[str, int]], matcher: str, compat: str,
+          overlaps: Union[str, Iterable[str]], filters: Any, filter_mode: str,
+          score_threshold: float, score_transform: str, all_classes: bool, calibration_bins: int,
+          distance_bin_m: float, max_distance_m: float, records: bool,
+          num_threads: int) -> List[EvalOptions]:
+    """The evaluation runs of evaluate()'s keyword arguments, one per overlap set, as the CLI
+    builds them (cli/eval_command.cc): the base options with the strict set's class specs
+    (KittiClassSpec, or OpenPcdetClassSpec with compat="openpcdet"), then the library's
+    OverlapSetRuns. ClassSpec objects keep their own thresholds (then one overlap set only)."""
     o = EvalOptions()
     o.compat = compat
-    if overlaps not in ("strict", "loose"):
-        raise ValueError(f"overlaps: unknown {overlaps!r} (strict, loose; one set per call)")
-    loose = overlaps == "loose"
     spec = _core._openpcdet_class_spec if o.compat == "openpcdet" else _core._kitti_class_spec
     if isinstance(classes, (str, ClassSpec)):
         classes = [classes]
     specs: List[ClassSpec] = []
+    custom: Dict[int, ClassSpec] = {}
     for c in classes:
-        s = c if isinstance(c, ClassSpec) else spec(str(c), loose)
+        s = c if isinstance(c, ClassSpec) else spec(str(c))
         for earlier in specs:
             if earlier.name.lower() == s.name.lower():
                 raise ValueError(f"classes: {s.name!r} given twice (as {earlier.name!r})")
+        if isinstance(c, ClassSpec):
+            custom[len(specs)] = c
         specs.append(s)
     o.classes = specs
     o.metrics = [metrics] if isinstance(metrics, str) else list(metrics)
@@ -94,7 +106,21 @@ def _options(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str]
     o.keep_records = records
     o.num_threads = num_threads
     o.check()
-    return o
+    runs = _core._overlap_set_runs(o, _overlap_names(overlaps))
+    if custom:  # OverlapSetRuns replaces every spec by KITTI's of the same name: put them back
+        if len(runs) > 1:
+            raise ValueError("overlaps: ClassSpec objects have their own thresholds; give one "
+                             "overlap set (or class names)")
+        run = runs[0]
+        run.classes = [custom.get(i, s) for i, s in enumerate(run.classes)]
+        run.check()
+    return runs
+
+
+def _single(runs: List[EvalOptions], what: str) -> EvalOptions:
+    if len(runs) != 1:
+        raise ValueError(f"overlaps: {what} takes one overlap set")
+    return runs[0]
 
 
 def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
@@ -102,11 +128,12 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              classes: Iterable[Union[str, ClassSpec]] = DEFAULT_CLASSES,
              metrics: Iterable[str] = ("2d", "bev", "3d"),
              difficulties: Iterable[Union[str, int]] = ("easy", "moderate", "hard"),
-             overlaps: str = "strict", filters: Any = None, filter_mode: str = "stable",
-             score_threshold: float = -math.inf, score_transform: str = "none",
-             all_classes: bool = False, calibration_bins: int = 10, distance_bin_m: float = 5.0,
-             max_distance_m: float = 80.0, records: bool = False, lenient: bool = False,
-             num_threads: int = 0) -> EvalResult:
+             overlaps: Union[str, Iterable[str]] = "strict", filters: Any = None,
+             filter_mode: str = "stable", score_threshold: float = -math.inf,
+             score_transform: str = "none", all_classes: bool = False, calibration_bins: int = 10,
+             distance_bin_m: float = 5.0, max_distance_m: float = 80.0, records: bool = False,
+             lenient: bool = False, num_threads: int = 0,
+             out: Optional[PathLike] = None) -> EvalResult:
     """Evaluates detections against labels; `stereodet eval` with the same options.
 
     gt, det: folders (gt: a KITTI root with training/label_2, a folder with label_2/, or a folder
@@ -117,26 +144,42 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
     compat: "devkit" or "openpcdet" (OpenPCDet's / mmdetection3d's numbers; matcher kitti).
     classes: names (KITTI's thresholds and neighbours) or ClassSpec objects.
     metrics: of "2d", "bev", "3d". difficulties: of "easy", "moderate", "hard".
-    overlaps: "strict" (0.7 / 0.5 / 0.5) or "loose" (KITTI's second set for BEV and 3D).
+    overlaps: "strict" (0.7 / 0.5 / 0.5), "loose" (KITTI's second set for BEV and 3D), or several,
+      "strict,loose" or ["strict", "loose"] (the CLI's --overlaps): one run each (result.runs).
     filters: "min-area=100,max-distance=40" (the CLI's syntax), a dict {"min_area": 100}, or
       (bound, value) pairs; filter_mode "stable" (the paper's) or "naive".
     score_threshold: the operating point (TP/FP/FN, Brier, calibration, filters).
     score_transform: "none" or "sigmoid" (logit scores; Brier and ECE only).
     all_classes: evaluate classes without any detection too (the devkit skips them).
-    records: keep what every detection and label counts as (EvalResult.records()).
+    records: keep what every detection and label counts as (EvalResult.records()); with out, also
+      OUT/matches.csv (the CLI's --records).
     lenient: folders only: skip malformed lines (listed in to_dict()["input"]["skipped_lines"]).
     num_threads: 0 = all hardware threads.
+    out: write the results folder there, `stereodet eval --out`'s (results.json, summary.csv,
+      curves/; result.files lists them): for folders through the CLI's very call (RunEvaluation),
+      for annotation dicts through the same report writer. An earlier results folder there is
+      replaced whole; a folder of other files is refused (OSError) before anything is read.
 
     Raises ValueError for a bad option or annotation dict, stereodet.ParseError for a bad line of
     a file, OSError for missing folders or files.
     """
-    options = _options(classes=classes, metrics=metrics, difficulties=difficulties,
-                       matcher=matcher, compat=compat, overlaps=overlaps, filters=filters,
-                       filter_mode=filter_mode, score_threshold=score_threshold,
-                       score_transform=score_transform, all_classes=all_classes,
-                       calibration_bins=calibration_bins, distance_bin_m=distance_bin_m,
-                       max_distance_m=max_distance_m, records=records, num_threads=num_threads)
-    return _core._evaluate(_frames(gt, det, split, lenient, num_threads), options)
+    runs = _runs(classes=classes, metrics=metrics, difficulties=difficulties, matcher=matcher,
+                 compat=compat, overlaps=overlaps, filters=filters, filter_mode=filter_mode,
+                 score_threshold=score_threshold, score_transform=score_transform,
+                 all_classes=all_classes, calibration_bins=calibration_bins,
+                 distance_bin_m=distance_bin_m, max_distance_m=max_distance_m, records=records,
+                 num_threads=num_threads)
+    target = "" if out is None else os.fspath(out)
+    if out is not None and not target:
+        raise ValueError("out: an empty path")
+    if _is_path(gt) and _is_path(det):
+        return _core._run_evaluation(os.fspath(gt), os.fspath(det),
+                                     "" if split is None else os.fspath(split), lenient,
+                                     num_threads, runs, target, records)
+    result = _core._evaluate(_frames(gt, det, split, lenient, num_threads), runs)
+    if out is not None:
+        _core._write_report(result, target, records)
+    return result
 
 
 _OPENPCDET_CLASSES = {0: "Car", 1: "Pedestrian", 2: "Cyclist", 3: "Van", 4: "Person_sitting",
@@ -202,36 +245,56 @@ def get_official_eval_result(gt_annos: Sequence[Annos], dt_annos: Sequence[Annos
 
 def filter_sweep(gt: Source, det: Source, bound: str, start: float = 0.0, stop: float = 200.0,
                  step: float = 5.0, *, split: Optional[PathLike] = None, lenient: bool = False,
-                 **options: Any) -> List[Dict[str, Any]]:
+                 out: Optional[PathLike] = None, **options: Any) -> List[Dict[str, Any]]:
     """`stereodet eval sweep`: for each value of `bound` ("min-area", "max-distance", ...) from
     `start` to `stop` by `step`, TP/FP/FN, precision and recall under the naive and the stable
     filter, one dict per class x metric x difficulty x value (pandas.DataFrame takes the list).
 
-    gt, det, split, lenient: as evaluate(). options: evaluate()'s (classes, metrics, matcher, ...);
-    `filters` there are the fixed extra conditions (the CLI's --where).
+    gt, det, split, lenient: as evaluate(). options: evaluate()'s (classes, metrics, matcher, ...;
+    one overlap set); `filters` there are the fixed extra conditions (the CLI's --where).
+    Folders go through the CLI's call (RunEvaluationSweep); out: folders only, also write
+    OUT/sweep.csv, the CLI's.
     """
     merged = dict(_EVALUATE_DEFAULTS, **options)
+    eval_options = _single(_runs(**merged), "filter_sweep")
+    if _is_path(gt) and _is_path(det):
+        return _core._run_sweep(os.fspath(gt), os.fspath(det),
+                                "" if split is None else os.fspath(split), lenient, eval_options,
+                                bound, start, stop, step, "" if out is None else os.fspath(out))
+    if out is not None:
+        raise ValueError("out: only for folders (the CLI's sweep.csv)")
     frames = _frames(gt, det, split, lenient, merged["num_threads"])
-    return _core._filter_sweep(frames, _options(**merged), bound, start, stop, step)
+    return _core._filter_sweep(frames, eval_options, bound, start, stop, step)
 
 
 def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLike] = None,
             calib: Any = None, disparity_error_px: float = 1.0, lenient: bool = False,
-            **options: Any) -> List[Dict[str, Any]]:
+            out: Optional[PathLike] = None, **options: Any) -> List[Dict[str, Any]]:
     """`stereodet eval compare`: the 3D localization error of two detection sets on the same
     labels (e.g. stereo vs LiDAR) per label-distance bin, beside the stereo depth-error model
     dz = z^2 / (b f) * dd.
 
     calib: a stereodet.kitti.Calibration for b and f (default: KITTI's frame 000000), or a path to
-    a calibration file. options: evaluate()'s. Returns one dict per class x metric x difficulty x
-    distance bin: counts and mean |dz| of A and B, B - A, centre errors, the model's dz.
+    a calibration file. options: evaluate()'s (one overlap set). Folders with calib None or a path
+    go through the CLI's call (RunEvaluationCompare); out: only then, also write OUT/compare.csv,
+    the CLI's. Returns one dict per class x metric x difficulty x distance bin: counts and mean
+    |dz| of A and B, B - A, centre errors, the model's dz.
     """
     from . import kitti
 
     merged = dict(_EVALUATE_DEFAULTS, **options)
-    opts = _options(**merged)
-    a = _core._evaluate(_frames(gt, det_a, split, lenient, merged["num_threads"]), opts)
-    b = _core._evaluate(_frames(gt, det_b, split, lenient, merged["num_threads"]), opts)
+    opts = _single(_runs(**merged), "compare")
+    folders = _is_path(gt) and _is_path(det_a) and _is_path(det_b)
+    if folders and (calib is None or _is_path(calib)):
+        return _core._run_compare(os.fspath(gt), os.fspath(det_a), os.fspath(det_b),
+                                  "" if split is None else os.fspath(split), lenient, opts,
+                                  "" if calib is None else os.fspath(calib), disparity_error_px,
+                                  "" if out is None else os.fspath(out))
+    if out is not None:
+        raise ValueError("out: only for folders with calib None or a path (the CLI's "
+                         "compare.csv)")
+    a = _core._evaluate(_frames(gt, det_a, split, lenient, merged["num_threads"]), [opts])
+    b = _core._evaluate(_frames(gt, det_b, split, lenient, merged["num_threads"]), [opts])
     if calib is None:
         calib = kitti.Calibration.kitti_like()
     elif _is_path(calib):
@@ -241,4 +304,4 @@ def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLik
 
 # evaluate()'s keyword options and their defaults, for filter_sweep() and compare().
 _EVALUATE_DEFAULTS = {name: p.default for name, p in inspect.signature(evaluate).parameters.items()
-                      if p.kind == p.KEYWORD_ONLY and name != "lenient"}
+                      if p.kind == p.KEYWORD_ONLY and name not in ("lenient", "out")}

@@ -3,6 +3,7 @@
 import csv
 import json
 import math
+import os
 
 import numpy as np
 import pytest
@@ -41,14 +42,12 @@ def cli_results(cli, tmp_path, *args):
 
 def same_as_cli(result, expected):
     got = result.to_dict()
-    # Everything but what describes the run itself (command line, wall time) and the tool's
-    # version, which the CLI's eval command records as "unknown" (STEREODET_VERSION is not
-    # defined for cli/eval_command.cc), while Python's is stereodet.__version__.
+    # Everything but what describes the run itself (command line, wall time); the tool's name and
+    # version too (both StereodetVersion(), the CMake project's).
     for key in expected:
-        if key not in ("command_line", "seconds", "tool"):
+        if key not in ("command_line", "seconds"):
             assert got[key] == expected[key], key
-    assert got["tool"]["name"] == expected["tool"]["name"]
-    assert got["tool"]["version"] == stereodet.__version__
+    assert got["tool"] == {"name": "stereodet eval", "version": stereodet.__version__}
     assert set(got) == set(expected)
 
 
@@ -96,6 +95,175 @@ def test_a_kitti_root_with_a_split(cli, data, tmp_path):
     result = stereodet.evaluate(root, det, split="val")
     same_as_cli(result, expected)
     assert result.num_frames == 2
+
+
+# --- Several overlap sets, as the CLI's --overlaps ---
+
+def test_overlap_sets_are_the_clis_runs(cli, random_set, tmp_path):
+    label_dir, det_dir = random_set[:2]
+    both = stereodet.evaluate(label_dir, det_dir, overlaps="strict,loose")
+    same_as_cli(both, cli_results(cli, tmp_path / "both", "--gt", label_dir, "--det", det_dir,
+                                  "--overlaps", "strict,loose"))
+    assert both.overlaps == ["strict", "loose"] and len(both.runs) == 2
+    # Each run is the CLI's run of that set alone.
+    strict, loose = both.runs
+    same_as_cli(strict, cli_results(cli, tmp_path / "strict", "--gt", label_dir, "--det",
+                                    det_dir))
+    same_as_cli(loose, cli_results(cli, tmp_path / "loose", "--gt", label_dir, "--det", det_dir,
+                                   "--overlaps", "loose"))
+    assert strict.overlaps == ["strict"] and loose.overlaps == ["loose"]
+    # KITTI's thresholds: Car 0.7 / 0.7 / 0.7 strict, 0.7 / 0.5 / 0.5 loose.
+    assert strict.find("Car", "3d").min_overlap == 0.7
+    assert loose.find("Car", "3d").min_overlap == 0.5
+    assert loose.find("Car", "2d").min_overlap == 0.7
+    # The whole: every run's cells in run order, rows tagged, the CLI's table.
+    assert len(both.cells) == len(strict.cells) + len(loose.cells) == 54
+    assert [r["overlaps"] for r in both.rows()] == ["strict"] * 27 + ["loose"] * 27
+    assert both.find("Car", "bev", overlaps="loose").ap_r40 == loose.ap("Car", "bev")
+    assert both.ap("Car", "bev", overlaps="strict") == strict.ap("Car", "bev")
+    out = cli("eval", "--gt", label_dir, "--det", det_dir, "--overlaps", "strict,loose").stdout
+    assert both.table() in out and "overlaps loose" in both.table()
+    assert both.num_frames == 300 and both.seconds == strict.seconds + loose.seconds
+    # A list works as the text does; one set is the result as before.
+    listed = stereodet.evaluate(label_dir, det_dir, overlaps=["strict", "loose"]).to_dict()
+    assert listed["results"] == both.to_dict()["results"]
+    one = stereodet.evaluate(label_dir, det_dir)
+    assert one.overlaps == ["strict"] and len(one.runs) == 1
+    assert one.runs[0].to_dict()["results"] == one.to_dict()["results"]
+    assert one.find("Car") is not None  # no overlaps= needed with one set
+
+
+def test_overlap_sets_refuse_what_is_ambiguous(small):
+    label_dir, det_dir, gt, dt = small
+    both = stereodet.evaluate(gt, dt, overlaps="loose, strict", records=True)
+    assert both.overlaps == ["loose", "strict"]
+    with pytest.raises(ValueError, match="give overlaps="):
+        both.find("Car")
+    with pytest.raises(ValueError, match="no run 'custom'"):
+        both.ap("Car", overlaps="custom")
+    with pytest.raises(ValueError, match=r"runs\[i\].records"):
+        both.records()
+    assert len(both.runs[1].records()["frame"]) > 0
+    with pytest.raises(ValueError, match="'strict' given twice"):
+        stereodet.evaluate(gt, dt, overlaps="strict,strict")
+    with pytest.raises(ValueError, match="overlaps: unknown 'medium'"):
+        stereodet.evaluate(gt, dt, overlaps="strict,medium")
+    with pytest.raises(ValueError, match="no overlap set"):
+        stereodet.evaluate(gt, dt, overlaps=[])
+    spec = stereodet.ClassSpec("Car", ["Van"], [0.6, 0.6, 0.6])
+    with pytest.raises(ValueError, match="ClassSpec objects have their own thresholds"):
+        stereodet.evaluate(gt, dt, classes=[spec], overlaps="strict,loose")
+    # One set: a ClassSpec keeps its thresholds, names beside it get the set's.
+    custom = stereodet.evaluate(gt, dt, classes=[spec, "Pedestrian"], overlaps="loose")
+    assert custom.find("Car", "3d").min_overlap == 0.6
+    assert custom.find("Pedestrian", "3d").min_overlap == 0.25
+    truck = stereodet.ClassSpec("Truck", [], [0.4, 0.3, 0.2])
+    assert stereodet.evaluate(gt, dt, classes=[truck], all_classes=True).options.classes[0] \
+        .min_overlap == [0.4, 0.3, 0.2]
+    with pytest.raises(ValueError, match="filter_sweep takes one overlap set"):
+        stereodet.filter_sweep(label_dir, det_dir, "min-area", overlaps="strict,loose")
+    with pytest.raises(ValueError, match="compare takes one overlap set"):
+        stereodet.compare(label_dir, det_dir, det_dir, overlaps="strict,loose")
+
+
+# --- out=: the CLI's results folder ---
+
+def files_under(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+
+
+def without_run_lines(text):
+    """results.json without what describes the run itself: the command line and the wall time."""
+    return [line for line in text.splitlines()
+            if not line.lstrip().startswith(('"command_line":', '"seconds":'))]
+
+
+def assert_same_folder(cli_dir, py_dir, *, results_json=True):
+    """Every file the CLI wrote, Python wrote too; the report's files byte for byte (results.json
+    but for its command line and wall time). Files are listed from the CLI's folder, so that a
+    file the report gains later is checked to be there as well."""
+    cli_files = files_under(cli_dir)
+    assert files_under(py_dir) == cli_files
+    assert "results.json" in cli_files and "summary.csv" in cli_files
+    curves = [f for f in cli_files if f.startswith("curves/")]
+    assert len(curves) > 100
+    for name in ["summary.csv"] + curves + [f for f in cli_files if f.startswith("matches")]:
+        assert (py_dir / name).read_bytes() == (cli_dir / name).read_bytes(), name
+    if results_json:
+        cli_text = (cli_dir / "results.json").read_text()
+        assert without_run_lines((py_dir / "results.json").read_text()) == \
+            without_run_lines(cli_text)
+        assert len(without_run_lines(cli_text)) == len(cli_text.splitlines()) - 2
+    return cli_files
+
+
+@pytest.mark.parametrize("python, flags", [
+    ({}, []),
+    (dict(overlaps="strict,loose", records=True, filters="max-distance=40"),
+     ["--overlaps", "strict,loose", "--records", "--filter", "max-distance=40"]),
+])
+def test_out_writes_the_clis_results_folder(cli, random_set, tmp_path, python, flags):
+    label_dir, det_dir = random_set[:2]
+    cli("eval", "--gt", label_dir, "--det", det_dir, "--out", tmp_path / "cli", *flags)
+    result = stereodet.evaluate(label_dir, det_dir, out=tmp_path / "py", **python)
+    files = assert_same_folder(tmp_path / "cli", tmp_path / "py")
+    assert sorted(os.path.relpath(f, tmp_path / "py") for f in result.files) == files
+    if python.get("records"):
+        assert {"matches_strict.csv", "matches_loose.csv"} <= set(files)
+    # An earlier results folder is replaced whole; a folder of other files is refused.
+    stereodet.evaluate(label_dir, det_dir, out=tmp_path / "py", **python)
+    assert files_under(tmp_path / "py") == files
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep me")
+    with pytest.raises(OSError, match="mine"):
+        stereodet.evaluate(label_dir, det_dir, out=tmp_path / "mine")
+    assert files_under(tmp_path / "mine") == ["notes.txt"]
+    assert stereodet.evaluate(label_dir, det_dir).files == []
+
+
+def test_out_of_annotation_dicts_is_the_same_report(cli, random_set, tmp_path):
+    label_dir, det_dir, gt, dt = random_set
+    cli("eval", "--gt", label_dir, "--det", det_dir, "--out", tmp_path / "cli", "--records")
+    result = stereodet.evaluate(gt, dt, out=tmp_path / "py", records=True)
+    # The numbers and curves byte for byte; results.json differs in what was read (no folders).
+    assert_same_folder(tmp_path / "cli", tmp_path / "py", results_json=False)
+    written = json.loads((tmp_path / "py" / "results.json").read_text())
+    expected = json.loads((tmp_path / "cli" / "results.json").read_text())
+    assert written["results"] == expected["results"] and written["tool"] == expected["tool"]
+    assert written == result.to_dict()
+    assert len(result.files) == len(files_under(tmp_path / "py"))
+    stereodet.evaluate(gt, dt, out=tmp_path / "plain")
+    assert "matches.csv" not in files_under(tmp_path / "plain")
+    assert "summary.csv" in files_under(tmp_path / "plain")
+
+
+def test_sweep_and_compare_out_are_the_clis_csvs(cli, small, data, tmp_path):
+    label_dir, det_dir = small[:2]
+    cli("eval", "sweep", "--gt", label_dir, "--det", det_dir, "--filter", "max-distance",
+        "--from", "10", "--to", "50", "--step", "20", "--out", tmp_path / "cli_sweep")
+    rows = stereodet.filter_sweep(label_dir, det_dir, "max-distance", 10, 50, 20,
+                                  out=tmp_path / "py_sweep")
+    assert len(rows) == 27 * 3
+    assert (tmp_path / "py_sweep" / "sweep.csv").read_bytes() == \
+        (tmp_path / "cli_sweep" / "sweep.csv").read_bytes()
+    root = data / "eval_compare"
+    args = ["--gt", root / "label_2", "--det", root / "det_a", "--det-b", root / "det_b",
+            "--classes", "Car", "--disparity-error-px", "0.5"]
+    cli("eval", "compare", *args, "--out", tmp_path / "cli_compare")
+    stereodet.compare(root / "label_2", root / "det_a", root / "det_b", classes="Car",
+                      disparity_error_px=0.5, out=tmp_path / "py_compare")
+    assert (tmp_path / "py_compare" / "compare.csv").read_bytes() == \
+        (tmp_path / "cli_compare" / "compare.csv").read_bytes()
+    # A Calibration object is the in-memory path: the same rows as the CLI's call.
+    in_memory = stereodet.compare(root / "label_2", root / "det_a", root / "det_b",
+                                  classes="Car", disparity_error_px=0.5,
+                                  calib=kitti.Calibration.kitti_like())
+    through_cli = stereodet.compare(root / "label_2", root / "det_a", root / "det_b",
+                                    classes="Car", disparity_error_px=0.5)
+    assert len(in_memory) == len(through_cli) > 0
+    assert repr(in_memory) == repr(through_cli)  # exact, NaN of empty bins included
+    with pytest.raises(ValueError, match="only for folders"):
+        stereodet.filter_sweep(small[2], small[3], "min-area", out=tmp_path / "x")
 
 
 # --- Annotation dicts ---
