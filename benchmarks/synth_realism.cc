@@ -232,6 +232,8 @@ int Run(const Args& args) {
           // Full-resolution crop for a look at texture detail.
           WriteSmallPng(args.images + "/synth_crop.png",
                         f.image_left(cv::Rect(420, 140, 400, 150)));
+          WriteSmallPng(args.images + "/synth_road_crop.png",
+                        f.image_left(cv::Rect(300, 250, 500, 125)));
         }
       },
       args.threads);

@@ -332,7 +332,14 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
       } else {
         const float distance = hit.t * dir_norm;
         const float cos_view = std::abs(hit.normal.dot(dir_unit));
-        const float footprint = distance * pixel_angle / std::sqrt(std::max(cos_view, 0.05f));
+        // Texture filter width. On horizontal surfaces (the road, sidewalks) a pixel row holds
+        // points of one depth in both cameras (rectified rows), so detail finer than the row
+        // spacing along the depth is sampled alike by both and only the across-row spacing
+        // (distance x pixel angle) has to be respected; elsewhere the footprint widens with the
+        // obliquity.
+        const float footprint = std::abs(hit.normal.y()) > 0.9f
+                                    ? distance * pixel_angle
+                                    : distance * pixel_angle / std::sqrt(std::max(cos_view, 0.05f));
         const Eigen::Vector3f albedo = SurfaceAlbedo(scene, hit, footprint);
         const float up = -hit.normal.y();
         Eigen::Vector3f irradiance = light.sky_ambient * (0.6f + 0.4f * up);

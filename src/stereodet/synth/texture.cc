@@ -51,6 +51,13 @@ float LineCoverage(float coord, float period, float phase, float width, float fo
   return Clamp01(overlap / (2.0f * half_fp));
 }
 
+// Fraction of a footprint centred at `coord` that lies in [lo, hi].
+float IntervalCoverage(float coord, float lo, float hi, float footprint) {
+  const float half_fp = std::max(0.5f * footprint, 1e-5f);
+  return Clamp01((std::min(coord + half_fp, hi) - std::max(coord - half_fp, lo)) /
+                 (2.0f * half_fp));
+}
+
 // Tone in [-1, 1] of lattice cell (i, j), for stones, bricks and windows.
 float CellTone(float i, float j, uint64_t salt) {
   return 2.0f * HashToUnitFloat(HashOf({salt, static_cast<uint64_t>(static_cast<int64_t>(i)),
@@ -154,12 +161,41 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     case Pattern::kPlain:
       return m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 2.0f, 0.6f, 8, fp));
     case Pattern::kAsphalt: {
-      const float grain = FilteredFbm(u, v, 6.0f, 0.7f, 7, fp);
+      // Aggregate and grain down to the pixel, stains at the scale of a block-matching window,
+      // repaired patches with sharp edges, and cracks along the zero lines of a noise field.
+      const float grain = FilteredFbm(u, v, 6.0f, 0.8f, 8, fp);
+      const float stains = FilteredFbm(u + 71.0f, v, 1.2f, 0.7f, 4, fp);
       const float patches =
           0.5f * Noise(0.12f * u + 91.0f, 0.12f * v) + 0.25f * Noise(0.5f * u, 0.5f * v + 13.0f);
-      Eigen::Vector3f albedo = m.albedo * (1.0f + m.contrast * grain + 0.18f * patches);
+      float tone = 1.0f + m.contrast * grain + 0.25f * stains + 0.18f * patches;
+      // Repairs: in 5 x 7 m cells, one in five holds a rectangle of fresher (darker) or older
+      // (lighter) asphalt, box-filtered at its edges.
+      {
+        const float ci = std::floor(u / 5.0f), cj = std::floor(v / 7.0f);
+        const float pick = CellTone(ci, cj, 41);
+        if (pick > 0.6f) {
+          const float a = CellTone(ci, cj, 43), b = CellTone(ci, cj, 47);
+          const float u0 = ci * 5.0f + 1.0f + 0.8f * a, u1 = u0 + 2.0f + 1.0f * b;
+          const float v0 = cj * 7.0f + 1.0f + 1.0f * b, v1 = v0 + 3.0f + 1.5f * a;
+          const float cover = IntervalCoverage(u, u0, u1, fp) * IntervalCoverage(v, v0, v1, fp);
+          tone *= 1.0f + cover * (pick > 0.8f ? -0.22f : 0.15f);
+        }
+      }
+      // Cracks: thin dark lines where a large-scale noise crosses zero, only in some regions.
+      {
+        const float crackable = Noise(0.07f * u + 3.0f, 0.07f * v + 5.0f);
+        if (crackable > 0.1f) {
+          constexpr float kFreq = 0.45f;
+          const float n = Noise(kFreq * u + 17.0f, kFreq * v + 29.0f);
+          const float distance = std::abs(n) / (1.5f * kFreq);  // metres, roughly
+          const float cover = LineCoverage(distance, 1000.0f, 0.0f, 0.012f, fp);
+          tone *= 1.0f - 0.55f * cover * Clamp01(4.0f * (crackable - 0.1f));
+        }
+      }
+      Eigen::Vector3f albedo = m.albedo * std::max(0.2f, tone);
       if (hit.kind == SurfaceHit::Kind::kGround && hit.material == scene.road_material) {
-        // Markings, box-filtered across their width so far lines fade instead of flickering.
+        // Markings, box-filtered across their width so far lines fade instead of flickering, and
+        // worn: tyres rub the paint off in blotches.
         const Eigen::Vector2f rc = scene.road.ToRoad(hit.point.x(), hit.point.z());
         float paint = 0.0f;
         for (const Road::Marking& mk : scene.road.markings) {
@@ -168,8 +204,9 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
           paint = std::max(paint, cover);
         }
         if (paint > 0.0f) {
+          const float wear = Clamp01(0.8f + 0.6f * FilteredFbm(u + 5.0f, v, 3.0f, 0.7f, 5, fp));
           const Eigen::Vector3f white = m.albedo2 * (1.0f + 0.1f * grain);
-          albedo = albedo + paint * (white - albedo);
+          albedo = albedo + paint * wear * (white - albedo);
         }
       }
       return albedo;
@@ -191,7 +228,9 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       const float window = wu * wv;
       Eigen::Vector3f out = Eigen::Vector3f::Zero();
       if (window < 1.0f) {
-        out = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 1.5f, 0.65f, 8, fp));
+        // Plaster or render: blotches and a fine grain.
+        out = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 1.5f, 0.65f, 8, fp) +
+                          0.12f * FilteredFbm(u + 3.0f, v, 10.0f, 0.7f, 5, fp));
         // Floor bands (cornices) give horizontal structure; roofs and undersides are plain.
         if (f.axis != 1) out *= 1.0f - 0.25f * LineCoverage(v, floor_h, 0.0f, 0.18f, fp);
       }
