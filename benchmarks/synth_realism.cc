@@ -77,8 +77,11 @@ StereoScore Score(const cv::Mat& estimate, const cv::Mat& gt) {
 // OpenCV's fixed-point disparities (x16) to pixels, invalid (< 0) to 0.
 // BM's score over the ground-truth pixels inside the 2D boxes of the frame's labels of `type`
 // (a pixel in two boxes counts once), near or far ones (`near` = 1 / 0) or all (`near` = -1).
+// With `min_u` > 0 only the columns from min_u on count (BM leaves its first numDisparities columns
+// empty).
 StereoScore ScoreInBoxes(const cv::Mat& estimate, const cv::Mat& gt,
-                         const std::vector<Object>& labels, const std::string& type, int near) {
+                         const std::vector<Object>& labels, const std::string& type, int near,
+                         int min_u = 0) {
   cv::Mat mask(gt.size(), CV_8U, cv::Scalar(0));
   for (const Object& o : labels) {
     if (o.type != type) continue;
@@ -91,6 +94,7 @@ StereoScore ScoreInBoxes(const cv::Mat& estimate, const cv::Mat& gt,
     if (u1 < u0 || v1 < v0) continue;
     mask(cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1)).setTo(255);
   }
+  if (min_u > 0) mask.colRange(0, std::min(min_u, gt.cols)).setTo(0);
   cv::Mat masked_gt(gt.size(), CV_32F, cv::Scalar(0.0f));
   gt.copyTo(masked_gt, mask);
   return Score(estimate, masked_gt);
@@ -167,7 +171,7 @@ int Run(const Args& args) {
   std::vector<std::vector<Object>> labels(args.frames);
   StereoScore bm_total, sgbm_total;
   // BM inside the boxes of kBoxClasses: [class][all, near, far].
-  std::array<std::array<StereoScore, 3>, kBoxClasses.size()> bm_boxes{};
+  std::array<std::array<StereoScore, 4>, kBoxClasses.size()> bm_boxes{};
   ParallelFor(
       static_cast<size_t>(args.frames),
       [&](size_t i) {
@@ -197,20 +201,19 @@ int Run(const Args& args) {
         sgbm->compute(left, right, sgbm_fixed);
         const cv::Mat bm_d = ToPixels(bm_fixed), sgbm_d = ToPixels(sgbm_fixed);
         const StereoScore b = Score(bm_d, f.disparity), s = Score(sgbm_d, f.disparity);
-        std::array<std::array<StereoScore, 3>, kBoxClasses.size()> boxes;
+        std::array<std::array<StereoScore, 4>, kBoxClasses.size()> boxes;
         for (size_t c = 0; c < kBoxClasses.size(); ++c) {
           for (int k = 0; k < 3; ++k) {
-            boxes[c][k] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c],
-                                       k == 0   ? -1
-                                       : k == 1 ? 1
-                                                : 0);
+            const int near = k == 0 ? -1 : (k == 1 ? 1 : 0);
+            boxes[c][k] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], near);
           }
+          boxes[c][3] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], -1, 128);
         }
         std::lock_guard<std::mutex> lock(mutex);
         Add(bm_total, b);
         Add(sgbm_total, s);
         for (size_t c = 0; c < kBoxClasses.size(); ++c) {
-          for (int k = 0; k < 3; ++k) Add(bm_boxes[c][k], boxes[c][k]);
+          for (int k = 0; k < 4; ++k) Add(bm_boxes[c][k], boxes[c][k]);
         }
         if (static_cast<int>(i) == args.picture_frame && !args.images.empty()) {
           cv::Mat pair, half_l, half_r;
@@ -309,7 +312,8 @@ int Run(const Args& args) {
     std::printf(
         "\nStereoBM inside the 2D boxes (ground-truth pixels in the boxes; near: < %.0f m):\n\n"
         "| class | density | D1 of estimated | density near | D1 near | density far | D1 far | "
-        "GT pixels |\n|---|---:|---:|---:|---:|---:|---:|---:|\n",
+        "GT pixels | share in BM's empty first 128 columns | density right of them "
+        "|\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         kNearM);
     for (size_t c = 0; c < kBoxClasses.size(); ++c) {
       std::printf("| %s |", kBoxClasses[c]);
@@ -318,7 +322,10 @@ int Run(const Args& args) {
         std::printf(" %.1f%% | %.1f%% |", 100.0 * s.estimated / std::max<int64_t>(1, s.gt),
                     100.0 * s.bad / std::max<int64_t>(1, s.estimated));
       }
-      std::printf(" %lld |\n", static_cast<long long>(bm_boxes[c][0].gt));
+      const StereoScore& right = bm_boxes[c][3];
+      std::printf(" %lld | %.1f%% | %.1f%% |\n", static_cast<long long>(bm_boxes[c][0].gt),
+                  100.0 - 100.0 * right.gt / std::max<int64_t>(1, bm_boxes[c][0].gt),
+                  100.0 * right.estimated / std::max<int64_t>(1, right.gt));
     }
   }
 

@@ -344,8 +344,9 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
         const float up = -hit.normal.y();
         Eigen::Vector3f irradiance = light.sky_ambient * (0.6f + 0.4f * up);
         const float sun_cos = hit.normal.dot(light.to_sun);
+        bool lit = false;
         if (sun_cos > 0.0f) {
-          bool lit = true;
+          lit = true;
           if (options.shadows) {
             lit = !sun_bins->Occluded(scene, hit.point + 0.005f * hit.normal,
                                       options.shadow_distance_m, &shadow_hint);
@@ -355,11 +356,17 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
         color = albedo.cwiseProduct(irradiance);
         const float specular = scene.materials[hit.material].specular;
         if (specular > 0.0f) {
-          // Mirror the sky, more at grazing angles (a cheap Fresnel term).
+          // Mirror the sky, more at grazing angles (a cheap Fresnel term) ...
           const Eigen::Vector3f reflected = dir_unit - 2.0f * dir_unit.dot(hit.normal) * hit.normal;
           const float grazing = 1.0f - cos_view;
           const float fresnel = specular * (0.3f + 0.7f * grazing * grazing * grazing);
           color += fresnel * SkyRadiance(light, reflected);
+          // ... and the sun's glint on the clear coat (view-dependent, as real highlights).
+          if (lit) {
+            const float r = std::max(0.0f, reflected.dot(light.to_sun));
+            const float r2 = r * r, r4 = r2 * r2, r8 = r4 * r4, r16 = r8 * r8;
+            color += (1.5f * specular * r16 * r16 * r16) * light.sun;  // lobe r^48
+          }
         }
         const float haze = 1.0f - std::exp(-distance * light.haze_per_m);
         color += haze * (light.sky_horizon - color);

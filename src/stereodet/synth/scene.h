@@ -28,9 +28,11 @@ enum class Pattern : uint8_t {
   kFence,     // vertical slats with gaps (albedo2)
   kFoliage,   // leaves: strong high-frequency noise
   kGrass,     // grass and soil
-  kCarPaint,  // smooth paint; lights and a number plate on the front and rear faces
-  kGlass,     // dark glass reflecting the sky
+  kCarPaint,  // paint with dirt and grime; lights, grille and plate on the front and rear faces,
+              // seams, handles and wheel arches (at +-scale_m along the body, if > 0) on the sides
+  kGlass,     // dark glass reflecting the sky, the interior behind it; pillars in albedo2
   kCloth,     // clothing: mid-frequency noise and folds
+  kWheel,     // tyre (albedo) with a spoked rim (albedo2) on the cylinder's end faces
 };
 
 struct Material {

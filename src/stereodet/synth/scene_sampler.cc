@@ -168,7 +168,7 @@ class StreetBuilder {
 
 void StreetBuilder::Materials() {
   Material asphalt =
-      MakeMaterial(Pattern::kAsphalt, Vary(rng_, Rgb(0.15, 0.15, 0.155), 0.25), 0.9f, 0.22f);
+      MakeMaterial(Pattern::kAsphalt, Vary(rng_, Rgb(0.15, 0.15, 0.155), 0.25), 0.75f, 0.22f);
   asphalt.albedo2 = Rgb(0.7, 0.7, 0.68);
   scene_.road_material = scene_.AddMaterial(asphalt);
   Material offroad =

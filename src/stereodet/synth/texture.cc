@@ -272,32 +272,100 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       return base * (1.0f + m.contrast * blades);
     }
     case Pattern::kCarPaint: {
-      Eigen::Vector3f paint = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp));
-      if (f.axis == 1) return paint;
+      // Paint with a little dirt everywhere and road grime rising from the bottom of the sides.
+      const float dirt = FilteredFbm(u + 13.0f, v, 6.0f, 0.7f, 6, fp);
+      Eigen::Vector3f paint =
+          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp) + 0.14f * dirt);
+      const Eigen::Vector3f grime(0.08f, 0.075f, 0.065f);
+      if (f.axis == 1) {
+        // Bonnet and boot seams across the top.
+        const float seam =
+            std::max(LineCoverage(f.local.x(), 1000.0f, f.half.x() - 1.05f, 0.012f, fp),
+                     LineCoverage(f.local.x(), 1000.0f, -f.half.x() + 0.75f, 0.012f, fp));
+        return paint + seam * (Eigen::Vector3f(0.03f, 0.03f, 0.03f) - paint);
+      }
+      const float grimy = Clamp01(1.0f - v / 0.45f) * Clamp01(0.55f + 0.5f * dirt);
+      paint += 0.5f * grimy * (grime - paint);
       // Bumper band at the bottom of the body.
-      if (v < 0.16f) paint = Eigen::Vector3f(0.05f, 0.05f, 0.055f);
+      if (v < 0.16f) paint = Eigen::Vector3f(0.05f, 0.05f, 0.055f) * (1.0f + 0.3f * dirt);
       if (f.axis == 0) {
-        // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle.
+        // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle, a
+        // grille between the headlamps.
         const float z = std::abs(f.local.z()), edge = f.half.z();
         const bool lamp_row = v > 0.32f && v < 0.5f;
         if (lamp_row && z > edge - 0.32f) {
-          return f.sign > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f)
-                               : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
+          const float rim = LineCoverage(z, 1000.0f, edge - 0.3f, 0.02f, fp);
+          const Eigen::Vector3f lamp = f.sign > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f)
+                                                     : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
+          return lamp * (1.0f - 0.6f * rim) * (1.0f + 0.15f * dirt);
         }
         if (z < 0.26f && v > 0.18f && v < 0.29f) {
           const float text = LineCoverage(f.local.z(), 0.07f, 0.0f, 0.025f, fp);
           return Eigen::Vector3f(0.8f, 0.8f, 0.78f) * (1.0f - 0.8f * text);
         }
+        if (f.sign > 0.0f && z < edge - 0.38f && v > 0.31f && v < 0.47f) {
+          const float slat = LineCoverage(v, 0.04f, 0.0f, 0.015f, fp);
+          return Eigen::Vector3f(0.03f, 0.03f, 0.035f) + slat * Eigen::Vector3f(0.2f, 0.2f, 0.2f);
+        }
       } else {
-        // Sides: a rubbing strip and door seams.
+        // Sides: a rubbing strip, door seams and handles, dark wheel arches.
+        const float x = f.local.x();
         const float strip = LineCoverage(v, 1000.0f, 0.3f, 0.05f, fp);
-        const float seam = LineCoverage(f.local.x(), 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
-        paint = paint + std::max(strip, seam) * (Eigen::Vector3f(0.04f, 0.04f, 0.04f) - paint);
+        const float seam = LineCoverage(x, 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
+        const float handle =
+            IntervalCoverage(Fract((x - 0.1f) / 1.05f) * 1.05f, 0.72f, 0.9f, fp) *
+            IntervalCoverage(v, f.half.y() * 2.0f - 0.17f, f.half.y() * 2.0f - 0.12f, fp);
+        paint = paint +
+                std::max({strip, seam, handle}) * (Eigen::Vector3f(0.04f, 0.04f, 0.04f) - paint);
+        if (m.scale_m > 0.0f) {
+          const float d = std::hypot(std::abs(x) - m.scale_m, v - 0.11f);  // wheel centre
+          const float arch = IntervalCoverage(d, -1.0f, 0.4f, fp);
+          paint += arch * (Eigen::Vector3f(0.02f, 0.02f, 0.02f) - paint);
+        }
       }
       return paint;
     }
-    case Pattern::kGlass:
-      return m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 2.0f, 0.5f, 5, fp));
+    case Pattern::kGlass: {
+      // Through the glass: seats, headrests and the far side, as mid-frequency dark noise.
+      Eigen::Vector3f glass =
+          m.albedo * std::max(0.2f, 1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp));
+      float frame = 0.0f;
+      if (f.axis == 2) {
+        // Sides: A, B and C pillars and the frame at the sill, in the body colour.
+        const float x = f.local.x(), hx = f.half.x();
+        frame = std::max({IntervalCoverage(x, hx - 0.14f, hx + 1.0f, fp),
+                          IntervalCoverage(x, -hx - 1.0f, -hx + 0.18f, fp),
+                          IntervalCoverage(x, -0.05f * hx - 0.06f, -0.05f * hx + 0.06f, fp),
+                          IntervalCoverage(v, -1.0f, 0.05f, fp)});
+      } else if (f.axis == 0) {
+        const float z = std::abs(f.local.z());
+        frame = std::max(IntervalCoverage(z, f.half.z() - 0.08f, f.half.z() + 1.0f, fp),
+                         IntervalCoverage(v, -1.0f, 0.05f, fp));
+      }
+      return glass + frame * (m.albedo2 - glass);
+    }
+    case Pattern::kWheel: {
+      // The end faces of a wheel (a cylinder on its local y axis): rim with spokes and hub inside
+      // 62% of the radius, tyre sidewall outside; the tread elsewhere.
+      const Primitive& p = scene.primitives[hit.primitive];
+      const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
+      const Eigen::Vector3f tyre =
+          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 5, fp));
+      if (std::abs(n.y()) <= 0.5f) return tyre;
+      const float radius = p.half_extent.x();
+      const float rho = std::hypot(f.local.x(), f.local.z());
+      const float rim_cover = IntervalCoverage(rho, -1.0f, 0.62f * radius, fp);
+      if (rim_cover <= 0.0f) return tyre;
+      // Five spokes; their contrast fades once the spoke period at this radius nears the footprint.
+      const float theta = std::atan2(f.local.z(), f.local.x());
+      const float period = 2.0f * static_cast<float>(M_PI) * std::max(rho, 1e-3f) / 5.0f;
+      const float fade = Clamp01(2.0f - 4.0f * fp / period);
+      const float spoke = 0.5f + 0.5f * std::cos(5.0f * theta);
+      const float hub = IntervalCoverage(rho, -1.0f, 0.16f * radius, fp);
+      const float metal = std::max(hub, 0.55f + fade * (Clamp01(3.0f * spoke - 1.0f) - 0.55f));
+      const Eigen::Vector3f rim = m.albedo2 * (0.15f + 0.85f * metal);
+      return tyre + rim_cover * (rim - tyre);
+    }
     case Pattern::kCloth: {
       const float folds = FilteredFbm(u, v, 4.0f, 0.6f, 6, fp);
       return m.albedo * (1.0f + m.contrast * folds);
