@@ -235,8 +235,20 @@ int Run(const Args& args) {
           // Full-resolution crop for a look at texture detail.
           WriteSmallPng(args.images + "/synth_crop.png",
                         f.image_left(cv::Rect(420, 140, 400, 150)));
-          WriteSmallPng(args.images + "/synth_road_crop.png",
-                        f.image_left(cv::Rect(300, 250, 500, 125)));
+          // The largest car, left image above BM's disparity (black: none).
+          cv::Rect car;
+          for (const Object& o : f.labels) {
+            if (o.type != "Car") continue;
+            const cv::Rect r(
+                cv::Point(static_cast<int>(o.box.left), static_cast<int>(o.box.top)),
+                cv::Point(static_cast<int>(o.box.right), static_cast<int>(o.box.bottom)));
+            if (r.area() > car.area()) car = r;
+          }
+          if (car.area() > 0) {
+            cv::Mat stack;
+            cv::vconcat(f.image_left(car), ColourDisparity(bm_d, 96)(car), stack);
+            WriteSmallPng(args.images + "/synth_car.png", stack);
+          }
         }
       },
       args.threads);

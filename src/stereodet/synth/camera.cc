@@ -373,7 +373,7 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
       }
       const float du = u - cx, dv = v - cy;
       const float vignette = 1.0f - options.vignetting * (du * du + dv * dv) / half_diag_sq;
-      color *= light.exposure * request.gain * vignette;
+      color = color.cwiseProduct(light.white_balance) * (light.exposure * request.gain * vignette);
       rad_row[u] = cv::Vec3f(color.z(), color.y(), color.x());  // BGR
       depth_row[u] = valid ? hit.t : 0.0f;
       if (id_row != nullptr) id_row[u] = valid ? hit.object : -1;
@@ -387,6 +387,7 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
     cv::GaussianBlur(radiance, radiance, cv::Size(0, 0), options.optics_blur_sigma_px);
   }
   const auto& lut = ToneLut();
+  const float noise_sigma = options.noise_sigma * scene.light.noise_scale;
   out.image.create(height, width, CV_8UC3);
   const uint64_t camera_seed = HashOf({request.noise_seed, static_cast<uint64_t>(request.camera)});
   for (int v = 0; v < height; ++v) {
@@ -397,7 +398,7 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
       for (int c = 0; c < 3; ++c) {
         const float x = std::clamp(rad_row[u][c], 0.0f, 1.0f);
         float level = lut[static_cast<int>(x * kToneLutSize + 0.5f)];
-        level += options.noise_sigma * HashNormal(Mix64(pixel_hash + c));
+        level += noise_sigma * HashNormal(Mix64(pixel_hash + c));
         img_row[u][c] = cv::saturate_cast<uchar>(level);
       }
     }

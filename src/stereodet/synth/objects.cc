@@ -67,10 +67,10 @@ VehicleMaterials AddVehicleMaterials(Scene& scene, Rng& rng, const Eigen::Vector
   Material paint = MakeMaterial(Pattern::kCarPaint, colour, 0.04f);
   paint.specular = 0.12f;
   paint.scale_m = 0.0f;  // no wheel arches unless the builder sets the axle position
-  Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.035, 0.04, 0.045), 0.6f, 0.05f);
+  Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.05, 0.055, 0.06), 0.8f, 0.05f);
   glass.specular = 0.3f;
   glass.albedo2 = colour;  // pillars and frames
-  Material tyre = MakeMaterial(Pattern::kWheel, Rgb(0.03, 0.03, 0.03), 0.35f, 0.04f);
+  Material tyre = MakeMaterial(Pattern::kWheel, Rgb(0.055, 0.055, 0.055), 0.45f, 0.04f);
   // Rims: silver alloy mostly, some black or dark grey.
   tyre.albedo2 = rng.Bernoulli(0.75) ? Vary(rng, Rgb(0.5, 0.5, 0.52), 0.2) : Rgb(0.08, 0.08, 0.09);
   Material dark = MakeMaterial(Pattern::kPlain, Vary(rng, Rgb(0.06, 0.06, 0.06), 0.3), 0.3f);

@@ -86,6 +86,10 @@ struct Lighting {
   float cloudiness = 0.3f;           // [0, 1]
   float haze_per_m = 1.0f / 600.0f;  // extinction: weight of the horizon colour is 1 - exp(-d k)
   float exposure = 1.0f;
+  // The camera's white balance (gains on linear R, G, B; as set, not as the light is) and its
+  // sensor noise relative to RenderOptions::noise_sigma (gain, temperature), both per frame.
+  Eigen::Vector3f white_balance = Eigen::Vector3f::Ones();
+  float noise_scale = 1.0f;
 };
 
 // What a ray hit.

@@ -564,6 +564,13 @@ void StreetBuilder::Build() {
   light.sky_horizon = Vary(rng_, Rgb(0.85, 0.88, 0.92), 0.08);
   light.haze_per_m = static_cast<float>(rng_.Uniform(1.0 / 900.0, 1.0 / 300.0));
   light.exposure = static_cast<float>(rng_.Uniform(0.85, 1.1) / (0.55 * sun + ambient));
+  // The camera's white balance is not perfect: +-6% on red and blue, warmer under a low sun; its
+  // noise varies with gain and temperature.
+  const double warm = elevation < 25.0 * M_PI / 180.0 ? 0.04 : 0.0;
+  const double wb_red = rng_.Uniform(0.94, 1.06) + warm;
+  const double wb_blue = rng_.Uniform(0.94, 1.06) - warm;
+  light.white_balance = Rgb(wb_red, 1.0, wb_blue);
+  light.noise_scale = static_cast<float>(rng_.Uniform(0.8, 1.5));
   scene_.Finalize();
 }
 

@@ -236,9 +236,15 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       }
       if (window > 0.0f) {
         const float tone = CellTone(std::floor(u / pitch), std::floor(v / floor_h), 23);
+        // Panes with curtains and rooms behind them, split by a mullion and a transom in the
+        // window frame's colour (light).
         const Eigen::Vector3f glass =
-            m.albedo2 * (1.0f + 0.5f * tone + 0.2f * FilteredFbm(u, v, 3.0f, 0.5f, 4, fp));
-        out += window * (glass - out);
+            m.albedo2 *
+            std::max(0.2f, 1.0f + 0.5f * tone + 0.6f * FilteredFbm(u, v, 2.5f, 0.7f, 6, fp));
+        const float bars = std::max(LineCoverage(u, pitch, 0.5f * pitch, 0.06f, fp),
+                                    LineCoverage(v, floor_h, 1.65f + 0.25f, 0.06f, fp));
+        const Eigen::Vector3f pane = glass + bars * (Eigen::Vector3f(0.55f, 0.55f, 0.53f) - glass);
+        out += window * (pane - out);
       }
       return out;
     }
@@ -272,10 +278,14 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       return base * (1.0f + m.contrast * blades);
     }
     case Pattern::kCarPaint: {
-      // Paint with a little dirt everywhere and road grime rising from the bottom of the sides.
+      // Paint with dust and spots of dirt everywhere and road grime rising from the bottom of the
+      // sides.
       const float dirt = FilteredFbm(u + 13.0f, v, 6.0f, 0.7f, 6, fp);
+      const float spots =
+          Clamp01(2.5f * (FilteredFbm(u + 41.0f, v + 7.0f, 9.0f, 0.75f, 5, fp) - 0.15f));
       Eigen::Vector3f paint =
           m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp) + 0.14f * dirt);
+      paint += 0.35f * spots * (Eigen::Vector3f(0.2f, 0.18f, 0.15f) - paint);
       const Eigen::Vector3f grime(0.08f, 0.075f, 0.065f);
       if (f.axis == 1) {
         // Bonnet and boot seams across the top.
@@ -287,7 +297,11 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       const float grimy = Clamp01(1.0f - v / 0.45f) * Clamp01(0.55f + 0.5f * dirt);
       paint += 0.5f * grimy * (grime - paint);
       // Bumper band at the bottom of the body.
-      if (v < 0.16f) paint = Eigen::Vector3f(0.05f, 0.05f, 0.055f) * (1.0f + 0.3f * dirt);
+      // Bumpers: painted, a little darker (they collect the dirt), with a black plastic strip.
+      if (v < 0.16f) {
+        paint *= 0.75f;
+        if (v < 0.05f) paint = Eigen::Vector3f(0.06f, 0.06f, 0.065f) * (1.0f + 0.6f * dirt);
+      }
       if (f.axis == 0) {
         // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle, a
         // grille between the headlamps.
