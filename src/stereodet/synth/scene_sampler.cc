@@ -173,12 +173,12 @@ void StreetBuilder::Materials() {
   scene_.road_material = scene_.AddMaterial(asphalt);
   Material offroad =
       kind_ == StreetKind::kCity
-          ? MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.3, 0.29, 0.27), 0.2), 0.25f)
+          ? MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.3, 0.29, 0.27), 0.2), 0.45f)
           : MakeMaterial(Pattern::kGrass, Vary(rng_, Rgb(0.12, 0.2, 0.06), 0.3), 0.45f, 0.5f);
   offroad.albedo2 = kind_ == StreetKind::kCity ? Rgb(0.1, 0.1, 0.1) : Rgb(0.22, 0.18, 0.1);
   offroad.scale_m = 0.5f;
   scene_.offroad_material = scene_.AddMaterial(offroad);
-  Material paving = MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.35, 0.33, 0.31), 0.2), 0.2f);
+  Material paving = MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.35, 0.33, 0.31), 0.2), 0.45f);
   paving.albedo2 = Rgb(0.12, 0.12, 0.11);
   paving.scale_m = static_cast<float>(rng_.Uniform(0.25, 0.5));
   sidewalk_material_ = scene_.AddMaterial(paving);

@@ -216,8 +216,10 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       const float joint =
           std::max(LineCoverage(u, s, 0.0f, 0.012f, fp), LineCoverage(v, s, 0.0f, 0.012f, fp));
       const float tone = CellTone(std::floor(u / s), std::floor(v / s), 17);
+      // Stones with their own tones, concrete grain, and stains that run across the joints.
       const Eigen::Vector3f stone =
-          m.albedo * (1.0f + 0.12f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 6, fp));
+          m.albedo * (1.0f + 0.12f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.75f, 7, fp) +
+                      0.12f * FilteredFbm(u + 9.0f, v, 1.5f, 0.6f, 4, fp));
       return stone + joint * (m.albedo2 - stone);
     }
     case Pattern::kFacade: {
@@ -261,8 +263,11 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     }
     case Pattern::kFence: {
       const float gap = f.axis == 1 ? 0.0f : LineCoverage(u, m.scale_m, 0.0f, 0.3f * m.scale_m, fp);
+      // Weathered boards: each slat its own tone, with a grain along it.
+      const float board = CellTone(std::floor(u / m.scale_m), 0.0f, 31);
       const Eigen::Vector3f slat =
-          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 4.0f, 0.6f, 6, fp));
+          m.albedo * (1.0f + 0.2f * board + m.contrast * FilteredFbm(u, v, 4.0f, 0.6f, 6, fp) +
+                      0.15f * FilteredFbm(8.0f * u, 0.5f * v, 2.0f, 0.7f, 5, fp));
       return slat + gap * (m.albedo2 - slat);
     }
     case Pattern::kFoliage: {
