@@ -163,8 +163,8 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     case Pattern::kAsphalt: {
       // Aggregate and grain down to the pixel, stains at the scale of a block-matching window,
       // repaired patches with sharp edges, and cracks along the zero lines of a noise field.
-      const float grain = FilteredFbm(u, v, 6.0f, 0.8f, 8, fp);
-      const float stains = FilteredFbm(u + 71.0f, v, 1.2f, 0.7f, 4, fp);
+      const float grain = FilteredFbm(u, v, 6.0f, 0.8f, 7, fp);
+      const float stains = FilteredFbm(u + 71.0f, v, 1.2f, 0.7f, 3, fp);
       const float patches =
           0.5f * Noise(0.12f * u + 91.0f, 0.12f * v) + 0.25f * Noise(0.5f * u, 0.5f * v + 13.0f);
       float tone = 1.0f + m.contrast * grain + 0.25f * stains + 0.18f * patches;
