@@ -1,18 +1,24 @@
 // synth_realism: the evidence in docs/synth.md that synthetic frames are realistic enough.
 //
 //   synth_realism [--frames 200] [--stereo-frames 20] [--seed 1] [--threads 0] [--images DIR]
-//                 [--picture-frame 0]
+//                 [--picture-frame 0] [--speed-frames 0]
 //
 // Generates frames in memory and prints, as Markdown tables:
 //  - label statistics (objects per frame, class mix, difficulty mix, occlusion and truncation mix,
 //    distance histogram), to set beside KITTI's published ones;
 //  - OpenCV StereoBM and StereoSGBM on the stereo frames against the exact ground truth: KITTI's D1
-//    (error > 3 px and > 5% of the true disparity) and density;
+//    (error > 3 px and > 5% of the true disparity) and density, over all pixels with ground truth
+//    and over the ground-truth pixels inside the 2D boxes of Car, Pedestrian and Cyclist labels
+//    (all, near < 20 m, far >= 20 m): issue 16's targets;
+//  - with --speed-frames N, the generation speed: N whole frames (1242 x 375 or the size given,
+//    both cameras, disparity, labels, LiDAR; nothing written) on --threads threads, frames/s;
 // and, with --images, writes the pictures of docs/synth.md (a sample pair, the ground-truth and
-// SGBM disparity, a bird's-eye view of the LiDAR scan with the label boxes).
+// SGBM disparity, BM's disparity (synth_bm.png), a bird's-eye view of the LiDAR scan with the
+// label boxes).
 #include <fmt/format.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -37,8 +43,13 @@ struct Args {
   uint64_t seed = 1;
   int threads = 0;
   int picture_frame = 0;  // the frame drawn for the pictures (must be a stereo frame)
+  int speed_frames = 0;   // frames timed for the generation speed (0: not measured)
   std::string images;
 };
+
+// Ground-truth pixels inside 2D boxes: the classes of issue 16's stereo targets.
+const std::array<const char*, 3> kBoxClasses = {"Car", "Pedestrian", "Cyclist"};
+constexpr double kNearM = 20.0;  // "near" objects: sqrt(x^2 + z^2) of the label below this
 
 struct StereoScore {
   int64_t gt = 0, estimated = 0, bad = 0;  // GT pixels, of which estimated, of which D1-bad
@@ -64,6 +75,35 @@ StereoScore Score(const cv::Mat& estimate, const cv::Mat& gt) {
 }
 
 // OpenCV's fixed-point disparities (x16) to pixels, invalid (< 0) to 0.
+// BM's score over the ground-truth pixels inside the 2D boxes of the frame's labels of `type`
+// (a pixel in two boxes counts once), near or far ones (`near` = 1 / 0) or all (`near` = -1).
+// With `min_u` > 0 only the columns from min_u on count (BM leaves its first numDisparities columns
+// empty).
+StereoScore ScoreInBoxes(const cv::Mat& estimate, const cv::Mat& gt,
+                         const std::vector<Object>& labels, const std::string& type, int near,
+                         int min_u = 0) {
+  cv::Mat mask(gt.size(), CV_8U, cv::Scalar(0));
+  for (const Object& o : labels) {
+    if (o.type != type) continue;
+    const bool is_near = std::hypot(o.box3d.location.x(), o.box3d.location.z()) < kNearM;
+    if (near >= 0 && is_near != (near == 1)) continue;
+    const int u0 = std::max(0, static_cast<int>(std::floor(o.box.left)));
+    const int v0 = std::max(0, static_cast<int>(std::floor(o.box.top)));
+    const int u1 = std::min(gt.cols - 1, static_cast<int>(std::ceil(o.box.right)));
+    const int v1 = std::min(gt.rows - 1, static_cast<int>(std::ceil(o.box.bottom)));
+    if (u1 < u0 || v1 < v0) continue;
+    mask(cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1)).setTo(255);
+  }
+  if (min_u > 0) mask.colRange(0, std::min(min_u, gt.cols)).setTo(0);
+  cv::Mat masked_gt(gt.size(), CV_32F, cv::Scalar(0.0f));
+  gt.copyTo(masked_gt, mask);
+  return Score(estimate, masked_gt);
+}
+
+void Add(StereoScore& total, const StereoScore& s) {
+  total.gt += s.gt, total.estimated += s.estimated, total.bad += s.bad, total.bad2 += s.bad2;
+}
+
 cv::Mat ToPixels(const cv::Mat& fixed) {
   cv::Mat d;
   fixed.convertTo(d, CV_32F, 1.0 / 16.0);
@@ -130,7 +170,8 @@ int Run(const Args& args) {
   std::mutex mutex;
   std::vector<std::vector<Object>> labels(args.frames);
   StereoScore bm_total, sgbm_total;
-  double bm_d1_sum = 0, sgbm_d1_sum = 0;
+  // BM inside the boxes of kBoxClasses: [class][all, near, far].
+  std::array<std::array<StereoScore, 4>, kBoxClasses.size()> bm_boxes{};
   ParallelFor(
       static_cast<size_t>(args.frames),
       [&](size_t i) {
@@ -160,12 +201,20 @@ int Run(const Args& args) {
         sgbm->compute(left, right, sgbm_fixed);
         const cv::Mat bm_d = ToPixels(bm_fixed), sgbm_d = ToPixels(sgbm_fixed);
         const StereoScore b = Score(bm_d, f.disparity), s = Score(sgbm_d, f.disparity);
+        std::array<std::array<StereoScore, 4>, kBoxClasses.size()> boxes;
+        for (size_t c = 0; c < kBoxClasses.size(); ++c) {
+          for (int k = 0; k < 3; ++k) {
+            const int near = k == 0 ? -1 : (k == 1 ? 1 : 0);
+            boxes[c][k] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], near);
+          }
+          boxes[c][3] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], -1, 128);
+        }
         std::lock_guard<std::mutex> lock(mutex);
-        bm_total.gt += b.gt, bm_total.estimated += b.estimated, bm_total.bad += b.bad;
-        bm_total.bad2 += b.bad2, sgbm_total.bad2 += s.bad2;
-        sgbm_total.gt += s.gt, sgbm_total.estimated += s.estimated, sgbm_total.bad += s.bad;
-        bm_d1_sum += static_cast<double>(b.bad) / std::max<int64_t>(1, b.estimated);
-        sgbm_d1_sum += static_cast<double>(s.bad) / std::max<int64_t>(1, s.estimated);
+        Add(bm_total, b);
+        Add(sgbm_total, s);
+        for (size_t c = 0; c < kBoxClasses.size(); ++c) {
+          for (int k = 0; k < 4; ++k) Add(bm_boxes[c][k], boxes[c][k]);
+        }
         if (static_cast<int>(i) == args.picture_frame && !args.images.empty()) {
           cv::Mat pair, half_l, half_r;
           cv::resize(f.image_left, half_l, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
@@ -179,10 +228,27 @@ int Run(const Args& args) {
                      cv::INTER_NEAREST);
           cv::vconcat(half_gt, half_sgbm, disp);
           WriteSmallPng(args.images + "/synth_disparity.png", disp);
+          cv::Mat half_bm;
+          cv::resize(ColourDisparity(bm_d, 96), half_bm, cv::Size(), 0.5, 0.5, cv::INTER_NEAREST);
+          WriteSmallPng(args.images + "/synth_bm.png", half_bm);
           WriteSmallPng(args.images + "/synth_bev.png", BirdsEye(f));
           // Full-resolution crop for a look at texture detail.
           WriteSmallPng(args.images + "/synth_crop.png",
                         f.image_left(cv::Rect(420, 140, 400, 150)));
+          // The largest car, left image above BM's disparity (black: none).
+          cv::Rect car;
+          for (const Object& o : f.labels) {
+            if (o.type != "Car") continue;
+            const cv::Rect r(
+                cv::Point(static_cast<int>(o.box.left), static_cast<int>(o.box.top)),
+                cv::Point(static_cast<int>(o.box.right), static_cast<int>(o.box.bottom)));
+            if (r.area() > car.area()) car = r;
+          }
+          if (car.area() > 0) {
+            cv::Mat stack;
+            cv::vconcat(f.image_left(car), ColourDisparity(bm_d, 96)(car), stack);
+            WriteSmallPng(args.images + "/synth_car.png", stack);
+          }
         }
       },
       args.threads);
@@ -255,6 +321,46 @@ int Run(const Args& args) {
                   100.0 * s.estimated / std::max<int64_t>(1, s.gt),
                   100.0 * (s.bad + s.gt - s.estimated) / std::max<int64_t>(1, s.gt));
     }
+    std::printf(
+        "\nStereoBM inside the 2D boxes (ground-truth pixels in the boxes; near: < %.0f m):\n\n"
+        "| class | density | D1 of estimated | density near | D1 near | density far | D1 far | "
+        "GT pixels | share in BM's empty first 128 columns | density right of them "
+        "|\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        kNearM);
+    for (size_t c = 0; c < kBoxClasses.size(); ++c) {
+      std::printf("| %s |", kBoxClasses[c]);
+      for (int k = 0; k < 3; ++k) {
+        const StereoScore& s = bm_boxes[c][k];
+        std::printf(" %.1f%% | %.1f%% |", 100.0 * s.estimated / std::max<int64_t>(1, s.gt),
+                    100.0 * s.bad / std::max<int64_t>(1, s.estimated));
+      }
+      const StereoScore& right = bm_boxes[c][3];
+      std::printf(" %lld | %.1f%% | %.1f%% |\n", static_cast<long long>(bm_boxes[c][0].gt),
+                  100.0 - 100.0 * right.gt / std::max<int64_t>(1, bm_boxes[c][0].gt),
+                  100.0 * right.estimated / std::max<int64_t>(1, right.gt));
+    }
+  }
+
+  if (args.speed_frames > 0) {
+    SynthOptions o = options;
+    o.lidar = true;
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<size_t> points(args.speed_frames);
+    ParallelFor(
+        static_cast<size_t>(args.speed_frames),
+        [&](size_t i) {
+          // Frames after the statistics' ones: the timing does not reuse any cache of theirs.
+          points[i] = GenerateFrame(o, args.seed, args.frames + static_cast<int>(i)).scan.size();
+        },
+        args.threads);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf(
+        "\n## Generation speed\n\n%d frames at %dx%d with LiDAR on %s threads: %.2f s, %.2f "
+        "frames/s\n",
+        args.speed_frames, o.width, o.height,
+        args.threads > 0 ? std::to_string(args.threads).c_str() : "all", seconds,
+        args.speed_frames / seconds);
   }
   return 0;
 }
@@ -277,13 +383,15 @@ int main(int argc, char** argv) {
       args.seed = static_cast<uint64_t>(*number);
     } else if (number && key == "--picture-frame") {
       args.picture_frame = static_cast<int>(*number);
+    } else if (number && key == "--speed-frames") {
+      args.speed_frames = static_cast<int>(*number);
     } else if (number && key == "--threads") {
       args.threads = static_cast<int>(*number);
     } else {
       std::fprintf(
           stderr,
           "usage: synth_realism [--frames N] [--stereo-frames K] [--seed S] [--threads T]\n"
-          "                     [--images DIR] [--picture-frame I]\n");
+          "                     [--images DIR] [--picture-frame I] [--speed-frames N]\n");
       return 2;
     }
   }

@@ -332,13 +332,21 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
       } else {
         const float distance = hit.t * dir_norm;
         const float cos_view = std::abs(hit.normal.dot(dir_unit));
-        const float footprint = distance * pixel_angle / std::sqrt(std::max(cos_view, 0.05f));
+        // Texture filter width. On horizontal surfaces (the road, sidewalks) a pixel row holds
+        // points of one depth in both cameras (rectified rows), so detail finer than the row
+        // spacing along the depth is sampled alike by both and only the across-row spacing
+        // (distance x pixel angle) has to be respected; elsewhere the footprint widens with the
+        // obliquity.
+        const float footprint = std::abs(hit.normal.y()) > 0.9f
+                                    ? distance * pixel_angle
+                                    : distance * pixel_angle / std::sqrt(std::max(cos_view, 0.05f));
         const Eigen::Vector3f albedo = SurfaceAlbedo(scene, hit, footprint);
         const float up = -hit.normal.y();
         Eigen::Vector3f irradiance = light.sky_ambient * (0.6f + 0.4f * up);
         const float sun_cos = hit.normal.dot(light.to_sun);
+        bool lit = false;
         if (sun_cos > 0.0f) {
-          bool lit = true;
+          lit = true;
           if (options.shadows) {
             lit = !sun_bins->Occluded(scene, hit.point + 0.005f * hit.normal,
                                       options.shadow_distance_m, &shadow_hint);
@@ -348,18 +356,24 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
         color = albedo.cwiseProduct(irradiance);
         const float specular = scene.materials[hit.material].specular;
         if (specular > 0.0f) {
-          // Mirror the sky, more at grazing angles (a cheap Fresnel term).
+          // Mirror the sky, more at grazing angles (a cheap Fresnel term) ...
           const Eigen::Vector3f reflected = dir_unit - 2.0f * dir_unit.dot(hit.normal) * hit.normal;
           const float grazing = 1.0f - cos_view;
           const float fresnel = specular * (0.3f + 0.7f * grazing * grazing * grazing);
           color += fresnel * SkyRadiance(light, reflected);
+          // ... and the sun's glint on the clear coat (view-dependent, as real highlights).
+          if (lit) {
+            const float r = std::max(0.0f, reflected.dot(light.to_sun));
+            const float r2 = r * r, r4 = r2 * r2, r8 = r4 * r4, r16 = r8 * r8;
+            color += (1.5f * specular * r16 * r16 * r16) * light.sun;  // lobe r^48
+          }
         }
         const float haze = 1.0f - std::exp(-distance * light.haze_per_m);
         color += haze * (light.sky_horizon - color);
       }
       const float du = u - cx, dv = v - cy;
       const float vignette = 1.0f - options.vignetting * (du * du + dv * dv) / half_diag_sq;
-      color *= light.exposure * request.gain * vignette;
+      color = color.cwiseProduct(light.white_balance) * (light.exposure * request.gain * vignette);
       rad_row[u] = cv::Vec3f(color.z(), color.y(), color.x());  // BGR
       depth_row[u] = valid ? hit.t : 0.0f;
       if (id_row != nullptr) id_row[u] = valid ? hit.object : -1;
@@ -373,6 +387,7 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
     cv::GaussianBlur(radiance, radiance, cv::Size(0, 0), options.optics_blur_sigma_px);
   }
   const auto& lut = ToneLut();
+  const float noise_sigma = options.noise_sigma * scene.light.noise_scale;
   out.image.create(height, width, CV_8UC3);
   const uint64_t camera_seed = HashOf({request.noise_seed, static_cast<uint64_t>(request.camera)});
   for (int v = 0; v < height; ++v) {
@@ -383,7 +398,7 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
       for (int c = 0; c < 3; ++c) {
         const float x = std::clamp(rad_row[u][c], 0.0f, 1.0f);
         float level = lut[static_cast<int>(x * kToneLutSize + 0.5f)];
-        level += options.noise_sigma * HashNormal(Mix64(pixel_hash + c));
+        level += noise_sigma * HashNormal(Mix64(pixel_hash + c));
         img_row[u][c] = cv::saturate_cast<uchar>(level);
       }
     }

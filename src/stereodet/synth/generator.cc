@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -29,7 +30,41 @@ enum Stream : uint64_t {
   kSplitStream = 5
 };
 
-constexpr int kSettingsVersion = 1;
+// The version of the scene and rendering model, recorded in synth_settings.txt: a folder written
+// by another version is refused rather than mixed. 1: the first street model; 2: issue 16's
+// textures (asphalt, paving, kerbs, facades, fences), car details, sun glints, per-frame white
+// balance and sensor noise.
+constexpr int kSettingsVersion = 2;
+
+// The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b
+// (this run)", for the refusal message.
+std::string SettingsDifference(const std::string& existing, const std::string& wanted) {
+  const auto tokens = [](const std::string& line) {
+    std::map<std::string, std::string> out;
+    std::istringstream in(line);
+    std::string token;
+    while (in >> token) {
+      const size_t eq = token.find('=');
+      out[token.substr(0, eq)] = eq == std::string::npos ? "" : token.substr(eq + 1);
+    }
+    return out;
+  };
+  const auto a = tokens(existing), b = tokens(wanted);
+  std::string diff;
+  for (const auto& [key, value] : b) {
+    const auto it = a.find(key);
+    const std::string old = it == a.end() ? "(none)" : it->second;
+    if (old != value)
+      diff += fmt::format("{}{}: {} in the folder, {} in this run", diff.empty() ? "" : "; ", key,
+                          old, value);
+  }
+  for (const auto& [key, value] : a) {
+    if (!b.count(key))
+      diff += fmt::format("{}{}: {} in the folder, (none) in this run", diff.empty() ? "" : "; ",
+                          key, value);
+  }
+  return diff;
+}
 
 void WritePng(const std::filesystem::path& path, const cv::Mat& image, int compression) {
   std::filesystem::create_directories(path.parent_path());
@@ -167,8 +202,9 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
   if (std::filesystem::exists(settings_path)) {
     const std::string existing = ReadFile(settings_path);
     STEREODET_CHECK(existing == settings)
-        << "the data set in " << options.out << " was made with other settings:\n  " << existing
-        << "this run has:\n  " << settings << "use another --out folder, or the same settings";
+        << "the data set in " << options.out << " was made with other settings ("
+        << SettingsDifference(existing, settings) << "):\n  " << existing << "this run has:\n  "
+        << settings << "use another --out folder, or the same settings";
   } else {
     WriteFileAtomically(settings_path, settings);
   }

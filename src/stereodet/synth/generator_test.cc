@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "stereodet/kitti/calib_io.h"
@@ -104,6 +105,34 @@ TEST(GeneratorTest, DatasetRoundTripsThroughTheKittiModule) {
   // ... but refuses other settings.
   options.seed = 6;
   EXPECT_THROW(GenerateDataset(options), std::invalid_argument);
+}
+
+// A folder written by another version of the scene model (here: version 1, before issue 16's
+// textures) is refused, and the message names the setting that differs.
+TEST(GeneratorTest, RefusesAFolderOfAnotherVersionNamingTheSetting) {
+  const TestTempDir dir("old");
+  DatasetOptions options;
+  options.out = dir.path();
+  options.frames = 1;
+  options.seed = 3;
+  options.progress.stream = nullptr;
+  options.synth = TinyOptions();
+  std::string line = "seed=3 " + options.synth.Fingerprint() + "\n";
+  const size_t at = line.find("version=");
+  ASSERT_NE(at, std::string::npos);
+  const size_t end = line.find(' ', at);
+  ASSERT_NE(line.substr(at, end - at), "version=1");
+  line.replace(at, end - at, "version=1");
+  fs::create_directories(dir.path());
+  std::ofstream(dir.path() / "synth_settings.txt") << line;
+  try {
+    GenerateDataset(options);
+    ADD_FAILURE() << "a version-1 folder was not refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("version: 1 in the folder"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "training" / "image_2" / "000000.png"));
 }
 
 TEST(GeneratorTest, SameSeedSameBytesWithOneAndTwoThreads) {

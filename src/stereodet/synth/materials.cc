@@ -53,8 +53,14 @@ Eigen::Vector3f ClothColour(Rng& rng) {
       return Vary(rng, Rgb(0.3, 0.28, 0.25), 0.4);
     case 3:
       return Vary(rng, Rgb(0.5, 0.12, 0.1), 0.4);
-    default:
-      return Rgb(rng.Uniform(0.05, 0.6), rng.Uniform(0.05, 0.6), rng.Uniform(0.05, 0.6));
+    default: {
+      // Three named draws: the order of evaluation of function arguments is unspecified in C++,
+      // and the data set must not depend on the compiler.
+      const double r = rng.Uniform(0.05, 0.6);
+      const double g = rng.Uniform(0.05, 0.6);
+      const double b = rng.Uniform(0.05, 0.6);
+      return Rgb(r, g, b);
+    }
   }
 }
 

@@ -66,15 +66,20 @@ struct VehicleMaterials {
 VehicleMaterials AddVehicleMaterials(Scene& scene, Rng& rng, const Eigen::Vector3f& colour) {
   Material paint = MakeMaterial(Pattern::kCarPaint, colour, 0.04f);
   paint.specular = 0.12f;
-  Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.035, 0.04, 0.045), 0.15f, 0.05f);
+  paint.scale_m = 0.0f;  // no wheel arches unless the builder sets the axle position
+  Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.05, 0.055, 0.06), 0.8f, 0.05f);
   glass.specular = 0.3f;
-  Material tyre = MakeMaterial(Pattern::kPlain, Rgb(0.03, 0.03, 0.03), 0.2f, 0.04f);
+  glass.albedo2 = colour;  // pillars and frames
+  Material tyre = MakeMaterial(Pattern::kWheel, Rgb(0.055, 0.055, 0.055), 0.45f, 0.04f);
+  // Rims: silver alloy mostly, some black or dark grey.
+  tyre.albedo2 = rng.Bernoulli(0.75) ? Vary(rng, Rgb(0.5, 0.5, 0.52), 0.2) : Rgb(0.08, 0.08, 0.09);
   Material dark = MakeMaterial(Pattern::kPlain, Vary(rng, Rgb(0.06, 0.06, 0.06), 0.3), 0.3f);
   return {scene.AddMaterial(paint), scene.AddMaterial(glass), scene.AddMaterial(tyre),
           scene.AddMaterial(dark)};
 }
 
-void BuildCar(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rng& rng) {
+// Returns the axles' distance from the body's centre (for the wheel arches of the paint).
+float BuildCar(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rng& rng) {
   const float r = static_cast<float>(rng.Uniform(0.29, 0.33));
   const float body_half_w = 0.5f * w - 0.03f;
   const float shoulder = h * static_cast<float>(rng.Uniform(0.56, 0.63));
@@ -89,6 +94,7 @@ void BuildCar(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rn
   for (float x : {-axle, axle}) {
     for (float z : {-0.5f * w + 0.1f, 0.5f * w - 0.1f}) p.Wheel(x, z, r, 0.2f, m.tyre);
   }
+  return axle;
 }
 
 void BuildVan(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rng& rng) {
@@ -223,7 +229,7 @@ int AddObject(Scene& scene, const std::string& type, const Box3D& box, Rng& rng)
   if (type == "Car" || type == "Van" || type == "Truck" || type == "Misc" || type == "Tram") {
     const VehicleMaterials m = AddVehicleMaterials(scene, rng, CarColour(rng));
     if (type == "Car") {
-      BuildCar(parts, lf, wf, hf, m, rng);
+      scene.materials[m.paint].scale_m = BuildCar(parts, lf, wf, hf, m, rng);
     } else if (type == "Van") {
       BuildVan(parts, lf, wf, hf, m, rng);
     } else if (type == "Truck") {

@@ -28,9 +28,11 @@ enum class Pattern : uint8_t {
   kFence,     // vertical slats with gaps (albedo2)
   kFoliage,   // leaves: strong high-frequency noise
   kGrass,     // grass and soil
-  kCarPaint,  // smooth paint; lights and a number plate on the front and rear faces
-  kGlass,     // dark glass reflecting the sky
+  kCarPaint,  // paint with dirt and grime; lights, grille and plate on the front and rear faces,
+              // seams, handles and wheel arches (at +-scale_m along the body, if > 0) on the sides
+  kGlass,     // dark glass reflecting the sky, the interior behind it; pillars in albedo2
   kCloth,     // clothing: mid-frequency noise and folds
+  kWheel,     // tyre (albedo) with a spoked rim (albedo2) on the cylinder's end faces
 };
 
 struct Material {
@@ -84,6 +86,10 @@ struct Lighting {
   float cloudiness = 0.3f;           // [0, 1]
   float haze_per_m = 1.0f / 600.0f;  // extinction: weight of the horizon colour is 1 - exp(-d k)
   float exposure = 1.0f;
+  // The camera's white balance (gains on linear R, G, B; as set, not as the light is) and its
+  // sensor noise relative to RenderOptions::noise_sigma (gain, temperature), both per frame.
+  Eigen::Vector3f white_balance = Eigen::Vector3f::Ones();
+  float noise_scale = 1.0f;
 };
 
 // What a ray hit.

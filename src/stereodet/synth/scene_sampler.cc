@@ -168,21 +168,25 @@ class StreetBuilder {
 
 void StreetBuilder::Materials() {
   Material asphalt =
-      MakeMaterial(Pattern::kAsphalt, Vary(rng_, Rgb(0.15, 0.15, 0.155), 0.25), 0.35f, 0.22f);
+      MakeMaterial(Pattern::kAsphalt, Vary(rng_, Rgb(0.15, 0.15, 0.155), 0.25), 0.75f, 0.22f);
   asphalt.albedo2 = Rgb(0.7, 0.7, 0.68);
   scene_.road_material = scene_.AddMaterial(asphalt);
   Material offroad =
       kind_ == StreetKind::kCity
-          ? MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.3, 0.29, 0.27), 0.2), 0.25f)
+          ? MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.3, 0.29, 0.27), 0.2), 0.45f)
           : MakeMaterial(Pattern::kGrass, Vary(rng_, Rgb(0.12, 0.2, 0.06), 0.3), 0.45f, 0.5f);
   offroad.albedo2 = kind_ == StreetKind::kCity ? Rgb(0.1, 0.1, 0.1) : Rgb(0.22, 0.18, 0.1);
   offroad.scale_m = 0.5f;
   scene_.offroad_material = scene_.AddMaterial(offroad);
-  Material paving = MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.35, 0.33, 0.31), 0.2), 0.2f);
+  Material paving = MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.35, 0.33, 0.31), 0.2), 0.45f);
   paving.albedo2 = Rgb(0.12, 0.12, 0.11);
   paving.scale_m = static_cast<float>(rng_.Uniform(0.25, 0.5));
   sidewalk_material_ = scene_.AddMaterial(paving);
-  curb_material_ = scene_.AddMaterial(MakeMaterial(Pattern::kPlain, Rgb(0.4, 0.4, 0.38), 0.2f));
+  // Kerb stones: 1 m blocks with joints and weathered grain.
+  Material curb = MakeMaterial(Pattern::kPaving, Vary(rng_, Rgb(0.42, 0.42, 0.4), 0.1), 0.35f);
+  curb.albedo2 = Rgb(0.15, 0.15, 0.14);
+  curb.scale_m = 1.0f;
+  curb_material_ = scene_.AddMaterial(curb);
   Material grass = MakeMaterial(Pattern::kGrass, Vary(rng_, Rgb(0.1, 0.2, 0.05), 0.3), 0.5f, 0.5f);
   grass.albedo2 = Rgb(0.2, 0.17, 0.1);
   grass_material_ = scene_.AddMaterial(grass);
@@ -452,9 +456,11 @@ void StreetBuilder::Roadside(int side) {
         RoadBox(a, a + w, std::min(s, s + sign * 0.08), std::max(s, s + sign * 0.08), 0.45, 0.75,
                 metal_material_);
       } else if (kind == 2) {  // a noise wall or fence
+        // Named draws: the order in which function arguments are evaluated is unspecified.
+        const double height = rng_.Uniform(1.5, 3.5);
+        const int material = rng_.Bernoulli(0.5) ? wall_material_ : fence_material_;
         RoadBox(a, a + w, std::min(s_front, s_front + sign * 0.2),
-                std::max(s_front, s_front + sign * 0.2), 0.0, rng_.Uniform(1.5, 3.5),
-                rng_.Bernoulli(0.5) ? wall_material_ : fence_material_);
+                std::max(s_front, s_front + sign * 0.2), 0.0, height, material);
       }
       a += w;
     }
@@ -558,6 +564,13 @@ void StreetBuilder::Build() {
   light.sky_horizon = Vary(rng_, Rgb(0.85, 0.88, 0.92), 0.08);
   light.haze_per_m = static_cast<float>(rng_.Uniform(1.0 / 900.0, 1.0 / 300.0));
   light.exposure = static_cast<float>(rng_.Uniform(0.85, 1.1) / (0.55 * sun + ambient));
+  // The camera's white balance is not perfect: +-6% on red and blue, warmer under a low sun; its
+  // noise varies with gain and temperature.
+  const double warm = elevation < 25.0 * M_PI / 180.0 ? 0.04 : 0.0;
+  const double wb_red = rng_.Uniform(0.94, 1.06) + warm;
+  const double wb_blue = rng_.Uniform(0.94, 1.06) - warm;
+  light.white_balance = Rgb(wb_red, 1.0, wb_blue);
+  light.noise_scale = static_cast<float>(rng_.Uniform(0.8, 1.5));
   scene_.Finalize();
 }
 

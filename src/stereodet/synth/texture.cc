@@ -51,6 +51,13 @@ float LineCoverage(float coord, float period, float phase, float width, float fo
   return Clamp01(overlap / (2.0f * half_fp));
 }
 
+// Fraction of a footprint centred at `coord` that lies in [lo, hi].
+float IntervalCoverage(float coord, float lo, float hi, float footprint) {
+  const float half_fp = std::max(0.5f * footprint, 1e-5f);
+  return Clamp01((std::min(coord + half_fp, hi) - std::max(coord - half_fp, lo)) /
+                 (2.0f * half_fp));
+}
+
 // Tone in [-1, 1] of lattice cell (i, j), for stones, bricks and windows.
 float CellTone(float i, float j, uint64_t salt) {
   return 2.0f * HashToUnitFloat(HashOf({salt, static_cast<uint64_t>(static_cast<int64_t>(i)),
@@ -154,12 +161,41 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     case Pattern::kPlain:
       return m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 2.0f, 0.6f, 8, fp));
     case Pattern::kAsphalt: {
-      const float grain = FilteredFbm(u, v, 6.0f, 0.7f, 7, fp);
+      // Aggregate and grain down to the pixel, stains at the scale of a block-matching window,
+      // repaired patches with sharp edges, and cracks along the zero lines of a noise field.
+      const float grain = FilteredFbm(u, v, 6.0f, 0.8f, 7, fp);
+      const float stains = FilteredFbm(u + 71.0f, v, 1.2f, 0.7f, 3, fp);
       const float patches =
           0.5f * Noise(0.12f * u + 91.0f, 0.12f * v) + 0.25f * Noise(0.5f * u, 0.5f * v + 13.0f);
-      Eigen::Vector3f albedo = m.albedo * (1.0f + m.contrast * grain + 0.18f * patches);
+      float tone = 1.0f + m.contrast * grain + 0.25f * stains + 0.18f * patches;
+      // Repairs: in 5 x 7 m cells, one in five holds a rectangle of fresher (darker) or older
+      // (lighter) asphalt, box-filtered at its edges.
+      {
+        const float ci = std::floor(u / 5.0f), cj = std::floor(v / 7.0f);
+        const float pick = CellTone(ci, cj, 41);
+        if (pick > 0.6f) {
+          const float a = CellTone(ci, cj, 43), b = CellTone(ci, cj, 47);
+          const float u0 = ci * 5.0f + 1.0f + 0.8f * a, u1 = u0 + 2.0f + 1.0f * b;
+          const float v0 = cj * 7.0f + 1.0f + 1.0f * b, v1 = v0 + 3.0f + 1.5f * a;
+          const float cover = IntervalCoverage(u, u0, u1, fp) * IntervalCoverage(v, v0, v1, fp);
+          tone *= 1.0f + cover * (pick > 0.8f ? -0.22f : 0.15f);
+        }
+      }
+      // Cracks: thin dark lines where a large-scale noise crosses zero, only in some regions.
+      {
+        const float crackable = Noise(0.07f * u + 3.0f, 0.07f * v + 5.0f);
+        if (crackable > 0.1f) {
+          constexpr float kFreq = 0.45f;
+          const float n = Noise(kFreq * u + 17.0f, kFreq * v + 29.0f);
+          const float distance = std::abs(n) / (1.5f * kFreq);  // metres, roughly
+          const float cover = LineCoverage(distance, 1000.0f, 0.0f, 0.012f, fp);
+          tone *= 1.0f - 0.55f * cover * Clamp01(4.0f * (crackable - 0.1f));
+        }
+      }
+      Eigen::Vector3f albedo = m.albedo * std::max(0.2f, tone);
       if (hit.kind == SurfaceHit::Kind::kGround && hit.material == scene.road_material) {
-        // Markings, box-filtered across their width so far lines fade instead of flickering.
+        // Markings, box-filtered across their width so far lines fade instead of flickering, and
+        // worn: tyres rub the paint off in blotches.
         const Eigen::Vector2f rc = scene.road.ToRoad(hit.point.x(), hit.point.z());
         float paint = 0.0f;
         for (const Road::Marking& mk : scene.road.markings) {
@@ -168,8 +204,9 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
           paint = std::max(paint, cover);
         }
         if (paint > 0.0f) {
+          const float wear = Clamp01(0.8f + 0.6f * FilteredFbm(u + 5.0f, v, 3.0f, 0.7f, 5, fp));
           const Eigen::Vector3f white = m.albedo2 * (1.0f + 0.1f * grain);
-          albedo = albedo + paint * (white - albedo);
+          albedo = albedo + paint * wear * (white - albedo);
         }
       }
       return albedo;
@@ -179,8 +216,10 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       const float joint =
           std::max(LineCoverage(u, s, 0.0f, 0.012f, fp), LineCoverage(v, s, 0.0f, 0.012f, fp));
       const float tone = CellTone(std::floor(u / s), std::floor(v / s), 17);
+      // Stones with their own tones, concrete grain, and stains that run across the joints.
       const Eigen::Vector3f stone =
-          m.albedo * (1.0f + 0.12f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 6, fp));
+          m.albedo * (1.0f + 0.12f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.75f, 7, fp) +
+                      0.12f * FilteredFbm(u + 9.0f, v, 1.5f, 0.6f, 4, fp));
       return stone + joint * (m.albedo2 - stone);
     }
     case Pattern::kFacade: {
@@ -191,15 +230,23 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       const float window = wu * wv;
       Eigen::Vector3f out = Eigen::Vector3f::Zero();
       if (window < 1.0f) {
-        out = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 1.5f, 0.65f, 8, fp));
+        // Plaster or render: blotches and a fine grain.
+        out = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 1.5f, 0.65f, 8, fp) +
+                          0.12f * FilteredFbm(u + 3.0f, v, 10.0f, 0.7f, 5, fp));
         // Floor bands (cornices) give horizontal structure; roofs and undersides are plain.
         if (f.axis != 1) out *= 1.0f - 0.25f * LineCoverage(v, floor_h, 0.0f, 0.18f, fp);
       }
       if (window > 0.0f) {
         const float tone = CellTone(std::floor(u / pitch), std::floor(v / floor_h), 23);
+        // Panes with curtains and rooms behind them, split by a mullion and a transom in the
+        // window frame's colour (light).
         const Eigen::Vector3f glass =
-            m.albedo2 * (1.0f + 0.5f * tone + 0.2f * FilteredFbm(u, v, 3.0f, 0.5f, 4, fp));
-        out += window * (glass - out);
+            m.albedo2 *
+            std::max(0.2f, 1.0f + 0.5f * tone + 0.6f * FilteredFbm(u, v, 2.5f, 0.7f, 6, fp));
+        const float bars = std::max(LineCoverage(u, pitch, 0.5f * pitch, 0.06f, fp),
+                                    LineCoverage(v, floor_h, 1.65f + 0.25f, 0.06f, fp));
+        const Eigen::Vector3f pane = glass + bars * (Eigen::Vector3f(0.55f, 0.55f, 0.53f) - glass);
+        out += window * (pane - out);
       }
       return out;
     }
@@ -216,8 +263,11 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     }
     case Pattern::kFence: {
       const float gap = f.axis == 1 ? 0.0f : LineCoverage(u, m.scale_m, 0.0f, 0.3f * m.scale_m, fp);
+      // Weathered boards: each slat its own tone, with a grain along it.
+      const float board = CellTone(std::floor(u / m.scale_m), 0.0f, 31);
       const Eigen::Vector3f slat =
-          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 4.0f, 0.6f, 6, fp));
+          m.albedo * (1.0f + 0.2f * board + m.contrast * FilteredFbm(u, v, 4.0f, 0.6f, 6, fp) +
+                      0.15f * FilteredFbm(8.0f * u, 0.5f * v, 2.0f, 0.7f, 5, fp));
       return slat + gap * (m.albedo2 - slat);
     }
     case Pattern::kFoliage: {
@@ -233,32 +283,108 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       return base * (1.0f + m.contrast * blades);
     }
     case Pattern::kCarPaint: {
-      Eigen::Vector3f paint = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp));
-      if (f.axis == 1) return paint;
+      // Paint with dust and spots of dirt everywhere and road grime rising from the bottom of the
+      // sides.
+      const float dirt = FilteredFbm(u + 13.0f, v, 6.0f, 0.7f, 6, fp);
+      const float spots =
+          Clamp01(2.5f * (FilteredFbm(u + 41.0f, v + 7.0f, 9.0f, 0.75f, 5, fp) - 0.15f));
+      Eigen::Vector3f paint =
+          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp) + 0.14f * dirt);
+      paint += 0.35f * spots * (Eigen::Vector3f(0.2f, 0.18f, 0.15f) - paint);
+      const Eigen::Vector3f grime(0.08f, 0.075f, 0.065f);
+      if (f.axis == 1) {
+        // Bonnet and boot seams across the top.
+        const float seam =
+            std::max(LineCoverage(f.local.x(), 1000.0f, f.half.x() - 1.05f, 0.012f, fp),
+                     LineCoverage(f.local.x(), 1000.0f, -f.half.x() + 0.75f, 0.012f, fp));
+        return paint + seam * (Eigen::Vector3f(0.03f, 0.03f, 0.03f) - paint);
+      }
+      const float grimy = Clamp01(1.0f - v / 0.45f) * Clamp01(0.55f + 0.5f * dirt);
+      paint += 0.5f * grimy * (grime - paint);
       // Bumper band at the bottom of the body.
-      if (v < 0.16f) paint = Eigen::Vector3f(0.05f, 0.05f, 0.055f);
+      // Bumpers: painted, a little darker (they collect the dirt), with a black plastic strip.
+      if (v < 0.16f) {
+        paint *= 0.75f;
+        if (v < 0.05f) paint = Eigen::Vector3f(0.06f, 0.06f, 0.065f) * (1.0f + 0.6f * dirt);
+      }
       if (f.axis == 0) {
-        // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle.
+        // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle, a
+        // grille between the headlamps.
         const float z = std::abs(f.local.z()), edge = f.half.z();
         const bool lamp_row = v > 0.32f && v < 0.5f;
         if (lamp_row && z > edge - 0.32f) {
-          return f.sign > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f)
-                               : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
+          const float rim = LineCoverage(z, 1000.0f, edge - 0.3f, 0.02f, fp);
+          const Eigen::Vector3f lamp = f.sign > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f)
+                                                     : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
+          return lamp * (1.0f - 0.6f * rim) * (1.0f + 0.15f * dirt);
         }
         if (z < 0.26f && v > 0.18f && v < 0.29f) {
           const float text = LineCoverage(f.local.z(), 0.07f, 0.0f, 0.025f, fp);
           return Eigen::Vector3f(0.8f, 0.8f, 0.78f) * (1.0f - 0.8f * text);
         }
+        if (f.sign > 0.0f && z < edge - 0.38f && v > 0.31f && v < 0.47f) {
+          const float slat = LineCoverage(v, 0.04f, 0.0f, 0.015f, fp);
+          return Eigen::Vector3f(0.03f, 0.03f, 0.035f) + slat * Eigen::Vector3f(0.2f, 0.2f, 0.2f);
+        }
       } else {
-        // Sides: a rubbing strip and door seams.
+        // Sides: a rubbing strip, door seams and handles, dark wheel arches.
+        const float x = f.local.x();
         const float strip = LineCoverage(v, 1000.0f, 0.3f, 0.05f, fp);
-        const float seam = LineCoverage(f.local.x(), 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
-        paint = paint + std::max(strip, seam) * (Eigen::Vector3f(0.04f, 0.04f, 0.04f) - paint);
+        const float seam = LineCoverage(x, 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
+        const float handle =
+            IntervalCoverage(Fract((x - 0.1f) / 1.05f) * 1.05f, 0.72f, 0.9f, fp) *
+            IntervalCoverage(v, f.half.y() * 2.0f - 0.17f, f.half.y() * 2.0f - 0.12f, fp);
+        paint = paint +
+                std::max({strip, seam, handle}) * (Eigen::Vector3f(0.04f, 0.04f, 0.04f) - paint);
+        if (m.scale_m > 0.0f) {
+          const float d = std::hypot(std::abs(x) - m.scale_m, v - 0.11f);  // wheel centre
+          const float arch = IntervalCoverage(d, -1.0f, 0.4f, fp);
+          paint += arch * (Eigen::Vector3f(0.02f, 0.02f, 0.02f) - paint);
+        }
       }
       return paint;
     }
-    case Pattern::kGlass:
-      return m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 2.0f, 0.5f, 5, fp));
+    case Pattern::kGlass: {
+      // Through the glass: seats, headrests and the far side, as mid-frequency dark noise.
+      Eigen::Vector3f glass =
+          m.albedo * std::max(0.2f, 1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp));
+      float frame = 0.0f;
+      if (f.axis == 2) {
+        // Sides: A, B and C pillars and the frame at the sill, in the body colour.
+        const float x = f.local.x(), hx = f.half.x();
+        frame = std::max({IntervalCoverage(x, hx - 0.14f, hx + 1.0f, fp),
+                          IntervalCoverage(x, -hx - 1.0f, -hx + 0.18f, fp),
+                          IntervalCoverage(x, -0.05f * hx - 0.06f, -0.05f * hx + 0.06f, fp),
+                          IntervalCoverage(v, -1.0f, 0.05f, fp)});
+      } else if (f.axis == 0) {
+        const float z = std::abs(f.local.z());
+        frame = std::max(IntervalCoverage(z, f.half.z() - 0.08f, f.half.z() + 1.0f, fp),
+                         IntervalCoverage(v, -1.0f, 0.05f, fp));
+      }
+      return glass + frame * (m.albedo2 - glass);
+    }
+    case Pattern::kWheel: {
+      // The end faces of a wheel (a cylinder on its local y axis): rim with spokes and hub inside
+      // 62% of the radius, tyre sidewall outside; the tread elsewhere.
+      const Primitive& p = scene.primitives[hit.primitive];
+      const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
+      const Eigen::Vector3f tyre =
+          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 5, fp));
+      if (std::abs(n.y()) <= 0.5f) return tyre;
+      const float radius = p.half_extent.x();
+      const float rho = std::hypot(f.local.x(), f.local.z());
+      const float rim_cover = IntervalCoverage(rho, -1.0f, 0.62f * radius, fp);
+      if (rim_cover <= 0.0f) return tyre;
+      // Five spokes; their contrast fades once the spoke period at this radius nears the footprint.
+      const float theta = std::atan2(f.local.z(), f.local.x());
+      const float period = 2.0f * static_cast<float>(M_PI) * std::max(rho, 1e-3f) / 5.0f;
+      const float fade = Clamp01(2.0f - 4.0f * fp / period);
+      const float spoke = 0.5f + 0.5f * std::cos(5.0f * theta);
+      const float hub = IntervalCoverage(rho, -1.0f, 0.16f * radius, fp);
+      const float metal = std::max(hub, 0.55f + fade * (Clamp01(3.0f * spoke - 1.0f) - 0.55f));
+      const Eigen::Vector3f rim = m.albedo2 * (0.15f + 0.85f * metal);
+      return tyre + rim_cover * (rim - tyre);
+    }
     case Pattern::kCloth: {
       const float folds = FilteredFbm(u, v, 4.0f, 0.6f, 6, fp);
       return m.albedo * (1.0f + m.contrast * folds);
