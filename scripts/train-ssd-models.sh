@@ -12,6 +12,8 @@
 #                    at once (each is one network thread plus a data-loader thread, so three at once
 #                    keep both cores of a 2-core machine busy; output then goes to MODELS_DIR/ssd-*.out)
 #   SSD_EPOCHS=10    epochs (the committed models: 10)
+#   SSD_FORCE=1      retrain a finished model (model.pt without checkpoint.pt, as committed) over it;
+#                    without it such a model is left alone and said so
 set -euo pipefail
 build_dir=${1:-build}
 data=${2:-data/synth}
@@ -19,6 +21,7 @@ models=${3:-models}
 inputs=${SSD_INPUTS:-rgb rgbh-fixed rgbh-learned}
 parallel=${SSD_PARALLEL:-1}
 epochs=${SSD_EPOCHS:-10}
+force=${SSD_FORCE:-0}
 bin="$build_dir/bin/stereodet"
 [[ -x "$bin" ]] || { echo "train-ssd-models: $bin not built; run make build" >&2; exit 1; }
 "$bin" train ssd --help >/dev/null 2>&1 ||
@@ -28,9 +31,18 @@ echo "==> synthetic data set ($data)"
 "$bin" synth --out "$data" --frames 4000 --seed 1 --val-fraction 0.25 --no-lidar
 
 train() {
-  local input=$1
-  "$bin" train ssd --data "$data" --split train --input "$input" --out "$models/ssd-$input" \
-    --epochs "$epochs" --seed 1 --threads 1 --resume
+  local input=$1 dir="$models/ssd-$input" mode=--resume
+  # A finished model without its checkpoint (the committed ones) cannot be resumed, and train ssd
+  # refuses to train over it silently: retrain it only when asked.
+  if [[ -f "$dir/model.pt" && ! -f "$dir/checkpoint.pt" ]]; then
+    if [[ "$force" != 1 ]]; then
+      echo "train-ssd-models: $dir holds a finished model; left alone (SSD_FORCE=1 retrains it)"
+      return 0
+    fi
+    mode=--force
+  fi
+  "$bin" train ssd --data "$data" --split train --input "$input" --out "$dir" \
+    --epochs "$epochs" --seed 1 --threads 1 "$mode"
 }
 
 mkdir -p "$models"
