@@ -8,6 +8,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
+  clang-format-14         # the formatting check of .ci/run (`make format-check`), one pinned version
   libfmt-dev              # util: formatting
   libtbb-dev              # util: parallel-for over frames
   libeigen3-dev           # geometry: small matrices, calibration
