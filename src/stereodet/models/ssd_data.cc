@@ -139,8 +139,10 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
               StereoGeometry::FromCalibration(ReadCalibration(paths.calib));
           StereoOutputs outputs;
           outputs.rgbh = false;
-          const StereoEncoding encoding = encoder.Encode(
-              ReadColourImage(paths.image_left), ReadColourImage(paths.image_right), geometry, outputs);
+          const cv::Mat left = ReadColourImage(paths.image_left);
+          const cv::Mat right = ReadColourImage(paths.image_right);
+          CheckStereoPairSize(left, right, paths.image_left, paths.image_right);
+          const StereoEncoding encoding = encoder.Encode(left, right, geometry, outputs);
           frame.height_code = ResizeHeightCodes(encoding.height_code, network_size);
         }
         reporter.Add(1);

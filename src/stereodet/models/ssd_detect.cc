@@ -118,6 +118,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
               ScopedStage stage(times, "read");
               right = ReadColourImage(paths.image_right);
             }
+            CheckStereoPairSize(left, right, paths.image_left, paths.image_right);
             ScopedStage stage(times, "stereo");
             StereoEncoder encoder(stereo);
             StereoOutputs outputs;

@@ -408,6 +408,23 @@ TEST(EncodeDatasetTest, RefusesMissingInputsAndNoFramesBeforeWriting) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
+TEST(EncodeDatasetTest, APairOfUnequalSizesNamesBothFiles) {
+  // The audit: the matcher's "left and right images differ in size" named no file or frame.
+  TestTempDir dir;
+  std::vector<std::string> ids = WriteScenes(dir / "data");
+  const KittiDataset dataset(dir / "data");
+  const fs::path right = dir / "data/training/image_3/000001.png";
+  WriteImageAtomically(right, cv::Mat(kHeight, kWidth - 16, CV_8UC3, cv::Scalar(0, 0, 0)));
+  try {
+    EncodeDataset(dataset, ids, dir / "out", SmallOptions());
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("a stereo pair must have equal sizes: "));
+    EXPECT_THAT(e.what(),
+                HasSubstr("image_2/000001.png is 256x96 px, " + right.string() + " is 240x96 px"));
+  }
+}
+
 TEST(FramePicturesTest, WritesFourPicturesOfTheImageSize) {
   TestTempDir dir;
   WriteScenes(dir / "data", 1);

@@ -16,6 +16,7 @@ FramePicturesResult WriteFramePictures(const KittiDataset& dataset, const std::s
   const FramePaths in = dataset.Paths(id);
   const cv::Mat left = ReadColourImage(in.image_left);
   const cv::Mat right = ReadColourImage(in.image_right);
+  CheckStereoPairSize(left, right, in.image_left, in.image_right);
   const StereoGeometry geometry = StereoGeometry::FromCalibration(ReadCalibration(in.calib));
   const StereoEncoding encoding =
       encoder.Encode(left, right, geometry, {.rgbh = false, .depth = false, .points = true});

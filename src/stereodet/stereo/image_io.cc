@@ -22,6 +22,15 @@ cv::Mat ReadColourImage(const std::filesystem::path& path) {
   return ReadImage(path, cv::IMREAD_COLOR);
 }
 
+void CheckStereoPairSize(const cv::Mat& left, const cv::Mat& right,
+                         const std::filesystem::path& left_path,
+                         const std::filesystem::path& right_path) {
+  STEREODET_CHECK_IO(left.size() == right.size())
+      << "a stereo pair must have equal sizes: " << left_path.string() << " is " << left.cols << "x"
+      << left.rows << " px, " << right_path.string() << " is " << right.cols << "x" << right.rows
+      << " px";
+}
+
 void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& image) {
   AtomicPath out(path);
   STEREODET_CHECK_IO(cv::imwrite(out.temp_path().string(), image))

@@ -17,6 +17,13 @@ cv::Mat ReadImage(const std::filesystem::path& path, int imread_flags, const cha
 // the path if it is missing or not a readable image.
 cv::Mat ReadColourImage(const std::filesystem::path& path);
 
+// Throws std::runtime_error naming both files when the two images of a stereo pair differ in size
+// (a rectified pair, KITTI's image_2 and image_3, is equal-sized); the matcher's own message would
+// name neither file nor frame.
+void CheckStereoPairSize(const cv::Mat& left, const cv::Mat& right,
+                         const std::filesystem::path& left_path,
+                         const std::filesystem::path& right_path);
+
 // Writes `image` atomically (temp file + rename); the format follows the extension. Throws
 // std::runtime_error naming the path on failure.
 void WriteImageAtomically(const std::filesystem::path& path, const cv::Mat& image);
