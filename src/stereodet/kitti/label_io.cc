@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <string>
 
@@ -34,6 +35,42 @@ constexpr std::array<double, kDetectionFields> kSentinels = {
     0, -1, 0, -10, 0, 0, 0, 0, -1, -1, -1, -1000, -1000, -1000, -10, 0};
 
 bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// The numbers of KITTI's files are short decimals ("-1.57", "712.40", "0", "-1000"): read as
+// m / 10^k with m < 10^15 and k <= 15, both exact doubles, the quotient is the decimal's correctly
+// rounded value (IEEE division rounds to nearest, and m / 10^k is never halfway between two
+// doubles), which is what std::from_chars returns, at a fraction of its cost. Reads
+// [+-]digits[.digits] with at most 15 digits in all; returns false for any other token, which then
+// takes ReadFiniteDouble (and its error messages).
+bool ReadShortDecimal(std::string_view token, double* value) {
+  constexpr int kMaxDigits = 15;
+  static constexpr double kPow10[kMaxDigits + 1] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                                    1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+  const char* p = token.data();
+  const char* const end = p + token.size();
+  bool negative = false;
+  if (p < end && (*p == '-' || *p == '+')) negative = *p++ == '-';
+  uint64_t mantissa = 0;
+  int digits = 0;  // in all, integer part and decimals
+  for (; p < end && *p >= '0' && *p <= '9'; ++p) {
+    if (++digits > kMaxDigits) return false;
+    mantissa = mantissa * 10 + static_cast<uint64_t>(*p - '0');
+  }
+  if (digits == 0) return false;
+  int decimals = 0;
+  if (p < end && *p == '.') {
+    ++p;
+    for (; p < end && *p >= '0' && *p <= '9'; ++p, ++decimals) {
+      if (++digits > kMaxDigits) return false;
+      mantissa = mantissa * 10 + static_cast<uint64_t>(*p - '0');
+    }
+    if (decimals == 0) return false;
+  }
+  if (p != end) return false;
+  const double magnitude = static_cast<double>(mantissa) / kPow10[decimals];
+  *value = negative ? -magnitude : magnitude;
+  return true;
+}
 
 // Splits one line (no '\n') into at most `max_tokens` tokens; returns the true token count, which
 // may exceed max_tokens (the extra tokens are counted, not stored).
@@ -93,6 +130,7 @@ bool ParseLine(std::string_view line, ObjectFileKind kind, Object* object, LineE
   double values[kDetectionFields];
   for (int i = 1; i < count; ++i) {
     if (i == 2) continue;  // occluded: an integer, read below
+    if (ReadShortDecimal(tokens[i], &values[i])) continue;
     const NumberStatus status = ReadFiniteDouble(tokens[i], &values[i]);
     if (status != NumberStatus::kOk) {
       error->field = i;
