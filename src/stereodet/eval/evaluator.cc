@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include "stereodet/eval/bipartite.h"
 #include "stereodet/eval/openpcdet_compat.h"
@@ -20,19 +21,38 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// ParallelFor over blocks of kFrameBlock consecutive frames, fn(i) for each frame i in order within
+// a block: most frames take well under a microsecond per cell, so one task per frame would cost
+// more in scheduling than in work.
+constexpr size_t kFrameBlock = 64;
+template <typename Fn>
+void ForEachFrame(size_t num_frames, int num_threads, const Fn& fn) {
+  ParallelFor((num_frames + kFrameBlock - 1) / kFrameBlock,
+              [&](size_t b) {
+                for (size_t i = b * kFrameBlock; i < std::min(num_frames, (b + 1) * kFrameBlock);
+                     ++i)
+                  fn(i);
+              },
+              num_threads);
+}
+
 // KITTI mode decides with the devkit's own overlap values where they may differ from ours; the
 // optimal and VOC matchers (>= tau, the paper's definition) keep the exact ones.
 // With --compat openpcdet, OpenPCDet's rules and overlaps instead (openpcdet_compat.h).
+// `reuse`: the ClassFrames of the previous class or overlap kind, whose memory is reused.
 std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
                                    OverlapKind kind, Matcher matcher, int num_threads,
-                                   EvalCompat compat = EvalCompat::kDevkit) {
+                                   EvalCompat compat = EvalCompat::kDevkit,
+                                   std::vector<ClassFrame> reuse = {}) {
   const OverlapArithmetic arithmetic =
       matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
-  std::vector<ClassFrame> out(frames.size());
-  ParallelFor(frames.size(), [&](size_t i) {
-    out[i] = compat == EvalCompat::kOpenPcdet ? PrepareClassFrameOpenPcdet(frames[i], spec, kind)
-                                              : PrepareClassFrame(frames[i], spec, kind, arithmetic);
-  }, num_threads);
+  std::vector<ClassFrame> out = std::move(reuse);
+  out.resize(frames.size());
+  ForEachFrame(frames.size(), num_threads, [&](size_t i) {
+    out[i] = compat == EvalCompat::kOpenPcdet
+                 ? PrepareClassFrameOpenPcdet(frames[i], spec, kind, std::move(out[i]))
+                 : PrepareClassFrame(frames[i], spec, kind, arithmetic, std::move(out[i]));
+  });
   return out;
 }
 
@@ -54,11 +74,15 @@ std::vector<EvalFrame> StrikeFailing(const std::vector<EvalFrame>& frames,
   return out;
 }
 
+// `reuse`: associations whose memory is reused (those of the previous cell).
 std::vector<FrameAssociation> AssociateAll(Matcher matcher, const std::vector<ClassFrame>& cfs,
-                                           Difficulty difficulty, double threshold, int num_threads) {
-  std::vector<FrameAssociation> out(cfs.size());
-  ParallelFor(cfs.size(), [&](size_t i) { out[i] = Associate(matcher, cfs[i], difficulty, threshold); },
-              num_threads);
+                                           Difficulty difficulty, double threshold, int num_threads,
+                                           std::vector<FrameAssociation> reuse = {}) {
+  std::vector<FrameAssociation> out = std::move(reuse);
+  out.resize(cfs.size());
+  ForEachFrame(cfs.size(), num_threads, [&](size_t i) {
+    out[i] = Associate(matcher, cfs[i], difficulty, threshold, std::move(out[i]));
+  });
   return out;
 }
 
@@ -526,11 +550,14 @@ const ClassResult* EvalResult::Find(const std::string& class_name, OverlapKind m
 }
 
 FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
-                           double threshold) {
+                           double threshold, FrameAssociation reuse) {
   switch (matcher) {
-    case Matcher::kKitti: return KittiAssociate(frame, difficulty, threshold);
-    case Matcher::kOptimal: return OptimalAssociate(frame, difficulty, threshold);
-    case Matcher::kVoc: return VocAssociate(frame, difficulty, threshold);
+    case Matcher::kKitti:
+      return KittiAssociate(frame, difficulty, threshold, std::move(reuse));
+    case Matcher::kOptimal:
+      return OptimalAssociate(frame, difficulty, threshold, std::move(reuse));
+    case Matcher::kVoc:
+      return VocAssociate(frame, difficulty, threshold, std::move(reuse));
   }
   return {};
 }
@@ -553,6 +580,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   std::vector<EvalFrame> struck;
   if (!options.filter.empty()) struck = StrikeFailing(frames, options.filter.conditions, threads);
 
+  // Kept from cell to cell so that their memory is reused.
+  std::vector<ClassFrame> cfs, struck_cfs;
+  std::vector<FrameAssociation> assocs;
   for (const ClassSpec& spec : options.classes) {
     int64_t num_detections = 0;
     for (const EvalFrame& f : frames) {
@@ -561,11 +591,11 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
     for (const OverlapKind kind : options.metrics) {
       const bool evaluated = compat == EvalCompat::kOpenPcdet || !options.require_detections ||
                              HasEvaluableDetection(frames, spec, kind);
-      std::vector<ClassFrame> cfs, struck_cfs;
       if (evaluated) {
-        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat);
+        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs));
         if (!options.filter.empty()) {
-          struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads, compat);
+          struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads, compat,
+                                  std::move(struck_cfs));
         }
       }
       for (const Difficulty difficulty : options.difficulties) {
@@ -597,8 +627,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         }
         r.best_f1 = BestF1(r.curve);
 
-        const std::vector<FrameAssociation> assocs =
-            AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
+        assocs = AssociateAll(options.matcher, cfs, difficulty, t_op, threads, std::move(assocs));
         r.at_threshold = CountAll(assocs, t_op);
         ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
                                     options.max_distance_m, options.score_transform);

@@ -241,9 +241,26 @@ void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFram
   }
 }
 
+void ClassFrame::Clear() {
+  label_object.clear();
+  label_neighbour.clear();
+  label_difficulty.clear();
+  label_alpha.clear();
+  det_object.clear();
+  det_is_class.clear();
+  det_height.clear();
+  det_score.clear();
+  det_alpha.clear();
+  det_dontcare.clear();
+  edge_begin.clear();
+  edge_det.clear();
+  edge_overlap.clear();
+}
+
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                             OverlapArithmetic arithmetic) {
-  ClassFrame cf;
+                             OverlapArithmetic arithmetic, ClassFrame reuse) {
+  ClassFrame cf = std::move(reuse);
+  cf.Clear();
   const double tau = spec.min_overlap[static_cast<int>(kind)];
   cf.min_overlap = tau;
   const bool devkit = arithmetic == OverlapArithmetic::kDevkit;

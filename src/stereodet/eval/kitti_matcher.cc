@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <utility>
 
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/util/parallel.h"
@@ -19,10 +20,27 @@ constexpr double kNoDetection = -10000000;
 // class, -1 for other classes.
 void DetStates(const ClassFrame& f, Difficulty difficulty, std::vector<int8_t>* states) {
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  states->resize(f.num_dets());
-  for (int j = 0; j < f.num_dets(); ++j) {
-    (*states)[j] = std::trunc(f.det_height[j]) < min_height ? 1 : (f.det_is_class[j] ? 0 : -1);
-  }
+  const int n = f.num_dets();
+  states->resize(n);
+  int8_t* out = states->data();
+  const double* height = f.det_height.data();
+  const uint8_t* is_class = f.det_is_class.data();
+  for (int j = 0; j < n; ++j)
+    out[j] = std::trunc(height[j]) < min_height ? 1 : (is_class[j] ? 0 : -1);
+}
+
+// Memory reused by one thread from call to call: the functions below run once per frame, class,
+// overlap kind and difficulty (tens of thousands of times per evaluation), mostly on frames of a
+// few objects, where allocating these lists afresh cost more than the matching.
+struct ThreadScratch {
+  std::vector<int8_t> states;
+  std::vector<uint8_t> assigned, interacting;
+  std::vector<double> interacting_scores, free_fp_scores;
+};
+
+ThreadScratch& Scratch() {
+  thread_local ThreadScratch scratch;
+  return scratch;
 }
 
 struct Pass2Result {
@@ -97,9 +115,11 @@ std::vector<double> KittiThresholds(std::vector<double> v, double n_groundtruth)
 }
 
 int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector<double>* tp_scores) {
-  std::vector<int8_t> states;
+  ThreadScratch& scratch = Scratch();
+  std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
-  std::vector<uint8_t> assigned(f.num_dets(), 0);
+  std::vector<uint8_t>& assigned = scratch.assigned;
+  assigned.assign(f.num_dets(), 0);
   const double tau = f.min_overlap;
   int n_gt = 0;
   for (int i = 0; i < f.num_labels(); ++i) {
@@ -124,17 +144,22 @@ int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector
 
 void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
                          const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
-  std::vector<int8_t> states;
+  ThreadScratch& scratch = Scratch();
+  std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
   const double tau = f.min_overlap;
   // Detections that can be chosen by some label; only their presence above the threshold changes
   // the greedy's outcome. The others are FPs (valid, not in DontCare) or nothing.
-  std::vector<uint8_t> interacting(f.num_dets(), 0);
+  std::vector<uint8_t>& interacting = scratch.interacting;
+  interacting.assign(f.num_dets(), 0);
   for (size_t e = 0; e < f.edge_det.size(); ++e) {
     const int j = f.edge_det[e];
     if (states[j] != -1 && f.edge_overlap[e] > tau) interacting[j] = 1;
   }
-  std::vector<double> interacting_scores, free_fp_scores;
+  std::vector<double>& interacting_scores = scratch.interacting_scores;
+  std::vector<double>& free_fp_scores = scratch.free_fp_scores;
+  interacting_scores.clear();
+  free_fp_scores.clear();
   for (int j = 0; j < f.num_dets(); ++j) {
     if (interacting[j]) interacting_scores.push_back(f.det_score[j]);
     else if (states[j] == 0 && !f.det_dontcare[j]) free_fp_scores.push_back(f.det_score[j]);
@@ -145,16 +170,21 @@ void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
   int64_t n_valid = 0;
   for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
 
-  std::vector<uint8_t> assigned;
+  std::vector<uint8_t>& assigned = scratch.assigned;
+  // The counts change only where a detection enters (its score >= the threshold), so the
+  // thresholds go by runs over which nothing enters: the greedy runs once per run, and each
+  // threshold of the run gets the same counts, added in the same order as one threshold at a time.
+  const size_t n_t = thresholds.size();
+  const size_t n_inter = interacting_scores.size(), n_free = free_fp_scores.size();
+  KittiCounts* out = counts->data();
   size_t k_inter = 0, k_free = 0;
-  size_t last_k = static_cast<size_t>(-1);
   KittiCounts cached;
-  for (size_t t = 0; t < thresholds.size(); ++t) {
+  for (size_t t = 0; t < n_t;) {
     const double threshold = thresholds[t];
-    while (k_inter < interacting_scores.size() && interacting_scores[k_inter] >= threshold) ++k_inter;
-    while (k_free < free_fp_scores.size() && free_fp_scores[k_free] >= threshold) ++k_free;
-    if (k_inter != last_k) {
-      last_k = k_inter;
+    const size_t inter_before = k_inter;
+    while (k_inter < n_inter && interacting_scores[k_inter] >= threshold) ++k_inter;
+    while (k_free < n_free && free_fp_scores[k_free] >= threshold) ++k_free;
+    if (t == 0 || k_inter != inter_before) {
       cached = KittiCounts{};
       if (k_inter == 0) {
         cached.fn = n_valid;
@@ -171,23 +201,33 @@ void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
         }
       }
     }
-    KittiCounts& c = (*counts)[t];
-    c.tp += cached.tp;
-    c.fn += cached.fn;
-    c.fp += cached.fp + static_cast<int64_t>(k_free);
-    c.similarity += cached.similarity;
+    // The run ends at the first threshold at which the next detection of either list enters.
+    size_t end = t + 1;
+    while (end < n_t && !(k_inter < n_inter && interacting_scores[k_inter] >= thresholds[end]) &&
+           !(k_free < n_free && free_fp_scores[k_free] >= thresholds[end])) {
+      ++end;
+    }
+    const int64_t fp = cached.fp + static_cast<int64_t>(k_free);
+    for (; t < end; ++t) {
+      out[t].tp += cached.tp;
+      out[t].fn += cached.fn;
+      out[t].fp += fp;
+      out[t].similarity += cached.similarity;
+    }
   }
 }
 
-FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
-  std::vector<int8_t> states;
+FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
+                                FrameAssociation reuse) {
+  ThreadScratch& scratch = Scratch();
+  std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
-  FrameAssociation a;
+  FrameAssociation a = std::move(reuse);
   a.label_outcome.assign(f.num_labels(), Outcome::kIgnored);
   a.label_det.assign(f.num_labels(), -1);
   a.det_outcome.assign(f.num_dets(), Outcome::kNone);
   a.det_label.assign(f.num_dets(), -1);
-  std::vector<uint8_t> assigned;
+  std::vector<uint8_t>& assigned = scratch.assigned;
   RunPass2(f, difficulty, states, threshold, &assigned, &a);
   for (int j = 0; j < f.num_dets(); ++j) {
     if (a.det_outcome[j] == Outcome::kTp) continue;

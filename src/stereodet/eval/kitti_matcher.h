@@ -49,7 +49,9 @@ void KittiAddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
                          const std::vector<double>& thresholds, std::vector<KittiCounts>* counts);
 
 // Pass 2 on one frame at one threshold, returning what every label and detection counts as.
-FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold);
+// `reuse` lends its memory to the result (its contents are discarded).
+FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
+                                FrameAssociation reuse = {});
 
 struct KittiClassResult {
   int64_t num_groundtruth = 0;              // n_gt: valid labels over all frames
