@@ -35,6 +35,19 @@ bool Footprint(const Box3D& box, Box3D* out) {
 double FootprintIntersection(const Box3D& a, const Box3D& b) {
   Box3D fa, fb;
   if (!Footprint(a, &fa) || !Footprint(b, &fb)) return 0.0;
+  // Most pairs of a frame are far apart. BevIntersectionArea returns 0 for them too, from its test
+  // of the circumscribed circles, but that costs two hypot calls: a half-diagonal is at most half
+  // the sum of the two sides, so centres farther apart than all four half sides along x or z, with
+  // a margin far above the rounding of either test, are apart in that test as well (sizes kept well
+  // inside double's range, so that no square there overflows or underflows).
+  const double half_sides = (fa.l + fa.w + fb.l + fb.w) / 2;
+  if (half_sides > 1e-100 && half_sides < 1e100) {
+    const double reach = half_sides * (1 + 1e-9);
+    if (std::abs(fb.location.x() - fa.location.x()) > reach ||
+        std::abs(fb.location.z() - fa.location.z()) > reach) {
+      return 0.0;
+    }
+  }
   return BevIntersectionArea(fa, fb);
 }
 

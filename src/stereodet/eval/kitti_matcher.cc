@@ -142,8 +142,66 @@ int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector
   return n_gt;
 }
 
-void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
-                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
+namespace {
+
+// Pass 2's counts of many frames at every threshold. A frame's counts are constant over runs of
+// thresholds, so its integer counts are recorded as changes at the ends of its runs (summed up in
+// AddTo, exact in any order), while each threshold's similarity sum gets the frame's value added
+// at each threshold of a run, frame after frame: a floating-point sum depends on its order, and
+// this is the order of adding every frame's counts threshold by threshold. Zero similarities are
+// not added (x + 0 is x for every sum here, none of which is -0).
+class PassTwoCounts {
+ public:
+  explicit PassTwoCounts(size_t num_thresholds)
+      : tp_(num_thresholds + 1, 0),
+        fp_(num_thresholds + 1, 0),
+        fn_(num_thresholds + 1, 0),
+        similarity_(num_thresholds, 0.0) {}
+
+  size_t num_thresholds() const { return similarity_.size(); }
+
+  // Adds the counts to the thresholds [begin, end).
+  void AddRun(size_t begin, size_t end, int64_t tp, int64_t fp, int64_t fn, double similarity) {
+    tp_[begin] += tp;
+    tp_[end] -= tp;
+    fp_[begin] += fp;
+    fp_[end] -= fp;
+    fn_[begin] += fn;
+    fn_[end] -= fn;
+    if (similarity != 0.0) {
+      for (size_t t = begin; t < end; ++t) similarity_[t] += similarity;
+    }
+  }
+
+  // Adds the sums to counts[t], t < num_thresholds().
+  void AddTo(std::vector<KittiCounts>* counts) const {
+    int64_t tp = 0, fp = 0, fn = 0;
+    for (size_t t = 0; t < similarity_.size(); ++t) {
+      tp += tp_[t];
+      fp += fp_[t];
+      fn += fn_[t];
+      KittiCounts& c = (*counts)[t];
+      c.tp += tp;
+      c.fp += fp;
+      c.fn += fn;
+      c.similarity += similarity_[t];
+    }
+  }
+
+ private:
+  std::vector<int64_t> tp_, fp_, fn_;
+  std::vector<double> similarity_;
+};
+
+void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+                    const std::vector<double>& thresholds, PassTwoCounts* counts) {
+  const size_t n_t = thresholds.size();
+  int64_t n_valid = 0;
+  for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
+  if (f.num_dets() == 0) {  // many frames hold nothing of a class: every valid label is a FN
+    if (n_t > 0) counts->AddRun(0, n_t, 0, 0, n_valid, 0.0);
+    return;
+  }
   ThreadScratch& scratch = Scratch();
   std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
@@ -167,16 +225,11 @@ void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
   std::sort(interacting_scores.begin(), interacting_scores.end(), std::greater<double>());
   std::sort(free_fp_scores.begin(), free_fp_scores.end(), std::greater<double>());
 
-  int64_t n_valid = 0;
-  for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
-
   std::vector<uint8_t>& assigned = scratch.assigned;
   // The counts change only where a detection enters (its score >= the threshold), so the
-  // thresholds go by runs over which nothing enters: the greedy runs once per run, and each
-  // threshold of the run gets the same counts, added in the same order as one threshold at a time.
-  const size_t n_t = thresholds.size();
+  // thresholds go by runs over which nothing enters: the greedy runs once per run, and every
+  // threshold of the run gets the same counts.
   const size_t n_inter = interacting_scores.size(), n_free = free_fp_scores.size();
-  KittiCounts* out = counts->data();
   size_t k_inter = 0, k_free = 0;
   KittiCounts cached;
   for (size_t t = 0; t < n_t;) {
@@ -202,19 +255,27 @@ void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
       }
     }
     // The run ends at the first threshold at which the next detection of either list enters.
-    size_t end = t + 1;
-    while (end < n_t && !(k_inter < n_inter && interacting_scores[k_inter] >= thresholds[end]) &&
-           !(k_free < n_free && free_fp_scores[k_free] >= thresholds[end])) {
-      ++end;
+    size_t end = n_t;
+    if (k_inter < n_inter || k_free < n_free) {
+      end = t + 1;
+      while (end < n_t && !(k_inter < n_inter && interacting_scores[k_inter] >= thresholds[end]) &&
+             !(k_free < n_free && free_fp_scores[k_free] >= thresholds[end])) {
+        ++end;
+      }
     }
-    const int64_t fp = cached.fp + static_cast<int64_t>(k_free);
-    for (; t < end; ++t) {
-      out[t].tp += cached.tp;
-      out[t].fn += cached.fn;
-      out[t].fp += fp;
-      out[t].similarity += cached.similarity;
-    }
+    counts->AddRun(t, end, cached.tp, cached.fp + static_cast<int64_t>(k_free), cached.fn,
+                   cached.similarity);
+    t = end;
   }
+}
+
+}  // namespace
+
+void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
+  PassTwoCounts frame_counts(thresholds.size());
+  AddFrameCounts(f, difficulty, thresholds, &frame_counts);
+  frame_counts.AddTo(counts);
 }
 
 FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
@@ -282,21 +343,14 @@ KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Diffi
 
   // Pass 2.
   const size_t n_t = result.thresholds.size();
-  std::vector<std::vector<KittiCounts>> block_counts(num_blocks, std::vector<KittiCounts>(n_t));
+  std::vector<PassTwoCounts> block_counts(num_blocks, PassTwoCounts(n_t));
   ParallelFor(num_blocks, [&](size_t b) {
     for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
-      KittiAddFrameCounts(frames[i], difficulty, result.thresholds, &block_counts[b]);
+      AddFrameCounts(frames[i], difficulty, result.thresholds, &block_counts[b]);
     }
   }, num_threads);
   result.counts.assign(n_t, KittiCounts{});
-  for (size_t b = 0; b < num_blocks; ++b) {
-    for (size_t t = 0; t < n_t; ++t) {
-      result.counts[t].tp += block_counts[b][t].tp;
-      result.counts[t].fp += block_counts[b][t].fp;
-      result.counts[t].fn += block_counts[b][t].fn;
-      result.counts[t].similarity += block_counts[b][t].similarity;
-    }
-  }
+  for (size_t b = 0; b < num_blocks; ++b) block_counts[b].AddTo(&result.counts);
 
   // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
   std::array<double, kKittiSamplePoints> precision{}, aos{};
