@@ -408,12 +408,25 @@ TEST(LabelIoTest, NumbersReadExactlyAsFromChars) {
     std::vector<std::string> tokens(16);
     for (int i = 1; i < 16; ++i) tokens[i] = token(i >= 8 && i <= 10);
     tokens[0] = "Car";
-    tokens[2] = "1";
+    // occluded: short integers on the one-pass reader, longer ones on the general one
+    static const char* kOccluded[] = {"1", "+2", "-1", "007", "0", "123456789", "1234567890"};
+    static const int kOccludedValue[] = {1, 2, -1, 7, 0, 123456789, 1234567890};
+    const int occluded = static_cast<int>(rng() % 7);
+    tokens[2] = kOccluded[occluded];
     if (line < static_cast<int>(fixed.size())) tokens[3] = fixed[line];
+    // Label lines (15 fields, as labels and as either kind) and detection lines (16).
+    const bool label = line % 2 == 1;
+    if (label) tokens.pop_back();
+    const ObjectFileKind kind = !label          ? ObjectFileKind::kDetection
+                                : line % 4 == 1 ? ObjectFileKind::kLabel
+                                                : ObjectFileKind::kAny;
     std::string text;
-    for (const std::string& t : tokens) text += t + " ";
-    const ObjectFile file = ParseObjects(text, "x", {ObjectFileKind::kDetection, false});
+    static const char* kBlanks[] = {" ", "  ", "\t", " \r"};
+    for (const std::string& t : tokens) text += t + kBlanks[rng() % 4];
+    const ObjectFile file = ParseObjects(text, "x", {kind, false});
     ASSERT_EQ(file.objects.size(), 1u) << text;
+    EXPECT_EQ(file.objects[0].type, "Car");
+    EXPECT_EQ(file.objects[0].occluded, kOccludedValue[occluded]) << text;
     const Object& o = file.objects[0];
     const double got[16] = {0,
                             o.truncated,
@@ -430,8 +443,9 @@ TEST(LabelIoTest, NumbersReadExactlyAsFromChars) {
                             o.box3d.location.y(),
                             o.box3d.location.z(),
                             o.box3d.rotation_y,
-                            *o.score};
-    for (int i = 1; i < 16; ++i) {
+                            o.score.value_or(0.0)};
+    EXPECT_EQ(o.score.has_value(), !label);
+    for (int i = 1; i < static_cast<int>(tokens.size()); ++i) {
       if (i == 2) continue;
       const double want = from_chars(tokens[i]);
       ASSERT_EQ(std::memcmp(&got[i], &want, sizeof(double)), 0)
