@@ -207,6 +207,12 @@ double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection
 std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpec& spec,
                                           bool exact_dontcare_name, ClassFrame* cf) {
   std::vector<const Object*> dontcares;
+  // At most every label: one allocation per list the first time, none when `cf` is reused.
+  const size_t most = cf->label_object.size() + frame.labels.size();
+  cf->label_object.reserve(most);
+  cf->label_neighbour.reserve(most);
+  cf->label_difficulty.reserve(most);
+  cf->label_alpha.reserve(most);
   for (size_t i = 0; i < frame.labels.size(); ++i) {
     const Object& label = frame.labels[i];
     if (exact_dontcare_name ? label.type == "DontCare" : IsDontCare(label)) {
@@ -238,6 +244,13 @@ std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpe
 
 void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFrame* cf,
                         const std::function<bool(const Object&)>& in_dontcare) {
+  const size_t most = cf->det_object.size() + frame.detections.size();
+  cf->det_object.reserve(most);
+  cf->det_is_class.reserve(most);
+  cf->det_height.reserve(most);
+  cf->det_score.reserve(most);
+  cf->det_alpha.reserve(most);
+  cf->det_dontcare.reserve(most);
   for (size_t j = 0; j < frame.detections.size(); ++j) {
     const Object& det = frame.detections[j];
     STEREODET_CHECK(det.score.has_value())

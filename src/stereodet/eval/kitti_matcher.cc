@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <utility>
 
 #include "stereodet/eval/openpcdet_compat.h"
@@ -316,66 +317,116 @@ double KittiApR40(const std::array<double, kKittiSamplePoints>& curve) {
   return sum / 40.0 * 100.0;
 }
 
+struct KittiPasses::Blocks {
+  // Pass 1, by difficulty then block: the TP scores in frame order, the valid labels.
+  std::vector<std::vector<std::vector<double>>> scores;
+  std::vector<std::vector<int64_t>> groundtruth;
+  // Pass 2, by difficulty then block.
+  std::vector<std::vector<PassTwoCounts>> counts;
+};
+
+KittiPasses::KittiPasses(size_t num_frames, std::vector<Difficulty> difficulties, EvalCompat compat)
+    : difficulties_(std::move(difficulties)),
+      compat_(compat),
+      num_blocks_((num_frames + kBlock - 1) / kBlock),
+      results_(difficulties_.size()),
+      blocks_(std::make_unique<Blocks>()) {
+  blocks_->scores.assign(difficulties_.size(), std::vector<std::vector<double>>(num_blocks_));
+  blocks_->groundtruth.assign(difficulties_.size(), std::vector<int64_t>(num_blocks_, 0));
+}
+
+KittiPasses::~KittiPasses() = default;
+
+void KittiPasses::CollectFrame(size_t frame_index, const ClassFrame& frame) {
+  const size_t b = frame_index / kBlock;
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    blocks_->groundtruth[d][b] +=
+        KittiCollectTpScores(frame, difficulties_[d], &blocks_->scores[d][b]);
+  }
+}
+
+void KittiPasses::ChooseThresholds() {
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    KittiClassResult& result = results_[d];
+    std::vector<double> v;
+    for (size_t b = 0; b < num_blocks_; ++b) {
+      result.num_groundtruth += blocks_->groundtruth[d][b];
+      v.insert(v.end(), blocks_->scores[d][b].begin(), blocks_->scores[d][b].end());
+    }
+    result.thresholds = KittiThresholds(std::move(v), static_cast<double>(result.num_groundtruth));
+    // The devkit writes precision[i] for every threshold into 41 slots; more than 41 thresholds
+    // cannot happen (see KittiThresholds), but never write past the array.
+    if (result.thresholds.size() > kKittiSamplePoints) result.thresholds.resize(kKittiSamplePoints);
+    blocks_->counts.emplace_back(num_blocks_, PassTwoCounts(result.thresholds.size()));
+  }
+}
+
+void KittiPasses::CountFrame(size_t frame_index, const ClassFrame& frame) {
+  const size_t b = frame_index / kBlock;
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    AddFrameCounts(frame, difficulties_[d], results_[d].thresholds, &blocks_->counts[d][b]);
+  }
+}
+
+std::vector<KittiClassResult> KittiPasses::Finish() {
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    KittiClassResult& result = results_[d];
+    const size_t n_t = result.thresholds.size();
+    result.counts.assign(n_t, KittiCounts{});
+    for (size_t b = 0; b < num_blocks_; ++b) blocks_->counts[d][b].AddTo(&result.counts);
+
+    // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
+    std::array<double, kKittiSamplePoints> precision{}, aos{};
+    for (size_t i = 0; i < n_t; ++i) {
+      const KittiCounts& c = result.counts[i];
+      result.recall[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fn);
+      precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
+      aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
+    }
+    if (compat_ == EvalCompat::kOpenPcdet) {
+      OpenPcdetEnvelope(&precision);
+      OpenPcdetEnvelope(&aos);
+    } else {
+      for (size_t i = 0; i < n_t; ++i) {
+        precision[i] = *std::max_element(precision.begin() + i, precision.end());
+        aos[i] = *std::max_element(aos.begin() + i, aos.end());
+      }
+    }
+    result.precision = precision;
+    result.aos = aos;
+    result.ap_r11 = KittiApR11(precision);
+    result.ap_r40 = KittiApR40(precision);
+    result.aos_r11 = KittiApR11(aos);
+    result.aos_r40 = KittiApR40(aos);
+  }
+  return std::move(results_);
+}
+
+std::vector<KittiClassResult> EvaluateKittiClass(const std::vector<ClassFrame>& frames,
+                                                 const std::vector<Difficulty>& difficulties,
+                                                 int num_threads, EvalCompat compat) {
+  KittiPasses passes(frames.size(), difficulties, compat);
+  const size_t num_blocks = (frames.size() + KittiPasses::kBlock - 1) / KittiPasses::kBlock;
+  auto for_each_frame = [&](auto fn) {
+    ParallelFor(
+        num_blocks,
+        [&](size_t b) {
+          for (size_t i = b * KittiPasses::kBlock;
+               i < std::min(frames.size(), (b + 1) * KittiPasses::kBlock); ++i) {
+            fn(i);
+          }
+        },
+        num_threads);
+  };
+  for_each_frame([&](size_t i) { passes.CollectFrame(i, frames[i]); });
+  passes.ChooseThresholds();
+  for_each_frame([&](size_t i) { passes.CountFrame(i, frames[i]); });
+  return passes.Finish();
+}
+
 KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
                                     int num_threads, EvalCompat compat) {
-  KittiClassResult result;
-  // Blocks of frames, so each worker accumulates locally and the reduction is short.
-  constexpr size_t kBlock = 64;
-  const size_t num_blocks = (frames.size() + kBlock - 1) / kBlock;
-
-  // Pass 1.
-  std::vector<std::vector<double>> block_scores(num_blocks);
-  std::vector<int64_t> block_gt(num_blocks, 0);
-  ParallelFor(num_blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
-      block_gt[b] += KittiCollectTpScores(frames[i], difficulty, &block_scores[b]);
-    }
-  }, num_threads);
-  std::vector<double> v;
-  for (size_t b = 0; b < num_blocks; ++b) {
-    result.num_groundtruth += block_gt[b];
-    v.insert(v.end(), block_scores[b].begin(), block_scores[b].end());
-  }
-  result.thresholds = KittiThresholds(std::move(v), static_cast<double>(result.num_groundtruth));
-  // The devkit writes precision[i] for every threshold into 41 slots; more than 41 thresholds cannot
-  // happen (see KittiThresholds), but never write past the array.
-  if (result.thresholds.size() > kKittiSamplePoints) result.thresholds.resize(kKittiSamplePoints);
-
-  // Pass 2.
-  const size_t n_t = result.thresholds.size();
-  std::vector<PassTwoCounts> block_counts(num_blocks, PassTwoCounts(n_t));
-  ParallelFor(num_blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
-      AddFrameCounts(frames[i], difficulty, result.thresholds, &block_counts[b]);
-    }
-  }, num_threads);
-  result.counts.assign(n_t, KittiCounts{});
-  for (size_t b = 0; b < num_blocks; ++b) block_counts[b].AddTo(&result.counts);
-
-  // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
-  std::array<double, kKittiSamplePoints> precision{}, aos{};
-  for (size_t i = 0; i < n_t; ++i) {
-    const KittiCounts& c = result.counts[i];
-    result.recall[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fn);
-    precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
-    aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
-  }
-  if (compat == EvalCompat::kOpenPcdet) {
-    OpenPcdetEnvelope(&precision);
-    OpenPcdetEnvelope(&aos);
-  } else {
-    for (size_t i = 0; i < n_t; ++i) {
-      precision[i] = *std::max_element(precision.begin() + i, precision.end());
-      aos[i] = *std::max_element(aos.begin() + i, aos.end());
-    }
-  }
-  result.precision = precision;
-  result.aos = aos;
-  result.ap_r11 = KittiApR11(precision);
-  result.ap_r40 = KittiApR40(precision);
-  result.aos_r11 = KittiApR11(aos);
-  result.aos_r40 = KittiApR40(aos);
-  return result;
+  return EvaluateKittiClass(frames, std::vector<Difficulty>{difficulty}, num_threads, compat)[0];
 }
 
 }  // namespace stereodet
