@@ -1,5 +1,6 @@
 #include "stereodet/kitti/label_io.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -300,8 +301,9 @@ const char* ObjectFieldName(int index) {
 ObjectFile ParseObjects(std::string_view text, const std::string& source,
                         const ObjectParseOptions& options) {
   ObjectFile file;
-  // A label line is about 90 bytes: reserving avoids most regrowth without a counting pass.
-  file.objects.reserve(text.size() / 64 + 1);
+  // One object per line at most: counting the newlines (a vectorized scan) reserves about the
+  // right size, where a guess from the byte count left a third of every frame's objects unused.
+  file.objects.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
   LineError error;
   int line_number = 0;
   size_t pos = 0;
