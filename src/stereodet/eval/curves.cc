@@ -1,6 +1,9 @@
 #include "stereodet/eval/curves.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
 
 namespace stereodet {
 
@@ -35,22 +38,60 @@ namespace {
 
 double InterpolatedAp(const std::vector<CurvePoint>& curve, int first, int last, double step,
                       bool orientation = false) {
-  // Best precision (or orientation ratio) at recall >= r: a suffix maximum over points sorted by
-  // recall.
-  std::vector<std::pair<double, double>> pr;  // (recall, precision)
+  // The mean over the recall levels r = k * step, k = first..last, of the best precision (or
+  // orientation ratio) at recall >= r, 0 where no point reaches r. Points with no detection
+  // (tp + fp = 0) take no part.
+  auto value = [&](const CurvePoint& p) { return orientation ? p.orientation : p.precision; };
+  bool any_nan = false;
+  for (const CurvePoint& p : curve) any_nan |= std::isnan(p.recall) || std::isnan(value(p));
+  if (any_nan) {
+    // With a NaN, std::max depends on the order of its operands: the original way, by sorting.
+    std::vector<std::pair<double, double>> pr;  // (recall, value)
+    for (const CurvePoint& p : curve) {
+      if (p.tp + p.fp > 0) pr.emplace_back(p.recall, value(p));
+    }
+    std::sort(pr.begin(), pr.end());
+    for (size_t i = pr.size(); i-- > 1;)
+      pr[i - 1].second = std::max(pr[i - 1].second, pr[i].second);
+    double sum = 0.0;
+    for (int k = first; k <= last; ++k) {
+      const double r = k * step;
+      const auto it = std::lower_bound(
+          pr.begin(), pr.end(), r,
+          [](const std::pair<double, double>& a, double v) { return a.first < v; });
+      if (it != pr.end()) sum += it->second;
+    }
+    return sum / (last - first + 1) * 100.0;
+  }
+  // Without NaN the maximum of a set is exact whatever the order: each point raises the best value
+  // of the highest level its recall reaches (levels reached form a prefix, k * step growing with
+  // k), and a suffix maximum over the levels gives each level's best, in linear time. (No value is
+  // -0: precisions are counts' ratios and similarity sums start at +0.)
+  const int n_levels = last - first + 1;
+  std::vector<double> best(n_levels, 0.0);
+  std::vector<uint8_t> reached(n_levels, 0);
   for (const CurvePoint& p : curve) {
-    if (p.tp + p.fp > 0) pr.emplace_back(p.recall, orientation ? p.orientation : p.precision);
+    if (p.tp + p.fp <= 0) continue;
+    // The highest k in [first, last] with k * step <= recall (the levels lower_bound would find).
+    int k = static_cast<int>(std::clamp(std::floor(p.recall / step), first - 1.0, last + 0.0));
+    while (k + 1 <= last && (k + 1) * step <= p.recall) ++k;
+    while (k >= first && !(k * step <= p.recall)) --k;
+    if (k < first) continue;
+    const int level = k - first;
+    best[level] = reached[level] ? std::max(best[level], value(p)) : value(p);
+    reached[level] = 1;
   }
-  std::sort(pr.begin(), pr.end());
-  for (size_t i = pr.size(); i-- > 1;) pr[i - 1].second = std::max(pr[i - 1].second, pr[i].second);
-  double sum = 0.0;
-  for (int k = first; k <= last; ++k) {
-    const double r = k * step;
-    const auto it = std::lower_bound(pr.begin(), pr.end(), r,
-                                     [](const std::pair<double, double>& a, double v) { return a.first < v; });
-    if (it != pr.end()) sum += it->second;
+  // Suffix maxima, in place: best[level] becomes the best value at recall >= that level's r.
+  for (int level = n_levels - 2; level >= 0; --level) {
+    if (!reached[level + 1]) continue;
+    best[level] = reached[level] ? std::max(best[level], best[level + 1]) : best[level + 1];
+    reached[level] = 1;
   }
-  return sum / (last - first + 1) * 100.0;
+  double sum = 0.0;  // in ascending level order, as the levels were always summed
+  for (int level = 0; level < n_levels; ++level) {
+    if (reached[level]) sum += best[level];
+  }
+  return sum / n_levels * 100.0;
 }
 
 }  // namespace
@@ -76,8 +117,10 @@ double EveryPointAp(const std::vector<CurvePoint>& curve) {
   for (const CurvePoint& p : curve) {
     if (p.tp + p.fp > 0) pr.emplace_back(p.recall, p.precision);
   }
-  std::stable_sort(pr.begin(), pr.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  // A curve's recall rarely goes down with the threshold: then the points are in order already.
+  const auto by_recall = [](const auto& a, const auto& b) { return a.first < b.first; };
+  if (!std::is_sorted(pr.begin(), pr.end(), by_recall))
+    std::stable_sort(pr.begin(), pr.end(), by_recall);
   std::vector<double> mrec = {0.0}, mpre = {0.0};
   for (const auto& [r, p] : pr) {
     mrec.push_back(r);

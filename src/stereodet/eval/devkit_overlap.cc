@@ -1,9 +1,13 @@
 #include "stereodet/eval/devkit_overlap.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 // boost 1.74's rescale policy trips g++ 12's -Wmaybe-uninitialized once inlined (a false positive
@@ -67,24 +71,98 @@ std::optional<double> FirstArea(const std::vector<DevkitPolygon>& polygons) {
   return bg::area(polygons.front());
 }
 
+// The intersection and union areas boost gives for one pair of footprints (label first), each
+// computed when first asked for. `kThrew`: boost threw (the devkit would end there).
+struct Overlay {
+  enum State : uint8_t { kUnknown, kValue, kNoPolygon, kThrew };
+  State intersection = kUnknown, union_ = kUnknown;
+  double intersection_area = 0.0, union_area = 0.0;
+};
+
+// Memory of the last pairs' overlays, per thread. An evaluation asks for the same pair in BEV and
+// in 3D (both use the same intersection), and a low detection of any class is matched against
+// the labels of every class; boost takes ~10 us per operation, a look-up well under 0.1 us. The
+// key is the exact bits of the ten numbers the footprints are made of, so a hit returns what
+// boost would compute again.
+class OverlayMemory {
+ public:
+  Overlay& Find(const Box3D& detection, const Box3D& label) {
+    if (memory_.size() >= kMaxPairs) memory_.clear();
+    return memory_[Key{{Bits(label.l), Bits(label.w), Bits(label.rotation_y),
+                        Bits(label.location.x()), Bits(label.location.z()), Bits(detection.l),
+                        Bits(detection.w), Bits(detection.rotation_y), Bits(detection.location.x()),
+                        Bits(detection.location.z())}}];
+  }
+
+ private:
+  static constexpr size_t kMaxPairs = 1 << 16;
+  struct Key {
+    std::array<uint64_t, 10> bits;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 0x9e3779b97f4a7c15ull;
+      for (const uint64_t b : k.bits) h = (h ^ b) * 0x100000001b3ull + (h >> 29);
+      return static_cast<size_t>(h);
+    }
+  };
+  static uint64_t Bits(double v) { return std::bit_cast<uint64_t>(v); }
+  std::unordered_map<Key, Overlay, KeyHash> memory_;
+};
+
+// Area of the first polygon of boost's `op` on the two footprints, into *state / *area.
+template <typename Op>
+void Compute(Op op, Overlay::State* state, double* area) {
+  try {
+    std::vector<DevkitPolygon> polygons;
+    op(&polygons);
+    const std::optional<double> first = FirstArea(polygons);
+    *state = first ? Overlay::kValue : Overlay::kNoPolygon;
+    *area = first.value_or(0.0);
+  } catch (const std::exception&) {
+    // boost::geometry's overlay may throw on input it finds invalid; uncaught in the devkit, that
+    // ends it too: no answer, like an empty union.
+    *state = Overlay::kThrew;
+  }
+}
+
 std::optional<double> Overlap(OverlapKind kind, DevkitCriterion criterion, const Box3D& detection,
                               const Box3D& label) {
-  const DevkitPolygon label_polygon = FootprintPolygon(label);
-  const DevkitPolygon det_polygon = FootprintPolygon(detection);
-  // Label first, as in the devkit: the operand order can change the last bits of the result.
-  std::vector<DevkitPolygon> intersection;
-  bg::intersection(label_polygon, det_polygon, intersection);
-  const double inter_area = FirstArea(intersection).value_or(0.0);
+  thread_local OverlayMemory memory;
+  Overlay& overlay = memory.Find(detection, label);
+  std::optional<DevkitPolygon> label_polygon, det_polygon;
+  auto polygons = [&] {
+    if (!label_polygon) {
+      label_polygon = FootprintPolygon(label);
+      det_polygon = FootprintPolygon(detection);
+    }
+  };
+  if (overlay.intersection == Overlay::kUnknown) {
+    polygons();
+    // Label first, as in the devkit: the operand order can change the last bits of the result.
+    Compute(
+        [&](std::vector<DevkitPolygon>* out) {
+          bg::intersection(*label_polygon, *det_polygon, *out);
+        },
+        &overlay.intersection, &overlay.intersection_area);
+  }
+  if (overlay.intersection == Overlay::kThrew) return std::nullopt;
+  const double inter_area = overlay.intersection_area;  // 0 if there is no polygon
 
   if (kind == OverlapKind::kBev) {
     // The devkit computes the union for both criteria and reads its first polygon unconditionally:
     // an empty union crashes it, whichever criterion was asked for.
-    std::vector<DevkitPolygon> uni;
-    bg::union_(label_polygon, det_polygon, uni);
-    const std::optional<double> union_area = FirstArea(uni);
-    if (!union_area) return std::nullopt;
-    if (criterion == DevkitCriterion::kUnion) return inter_area / *union_area;
-    return inter_area / bg::area(det_polygon);
+    if (overlay.union_ == Overlay::kUnknown) {
+      polygons();
+      Compute(
+          [&](std::vector<DevkitPolygon>* out) { bg::union_(*label_polygon, *det_polygon, *out); },
+          &overlay.union_, &overlay.union_area);
+    }
+    if (overlay.union_ != Overlay::kValue) return std::nullopt;
+    if (criterion == DevkitCriterion::kUnion) return inter_area / overlay.union_area;
+    polygons();
+    return inter_area / bg::area(*det_polygon);
   }
 
   // 3D: the devkit also computes a union here but never reads it, so nothing can crash.
@@ -103,13 +181,7 @@ std::optional<double> DevkitBoxOverlap(OverlapKind kind, DevkitCriterion criteri
                                        const Box3D& detection, const Box3D& label) {
   STEREODET_CHECK(kind == OverlapKind::kBev || kind == OverlapKind::k3D)
       << "the devkit's polygon arithmetic is for BEV and 3D overlaps only";
-  try {
-    return Overlap(kind, criterion, detection, label);
-  } catch (const std::exception&) {
-    // boost::geometry's overlay may throw on input it finds invalid; uncaught in the devkit, that
-    // ends it too: no answer, like an empty union.
-    return std::nullopt;
-  }
+  return Overlap(kind, criterion, detection, label);
 }
 
 }  // namespace stereodet

@@ -49,7 +49,8 @@ enum class DevkitCriterion {
 // empty result and crashes; this happens for a degenerate footprint, l or w zero, or one of them
 // negative and the other positive, that overlaps the other box), and when boost throws (uncaught
 // in the devkit). Requires: kind is kBev or k3D (throws std::invalid_argument for k2D, whose devkit
-// arithmetic is KittiOverlap's own).
+// arithmetic is KittiOverlap's own). Each thread keeps boost's results for its last pairs (up to
+// 65,536; BEV and 3D share a pair's intersection), so asking again costs a look-up.
 std::optional<double> DevkitBoxOverlap(OverlapKind kind, DevkitCriterion criterion,
                                        const Box3D& detection, const Box3D& label);
 

@@ -1,5 +1,7 @@
 #include "stereodet/eval/devkit_overlap.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -7,8 +9,8 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-
-#include <gtest/gtest.h>
+#include <utility>
+#include <vector>
 
 #include "stereodet/eval/frame_data.h"
 #include "stereodet/eval/kitti_matcher.h"
@@ -100,6 +102,53 @@ TEST(DevkitBoxOverlap, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
     SCOPED_TRACE(thin ? "boxes 1-10 cm wide" : "KITTI-sized boxes");
     EXPECT_GT(overlapping, 2000);
     EXPECT_LT(max_diff, thin ? kDevkitTieBand / 4 : kDevkitTieBand / 20);
+  }
+}
+
+// DevkitBoxOverlap keeps the last pairs' boost results per thread (BEV and 3D share the
+// intersection). Whatever was asked before, and after the memory has been emptied, every pair's
+// four overlaps come out the same: asked BEV first, 3D first, or with 70,000 other pairs between.
+TEST(DevkitBoxOverlap, SameValuesWhateverWasAskedBefore) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  auto random_pair = [&] {
+    const Box3D label = Footprint(-10 + 20 * u(rng), 5 + 40 * u(rng), 0.5 + 4 * u(rng),
+                                  0.5 + 2 * u(rng), u(rng) < 0.3 ? 1.57 : 6 * u(rng) - 3);
+    Box3D det = label;
+    det.location += Eigen::Vector3d(u(rng) - 0.5, 0.5 * (u(rng) - 0.5), u(rng) - 0.5);
+    det.w *= 0.8 + 0.4 * u(rng);
+    if (u(rng) < 0.5) det.rotation_y += 0.3 * (u(rng) - 0.5);
+    return std::pair(det, label);
+  };
+  struct Four {
+    std::optional<double> v[4];
+  };
+  auto four = [](const std::pair<Box3D, Box3D>& p, bool bev_first) {
+    Four f;
+    const OverlapKind kinds[2] = {bev_first ? OverlapKind::kBev : OverlapKind::k3D,
+                                  bev_first ? OverlapKind::k3D : OverlapKind::kBev};
+    for (int k = 0; k < 2; ++k) {
+      const int slot = kinds[k] == OverlapKind::kBev ? 0 : 2;
+      f.v[slot + 1] =
+          DevkitBoxOverlap(kinds[k], DevkitCriterion::kDetectionSize, p.first, p.second);
+      f.v[slot] = DevkitBoxOverlap(kinds[k], DevkitCriterion::kUnion, p.first, p.second);
+    }
+    return f;
+  };
+  std::vector<std::pair<Box3D, Box3D>> pairs;
+  for (int i = 0; i < 300; ++i) pairs.push_back(random_pair());
+  std::vector<Four> bev_first, three_d_first, after_flush;
+  for (const auto& p : pairs) bev_first.push_back(four(p, true));
+  for (int i = 0; i < 70000; ++i)
+    DevkitBoxOverlap(OverlapKind::k3D, DevkitCriterion::kUnion, random_pair().first,
+                     pairs[0].second);
+  for (const auto& p : pairs) three_d_first.push_back(four(p, false));
+  for (const auto& p : pairs) after_flush.push_back(four(p, true));
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(bev_first[i].v[k], three_d_first[i].v[k]) << "pair " << i << " value " << k;
+      EXPECT_EQ(bev_first[i].v[k], after_flush[i].v[k]) << "pair " << i << " value " << k;
+    }
   }
 }
 

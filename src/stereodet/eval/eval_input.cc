@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
@@ -47,13 +48,20 @@ std::set<std::string> FrameStems(const fs::path& dir, std::vector<std::string>* 
   std::set<std::string> stems;
   std::set<std::string> others;
   for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (!e.is_regular_file() || e.path().extension() != ".txt" || name[0] == '.') continue;
-    const std::string stem = e.path().stem().string();
+    // The name as a view of the entry's path: a folder of thousands of frames makes the path
+    // objects of filename(), extension() and stem() cost more than the listing.
+    const std::string& full = e.path().native();
+    const std::string_view name = std::string_view(full).substr(full.rfind('/') + 1);
+    constexpr std::string_view kTxt = ".txt";
+    if (name.empty() || name[0] == '.' || name.size() <= kTxt.size() ||
+        name.substr(name.size() - kTxt.size()) != kTxt || !e.is_regular_file()) {
+      continue;
+    }
+    const std::string_view stem = name.substr(0, name.size() - kTxt.size());
     if (IsFrameId(stem)) {
-      stems.insert(stem);
+      stems.emplace(stem);
     } else {
-      others.insert(e.path().string());
+      others.insert(full);
     }
   }
   not_ids->insert(not_ids->end(), others.begin(), others.end());

@@ -57,6 +57,7 @@ std::optional<OverlapKind> ParseOverlapKind(std::string_view text) {
 bool EqualsIgnoreCase(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i] == b[i]) continue;  // most comparisons are of equal names: no tolower call for them
     if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) {
       return false;
     }

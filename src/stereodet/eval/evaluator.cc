@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include "stereodet/eval/bipartite.h"
 #include "stereodet/eval/openpcdet_compat.h"
@@ -20,19 +21,45 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// ParallelFor over blocks of kFrameBlock consecutive frames, fn(i) for each frame i in order within
+// a block: most frames take well under a microsecond per cell, so one task per frame would cost
+// more in scheduling than in work.
+constexpr size_t kFrameBlock = 64;
+template <typename Fn>
+void ForEachFrame(size_t num_frames, int num_threads, const Fn& fn) {
+  ParallelFor((num_frames + kFrameBlock - 1) / kFrameBlock,
+              [&](size_t b) {
+                for (size_t i = b * kFrameBlock; i < std::min(num_frames, (b + 1) * kFrameBlock);
+                     ++i)
+                  fn(i);
+              },
+              num_threads);
+}
+
 // KITTI mode decides with the devkit's own overlap values where they may differ from ours; the
 // optimal and VOC matchers (>= tau, the paper's definition) keep the exact ones.
 // With --compat openpcdet, OpenPCDet's rules and overlaps instead (openpcdet_compat.h).
+// `reuse`: the ClassFrames of the previous class or overlap kind, whose memory is reused.
+// `after(i, frame)` is called on each prepared frame in the same pass (KittiPasses::CollectFrame).
+struct NoFrameWork {
+  void operator()(size_t, const ClassFrame&) const {}
+};
+template <typename AfterFrame = NoFrameWork>
 std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
                                    OverlapKind kind, Matcher matcher, int num_threads,
-                                   EvalCompat compat = EvalCompat::kDevkit) {
+                                   EvalCompat compat = EvalCompat::kDevkit,
+                                   std::vector<ClassFrame> reuse = {},
+                                   const AfterFrame& after = AfterFrame{}) {
   const OverlapArithmetic arithmetic =
       matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
-  std::vector<ClassFrame> out(frames.size());
-  ParallelFor(frames.size(), [&](size_t i) {
-    out[i] = compat == EvalCompat::kOpenPcdet ? PrepareClassFrameOpenPcdet(frames[i], spec, kind)
-                                              : PrepareClassFrame(frames[i], spec, kind, arithmetic);
-  }, num_threads);
+  std::vector<ClassFrame> out = std::move(reuse);
+  out.resize(frames.size());
+  ForEachFrame(frames.size(), num_threads, [&](size_t i) {
+    out[i] = compat == EvalCompat::kOpenPcdet
+                 ? PrepareClassFrameOpenPcdet(frames[i], spec, kind, std::move(out[i]))
+                 : PrepareClassFrame(frames[i], spec, kind, arithmetic, std::move(out[i]));
+    after(i, out[i]);
+  });
   return out;
 }
 
@@ -54,11 +81,35 @@ std::vector<EvalFrame> StrikeFailing(const std::vector<EvalFrame>& frames,
   return out;
 }
 
+// `reuse`: associations whose memory is reused (those of the previous cell).
 std::vector<FrameAssociation> AssociateAll(Matcher matcher, const std::vector<ClassFrame>& cfs,
-                                           Difficulty difficulty, double threshold, int num_threads) {
-  std::vector<FrameAssociation> out(cfs.size());
-  ParallelFor(cfs.size(), [&](size_t i) { out[i] = Associate(matcher, cfs[i], difficulty, threshold); },
-              num_threads);
+                                           Difficulty difficulty, double threshold, int num_threads,
+                                           std::vector<FrameAssociation> reuse = {}) {
+  std::vector<FrameAssociation> out = std::move(reuse);
+  out.resize(cfs.size());
+  ForEachFrame(cfs.size(), num_threads, [&](size_t i) {
+    out[i] = Associate(matcher, cfs[i], difficulty, threshold, std::move(out[i]));
+  });
+  return out;
+}
+
+// AssociateAll for each of `difficulties` (out[d][frame]), each frame's together, and
+// `before(i, cfs[i])` on each frame in the same pass (KittiPasses::CountFrame).
+template <typename BeforeFrame = NoFrameWork>
+std::vector<std::vector<FrameAssociation>> AssociateAll(
+    Matcher matcher, const std::vector<ClassFrame>& cfs,
+    const std::vector<Difficulty>& difficulties, double threshold, int num_threads,
+    std::vector<std::vector<FrameAssociation>> reuse = {},
+    const BeforeFrame& before = BeforeFrame{}) {
+  std::vector<std::vector<FrameAssociation>> out = std::move(reuse);
+  out.resize(difficulties.size());
+  for (std::vector<FrameAssociation>& a : out) a.resize(cfs.size());
+  ForEachFrame(cfs.size(), num_threads, [&](size_t i) {
+    before(i, cfs[i]);
+    for (size_t d = 0; d < difficulties.size(); ++d) {
+      out[d][i] = Associate(matcher, cfs[i], difficulties[d], threshold, std::move(out[d][i]));
+    }
+  });
   return out;
 }
 
@@ -471,9 +522,8 @@ std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
   return out;
 }
 
-void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
-                int num_threads, ClassResult* r, EvalCompat compat = EvalCompat::kDevkit) {
-  const KittiClassResult k = EvaluateKittiClass(cfs, difficulty, num_threads, compat);
+// The KITTI matcher's curve and summaries into *r.
+void SetKittiCurve(const KittiClassResult& k, bool with_aos, ClassResult* r) {
   r->num_valid_labels = k.num_groundtruth;
   r->ap_r40 = k.ap_r40;
   r->ap_r11 = k.ap_r11;
@@ -494,6 +544,11 @@ void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool 
     FinishPoint(&p);
     r->curve.push_back(p);
   }
+}
+
+void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
+                int num_threads, ClassResult* r, EvalCompat compat = EvalCompat::kDevkit) {
+  SetKittiCurve(EvaluateKittiClass(cfs, difficulty, num_threads, compat), with_aos, r);
 }
 
 ScoreSummary SummarizeScores(const std::vector<EvalFrame>& frames) {
@@ -526,11 +581,14 @@ const ClassResult* EvalResult::Find(const std::string& class_name, OverlapKind m
 }
 
 FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
-                           double threshold) {
+                           double threshold, FrameAssociation reuse) {
   switch (matcher) {
-    case Matcher::kKitti: return KittiAssociate(frame, difficulty, threshold);
-    case Matcher::kOptimal: return OptimalAssociate(frame, difficulty, threshold);
-    case Matcher::kVoc: return VocAssociate(frame, difficulty, threshold);
+    case Matcher::kKitti:
+      return KittiAssociate(frame, difficulty, threshold, std::move(reuse));
+    case Matcher::kOptimal:
+      return OptimalAssociate(frame, difficulty, threshold, std::move(reuse));
+    case Matcher::kVoc:
+      return VocAssociate(frame, difficulty, threshold, std::move(reuse));
   }
   return {};
 }
@@ -553,6 +611,12 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   std::vector<EvalFrame> struck;
   if (!options.filter.empty()) struck = StrikeFailing(frames, options.filter.conditions, threads);
 
+  // Kept from cell to cell so that their memory is reused.
+  std::vector<ClassFrame> cfs, struck_cfs;
+  std::vector<std::vector<FrameAssociation>> assocs;  // by difficulty, then frame
+  const std::vector<Difficulty>& difficulties = options.difficulties;
+  const size_t n_d = difficulties.size();
+  const bool kitti = options.matcher == Matcher::kKitti;
   for (const ClassSpec& spec : options.classes) {
     int64_t num_detections = 0;
     for (const EvalFrame& f : frames) {
@@ -561,32 +625,59 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
     for (const OverlapKind kind : options.metrics) {
       const bool evaluated = compat == EvalCompat::kOpenPcdet || !options.require_detections ||
                              HasEvaluableDetection(frames, spec, kind);
-      std::vector<ClassFrame> cfs, struck_cfs;
-      if (evaluated) {
-        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat);
-        if (!options.filter.empty()) {
-          struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads, compat);
-        }
-      }
-      for (const Difficulty difficulty : options.difficulties) {
-        ClassResult r;
+      // The difficulties of one class and overlap kind go phase by phase, every difficulty of a
+      // frame at once: one pass over the frames' data per phase instead of one per difficulty.
+      std::vector<ClassResult> cell(n_d);
+      for (size_t d = 0; d < n_d; ++d) {
+        ClassResult& r = cell[d];
         r.class_name = spec.name;
         r.metric = kind;
-        r.difficulty = difficulty;
+        r.difficulty = difficulties[d];
         r.min_overlap = spec.min_overlap[static_cast<int>(kind)];
         r.evaluated = evaluated;
         r.num_detections = num_detections;
-        if (!evaluated) {
-          r.ap_r40 = r.ap_r11 = r.ap_voc = r.aos_r40 = r.aos_r11 = kNaN;
-          result.results.push_back(std::move(r));
-          continue;
-        }
-        const bool with_aos = result.aos_computed && kind == OverlapKind::k2D;
-        if (options.matcher == Matcher::kKitti) {
-          KittiCurve(cfs, difficulty, with_aos, threads, &r, compat);
-        } else {
+        if (!evaluated) r.ap_r40 = r.ap_r11 = r.ap_voc = r.aos_r40 = r.aos_r11 = kNaN;
+      }
+      if (!evaluated) {
+        for (ClassResult& r : cell) result.results.push_back(std::move(r));
+        continue;
+      }
+      const bool with_aos = result.aos_computed && kind == OverlapKind::k2D;
+      // KITTI matcher: its pass 1 goes with the preparation of each frame and its pass 2 with the
+      // association at the operating point (kitti_passes.Finish() below).
+      static_assert(kFrameBlock == KittiPasses::kBlock);
+      KittiPasses kitti_passes(kitti ? frames.size() : 0, difficulties, compat);
+      if (kitti) {
+        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs),
+                         [&](size_t i, const ClassFrame& cf) { kitti_passes.CollectFrame(i, cf); });
+        kitti_passes.ChooseThresholds();
+      } else {
+        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs));
+      }
+      if (!options.filter.empty()) {
+        struck_cfs =
+            PrepareAll(struck, spec, kind, options.matcher, threads, compat, std::move(struck_cfs));
+      }
+
+      // The operating point's associations (and the KITTI matcher's pass 2).
+      if (kitti) {
+        assocs =
+            AssociateAll(options.matcher, cfs, difficulties, t_op, threads, std::move(assocs),
+                         [&](size_t i, const ClassFrame& cf) { kitti_passes.CountFrame(i, cf); });
+      } else {
+        assocs = AssociateAll(options.matcher, cfs, difficulties, t_op, threads, std::move(assocs));
+      }
+
+      // Curves.
+      if (kitti) {
+        const std::vector<KittiClassResult> curves = kitti_passes.Finish();
+        for (size_t d = 0; d < n_d; ++d) SetKittiCurve(curves[d], with_aos, &cell[d]);
+      } else {
+        for (size_t d = 0; d < n_d; ++d) {
+          ClassResult& r = cell[d];
           FilteredCurve c;
-          ExactCurve(options.matcher, frames, cfs, difficulty, with_aos, threads, &c, &r.num_valid_labels);
+          ExactCurve(options.matcher, frames, cfs, difficulties[d], with_aos, threads, &c,
+                     &r.num_valid_labels);
           r.curve = std::move(c.curve);
           r.ap_r40 = c.ap_r40;
           r.ap_r11 = c.ap_r11;
@@ -595,27 +686,45 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           r.aos_r11 = c.aos_r11;
           r.has_aos = with_aos;
         }
-        r.best_f1 = BestF1(r.curve);
+      }
+      for (ClassResult& r : cell) r.best_f1 = BestF1(r.curve);
 
-        const std::vector<FrameAssociation> assocs =
-            AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
-        r.at_threshold = CountAll(assocs, t_op);
-        ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
-                                    options.max_distance_m, options.score_transform);
-        for (size_t f = 0; f < frames.size(); ++f) {
-          acc.Add(frames[f], cfs[f], assocs[f], difficulty);
+      // The operating point: counts and the metrics of scores, each accumulator over the frames in
+      // order.
+      std::vector<ScoreMetricsAccumulator> accs;
+      std::vector<std::array<int64_t, 3>> tp_fp_fn(n_d, {0, 0, 0});
+      for (size_t d = 0; d < n_d; ++d) {
+        accs.emplace_back(options.calibration_bins, options.distance_bin_m, options.max_distance_m,
+                          options.score_transform);
+      }
+      for (size_t f = 0; f < frames.size(); ++f) {
+        for (size_t d = 0; d < n_d; ++d) {
+          const FrameAssociation& a = assocs[d][f];
+          tp_fp_fn[d][0] += a.CountDets(Outcome::kTp);
+          tp_fp_fn[d][1] += a.CountDets(Outcome::kFp);
+          tp_fp_fn[d][2] += a.CountLabels(Outcome::kFn);
+          accs[d].Add(frames[f], cfs[f], a, difficulties[d]);
         }
-        r.brier = acc.Brier();
-        r.calibration = acc.Calibration();
+      }
+      for (size_t d = 0; d < n_d; ++d) {
+        cell[d].at_threshold =
+            MakeOperatingPoint(t_op, tp_fp_fn[d][0], tp_fp_fn[d][1], tp_fp_fn[d][2]);
+      }
+
+      for (size_t d = 0; d < n_d; ++d) {
+        ClassResult& r = cell[d];
+        const Difficulty difficulty = difficulties[d];
+        r.brier = accs[d].Brier();
+        r.calibration = accs[d].Calibration();
         if (!result.probability_metrics) LeaveOutProbabilityMetrics(&r.brier, &r.calibration);
-        r.localization = acc.Localization();
+        r.localization = accs[d].Localization();
         if (options.keep_records) {
-          r.records = BuildRecords(frames, cfs, assocs, kind, difficulty, t_op, threads);
+          r.records = BuildRecords(frames, cfs, assocs[d], kind, difficulty, t_op, threads);
         }
 
         if (!options.filter.empty()) {
           FilteredStats fs;
-          fs.stable = CountStable(frames, cfs, assocs, options.filter.conditions, t_op);
+          fs.stable = CountStable(frames, cfs, assocs[d], options.filter.conditions, t_op);
           fs.naive = CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           // Naive curve: the struck set evaluated exactly like the unfiltered one.
           if (options.matcher == Matcher::kKitti) {

@@ -130,9 +130,10 @@ struct EvalResult {
 // Requires: options.Check() passes; every detection has a score.
 EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& options);
 
-// The association at `threshold` of one frame with `matcher`.
+// The association at `threshold` of one frame with `matcher`. `reuse` lends its memory to the
+// result (its contents are discarded).
 FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
-                           double threshold);
+                           double threshold, FrameAssociation reuse = {});
 
 // Curve events of one frame derived from the matcher's association at every distinct detection
 // score of the frame (exact by construction, one association per distinct score). With `conditions`

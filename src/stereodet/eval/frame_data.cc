@@ -35,6 +35,19 @@ bool Footprint(const Box3D& box, Box3D* out) {
 double FootprintIntersection(const Box3D& a, const Box3D& b) {
   Box3D fa, fb;
   if (!Footprint(a, &fa) || !Footprint(b, &fb)) return 0.0;
+  // Most pairs of a frame are far apart. BevIntersectionArea returns 0 for them too, from its test
+  // of the circumscribed circles, but that costs two hypot calls: a half-diagonal is at most half
+  // the sum of the two sides, so centres farther apart than all four half sides along x or z, with
+  // a margin far above the rounding of either test, are apart in that test as well (sizes kept well
+  // inside double's range, so that no square there overflows or underflows).
+  const double half_sides = (fa.l + fa.w + fb.l + fb.w) / 2;
+  if (half_sides > 1e-100 && half_sides < 1e100) {
+    const double reach = half_sides * (1 + 1e-9);
+    if (std::abs(fb.location.x() - fa.location.x()) > reach ||
+        std::abs(fb.location.z() - fa.location.z()) > reach) {
+      return 0.0;
+    }
+  }
   return BevIntersectionArea(fa, fb);
 }
 
@@ -194,6 +207,12 @@ double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection
 std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpec& spec,
                                           bool exact_dontcare_name, ClassFrame* cf) {
   std::vector<const Object*> dontcares;
+  // At most every label: one allocation per list the first time, none when `cf` is reused.
+  const size_t most = cf->label_object.size() + frame.labels.size();
+  cf->label_object.reserve(most);
+  cf->label_neighbour.reserve(most);
+  cf->label_difficulty.reserve(most);
+  cf->label_alpha.reserve(most);
   for (size_t i = 0; i < frame.labels.size(); ++i) {
     const Object& label = frame.labels[i];
     if (exact_dontcare_name ? label.type == "DontCare" : IsDontCare(label)) {
@@ -225,6 +244,13 @@ std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpe
 
 void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFrame* cf,
                         const std::function<bool(const Object&)>& in_dontcare) {
+  const size_t most = cf->det_object.size() + frame.detections.size();
+  cf->det_object.reserve(most);
+  cf->det_is_class.reserve(most);
+  cf->det_height.reserve(most);
+  cf->det_score.reserve(most);
+  cf->det_alpha.reserve(most);
+  cf->det_dontcare.reserve(most);
   for (size_t j = 0; j < frame.detections.size(); ++j) {
     const Object& det = frame.detections[j];
     STEREODET_CHECK(det.score.has_value())
@@ -241,9 +267,26 @@ void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFram
   }
 }
 
+void ClassFrame::Clear() {
+  label_object.clear();
+  label_neighbour.clear();
+  label_difficulty.clear();
+  label_alpha.clear();
+  det_object.clear();
+  det_is_class.clear();
+  det_height.clear();
+  det_score.clear();
+  det_alpha.clear();
+  det_dontcare.clear();
+  edge_begin.clear();
+  edge_det.clear();
+  edge_overlap.clear();
+}
+
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                             OverlapArithmetic arithmetic) {
-  ClassFrame cf;
+                             OverlapArithmetic arithmetic, ClassFrame reuse) {
+  ClassFrame cf = std::move(reuse);
+  cf.Clear();
   const double tau = spec.min_overlap[static_cast<int>(kind)];
   cf.min_overlap = tau;
   const bool devkit = arithmetic == OverlapArithmetic::kDevkit;

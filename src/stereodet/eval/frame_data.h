@@ -97,6 +97,8 @@ struct ClassFrame {
 
   int num_labels() const { return static_cast<int>(label_object.size()); }
   int num_dets() const { return static_cast<int>(det_object.size()); }
+  // Empties every list, keeping its memory (see PrepareClassFrame's `reuse`).
+  void Clear();
   bool LabelValid(int i, Difficulty d) const {
     return !label_neighbour[i] && (label_difficulty[i] >> static_cast<int>(d) & 1);
   }
@@ -123,9 +125,13 @@ void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFram
 // within kDevkitTieBand of each other are both the devkit's values too: KITTI's pass 2 takes the
 // larger, and the devkit may order (or tie) two mathematically equal overlaps otherwise than
 // KittiOverlap does, e.g. two detections shifted by the same distance either side of a label. All
-// of this is rare; every other overlap is KittiOverlap's. Requires: every detection has a score.
+// of this is rare; every other overlap is KittiOverlap's. `reuse` lends its memory to the result
+// (its contents are discarded): an evaluation prepares every frame once per class and overlap kind,
+// and reusing the previous ClassFrame's lists saves allocating them afresh each time. Requires:
+// every detection has a score.
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                             OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit);
+                             OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit,
+                             ClassFrame reuse = {});
 
 // Whether KITTI's official devkit would evaluate `spec` for `kind` given these detections: some
 // detection of the class with left >= 0 (2D); x, z != -1000 and w, l > 0 (BEV); x, y, z != -1000

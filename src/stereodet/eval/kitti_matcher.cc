@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
+#include <utility>
 
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/util/parallel.h"
@@ -19,10 +21,27 @@ constexpr double kNoDetection = -10000000;
 // class, -1 for other classes.
 void DetStates(const ClassFrame& f, Difficulty difficulty, std::vector<int8_t>* states) {
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  states->resize(f.num_dets());
-  for (int j = 0; j < f.num_dets(); ++j) {
-    (*states)[j] = std::trunc(f.det_height[j]) < min_height ? 1 : (f.det_is_class[j] ? 0 : -1);
-  }
+  const int n = f.num_dets();
+  states->resize(n);
+  int8_t* out = states->data();
+  const double* height = f.det_height.data();
+  const uint8_t* is_class = f.det_is_class.data();
+  for (int j = 0; j < n; ++j)
+    out[j] = std::trunc(height[j]) < min_height ? 1 : (is_class[j] ? 0 : -1);
+}
+
+// Memory reused by one thread from call to call: the functions below run once per frame, class,
+// overlap kind and difficulty (tens of thousands of times per evaluation), mostly on frames of a
+// few objects, where allocating these lists afresh cost more than the matching.
+struct ThreadScratch {
+  std::vector<int8_t> states;
+  std::vector<uint8_t> assigned, interacting;
+  std::vector<double> interacting_scores, free_fp_scores;
+};
+
+ThreadScratch& Scratch() {
+  thread_local ThreadScratch scratch;
+  return scratch;
 }
 
 struct Pass2Result {
@@ -97,9 +116,11 @@ std::vector<double> KittiThresholds(std::vector<double> v, double n_groundtruth)
 }
 
 int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector<double>* tp_scores) {
-  std::vector<int8_t> states;
+  ThreadScratch& scratch = Scratch();
+  std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
-  std::vector<uint8_t> assigned(f.num_dets(), 0);
+  std::vector<uint8_t>& assigned = scratch.assigned;
+  assigned.assign(f.num_dets(), 0);
   const double tau = f.min_overlap;
   int n_gt = 0;
   for (int i = 0; i < f.num_labels(); ++i) {
@@ -122,19 +143,82 @@ int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector
   return n_gt;
 }
 
-void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
-                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
-  std::vector<int8_t> states;
+namespace {
+
+// Pass 2's counts of many frames at every threshold. A frame's counts are constant over runs of
+// thresholds, so its integer counts are recorded as changes at the ends of its runs (summed up in
+// AddTo, exact in any order), while each threshold's similarity sum gets the frame's value added
+// at each threshold of a run, frame after frame: a floating-point sum depends on its order, and
+// this is the order of adding every frame's counts threshold by threshold. Zero similarities are
+// not added (x + 0 is x for every sum here, none of which is -0).
+class PassTwoCounts {
+ public:
+  explicit PassTwoCounts(size_t num_thresholds)
+      : tp_(num_thresholds + 1, 0),
+        fp_(num_thresholds + 1, 0),
+        fn_(num_thresholds + 1, 0),
+        similarity_(num_thresholds, 0.0) {}
+
+  size_t num_thresholds() const { return similarity_.size(); }
+
+  // Adds the counts to the thresholds [begin, end).
+  void AddRun(size_t begin, size_t end, int64_t tp, int64_t fp, int64_t fn, double similarity) {
+    tp_[begin] += tp;
+    tp_[end] -= tp;
+    fp_[begin] += fp;
+    fp_[end] -= fp;
+    fn_[begin] += fn;
+    fn_[end] -= fn;
+    if (similarity != 0.0) {
+      for (size_t t = begin; t < end; ++t) similarity_[t] += similarity;
+    }
+  }
+
+  // Adds the sums to counts[t], t < num_thresholds().
+  void AddTo(std::vector<KittiCounts>* counts) const {
+    int64_t tp = 0, fp = 0, fn = 0;
+    for (size_t t = 0; t < similarity_.size(); ++t) {
+      tp += tp_[t];
+      fp += fp_[t];
+      fn += fn_[t];
+      KittiCounts& c = (*counts)[t];
+      c.tp += tp;
+      c.fp += fp;
+      c.fn += fn;
+      c.similarity += similarity_[t];
+    }
+  }
+
+ private:
+  std::vector<int64_t> tp_, fp_, fn_;
+  std::vector<double> similarity_;
+};
+
+void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+                    const std::vector<double>& thresholds, PassTwoCounts* counts) {
+  const size_t n_t = thresholds.size();
+  int64_t n_valid = 0;
+  for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
+  if (f.num_dets() == 0) {  // many frames hold nothing of a class: every valid label is a FN
+    if (n_t > 0) counts->AddRun(0, n_t, 0, 0, n_valid, 0.0);
+    return;
+  }
+  ThreadScratch& scratch = Scratch();
+  std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
   const double tau = f.min_overlap;
   // Detections that can be chosen by some label; only their presence above the threshold changes
   // the greedy's outcome. The others are FPs (valid, not in DontCare) or nothing.
-  std::vector<uint8_t> interacting(f.num_dets(), 0);
+  std::vector<uint8_t>& interacting = scratch.interacting;
+  interacting.assign(f.num_dets(), 0);
   for (size_t e = 0; e < f.edge_det.size(); ++e) {
     const int j = f.edge_det[e];
     if (states[j] != -1 && f.edge_overlap[e] > tau) interacting[j] = 1;
   }
-  std::vector<double> interacting_scores, free_fp_scores;
+  std::vector<double>& interacting_scores = scratch.interacting_scores;
+  std::vector<double>& free_fp_scores = scratch.free_fp_scores;
+  interacting_scores.clear();
+  free_fp_scores.clear();
   for (int j = 0; j < f.num_dets(); ++j) {
     if (interacting[j]) interacting_scores.push_back(f.det_score[j]);
     else if (states[j] == 0 && !f.det_dontcare[j]) free_fp_scores.push_back(f.det_score[j]);
@@ -142,19 +226,19 @@ void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
   std::sort(interacting_scores.begin(), interacting_scores.end(), std::greater<double>());
   std::sort(free_fp_scores.begin(), free_fp_scores.end(), std::greater<double>());
 
-  int64_t n_valid = 0;
-  for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
-
-  std::vector<uint8_t> assigned;
+  std::vector<uint8_t>& assigned = scratch.assigned;
+  // The counts change only where a detection enters (its score >= the threshold), so the
+  // thresholds go by runs over which nothing enters: the greedy runs once per run, and every
+  // threshold of the run gets the same counts.
+  const size_t n_inter = interacting_scores.size(), n_free = free_fp_scores.size();
   size_t k_inter = 0, k_free = 0;
-  size_t last_k = static_cast<size_t>(-1);
   KittiCounts cached;
-  for (size_t t = 0; t < thresholds.size(); ++t) {
+  for (size_t t = 0; t < n_t;) {
     const double threshold = thresholds[t];
-    while (k_inter < interacting_scores.size() && interacting_scores[k_inter] >= threshold) ++k_inter;
-    while (k_free < free_fp_scores.size() && free_fp_scores[k_free] >= threshold) ++k_free;
-    if (k_inter != last_k) {
-      last_k = k_inter;
+    const size_t inter_before = k_inter;
+    while (k_inter < n_inter && interacting_scores[k_inter] >= threshold) ++k_inter;
+    while (k_free < n_free && free_fp_scores[k_free] >= threshold) ++k_free;
+    if (t == 0 || k_inter != inter_before) {
       cached = KittiCounts{};
       if (k_inter == 0) {
         cached.fn = n_valid;
@@ -171,23 +255,41 @@ void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
         }
       }
     }
-    KittiCounts& c = (*counts)[t];
-    c.tp += cached.tp;
-    c.fn += cached.fn;
-    c.fp += cached.fp + static_cast<int64_t>(k_free);
-    c.similarity += cached.similarity;
+    // The run ends at the first threshold at which the next detection of either list enters.
+    size_t end = n_t;
+    if (k_inter < n_inter || k_free < n_free) {
+      end = t + 1;
+      while (end < n_t && !(k_inter < n_inter && interacting_scores[k_inter] >= thresholds[end]) &&
+             !(k_free < n_free && free_fp_scores[k_free] >= thresholds[end])) {
+        ++end;
+      }
+    }
+    counts->AddRun(t, end, cached.tp, cached.fp + static_cast<int64_t>(k_free), cached.fn,
+                   cached.similarity);
+    t = end;
   }
 }
 
-FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
-  std::vector<int8_t> states;
+}  // namespace
+
+void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
+  PassTwoCounts frame_counts(thresholds.size());
+  AddFrameCounts(f, difficulty, thresholds, &frame_counts);
+  frame_counts.AddTo(counts);
+}
+
+FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
+                                FrameAssociation reuse) {
+  ThreadScratch& scratch = Scratch();
+  std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
-  FrameAssociation a;
+  FrameAssociation a = std::move(reuse);
   a.label_outcome.assign(f.num_labels(), Outcome::kIgnored);
   a.label_det.assign(f.num_labels(), -1);
   a.det_outcome.assign(f.num_dets(), Outcome::kNone);
   a.det_label.assign(f.num_dets(), -1);
-  std::vector<uint8_t> assigned;
+  std::vector<uint8_t>& assigned = scratch.assigned;
   RunPass2(f, difficulty, states, threshold, &assigned, &a);
   for (int j = 0; j < f.num_dets(); ++j) {
     if (a.det_outcome[j] == Outcome::kTp) continue;
@@ -215,73 +317,116 @@ double KittiApR40(const std::array<double, kKittiSamplePoints>& curve) {
   return sum / 40.0 * 100.0;
 }
 
+struct KittiPasses::Blocks {
+  // Pass 1, by difficulty then block: the TP scores in frame order, the valid labels.
+  std::vector<std::vector<std::vector<double>>> scores;
+  std::vector<std::vector<int64_t>> groundtruth;
+  // Pass 2, by difficulty then block.
+  std::vector<std::vector<PassTwoCounts>> counts;
+};
+
+KittiPasses::KittiPasses(size_t num_frames, std::vector<Difficulty> difficulties, EvalCompat compat)
+    : difficulties_(std::move(difficulties)),
+      compat_(compat),
+      num_blocks_((num_frames + kBlock - 1) / kBlock),
+      results_(difficulties_.size()),
+      blocks_(std::make_unique<Blocks>()) {
+  blocks_->scores.assign(difficulties_.size(), std::vector<std::vector<double>>(num_blocks_));
+  blocks_->groundtruth.assign(difficulties_.size(), std::vector<int64_t>(num_blocks_, 0));
+}
+
+KittiPasses::~KittiPasses() = default;
+
+void KittiPasses::CollectFrame(size_t frame_index, const ClassFrame& frame) {
+  const size_t b = frame_index / kBlock;
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    blocks_->groundtruth[d][b] +=
+        KittiCollectTpScores(frame, difficulties_[d], &blocks_->scores[d][b]);
+  }
+}
+
+void KittiPasses::ChooseThresholds() {
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    KittiClassResult& result = results_[d];
+    std::vector<double> v;
+    for (size_t b = 0; b < num_blocks_; ++b) {
+      result.num_groundtruth += blocks_->groundtruth[d][b];
+      v.insert(v.end(), blocks_->scores[d][b].begin(), blocks_->scores[d][b].end());
+    }
+    result.thresholds = KittiThresholds(std::move(v), static_cast<double>(result.num_groundtruth));
+    // The devkit writes precision[i] for every threshold into 41 slots; more than 41 thresholds
+    // cannot happen (see KittiThresholds), but never write past the array.
+    if (result.thresholds.size() > kKittiSamplePoints) result.thresholds.resize(kKittiSamplePoints);
+    blocks_->counts.emplace_back(num_blocks_, PassTwoCounts(result.thresholds.size()));
+  }
+}
+
+void KittiPasses::CountFrame(size_t frame_index, const ClassFrame& frame) {
+  const size_t b = frame_index / kBlock;
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    AddFrameCounts(frame, difficulties_[d], results_[d].thresholds, &blocks_->counts[d][b]);
+  }
+}
+
+std::vector<KittiClassResult> KittiPasses::Finish() {
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    KittiClassResult& result = results_[d];
+    const size_t n_t = result.thresholds.size();
+    result.counts.assign(n_t, KittiCounts{});
+    for (size_t b = 0; b < num_blocks_; ++b) blocks_->counts[d][b].AddTo(&result.counts);
+
+    // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
+    std::array<double, kKittiSamplePoints> precision{}, aos{};
+    for (size_t i = 0; i < n_t; ++i) {
+      const KittiCounts& c = result.counts[i];
+      result.recall[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fn);
+      precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
+      aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
+    }
+    if (compat_ == EvalCompat::kOpenPcdet) {
+      OpenPcdetEnvelope(&precision);
+      OpenPcdetEnvelope(&aos);
+    } else {
+      for (size_t i = 0; i < n_t; ++i) {
+        precision[i] = *std::max_element(precision.begin() + i, precision.end());
+        aos[i] = *std::max_element(aos.begin() + i, aos.end());
+      }
+    }
+    result.precision = precision;
+    result.aos = aos;
+    result.ap_r11 = KittiApR11(precision);
+    result.ap_r40 = KittiApR40(precision);
+    result.aos_r11 = KittiApR11(aos);
+    result.aos_r40 = KittiApR40(aos);
+  }
+  return std::move(results_);
+}
+
+std::vector<KittiClassResult> EvaluateKittiClass(const std::vector<ClassFrame>& frames,
+                                                 const std::vector<Difficulty>& difficulties,
+                                                 int num_threads, EvalCompat compat) {
+  KittiPasses passes(frames.size(), difficulties, compat);
+  const size_t num_blocks = (frames.size() + KittiPasses::kBlock - 1) / KittiPasses::kBlock;
+  auto for_each_frame = [&](auto fn) {
+    ParallelFor(
+        num_blocks,
+        [&](size_t b) {
+          for (size_t i = b * KittiPasses::kBlock;
+               i < std::min(frames.size(), (b + 1) * KittiPasses::kBlock); ++i) {
+            fn(i);
+          }
+        },
+        num_threads);
+  };
+  for_each_frame([&](size_t i) { passes.CollectFrame(i, frames[i]); });
+  passes.ChooseThresholds();
+  for_each_frame([&](size_t i) { passes.CountFrame(i, frames[i]); });
+  return passes.Finish();
+}
+
 KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
                                     int num_threads, EvalCompat compat) {
-  KittiClassResult result;
-  // Blocks of frames, so each worker accumulates locally and the reduction is short.
-  constexpr size_t kBlock = 64;
-  const size_t num_blocks = (frames.size() + kBlock - 1) / kBlock;
-
-  // Pass 1.
-  std::vector<std::vector<double>> block_scores(num_blocks);
-  std::vector<int64_t> block_gt(num_blocks, 0);
-  ParallelFor(num_blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
-      block_gt[b] += KittiCollectTpScores(frames[i], difficulty, &block_scores[b]);
-    }
-  }, num_threads);
-  std::vector<double> v;
-  for (size_t b = 0; b < num_blocks; ++b) {
-    result.num_groundtruth += block_gt[b];
-    v.insert(v.end(), block_scores[b].begin(), block_scores[b].end());
-  }
-  result.thresholds = KittiThresholds(std::move(v), static_cast<double>(result.num_groundtruth));
-  // The devkit writes precision[i] for every threshold into 41 slots; more than 41 thresholds cannot
-  // happen (see KittiThresholds), but never write past the array.
-  if (result.thresholds.size() > kKittiSamplePoints) result.thresholds.resize(kKittiSamplePoints);
-
-  // Pass 2.
-  const size_t n_t = result.thresholds.size();
-  std::vector<std::vector<KittiCounts>> block_counts(num_blocks, std::vector<KittiCounts>(n_t));
-  ParallelFor(num_blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(frames.size(), (b + 1) * kBlock); ++i) {
-      KittiAddFrameCounts(frames[i], difficulty, result.thresholds, &block_counts[b]);
-    }
-  }, num_threads);
-  result.counts.assign(n_t, KittiCounts{});
-  for (size_t b = 0; b < num_blocks; ++b) {
-    for (size_t t = 0; t < n_t; ++t) {
-      result.counts[t].tp += block_counts[b][t].tp;
-      result.counts[t].fp += block_counts[b][t].fp;
-      result.counts[t].fn += block_counts[b][t].fn;
-      result.counts[t].similarity += block_counts[b][t].similarity;
-    }
-  }
-
-  // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
-  std::array<double, kKittiSamplePoints> precision{}, aos{};
-  for (size_t i = 0; i < n_t; ++i) {
-    const KittiCounts& c = result.counts[i];
-    result.recall[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fn);
-    precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
-    aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
-  }
-  if (compat == EvalCompat::kOpenPcdet) {
-    OpenPcdetEnvelope(&precision);
-    OpenPcdetEnvelope(&aos);
-  } else {
-    for (size_t i = 0; i < n_t; ++i) {
-      precision[i] = *std::max_element(precision.begin() + i, precision.end());
-      aos[i] = *std::max_element(aos.begin() + i, aos.end());
-    }
-  }
-  result.precision = precision;
-  result.aos = aos;
-  result.ap_r11 = KittiApR11(precision);
-  result.ap_r40 = KittiApR40(precision);
-  result.aos_r11 = KittiApR11(aos);
-  result.aos_r40 = KittiApR40(aos);
-  return result;
+  return EvaluateKittiClass(frames, std::vector<Difficulty>{difficulty}, num_threads, compat)[0];
 }
 
 }  // namespace stereodet

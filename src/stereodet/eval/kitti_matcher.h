@@ -17,7 +17,9 @@
 #define STEREODET_EVAL_KITTI_MATCHER_H_
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "stereodet/eval/association.h"
@@ -49,7 +51,9 @@ void KittiAddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
                          const std::vector<double>& thresholds, std::vector<KittiCounts>* counts);
 
 // Pass 2 on one frame at one threshold, returning what every label and detection counts as.
-FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold);
+// `reuse` lends its memory to the result (its contents are discarded).
+FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
+                                FrameAssociation reuse = {});
 
 struct KittiClassResult {
   int64_t num_groundtruth = 0;              // n_gt: valid labels over all frames
@@ -66,6 +70,42 @@ struct KittiClassResult {
 // is numpy's (OpenPcdetEnvelope: a NaN slot makes every slot before it NaN); the rest is the same.
 KittiClassResult EvaluateKittiClass(const std::vector<ClassFrame>& frames, Difficulty difficulty,
                                     int num_threads, EvalCompat compat = EvalCompat::kDevkit);
+// The same for several difficulties at once (each frame's passes for all of them together): one
+// result per difficulty, in their order, each equal to EvaluateKittiClass's for that difficulty.
+std::vector<KittiClassResult> EvaluateKittiClass(const std::vector<ClassFrame>& frames,
+                                                 const std::vector<Difficulty>& difficulties,
+                                                 int num_threads,
+                                                 EvalCompat compat = EvalCompat::kDevkit);
+
+// EvaluateKittiClass in steps, for a caller that does other work on each frame in the same passes
+// (each frame's data then comes from memory once): CollectFrame(i, frames[i]) for every frame
+// (pass 1), ChooseThresholds(), CountFrame(i, frames[i]) for every frame (pass 2), Finish(). The
+// frames of one block (i / kBlock) go in order on one thread; blocks in any order, on any threads
+// (each writes only its own sums, added up in block order). Results as EvaluateKittiClass's.
+class KittiPasses {
+ public:
+  static constexpr size_t kBlock = 64;
+
+  KittiPasses(size_t num_frames, std::vector<Difficulty> difficulties,
+              EvalCompat compat = EvalCompat::kDevkit);
+  ~KittiPasses();
+  KittiPasses(const KittiPasses&) = delete;
+  KittiPasses& operator=(const KittiPasses&) = delete;
+
+  void CollectFrame(size_t frame_index, const ClassFrame& frame);
+  void ChooseThresholds();
+  void CountFrame(size_t frame_index, const ClassFrame& frame);
+  // One result per difficulty, in the constructor's order.
+  std::vector<KittiClassResult> Finish();
+
+ private:
+  struct Blocks;
+  std::vector<Difficulty> difficulties_;
+  EvalCompat compat_;
+  size_t num_blocks_;
+  std::vector<KittiClassResult> results_;
+  std::unique_ptr<Blocks> blocks_;
+};
 
 // The devkit's summaries of a 41-slot curve, in percent: sum of [0,4,...,40] / 11 and [1..40] / 40.
 double KittiApR11(const std::array<double, kKittiSamplePoints>& curve);

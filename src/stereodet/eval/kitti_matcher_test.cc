@@ -359,5 +359,49 @@ TEST_P(KittiMatchesReference, OnRandomFrames) {
 
 INSTANTIATE_TEST_SUITE_P(Seeds, KittiMatchesReference, ::testing::Range(0, 6));
 
+// KittiPasses, driven as Evaluate drives it (all difficulties of a frame at once) but with its
+// blocks in reverse order, gives each difficulty exactly EvaluateKittiClass's result, bit for bit.
+TEST(KittiPasses, AllDifficultiesAtOnceInAnyBlockOrderEqualOneAtATime) {
+  RandomFramesOptions ro;
+  ro.num_frames = 300;  // five blocks
+  ro.seed = 21;
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  const std::vector<Difficulty> all = {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard};
+  for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::kBev}) {
+    std::vector<ClassFrame> cfs;
+    for (const EvalFrame& f : frames)
+      cfs.push_back(PrepareClassFrame(f, KittiClassSpec("Car"), kind));
+    KittiPasses passes(cfs.size(), all);
+    const size_t num_blocks = (cfs.size() + KittiPasses::kBlock - 1) / KittiPasses::kBlock;
+    auto reverse_blocks = [&](auto fn) {
+      for (size_t b = num_blocks; b-- > 0;) {
+        for (size_t i = b * KittiPasses::kBlock;
+             i < std::min(cfs.size(), (b + 1) * KittiPasses::kBlock); ++i) {
+          fn(i);
+        }
+      }
+    };
+    reverse_blocks([&](size_t i) { passes.CollectFrame(i, cfs[i]); });
+    passes.ChooseThresholds();
+    reverse_blocks([&](size_t i) { passes.CountFrame(i, cfs[i]); });
+    const std::vector<KittiClassResult> got = passes.Finish();
+    ASSERT_EQ(got.size(), all.size());
+    for (size_t d = 0; d < all.size(); ++d) {
+      const KittiClassResult want = EvaluateKittiClass(cfs, all[d], 1);
+      EXPECT_EQ(got[d].num_groundtruth, want.num_groundtruth);
+      ASSERT_EQ(got[d].thresholds, want.thresholds);
+      ASSERT_FALSE(want.thresholds.empty());
+      for (size_t t = 0; t < want.thresholds.size(); ++t) {
+        EXPECT_EQ(got[d].counts[t].tp, want.counts[t].tp);
+        EXPECT_EQ(got[d].counts[t].fp, want.counts[t].fp);
+        EXPECT_EQ(got[d].counts[t].fn, want.counts[t].fn);
+        EXPECT_EQ(got[d].counts[t].similarity, want.counts[t].similarity);  // same order of sums
+      }
+      EXPECT_EQ(got[d].ap_r40, want.ap_r40);
+      EXPECT_EQ(got[d].aos_r40, want.aos_r40);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace stereodet

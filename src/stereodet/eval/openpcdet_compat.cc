@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/util/check.h"
@@ -264,8 +265,9 @@ ClassSpec OpenPcdetClassSpec(const std::string& name, bool loose) {
 }
 
 ClassFrame PrepareClassFrameOpenPcdet(const EvalFrame& frame, const ClassSpec& spec,
-                                      OverlapKind kind) {
-  ClassFrame cf;
+                                      OverlapKind kind, ClassFrame reuse) {
+  ClassFrame cf = std::move(reuse);
+  cf.Clear();
   const double tau = spec.min_overlap[static_cast<int>(kind)];
   cf.min_overlap = tau;
 

@@ -60,10 +60,10 @@ double PcdetOverlap(OverlapKind kind, const Object& detection, const Object& lab
 // PrepareClassFrame under OpenPCDet's rules (its clean_data): a label is ignored at a difficulty
 // when its height is <= the minimum (the official devkit's rule); DontCare regions are the labels
 // named exactly "DontCare" (case-sensitive) and suppress false positives in 2D only; overlaps are
-// PcdetOverlap's. Detections and neighbour classes as the devkit. Requires: every detection has a
-// score.
+// PcdetOverlap's. Detections and neighbour classes as the devkit. `reuse` lends its memory, as in
+// PrepareClassFrame. Requires: every detection has a score.
 ClassFrame PrepareClassFrameOpenPcdet(const EvalFrame& frame, const ClassSpec& spec,
-                                      OverlapKind kind);
+                                      OverlapKind kind, ClassFrame reuse = {});
 
 // OpenPCDet's AOS switch: on iff the first detection of the first frame that has detections has
 // alpha != -10 (the others are not looked at). False when there is no detection at all.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 #include "stereodet/eval/bipartite.h"
 
@@ -156,13 +157,14 @@ void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<
   }
 }
 
-FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
+FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
+                                  FrameAssociation reuse) {
   ThreadScratch& scratch = Scratch();
   OptimalGraph& g = scratch.graph;
   BuildGraph(f, difficulty, &g);
   const int nl = f.num_labels();
   const int nd = f.num_dets();
-  FrameAssociation a;
+  FrameAssociation a = std::move(reuse);
   a.label_outcome.assign(nl, Outcome::kIgnored);
   a.label_det.assign(nl, -1);
   a.det_outcome.assign(nd, Outcome::kNone);

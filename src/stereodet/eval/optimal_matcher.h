@@ -38,7 +38,9 @@ void OptimalFrameEvents(const ClassFrame& frame, Difficulty difficulty, std::vec
 
 // The association at `threshold` (detections with score >= threshold): maximum TPs, then most
 // excused detections and labels, then largest total overlap; Hungarian per connected component.
-FrameAssociation OptimalAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold);
+// `reuse` lends its memory to the result (its contents are discarded).
+FrameAssociation OptimalAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
+                                  FrameAssociation reuse = {});
 
 }  // namespace stereodet
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace stereodet {
 
@@ -73,8 +74,9 @@ void VocFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<Curv
   });
 }
 
-FrameAssociation VocAssociate(const ClassFrame& f, Difficulty difficulty, double threshold) {
-  FrameAssociation a;
+FrameAssociation VocAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
+                              FrameAssociation reuse) {
+  FrameAssociation a = std::move(reuse);
   a.label_outcome.assign(f.num_labels(), Outcome::kIgnored);
   a.label_det.assign(f.num_labels(), -1);
   a.det_outcome.assign(f.num_dets(), Outcome::kNone);

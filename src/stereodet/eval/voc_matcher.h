@@ -19,8 +19,10 @@ namespace stereodet {
 // any threshold are those of the prefix of detections above it.
 void VocFrameEvents(const ClassFrame& frame, Difficulty difficulty, std::vector<CurveEvent>* events);
 
-// The association at `threshold`.
-FrameAssociation VocAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold);
+// The association at `threshold`. `reuse` lends its memory to the result (its contents are
+// discarded).
+FrameAssociation VocAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
+                              FrameAssociation reuse = {});
 
 }  // namespace stereodet
 

@@ -3,12 +3,16 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <random>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "stereodet/util/check.h"
 #include "stereodet/util/test_temp_dir.h"
@@ -358,6 +362,95 @@ TEST(LabelIoTest, ParseOfFormatIsIdentityOnRandomObjects) {
     ASSERT_EQ(back.objects[i], objects[i]) << FormatObject(objects[i]);
     // Bit-exact, sign of zero included.
     EXPECT_EQ(std::signbit(back.objects[i].alpha), std::signbit(objects[i].alpha));
+  }
+}
+
+// The parser reads short decimals ("-1.57") on a fast path of its own; every number must come out
+// bit for bit as std::from_chars reads it, on both sides of the fast path's 15-digit limit, with
+// leading zeros, signs and negative zero.
+TEST(LabelIoTest, NumbersReadExactlyAsFromChars) {
+  std::mt19937_64 rng(11);
+  auto digits = [&](int n) {
+    std::string s;
+    for (int k = 0; k < n; ++k) s.push_back(static_cast<char>('0' + rng() % 10));
+    return s;
+  };
+  auto token = [&](bool non_negative) {
+    static const char* kSigns[] = {"", "-", "+"};
+    std::string t = kSigns[non_negative ? (rng() % 2) * 2 : rng() % 3];
+    t += digits(1 + static_cast<int>(rng() % 10));
+    if (rng() % 4 != 0) {
+      t += '.';
+      t += digits(1 + static_cast<int>(rng() % 10));
+    }
+    return t;
+  };
+  auto from_chars = [](std::string_view t) {
+    if (t.front() == '+') t.remove_prefix(1);
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    EXPECT_TRUE(ec == std::errc() && ptr == t.data() + t.size()) << t;
+    return v;
+  };
+  std::vector<std::string> fixed = {"0",
+                                    "-0",
+                                    "-0.00",
+                                    "+0.0",
+                                    "007.50",
+                                    "-1000",
+                                    "-10",
+                                    "999999999999999",
+                                    "0.000000000000001",
+                                    "123456789012.345",
+                                    "1234567890123456",
+                                    "-9999999999.999999"};
+  for (int line = 0; line < 20000; ++line) {
+    std::vector<std::string> tokens(16);
+    for (int i = 1; i < 16; ++i) tokens[i] = token(i >= 8 && i <= 10);
+    tokens[0] = "Car";
+    // occluded: short integers on the one-pass reader, longer ones on the general one
+    static const char* kOccluded[] = {"1", "+2", "-1", "007", "0", "123456789", "1234567890"};
+    static const int kOccludedValue[] = {1, 2, -1, 7, 0, 123456789, 1234567890};
+    const int occluded = static_cast<int>(rng() % 7);
+    tokens[2] = kOccluded[occluded];
+    if (line < static_cast<int>(fixed.size())) tokens[3] = fixed[line];
+    // Label lines (15 fields, as labels and as either kind) and detection lines (16).
+    const bool label = line % 2 == 1;
+    if (label) tokens.pop_back();
+    const ObjectFileKind kind = !label          ? ObjectFileKind::kDetection
+                                : line % 4 == 1 ? ObjectFileKind::kLabel
+                                                : ObjectFileKind::kAny;
+    std::string text;
+    static const char* kBlanks[] = {" ", "  ", "\t", " \r"};
+    for (const std::string& t : tokens) text += t + kBlanks[rng() % 4];
+    const ObjectFile file = ParseObjects(text, "x", {kind, false});
+    ASSERT_EQ(file.objects.size(), 1u) << text;
+    EXPECT_EQ(file.objects[0].type, "Car");
+    EXPECT_EQ(file.objects[0].occluded, kOccludedValue[occluded]) << text;
+    const Object& o = file.objects[0];
+    const double got[16] = {0,
+                            o.truncated,
+                            0,
+                            o.alpha,
+                            o.box.left,
+                            o.box.top,
+                            o.box.right,
+                            o.box.bottom,
+                            o.box3d.h,
+                            o.box3d.w,
+                            o.box3d.l,
+                            o.box3d.location.x(),
+                            o.box3d.location.y(),
+                            o.box3d.location.z(),
+                            o.box3d.rotation_y,
+                            o.score.value_or(0.0)};
+    EXPECT_EQ(o.score.has_value(), !label);
+    for (int i = 1; i < static_cast<int>(tokens.size()); ++i) {
+      if (i == 2) continue;
+      const double want = from_chars(tokens[i]);
+      ASSERT_EQ(std::memcmp(&got[i], &want, sizeof(double)), 0)
+          << "field " << i << " '" << tokens[i] << "': " << got[i] << " vs " << want;
+    }
   }
 }
 

@@ -1,5 +1,6 @@
 #include "stereodet/report/eval_report.h"
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -38,6 +39,11 @@ std::string Csv(double v) {
   return fmt::format("{}", v);
 }
 
+// Csv(v) appended to `out`.
+void AppendCsv(fmt::memory_buffer* out, double v) {
+  if (!std::isnan(v)) fmt::format_to(fmt::appender(*out), FMT_COMPILE("{}"), v);
+}
+
 }  // namespace
 
 std::string FormatNumber(double value, int decimals) {
@@ -52,20 +58,23 @@ double FpPerFrame(const CurvePoint& p, int64_t num_frames) {
 }
 
 json CurveJson(const std::vector<CurvePoint>& points, int64_t num_frames, bool with_aos) {
-  json curve = {{"threshold", json::array()}, {"tp", json::array()},        {"fp", json::array()},
-                {"fn", json::array()},        {"precision", json::array()}, {"recall", json::array()},
-                {"fp_per_frame", json::array()}};
-  if (with_aos) curve["orientation"] = json::array();
-  for (const CurvePoint& p : points) {
-    curve["threshold"].push_back(p.threshold);
-    curve["tp"].push_back(p.tp);
-    curve["fp"].push_back(p.fp);
-    curve["fn"].push_back(p.fn);
-    curve["precision"].push_back(p.precision);
-    curve["recall"].push_back(p.recall);
-    curve["fp_per_frame"].push_back(FpPerFrame(p, num_frames));
-    if (with_aos) curve["orientation"].push_back(p.orientation);
-  }
+  // Column by column into reserved arrays: an exact curve has one point per distinct score (tens
+  // of thousands per cell), and a push_back per value through curve["name"] costs a map look-up.
+  auto column = [&](auto value_of) {
+    json::array_t values;
+    values.reserve(points.size());
+    for (const CurvePoint& p : points) values.emplace_back(value_of(p));
+    return values;
+  };
+  json curve = {
+      {"threshold", column([](const CurvePoint& p) { return p.threshold; })},
+      {"tp", column([](const CurvePoint& p) { return p.tp; })},
+      {"fp", column([](const CurvePoint& p) { return p.fp; })},
+      {"fn", column([](const CurvePoint& p) { return p.fn; })},
+      {"precision", column([](const CurvePoint& p) { return p.precision; })},
+      {"recall", column([](const CurvePoint& p) { return p.recall; })},
+      {"fp_per_frame", column([&](const CurvePoint& p) { return FpPerFrame(p, num_frames); })}};
+  if (with_aos) curve["orientation"] = column([](const CurvePoint& p) { return p.orientation; });
   return curve;
 }
 
@@ -342,26 +351,43 @@ int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult
 }
 
 std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos) {
-  std::ostringstream pr;
-  pr << "threshold,tp,fp,fn,precision,recall,fp_per_frame" << (with_aos ? ",orientation" : "") << '\n';
+  // fmt into one buffer rather than a stream and a string per number: an exact curve is tens of
+  // thousands of rows. The text is Csv's, number for number.
+  fmt::memory_buffer pr;
+  pr.reserve(128 * (curve.size() + 1));
+  fmt::format_to(fmt::appender(pr), "threshold,tp,fp,fn,precision,recall,fp_per_frame{}\n",
+                 with_aos ? ",orientation" : "");
   for (const CurvePoint& p : curve) {
-    pr << Csv(p.threshold) << ',' << p.tp << ',' << p.fp << ',' << p.fn << ',' << Csv(p.precision) << ','
-       << Csv(p.recall) << ',' << Csv(FpPerFrame(p, num_frames));
-    if (with_aos) pr << ',' << Csv(p.orientation);
-    pr << '\n';
+    AppendCsv(&pr, p.threshold);
+    fmt::format_to(fmt::appender(pr), FMT_COMPILE(",{},{},{},"), p.tp, p.fp, p.fn);
+    AppendCsv(&pr, p.precision);
+    pr.push_back(',');
+    AppendCsv(&pr, p.recall);
+    pr.push_back(',');
+    AppendCsv(&pr, FpPerFrame(p, num_frames));
+    if (with_aos) {
+      pr.push_back(',');
+      AppendCsv(&pr, p.orientation);
+    }
+    pr.push_back('\n');
   }
-  return pr.str();
+  return fmt::to_string(pr);
 }
 
 std::string RocCsv(const std::vector<CurvePoint>& curve, int64_t num_frames) {
-  std::ostringstream roc;
-  roc << "fp_per_frame,recall,threshold,tp,fp\n";
+  fmt::memory_buffer roc;
+  roc.reserve(96 * (curve.size() + 1));
+  fmt::format_to(fmt::appender(roc), "fp_per_frame,recall,threshold,tp,fp\n");
   // The curve is in descending threshold order, so FP per frame ascends.
   for (const CurvePoint& p : curve) {
-    roc << Csv(FpPerFrame(p, num_frames)) << ',' << Csv(p.recall) << ',' << Csv(p.threshold) << ',' << p.tp
-        << ',' << p.fp << '\n';
+    AppendCsv(&roc, FpPerFrame(p, num_frames));
+    roc.push_back(',');
+    AppendCsv(&roc, p.recall);
+    roc.push_back(',');
+    AppendCsv(&roc, p.threshold);
+    fmt::format_to(fmt::appender(roc), FMT_COMPILE(",{},{}\n"), p.tp, p.fp);
   }
-  return roc.str();
+  return fmt::to_string(roc);
 }
 
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,

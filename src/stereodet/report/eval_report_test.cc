@@ -1,10 +1,11 @@
 #include "stereodet/report/eval_report.h"
 
+#include <gtest/gtest.h>
+
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/util/atomic_file.h"
@@ -44,6 +45,37 @@ TEST(EvalReport, WritesJsonAndCsvThatAgreeWithTheResult) {
   const std::string table = FormatEvalTable(result, options);
   EXPECT_NE(table.find("AP_R40"), std::string::npos);
   std::filesystem::remove_all(dir);
+}
+
+// The curve CSVs of a hand-made two-point curve, byte for byte: shortest round-trip numbers,
+// integers as integers, NaN as an empty field.
+TEST(EvalReport, CurveCsvTextByHand) {
+  CurvePoint a;
+  a.threshold = 0.9;
+  a.tp = 1;
+  a.fp = 0;
+  a.fn = 2;
+  a.precision = 1.0;
+  a.recall = 1.0 / 3.0;
+  a.orientation = 0.5;
+  CurvePoint b;
+  b.threshold = 0.25;
+  b.tp = 2;
+  b.fp = 1;
+  b.fn = 1;
+  b.precision = 2.0 / 3.0;
+  b.recall = 2.0 / 3.0;
+  b.orientation = std::nan("");
+  EXPECT_EQ(PrCsv({a, b}, 4, true),
+            "threshold,tp,fp,fn,precision,recall,fp_per_frame,orientation\n"
+            "0.9,1,0,2,1,0.3333333333333333,0,0.5\n"
+            "0.25,2,1,1,0.6666666666666666,0.6666666666666666,0.25,\n");
+  EXPECT_EQ(PrCsv({a}, 0, false),
+            "threshold,tp,fp,fn,precision,recall,fp_per_frame\n0.9,1,0,2,1,0.3333333333333333,0\n");
+  EXPECT_EQ(RocCsv({a, b}, 4),
+            "fp_per_frame,recall,threshold,tp,fp\n"
+            "0,0.3333333333333333,0.9,1,0\n"
+            "0.25,0.6666666666666666,0.25,2,1\n");
 }
 
 // With a filter and the optimal matcher: the ROC file is the curve's (FP per frame, recall) in

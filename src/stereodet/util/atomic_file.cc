@@ -146,7 +146,7 @@ std::string ReadFile(const fs::path& path) {
   // the stream set-up (and its seeks) would cost more than the parsing. fstat before reading, so a
   // FIFO or a folder is refused instead of blocking (O_NONBLOCK: opening a FIFO without a writer
   // would block; it does nothing to a regular file); the read loop also grows past st_size, so
-  // /proc files (size 0) read whole.
+  // /proc files (size 0) read whole. A file of the size fstat reports takes one read().
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   STEREODET_CHECK_IO(fd >= 0) << "cannot read " << path.string() << ": " << std::strerror(errno);
   struct FdCloser {
@@ -169,6 +169,10 @@ std::string ReadFile(const fs::path& path) {
     STEREODET_CHECK_IO(got >= 0) << "cannot read " << path.string() << ": " << std::strerror(errno);
     if (got == 0) break;
     used += static_cast<size_t>(got);
+    // Exactly the size fstat reported: that is the whole file (one more byte was asked for, so a
+    // file that grew since would have filled the buffer). No second read() just to see the end:
+    // reading thousands of small files, that was a fifth of the system calls.
+    if (info.st_size > 0 && used == static_cast<size_t>(info.st_size)) break;
   }
   contents.resize(used);
   return contents;

@@ -1,0 +1,74 @@
+#include "stereodet/eval/curves.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace stereodet {
+namespace {
+
+// The interpolated AP as defined (curves.h), by sorting the points by recall: the reference for
+// the linear-time implementation.
+double ReferenceInterpolatedAp(const std::vector<CurvePoint>& curve, int first, int last,
+                               double step, bool orientation) {
+  std::vector<std::pair<double, double>> pr;
+  for (const CurvePoint& p : curve) {
+    if (p.tp + p.fp > 0) pr.emplace_back(p.recall, orientation ? p.orientation : p.precision);
+  }
+  std::sort(pr.begin(), pr.end());
+  for (size_t i = pr.size(); i-- > 1;) pr[i - 1].second = std::max(pr[i - 1].second, pr[i].second);
+  double sum = 0.0;
+  for (int k = first; k <= last; ++k) {
+    const double r = k * step;
+    const auto it =
+        std::lower_bound(pr.begin(), pr.end(), r,
+                         [](const std::pair<double, double>& a, double v) { return a.first < v; });
+    if (it != pr.end()) sum += it->second;
+  }
+  return sum / (last - first + 1) * 100.0;
+}
+
+bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+// Random curves with recall ties, recall exactly on the levels (k / 40, k / 10), points without a
+// detection, in and out of recall order: every summary bit for bit the reference's.
+TEST(Curves, InterpolatedApEqualsItsDefinitionOnRandomCurves) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int n = 0; n < 3000; ++n) {
+    const int num_points = static_cast<int>(rng() % 60);
+    std::vector<CurvePoint> curve;
+    for (int i = 0; i < num_points; ++i) {
+      CurvePoint p;
+      p.tp = static_cast<int64_t>(rng() % 20);
+      p.fp = rng() % 5 == 0 ? 0 : static_cast<int64_t>(rng() % 20);
+      const int pick = static_cast<int>(rng() % 3);
+      p.recall = pick == 0   ? static_cast<double>(rng() % 41) / 40.0
+                 : pick == 1 ? static_cast<double>(rng() % 11) / 10.0
+                             : u(rng);
+      p.precision = rng() % 4 == 0 ? 1.0 : u(rng);
+      p.orientation = p.precision * u(rng);
+      curve.push_back(p);
+    }
+    if (n % 2 == 0) {  // in recall order, as most curves are
+      std::sort(curve.begin(), curve.end(),
+                [](const CurvePoint& a, const CurvePoint& b) { return a.recall < b.recall; });
+    }
+    SCOPED_TRACE(n);
+    ASSERT_TRUE(SameBits(InterpolatedApR40(curve),
+                         ReferenceInterpolatedAp(curve, 1, 40, 1.0 / 40.0, false)));
+    ASSERT_TRUE(SameBits(InterpolatedApR11(curve),
+                         ReferenceInterpolatedAp(curve, 0, 10, 1.0 / 10.0, false)));
+    ASSERT_TRUE(SameBits(InterpolatedAosR40(curve),
+                         ReferenceInterpolatedAp(curve, 1, 40, 1.0 / 40.0, true)));
+    ASSERT_TRUE(SameBits(InterpolatedAosR11(curve),
+                         ReferenceInterpolatedAp(curve, 0, 10, 1.0 / 10.0, true)));
+  }
+}
+
+}  // namespace
+}  // namespace stereodet
