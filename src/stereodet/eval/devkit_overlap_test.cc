@@ -1,5 +1,3 @@
-#include "stereodet/eval/devkit_overlap.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,8 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/frame_data.h"
-#include "stereodet/eval/kitti_matcher.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/kitti/label_io.h"
 
 namespace stereodet {

@@ -1,13 +1,15 @@
 #include "stereodet/eval/evaluator.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include <gtest/gtest.h>
-
-#include "stereodet/eval/optimal_matcher.h"
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/kitti/label_io.h"
 

@@ -1,12 +1,12 @@
-#include "stereodet/eval/kitti_matcher.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numeric>
+#include <utility>
 
-#include "stereodet/eval/devkit_overlap.h"
+#include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/eval/test_objects.h"
 
@@ -304,7 +304,7 @@ TEST(KittiMatcher, ThresholdPassTakesHighestScorePrPassTakesLargestOverlap) {
   f.detections.push_back(Det("Car", {100, 100, 200, 175}, 0.9));  // IoU 0.75
   std::vector<double> scores;
   ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Car"), OverlapKind::k2D);
-  KittiCollectTpScores(cf, Difficulty::kModerate, &scores);
+  scores = KittiCollectTpScores(cf, Difficulty::kModerate, std::move(scores)).scores;
   ASSERT_EQ(scores.size(), 1u);
   EXPECT_EQ(scores[0], 0.9);
   const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);

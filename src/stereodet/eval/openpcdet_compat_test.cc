@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/openpcdet_compat_internal.h"
 #include "stereodet/kitti/label_io.h"
 
 namespace stereodet {
@@ -235,7 +236,7 @@ TEST(OpenPcdetEnvelope, NanPropagatesToEarlierSlots) {
   c[1] = kNaN;
   c[2] = 0.5;
   c[3] = 1.0;
-  OpenPcdetEnvelope(&c);
+  c = OpenPcdetEnvelope(c);
   EXPECT_TRUE(std::isnan(c[0]));
   EXPECT_TRUE(std::isnan(c[1]));
   EXPECT_EQ(c[2], 1.0);

@@ -1,16 +1,17 @@
-#include "stereodet/eval/optimal_matcher.h"
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
+#include <utility>
 
-#include <gtest/gtest.h>
-
-#include "stereodet/eval/bipartite.h"
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/bipartite_internal.h"
 #include "stereodet/eval/evaluator.h"
-#include "stereodet/eval/kitti_matcher.h"
-#include "stereodet/eval/voc_matcher.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
+#include "stereodet/eval/voc_matcher_internal.h"
 
 namespace stereodet {
 namespace {
@@ -83,7 +84,7 @@ TEST(OptimalMatcher, PapersTwoOverlappingLabels) {
   EXPECT_EQ(a.label_det[0], 0);
   EXPECT_EQ(a.label_det[1], 1);
   std::vector<CurveEvent> events;
-  OptimalFrameEvents(cf, Difficulty::kModerate, &events);
+  events = OptimalFrameEvents(cf, Difficulty::kModerate, std::move(events));
   const std::vector<CurvePoint> curve = BuildCurve(events, 2);
   ASSERT_EQ(curve.size(), 2u);
   EXPECT_EQ(curve[0].tp, 1);  // at 0.9: one detection, one TP
@@ -233,7 +234,7 @@ TEST(OptimalMatcher, EqualsBruteForceAtEveryThresholdOnThousandsOfFrames) {
     const ClassFrame cf = PrepareClassFrame(frame, spec, OverlapKind::k2D);
     for (const Difficulty d : {Difficulty::kEasy, Difficulty::kHard}) {
       std::vector<CurveEvent> events;
-      OptimalFrameEvents(cf, d, &events);
+      events = OptimalFrameEvents(cf, d, std::move(events));
       const int n_valid = CountValidLabels(cf, d);
       const std::vector<CurvePoint> curve = BuildCurve(events, n_valid);
       // Every distinct score is a threshold to check (and one above all scores).
