@@ -122,22 +122,6 @@ TEST(OptimalMatcher, AmongMaximumMatchingsTakesLargestOverlap) {
   EXPECT_EQ(a.label_det[1], 0);
 }
 
-TEST(IncrementalMatching, RemovingAMatchedLabelReroutes) {
-  // det 0 - {label 0, label 1}, det 1 - {label 0}.
-  DetAdjacency adj;
-  adj.num_labels = 2;
-  adj.begin = {0, 2, 3};
-  adj.labels = {0, 1, 0};
-  IncrementalMatching m(&adj);
-  EXPECT_TRUE(m.AddDet(0));   // det 0 - label 0
-  EXPECT_TRUE(m.AddDet(1));   // det 1 - label 0, det 0 rerouted to label 1
-  EXPECT_EQ(m.size(), 2);
-  EXPECT_EQ(m.RemoveLabel(0), -1);
-  EXPECT_EQ(m.size(), 1);
-  EXPECT_EQ(m.RemoveLabel(1), -1);
-  EXPECT_EQ(m.size(), 0);
-}
-
 // ------------------------------------------------------------------------------------------------
 // Brute force: every association of a small frame.
 
