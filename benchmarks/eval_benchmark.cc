@@ -7,17 +7,20 @@
 //    and N detections overlapping about 7 labels each (tau 0.5): the matcher's per-frame work.
 // Run one benchmark per process for a clean peak-RSS figure, e.g.
 //   eval_benchmark --benchmark_filter='BM_FullEvaluation/1/2/'
+#include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
 #include <map>
+#include <utility>
+#include <vector>
 
-#include <benchmark/benchmark.h>
-
+#include "stereodet/eval/associate_internal.h"
 #include "stereodet/eval/evaluator.h"
-#include "stereodet/eval/kitti_matcher.h"
-#include "stereodet/eval/optimal_matcher.h"
+#include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
 #include "stereodet/eval/random_frames.h"
-#include "stereodet/eval/voc_matcher.h"
+#include "stereodet/eval/voc_matcher_internal.h"
 
 namespace stereodet {
 namespace {
@@ -100,15 +103,15 @@ void BM_FrameScaling(benchmark::State& state) {
   for (auto _ : state) {
     std::vector<CurveEvent> events;
     if (matcher == Matcher::kKitti) {
-      std::vector<double> scores;
-      KittiCollectTpScores(cf, Difficulty::kModerate, &scores);
+      const std::vector<double> scores = KittiCollectTpScores(cf, Difficulty::kModerate).scores;
       const std::vector<double> thresholds = KittiThresholds(scores, n);
-      std::vector<KittiCounts> counts(thresholds.size());
-      KittiAddFrameCounts(cf, Difficulty::kModerate, thresholds, &counts);
+      const std::vector<KittiCounts> counts =
+          KittiAddFrameCounts(cf, Difficulty::kModerate, thresholds);
+      benchmark::DoNotOptimize(counts.data());
     } else if (matcher == Matcher::kOptimal) {
-      OptimalFrameEvents(cf, Difficulty::kModerate, &events);
+      events = OptimalFrameEvents(cf, Difficulty::kModerate, std::move(events));
     } else {
-      VocFrameEvents(cf, Difficulty::kModerate, &events);
+      events = VocFrameEvents(cf, Difficulty::kModerate, std::move(events));
     }
     tp = Associate(matcher, cf, Difficulty::kModerate, 0.0).CountDets(Outcome::kTp);
     benchmark::DoNotOptimize(tp);

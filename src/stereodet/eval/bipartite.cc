@@ -1,9 +1,8 @@
-#include "stereodet/eval/bipartite.h"
-
 #include <algorithm>
 #include <functional>
 #include <limits>
 
+#include "stereodet/eval/bipartite_internal.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {

@@ -7,10 +7,12 @@
 
 namespace stereodet {
 
-void FinishPoint(CurvePoint* p) {
-  p->precision = p->tp + p->fp > 0 ? static_cast<double>(p->tp) / static_cast<double>(p->tp + p->fp) : 0.0;
-  p->recall = p->tp + p->fn > 0 ? static_cast<double>(p->tp) / static_cast<double>(p->tp + p->fn) : 0.0;
-  p->orientation = p->tp + p->fp > 0 ? p->similarity / static_cast<double>(p->tp + p->fp) : 0.0;
+CurvePoint FinishPoint(CurvePoint p) {
+  p.precision =
+      p.tp + p.fp > 0 ? static_cast<double>(p.tp) / static_cast<double>(p.tp + p.fp) : 0.0;
+  p.recall = p.tp + p.fn > 0 ? static_cast<double>(p.tp) / static_cast<double>(p.tp + p.fn) : 0.0;
+  p.orientation = p.tp + p.fp > 0 ? p.similarity / static_cast<double>(p.tp + p.fp) : 0.0;
+  return p;
 }
 
 std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels) {
@@ -28,7 +30,7 @@ std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_v
       current.similarity += events[i].similarity;
     }
     current.threshold = score;
-    FinishPoint(&current);
+    current = FinishPoint(current);
     curve.push_back(current);
   }
   return curve;

@@ -32,8 +32,8 @@ struct CurvePoint {
 // detected). One point per distinct score, in descending threshold order.
 std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels);
 
-// Fills precision and recall from the counts.
-void FinishPoint(CurvePoint* point);
+// `point` with precision, recall and the orientation ratio filled from its counts.
+CurvePoint FinishPoint(CurvePoint point);
 
 // Interpolated AP in percent: the mean over recall levels r of max{precision(p) : recall(p) >= r}
 // (0 if no point reaches r). R40: r = 1/40, ..., 40/40; R11: r = 0, 0.1, ..., 1. Points with no

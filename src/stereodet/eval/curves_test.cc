@@ -70,5 +70,26 @@ TEST(Curves, InterpolatedApEqualsItsDefinitionOnRandomCurves) {
   }
 }
 
+TEST(Curves, InterpolatedApOfAPerfectCurveIs100) {
+  // 40 labels, found one by one with precision 1: R40 = 100 (no devkit slot quirk here).
+  std::vector<CurveEvent> events;
+  for (int i = 0; i < 40; ++i) events.push_back(CurveEvent{1.0 - i / 100.0, 1, 0, -1});
+  const std::vector<CurvePoint> curve = BuildCurve(events, 40);
+  EXPECT_DOUBLE_EQ(InterpolatedApR40(curve), 100.0);
+  EXPECT_DOUBLE_EQ(InterpolatedApR11(curve), 100.0);
+  EXPECT_DOUBLE_EQ(EveryPointAp(curve), 100.0);
+  EXPECT_DOUBLE_EQ(BestF1(curve).f1, 1.0);
+}
+
+TEST(Curves, EveryPointApIntegratesTheEnvelope) {
+  // Labels: 2. Scores: TP, FP, TP -> (P, R) = (1, .5), (.5, .5), (2/3, 1).
+  const std::vector<CurvePoint> curve =
+      BuildCurve({{0.9, 1, 0, -1}, {0.8, 0, 1, 0}, {0.7, 1, 0, -1}}, 2);
+  ASSERT_EQ(curve.size(), 3u);
+  EXPECT_NEAR(EveryPointAp(curve), (0.5 * 1.0 + 0.5 * 2.0 / 3.0) * 100, 1e-12);
+  // R11: r = 0..0.5 -> 1 (6 levels), r = 0.6..1 -> 2/3 (5 levels).
+  EXPECT_NEAR(InterpolatedApR11(curve), (6 * 1.0 + 5 * 2.0 / 3.0) / 11 * 100, 1e-12);
+}
+
 }  // namespace
 }  // namespace stereodet

@@ -1,5 +1,3 @@
-#include "stereodet/eval/devkit_overlap.h"
-
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -9,6 +7,8 @@
 #include <optional>
 #include <unordered_map>
 #include <vector>
+
+#include "stereodet/eval/devkit_overlap_internal.h"
 
 // boost 1.74's rescale policy trips g++ 12's -Wmaybe-uninitialized once inlined (a false positive
 // in boost's own code, not ours).

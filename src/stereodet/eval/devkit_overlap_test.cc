@@ -1,5 +1,3 @@
-#include "stereodet/eval/devkit_overlap.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,8 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/frame_data.h"
-#include "stereodet/eval/kitti_matcher.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/kitti/label_io.h"
 
 namespace stereodet {
@@ -41,7 +40,7 @@ double Devkit(OverlapKind kind, const Box3D& det, const Box3D& label,
   return o.value_or(-1.0);
 }
 
-TEST(DevkitBoxOverlap, HandComputableCases) {
+TEST(DevkitOverlap, HandComputableCases) {
   const Box3D label = Footprint(3.0, 20.0, 3.9, 1.6, 0.0, 1.65, 2.0);
   // Axis-aligned, shifted by half its length: intersection 1.95 x 1.6 of union 5.85 x 1.6.
   Box3D det = label;
@@ -61,7 +60,7 @@ TEST(DevkitBoxOverlap, HandComputableCases) {
   EXPECT_EQ(Devkit(OverlapKind::k3D, det, label), 0.0);
 }
 
-TEST(DevkitBoxOverlap, RejectsImageBoxes) {
+TEST(DevkitOverlap, RejectsImageBoxes) {
   const Box3D b = Footprint(0, 10, 4, 2, 0);
   EXPECT_THROW(DevkitBoxOverlap(OverlapKind::k2D, DevkitCriterion::kUnion, b, b),
                std::invalid_argument);
@@ -70,7 +69,7 @@ TEST(DevkitBoxOverlap, RejectsImageBoxes) {
 // The band of KittiOverlapAtThreshold and PrepareClassFrame rests on this: away from the degenerate
 // cases below, the devkit's (rescaled) arithmetic stays within a fraction of kDevkitTieBand of the
 // exact overlap, so only values that close to tau, or to each other, can be decided otherwise.
-TEST(DevkitBoxOverlap, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
+TEST(DevkitOverlap, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (const bool thin : {false, true}) {
@@ -108,7 +107,7 @@ TEST(DevkitBoxOverlap, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
 // DevkitBoxOverlap keeps the last pairs' boost results per thread (BEV and 3D share the
 // intersection). Whatever was asked before, and after the memory has been emptied, every pair's
 // four overlaps come out the same: asked BEV first, 3D first, or with 70,000 other pairs between.
-TEST(DevkitBoxOverlap, SameValuesWhateverWasAskedBefore) {
+TEST(DevkitOverlap, SameValuesWhateverWasAskedBefore) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   auto random_pair = [&] {
@@ -155,7 +154,7 @@ TEST(DevkitBoxOverlap, SameValuesWhateverWasAskedBefore) {
 // Boost 1.74 loses the intersection of a footprint nested in a parallel one between common end
 // lines (same centre, length and rotation, 6 cm wider): the devkit sees overlap 0, not 0.976, and
 // KITTI mode follows it. Checked end to end against the devkit in evaluator_test.cc.
-TEST(DevkitBoxOverlap, LosesSomeNestedParallelFootprintsLikeTheDevkit) {
+TEST(DevkitOverlap, LosesSomeNestedParallelFootprintsLikeTheDevkit) {
   const Object label = Line("Car 0.00 0 0.00 100 100 200 200 1.27 2.41 0.75 9.69 1.74 15.90 -1.57");
   const Object det =
       Line("Car -1 -1 0.00 100 100 200 200 1.27 2.47 0.75 9.69 1.74 15.90 -1.57 0.9");
@@ -170,7 +169,7 @@ TEST(DevkitBoxOverlap, LosesSomeNestedParallelFootprintsLikeTheDevkit) {
 
 // A footprint with w = -1 and l > 0 is a reversed ring: boost returns no union and the devkit
 // crashes (tools' repro D). The devkit has no answer; KittiOverlap's 0 stays.
-TEST(DevkitBoxOverlap, NoAnswerWhereTheDevkitCrashes) {
+TEST(DevkitOverlap, NoAnswerWhereTheDevkitCrashes) {
   const Object label =
       Line("Car 0.81 0 0.36 897.35 262.62 968.99 291.25 1.59 1.84 3.48 6.34 1.88 51.24 0.90");
   const Object det =
@@ -182,112 +181,6 @@ TEST(DevkitBoxOverlap, NoAnswerWhereTheDevkitCrashes) {
   EXPECT_EQ(KittiOverlap(OverlapKind::kBev, det, label), 0.0);
   // Even with a threshold so low that 0 lies in the band, the value stays 0 (no crash, no NaN).
   EXPECT_EQ(KittiOverlapAtThreshold(OverlapKind::kBev, det, label, 1e-6), 0.0);
-}
-
-// The three ties of the devkit comparison (tools' repro A, B, C): overlaps mathematically equal to
-// tau, which the devkit's rounding puts above or below it. The decisions asserted are the devkit's,
-// read off its output on these boxes.
-struct TieCase {
-  const char* name;
-  OverlapKind kind;
-  double tau;
-  const char* label;
-  const char* detection;
-  bool devkit_matches;  // the devkit's `overlap > tau`
-};
-
-TEST(KittiOverlapAtThreshold, TiesAreDecidedByTheDevkitArithmetic) {
-  const TieCase cases[] = {
-      {"A: car, same footprint, 0.3 m lower (3D IoU 1.4 / 2.0)", OverlapKind::k3D, 0.7,
-       "Car 0.00 0 0.00 100 100 150 200 1.70 1.60 3.90 -4.10 1.65 22.70 0.00",
-       "Car -1 -1 0.00 100 100 150 200 1.70 1.60 3.90 -4.10 1.95 22.70 0.00 0.8", true},
-      {"B: pedestrian, same footprint, 0.5 m lower (3D IoU 1.0 / 2.0)", OverlapKind::k3D, 0.5,
-       "Pedestrian 0.00 0 0.00 100 100 150 200 1.50 0.60 0.80 2.30 1.80 15.40 1.00",
-       "Pedestrian -1 -1 0.00 100 100 150 200 1.50 0.60 0.80 2.30 2.30 15.40 1.00 0.8", false},
-      {"C: pedestrian, shifted by a third of its length (BEV IoU 2 / 4)", OverlapKind::kBev, 0.5,
-       "Pedestrian 0.00 0 0.00 100 100 150 200 1.50 0.60 3.00 2.30 1.80 15.40 0.00",
-       "Pedestrian -1 -1 0.00 100 100 150 200 1.50 0.60 3.00 3.30 1.80 15.40 0.00 0.8", false},
-      {"C in 3D", OverlapKind::k3D, 0.5,
-       "Pedestrian 0.00 0 0.00 100 100 150 200 1.50 0.60 3.00 2.30 1.80 15.40 0.00",
-       "Pedestrian -1 -1 0.00 100 100 150 200 1.50 0.60 3.00 3.30 1.80 15.40 0.00 0.8", true},
-  };
-  for (const TieCase& c : cases) {
-    SCOPED_TRACE(c.name);
-    const Object label = Line(c.label);
-    const Object det = Line(c.detection);
-    const double fast = KittiOverlap(c.kind, det, label);
-    EXPECT_NEAR(fast, c.tau, 1e-12);  // a tie: the band is hit
-    const double devkit = Devkit(c.kind, det.box3d, label.box3d);
-    const double used = KittiOverlapAtThreshold(c.kind, det, label, c.tau);
-    EXPECT_EQ(used, devkit);
-    EXPECT_EQ(used > c.tau, c.devkit_matches);
-    // PrepareClassFrame stores that value and the matcher decides with it.
-    EvalFrame frame;
-    frame.labels = {label};
-    frame.detections = {det};
-    const ClassFrame cf = PrepareClassFrame(frame, KittiClassSpec(label.type), c.kind);
-    ASSERT_EQ(cf.num_labels(), 1);
-    const bool has_edge = cf.edge_begin[1] == 1;
-    if (has_edge) {
-      EXPECT_EQ(cf.edge_overlap[0], devkit);
-    }
-    EXPECT_EQ(has_edge, devkit >= c.tau);
-    const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
-    EXPECT_EQ(a.CountLabels(Outcome::kTp), c.devkit_matches ? 1 : 0);
-  }
-}
-
-TEST(KittiOverlapAtThreshold, AwayFromTheThresholdKeepsTheExactValue) {
-  // BEV IoU 1/3 (shift by half the length, rotated, so not a parallel-footprint case either way).
-  const Box3D label = Footprint(3.0, 20.0, 3.9, 1.6, 0.3);
-  Box3D moved = label;
-  moved.location += Eigen::Vector3d(std::cos(0.3), 0, -std::sin(0.3)) * 1.95;
-  moved.rotation_y += 0.2;
-  Object l, d;
-  l.box3d = label;
-  d.box3d = moved;
-  for (const OverlapKind kind : {OverlapKind::kBev, OverlapKind::k3D}) {
-    const double fast = KittiOverlap(kind, d, l);
-    ASSERT_GT(fast, 0.0);
-    EXPECT_EQ(KittiOverlapAtThreshold(kind, d, l, 0.7), fast);
-    EXPECT_EQ(KittiDontCareOverlapAtThreshold(kind, d, l, 0.7), KittiDontCareOverlap(kind, d, l));
-  }
-}
-
-// Two detections shifted by 0.33 m and turned by 0.02 rad either side of a car (mirror images, so
-// equal overlaps mathematically; tools' repro H): ours rank the second higher by an ulp, the
-// devkit's the first by ~4e-16, so its pass 2 gives the car the first one and the second car the
-// other. Not a tie at tau and not parallel: only the closeness rule of PrepareClassFrame applies.
-TEST(PrepareClassFrame, CloseOverlapsOfOneLabelAreOrderedByTheDevkit) {
-  EvalFrame frame;
-  frame.labels = {Line("Car 0.00 0 0.00 100 100 200 200 1.50 1.60 3.90 -7.32 1.65 10.46 0.00"),
-                  Line("Car 0.00 0 0.00 300 100 400 200 1.50 1.60 3.90 -7.65 1.65 10.66 0.00")};
-  frame.detections = {
-      Line("Car -1 -1 0.00 100 100 200 200 1.50 1.60 3.90 -6.99 1.65 10.46 0.02 0.9"),
-      Line("Car -1 -1 0.00 300 100 400 200 1.50 1.60 3.90 -7.65 1.65 10.46 -0.02 0.8")};
-  for (const OverlapKind kind : {OverlapKind::kBev, OverlapKind::k3D}) {
-    SCOPED_TRACE(OverlapKindName(kind));
-    const ClassFrame cf = PrepareClassFrame(frame, KittiClassSpec("Car"), kind);
-    ASSERT_EQ(cf.edge_begin[1], 2);  // the first car overlaps both detections (~0.827)
-    for (int e = 0; e < 2; ++e) {
-      const Object& det = frame.detections[cf.edge_det[e]];
-      // Pairwise, neither near tau nor parallel: only the closeness rule brings the devkit in.
-      EXPECT_EQ(KittiOverlapAtThreshold(kind, det, frame.labels[0], 0.7),
-                KittiOverlap(kind, det, frame.labels[0]));
-      EXPECT_EQ(cf.edge_overlap[e], Devkit(kind, det.box3d, frame.labels[0].box3d));
-    }
-    const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
-    EXPECT_EQ(a.label_det[0], 0);
-    EXPECT_EQ(a.label_det[1], 1);
-    // The exact arithmetic (optimal and VOC matchers) keeps KittiOverlap's values.
-    const ClassFrame exact =
-        PrepareClassFrame(frame, KittiClassSpec("Car"), kind, OverlapArithmetic::kExact);
-    ASSERT_EQ(exact.edge_begin[1], 2);
-    for (int e = 0; e < 2; ++e) {
-      EXPECT_EQ(exact.edge_overlap[e],
-                KittiOverlap(kind, frame.detections[exact.edge_det[e]], frame.labels[0]));
-    }
-  }
 }
 
 }  // namespace

@@ -2,12 +2,54 @@
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+#include <string>
+
 namespace stereodet {
 namespace {
 
+TEST(EvalOptions, CompatNamesRoundTrip) {
+  for (EvalCompat c : {EvalCompat::kDevkit, EvalCompat::kOpenPcdet}) {
+    EXPECT_EQ(ParseEvalCompat(EvalCompatName(c)), c);
+  }
+  EXPECT_EQ(ParseEvalCompat("OpenPCDet"), EvalCompat::kOpenPcdet);
+  EXPECT_FALSE(ParseEvalCompat("mmdet").has_value());
+}
+
+TEST(EvalOptions, OpenPcdetCompatNeedsTheKittiMatcher) {
+  EvalOptions options;
+  options.compat = EvalCompat::kOpenPcdet;
+  EXPECT_NO_THROW(options.Check());
+  options.matcher = Matcher::kOptimal;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+// Option checks name the field and its value (the comparison checks of util/check.h).
+TEST(EvalOptions, CheckMessagesNameTheFieldAndItsValue) {
+  auto message = [](const EvalOptions& o) -> std::string {
+    try {
+      o.Check();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  EvalOptions o;
+  o.num_threads = -2;
+  EXPECT_NE(message(o).find("num_threads = -2, must be >= 0"), std::string::npos) << message(o);
+  o = EvalOptions();
+  o.distance_bin_m = -5;
+  EXPECT_NE(message(o).find("distance_bin_m = -5, must be > 0"), std::string::npos) << message(o);
+  o = EvalOptions();
+  o.distance_bin_m = 1e-4;
+  EXPECT_NE(message(o).find("must be <= 100000 (localization bins)"), std::string::npos)
+      << message(o);
+}
+
+
 // Every enum of the options: Name() then Parse() gives the value back, a bad name gives nullopt.
 
-TEST(EvalOptionsNamesTest, Matcher) {
+TEST(EvalOptions, MatcherNamesRoundTrip) {
   for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
     EXPECT_EQ(ParseMatcher(MatcherName(m)), m) << MatcherName(m);
   }
@@ -16,14 +58,14 @@ TEST(EvalOptionsNamesTest, Matcher) {
   EXPECT_EQ(ParseMatcher(""), std::nullopt);
 }
 
-TEST(EvalOptionsNamesTest, EvalCompat) {
+TEST(EvalOptions, EvalCompatNamesRoundTrip) {
   for (EvalCompat c : {EvalCompat::kDevkit, EvalCompat::kOpenPcdet}) {
     EXPECT_EQ(ParseEvalCompat(EvalCompatName(c)), c) << EvalCompatName(c);
   }
   EXPECT_EQ(ParseEvalCompat("mmdet3d"), std::nullopt);
 }
 
-TEST(EvalOptionsNamesTest, OverlapKind) {
+TEST(EvalOptions, OverlapKindNamesRoundTrip) {
   for (OverlapKind k : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
     EXPECT_EQ(ParseOverlapKind(OverlapKindName(k)), k) << OverlapKindName(k);
   }
@@ -31,14 +73,14 @@ TEST(EvalOptionsNamesTest, OverlapKind) {
   EXPECT_EQ(ParseOverlapKind("4d"), std::nullopt);
 }
 
-TEST(EvalOptionsNamesTest, OverlapSet) {
+TEST(EvalOptions, OverlapSetNamesRoundTrip) {
   for (OverlapSet s : {OverlapSet::kStrict, OverlapSet::kLoose}) {
     EXPECT_EQ(ParseOverlapSet(OverlapSetName(s)), s) << OverlapSetName(s);
   }
   EXPECT_EQ(ParseOverlapSet("custom"), std::nullopt);
 }
 
-TEST(EvalOptionsNamesTest, ScoreTransform) {
+TEST(EvalOptions, ScoreTransformNamesRoundTrip) {
   for (ScoreTransform t : {ScoreTransform::kNone, ScoreTransform::kSigmoid}) {
     EXPECT_EQ(ParseScoreTransform(ScoreTransformName(t)), t) << ScoreTransformName(t);
   }

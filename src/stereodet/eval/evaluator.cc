@@ -7,10 +7,14 @@
 #include <numeric>
 #include <utility>
 
-#include "stereodet/eval/bipartite.h"
-#include "stereodet/eval/openpcdet_compat.h"
-#include "stereodet/eval/optimal_matcher.h"
-#include "stereodet/eval/voc_matcher.h"
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/curve_events_internal.h"
+#include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/openpcdet_compat_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
+#include "stereodet/eval/score_metrics_internal.h"
+#include "stereodet/eval/voc_matcher_internal.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/timer.h"
@@ -152,214 +156,29 @@ OperatingPoint CountStable(const std::vector<EvalFrame>& frames, const std::vect
   return MakeOperatingPoint(threshold, tp, fp, fn);
 }
 
-// TP/FP/FN and the TP similarity of one association; with `conditions`, the stable filter's counts.
-struct Tally {
-  int64_t tp = 0, fp = 0, fn = 0;
-  double similarity = 0.0;
+// An exact curve and its summaries.
+FilteredCurve SummarizeExact(std::vector<CurvePoint> curve, bool with_aos) {
+  FilteredCurve c;
+  c.curve = std::move(curve);
+  c.ap_r40 = InterpolatedApR40(c.curve);
+  c.ap_r11 = InterpolatedApR11(c.curve);
+  c.ap_voc = EveryPointAp(c.curve);
+  c.aos_r40 = with_aos ? InterpolatedAosR40(c.curve) : kNaN;
+  c.aos_r11 = with_aos ? InterpolatedAosR11(c.curve) : kNaN;
+  return c;
+}
+
+struct ExactCurveResult {
+  FilteredCurve curve;
+  int64_t num_valid_labels = 0;
 };
-
-Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
-                       const std::vector<FilterCondition>* conditions) {
-  auto label_passes = [&](int i) {
-    return conditions == nullptr || PassesFilter(frame.labels[cf.label_object[i]], true, *conditions);
-  };
-  auto det_passes = [&](int j) {
-    return conditions == nullptr || PassesFilter(frame.detections[cf.det_object[j]], false, *conditions);
-  };
-  Tally t;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const int j = a.label_det[i];
-      if (label_passes(i) && det_passes(j)) {
-        ++t.tp;
-        t.similarity += (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[i])) / 2.0;
-      }
-    } else if (a.label_outcome[i] == Outcome::kFn) {
-      if (label_passes(i)) ++t.fn;
-    }
-  }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    if (a.det_outcome[j] == Outcome::kFp && det_passes(j)) ++t.fp;
-  }
-  return t;
-}
-
-// AOS of the optimal matcher: above this many distinct scores in one connected component, the
-// similarity is recomputed at kAosSamples of them only (see FrameEventsFromAssociations).
-constexpr size_t kMaxExactAosScores = 256;
-constexpr size_t kAosSamples = 64;
-
-// AssociationEvents; with `similarity_only` only the similarity changes are emitted, and scores
-// whose detections overlap no label are skipped (such a detection changes no pair of the optimal
-// or VOC association, only its own outcome). Cost: one association per distinct score.
-int64_t FrameEventsFromAssociations(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
-                                    Difficulty difficulty, const std::vector<FilterCondition>* conditions,
-                                    bool similarity_only, bool with_aos, std::vector<CurveEvent>* events) {
-  std::vector<uint8_t> has_edge(cf.num_dets(), 0);
-  for (int e = 0; e < static_cast<int>(cf.edge_det.size()); ++e) has_edge[cf.edge_det[e]] = 1;
-  std::vector<int32_t> order(cf.num_dets());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
-  Tally prev = TallyAssociation(
-      frame, cf, Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity()), conditions);
-  const int64_t base_fn = prev.fn;
-  std::vector<double> scores;  // the distinct scores at which the association is recomputed
-  for (size_t k = 0; k < order.size();) {
-    const double score = cf.det_score[order[k]];
-    bool relevant = !similarity_only;
-    for (; k < order.size() && cf.det_score[order[k]] == score; ++k) relevant |= has_edge[order[k]] != 0;
-    if (relevant) scores.push_back(score);
-  }
-  if (similarity_only && scores.size() > kMaxExactAosScores) {
-    // A huge component (thousands of overlapping detections): bound the cost to kAosSamples
-    // associations, evenly spaced over its scores, the lowest included; the similarity is held
-    // between them (documented approximation; the counts are exact, they come from elsewhere).
-    std::vector<double> sampled;
-    for (size_t s = 1; s <= kAosSamples; ++s) sampled.push_back(scores[s * scores.size() / kAosSamples - 1]);
-    scores = std::move(sampled);
-  }
-  for (const double score : scores) {
-    const Tally cur = TallyAssociation(frame, cf, Associate(matcher, cf, difficulty, score), conditions);
-    CurveEvent ev;
-    ev.score = score;
-    // Without AOS the similarity takes no part (it must not add curve points).
-    ev.similarity = with_aos ? cur.similarity - prev.similarity : 0.0;
-    if (!similarity_only) {
-      ev.tp = static_cast<int32_t>(cur.tp - prev.tp);
-      ev.fp = static_cast<int32_t>(cur.fp - prev.fp);
-      ev.fn = static_cast<int32_t>(cur.fn - prev.fn);
-    }
-    if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) events->push_back(ev);
-    prev = cur;
-  }
-  return base_fn;
-}
-
-// The connected components of `cf`'s overlap graph that have an edge, each as a ClassFrame of its
-// own (object indices still into the frame's EvalFrame). The optimal association decomposes over
-// them, and detections without an edge pair with nothing, so the TP pairs of `cf` at any threshold
-// are the union of the components' TP pairs.
-//
-// A component of one label (the common case) is not copied: `on_label(i)` is called for it instead.
-template <typename OnLabel>
-std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
-  const int nl = cf.num_labels(), nd = cf.num_dets();
-  DisjointSets sets(nl + nd);
-  for (int i = 0; i < nl; ++i) {
-    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) sets.Union(i, nl + cf.edge_det[e]);
-  }
-  // Single-label components first: a label whose detections overlap no other label.
-  std::vector<int32_t> det_degree(nd, 0);
-  for (const int32_t j : cf.edge_det) ++det_degree[j];
-  std::vector<uint8_t> single(nl, 0);
-  for (int i = 0; i < nl; ++i) {
-    if (cf.edge_begin[i + 1] == cf.edge_begin[i]) continue;
-    bool alone = true;
-    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) alone &= det_degree[cf.edge_det[e]] == 1;
-    if (alone) {
-      single[i] = 1;
-      on_label(i);
-    }
-  }
-  std::vector<int32_t> comp_of_root(nl + nd, -1), local(nl + nd, -1);
-  std::vector<ClassFrame> comps;
-  auto comp = [&](int x) -> ClassFrame& {
-    const int r = sets.Find(x);
-    if (comp_of_root[r] < 0) {
-      comp_of_root[r] = static_cast<int32_t>(comps.size());
-      comps.emplace_back();
-      comps.back().min_overlap = cf.min_overlap;
-    }
-    return comps[comp_of_root[r]];
-  };
-  for (int i = 0; i < nl; ++i) {
-    if (cf.edge_begin[i + 1] == cf.edge_begin[i] || single[i]) continue;
-    ClassFrame& c = comp(i);
-    local[i] = c.num_labels();
-    c.label_object.push_back(cf.label_object[i]);
-    c.label_neighbour.push_back(cf.label_neighbour[i]);
-    c.label_difficulty.push_back(cf.label_difficulty[i]);
-    c.label_alpha.push_back(cf.label_alpha[i]);
-  }
-  for (int j = 0; j < nd; ++j) {
-    if (comp_of_root[sets.Find(nl + j)] < 0) continue;  // no edge, or in a single-edge component
-    ClassFrame& c = comp(nl + j);
-    local[nl + j] = c.num_dets();
-    c.det_object.push_back(cf.det_object[j]);
-    c.det_is_class.push_back(cf.det_is_class[j]);
-    c.det_height.push_back(cf.det_height[j]);
-    c.det_score.push_back(cf.det_score[j]);
-    c.det_alpha.push_back(cf.det_alpha[j]);
-    c.det_dontcare.push_back(cf.det_dontcare[j]);
-  }
-  for (ClassFrame& c : comps) c.edge_begin.push_back(0);
-  for (int i = 0; i < nl; ++i) {  // labels in order, so each component's CSR is built in order
-    if (local[i] < 0) continue;
-    ClassFrame& c = comps[comp_of_root[sets.Find(i)]];
-    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
-      c.edge_det.push_back(local[nl + cf.edge_det[e]]);
-      c.edge_overlap.push_back(cf.edge_overlap[e]);
-    }
-    c.edge_begin.push_back(static_cast<int32_t>(c.edge_det.size()));
-  }
-  return comps;
-}
-
-// The similarity events of a component made of one label and the detections overlapping only it.
-// The optimal association pairs the label, if valid, with its best present valid detection: the
-// largest (not inside DontCare, overlap), the lowest index among equals (OptimalAssociate makes the
-// same choice for a one-label component). So the partner changes only when a better detection
-// arrives.
-void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty difficulty,
-                                 std::vector<CurveEvent>* events) {
-  if (!cf.LabelValid(label, difficulty)) return;
-  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  std::vector<std::pair<int32_t, double>> dets;  // (detection, overlap), valid ones
-  for (int e = cf.edge_begin[label]; e < cf.edge_begin[label + 1]; ++e) {
-    const int j = cf.edge_det[e];
-    if (cf.det_is_class[j] && std::trunc(cf.det_height[j]) >= min_height) dets.emplace_back(j, cf.edge_overlap[e]);
-  }
-  std::stable_sort(dets.begin(), dets.end(),
-                   [&](const auto& a, const auto& b) { return cf.det_score[a.first] > cf.det_score[b.first]; });
-  auto better = [&](const std::pair<int32_t, double>& a, const std::pair<int32_t, double>& b) {
-    const int ka = cf.det_dontcare[a.first] ? 0 : 1, kb = cf.det_dontcare[b.first] ? 0 : 1;
-    if (ka != kb) return ka > kb;
-    if (a.second != b.second) return a.second > b.second;
-    return a.first < b.first;
-  };
-  int best = -1;
-  double similarity = 0.0;
-  for (size_t k = 0; k < dets.size();) {
-    const double score = cf.det_score[dets[k].first];
-    const int before = best;
-    for (; k < dets.size() && cf.det_score[dets[k].first] == score; ++k) {
-      if (best < 0 || better(dets[k], dets[best])) best = static_cast<int>(k);
-    }
-    if (best == before) continue;
-    const int j = dets[best].first;
-    const double now = (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[label])) / 2.0;
-    CurveEvent ev;
-    ev.score = score;
-    ev.similarity = now - similarity;
-    similarity = now;
-    if (ev.similarity != 0.0) events->push_back(ev);
-  }
-}
-
-void SummarizeExact(bool with_aos, FilteredCurve* c) {
-  c->ap_r40 = InterpolatedApR40(c->curve);
-  c->ap_r11 = InterpolatedApR11(c->curve);
-  c->ap_voc = EveryPointAp(c->curve);
-  c->aos_r40 = with_aos ? InterpolatedAosR40(c->curve) : kNaN;
-  c->aos_r11 = with_aos ? InterpolatedAosR11(c->curve) : kNaN;
-}
 
 // Curve and AP of the optimal or VOC matcher, exact at every score. AOS: VOC's pairs never change
 // as the threshold drops, so its events carry the similarity; the optimal association may re-pair
 // labels when a detection arrives, so its similarity is taken from the association at each score.
-void ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs,
-                Difficulty difficulty, bool with_aos, int num_threads, FilteredCurve* c,
-                int64_t* num_valid_labels) {
+ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames,
+                            const std::vector<ClassFrame>& cfs, Difficulty difficulty,
+                            bool with_aos, int num_threads) {
   constexpr size_t kBlock = 64;
   const size_t num_blocks = (cfs.size() + kBlock - 1) / kBlock;
   std::vector<std::vector<CurveEvent>> block_events(num_blocks);
@@ -368,28 +187,24 @@ void ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames, const std
     for (size_t i = b * kBlock; i < std::min(cfs.size(), (b + 1) * kBlock); ++i) {
       block_labels[b] += CountValidLabels(cfs[i], difficulty);
       if (matcher == Matcher::kOptimal) {
-        OptimalFrameEvents(cfs[i], difficulty, &block_events[b]);
+        block_events[b] = OptimalFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
         if (with_aos) {
-          const ClassFrame& cf = cfs[i];
-          auto on_label = [&](int label) { SingleLabelSimilarityEvents(cf, label, difficulty, &block_events[b]); };
-          for (const ClassFrame& c : EdgeComponents(cf, on_label)) {
-            FrameEventsFromAssociations(matcher, frames[i], c, difficulty, nullptr, true, true,
-                                        &block_events[b]);
-          }
+          block_events[b] =
+              OptimalSimilarityEvents(frames[i], cfs[i], difficulty, std::move(block_events[b]));
         }
       } else {
-        VocFrameEvents(cfs[i], difficulty, &block_events[b]);
+        block_events[b] = VocFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
       }
     }
   }, num_threads);
   std::vector<CurveEvent> events;
-  *num_valid_labels = 0;
+  int64_t num_valid_labels = 0;
   for (size_t b = 0; b < num_blocks; ++b) {
-    *num_valid_labels += block_labels[b];
+    num_valid_labels += block_labels[b];
     events.insert(events.end(), block_events[b].begin(), block_events[b].end());
   }
-  c->curve = BuildCurve(std::move(events), *num_valid_labels);
-  SummarizeExact(with_aos, c);
+  return {SummarizeExact(BuildCurve(std::move(events), num_valid_labels), with_aos),
+          num_valid_labels};
 }
 
 // The stable filter's exact curve (optimal / VOC): the unfiltered association at every score.
@@ -399,20 +214,22 @@ FilteredCurve StableExactCurve(Matcher matcher, const std::vector<EvalFrame>& fr
                                int num_threads) {
   std::vector<std::vector<CurveEvent>> frame_events(cfs.size());
   std::vector<int64_t> base_fn(cfs.size(), 0);
-  ParallelFor(cfs.size(), [&](size_t i) {
-    base_fn[i] = FrameEventsFromAssociations(matcher, frames[i], cfs[i], difficulty, &conditions, false,
-                                             with_aos, &frame_events[i]);
-  }, num_threads);
+  ParallelFor(
+      cfs.size(),
+      [&](size_t i) {
+        FrameCurveEvents e =
+            AssociationEvents(matcher, frames[i], cfs[i], difficulty, &conditions, with_aos);
+        frame_events[i] = std::move(e.events);
+        base_fn[i] = e.base_fn;
+      },
+      num_threads);
   std::vector<CurveEvent> events;
   int64_t num_labels = 0;
   for (size_t i = 0; i < cfs.size(); ++i) {
     num_labels += base_fn[i];
     events.insert(events.end(), frame_events[i].begin(), frame_events[i].end());
   }
-  FilteredCurve c;
-  c.curve = BuildCurve(std::move(events), num_labels);
-  SummarizeExact(with_aos, &c);
-  return c;
+  return SummarizeExact(BuildCurve(std::move(events), num_labels), with_aos);
 }
 
 // The stable filter's curve with the KITTI matcher: the devkit's pass 2 association of the
@@ -441,7 +258,7 @@ FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames, const std::
       p.fn += per_frame[i][t].fn;
       p.similarity += per_frame[i][t].similarity;
     }
-    FinishPoint(&p);
+    p = FinishPoint(p);
     c.curve.push_back(p);
     precision[t] = static_cast<double>(p.tp) / static_cast<double>(p.tp + p.fp);
     aos[t] = p.similarity / static_cast<double>(p.tp + p.fp);
@@ -459,9 +276,11 @@ FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames, const std::
 }
 
 // The rows of one frame (see MatchRecord), in the documented order.
-void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame& cf,
-                   const FrameAssociation& a, OverlapKind kind, Difficulty difficulty,
-                   double threshold, std::vector<MatchRecord>* out) {
+std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& frame,
+                                      const ClassFrame& cf, const FrameAssociation& a,
+                                      OverlapKind kind, Difficulty difficulty, double threshold) {
+  std::vector<MatchRecord> rows;
+  std::vector<MatchRecord>* out = &rows;
   auto pair_overlap = [&](int i, int j) {
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
       if (cf.edge_det[e] == j) return cf.edge_overlap[e];
@@ -500,6 +319,7 @@ void AppendRecords(int32_t frame_index, const EvalFrame& frame, const ClassFrame
     }
     out->push_back(r);
   }
+  return rows;
 }
 
 std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
@@ -510,8 +330,8 @@ std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
   ParallelFor(
       frames.size(),
       [&](size_t f) {
-        AppendRecords(static_cast<int32_t>(f), frames[f], cfs[f], assocs[f], kind, difficulty,
-                      threshold, &per_frame[f]);
+        per_frame[f] = FrameRecords(static_cast<int32_t>(f), frames[f], cfs[f], assocs[f], kind,
+                                    difficulty, threshold);
       },
       num_threads);
   size_t total = 0;
@@ -522,8 +342,9 @@ std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
   return out;
 }
 
-// The KITTI matcher's curve and summaries into *r.
-void SetKittiCurve(const KittiClassResult& k, bool with_aos, ClassResult* r) {
+// `r` with the KITTI matcher's curve and summaries.
+ClassResult WithKittiCurve(const KittiClassResult& k, bool with_aos, ClassResult result) {
+  ClassResult* r = &result;
   r->num_valid_labels = k.num_groundtruth;
   r->ap_r40 = k.ap_r40;
   r->ap_r11 = k.ap_r11;
@@ -541,14 +362,15 @@ void SetKittiCurve(const KittiClassResult& k, bool with_aos, ClassResult* r) {
     p.fp = k.counts[t].fp;
     p.fn = k.counts[t].fn;
     p.similarity = k.counts[t].similarity;
-    FinishPoint(&p);
+    p = FinishPoint(p);
     r->curve.push_back(p);
   }
+  return result;
 }
 
-void KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
-                int num_threads, ClassResult* r, EvalCompat compat = EvalCompat::kDevkit) {
-  SetKittiCurve(EvaluateKittiClass(cfs, difficulty, num_threads, compat), with_aos, r);
+ClassResult KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
+                       int num_threads, EvalCompat compat = EvalCompat::kDevkit) {
+  return WithKittiCurve(EvaluateKittiClass(cfs, difficulty, num_threads, compat), with_aos, {});
 }
 
 ScoreSummary SummarizeScores(const std::vector<EvalFrame>& frames) {
@@ -578,19 +400,6 @@ const ClassResult* EvalResult::Find(const std::string& class_name, OverlapKind m
     }
   }
   return nullptr;
-}
-
-FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
-                           double threshold, FrameAssociation reuse) {
-  switch (matcher) {
-    case Matcher::kKitti:
-      return KittiAssociate(frame, difficulty, threshold, std::move(reuse));
-    case Matcher::kOptimal:
-      return OptimalAssociate(frame, difficulty, threshold, std::move(reuse));
-    case Matcher::kVoc:
-      return VocAssociate(frame, difficulty, threshold, std::move(reuse));
-  }
-  return {};
 }
 
 EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& options) {
@@ -671,13 +480,16 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       // Curves.
       if (kitti) {
         const std::vector<KittiClassResult> curves = kitti_passes.Finish();
-        for (size_t d = 0; d < n_d; ++d) SetKittiCurve(curves[d], with_aos, &cell[d]);
+        for (size_t d = 0; d < n_d; ++d) {
+          cell[d] = WithKittiCurve(curves[d], with_aos, std::move(cell[d]));
+        }
       } else {
         for (size_t d = 0; d < n_d; ++d) {
           ClassResult& r = cell[d];
-          FilteredCurve c;
-          ExactCurve(options.matcher, frames, cfs, difficulties[d], with_aos, threads, &c,
-                     &r.num_valid_labels);
+          ExactCurveResult exact =
+              ExactCurve(options.matcher, frames, cfs, difficulties[d], with_aos, threads);
+          r.num_valid_labels = exact.num_valid_labels;
+          FilteredCurve& c = exact.curve;
           r.curve = std::move(c.curve);
           r.ap_r40 = c.ap_r40;
           r.ap_r11 = c.ap_r11;
@@ -716,7 +528,10 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         const Difficulty difficulty = difficulties[d];
         r.brier = accs[d].Brier();
         r.calibration = accs[d].Calibration();
-        if (!result.probability_metrics) LeaveOutProbabilityMetrics(&r.brier, &r.calibration);
+        if (!result.probability_metrics) {
+          r.brier = WithoutProbabilities(r.brier);
+          r.calibration = WithoutProbabilities(r.calibration);
+        }
         r.localization = accs[d].Localization();
         if (options.keep_records) {
           r.records = BuildRecords(frames, cfs, assocs[d], kind, difficulty, t_op, threads);
@@ -728,8 +543,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           fs.naive = CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           // Naive curve: the struck set evaluated exactly like the unfiltered one.
           if (options.matcher == Matcher::kKitti) {
-            ClassResult naive;
-            KittiCurve(struck_cfs, difficulty, with_aos, threads, &naive, compat);
+            ClassResult naive = KittiCurve(struck_cfs, difficulty, with_aos, threads, compat);
             fs.naive_curve.curve = std::move(naive.curve);
             fs.naive_curve.ap_r40 = naive.ap_r40;
             fs.naive_curve.ap_r11 = naive.ap_r11;
@@ -739,9 +553,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             fs.stable_curve = StableKittiCurve(frames, cfs, difficulty, r.kitti_thresholds,
                                                options.filter.conditions, with_aos, threads);
           } else {
-            int64_t unused = 0;
-            ExactCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads, &fs.naive_curve,
-                       &unused);
+            fs.naive_curve =
+                ExactCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads)
+                    .curve;
             fs.stable_curve = StableExactCurve(options.matcher, frames, cfs, difficulty,
                                                options.filter.conditions, with_aos, threads);
           }
@@ -753,12 +567,6 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   }
   result.seconds = timer.ElapsedSeconds();
   return result;
-}
-
-int64_t AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
-                          Difficulty difficulty, const std::vector<FilterCondition>* conditions,
-                          std::vector<CurveEvent>* events) {
-  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, conditions, false, true, events);
 }
 
 std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const EvalOptions& options,

@@ -6,14 +6,16 @@
 #ifndef STEREODET_EVAL_EVALUATOR_H_
 #define STEREODET_EVAL_EVALUATOR_H_
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/association.h"
 #include "stereodet/eval/curves.h"
 #include "stereodet/eval/eval_options.h"
+#include "stereodet/eval/filter.h"
 #include "stereodet/eval/frame_data.h"
-#include "stereodet/eval/kitti_matcher.h"
 #include "stereodet/eval/score_metrics.h"
 
 namespace stereodet {
@@ -129,21 +131,6 @@ struct EvalResult {
 
 // Requires: options.Check() passes; every detection has a score.
 EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& options);
-
-// The association at `threshold` of one frame with `matcher`. `reuse` lends its memory to the
-// result (its contents are discarded).
-FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty difficulty,
-                           double threshold, FrameAssociation reuse = {});
-
-// Curve events of one frame derived from the matcher's association at every distinct detection
-// score of the frame (exact by construction, one association per distinct score). With `conditions`
-// non-null the counts are the stable filter's (pairs whose label and detection both pass; unmatched
-// labels / detections that pass); the similarity is that of the counted TP pairs. Returns the FN
-// count with no detection (the frame's share of the curve's starting FN). `frame` is the EvalFrame
-// `cf` was prepared from.
-int64_t AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
-                          Difficulty difficulty, const std::vector<FilterCondition>* conditions,
-                          std::vector<CurveEvent>* events);
 
 // Filter sweep (the paper's filter figure): for each value of `bound` from `from` to `to` by
 // `step`, the operating-point statistics under the naive and the stable filter.

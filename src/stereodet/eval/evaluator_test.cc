@@ -1,20 +1,26 @@
 #include "stereodet/eval/evaluator.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include <gtest/gtest.h>
-
-#include "stereodet/eval/optimal_matcher.h"
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
 #include "stereodet/eval/random_frames.h"
+#include "stereodet/eval/test_objects.h"
 #include "stereodet/kitti/label_io.h"
 
 namespace stereodet {
 namespace {
 
 namespace fs = std::filesystem;
+using testing_objects::Car;
+using testing_objects::Car2D;
+using testing_objects::CarModerate2D;
 
 std::vector<EvalFrame> ReadFixture(const fs::path& dir) {
   std::vector<EvalFrame> frames;
@@ -377,153 +383,10 @@ TEST(Evaluator, OptimalCurveMatchesItsAssociationAndBeatsGreedy) {
   }
 }
 
-TEST(Curves, InterpolatedApOfAPerfectCurveIs100) {
-  // 40 labels, found one by one with precision 1: R40 = 100 (no devkit slot quirk here).
-  std::vector<CurveEvent> events;
-  for (int i = 0; i < 40; ++i) events.push_back(CurveEvent{1.0 - i / 100.0, 1, 0, -1});
-  const std::vector<CurvePoint> curve = BuildCurve(events, 40);
-  EXPECT_DOUBLE_EQ(InterpolatedApR40(curve), 100.0);
-  EXPECT_DOUBLE_EQ(InterpolatedApR11(curve), 100.0);
-  EXPECT_DOUBLE_EQ(EveryPointAp(curve), 100.0);
-  EXPECT_DOUBLE_EQ(BestF1(curve).f1, 1.0);
-}
-
-TEST(Curves, EveryPointApIntegratesTheEnvelope) {
-  // Labels: 2. Scores: TP, FP, TP -> (P, R) = (1, .5), (.5, .5), (2/3, 1).
-  const std::vector<CurvePoint> curve =
-      BuildCurve({{0.9, 1, 0, -1}, {0.8, 0, 1, 0}, {0.7, 1, 0, -1}}, 2);
-  ASSERT_EQ(curve.size(), 3u);
-  EXPECT_NEAR(EveryPointAp(curve), (0.5 * 1.0 + 0.5 * 2.0 / 3.0) * 100, 1e-12);
-  // R11: r = 0..0.5 -> 1 (6 levels), r = 0.6..1 -> 2/3 (5 levels).
-  EXPECT_NEAR(InterpolatedApR11(curve), (6 * 1.0 + 5 * 2.0 / 3.0) / 11 * 100, 1e-12);
-}
-
-// Brier three ways, by hand: one TP (s = 0.9), one FP (s = 0.4), one FN.
-TEST(ScoreMetrics, BrierThreeWaysByHand) {
-  EvalFrame f;
-  Object l1, l2, d1, d2;
-  l1.type = l2.type = d1.type = d2.type = "Car";
-  l1.box = {0, 0, 100, 100};
-  l2.box = {300, 0, 400, 100};
-  d1.box = {0, 0, 100, 100};
-  d1.score = 0.9;
-  d2.box = {600, 0, 700, 100};
-  d2.score = 0.4;
-  f.labels = {l1, l2};
-  f.detections = {d1, d2};
-  EvalOptions options;
-  options.classes = {KittiClassSpec("Car")};
-  options.metrics = {OverlapKind::k2D};
-  options.difficulties = {Difficulty::kModerate};
-  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
-    options.matcher = m;
-    const EvalResult result = Evaluate({f}, options);  // keeps the result alive
-    const ClassResult& r = result.results.at(0);
-    EXPECT_NEAR(r.brier.over_labels, (0.01 + 1.0) / 2, 1e-12);
-    EXPECT_NEAR(r.brier.over_detections, (0.01 + 0.16) / 2, 1e-12);
-    EXPECT_NEAR(r.brier.over_all, (0.01 + 0.16 + 1.0) / 3, 1e-12);
-    // Reliability, 10 bins: 0.4 (FP) in bin 4, 0.9 (TP) in bin 9. ECE = (0.4 + 0.1) / 2.
-    EXPECT_EQ(r.calibration.bins[4].count, 1);
-    EXPECT_EQ(r.calibration.bins[9].tp_fraction, 1.0);
-    EXPECT_NEAR(r.calibration.ece, 0.25, 1e-12);
-  }
-}
-
-Object Car(Box2D box, std::optional<double> score = std::nullopt) {
-  Object o;
-  o.type = "Car";
-  o.box = box;
-  o.score = score;
-  return o;
-}
-
-// Brier over labels has a fixed support: one term per valid label whatever the detector did. Two
-// detectors on the same two labels (l1 100 px tall, l2 30 px, both valid at Moderate): A finds l1
-// (0.9) and misses l2; B finds l1 (0.9) and covers l2 with a 24 px detection, which Moderate
-// ignores (< 25 px), so l2 is excused (neither TP nor FN). Both are scored over 2 label terms:
-// ((1 - 0.9)^2 + 1) / 2 = 0.505. (Before, B's l2 dropped out: 1 term, 0.01.)
-TEST(ScoreMetrics, BrierOverLabelsHasAFixedSupport) {
-  const Object l1 = Car({0, 0, 100, 100}), l2 = Car({300, 0, 400, 30});
-  EvalFrame a, b;
-  a.labels = b.labels = {l1, l2};
-  a.detections = {Car({0, 0, 100, 100}, 0.9), Car({600, 0, 700, 100}, 0.4)};
-  b.detections = {Car({0, 0, 100, 100}, 0.9), Car({300, 0, 400, 24}, 0.7)};
-  EvalOptions options;
-  options.classes = {KittiClassSpec("Car")};
-  options.metrics = {OverlapKind::k2D};
-  options.difficulties = {Difficulty::kModerate};
-  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
-    options.matcher = m;
-    const EvalResult ra = Evaluate({a}, options), rb = Evaluate({b}, options);
-    const ClassResult &ca = ra.results.at(0), &cb = rb.results.at(0);
-    EXPECT_EQ(cb.at_threshold.fn, 0) << MatcherName(m);  // l2 is excused, not missed
-    EXPECT_EQ(ca.num_valid_labels, 2);
-    EXPECT_EQ(ca.brier.num_label_terms, ca.num_valid_labels) << MatcherName(m);
-    EXPECT_EQ(cb.brier.num_label_terms, cb.num_valid_labels) << MatcherName(m);
-    EXPECT_NEAR(ca.brier.over_labels, 0.505, 1e-12) << MatcherName(m);
-    EXPECT_NEAR(cb.brier.over_labels, 0.505, 1e-12) << MatcherName(m);
-    // Over all: the label terms plus one s^2 per FP (A's 0.4; B has none).
-    EXPECT_EQ(ca.brier.num_all_terms, 3);
-    EXPECT_NEAR(ca.brier.over_all, (0.01 + 1.0 + 0.16) / 3, 1e-12);
-    EXPECT_EQ(cb.brier.num_all_terms, 2);
-    EXPECT_NEAR(cb.brier.over_all, 0.505, 1e-12);
-  }
-}
-
-// Brier and ECE need probabilities. Logit scores (2.0 TP, -1.0 FP): left out (NaN) unless
-// --score-transform sigmoid; AP, the curve and the operating point are the raw scores' either way.
-TEST(ScoreMetrics, ScoresOutsideTheUnitIntervalLeaveBrierOutUnlessTransformed) {
-  EvalFrame f;
-  f.labels = {Car({0, 0, 100, 100}), Car({300, 0, 400, 100})};
-  f.detections = {Car({0, 0, 100, 100}, 2.0), Car({600, 0, 700, 100}, -1.0),
-                  Car({300, 0, 400, 100}, 40.0)};
-  EvalOptions options;
-  options.classes = {KittiClassSpec("Car")};
-  options.metrics = {OverlapKind::k2D};
-  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal}) {
-    options.matcher = m;
-    options.score_transform = ScoreTransform::kNone;
-    const EvalResult raw = Evaluate({f}, options);
-    EXPECT_FALSE(raw.probability_metrics);
-    EXPECT_EQ(raw.scores.num_scores, 3);
-    EXPECT_EQ(raw.scores.num_outside_unit, 3);
-    EXPECT_EQ(raw.scores.min_score, -1.0);
-    EXPECT_EQ(raw.scores.max_score, 40.0);
-    options.score_transform = ScoreTransform::kSigmoid;
-    const EvalResult sig = Evaluate({f}, options);
-    EXPECT_TRUE(sig.probability_metrics);
-    ASSERT_EQ(raw.results.size(), sig.results.size());
-    for (size_t k = 0; k < raw.results.size(); ++k) {
-      const ClassResult &r = raw.results[k], &s = sig.results[k];
-      EXPECT_TRUE(std::isnan(r.brier.over_labels));
-      EXPECT_TRUE(std::isnan(r.brier.over_detections));
-      EXPECT_TRUE(std::isnan(r.brier.over_all));
-      EXPECT_TRUE(std::isnan(r.calibration.ece));
-      EXPECT_EQ(r.brier.num_label_terms, 2);  // the support is still there
-      // AP, the curve and the operating point do not depend on the transform (bit for bit).
-      EXPECT_EQ(r.ap_r40, s.ap_r40);
-      EXPECT_EQ(r.ap_r11, s.ap_r11);
-      ASSERT_EQ(r.curve.size(), s.curve.size());
-      for (size_t i = 0; i < r.curve.size(); ++i)
-        EXPECT_EQ(r.curve[i].threshold, s.curve[i].threshold);
-      EXPECT_EQ(r.at_threshold.tp, s.at_threshold.tp);
-      // Sigmoid: the TPs 2.0 and 40.0 (sigmoid(40) = 1 - 4e-18, rounds to 1), the FP -1.0.
-      const double p2 = 1.0 / (1.0 + std::exp(-2.0)), pm1 = 1.0 / (1.0 + std::exp(1.0));
-      EXPECT_NEAR(s.brier.over_labels, ((1 - p2) * (1 - p2) + 0.0) / 2, 1e-12);
-      EXPECT_NEAR(s.brier.over_detections, ((1 - p2) * (1 - p2) + pm1 * pm1) / 3, 1e-12);
-      EXPECT_FALSE(std::isnan(s.calibration.ece));
-    }
-  }
-  EXPECT_EQ(ApplyScoreTransform(ScoreTransform::kSigmoid, 0.0), 0.5);
-  EXPECT_EQ(ApplyScoreTransform(ScoreTransform::kSigmoid, -1000.0), 0.0);
-  EXPECT_EQ(ParseScoreTransform("SIGMOID"), ScoreTransform::kSigmoid);
-  EXPECT_FALSE(ParseScoreTransform("softmax").has_value());
-}
-
 // 26 perfect detections of 27 labels: the devkit's AP_R40 is capped at (TP - 1) / 40 = 62.5 with 40
 // or fewer labels (every TP score is a threshold, 26 of its 41 slots are filled, slot 0 is not
 // summed); the exact curve of the optimal matcher gives 95 (38 of 40 recall positions reached).
-TEST(SmallSample, KittiApR40IsCappedAtFortyLabelsOrFewer) {
+TEST(Evaluator, SmallSampleKittiApR40IsCappedAtFortyLabelsOrFewer) {
   EvalFrame f;
   for (int i = 0; i < 27; ++i) {
     const Box2D box{i * 45.0, 0, i * 45.0 + 40, 50};
@@ -548,64 +411,10 @@ TEST(SmallSample, KittiApR40IsCappedAtFortyLabelsOrFewer) {
   EXPECT_FALSE(IsSmallSample(Evaluate({f}, options).results.at(0)));
 }
 
-// The paper's instability of naive filtering: a label just under a min-area bound whose matched
-// detection is just above it. Naive: the label is struck, the detection becomes a FP. Stable: the
-// pair is dropped as a whole (neither TP nor FP).
-TEST(Filters, NaiveFilterTurnsAMatchedDetectionIntoAFalsePositive) {
-  EvalFrame f;
-  Object label, det;
-  label.type = det.type = "Car";
-  label.box = {0, 0, 99, 100};  // area 9900
-  det.box = {0, 0, 101, 100};   // area 10100, IoU 0.98
-  det.score = 0.9;
-  f.labels = {label};
-  f.detections = {det};
-  EvalOptions options;
-  options.classes = {KittiClassSpec("Car")};
-  options.metrics = {OverlapKind::k2D};
-  options.difficulties = {Difficulty::kModerate};
-  options.filter.conditions = ParseFilterConditions("min-area=10000");
-  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
-    options.matcher = m;
-    const EvalResult result = Evaluate({f}, options);  // keeps the result alive
-    const ClassResult& r = result.results.at(0);
-    ASSERT_TRUE(r.filtered.has_value());
-    EXPECT_EQ(r.filtered->naive.fp, 1) << MatcherName(m);
-    EXPECT_EQ(r.filtered->stable.fp, 0) << MatcherName(m);
-    EXPECT_EQ(r.filtered->stable.tp, 0) << MatcherName(m);
-    EXPECT_EQ(r.filtered->stable.fn, 0) << MatcherName(m);
-  }
-  options.filter.conditions.clear();  // the sweep adds its own bound
-  const std::vector<SweepRow> rows =
-      FilterSweep({f}, options, FilterBound::kMinArea, 9000, 11000, 1000);
-  ASSERT_EQ(rows.size(), 3u);
-  EXPECT_EQ(rows[0].stats.stable.tp, 1);  // 9000: both pass
-  EXPECT_EQ(rows[1].stats.naive.fp, 1);   // 10000: the naive FP
-  EXPECT_EQ(rows[2].stats.naive.fp, 0);   // 11000: both struck
-}
-
-Object Car2D(double left, double top, double right, double bottom, double alpha, double score = -1) {
-  Object o;
-  o.type = "Car";
-  o.box = {left, top, right, bottom};
-  o.alpha = alpha;
-  if (score >= 0) o.score = score;  // labels carry no score
-  return o;
-}
-
-EvalOptions CarModerate2D(Matcher matcher) {
-  EvalOptions options;
-  options.classes = {KittiClassSpec("Car")};
-  options.metrics = {OverlapKind::k2D};
-  options.difficulties = {Difficulty::kModerate};
-  options.matcher = matcher;
-  return options;
-}
-
 // AOS by hand for the exact matchers: two labels (alpha 0), found at scores 0.9 (alpha 0,
 // similarity 1) and 0.8 (alpha pi/2, similarity 1/2). Orientation ratio 1 at recall 1/2, 3/4 at
 // recall 1: AOS_R40 = (20 * 1 + 20 * 0.75) / 40 = 87.5 %, AOS_R11 = (6 + 5 * 0.75) / 11.
-TEST(Aos, ExactMatchersByHand) {
+TEST(Evaluator, AosOfExactMatchersByHand) {
   EvalFrame f;
   f.labels = {Car2D(0, 0, 100, 100, 0), Car2D(300, 0, 400, 100, 0)};
   f.detections = {Car2D(0, 0, 100, 100, 0, 0.9), Car2D(300, 0, 400, 100, M_PI / 2, 0.8)};
@@ -622,28 +431,9 @@ TEST(Aos, ExactMatchersByHand) {
   }
 }
 
-// The optimal association re-pairs a label when a better detection arrives: label A (alpha 0) is
-// first taken by a detection of alpha pi (similarity 0); at a lower score a detection that only
-// fits A arrives while the first one also fits label B, so the maximum matching pairs both and the
-// similarity of A's pair changes.
-TEST(Aos, OptimalSimilarityFollowsTheAssociationAtEachScore) {
-  EvalFrame f;
-  f.labels = {Car2D(0, 0, 100, 100, 0), Car2D(20, 0, 120, 100, 0)};
-  f.detections = {Car2D(10, 0, 110, 100, M_PI, 0.9), Car2D(0, 0, 100, 100, 0, 0.8)};
-  EvalOptions options = CarModerate2D(Matcher::kOptimal);
-  options.classes[0].min_overlap = {0.5, 0.5, 0.5};
-  const EvalResult result = Evaluate({f}, options);
-  const ClassResult& r = result.results.at(0);
-  ASSERT_EQ(r.curve.size(), 2u);
-  EXPECT_EQ(r.curve[0].tp, 1);
-  EXPECT_NEAR(r.curve[0].similarity, 0.0, 1e-12);
-  EXPECT_EQ(r.curve[1].tp, 2);
-  EXPECT_NEAR(r.curve[1].similarity, 1.0, 1e-12);  // (0 for B's pair) + 1 for A's
-}
-
 // With every orientation right, AOS equals AP; and the optimal curve's similarity at each point
 // equals that of the association at that threshold, summed over frames.
-TEST(Aos, PerfectOrientationGivesApAndCurveAgreesWithAssociations) {
+TEST(Evaluator, AosPerfectOrientationGivesApAndCurveAgreesWithAssociations) {
   RandomFramesOptions ro;
   ro.num_frames = 40;
   ro.crowded = true;
@@ -688,161 +478,6 @@ TEST(Aos, PerfectOrientationGivesApAndCurveAgreesWithAssociations) {
       EXPECT_NEAR(r.aos_r11, r.ap_r11, 1e-9) << r.class_name;
     }
   }
-}
-
-// A component with more distinct scores than the exact AOS bound (256): the similarity is sampled at
-// 64 scores, the lowest included, so the last curve point is still exact.
-TEST(Aos, HugeComponentIsSampledAndExactAtTheLowestScore) {
-  EvalFrame f;
-  for (int i = 0; i < 3; ++i) f.labels.push_back(Car2D(10.0 * i, 0, 100 + 10.0 * i, 100, 0.1 * i));
-  for (int k = 0; k < 400; ++k) {
-    const double shift = (k % 21) - 10.0;
-    f.detections.push_back(Car2D(shift, 0, 100 + shift, 100, 0.01 * (k % 50), 1.0 - k / 1000.0));
-  }
-  EvalOptions options = CarModerate2D(Matcher::kOptimal);
-  options.classes[0].min_overlap = {0.5, 0.5, 0.5};
-  const EvalResult result = Evaluate({f}, options);
-  const ClassResult& r = result.results.at(0);
-  ASSERT_FALSE(r.curve.empty());
-  EXPECT_EQ(r.curve.back().tp, 3);
-  const ClassFrame cf = PrepareClassFrame(f, options.classes[0], OverlapKind::k2D);
-  const FrameAssociation a = Associate(Matcher::kOptimal, cf, Difficulty::kModerate, r.curve.back().threshold);
-  double similarity = 0.0;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    ASSERT_EQ(a.label_outcome[i], Outcome::kTp);
-    similarity += (1 + std::cos(cf.det_alpha[a.label_det[i]] - cf.label_alpha[i])) / 2;
-  }
-  EXPECT_NEAR(r.curve.back().similarity, similarity, 1e-9);
-  EXPECT_LE(r.aos_r40, r.ap_r40 + 1e-9);
-}
-
-// Curves under a filter, by hand: a passing pair (score 0.8) and a label of 9900 px^2 matched by a
-// detection of 10100 px^2 (score 0.9) under min-area=10000. Naive: the 0.9 detection is a FP, so
-// precision is 0 then 1/2 at recall 1: AP_R40 50. Stable: the failing pair drops out: AP_R40 100.
-TEST(FilteredCurves, ExactMatchersByHand) {
-  EvalFrame f;
-  f.labels = {Car2D(0, 0, 99, 100, 0), Car2D(300, 0, 500, 100, 0)};
-  f.detections = {Car2D(0, 0, 101, 100, 0, 0.9), Car2D(300, 0, 500, 100, 0, 0.8)};
-  for (Matcher m : {Matcher::kOptimal, Matcher::kVoc}) {
-    EvalOptions options = CarModerate2D(m);
-    options.filter.conditions = ParseFilterConditions("min-area=10000");
-    const EvalResult result = Evaluate({f}, options);
-    const ClassResult& r = result.results.at(0);
-    ASSERT_TRUE(r.filtered.has_value());
-    const FilteredStats& fs = *r.filtered;
-    ASSERT_EQ(fs.naive_curve.curve.size(), 2u) << MatcherName(m);
-    EXPECT_EQ(fs.naive_curve.curve[0].fp, 1);
-    EXPECT_EQ(fs.naive_curve.curve[1].tp, 1);
-    EXPECT_NEAR(fs.naive_curve.ap_r40, 50.0, 1e-9) << MatcherName(m);
-    EXPECT_NEAR(fs.stable_curve.ap_r40, 100.0, 1e-9) << MatcherName(m);
-    EXPECT_NEAR(fs.stable_curve.aos_r40, 100.0, 1e-9) << MatcherName(m);
-    ASSERT_EQ(fs.stable_curve.curve.size(), 1u);  // nothing counts at 0.9
-    EXPECT_EQ(fs.stable_curve.curve[0].tp, 1);
-    EXPECT_EQ(fs.stable_curve.curve[0].fp, 0);
-    EXPECT_EQ(fs.stable_curve.curve[0].fn, 0);
-    EXPECT_NEAR(r.ap_r40, 100.0, 1e-9);  // unfiltered: both pairs
-  }
-  // KITTI matcher, stable: the unfiltered thresholds (0.9 and 0.8); at 0.9 nothing counts (0 / 0),
-  // at 0.8 the passing pair.
-  EvalOptions options = CarModerate2D(Matcher::kKitti);
-  options.filter.conditions = ParseFilterConditions("min-area=10000");
-  const EvalResult result = Evaluate({f}, options);
-  const FilteredStats& fs = *result.results.at(0).filtered;
-  ASSERT_EQ(fs.stable_curve.curve.size(), 2u);
-  EXPECT_EQ(fs.stable_curve.curve[0].tp + fs.stable_curve.curve[0].fp, 0);
-  EXPECT_EQ(fs.stable_curve.curve[1].tp, 1);
-  EXPECT_EQ(fs.stable_curve.curve[1].fp, 0);
-  ASSERT_EQ(fs.naive_curve.curve.size(), 1u);  // one label left, one threshold (0.8)
-  EXPECT_EQ(fs.naive_curve.curve[0].tp, 1);
-  EXPECT_EQ(fs.naive_curve.curve[0].fp, 1);
-}
-
-// The mirror case: the label passes (10100 px^2) and its detection fails (9900 px^2). Naive: the
-// label is missed (FN); stable: the pair drops out, nothing counts. Every matcher, curve and
-// operating point.
-TEST(FilteredCurves, PassingLabelWithFailingDetectionDropsOutWhenStable) {
-  EvalFrame f;
-  f.labels = {Car2D(0, 0, 101, 100, 0), Car2D(300, 0, 500, 100, 0)};
-  f.detections = {Car2D(0, 0, 99, 100, 0, 0.9), Car2D(300, 0, 500, 100, 0, 0.8)};
-  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
-    EvalOptions options = CarModerate2D(m);
-    options.filter.conditions = ParseFilterConditions("min-area=10000");
-    const EvalResult result = Evaluate({f}, options);
-    const FilteredStats& fs = *result.results.at(0).filtered;
-    EXPECT_EQ(fs.stable.tp, 1) << MatcherName(m);
-    EXPECT_EQ(fs.stable.fn, 0) << MatcherName(m);
-    EXPECT_EQ(fs.naive.fn, 1) << MatcherName(m);
-    ASSERT_FALSE(fs.stable_curve.curve.empty());
-    EXPECT_EQ(fs.stable_curve.curve.back().tp, 1) << MatcherName(m);
-    EXPECT_EQ(fs.stable_curve.curve.back().fn, 0) << MatcherName(m);
-    EXPECT_EQ(fs.naive_curve.curve.back().fn, 1) << MatcherName(m);
-    if (m != Matcher::kKitti) {
-      EXPECT_NEAR(fs.stable_curve.ap_r40, 100.0, 1e-9) << MatcherName(m);
-      EXPECT_NEAR(fs.naive_curve.ap_r40, 50.0, 1e-9) << MatcherName(m);  // recall 1/2 at precision 1
-    }
-  }
-}
-
-// Properties on random frames, every matcher: a filter everything passes leaves the curves and AP
-// unchanged in both modes; and under a real filter, each mode's curve at the operating threshold
-// has the counts of that mode's operating point.
-TEST(FilteredCurves, AgreeWithUnfilteredAndWithTheOperatingPoint) {
-  RandomFramesOptions ro;
-  ro.num_frames = 30;
-  ro.crowded = true;
-  const std::vector<EvalFrame> frames = RandomFrames(ro);
-  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
-    EvalOptions options;
-    options.matcher = m;
-    options.metrics = {OverlapKind::k2D, OverlapKind::kBev};
-    options.filter.conditions = ParseFilterConditions("min-area=0");
-    const EvalResult all_pass = Evaluate(frames, options);
-    for (const ClassResult& r : all_pass.results) {
-      if (!r.evaluated) continue;
-      for (const FilteredCurve* c : {&r.filtered->naive_curve, &r.filtered->stable_curve}) {
-        EXPECT_NEAR(c->ap_r40, r.ap_r40, 1e-9) << MatcherName(m) << ' ' << r.class_name;
-        EXPECT_NEAR(c->ap_r11, r.ap_r11, 1e-9) << MatcherName(m) << ' ' << r.class_name;
-        ASSERT_EQ(c->curve.size(), r.curve.size()) << MatcherName(m) << ' ' << r.class_name;
-        for (size_t k = 0; k < r.curve.size(); ++k) {
-          EXPECT_EQ(c->curve[k].tp, r.curve[k].tp);
-          EXPECT_EQ(c->curve[k].fp, r.curve[k].fp);
-          EXPECT_EQ(c->curve[k].fn, r.curve[k].fn);
-        }
-      }
-    }
-    if (m == Matcher::kKitti) continue;  // its curve has only the devkit's thresholds
-    options.filter.conditions = ParseFilterConditions("min-area=3000,max-distance=40");
-    options.score_threshold = 0.5;
-    const EvalResult filtered = Evaluate(frames, options);
-    int nontrivial = 0;
-    for (const ClassResult& r : filtered.results) {
-      if (!r.evaluated) continue;
-      auto at = [&](const FilteredCurve& c, const OperatingPoint& op) {
-        CurvePoint p;
-        p.fn = op.tp + op.fn;  // nothing detected above every threshold: all counted labels are FN
-        for (const CurvePoint& q : c.curve) {
-          if (q.threshold >= 0.5) p = q;
-        }
-        EXPECT_EQ(p.tp, op.tp) << MatcherName(m) << ' ' << r.class_name;
-        EXPECT_EQ(p.fp, op.fp) << MatcherName(m) << ' ' << r.class_name;
-        EXPECT_EQ(p.fn, op.fn) << MatcherName(m) << ' ' << r.class_name;
-      };
-      at(r.filtered->naive_curve, r.filtered->naive);
-      at(r.filtered->stable_curve, r.filtered->stable);
-      nontrivial += r.filtered->stable.tp > 0 ? 1 : 0;
-    }
-    EXPECT_GT(nontrivial, 0);
-  }
-}
-
-TEST(Filters, ParsesAndRejects) {
-  const auto c = ParseFilterConditions("min-height=25, max-distance=40,difficulty=moderate");
-  ASSERT_EQ(c.size(), 3u);
-  EXPECT_EQ(c[2].bound, FilterBound::kDifficulty);
-  EXPECT_EQ(c[2].value, 1);
-  EXPECT_THROW(ParseFilterConditions("min-size=3"), std::invalid_argument);
-  EXPECT_THROW(ParseFilterConditions("min-area=abc"), std::invalid_argument);
-  EXPECT_THROW(ParseFilterConditions("min-area"), std::invalid_argument);
 }
 
 }  // namespace

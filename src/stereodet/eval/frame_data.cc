@@ -8,7 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "stereodet/eval/devkit_overlap.h"
+#include "stereodet/eval/devkit_overlap_internal.h"
+#include "stereodet/eval/frame_data_internal.h"
 #include "stereodet/geometry/iou.h"
 #include "stereodet/util/check.h"
 
@@ -204,9 +205,12 @@ double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection
       .value_or(overlap);
 }
 
-std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpec& spec,
-                                          bool exact_dontcare_name, ClassFrame* cf) {
-  std::vector<const Object*> dontcares;
+ClassFrameBuilder::ClassFrameBuilder(ClassFrame reuse) : cf_(std::move(reuse)) { cf_.Clear(); }
+
+void ClassFrameBuilder::AddLabels(const EvalFrame& frame, const ClassSpec& spec,
+                                  bool exact_dontcare_name) {
+  ClassFrame* cf = &cf_;
+  std::vector<const Object*>& dontcares = dontcares_;
   // At most every label: one allocation per list the first time, none when `cf` is reused.
   const size_t most = cf->label_object.size() + frame.labels.size();
   cf->label_object.reserve(most);
@@ -239,11 +243,11 @@ std::vector<const Object*> AddClassLabels(const EvalFrame& frame, const ClassSpe
     cf->label_difficulty.push_back(bits);
     cf->label_alpha.push_back(label.alpha);
   }
-  return dontcares;
 }
 
-void AddClassDetections(const EvalFrame& frame, const ClassSpec& spec, ClassFrame* cf,
-                        const std::function<bool(const Object&)>& in_dontcare) {
+void ClassFrameBuilder::AddDetections(const EvalFrame& frame, const ClassSpec& spec,
+                                      const std::function<bool(const Object&)>& in_dontcare) {
+  ClassFrame* cf = &cf_;
   const size_t most = cf->det_object.size() + frame.detections.size();
   cf->det_object.reserve(most);
   cf->det_is_class.reserve(most);
@@ -285,15 +289,13 @@ void ClassFrame::Clear() {
 
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic, ClassFrame reuse) {
-  ClassFrame cf = std::move(reuse);
-  cf.Clear();
   const double tau = spec.min_overlap[static_cast<int>(kind)];
-  cf.min_overlap = tau;
   const bool devkit = arithmetic == OverlapArithmetic::kDevkit;
 
-  const std::vector<const Object*> dontcares = AddClassLabels(frame, spec, false, &cf);
-
-  AddClassDetections(frame, spec, &cf, [&](const Object& det) {
+  ClassFrameBuilder builder(std::move(reuse));
+  builder.AddLabels(frame, spec, false);
+  const std::vector<const Object*>& dontcares = builder.dontcares();
+  builder.AddDetections(frame, spec, [&](const Object& det) {
     for (const Object* dc : dontcares) {
       const double overlap = devkit ? KittiDontCareOverlapAtThreshold(kind, det, *dc, tau)
                                     : KittiDontCareOverlap(kind, det, *dc);
@@ -301,6 +303,8 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
     }
     return false;
   });
+  ClassFrame cf = builder.Take();
+  cf.min_overlap = tau;
 
   cf.edge_begin.assign(1, 0);
   std::vector<std::pair<double, size_t>> scratch;

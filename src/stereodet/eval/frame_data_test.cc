@@ -4,12 +4,40 @@
 
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <random>
+#include <string>
 
+#include "stereodet/eval/devkit_overlap_internal.h"
+#include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/geometry/iou.h"
+#include "stereodet/kitti/label_io.h"
 
 namespace stereodet {
 namespace {
+
+Object Line(const std::string& text) {
+  return ParseObjects(text, "test", {ObjectFileKind::kAny}).objects.at(0);
+}
+
+Box3D Footprint(double x, double z, double l, double w, double rotation_y, double y = 1.65,
+                double h = 1.5) {
+  Box3D b;
+  b.h = h;
+  b.w = w;
+  b.l = l;
+  b.location = Eigen::Vector3d(x, y, z);
+  b.rotation_y = rotation_y;
+  return b;
+}
+
+double Devkit(OverlapKind kind, const Box3D& det, const Box3D& label,
+              DevkitCriterion criterion = DevkitCriterion::kUnion) {
+  const std::optional<double> o = DevkitBoxOverlap(kind, criterion, det, label);
+  EXPECT_TRUE(o.has_value());
+  return o.value_or(-1.0);
+}
 
 // KittiOverlap's BEV and 3D values, written out from their definition (frame_data.h) on
 // BevIntersectionArea, with no shortcut: the reference for the far-apart test of
@@ -40,7 +68,7 @@ bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) =
 
 // Random pairs from overlapping to far apart, including pairs just beyond the reach of the
 // circumscribed circles and boxes of very different sizes; every overlap bit for bit the reference.
-TEST(KittiOverlap, BevAnd3DEqualTheirDefinitionOnRandomPairs) {
+TEST(FrameData, KittiOverlapBevAnd3DEqualTheirDefinitionOnRandomPairs) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> size(0.05, 6.0), angle(-3.2, 3.2), unit(0.0, 1.0);
   int overlapping = 0, apart = 0;
@@ -69,6 +97,112 @@ TEST(KittiOverlap, BevAnd3DEqualTheirDefinitionOnRandomPairs) {
   // Both sides of the shortcut are exercised.
   EXPECT_GT(overlapping, 50000);
   EXPECT_GT(apart, 50000);
+}
+
+// The three ties of the devkit comparison (tools' repro A, B, C): overlaps mathematically equal to
+// tau, which the devkit's rounding puts above or below it. The decisions asserted are the devkit's,
+// read off its output on these boxes.
+struct TieCase {
+  const char* name;
+  OverlapKind kind;
+  double tau;
+  const char* label;
+  const char* detection;
+  bool devkit_matches;  // the devkit's `overlap > tau`
+};
+
+TEST(FrameData, OverlapAtThresholdTiesAreDecidedByTheDevkitArithmetic) {
+  const TieCase cases[] = {
+      {"A: car, same footprint, 0.3 m lower (3D IoU 1.4 / 2.0)", OverlapKind::k3D, 0.7,
+       "Car 0.00 0 0.00 100 100 150 200 1.70 1.60 3.90 -4.10 1.65 22.70 0.00",
+       "Car -1 -1 0.00 100 100 150 200 1.70 1.60 3.90 -4.10 1.95 22.70 0.00 0.8", true},
+      {"B: pedestrian, same footprint, 0.5 m lower (3D IoU 1.0 / 2.0)", OverlapKind::k3D, 0.5,
+       "Pedestrian 0.00 0 0.00 100 100 150 200 1.50 0.60 0.80 2.30 1.80 15.40 1.00",
+       "Pedestrian -1 -1 0.00 100 100 150 200 1.50 0.60 0.80 2.30 2.30 15.40 1.00 0.8", false},
+      {"C: pedestrian, shifted by a third of its length (BEV IoU 2 / 4)", OverlapKind::kBev, 0.5,
+       "Pedestrian 0.00 0 0.00 100 100 150 200 1.50 0.60 3.00 2.30 1.80 15.40 0.00",
+       "Pedestrian -1 -1 0.00 100 100 150 200 1.50 0.60 3.00 3.30 1.80 15.40 0.00 0.8", false},
+      {"C in 3D", OverlapKind::k3D, 0.5,
+       "Pedestrian 0.00 0 0.00 100 100 150 200 1.50 0.60 3.00 2.30 1.80 15.40 0.00",
+       "Pedestrian -1 -1 0.00 100 100 150 200 1.50 0.60 3.00 3.30 1.80 15.40 0.00 0.8", true},
+  };
+  for (const TieCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    const Object label = Line(c.label);
+    const Object det = Line(c.detection);
+    const double fast = KittiOverlap(c.kind, det, label);
+    EXPECT_NEAR(fast, c.tau, 1e-12);  // a tie: the band is hit
+    const double devkit = Devkit(c.kind, det.box3d, label.box3d);
+    const double used = KittiOverlapAtThreshold(c.kind, det, label, c.tau);
+    EXPECT_EQ(used, devkit);
+    EXPECT_EQ(used > c.tau, c.devkit_matches);
+    // PrepareClassFrame stores that value and the matcher decides with it.
+    EvalFrame frame;
+    frame.labels = {label};
+    frame.detections = {det};
+    const ClassFrame cf = PrepareClassFrame(frame, KittiClassSpec(label.type), c.kind);
+    ASSERT_EQ(cf.num_labels(), 1);
+    const bool has_edge = cf.edge_begin[1] == 1;
+    if (has_edge) {
+      EXPECT_EQ(cf.edge_overlap[0], devkit);
+    }
+    EXPECT_EQ(has_edge, devkit >= c.tau);
+    const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
+    EXPECT_EQ(a.CountLabels(Outcome::kTp), c.devkit_matches ? 1 : 0);
+  }
+}
+
+TEST(FrameData, OverlapAtThresholdAwayFromTheThresholdKeepsTheExactValue) {
+  // BEV IoU 1/3 (shift by half the length, rotated, so not a parallel-footprint case either way).
+  const Box3D label = Footprint(3.0, 20.0, 3.9, 1.6, 0.3);
+  Box3D moved = label;
+  moved.location += Eigen::Vector3d(std::cos(0.3), 0, -std::sin(0.3)) * 1.95;
+  moved.rotation_y += 0.2;
+  Object l, d;
+  l.box3d = label;
+  d.box3d = moved;
+  for (const OverlapKind kind : {OverlapKind::kBev, OverlapKind::k3D}) {
+    const double fast = KittiOverlap(kind, d, l);
+    ASSERT_GT(fast, 0.0);
+    EXPECT_EQ(KittiOverlapAtThreshold(kind, d, l, 0.7), fast);
+    EXPECT_EQ(KittiDontCareOverlapAtThreshold(kind, d, l, 0.7), KittiDontCareOverlap(kind, d, l));
+  }
+}
+
+// Two detections shifted by 0.33 m and turned by 0.02 rad either side of a car (mirror images, so
+// equal overlaps mathematically; tools' repro H): ours rank the second higher by an ulp, the
+// devkit's the first by ~4e-16, so its pass 2 gives the car the first one and the second car the
+// other. Not a tie at tau and not parallel: only the closeness rule of PrepareClassFrame applies.
+TEST(FrameData, PrepareClassFrameOrdersCloseOverlapsOfOneLabelByTheDevkit) {
+  EvalFrame frame;
+  frame.labels = {Line("Car 0.00 0 0.00 100 100 200 200 1.50 1.60 3.90 -7.32 1.65 10.46 0.00"),
+                  Line("Car 0.00 0 0.00 300 100 400 200 1.50 1.60 3.90 -7.65 1.65 10.66 0.00")};
+  frame.detections = {
+      Line("Car -1 -1 0.00 100 100 200 200 1.50 1.60 3.90 -6.99 1.65 10.46 0.02 0.9"),
+      Line("Car -1 -1 0.00 300 100 400 200 1.50 1.60 3.90 -7.65 1.65 10.46 -0.02 0.8")};
+  for (const OverlapKind kind : {OverlapKind::kBev, OverlapKind::k3D}) {
+    SCOPED_TRACE(OverlapKindName(kind));
+    const ClassFrame cf = PrepareClassFrame(frame, KittiClassSpec("Car"), kind);
+    ASSERT_EQ(cf.edge_begin[1], 2);  // the first car overlaps both detections (~0.827)
+    for (int e = 0; e < 2; ++e) {
+      const Object& det = frame.detections[cf.edge_det[e]];
+      // Pairwise, neither near tau nor parallel: only the closeness rule brings the devkit in.
+      EXPECT_EQ(KittiOverlapAtThreshold(kind, det, frame.labels[0], 0.7),
+                KittiOverlap(kind, det, frame.labels[0]));
+      EXPECT_EQ(cf.edge_overlap[e], Devkit(kind, det.box3d, frame.labels[0].box3d));
+    }
+    const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
+    EXPECT_EQ(a.label_det[0], 0);
+    EXPECT_EQ(a.label_det[1], 1);
+    // The exact arithmetic (optimal and VOC matchers) keeps KittiOverlap's values.
+    const ClassFrame exact =
+        PrepareClassFrame(frame, KittiClassSpec("Car"), kind, OverlapArithmetic::kExact);
+    ASSERT_EQ(exact.edge_begin[1], 2);
+    for (int e = 0; e < 2; ++e) {
+      EXPECT_EQ(exact.edge_overlap[e],
+                KittiOverlap(kind, frame.detections[exact.edge_det[e]], frame.labels[0]));
+    }
+  }
 }
 
 }  // namespace

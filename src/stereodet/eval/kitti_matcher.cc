@@ -1,12 +1,11 @@
-#include "stereodet/eval/kitti_matcher.h"
-
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
 #include <utility>
 
-#include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/openpcdet_compat_internal.h"
 #include "stereodet/util/parallel.h"
 
 namespace stereodet {
@@ -115,7 +114,11 @@ std::vector<double> KittiThresholds(std::vector<double> v, double n_groundtruth)
   return t;
 }
 
-int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector<double>* tp_scores) {
+KittiTpScores KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty,
+                                   std::vector<double> append_to) {
+  KittiTpScores out;
+  out.scores = std::move(append_to);
+  std::vector<double>* tp_scores = &out.scores;
   ThreadScratch& scratch = Scratch();
   std::vector<int8_t>& states = scratch.states;
   DetStates(f, difficulty, &states);
@@ -140,7 +143,8 @@ int KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty, std::vector
     assigned[best] = 1;
     if (label_valid && states[best] == 0) tp_scores->push_back(f.det_score[best]);
   }
-  return n_gt;
+  out.num_groundtruth = n_gt;
+  return out;
 }
 
 namespace {
@@ -272,11 +276,14 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
 
 }  // namespace
 
-void KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
-                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts) {
+std::vector<KittiCounts> KittiAddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+                                             const std::vector<double>& thresholds,
+                                             std::vector<KittiCounts> counts) {
+  if (counts.size() < thresholds.size()) counts.resize(thresholds.size());
   PassTwoCounts frame_counts(thresholds.size());
   AddFrameCounts(f, difficulty, thresholds, &frame_counts);
-  frame_counts.AddTo(counts);
+  frame_counts.AddTo(&counts);
+  return counts;
 }
 
 FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
@@ -340,8 +347,10 @@ KittiPasses::~KittiPasses() = default;
 void KittiPasses::CollectFrame(size_t frame_index, const ClassFrame& frame) {
   const size_t b = frame_index / kBlock;
   for (size_t d = 0; d < difficulties_.size(); ++d) {
-    blocks_->groundtruth[d][b] +=
-        KittiCollectTpScores(frame, difficulties_[d], &blocks_->scores[d][b]);
+    KittiTpScores tp =
+        KittiCollectTpScores(frame, difficulties_[d], std::move(blocks_->scores[d][b]));
+    blocks_->scores[d][b] = std::move(tp.scores);
+    blocks_->groundtruth[d][b] += tp.num_groundtruth;
   }
 }
 
@@ -384,8 +393,8 @@ std::vector<KittiClassResult> KittiPasses::Finish() {
       aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
     }
     if (compat_ == EvalCompat::kOpenPcdet) {
-      OpenPcdetEnvelope(&precision);
-      OpenPcdetEnvelope(&aos);
+      precision = OpenPcdetEnvelope(precision);
+      aos = OpenPcdetEnvelope(aos);
     } else {
       for (size_t i = 0; i < n_t; ++i) {
         precision[i] = *std::max_element(precision.begin() + i, precision.end());

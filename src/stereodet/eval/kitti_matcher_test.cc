@@ -1,12 +1,12 @@
-#include "stereodet/eval/kitti_matcher.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numeric>
+#include <utility>
 
-#include "stereodet/eval/devkit_overlap.h"
+#include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/eval/test_objects.h"
 
@@ -17,7 +17,7 @@ namespace {
 // A literal re-statement of the devkit's control flow (cleanData / computeStatistics / eval_class),
 // dense and slow, over raw Objects: the reference the optimized matcher must equal exactly.
 // Overlaps are the ones KITTI mode decides with (RefOverlaps; their devkit arithmetic is tested in
-// devkit_overlap_test.cc): this reference is about the control flow.
+// devkit_overlap_test.cc and frame_data_test.cc): this reference is about the control flow.
 
 struct RefStats {
   int64_t tp = 0, fp = 0, fn = 0;
@@ -215,7 +215,7 @@ using testing_objects::Label;
 
 // ------------------------------------------------------------------------------------------------
 
-TEST(KittiThresholds, PerfectDetectorOn40LabelsKeepsEveryScore) {
+TEST(KittiMatcher, ThresholdsOfAPerfectDetectorOn40LabelsKeepEveryScore) {
   std::vector<double> scores(40);
   std::iota(scores.begin(), scores.end(), 1.0);
   const std::vector<double> t = KittiThresholds(scores, 40);
@@ -224,7 +224,7 @@ TEST(KittiThresholds, PerfectDetectorOn40LabelsKeepsEveryScore) {
   EXPECT_EQ(t.back(), 1.0);
 }
 
-TEST(KittiThresholds, SubsamplesToRecallStepsAndKeepsTheLast) {
+TEST(KittiMatcher, ThresholdsSubsampleToRecallStepsAndKeepTheLast) {
   // 400 labels, 400 TPs: one score every 10 (recall steps of 1/40), plus the last.
   std::vector<double> scores(400);
   std::iota(scores.begin(), scores.end(), 0.0);
@@ -235,7 +235,7 @@ TEST(KittiThresholds, SubsamplesToRecallStepsAndKeepsTheLast) {
   EXPECT_TRUE(std::is_sorted(t.rbegin(), t.rend()));
 }
 
-TEST(KittiThresholds, EmptyWhenNoTruePositive) {
+TEST(KittiMatcher, ThresholdsEmptyWhenNoTruePositive) {
   EXPECT_TRUE(KittiThresholds({}, 10).empty());
 }
 
@@ -304,7 +304,7 @@ TEST(KittiMatcher, ThresholdPassTakesHighestScorePrPassTakesLargestOverlap) {
   f.detections.push_back(Det("Car", {100, 100, 200, 175}, 0.9));  // IoU 0.75
   std::vector<double> scores;
   ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Car"), OverlapKind::k2D);
-  KittiCollectTpScores(cf, Difficulty::kModerate, &scores);
+  scores = KittiCollectTpScores(cf, Difficulty::kModerate, std::move(scores)).scores;
   ASSERT_EQ(scores.size(), 1u);
   EXPECT_EQ(scores[0], 0.9);
   const FrameAssociation a = KittiAssociate(cf, Difficulty::kModerate, 0.0);
@@ -322,9 +322,9 @@ TEST(KittiMatcher, OverlapEqualToThresholdIsNoMatch) {
   EXPECT_EQ(a.CountLabels(Outcome::kFn), 1);
 }
 
-class KittiMatchesReference : public ::testing::TestWithParam<int> {};
+class KittiMatcherBySeed : public ::testing::TestWithParam<int> {};
 
-TEST_P(KittiMatchesReference, OnRandomFrames) {
+TEST_P(KittiMatcherBySeed, MatchesTheReferenceOnRandomFrames) {
   RandomFramesOptions ro;
   ro.num_frames = 40;
   ro.seed = 100 + GetParam();
@@ -357,11 +357,11 @@ TEST_P(KittiMatchesReference, OnRandomFrames) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Seeds, KittiMatchesReference, ::testing::Range(0, 6));
+INSTANTIATE_TEST_SUITE_P(Seeds, KittiMatcherBySeed, ::testing::Range(0, 6));
 
 // KittiPasses, driven as Evaluate drives it (all difficulties of a frame at once) but with its
 // blocks in reverse order, gives each difficulty exactly EvaluateKittiClass's result, bit for bit.
-TEST(KittiPasses, AllDifficultiesAtOnceInAnyBlockOrderEqualOneAtATime) {
+TEST(KittiMatcher, PassesOverAllDifficultiesInAnyBlockOrderEqualOneAtATime) {
   RandomFramesOptions ro;
   ro.num_frames = 300;  // five blocks
   ro.seed = 21;

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/openpcdet_compat_internal.h"
 #include "stereodet/util/check.h"
 
 // This file is compiled with -ffp-contract=off (CMakeLists.txt): the rotated-box port below rounds
@@ -188,15 +189,13 @@ PcdetRotatedBox PcdetFootprint(const Box3D& box) {
   return PcdetRotatedBox{box.location.x(), box.location.z(), box.l, box.w, box.rotation_y};
 }
 
-double PcdetIntersectionArea(const PcdetRotatedBox& rbox1, const PcdetRotatedBox& rbox2,
-                             bool* overflow) {
+double PcdetIntersectionArea(const PcdetRotatedBox& rbox1, const PcdetRotatedBox& rbox2) {
   float r1[5], r2[5], c1[8], c2[8], pts[2 * kMaxPoints];
   ToFloat32(rbox1, r1);
   ToFloat32(rbox2, r2);
   RboxToCorners(r1, c1);
   RboxToCorners(r2, c2);
   const int n = QuadrilateralIntersection(c1, c2, pts);
-  if (overflow != nullptr) *overflow = n < 0;
   if (n < 0) return kNaN;
   SortVertices(pts, n);
   return PolygonArea(pts, n);
@@ -266,24 +265,25 @@ ClassSpec OpenPcdetClassSpec(const std::string& name, bool loose) {
 
 ClassFrame PrepareClassFrameOpenPcdet(const EvalFrame& frame, const ClassSpec& spec,
                                       OverlapKind kind, ClassFrame reuse) {
-  ClassFrame cf = std::move(reuse);
-  cf.Clear();
   const double tau = spec.min_overlap[static_cast<int>(kind)];
-  cf.min_overlap = tau;
 
   // clean_data: labels of the class (valid unless ignored at the difficulty) or of a neighbour
   // class (always ignored); DontCare regions by their exact name.
-  const std::vector<const Object*> dontcares = AddClassLabels(frame, spec, true, &cf);
+  ClassFrameBuilder builder(std::move(reuse));
+  builder.AddLabels(frame, spec, true);
+  const std::vector<const Object*>& dontcares = builder.dontcares();
 
   // Detections: the class, or lower than 40 px (ignored at Easy whatever the class), as the devkit.
   // The DontCare test (intersection over the detection's area > tau) exists for 2D only.
-  AddClassDetections(frame, spec, &cf, [&](const Object& det) {
+  builder.AddDetections(frame, spec, [&](const Object& det) {
     if (kind != OverlapKind::k2D) return false;
     for (const Object* dc : dontcares) {
       if (KittiDontCareOverlap(OverlapKind::k2D, det, *dc) > tau) return true;
     }
     return false;
   });
+  ClassFrame cf = builder.Take();
+  cf.min_overlap = tau;
 
   cf.edge_begin.assign(1, 0);
   for (int i = 0; i < cf.num_labels(); ++i) {
@@ -307,8 +307,7 @@ bool OpenPcdetComputesAos(const std::vector<EvalFrame>& frames) {
   return false;
 }
 
-void OpenPcdetEnvelope(std::array<double, 41>* curve) {
-  std::array<double, 41>& c = *curve;
+std::array<double, 41> OpenPcdetEnvelope(std::array<double, 41> c) {
   for (size_t i = 0; i < c.size(); ++i) {
     double m = c[i];
     for (size_t k = i; k < c.size(); ++k) {
@@ -320,6 +319,7 @@ void OpenPcdetEnvelope(std::array<double, 41>* curve) {
     }
     c[i] = m;
   }
+  return c;
 }
 
 std::string FormatOpenPcdetResult(const EvalResult& strict, const EvalResult& loose) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/openpcdet_compat_internal.h"
 #include "stereodet/kitti/label_io.h"
 
 namespace stereodet {
@@ -47,24 +48,8 @@ Object Footprint(double x, double z, double l, double w, double ry) {
   return o;
 }
 
-TEST(EvalCompat, NamesRoundTrip) {
-  for (EvalCompat c : {EvalCompat::kDevkit, EvalCompat::kOpenPcdet}) {
-    EXPECT_EQ(ParseEvalCompat(EvalCompatName(c)), c);
-  }
-  EXPECT_EQ(ParseEvalCompat("OpenPCDet"), EvalCompat::kOpenPcdet);
-  EXPECT_FALSE(ParseEvalCompat("mmdet").has_value());
-}
-
-TEST(EvalCompat, OpenPcdetNeedsTheKittiMatcher) {
-  EvalOptions options;
-  options.compat = EvalCompat::kOpenPcdet;
-  EXPECT_NO_THROW(options.Check());
-  options.matcher = Matcher::kOptimal;
-  EXPECT_THROW(options.Check(), std::invalid_argument);
-}
-
 // get_official_eval_result's overlap_0_7 / overlap_0_5 tables, class by class.
-TEST(OpenPcdetClassSpec, HasTheToolsOverlapsAndNeighbours) {
+TEST(OpenPcdetCompat, ClassSpecHasTheToolsOverlapsAndNeighbours) {
   EXPECT_EQ(OpenPcdetClassSpec("Car").min_overlap, (std::array<double, 3>{0.7, 0.7, 0.7}));
   EXPECT_EQ(OpenPcdetClassSpec("car", true).min_overlap, (std::array<double, 3>{0.7, 0.5, 0.5}));
   EXPECT_EQ(OpenPcdetClassSpec("Car").neighbours, std::vector<std::string>{"Van"});
@@ -83,7 +68,7 @@ TEST(OpenPcdetClassSpec, HasTheToolsOverlapsAndNeighbours) {
 }
 
 // Axis-aligned footprints: the float32 corners are exact, so the kernel's area is the true one.
-TEST(PcdetIntersectionArea, AxisAlignedBoxesAreExact) {
+TEST(OpenPcdetCompat, IntersectionAreaOfAxisAlignedBoxesIsExact) {
   const PcdetRotatedBox a{0, 10, 4, 2, 0}, b{2, 10, 4, 2, 0}, far{9, 10, 4, 2, 0};
   EXPECT_EQ(PcdetIntersectionArea(a, b), 4.0);
   EXPECT_EQ(PcdetIntersectionArea(a, far), 0.0);
@@ -95,7 +80,7 @@ TEST(PcdetIntersectionArea, AxisAlignedBoxesAreExact) {
 
 // The kernel loses corners of identical footprints to float32 rounding. Expected values: what
 // rotate_iou.py printed for these boxes under NUMBA_ENABLE_CUDASIM=1 (numba 0.56, numpy 1.24).
-TEST(PcdetIntersectionArea, IdenticalFootprintsAsTheKernelComputesThem) {
+TEST(OpenPcdetCompat, IntersectionAreaOfIdenticalFootprintsAsTheKernelComputesIt) {
   struct Case {
     PcdetRotatedBox box;
     double iou;
@@ -116,7 +101,7 @@ TEST(PcdetIntersectionArea, IdenticalFootprintsAsTheKernelComputesThem) {
 }
 
 // 3D: the footprint intersection times the y overlap, over the volumes (l * h * w) minus it.
-TEST(PcdetOverlap, ThreeDimensionalIsFootprintTimesHeightOverlap) {
+TEST(OpenPcdetCompat, OverlapIn3DIsFootprintTimesHeightOverlap) {
   Object g = Footprint(0, 10, 4, 2, 0), d = g;
   d.box3d.location.y() = 1.0;                            // 0.5 m higher: y overlap 1.0 of 1.5
   EXPECT_EQ(PcdetOverlap(OverlapKind::k3D, d, g), 0.5);  // 8 / (12 + 12 - 8)
@@ -229,13 +214,13 @@ TEST(OpenPcdetCompat, ClassWithoutDetectionsIsEvaluatedAsZero) {
 
 // np.max over slots i..40 is NaN if any of them is; the devkit's max_element loop skips a NaN that
 // is not the first.
-TEST(OpenPcdetEnvelope, NanPropagatesToEarlierSlots) {
+TEST(OpenPcdetCompat, EnvelopePropagatesNanToEarlierSlots) {
   std::array<double, 41> c{};
   c[0] = 0.25;
   c[1] = kNaN;
   c[2] = 0.5;
   c[3] = 1.0;
-  OpenPcdetEnvelope(&c);
+  c = OpenPcdetEnvelope(c);
   EXPECT_TRUE(std::isnan(c[0]));
   EXPECT_TRUE(std::isnan(c[1]));
   EXPECT_EQ(c[2], 1.0);
@@ -273,7 +258,7 @@ TEST(OpenPcdetCompat, LabelsAgainstThemselvesLoseTheFootprintsTheKernelLoses) {
               1e-9);
 }
 
-TEST(FormatOpenPcdetResult, PrintsLikeGetOfficialEvalResult) {
+TEST(OpenPcdetCompat, FormatResultPrintsLikeGetOfficialEvalResult) {
   const EvalFrame frame =
       Frame("Car 0.00 0 0.50 100.00 100.00 200.00 200.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00\n",
             "Car -1 -1 0.50 100.00 100.00 200.00 200.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00 0.9\n");
@@ -306,7 +291,7 @@ TEST(FormatOpenPcdetResult, PrintsLikeGetOfficialEvalResult) {
 
 // tests/data/eval_small/openpcdet_expected.txt is what OpenPCDet's get_official_eval_result (commit
 // 8cacccec, numba 0.56.4 CUDA simulator) printed for Car, Pedestrian and Cyclist on these frames.
-TEST(OpenPcdetPrintout, EqualsTheToolsOnTheFixture) {
+TEST(OpenPcdetCompat, PrintoutEqualsTheToolsOnTheFixture) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
   std::vector<fs::path> labels;

@@ -1,11 +1,10 @@
-#include "stereodet/eval/optimal_matcher.h"
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <utility>
 
-#include "stereodet/eval/bipartite.h"
+#include "stereodet/eval/bipartite_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
 
 namespace stereodet {
 
@@ -106,8 +105,11 @@ int CountValidLabels(const ClassFrame& f, Difficulty difficulty) {
   return n;
 }
 
-void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<CurveEvent>* events) {
-  if (f.num_dets() == 0) return;  // no events: the valid labels are all FN at every threshold
+std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty,
+                                           std::vector<CurveEvent> append_to) {
+  std::vector<CurveEvent> out = std::move(append_to);
+  std::vector<CurveEvent>* events = &out;
+  if (f.num_dets() == 0) return out;  // no events: the valid labels are all FN at every threshold
   ThreadScratch& scratch = Scratch();
   OptimalGraph& g = scratch.graph;
   BuildGraph(f, difficulty, &g);
@@ -155,6 +157,7 @@ void OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<
     }
     if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0) events->push_back(ev);
   }
+  return out;
 }
 
 FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,

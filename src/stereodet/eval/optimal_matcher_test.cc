@@ -1,16 +1,17 @@
-#include "stereodet/eval/optimal_matcher.h"
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
+#include <utility>
 
-#include <gtest/gtest.h>
-
-#include "stereodet/eval/bipartite.h"
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/bipartite_internal.h"
 #include "stereodet/eval/evaluator.h"
-#include "stereodet/eval/kitti_matcher.h"
-#include "stereodet/eval/voc_matcher.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
+#include "stereodet/eval/voc_matcher_internal.h"
 
 namespace stereodet {
 namespace {
@@ -83,7 +84,7 @@ TEST(OptimalMatcher, PapersTwoOverlappingLabels) {
   EXPECT_EQ(a.label_det[0], 0);
   EXPECT_EQ(a.label_det[1], 1);
   std::vector<CurveEvent> events;
-  OptimalFrameEvents(cf, Difficulty::kModerate, &events);
+  events = OptimalFrameEvents(cf, Difficulty::kModerate, std::move(events));
   const std::vector<CurvePoint> curve = BuildCurve(events, 2);
   ASSERT_EQ(curve.size(), 2u);
   EXPECT_EQ(curve[0].tp, 1);  // at 0.9: one detection, one TP
@@ -119,22 +120,6 @@ TEST(OptimalMatcher, AmongMaximumMatchingsTakesLargestOverlap) {
   const FrameAssociation a = OptimalAssociate(cf, Difficulty::kModerate, 0.0);
   EXPECT_EQ(a.label_det[0], 1);
   EXPECT_EQ(a.label_det[1], 0);
-}
-
-TEST(IncrementalMatching, RemovingAMatchedLabelReroutes) {
-  // det 0 - {label 0, label 1}, det 1 - {label 0}.
-  DetAdjacency adj;
-  adj.num_labels = 2;
-  adj.begin = {0, 2, 3};
-  adj.labels = {0, 1, 0};
-  IncrementalMatching m(&adj);
-  EXPECT_TRUE(m.AddDet(0));   // det 0 - label 0
-  EXPECT_TRUE(m.AddDet(1));   // det 1 - label 0, det 0 rerouted to label 1
-  EXPECT_EQ(m.size(), 2);
-  EXPECT_EQ(m.RemoveLabel(0), -1);
-  EXPECT_EQ(m.size(), 1);
-  EXPECT_EQ(m.RemoveLabel(1), -1);
-  EXPECT_EQ(m.size(), 0);
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -233,7 +218,7 @@ TEST(OptimalMatcher, EqualsBruteForceAtEveryThresholdOnThousandsOfFrames) {
     const ClassFrame cf = PrepareClassFrame(frame, spec, OverlapKind::k2D);
     for (const Difficulty d : {Difficulty::kEasy, Difficulty::kHard}) {
       std::vector<CurveEvent> events;
-      OptimalFrameEvents(cf, d, &events);
+      events = OptimalFrameEvents(cf, d, std::move(events));
       const int n_valid = CountValidLabels(cf, d);
       const std::vector<CurvePoint> curve = BuildCurve(events, n_valid);
       // Every distinct score is a threshold to check (and one above all scores).

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "stereodet/eval/score_metrics_internal.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -22,10 +23,15 @@ double Quantile(std::vector<double> values, double q) {
   return values[lo] + (values[hi] - values[lo]) * frac;
 }
 
-void LeaveOutProbabilityMetrics(BrierScores* brier, CalibrationResult* calibration) {
-  brier->over_labels = brier->over_detections = brier->over_all = kNaN;
-  calibration->ece = kNaN;
-  for (ReliabilityBin& bin : calibration->bins) bin.mean_score = bin.tp_fraction = kNaN;
+BrierScores WithoutProbabilities(BrierScores brier) {
+  brier.over_labels = brier.over_detections = brier.over_all = kNaN;
+  return brier;
+}
+
+CalibrationResult WithoutProbabilities(CalibrationResult calibration) {
+  calibration.ece = kNaN;
+  for (ReliabilityBin& bin : calibration.bins) bin.mean_score = bin.tp_fraction = kNaN;
+  return calibration;
 }
 
 ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m,

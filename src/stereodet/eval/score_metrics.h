@@ -1,18 +1,15 @@
 // Metrics of an association at an operating point: Brier scores (three ways), the reliability curve
 // and expected calibration error, and the 3D localization error of matched pairs by distance.
-// Definitions: docs/metrics.md.
+// Definitions: docs/metrics.md. Computed by score_metrics_internal.h's ScoreMetricsAccumulator.
 #ifndef STEREODET_EVAL_SCORE_METRICS_H_
 #define STEREODET_EVAL_SCORE_METRICS_H_
 
 #include <cstdint>
 #include <vector>
 
-#include "stereodet/eval/association.h"
-#include "stereodet/eval/frame_data.h"
-
 namespace stereodet {
 
-// Means of Brier terms (NaN when there is no term, or when left out: LeaveOutProbabilityMetrics).
+// Means of Brier terms (NaN when there is no term, or when left out: WithoutProbabilities).
 // s is a detection's score after EvalOptions::score_transform. Definitions: docs/metrics.md.
 struct BrierScores {
   // Over labels (the default, the paper's recommendation): a fixed support, one term per valid
@@ -44,10 +41,6 @@ struct CalibrationResult {
   int64_t num_out_of_range = 0;  // scores outside [0, 1], clamped into the end bins
 };
 
-// Sets every Brier mean, the ECE and the bins' mean score and TP fraction to NaN (the term counts
-// and bin counts stay): the scores are not probabilities (see EvalResult::probability_metrics).
-void LeaveOutProbabilityMetrics(BrierScores* brier, CalibrationResult* calibration);
-
 struct DistanceBin {
   double lower_m = 0.0, upper_m = 0.0;  // label depth z in [lower, upper)
   int64_t count = 0;                    // TP pairs with 3D boxes on both sides
@@ -55,34 +48,6 @@ struct DistanceBin {
   double depth_error_mean_m = 0.0;      // signed, detection z - label z
   double abs_depth_error_mean_m = 0.0, abs_depth_error_median_m = 0.0, abs_depth_error_p90_m = 0.0;
 };
-
-// Accumulates the operating-point metrics of many frames' associations, then Finish().
-class ScoreMetricsAccumulator {
- public:
-  // Brier scores and calibration use ApplyScoreTransform(transform, score).
-  ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m, double max_distance_m,
-                          ScoreTransform transform = ScoreTransform::kNone);
-
-  // `association` is that of `class_frame` at `difficulty` (which decides the valid labels).
-  void Add(const EvalFrame& frame, const ClassFrame& class_frame,
-           const FrameAssociation& association, Difficulty difficulty);
-
-  BrierScores Brier() const;                 // means
-  CalibrationResult Calibration() const;
-  std::vector<DistanceBin> Localization() const;  // bins [0, w), [w, 2w), ... up to max_distance_m
-
- private:
-  BrierScores brier_sums_;
-  std::vector<int64_t> bin_count_, bin_tp_;
-  std::vector<double> bin_score_sum_;
-  int64_t out_of_range_ = 0;
-  double distance_bin_m_, max_distance_m_;
-  ScoreTransform transform_;
-  std::vector<std::vector<double>> centre_errors_, depth_errors_;
-};
-
-// Quantile q in [0, 1] of `values` with linear interpolation (NumPy's default); NaN if empty.
-double Quantile(std::vector<double> values, double q);
 
 }  // namespace stereodet
 

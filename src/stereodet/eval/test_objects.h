@@ -1,11 +1,13 @@
 // Test support (include from *_test.cc only): labels and detections with a 2D box and a fixed
 // KITTI-like car-sized 3D box (1.5 x 1.6 x 3.9 m, 20 m ahead, x from the box's left edge), so that
-// 2D cases can be written by hand and BEV / 3D fields are valid.
+// 2D cases can be written by hand and BEV / 3D fields are valid; and plain 2D cars.
 #ifndef STEREODET_EVAL_TEST_OBJECTS_H_
 #define STEREODET_EVAL_TEST_OBJECTS_H_
 
+#include <optional>
 #include <string>
 
+#include "stereodet/eval/eval_options.h"
 #include "stereodet/kitti/object.h"
 
 namespace stereodet::testing_objects {
@@ -30,6 +32,36 @@ inline Object Det(const std::string& type, Box2D box, double score) {
   o.occluded = -1;
   o.score = score;
   return o;
+}
+
+// A Car label (no score) or detection with a 2D box only (3D fields left at zero).
+inline Object Car(Box2D box, std::optional<double> score = std::nullopt) {
+  Object o;
+  o.type = "Car";
+  o.box = box;
+  o.score = score;
+  return o;
+}
+
+// A Car with a 2D box and an observation angle; a detection when score >= 0.
+inline Object Car2D(double left, double top, double right, double bottom, double alpha,
+                    double score = -1) {
+  Object o;
+  o.type = "Car";
+  o.box = {left, top, right, bottom};
+  o.alpha = alpha;
+  if (score >= 0) o.score = score;  // labels carry no score
+  return o;
+}
+
+// Options for Car, 2D, Moderate with `matcher`.
+inline EvalOptions CarModerate2D(Matcher matcher) {
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.metrics = {OverlapKind::k2D};
+  options.difficulties = {Difficulty::kModerate};
+  options.matcher = matcher;
+  return options;
 }
 
 }  // namespace stereodet::testing_objects

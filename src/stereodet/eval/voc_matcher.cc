@@ -1,8 +1,8 @@
-#include "stereodet/eval/voc_matcher.h"
-
 #include <algorithm>
 #include <cmath>
 #include <utility>
+
+#include "stereodet/eval/voc_matcher_internal.h"
 
 namespace stereodet {
 
@@ -55,7 +55,10 @@ void RunVoc(const ClassFrame& f, Difficulty difficulty, double threshold, OnDet 
 
 }  // namespace
 
-void VocFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<CurveEvent>* events) {
+std::vector<CurveEvent> VocFrameEvents(const ClassFrame& f, Difficulty difficulty,
+                                       std::vector<CurveEvent> append_to) {
+  std::vector<CurveEvent> out = std::move(append_to);
+  std::vector<CurveEvent>* events = &out;
   RunVoc(f, difficulty, -INFINITY, [&](int j, Outcome outcome, int label) {
     CurveEvent ev;
     ev.score = f.det_score[j];
@@ -72,6 +75,7 @@ void VocFrameEvents(const ClassFrame& f, Difficulty difficulty, std::vector<Curv
     }
     events->push_back(ev);
   });
+  return out;
 }
 
 FrameAssociation VocAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,

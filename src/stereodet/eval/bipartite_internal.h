@@ -1,10 +1,13 @@
+// Internal to the eval module (used by Evaluate, its tests and benchmarks; not by other modules).
+//
 // Bipartite matching between labels (left) and detections (right):
 //  - DisjointSets: the connected components of an overlap graph;
-//  - IncrementalMatching: a maximum-cardinality matching kept maximum while detections are added and
+//  - IncrementalMatching: a maximum-cardinality matching kept maximum while detections are added
+//  and
 //    labels removed, one augmenting-path search per operation;
 //  - MaxWeightAssignment: the Hungarian algorithm (sparse form) on exact lexicographic weights.
-#ifndef STEREODET_EVAL_BIPARTITE_H_
-#define STEREODET_EVAL_BIPARTITE_H_
+#ifndef STEREODET_EVAL_BIPARTITE_INTERNAL_H_
+#define STEREODET_EVAL_BIPARTITE_INTERNAL_H_
 
 #include <cstdint>
 #include <numeric>
@@ -97,11 +100,12 @@ struct WeightedEdge {
 
 // A matching of maximum total weight (sum of LexWeight, compared lexicographically) among
 // `num_labels` x `num_dets` vertices and the given edges (at most one per pair, weights > 0). The
-// Hungarian algorithm in its sparse form (successive shortest paths with potentials, Dijkstra on the
-// reduced costs): O(n E log n) worst case, O(n^3) on a dense graph. Returns label -> detection or -1.
+// Hungarian algorithm in its sparse form (successive shortest paths with potentials, Dijkstra on
+// the reduced costs): O(n E log n) worst case, O(n^3) on a dense graph. Returns label -> detection
+// or -1.
 std::vector<int32_t> MaxWeightAssignment(int num_labels, int num_dets,
                                          const std::vector<WeightedEdge>& edges);
 
 }  // namespace stereodet
 
-#endif  // STEREODET_EVAL_BIPARTITE_H_
+#endif  // STEREODET_EVAL_BIPARTITE_INTERNAL_H_

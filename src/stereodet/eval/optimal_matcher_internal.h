@@ -1,7 +1,9 @@
+// Internal to the eval module (used by Evaluate, its tests and benchmarks; not by other modules).
+//
 // The paper's optimal matcher: per frame and class, the association of detections to labels with
 // overlap >= tau that has the most true positives, then the fewest false positives and false
-// negatives, then the largest total overlap. Exact (integer lexicographic weights, no (IoU + n)/2n^2
-// scaling), each connected component of the overlap graph solved on its own.
+// negatives, then the largest total overlap. Exact (integer lexicographic weights, no (IoU +
+// n)/2n^2 scaling), each connected component of the overlap graph solved on its own.
 //
 // Who takes part, per difficulty (KITTI's meaning, see docs/metrics.md "Optimal matching"):
 //  - valid labels: the class, meeting the difficulty; ignored labels: neighbour classes (Van for
@@ -16,14 +18,14 @@
 //    it (>= tau).
 //  Among the maximum matchings the one excusing the most is chosen (it exists: Mendelsohn-Dulmage),
 //  so TP, FP and FN at a threshold are those of one association.
-#ifndef STEREODET_EVAL_OPTIMAL_MATCHER_H_
-#define STEREODET_EVAL_OPTIMAL_MATCHER_H_
+#ifndef STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_
+#define STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_
 
 #include <vector>
 
 #include "stereodet/eval/association.h"
 #include "stereodet/eval/curves.h"
-#include "stereodet/eval/frame_data.h"
+#include "stereodet/eval/frame_data_internal.h"
 
 namespace stereodet {
 
@@ -32,9 +34,11 @@ int CountValidLabels(const ClassFrame& frame, Difficulty difficulty);
 
 // Appends the frame's curve events: TP(t), FP(t), FN(t) exact at every threshold t, computed in one
 // pass over the detections in descending score with one augmenting-path search per detection in
-// each of three incremental matchings (TP: all valid detections; FP: the valid detections no ignored
-// label or DontCare excuses; FN: the labels no ignored detection above t excuses).
-void OptimalFrameEvents(const ClassFrame& frame, Difficulty difficulty, std::vector<CurveEvent>* events);
+// each of three incremental matchings (TP: all valid detections; FP: the valid detections no
+// ignored label or DontCare excuses; FN: the labels no ignored detection above t excuses). Returns
+// `append_to` with them appended.
+std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& frame, Difficulty difficulty,
+                                           std::vector<CurveEvent> append_to = {});
 
 // The association at `threshold` (detections with score >= threshold): maximum TPs, then most
 // excused detections and labels, then largest total overlap; Hungarian per connected component.
@@ -44,4 +48,4 @@ FrameAssociation OptimalAssociate(const ClassFrame& frame, Difficulty difficulty
 
 }  // namespace stereodet
 
-#endif  // STEREODET_EVAL_OPTIMAL_MATCHER_H_
+#endif  // STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_

@@ -1,3 +1,5 @@
+// Internal to the eval module (used by Evaluate, its tests and benchmarks; not by other modules).
+//
 // The BEV and 3D overlaps of KITTI's devkit (evaluate_object.cpp: groundBoxOverlap and
 // box3DOverlap) in the devkit's own arithmetic, for the rare overlaps whose decision depends on it
 // (see KittiOverlapAtThreshold, frame_data.h). boost::geometry 1.74 computes intersections and
@@ -26,8 +28,8 @@
 // the devkit's own functions on 1.6 million overlaps. The arithmetic is the installed boost's, so
 // it follows a devkit built against the same boost; later boost versions dropped the rescaling (off
 // by default by 1.86), and a devkit built against them rounds otherwise.
-#ifndef STEREODET_EVAL_DEVKIT_OVERLAP_H_
-#define STEREODET_EVAL_DEVKIT_OVERLAP_H_
+#ifndef STEREODET_EVAL_DEVKIT_OVERLAP_INTERNAL_H_
+#define STEREODET_EVAL_DEVKIT_OVERLAP_INTERNAL_H_
 
 #include <optional>
 
@@ -56,4 +58,4 @@ std::optional<double> DevkitBoxOverlap(OverlapKind kind, DevkitCriterion criteri
 
 }  // namespace stereodet
 
-#endif  // STEREODET_EVAL_DEVKIT_OVERLAP_H_
+#endif  // STEREODET_EVAL_DEVKIT_OVERLAP_INTERNAL_H_

@@ -1,20 +1,23 @@
+// Internal to the eval module (used by Evaluate, its tests and benchmarks; not by other modules).
+//
 // KITTI's official devkit (devkit_object, cpp/evaluate_object.cpp), reproduced exactly, quirks
 // kept: see docs/metrics.md, section "KITTI-compatible mode", for each quirk and the test that
 // shows it.
 //
 // Per class, overlap kind and difficulty the devkit
 //  1. matches every frame greedily, label by label in file order, each label taking the unassigned
-//     detection with overlap > threshold and the HIGHEST SCORE; the scores of the true positives are
-//     collected over all frames (pass 1);
+//     detection with overlap > threshold and the HIGHEST SCORE; the scores of the true positives
+//     are collected over all frames (pass 1);
 //  2. picks at most 41 score thresholds from those TP scores (getThresholds);
 //  3. at each threshold, matches every frame again with detections of lower score left out, each
 //     label now taking the detection with the LARGEST OVERLAP (pass 2), and counts TP, FP (minus
 //     detections inside DontCare regions) and FN, and sums the orientation similarity of the TPs;
-//  4. precision[i] = TP / (TP + FP) at threshold i (41 slots, zero beyond the thresholds), replaced by
+//  4. precision[i] = TP / (TP + FP) at threshold i (41 slots, zero beyond the thresholds), replaced
+//  by
 //     its maximum over i..40 (the envelope); the same for AOS;
 //  5. AP_R11 = sum of precision[0, 4, ..., 40] / 11, AP_R40 = sum of precision[1..40] / 40, in %.
-#ifndef STEREODET_EVAL_KITTI_MATCHER_H_
-#define STEREODET_EVAL_KITTI_MATCHER_H_
+#ifndef STEREODET_EVAL_KITTI_MATCHER_INTERNAL_H_
+#define STEREODET_EVAL_KITTI_MATCHER_INTERNAL_H_
 
 #include <array>
 #include <cstddef>
@@ -23,7 +26,7 @@
 #include <vector>
 
 #include "stereodet/eval/association.h"
-#include "stereodet/eval/frame_data.h"
+#include "stereodet/eval/frame_data_internal.h"
 
 namespace stereodet {
 
@@ -35,20 +38,27 @@ inline constexpr int kKittiSamplePoints = 41;  // N_SAMPLE_PTS
 // Returns the kept scores, descending (at most 41 of them).
 std::vector<double> KittiThresholds(std::vector<double> tp_scores, double n_groundtruth);
 
-// Pass 1 on one frame: appends the scores of the true positives to `tp_scores` and returns the
-// number of valid labels (the recall denominator's share of this frame).
-int KittiCollectTpScores(const ClassFrame& frame, Difficulty difficulty, std::vector<double>* tp_scores);
+// Pass 1 on one frame: the scores of its true positives, appended to `append_to` (frames' scores
+// collect in one list), and its number of valid labels (the recall denominator's share).
+struct KittiTpScores {
+  std::vector<double> scores;
+  int num_groundtruth = 0;
+};
+KittiTpScores KittiCollectTpScores(const ClassFrame& frame, Difficulty difficulty,
+                                   std::vector<double> append_to = {});
 
 struct KittiCounts {
   int64_t tp = 0, fp = 0, fn = 0;
   double similarity = 0.0;  // sum of (1 + cos(alpha_label - alpha_det)) / 2 over the TPs
 };
 
-// Pass 2 on one frame at every threshold of `thresholds` (descending): adds each threshold's counts
-// to `counts[t]`. Equivalent to the devkit's computeStatistics(compute_fp = true) per threshold, but
-// the greedy is rerun only when the set of overlapping detections above the threshold changes.
-void KittiAddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
-                         const std::vector<double>& thresholds, std::vector<KittiCounts>* counts);
+// Pass 2 on one frame at every threshold of `thresholds` (descending): `counts` (resized to one
+// per threshold if shorter) with each threshold's counts added to counts[t]. Equivalent to the
+// devkit's computeStatistics(compute_fp = true) per threshold, but the greedy is rerun only when
+// the set of overlapping detections above the threshold changes.
+std::vector<KittiCounts> KittiAddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
+                                             const std::vector<double>& thresholds,
+                                             std::vector<KittiCounts> counts = {});
 
 // Pass 2 on one frame at one threshold, returning what every label and detection counts as.
 // `reuse` lends its memory to the result (its contents are discarded).
@@ -56,14 +66,14 @@ FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, 
                                 FrameAssociation reuse = {});
 
 struct KittiClassResult {
-  int64_t num_groundtruth = 0;              // n_gt: valid labels over all frames
-  std::vector<double> thresholds;           // descending, <= 41
-  std::vector<KittiCounts> counts;          // per threshold
+  int64_t num_groundtruth = 0;                         // n_gt: valid labels over all frames
+  std::vector<double> thresholds;                      // descending, <= 41
+  std::vector<KittiCounts> counts;                     // per threshold
   std::array<double, kKittiSamplePoints> precision{};  // after the envelope, as the devkit saves it
   std::array<double, kKittiSamplePoints> aos{};        // idem (valid only if AOS was computed)
   std::array<double, kKittiSamplePoints> recall{};     // TP / (TP + FN) per threshold, 0 beyond
-  double ap_r11 = 0.0, ap_r40 = 0.0;    // percent
-  double aos_r11 = 0.0, aos_r40 = 0.0;  // percent (valid only if AOS was computed)
+  double ap_r11 = 0.0, ap_r40 = 0.0;                   // percent
+  double aos_r11 = 0.0, aos_r40 = 0.0;                 // percent (valid only if AOS was computed)
 };
 
 // Runs passes 1-5 over all frames (parallel over frames). With EvalCompat::kOpenPcdet the envelope
@@ -113,4 +123,4 @@ double KittiApR40(const std::array<double, kKittiSamplePoints>& curve);
 
 }  // namespace stereodet
 
-#endif  // STEREODET_EVAL_KITTI_MATCHER_H_
+#endif  // STEREODET_EVAL_KITTI_MATCHER_INTERNAL_H_

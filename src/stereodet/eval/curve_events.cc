@@ -1,0 +1,242 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <utility>
+
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/bipartite_internal.h"
+#include "stereodet/eval/curve_events_internal.h"
+
+namespace stereodet {
+
+Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
+                       const std::vector<FilterCondition>* conditions) {
+  auto label_passes = [&](int i) {
+    return conditions == nullptr ||
+           PassesFilter(frame.labels[cf.label_object[i]], true, *conditions);
+  };
+  auto det_passes = [&](int j) {
+    return conditions == nullptr ||
+           PassesFilter(frame.detections[cf.det_object[j]], false, *conditions);
+  };
+  Tally t;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      if (label_passes(i) && det_passes(j)) {
+        ++t.tp;
+        t.similarity += (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[i])) / 2.0;
+      }
+    } else if (a.label_outcome[i] == Outcome::kFn) {
+      if (label_passes(i)) ++t.fn;
+    }
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    if (a.det_outcome[j] == Outcome::kFp && det_passes(j)) ++t.fp;
+  }
+  return t;
+}
+
+namespace {
+
+// AOS of the optimal matcher: above this many distinct scores in one connected component, the
+// similarity is recomputed at kAosSamples of them only (see FrameEventsFromAssociations).
+constexpr size_t kMaxExactAosScores = 256;
+constexpr size_t kAosSamples = 64;
+
+// AssociationEvents; with `similarity_only` only the similarity changes are emitted, and scores
+// whose detections overlap no label are skipped (such a detection changes no pair of the optimal
+// or VOC association, only its own outcome). Cost: one association per distinct score.
+FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& frame,
+                                             const ClassFrame& cf, Difficulty difficulty,
+                                             const std::vector<FilterCondition>* conditions,
+                                             bool similarity_only, bool with_aos,
+                                             std::vector<CurveEvent> append_to) {
+  FrameCurveEvents out;
+  out.events = std::move(append_to);
+  std::vector<CurveEvent>* events = &out.events;
+  std::vector<uint8_t> has_edge(cf.num_dets(), 0);
+  for (int e = 0; e < static_cast<int>(cf.edge_det.size()); ++e) has_edge[cf.edge_det[e]] = 1;
+  std::vector<int32_t> order(cf.num_dets());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
+  Tally prev = TallyAssociation(
+      frame, cf, Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity()),
+      conditions);
+  out.base_fn = prev.fn;
+  std::vector<double> scores;  // the distinct scores at which the association is recomputed
+  for (size_t k = 0; k < order.size();) {
+    const double score = cf.det_score[order[k]];
+    bool relevant = !similarity_only;
+    for (; k < order.size() && cf.det_score[order[k]] == score; ++k)
+      relevant |= has_edge[order[k]] != 0;
+    if (relevant) scores.push_back(score);
+  }
+  if (similarity_only && scores.size() > kMaxExactAosScores) {
+    // A huge component (thousands of overlapping detections): bound the cost to kAosSamples
+    // associations, evenly spaced over its scores, the lowest included; the similarity is held
+    // between them (documented approximation; the counts are exact, they come from elsewhere).
+    std::vector<double> sampled;
+    for (size_t s = 1; s <= kAosSamples; ++s)
+      sampled.push_back(scores[s * scores.size() / kAosSamples - 1]);
+    scores = std::move(sampled);
+  }
+  for (const double score : scores) {
+    const Tally cur =
+        TallyAssociation(frame, cf, Associate(matcher, cf, difficulty, score), conditions);
+    CurveEvent ev;
+    ev.score = score;
+    // Without AOS the similarity takes no part (it must not add curve points).
+    ev.similarity = with_aos ? cur.similarity - prev.similarity : 0.0;
+    if (!similarity_only) {
+      ev.tp = static_cast<int32_t>(cur.tp - prev.tp);
+      ev.fp = static_cast<int32_t>(cur.fp - prev.fp);
+      ev.fn = static_cast<int32_t>(cur.fn - prev.fn);
+    }
+    if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) events->push_back(ev);
+    prev = cur;
+  }
+  return out;
+}
+
+// The connected components of `cf`'s overlap graph that have an edge, each as a ClassFrame of its
+// own (object indices still into the frame's EvalFrame). The optimal association decomposes over
+// them, and detections without an edge pair with nothing, so the TP pairs of `cf` at any threshold
+// are the union of the components' TP pairs.
+//
+// A component of one label (the common case) is not copied: `on_label(i)` is called for it instead.
+template <typename OnLabel>
+std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
+  const int nl = cf.num_labels(), nd = cf.num_dets();
+  DisjointSets sets(nl + nd);
+  for (int i = 0; i < nl; ++i) {
+    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e)
+      sets.Union(i, nl + cf.edge_det[e]);
+  }
+  // Single-label components first: a label whose detections overlap no other label.
+  std::vector<int32_t> det_degree(nd, 0);
+  for (const int32_t j : cf.edge_det) ++det_degree[j];
+  std::vector<uint8_t> single(nl, 0);
+  for (int i = 0; i < nl; ++i) {
+    if (cf.edge_begin[i + 1] == cf.edge_begin[i]) continue;
+    bool alone = true;
+    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e)
+      alone &= det_degree[cf.edge_det[e]] == 1;
+    if (alone) {
+      single[i] = 1;
+      on_label(i);
+    }
+  }
+  std::vector<int32_t> comp_of_root(nl + nd, -1), local(nl + nd, -1);
+  std::vector<ClassFrame> comps;
+  auto comp = [&](int x) -> ClassFrame& {
+    const int r = sets.Find(x);
+    if (comp_of_root[r] < 0) {
+      comp_of_root[r] = static_cast<int32_t>(comps.size());
+      comps.emplace_back();
+      comps.back().min_overlap = cf.min_overlap;
+    }
+    return comps[comp_of_root[r]];
+  };
+  for (int i = 0; i < nl; ++i) {
+    if (cf.edge_begin[i + 1] == cf.edge_begin[i] || single[i]) continue;
+    ClassFrame& c = comp(i);
+    local[i] = c.num_labels();
+    c.label_object.push_back(cf.label_object[i]);
+    c.label_neighbour.push_back(cf.label_neighbour[i]);
+    c.label_difficulty.push_back(cf.label_difficulty[i]);
+    c.label_alpha.push_back(cf.label_alpha[i]);
+  }
+  for (int j = 0; j < nd; ++j) {
+    if (comp_of_root[sets.Find(nl + j)] < 0) continue;  // no edge, or in a single-edge component
+    ClassFrame& c = comp(nl + j);
+    local[nl + j] = c.num_dets();
+    c.det_object.push_back(cf.det_object[j]);
+    c.det_is_class.push_back(cf.det_is_class[j]);
+    c.det_height.push_back(cf.det_height[j]);
+    c.det_score.push_back(cf.det_score[j]);
+    c.det_alpha.push_back(cf.det_alpha[j]);
+    c.det_dontcare.push_back(cf.det_dontcare[j]);
+  }
+  for (ClassFrame& c : comps) c.edge_begin.push_back(0);
+  for (int i = 0; i < nl; ++i) {  // labels in order, so each component's CSR is built in order
+    if (local[i] < 0) continue;
+    ClassFrame& c = comps[comp_of_root[sets.Find(i)]];
+    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
+      c.edge_det.push_back(local[nl + cf.edge_det[e]]);
+      c.edge_overlap.push_back(cf.edge_overlap[e]);
+    }
+    c.edge_begin.push_back(static_cast<int32_t>(c.edge_det.size()));
+  }
+  return comps;
+}
+
+// The similarity events of a component made of one label and the detections overlapping only it.
+// The optimal association pairs the label, if valid, with its best present valid detection: the
+// largest (not inside DontCare, overlap), the lowest index among equals (OptimalAssociate makes the
+// same choice for a one-label component). So the partner changes only when a better detection
+// arrives.
+void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty difficulty,
+                                 std::vector<CurveEvent>* events) {
+  if (!cf.LabelValid(label, difficulty)) return;
+  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+  std::vector<std::pair<int32_t, double>> dets;  // (detection, overlap), valid ones
+  for (int e = cf.edge_begin[label]; e < cf.edge_begin[label + 1]; ++e) {
+    const int j = cf.edge_det[e];
+    if (cf.det_is_class[j] && std::trunc(cf.det_height[j]) >= min_height)
+      dets.emplace_back(j, cf.edge_overlap[e]);
+  }
+  std::stable_sort(dets.begin(), dets.end(), [&](const auto& a, const auto& b) {
+    return cf.det_score[a.first] > cf.det_score[b.first];
+  });
+  auto better = [&](const std::pair<int32_t, double>& a, const std::pair<int32_t, double>& b) {
+    const int ka = cf.det_dontcare[a.first] ? 0 : 1, kb = cf.det_dontcare[b.first] ? 0 : 1;
+    if (ka != kb) return ka > kb;
+    if (a.second != b.second) return a.second > b.second;
+    return a.first < b.first;
+  };
+  int best = -1;
+  double similarity = 0.0;
+  for (size_t k = 0; k < dets.size();) {
+    const double score = cf.det_score[dets[k].first];
+    const int before = best;
+    for (; k < dets.size() && cf.det_score[dets[k].first] == score; ++k) {
+      if (best < 0 || better(dets[k], dets[best])) best = static_cast<int>(k);
+    }
+    if (best == before) continue;
+    const int j = dets[best].first;
+    const double now = (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[label])) / 2.0;
+    CurveEvent ev;
+    ev.score = score;
+    ev.similarity = now - similarity;
+    similarity = now;
+    if (ev.similarity != 0.0) events->push_back(ev);
+  }
+}
+
+}  // namespace
+
+FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
+                                   Difficulty difficulty,
+                                   const std::vector<FilterCondition>* conditions, bool with_aos,
+                                   std::vector<CurveEvent> append_to) {
+  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, conditions, false, with_aos,
+                                     std::move(append_to));
+}
+
+std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const ClassFrame& cf,
+                                                Difficulty difficulty,
+                                                std::vector<CurveEvent> append_to) {
+  std::vector<CurveEvent> events = std::move(append_to);
+  auto on_label = [&](int label) { SingleLabelSimilarityEvents(cf, label, difficulty, &events); };
+  for (const ClassFrame& c : EdgeComponents(cf, on_label)) {
+    events = FrameEventsFromAssociations(Matcher::kOptimal, frame, c, difficulty, nullptr, true,
+                                         true, std::move(events))
+                 .events;
+  }
+  return events;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,57 @@
+// Internal to the eval module: a frame's curve events (curves.h) taken from the matcher's
+// association at each of its scores, where the curve cannot be had incrementally: the AOS of the
+// optimal matcher (its pairs may change as the threshold drops) and the stable filter's curves of
+// the exact matchers.
+#ifndef STEREODET_EVAL_CURVE_EVENTS_INTERNAL_H_
+#define STEREODET_EVAL_CURVE_EVENTS_INTERNAL_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "stereodet/eval/association.h"
+#include "stereodet/eval/curves.h"
+#include "stereodet/eval/eval_options.h"
+#include "stereodet/eval/filter.h"
+#include "stereodet/eval/frame_data.h"
+#include "stereodet/eval/frame_data_internal.h"
+
+namespace stereodet {
+
+// TP/FP/FN and the TP similarity of one association; with `conditions`, the stable filter's counts.
+struct Tally {
+  int64_t tp = 0, fp = 0, fn = 0;
+  double similarity = 0.0;
+};
+
+Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
+                       const std::vector<FilterCondition>* conditions);
+
+// A frame's curve events and its share of the curve's starting FN count.
+struct FrameCurveEvents {
+  std::vector<CurveEvent> events;
+  int64_t base_fn = 0;  // FN with no detection taken (all valid labels that nothing excuses)
+};
+
+// Curve events of one frame derived from the matcher's association at every distinct detection
+// score of the frame (exact by construction, one association per distinct score), appended to
+// `append_to`. With `conditions` non-null the counts are the stable filter's (pairs whose label
+// and detection both pass; unmatched labels / detections that pass); the similarity is that of the
+// counted TP pairs, and is left out (0) without `with_aos`. `frame` is the EvalFrame `cf` was
+// prepared from.
+FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
+                                   Difficulty difficulty,
+                                   const std::vector<FilterCondition>* conditions = nullptr,
+                                   bool with_aos = true, std::vector<CurveEvent> append_to = {});
+
+// The similarity events (AOS) of the optimal matcher's association on one frame, appended to
+// `append_to`: each connected component of the overlap graph on its own, one-label components in
+// closed form (the label's best present detection), the others from the association at each of
+// their scores (above 256 distinct scores in one component, at 64 of them only, the lowest
+// included: the similarity is held between them).
+std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const ClassFrame& cf,
+                                                Difficulty difficulty,
+                                                std::vector<CurveEvent> append_to = {});
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_CURVE_EVENTS_INTERNAL_H_

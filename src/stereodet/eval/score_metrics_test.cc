@@ -1,0 +1,131 @@
+#include "stereodet/eval/score_metrics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/test_objects.h"
+
+namespace stereodet {
+namespace {
+
+using testing_objects::Car;
+
+// Brier three ways, by hand: one TP (s = 0.9), one FP (s = 0.4), one FN.
+TEST(ScoreMetrics, BrierThreeWaysByHand) {
+  EvalFrame f;
+  Object l1, l2, d1, d2;
+  l1.type = l2.type = d1.type = d2.type = "Car";
+  l1.box = {0, 0, 100, 100};
+  l2.box = {300, 0, 400, 100};
+  d1.box = {0, 0, 100, 100};
+  d1.score = 0.9;
+  d2.box = {600, 0, 700, 100};
+  d2.score = 0.4;
+  f.labels = {l1, l2};
+  f.detections = {d1, d2};
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.metrics = {OverlapKind::k2D};
+  options.difficulties = {Difficulty::kModerate};
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    options.matcher = m;
+    const EvalResult result = Evaluate({f}, options);  // keeps the result alive
+    const ClassResult& r = result.results.at(0);
+    EXPECT_NEAR(r.brier.over_labels, (0.01 + 1.0) / 2, 1e-12);
+    EXPECT_NEAR(r.brier.over_detections, (0.01 + 0.16) / 2, 1e-12);
+    EXPECT_NEAR(r.brier.over_all, (0.01 + 0.16 + 1.0) / 3, 1e-12);
+    // Reliability, 10 bins: 0.4 (FP) in bin 4, 0.9 (TP) in bin 9. ECE = (0.4 + 0.1) / 2.
+    EXPECT_EQ(r.calibration.bins[4].count, 1);
+    EXPECT_EQ(r.calibration.bins[9].tp_fraction, 1.0);
+    EXPECT_NEAR(r.calibration.ece, 0.25, 1e-12);
+  }
+}
+
+// Brier over labels has a fixed support: one term per valid label whatever the detector did. Two
+// detectors on the same two labels (l1 100 px tall, l2 30 px, both valid at Moderate): A finds l1
+// (0.9) and misses l2; B finds l1 (0.9) and covers l2 with a 24 px detection, which Moderate
+// ignores (< 25 px), so l2 is excused (neither TP nor FN). Both are scored over 2 label terms:
+// ((1 - 0.9)^2 + 1) / 2 = 0.505. (Before, B's l2 dropped out: 1 term, 0.01.)
+TEST(ScoreMetrics, BrierOverLabelsHasAFixedSupport) {
+  const Object l1 = Car({0, 0, 100, 100}), l2 = Car({300, 0, 400, 30});
+  EvalFrame a, b;
+  a.labels = b.labels = {l1, l2};
+  a.detections = {Car({0, 0, 100, 100}, 0.9), Car({600, 0, 700, 100}, 0.4)};
+  b.detections = {Car({0, 0, 100, 100}, 0.9), Car({300, 0, 400, 24}, 0.7)};
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.metrics = {OverlapKind::k2D};
+  options.difficulties = {Difficulty::kModerate};
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    options.matcher = m;
+    const EvalResult ra = Evaluate({a}, options), rb = Evaluate({b}, options);
+    const ClassResult &ca = ra.results.at(0), &cb = rb.results.at(0);
+    EXPECT_EQ(cb.at_threshold.fn, 0) << MatcherName(m);  // l2 is excused, not missed
+    EXPECT_EQ(ca.num_valid_labels, 2);
+    EXPECT_EQ(ca.brier.num_label_terms, ca.num_valid_labels) << MatcherName(m);
+    EXPECT_EQ(cb.brier.num_label_terms, cb.num_valid_labels) << MatcherName(m);
+    EXPECT_NEAR(ca.brier.over_labels, 0.505, 1e-12) << MatcherName(m);
+    EXPECT_NEAR(cb.brier.over_labels, 0.505, 1e-12) << MatcherName(m);
+    // Over all: the label terms plus one s^2 per FP (A's 0.4; B has none).
+    EXPECT_EQ(ca.brier.num_all_terms, 3);
+    EXPECT_NEAR(ca.brier.over_all, (0.01 + 1.0 + 0.16) / 3, 1e-12);
+    EXPECT_EQ(cb.brier.num_all_terms, 2);
+    EXPECT_NEAR(cb.brier.over_all, 0.505, 1e-12);
+  }
+}
+
+// Brier and ECE need probabilities. Logit scores (2.0 TP, -1.0 FP): left out (NaN) unless
+// --score-transform sigmoid; AP, the curve and the operating point are the raw scores' either way.
+TEST(ScoreMetrics, ScoresOutsideTheUnitIntervalLeaveBrierOutUnlessTransformed) {
+  EvalFrame f;
+  f.labels = {Car({0, 0, 100, 100}), Car({300, 0, 400, 100})};
+  f.detections = {Car({0, 0, 100, 100}, 2.0), Car({600, 0, 700, 100}, -1.0),
+                  Car({300, 0, 400, 100}, 40.0)};
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.metrics = {OverlapKind::k2D};
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal}) {
+    options.matcher = m;
+    options.score_transform = ScoreTransform::kNone;
+    const EvalResult raw = Evaluate({f}, options);
+    EXPECT_FALSE(raw.probability_metrics);
+    EXPECT_EQ(raw.scores.num_scores, 3);
+    EXPECT_EQ(raw.scores.num_outside_unit, 3);
+    EXPECT_EQ(raw.scores.min_score, -1.0);
+    EXPECT_EQ(raw.scores.max_score, 40.0);
+    options.score_transform = ScoreTransform::kSigmoid;
+    const EvalResult sig = Evaluate({f}, options);
+    EXPECT_TRUE(sig.probability_metrics);
+    ASSERT_EQ(raw.results.size(), sig.results.size());
+    for (size_t k = 0; k < raw.results.size(); ++k) {
+      const ClassResult &r = raw.results[k], &s = sig.results[k];
+      EXPECT_TRUE(std::isnan(r.brier.over_labels));
+      EXPECT_TRUE(std::isnan(r.brier.over_detections));
+      EXPECT_TRUE(std::isnan(r.brier.over_all));
+      EXPECT_TRUE(std::isnan(r.calibration.ece));
+      EXPECT_EQ(r.brier.num_label_terms, 2);  // the support is still there
+      // AP, the curve and the operating point do not depend on the transform (bit for bit).
+      EXPECT_EQ(r.ap_r40, s.ap_r40);
+      EXPECT_EQ(r.ap_r11, s.ap_r11);
+      ASSERT_EQ(r.curve.size(), s.curve.size());
+      for (size_t i = 0; i < r.curve.size(); ++i)
+        EXPECT_EQ(r.curve[i].threshold, s.curve[i].threshold);
+      EXPECT_EQ(r.at_threshold.tp, s.at_threshold.tp);
+      // Sigmoid: the TPs 2.0 and 40.0 (sigmoid(40) = 1 - 4e-18, rounds to 1), the FP -1.0.
+      const double p2 = 1.0 / (1.0 + std::exp(-2.0)), pm1 = 1.0 / (1.0 + std::exp(1.0));
+      EXPECT_NEAR(s.brier.over_labels, ((1 - p2) * (1 - p2) + 0.0) / 2, 1e-12);
+      EXPECT_NEAR(s.brier.over_detections, ((1 - p2) * (1 - p2) + pm1 * pm1) / 3, 1e-12);
+      EXPECT_FALSE(std::isnan(s.calibration.ece));
+    }
+  }
+  EXPECT_EQ(ApplyScoreTransform(ScoreTransform::kSigmoid, 0.0), 0.5);
+  EXPECT_EQ(ApplyScoreTransform(ScoreTransform::kSigmoid, -1000.0), 0.0);
+  EXPECT_EQ(ParseScoreTransform("SIGMOID"), ScoreTransform::kSigmoid);
+  EXPECT_FALSE(ParseScoreTransform("softmax").has_value());
+}
+
+}  // namespace
+}  // namespace stereodet
