@@ -89,9 +89,10 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--metrics", a->metrics, "overlap kinds: 2d,bev,3d")->capture_default_str();
   cmd->add_option("--difficulties", a->difficulties, "easy,moderate,hard")->capture_default_str();
   cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc")->capture_default_str();
-  cmd->add_option("--compat", a->compat,
-                  "devkit | openpcdet (kitti matcher: OpenPCDet's kitti_object_eval_python numbers, "
-                  "and its printout)")
+  cmd->add_option(
+         "--compat", a->compat,
+         "devkit | openpcdet (kitti matcher: OpenPCDet's kitti_object_eval_python numbers, "
+         "and its printout)")
       ->capture_default_str();
   if (with_filter) {
     cmd->add_option("--filter", a->filter, "filter, e.g. min-area=100,max-distance=40");
@@ -184,10 +185,12 @@ EvalOptions MakeOptions(const EvalArgs& a) {
     o.difficulties.push_back(*difficulty);
   }
   const auto matcher = ParseMatcher(a.matcher);
-  STEREODET_CHECK(matcher.has_value()) << "--matcher: unknown '" << a.matcher << "' (kitti, optimal, voc)";
+  STEREODET_CHECK(matcher.has_value())
+      << "--matcher: unknown '" << a.matcher << "' (kitti, optimal, voc)";
   o.matcher = *matcher;
   const auto mode = ParseFilterMode(a.filter_mode);
-  STEREODET_CHECK(mode.has_value()) << "--filter-mode: unknown '" << a.filter_mode << "' (naive, stable)";
+  STEREODET_CHECK(mode.has_value())
+      << "--filter-mode: unknown '" << a.filter_mode << "' (naive, stable)";
   o.filter.mode = *mode;
   if (!a.filter.empty()) o.filter.conditions = ParseFilterConditions(a.filter);
   const auto transform = ParseScoreTransform(a.score_transform);
@@ -318,8 +321,9 @@ void AddEvalCommand(CLI::App& app) {
   auto sweep_common = std::make_shared<EvalArgs>();
   auto sweep_options = std::make_shared<EvaluationSweepOptions>();
   auto sweep_bound = std::make_shared<std::string>();
-  CLI::App* sweep = eval->add_subcommand("sweep", "precision/recall of the naive and the stable filter "
-                                                  "along a sweep of one filter bound");
+  CLI::App* sweep = eval->add_subcommand("sweep",
+                                         "precision/recall of the naive and the stable filter "
+                                         "along a sweep of one filter bound");
   AddCommonOptions(sweep, sweep_common.get(), false);
   sweep->add_option("--filter", *sweep_bound, "the swept bound, e.g. min-area")->required();
   sweep->add_option("--from", sweep_options->from)->capture_default_str();
@@ -335,8 +339,9 @@ void AddEvalCommand(CLI::App& app) {
 
   auto compare_common = std::make_shared<EvalArgs>();
   auto compare_options = std::make_shared<EvaluationCompareOptions>();
-  CLI::App* compare = eval->add_subcommand("compare", "3D localization error of two detection sets "
-                                                      "(e.g. stereo vs LiDAR) beside the stereo model");
+  CLI::App* compare = eval->add_subcommand("compare",
+                                           "3D localization error of two detection sets "
+                                           "(e.g. stereo vs LiDAR) beside the stereo model");
   AddCommonOptions(compare, compare_common.get(), true);
   compare->add_option("--det-b", compare_options->det_b, "the second detection folder")->required();
   compare->add_option("--calib", compare_options->calib,

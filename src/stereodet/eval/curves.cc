@@ -146,7 +146,8 @@ OperatingPoint MakeOperatingPoint(double threshold, int64_t tp, int64_t fp, int6
   op.fn = fn;
   op.precision = tp + fp > 0 ? static_cast<double>(tp) / static_cast<double>(tp + fp) : 0.0;
   op.recall = tp + fn > 0 ? static_cast<double>(tp) / static_cast<double>(tp + fn) : 0.0;
-  op.f1 = op.precision + op.recall > 0 ? 2 * op.precision * op.recall / (op.precision + op.recall) : 0.0;
+  op.f1 = op.precision + op.recall > 0 ? 2 * op.precision * op.recall / (op.precision + op.recall)
+                                       : 0.0;
   return op;
 }
 

@@ -50,8 +50,8 @@ struct EvalInput {
   std::vector<std::string> skipped_lines;
   // What was read, as 16 hex digits: FNV-1a 64 (util/hash.h) over the frames' hashes in frame order
   // (8 bytes each, little-endian), a frame's hash being FNV-1a 64 over its id, a NUL, its label
-  // file's bytes, a NUL and its detection file's bytes (none when the file is missing). Equal inputs
-  // give equal hashes whatever the thread count.
+  // file's bytes, a NUL and its detection file's bytes (none when the file is missing). Equal
+  // inputs give equal hashes whatever the thread count.
   std::string input_hash;
   // The detection folder's run manifest (DET/run.json, written by `stereodet detect`), when it has
   // one (KITTI's own results have none): "TOOL VERSION: COMMAND LINE", else empty.

@@ -9,9 +9,12 @@ namespace stereodet {
 
 const char* MatcherName(Matcher matcher) {
   switch (matcher) {
-    case Matcher::kKitti: return "kitti";
-    case Matcher::kOptimal: return "optimal";
-    case Matcher::kVoc: return "voc";
+    case Matcher::kKitti:
+      return "kitti";
+    case Matcher::kOptimal:
+      return "optimal";
+    case Matcher::kVoc:
+      return "voc";
   }
   return "?";
 }
@@ -25,8 +28,10 @@ std::optional<Matcher> ParseMatcher(std::string_view text) {
 
 const char* EvalCompatName(EvalCompat compat) {
   switch (compat) {
-    case EvalCompat::kDevkit: return "devkit";
-    case EvalCompat::kOpenPcdet: return "openpcdet";
+    case EvalCompat::kDevkit:
+      return "devkit";
+    case EvalCompat::kOpenPcdet:
+      return "openpcdet";
   }
   return "?";
 }
@@ -40,9 +45,12 @@ std::optional<EvalCompat> ParseEvalCompat(std::string_view text) {
 
 const char* OverlapKindName(OverlapKind kind) {
   switch (kind) {
-    case OverlapKind::k2D: return "2d";
-    case OverlapKind::kBev: return "bev";
-    case OverlapKind::k3D: return "3d";
+    case OverlapKind::k2D:
+      return "2d";
+    case OverlapKind::kBev:
+      return "bev";
+    case OverlapKind::k3D:
+      return "3d";
   }
   return "?";
 }
@@ -58,7 +66,8 @@ bool EqualsIgnoreCase(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i) {
     if (a[i] == b[i]) continue;  // most comparisons are of equal names: no tolower call for them
-    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) {
+    if (std::tolower(static_cast<unsigned char>(a[i])) !=
+        std::tolower(static_cast<unsigned char>(b[i]))) {
       return false;
     }
   }
@@ -70,12 +79,15 @@ ClassSpec KittiClassSpec(const std::string& name, bool loose) {
   spec.name = name;
   if (EqualsIgnoreCase(name, "Car")) {
     spec.neighbours = {"Van"};
-    spec.min_overlap = loose ? std::array<double, 3>{0.7, 0.5, 0.5} : std::array<double, 3>{0.7, 0.7, 0.7};
+    spec.min_overlap =
+        loose ? std::array<double, 3>{0.7, 0.5, 0.5} : std::array<double, 3>{0.7, 0.7, 0.7};
   } else if (EqualsIgnoreCase(name, "Pedestrian")) {
     spec.neighbours = {"Person_sitting"};
-    spec.min_overlap = loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
+    spec.min_overlap =
+        loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
   } else if (EqualsIgnoreCase(name, "Cyclist")) {
-    spec.min_overlap = loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
+    spec.min_overlap =
+        loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
   }
   return spec;
 }
@@ -142,7 +154,8 @@ void EvalOptions::Check() const {
   for (const ClassSpec& c : classes) {
     STEREODET_CHECK(!c.name.empty()) << "empty class name";
     for (double tau : c.min_overlap) {
-      STEREODET_CHECK(tau > 0 && tau <= 1) << "class " << c.name << ": min overlap must be in (0, 1], got " << tau;
+      STEREODET_CHECK(tau > 0 && tau <= 1)
+          << "class " << c.name << ": min overlap must be in (0, 1], got " << tau;
     }
   }
   STEREODET_CHECK(compat == EvalCompat::kDevkit || matcher == Matcher::kKitti)

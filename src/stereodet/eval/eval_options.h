@@ -49,9 +49,9 @@ struct ClassSpec {
   std::array<double, kNumOverlapKinds> min_overlap = {0.5, 0.5, 0.5};
 };
 
-// KITTI's settings for Car (neighbour Van, overlap 0.7), Pedestrian (Person_sitting, 0.5) and Cyclist
-// (0.5). With `loose`, the BEV and 3D thresholds become 0.5 / 0.25 / 0.25 (KITTI's second set);
-// 2D keeps 0.7 / 0.5 / 0.5. Another name gets no neighbours and 0.5 everywhere.
+// KITTI's settings for Car (neighbour Van, overlap 0.7), Pedestrian (Person_sitting, 0.5) and
+// Cyclist (0.5). With `loose`, the BEV and 3D thresholds become 0.5 / 0.25 / 0.25 (KITTI's second
+// set); 2D keeps 0.7 / 0.5 / 0.5. Another name gets no neighbours and 0.5 everywhere.
 ClassSpec KittiClassSpec(const std::string& name, bool loose = false);
 
 // KITTI's two overlap sets (KittiClassSpec's thresholds), as OpenPCDet prints both.

@@ -46,7 +46,6 @@ TEST(EvalOptions, CheckMessagesNameTheFieldAndItsValue) {
       << message(o);
 }
 
-
 // Every enum of the options: Name() then Parse() gives the value back, a bad name gives nullopt.
 
 TEST(EvalOptions, MatcherNamesRoundTrip) {

@@ -69,19 +69,23 @@ std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const C
 
 // The frames with the labels and detections that fail `conditions` struck (DontCare regions stay).
 std::vector<EvalFrame> StrikeFailing(const std::vector<EvalFrame>& frames,
-                                     const std::vector<FilterCondition>& conditions, int num_threads) {
+                                     const std::vector<FilterCondition>& conditions,
+                                     int num_threads) {
   std::vector<EvalFrame> out(frames.size());
-  ParallelFor(frames.size(), [&](size_t i) {
-    out[i].id = frames[i].id;
-    for (const Object& label : frames[i].labels) {
-      if (EqualsIgnoreCase(label.type, "DontCare") || PassesFilter(label, true, conditions)) {
-        out[i].labels.push_back(label);
-      }
-    }
-    for (const Object& det : frames[i].detections) {
-      if (PassesFilter(det, false, conditions)) out[i].detections.push_back(det);
-    }
-  }, num_threads);
+  ParallelFor(
+      frames.size(),
+      [&](size_t i) {
+        out[i].id = frames[i].id;
+        for (const Object& label : frames[i].labels) {
+          if (EqualsIgnoreCase(label.type, "DontCare") || PassesFilter(label, true, conditions)) {
+            out[i].labels.push_back(label);
+          }
+        }
+        for (const Object& det : frames[i].detections) {
+          if (PassesFilter(det, false, conditions)) out[i].detections.push_back(det);
+        }
+      },
+      num_threads);
   return out;
 }
 
@@ -183,20 +187,23 @@ ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frame
   const size_t num_blocks = (cfs.size() + kBlock - 1) / kBlock;
   std::vector<std::vector<CurveEvent>> block_events(num_blocks);
   std::vector<int64_t> block_labels(num_blocks, 0);
-  ParallelFor(num_blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(cfs.size(), (b + 1) * kBlock); ++i) {
-      block_labels[b] += CountValidLabels(cfs[i], difficulty);
-      if (matcher == Matcher::kOptimal) {
-        block_events[b] = OptimalFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
-        if (with_aos) {
-          block_events[b] =
-              OptimalSimilarityEvents(frames[i], cfs[i], difficulty, std::move(block_events[b]));
+  ParallelFor(
+      num_blocks,
+      [&](size_t b) {
+        for (size_t i = b * kBlock; i < std::min(cfs.size(), (b + 1) * kBlock); ++i) {
+          block_labels[b] += CountValidLabels(cfs[i], difficulty);
+          if (matcher == Matcher::kOptimal) {
+            block_events[b] = OptimalFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
+            if (with_aos) {
+              block_events[b] = OptimalSimilarityEvents(frames[i], cfs[i], difficulty,
+                                                        std::move(block_events[b]));
+            }
+          } else {
+            block_events[b] = VocFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
+          }
         }
-      } else {
-        block_events[b] = VocFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
-      }
-    }
-  }, num_threads);
+      },
+      num_threads);
   std::vector<CurveEvent> events;
   int64_t num_valid_labels = 0;
   for (size_t b = 0; b < num_blocks; ++b) {
@@ -235,18 +242,22 @@ FilteredCurve StableExactCurve(Matcher matcher, const std::vector<EvalFrame>& fr
 // The stable filter's curve with the KITTI matcher: the devkit's pass 2 association of the
 // unfiltered set at the unfiltered evaluation's thresholds, counted under the filter, then the
 // devkit's 41-slot arithmetic (NaN for 0 / 0 kept, envelope, AP_R40 / AP_R11).
-FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs,
-                               Difficulty difficulty, const std::vector<double>& thresholds,
+FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames,
+                               const std::vector<ClassFrame>& cfs, Difficulty difficulty,
+                               const std::vector<double>& thresholds,
                                const std::vector<FilterCondition>& conditions, bool with_aos,
                                int num_threads) {
   const size_t n_t = std::min<size_t>(thresholds.size(), kKittiSamplePoints);
   std::vector<std::vector<Tally>> per_frame(cfs.size(), std::vector<Tally>(n_t));
-  ParallelFor(cfs.size(), [&](size_t i) {
-    for (size_t t = 0; t < n_t; ++t) {
-      per_frame[i][t] = TallyAssociation(frames[i], cfs[i], KittiAssociate(cfs[i], difficulty, thresholds[t]),
-                                         &conditions);
-    }
-  }, num_threads);
+  ParallelFor(
+      cfs.size(),
+      [&](size_t i) {
+        for (size_t t = 0; t < n_t; ++t) {
+          per_frame[i][t] = TallyAssociation(
+              frames[i], cfs[i], KittiAssociate(cfs[i], difficulty, thresholds[t]), &conditions);
+        }
+      },
+      num_threads);
   FilteredCurve c;
   std::array<double, kKittiSamplePoints> precision{}, aos{};
   for (size_t t = 0; t < n_t; ++t) {
@@ -395,7 +406,8 @@ ScoreSummary SummarizeScores(const std::vector<EvalFrame>& frames) {
 const ClassResult* EvalResult::Find(const std::string& class_name, OverlapKind metric,
                                     Difficulty difficulty) const {
   for (const ClassResult& r : results) {
-    if (EqualsIgnoreCase(r.class_name, class_name) && r.metric == metric && r.difficulty == difficulty) {
+    if (EqualsIgnoreCase(r.class_name, class_name) && r.metric == metric &&
+        r.difficulty == difficulty) {
       return &r;
     }
   }
@@ -408,9 +420,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   EvalResult result;
   result.num_frames = static_cast<int64_t>(frames.size());
   const EvalCompat compat = options.compat;
-  result.aos_computed = options.compute_aos && (compat == EvalCompat::kOpenPcdet
-                                                    ? OpenPcdetComputesAos(frames)
-                                                    : AllAlphasValid(frames));
+  result.aos_computed =
+      options.compute_aos &&
+      (compat == EvalCompat::kOpenPcdet ? OpenPcdetComputesAos(frames) : AllAlphasValid(frames));
   const int threads = options.num_threads;
   const double t_op = options.score_threshold;
   result.scores = SummarizeScores(frames);
@@ -429,7 +441,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   for (const ClassSpec& spec : options.classes) {
     int64_t num_detections = 0;
     for (const EvalFrame& f : frames) {
-      for (const Object& d : f.detections) num_detections += EqualsIgnoreCase(d.type, spec.name) ? 1 : 0;
+      for (const Object& d : f.detections)
+        num_detections += EqualsIgnoreCase(d.type, spec.name) ? 1 : 0;
     }
     for (const OverlapKind kind : options.metrics) {
       const bool evaluated = compat == EvalCompat::kOpenPcdet || !options.require_detections ||
@@ -540,7 +553,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         if (!options.filter.empty()) {
           FilteredStats fs;
           fs.stable = CountStable(frames, cfs, assocs[d], options.filter.conditions, t_op);
-          fs.naive = CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
+          fs.naive =
+              CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           // Naive curve: the struck set evaluated exactly like the unfiltered one.
           if (options.matcher == Matcher::kKitti) {
             ClassResult naive = KittiCurve(struck_cfs, difficulty, with_aos, threads, compat);
@@ -573,7 +587,8 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
                                   FilterBound bound, double from, double to, double step) {
   options.Check();
   STEREODET_CHECK(step > 0 && std::isfinite(from) && std::isfinite(to) && from <= to)
-      << "sweep needs from <= to and step > 0, got from " << from << " to " << to << " step " << step;
+      << "sweep needs from <= to and step > 0, got from " << from << " to " << to << " step "
+      << step;
   const int num_values = static_cast<int>(std::floor((to - from) / step + 1e-9)) + 1;
   STEREODET_CHECK(num_values <= 100000) << "sweep has too many values: " << num_values;
   const int threads = options.num_threads;

@@ -1,8 +1,8 @@
 // The whole evaluation: every class x overlap kind x difficulty, with the chosen matcher.
 //
 //   std::vector<EvalFrame> frames = ...;           // labels + detections per frame
-//   EvalOptions options;                           // defaults: KITTI matcher, Car/Ped/Cyc, 2D/BEV/3D
-//   EvalResult result = Evaluate(frames, options);
+//   EvalOptions options;                           // defaults: KITTI matcher, Car/Ped/Cyc,
+//   2D/BEV/3D EvalResult result = Evaluate(frames, options);
 #ifndef STEREODET_EVAL_EVALUATOR_H_
 #define STEREODET_EVAL_EVALUATOR_H_
 
@@ -21,8 +21,9 @@
 namespace stereodet {
 
 // The PR curve and its summaries under a filter (percent; aos_* NaN where AOS is not computed).
-// KITTI matcher: the devkit's arithmetic (41 slots, envelope) at the devkit thresholds (naive: those
-// of the struck set; stable: those of the unfiltered set). Optimal / VOC: exact at every score.
+// KITTI matcher: the devkit's arithmetic (41 slots, envelope) at the devkit thresholds (naive:
+// those of the struck set; stable: those of the unfiltered set). Optimal / VOC: exact at every
+// score.
 struct FilteredCurve {
   std::vector<CurvePoint> curve;
   double ap_r40 = 0.0, ap_r11 = 0.0, ap_voc = 0.0;
@@ -69,8 +70,8 @@ struct ClassResult {
   OverlapKind metric = OverlapKind::k2D;
   Difficulty difficulty = Difficulty::kModerate;
   double min_overlap = 0.5;
-  // False when the devkit would skip this class and overlap kind (no detection of it with a valid box
-  // of that kind; see EvalOptions::require_detections). Nothing else is filled then.
+  // False when the devkit would skip this class and overlap kind (no detection of it with a valid
+  // box of that kind; see EvalOptions::require_detections). Nothing else is filled then.
   bool evaluated = true;
 
   int64_t num_valid_labels = 0;  // labels counted at this difficulty (KITTI's n_gt)
@@ -87,8 +88,8 @@ struct ClassResult {
   // KITTI matcher only: the devkit's 41-slot arrays after the envelope, and its thresholds.
   std::vector<double> kitti_precision, kitti_aos, kitti_thresholds;
 
-  OperatingPoint at_threshold;  // at EvalOptions::score_threshold
-  OperatingPoint best_f1;       // over the curve's points
+  OperatingPoint at_threshold;            // at EvalOptions::score_threshold
+  OperatingPoint best_f1;                 // over the curve's points
   std::optional<FilteredStats> filtered;  // when EvalOptions::filter has conditions
 
   BrierScores brier;
@@ -122,11 +123,13 @@ struct EvalResult {
   // False when a score is outside [0, 1] and EvalOptions::score_transform is kNone: the scores are
   // not probabilities, and every cell's Brier scores and ECE are left out (NaN).
   bool probability_metrics = true;
-  std::vector<ClassResult> results;  // class-major, then overlap kind, then difficulty (options order)
-  double seconds = 0.0;              // wall time of Evaluate()
+  std::vector<ClassResult>
+      results;           // class-major, then overlap kind, then difficulty (options order)
+  double seconds = 0.0;  // wall time of Evaluate()
 
   // The result for a class / kind / difficulty, or nullptr.
-  const ClassResult* Find(const std::string& class_name, OverlapKind metric, Difficulty difficulty) const;
+  const ClassResult* Find(const std::string& class_name, OverlapKind metric,
+                          Difficulty difficulty) const;
 };
 
 // Requires: options.Check() passes; every detection has a score.

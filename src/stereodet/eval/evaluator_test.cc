@@ -31,7 +31,8 @@ std::vector<EvalFrame> ReadFixture(const fs::path& dir) {
     EvalFrame f;
     f.id = p.stem().string();
     f.labels = ReadObjects(p, {ObjectFileKind::kLabel, false}).objects;
-    f.detections = ReadObjects(dir / "det" / p.filename(), {ObjectFileKind::kDetection, false}).objects;
+    f.detections =
+        ReadObjects(dir / "det" / p.filename(), {ObjectFileKind::kDetection, false}).objects;
     frames.push_back(std::move(f));
   }
   return frames;
@@ -62,7 +63,8 @@ TEST(Evaluator, AgreesWithTheDevkitOnTheFixture) {
     for (int d = 0; d < 3; ++d) {
       const ClassResult* r = result.Find(cls, kind, static_cast<Difficulty>(d));
       ASSERT_NE(r, nullptr) << line;
-      const double ours = which == "AP:" ? (aos ? r->aos_r11 : r->ap_r11) : (aos ? r->aos_r40 : r->ap_r40);
+      const double ours =
+          which == "AP:" ? (aos ? r->aos_r11 : r->ap_r11) : (aos ? r->aos_r40 : r->ap_r40);
       EXPECT_NEAR(ours, v[d], 1e-4) << line << " difficulty " << d;
       ++checked;
     }
@@ -126,48 +128,60 @@ TEST(Evaluator, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
        "Car 0.00 0 0.00 100.00 100.00 150.00 200.00 1.70 1.60 3.90 -4.10 1.65 22.70 0.00\n",
        "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00 0.90\n"
        "Car -1 -1 0.00 100.00 100.00 150.00 200.00 1.70 1.60 3.90 -4.10 1.95 22.70 0.00 0.80\n",
-       "Car", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
+       "Car",
+       {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
       {"B: pedestrian, same footprint 0.5 m lower: 3D IoU 0.5 exactly, not > 0.5 for the devkit",
        "Pedestrian 0.00 0 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30\n"
        "Pedestrian 0.00 0 0.00 100.00 100.00 150.00 200.00 1.50 0.60 0.80 2.30 1.80 15.40 1.00\n",
-       "Pedestrian -1 -1 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30 0.90\n"
-       "Pedestrian -1 -1 0.00 100.00 100.00 150.00 200.00 1.50 0.60 0.80 2.30 2.30 15.40 1.00 0.80\n",
-       "Pedestrian", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {0.0, 100.0 / 11}}},
+       "Pedestrian -1 -1 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30 "
+       "0.90\n"
+       "Pedestrian -1 -1 0.00 100.00 100.00 150.00 200.00 1.50 0.60 0.80 2.30 2.30 15.40 1.00 "
+       "0.80\n",
+       "Pedestrian",
+       {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {0.0, 100.0 / 11}}},
       {"C: pedestrian shifted by a third of its length: BEV and 3D IoU 0.5 exactly",
        "Pedestrian 0.00 0 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30\n"
        "Pedestrian 0.00 0 0.00 100.00 100.00 150.00 200.00 1.50 0.60 3.00 2.30 1.80 15.40 0.00\n",
-       "Pedestrian -1 -1 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30 0.90\n"
-       "Pedestrian -1 -1 0.00 100.00 100.00 150.00 200.00 1.50 0.60 3.00 3.30 1.80 15.40 0.00 0.80\n",
-       "Pedestrian", {{2.5, 100.0 / 11}, {0.0, 100.0 / 11}, {2.5, 100.0 / 11}}},
+       "Pedestrian -1 -1 0.00 300.00 100.00 340.00 200.00 1.50 0.60 0.80 3.00 1.80 30.00 0.30 "
+       "0.90\n"
+       "Pedestrian -1 -1 0.00 100.00 100.00 150.00 200.00 1.50 0.60 3.00 3.30 1.80 15.40 0.00 "
+       "0.80\n",
+       "Pedestrian",
+       {{2.5, 100.0 / 11}, {0.0, 100.0 / 11}, {2.5, 100.0 / 11}}},
       {"F: detections 0.33 m either side of a car, same rotation",
        "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -0.51 1.65 15.80 0.00\n"
        "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -0.84 1.65 16.00 0.00\n",
        "Car -1 -1 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -0.18 1.65 15.80 0.00 0.90\n"
        "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -0.84 1.65 15.80 0.00 0.80\n",
-       "Car", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
+       "Car",
+       {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
       {"H: detections 0.33 m either side of a car, turned +-0.02 rad",
        "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -7.32 1.65 10.46 0.00\n"
        "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -7.65 1.65 10.66 0.00\n",
        "Car -1 -1 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 -6.99 1.65 10.46 0.02 0.90\n"
        "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -7.65 1.65 10.46 -0.02 0.80\n",
-       "Car", {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
+       "Car",
+       {{2.5, 100.0 / 11}, {2.5, 100.0 / 11}, {2.5, 100.0 / 11}}},
       {"G: a detection 6 cm wider than its car, nested between common end lines",
        "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.27 2.41 0.75 9.69 1.74 15.90 -1.57\n"
        "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -4.00 1.65 30.00 0.30\n",
        "Car -1 -1 0.00 100.00 100.00 200.00 200.00 1.27 2.47 0.75 9.69 1.74 15.90 -1.57 0.90\n"
        "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 -4.00 1.65 30.00 0.30 0.80\n",
-       "Car", {{2.5, 100.0 / 11}, {0.0, 50.0 / 11}, {0.0, 50.0 / 11}}},
+       "Car",
+       {{2.5, 100.0 / 11}, {0.0, 50.0 / 11}, {0.0, 50.0 / 11}}},
       {"E: a detection without 3D inside KITTI's DontCare row: suppressed in BEV, not in 3D",
        "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n"
        "DontCare -1 -1 -10 600.00 100.00 700.00 150.00 -1 -1 -1 -1000 -1000 -1000 -10\n",
        "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00 0.90\n"
        "Car -1 -1 -10 100.00 100.00 150.00 200.00 -1 -1 -1 -1000 -1000 -1000 -10 0.95\n",
-       "Car", {{0.0, 50.0 / 11}, {0.0, 100.0 / 11}, {0.0, 50.0 / 11}}},
+       "Car",
+       {{0.0, 50.0 / 11}, {0.0, 100.0 / 11}, {0.0, 50.0 / 11}}},
       {"E2: the same without the DontCare row",
        "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n",
        "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00 0.90\n"
        "Car -1 -1 -10 100.00 100.00 150.00 200.00 -1 -1 -1 -1000 -1000 -1000 -10 0.95\n",
-       "Car", {{0.0, 50.0 / 11}, {0.0, 50.0 / 11}, {0.0, 50.0 / 11}}},
+       "Car",
+       {{0.0, 50.0 / 11}, {0.0, 50.0 / 11}, {0.0, 50.0 / 11}}},
   };
   for (const DevkitCase& c : cases) {
     SCOPED_TRACE(c.name);
@@ -184,8 +198,10 @@ TEST(Evaluator, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
         ASSERT_NE(r, nullptr);
         ASSERT_TRUE(r->evaluated);
         const int k = static_cast<int>(kind);
-        EXPECT_NEAR(r->ap_r40, c.ap[k][0], 1e-4) << OverlapKindName(kind) << " " << DifficultyName(d);
-        EXPECT_NEAR(r->ap_r11, c.ap[k][1], 1e-4) << OverlapKindName(kind) << " " << DifficultyName(d);
+        EXPECT_NEAR(r->ap_r40, c.ap[k][0], 1e-4)
+            << OverlapKindName(kind) << " " << DifficultyName(d);
+        EXPECT_NEAR(r->ap_r11, c.ap[k][1], 1e-4)
+            << OverlapKindName(kind) << " " << DifficultyName(d);
       }
     }
   }

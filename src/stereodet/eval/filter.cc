@@ -66,9 +66,9 @@ std::vector<FilterCondition> ParseFilterConditions(std::string_view text) {
     const std::string_view name = Trim(part.substr(0, eq));
     const std::string_view value_text = Trim(part.substr(eq + 1));
     const std::optional<FilterBound> bound = ParseFilterBound(name);
-    STEREODET_CHECK(bound.has_value())
-        << "filter '" << part << "': unknown name '" << name
-        << "' (min-/max-height, -width, -area, -distance, max-occlusion, max-truncation, difficulty)";
+    STEREODET_CHECK(bound.has_value()) << "filter '" << part << "': unknown name '" << name
+                                       << "' (min-/max-height, -width, -area, -distance, "
+                                          "max-occlusion, max-truncation, difficulty)";
     FilterCondition condition;
     condition.bound = *bound;
     if (*bound == FilterBound::kDifficulty && !ParseDouble(value_text)) {
@@ -88,17 +88,30 @@ std::vector<FilterCondition> ParseFilterConditions(std::string_view text) {
   return conditions;
 }
 
-bool PassesFilter(const Object& object, bool is_label, const std::vector<FilterCondition>& conditions) {
+bool PassesFilter(const Object& object, bool is_label,
+                  const std::vector<FilterCondition>& conditions) {
   for (const FilterCondition& c : conditions) {
     const double height = object.box.Height();
     const double width = object.box.Width();
     switch (c.bound) {
-      case FilterBound::kMinHeight: if (!(height >= c.value)) return false; break;
-      case FilterBound::kMaxHeight: if (!(height <= c.value)) return false; break;
-      case FilterBound::kMinWidth: if (!(width >= c.value)) return false; break;
-      case FilterBound::kMaxWidth: if (!(width <= c.value)) return false; break;
-      case FilterBound::kMinArea: if (!(object.box.Area() >= c.value)) return false; break;
-      case FilterBound::kMaxArea: if (!(object.box.Area() <= c.value)) return false; break;
+      case FilterBound::kMinHeight:
+        if (!(height >= c.value)) return false;
+        break;
+      case FilterBound::kMaxHeight:
+        if (!(height <= c.value)) return false;
+        break;
+      case FilterBound::kMinWidth:
+        if (!(width >= c.value)) return false;
+        break;
+      case FilterBound::kMaxWidth:
+        if (!(width <= c.value)) return false;
+        break;
+      case FilterBound::kMinArea:
+        if (!(object.box.Area() >= c.value)) return false;
+        break;
+      case FilterBound::kMaxArea:
+        if (!(object.box.Area() <= c.value)) return false;
+        break;
       case FilterBound::kMinDistance:
         if (!(object.box3d.location.z() >= c.value)) return false;
         break;
@@ -112,7 +125,8 @@ bool PassesFilter(const Object& object, bool is_label, const std::vector<FilterC
         if (is_label && !(object.truncated <= c.value)) return false;
         break;
       case FilterBound::kDifficulty:
-        if (is_label && !MeetsDifficulty(object, static_cast<Difficulty>(static_cast<int>(c.value)))) {
+        if (is_label &&
+            !MeetsDifficulty(object, static_cast<Difficulty>(static_cast<int>(c.value)))) {
           return false;
         }
         break;

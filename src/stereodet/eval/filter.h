@@ -24,10 +24,17 @@ std::optional<FilterMode> ParseFilterMode(std::string_view text);
 // z of the 3D location (m). Occlusion, truncation and difficulty bind labels only (detection files
 // carry no meaningful values there): detections always pass them.
 enum class FilterBound {
-  kMinHeight, kMaxHeight, kMinWidth, kMaxWidth, kMinArea, kMaxArea,  // px, px^2
-  kMinDistance, kMaxDistance,                                        // m
-  kMaxOcclusion, kMaxTruncation,                                     // labels only
-  kDifficulty,  // labels only: value 0, 1, 2 = the label must meet Easy, Moderate, Hard
+  kMinHeight,
+  kMaxHeight,
+  kMinWidth,
+  kMaxWidth,
+  kMinArea,
+  kMaxArea,  // px, px^2
+  kMinDistance,
+  kMaxDistance,  // m
+  kMaxOcclusion,
+  kMaxTruncation,  // labels only
+  kDifficulty,     // labels only: value 0, 1, 2 = the label must meet Easy, Moderate, Hard
 };
 // "min-height", "max-height", "min-width", "max-width", "min-area", "max-area", "min-distance",
 // "max-distance", "max-occlusion", "max-truncation", "difficulty".
@@ -53,7 +60,8 @@ struct FilterOptions {
 std::vector<FilterCondition> ParseFilterConditions(std::string_view text);
 
 // Whether `object` passes every condition. `is_label` selects the label-only bounds.
-bool PassesFilter(const Object& object, bool is_label, const std::vector<FilterCondition>& conditions);
+bool PassesFilter(const Object& object, bool is_label,
+                  const std::vector<FilterCondition>& conditions);
 
 }  // namespace stereodet
 

@@ -181,7 +181,6 @@ TEST(Filter, ParsesAndRejects) {
   EXPECT_THROW(ParseFilterConditions("min-area"), std::invalid_argument);
 }
 
-
 TEST(Filter, FilterModeRoundTrip) {
   for (FilterMode m : {FilterMode::kNaive, FilterMode::kStable}) {
     EXPECT_EQ(ParseFilterMode(FilterModeName(m)), m) << FilterModeName(m);

@@ -17,8 +17,8 @@ namespace stereodet {
 
 namespace {
 
-// The devkit evaluates a detection lower than MIN_HEIGHT[difficulty] as "ignored" whatever its class;
-// 40 px is the largest MIN_HEIGHT, so lower detections of other classes may matter.
+// The devkit evaluates a detection lower than MIN_HEIGHT[difficulty] as "ignored" whatever its
+// class; 40 px is the largest MIN_HEIGHT, so lower detections of other classes may matter.
 constexpr double kLargestMinHeightPx = 40.0;
 
 // The devkit's footprint polygon: corners (+-l/2, +-w/2) turned by rotation_y. With l and w both
@@ -151,7 +151,8 @@ double KittiOverlap(OverlapKind kind, const Object& detection, const Object& lab
     case OverlapKind::kBev: {
       const double inter = FootprintIntersection(detection.box3d, label.box3d);
       if (inter <= 0) return 0.0;
-      const double uni = detection.box3d.l * detection.box3d.w + label.box3d.l * label.box3d.w - inter;
+      const double uni =
+          detection.box3d.l * detection.box3d.w + label.box3d.l * label.box3d.w - inter;
       return inter / uni;
     }
     case OverlapKind::k3D: {
@@ -334,7 +335,9 @@ bool HasEvaluableDetection(const std::vector<EvalFrame>& frames, const ClassSpec
     for (const Object& det : frame.detections) {
       if (!EqualsIgnoreCase(det.type, spec.name)) continue;
       switch (kind) {
-        case OverlapKind::k2D: if (det.box.left >= 0) return true; break;
+        case OverlapKind::k2D:
+          if (det.box.left >= 0) return true;
+          break;
         // The official devkit's tests (loadDetections); the prclibo/kitti_eval fork tests only
         // x != -1000 (BEV) and y != -1000 (3D).
         case OverlapKind::kBev:

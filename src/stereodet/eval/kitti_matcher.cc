@@ -50,7 +50,8 @@ struct Pass2Result {
 
 // computeStatistics(compute_fp = true) without the FP count: matches labels in order, each taking
 // the unassigned detection (score >= threshold) with overlap > tau of largest overlap; a valid
-// detection replaces an earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records pairs.
+// detection replaces an earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records
+// pairs.
 Pass2Result RunPass2(const ClassFrame& f, Difficulty difficulty, const std::vector<int8_t>& states,
                      double threshold, std::vector<uint8_t>* assigned, FrameAssociation* assoc) {
   Pass2Result r;
@@ -224,8 +225,10 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
   interacting_scores.clear();
   free_fp_scores.clear();
   for (int j = 0; j < f.num_dets(); ++j) {
-    if (interacting[j]) interacting_scores.push_back(f.det_score[j]);
-    else if (states[j] == 0 && !f.det_dontcare[j]) free_fp_scores.push_back(f.det_score[j]);
+    if (interacting[j])
+      interacting_scores.push_back(f.det_score[j]);
+    else if (states[j] == 0 && !f.det_dontcare[j])
+      free_fp_scores.push_back(f.det_score[j]);
   }
   std::sort(interacting_scores.begin(), interacting_scores.end(), std::greater<double>());
   std::sort(free_fp_scores.begin(), free_fp_scores.end(), std::greater<double>());

@@ -92,15 +92,18 @@ RefClean RefCleanData(const EvalFrame& frame, const ClassSpec& spec, Difficulty 
   for (const Object& d : frame.detections) {
     const int valid_class = EqualsIgnoreCase(d.type, spec.name) ? 1 : -1;
     const int height = static_cast<int>(std::fabs(d.box.top - d.box.bottom));
-    if (height < lim.min_height_px) c.ignored_det.push_back(1);
-    else if (valid_class == 1) c.ignored_det.push_back(0);
-    else c.ignored_det.push_back(-1);
+    if (height < lim.min_height_px)
+      c.ignored_det.push_back(1);
+    else if (valid_class == 1)
+      c.ignored_det.push_back(0);
+    else
+      c.ignored_det.push_back(-1);
   }
   return c;
 }
 
-RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, OverlapKind kind, double tau,
-                              bool compute_fp, double thresh) {
+RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, OverlapKind kind,
+                              double tau, bool compute_fp, double thresh) {
   RefStats stat;
   const double kNoDetection = -10000000;
   const auto& gt = frame.labels;
@@ -126,7 +129,8 @@ RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, Overlap
         det_idx = static_cast<int>(j);
         valid_detection = 1;
         assigned_ignored_det = false;
-      } else if (compute_fp && overlap > tau && valid_detection == kNoDetection && c.ignored_det[j] == 1) {
+      } else if (compute_fp && overlap > tau && valid_detection == kNoDetection &&
+                 c.ignored_det[j] == 1) {
         det_idx = static_cast<int>(j);
         valid_detection = 1;
         assigned_ignored_det = true;
@@ -134,7 +138,8 @@ RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, Overlap
     }
     if (valid_detection == kNoDetection && c.ignored_gt[i] == 0) {
       ++stat.fn;
-    } else if (valid_detection != kNoDetection && (c.ignored_gt[i] == 1 || c.ignored_det[det_idx] == 1)) {
+    } else if (valid_detection != kNoDetection &&
+               (c.ignored_gt[i] == 1 || c.ignored_det[det_idx] == 1)) {
       assigned[det_idx] = true;
     } else if (valid_detection != kNoDetection) {
       ++stat.tp;
@@ -145,12 +150,14 @@ RefStats RefComputeStatistics(const EvalFrame& frame, const RefClean& c, Overlap
   }
   if (compute_fp) {
     for (size_t i = 0; i < det.size(); ++i) {
-      if (!(assigned[i] || c.ignored_det[i] == -1 || c.ignored_det[i] == 1 || ignored_threshold[i])) ++stat.fp;
+      if (!(assigned[i] || c.ignored_det[i] == -1 || c.ignored_det[i] == 1 || ignored_threshold[i]))
+        ++stat.fp;
     }
     int nstuff = 0;
     for (const Object* dc : c.dc) {
       for (size_t j = 0; j < det.size(); ++j) {
-        if (assigned[j] || c.ignored_det[j] == -1 || c.ignored_det[j] == 1 || ignored_threshold[j]) continue;
+        if (assigned[j] || c.ignored_det[j] == -1 || c.ignored_det[j] == 1 || ignored_threshold[j])
+          continue;
         if (KittiDontCareOverlapAtThreshold(kind, det[j], *dc, tau) > tau) {
           assigned[j] = true;
           ++nstuff;
@@ -179,7 +186,8 @@ KittiClassResult RefEvalClass(const std::vector<EvalFrame>& frames, const ClassS
   r.counts.assign(r.thresholds.size(), KittiCounts{});
   for (size_t i = 0; i < frames.size(); ++i) {
     for (size_t t = 0; t < r.thresholds.size(); ++t) {
-      const RefStats s = RefComputeStatistics(frames[i], cleans[i], kind, tau, true, r.thresholds[t]);
+      const RefStats s =
+          RefComputeStatistics(frames[i], cleans[i], kind, tau, true, r.thresholds[t]);
       r.counts[t].tp += s.tp;
       r.counts[t].fp += s.fp;
       r.counts[t].fn += s.fn;
@@ -203,8 +211,8 @@ KittiClassResult RefEvalClass(const std::vector<EvalFrame>& frames, const ClassS
   return r;
 }
 
-KittiClassResult RunKitti(const std::vector<EvalFrame>& frames, const ClassSpec& spec, OverlapKind kind,
-                     Difficulty difficulty) {
+KittiClassResult RunKitti(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
+                          OverlapKind kind, Difficulty difficulty) {
   std::vector<ClassFrame> cfs;
   for (const EvalFrame& f : frames) cfs.push_back(PrepareClassFrame(f, spec, kind));
   return EvaluateKittiClass(cfs, difficulty, 2);
@@ -239,8 +247,8 @@ TEST(KittiMatcher, ThresholdsEmptyWhenNoTruePositive) {
   EXPECT_TRUE(KittiThresholds({}, 10).empty());
 }
 
-// The quirk in the issue: a perfect detector on 40 labels gets AP_R40 = 97.5, since threshold i sits
-// in slot i (recall (i+1)/40) and slot 40 stays 0.
+// The quirk in the issue: a perfect detector on 40 labels gets AP_R40 = 97.5, since threshold i
+// sits in slot i (recall (i+1)/40) and slot 40 stays 0.
 TEST(KittiMatcher, PerfectDetectorOn40LabelsScores97Point5) {
   std::vector<EvalFrame> frames(40);
   for (int i = 0; i < 40; ++i) {
@@ -248,7 +256,8 @@ TEST(KittiMatcher, PerfectDetectorOn40LabelsScores97Point5) {
     frames[i].labels.push_back(Label("Car", box));
     frames[i].detections.push_back(Det("Car", box, 0.5 + i / 100.0));
   }
-  const KittiClassResult r = RunKitti(frames, KittiClassSpec("Car"), OverlapKind::k2D, Difficulty::kModerate);
+  const KittiClassResult r =
+      RunKitti(frames, KittiClassSpec("Car"), OverlapKind::k2D, Difficulty::kModerate);
   EXPECT_EQ(r.num_groundtruth, 40);
   EXPECT_EQ(r.thresholds.size(), 40u);
   EXPECT_DOUBLE_EQ(r.ap_r40, 97.5);
@@ -266,7 +275,8 @@ TEST(KittiMatcher, NeighbourClassAndDontCareAreNotFalsePositives) {
   f.detections.push_back(Det("Car", {300, 100, 400, 200}, 0.8));  // on the Van: ignored
   f.detections.push_back(Det("Car", {510, 110, 590, 190}, 0.7));  // inside DontCare: ignored
   f.detections.push_back(Det("Car", {700, 100, 800, 200}, 0.6));  // FP
-  const KittiClassResult r = RunKitti({f}, KittiClassSpec("Car"), OverlapKind::k2D, Difficulty::kModerate);
+  const KittiClassResult r =
+      RunKitti({f}, KittiClassSpec("Car"), OverlapKind::k2D, Difficulty::kModerate);
   ASSERT_EQ(r.thresholds.size(), 1u);
   EXPECT_EQ(r.counts[0].tp, 1);
   EXPECT_EQ(r.counts[0].fp, 0);  // threshold 0.9: only the TP is above it
@@ -284,9 +294,9 @@ TEST(KittiMatcher, NeighbourClassAndDontCareAreNotFalsePositives) {
 // the car neither TP nor FN.
 TEST(KittiMatcher, LowDetectionOfAnotherClassAbsorbsALabel) {
   EvalFrame f;
-  f.labels.push_back(Label("Car", {100, 100, 200, 150}));  // 50 px: Easy
+  f.labels.push_back(Label("Car", {100, 100, 200, 150}));                // 50 px: Easy
   f.detections.push_back(Det("Pedestrian", {100, 100, 200, 139}, 0.9));  // 39 px, IoU 0.78
-  f.detections.push_back(Det("Car", {600, 100, 700, 200}, 0.5));  // unrelated FP
+  f.detections.push_back(Det("Car", {600, 100, 700, 200}, 0.5));         // unrelated FP
   ClassFrame cf = PrepareClassFrame(f, KittiClassSpec("Car"), OverlapKind::k2D);
   FrameAssociation a = KittiAssociate(cf, Difficulty::kEasy, 0.0);
   EXPECT_EQ(a.CountLabels(Outcome::kFn), 0);
@@ -337,7 +347,8 @@ TEST_P(KittiMatcherBySeed, MatchesTheReferenceOnRandomFrames) {
       const ClassSpec spec = KittiClassSpec(name, loose);
       for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
         for (const Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
-          SCOPED_TRACE(std::string(name) + " " + OverlapKindName(kind) + " " + DifficultyName(d) + (loose ? " loose" : ""));
+          SCOPED_TRACE(std::string(name) + " " + OverlapKindName(kind) + " " + DifficultyName(d) +
+                       (loose ? " loose" : ""));
           const KittiClassResult ref = RefEvalClass(frames, spec, kind, d);
           const KittiClassResult got = RunKitti(frames, spec, kind, d);
           EXPECT_EQ(got.num_groundtruth, ref.num_groundtruth);

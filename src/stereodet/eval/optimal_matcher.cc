@@ -46,8 +46,10 @@ void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
   g->role.resize(f.num_dets());
   for (int j = 0; j < f.num_dets(); ++j) {
-    if (!f.det_is_class[j]) g->role[j] = kOut;
-    else g->role[j] = std::trunc(f.det_height[j]) < min_height ? kIgnoredDet : kValid;
+    if (!f.det_is_class[j])
+      g->role[j] = kOut;
+    else
+      g->role[j] = std::trunc(f.det_height[j]) < min_height ? kIgnoredDet : kValid;
   }
   g->label_valid.resize(f.num_labels());
   for (int i = 0; i < f.num_labels(); ++i) g->label_valid[i] = f.LabelValid(i, difficulty) ? 1 : 0;
@@ -60,7 +62,8 @@ void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
     for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
       const int j = f.edge_det[e];
       if (g->role[j] == kOut) continue;
-      if (g->label_valid[i]) ++count[j + 1];
+      if (g->label_valid[i])
+        ++count[j + 1];
       else if (g->role[j] == kValid)
         g->det_excusable[j] = g->det_on_ignored[j] = 1;
     }
@@ -82,7 +85,8 @@ void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
 }
 
 // Detections of the class in descending score (file order among ties), into *order.
-void ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role, std::vector<int32_t>* order) {
+void ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role,
+                       std::vector<int32_t>* order) {
   order->clear();
   for (int j = 0; j < f.num_dets(); ++j) {
     if (role[j] != kOut) order->push_back(j);
@@ -93,9 +97,9 @@ void ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role, std
 
 // The maximum-weight association of each connected component of the overlap graph at the
 // threshold (present = detections taking part), written into *assoc's TP pairs.
-void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vector<uint8_t>& present,
-                     const std::vector<uint8_t>& label_excused, ThreadScratch* scratch,
-                     FrameAssociation* assoc);
+void MatchComponents(const ClassFrame& f, const OptimalGraph& g,
+                     const std::vector<uint8_t>& present, const std::vector<uint8_t>& label_excused,
+                     ThreadScratch* scratch, FrameAssociation* assoc);
 
 }  // namespace
 
@@ -198,16 +202,17 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
       a.det_outcome[j] = Outcome::kIgnored;
     else if (g.det_excusable[j])
       a.det_outcome[j] = Outcome::kDontCare;
-    else a.det_outcome[j] = Outcome::kFp;
+    else
+      a.det_outcome[j] = Outcome::kFp;
   }
   return a;
 }
 
 namespace {
 
-void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vector<uint8_t>& present,
-                     const std::vector<uint8_t>& label_excused, ThreadScratch* scratch_ptr,
-                     FrameAssociation* assoc) {
+void MatchComponents(const ClassFrame& f, const OptimalGraph& g,
+                     const std::vector<uint8_t>& present, const std::vector<uint8_t>& label_excused,
+                     ThreadScratch* scratch_ptr, FrameAssociation* assoc) {
   ThreadScratch& scratch = *scratch_ptr;
   FrameAssociation& a = *assoc;
   const int nl = f.num_labels();
@@ -257,8 +262,8 @@ void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vect
         cd.push_back(x - nl);
       }
     }
-    // Weight of a pair: K^2 (one TP) + K (the detection could not be excused otherwise) + 1 (nor the
-    // label), then the overlap. With K above any count in the component the integer part orders
+    // Weight of a pair: K^2 (one TP) + K (the detection could not be excused otherwise) + 1 (nor
+    // the label), then the overlap. With K above any count in the component the integer part orders
     // matchings by (TPs, unexcusable detections covered, unexcused labels covered) exactly.
     const int64_t big_k = static_cast<int64_t>(std::max(cl.size(), cd.size())) + 1;
     edges.clear();
@@ -268,7 +273,8 @@ void MatchComponents(const ClassFrame& f, const OptimalGraph& g, const std::vect
         WeightedEdge e;
         e.label = local[i];
         e.det = local[nl + j];
-        e.weight.major = big_k * big_k + (g.det_excusable[j] ? 0 : big_k) + (label_excused[i] ? 0 : 1);
+        e.weight.major =
+            big_k * big_k + (g.det_excusable[j] ? 0 : big_k) + (label_excused[i] ? 0 : 1);
         e.weight.minor = g.adj_overlap[k];
         edges.push_back(e);
       }

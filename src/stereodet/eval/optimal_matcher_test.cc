@@ -29,8 +29,8 @@ Object Box(const std::string& type, double left, double top, double right, doubl
 }
 
 // A ClassFrame with the given overlaps (labels x detections, 0 = no edge), all valid, 100 px high.
-ClassFrame HandFrame(const std::vector<std::vector<double>>& overlap, const std::vector<double>& scores,
-                     double tau) {
+ClassFrame HandFrame(const std::vector<std::vector<double>>& overlap,
+                     const std::vector<double>& scores, double tau) {
   ClassFrame f;
   f.min_overlap = tau;
   const int nl = static_cast<int>(overlap.size());
@@ -96,7 +96,8 @@ TEST(OptimalMatcher, PapersTwoOverlappingLabels) {
 // tau = 0.5, three labels and three detections: the matching of largest plain IoU sum has 2 pairs
 // (0.95 + 0.95), yet 3 pairs exist (0.55 * 3). The lexicographic weights find the 3.
 TEST(OptimalMatcher, PlainIouSumPicksFewerTruePositives) {
-  const std::vector<std::vector<double>> iou = {{0.95, 0.55, 0.0}, {0.0, 0.95, 0.55}, {0.55, 0.0, 0.0}};
+  const std::vector<std::vector<double>> iou = {
+      {0.95, 0.55, 0.0}, {0.0, 0.95, 0.55}, {0.55, 0.0, 0.0}};
   std::vector<WeightedEdge> plain;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
@@ -141,7 +142,8 @@ Brute BruteForce(const ClassFrame& f, Difficulty d, double t) {
   }
   std::vector<std::vector<double>> ov(nl, std::vector<double>(nd, -1));
   for (int i = 0; i < nl; ++i) {
-    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) ov[i][f.edge_det[e]] = f.edge_overlap[e];
+    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e)
+      ov[i][f.edge_det[e]] = f.edge_overlap[e];
   }
   std::vector<uint8_t> excusable(nd, 0), label_excused(nl, 0);
   for (int j : valid_det) {
@@ -201,7 +203,8 @@ EvalFrame RandomSmallFrame(std::mt19937_64& rng) {
     if (!f.labels.empty() && u(rng) < 0.8) {
       const Object& l = f.labels[std::uniform_int_distribution<int>(0, nl - 1)(rng)];
       const double dx = 20 * (u(rng) - 0.5), dy = 20 * (u(rng) - 0.5);
-      det.box = Box2D{l.box.left + dx, l.box.top + dy, l.box.right + dx * u(rng), l.box.bottom + dy * u(rng)};
+      det.box = Box2D{l.box.left + dx, l.box.top + dy, l.box.right + dx * u(rng),
+                      l.box.bottom + dy * u(rng)};
     }
     f.detections.push_back(det);
   }

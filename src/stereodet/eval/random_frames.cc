@@ -19,8 +19,10 @@ struct Shape {
   const char* type;
   double h, w, l;
 };
-constexpr Shape kShapes[] = {{"Car", 1.53, 1.63, 3.88},        {"Van", 2.2, 1.9, 5.1},
-                             {"Pedestrian", 1.76, 0.66, 0.84}, {"Cyclist", 1.74, 0.6, 1.76},
+constexpr Shape kShapes[] = {{"Car", 1.53, 1.63, 3.88},
+                             {"Van", 2.2, 1.9, 5.1},
+                             {"Pedestrian", 1.76, 0.66, 0.84},
+                             {"Cyclist", 1.74, 0.6, 1.76},
                              {"Person_sitting", 1.27, 0.54, 0.8}};
 
 // Projects the box and fills the 2D box and truncation; false if nothing of it is in the image.
@@ -97,8 +99,11 @@ std::vector<EvalFrame> RandomFrames(const RandomFramesOptions& options) {
         frame.labels.push_back(label);
         continue;
       }
-      const Shape& shape = r < 0.62 ? kShapes[0] : r < 0.68 ? kShapes[1] : r < 0.84 ? kShapes[2]
-                           : r < 0.97 ? kShapes[3] : kShapes[4];
+      const Shape& shape = r < 0.62   ? kShapes[0]
+                           : r < 0.68 ? kShapes[1]
+                           : r < 0.84 ? kShapes[2]
+                           : r < 0.97 ? kShapes[3]
+                                      : kShapes[4];
       label.type = shape.type;
       random_box(shape, &label);
       if (!ProjectBox(&label)) continue;

@@ -45,7 +45,7 @@ struct DistanceBin {
   double lower_m = 0.0, upper_m = 0.0;  // label depth z in [lower, upper)
   int64_t count = 0;                    // TP pairs with 3D boxes on both sides
   double centre_error_mean_m = 0.0, centre_error_median_m = 0.0, centre_error_p90_m = 0.0;
-  double depth_error_mean_m = 0.0;      // signed, detection z - label z
+  double depth_error_mean_m = 0.0;  // signed, detection z - label z
   double abs_depth_error_mean_m = 0.0, abs_depth_error_median_m = 0.0, abs_depth_error_p90_m = 0.0;
 };
 

@@ -40,8 +40,9 @@ TEST(Box3DTest, RotationByNinetyDegreesTurnsLengthOntoZ) {
   box.l = 4;
   box.rotation_y = M_PI / 2;
   const auto bev = BevCorners(box);
-  // Object +x (length) maps to camera -z for rotation_y = +90 degrees: x' = c x + s z, z' = -s x + c z.
-  EXPECT_NEAR(bev[0].x(), 1.0, 1e-12);   // (l/2, w/2) -> (w/2, -l/2)
+  // Object +x (length) maps to camera -z for rotation_y = +90 degrees: x' = c x + s z, z' = -s x +
+  // c z.
+  EXPECT_NEAR(bev[0].x(), 1.0, 1e-12);  // (l/2, w/2) -> (w/2, -l/2)
   EXPECT_NEAR(bev[0].y(), -2.0, 1e-12);
   double min_z = 1e9, max_z = -1e9;
   for (const auto& p : bev) {

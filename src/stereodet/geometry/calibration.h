@@ -3,7 +3,8 @@
 // Frames (KITTI object benchmark):
 //  - velo: the Velodyne HDL-64E, x forward, y left, z up, metres.
 //  - cam0: the unrectified reference camera (camera 0, grey, left), x right, y down, z forward.
-//  - rect: the rectified frame of camera 0. Labels (Box3D::location) live here; every P_i maps it to
+//  - rect: the rectified frame of camera 0. Labels (Box3D::location) live here; every P_i maps it
+//  to
 //    the image of camera i. Cameras 2 (left colour) and 3 (right colour) are the stereo pair.
 //  - imu: the GPS/IMU unit.
 // KITTI's file names (P0..P3, R0_rect, Tr_velo_to_cam, Tr_imu_to_velo) are kept to the parser; here
@@ -11,10 +12,9 @@
 #ifndef STEREODET_GEOMETRY_CALIBRATION_H_
 #define STEREODET_GEOMETRY_CALIBRATION_H_
 
-#include <array>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 
 namespace stereodet {
 
@@ -25,7 +25,7 @@ struct Calibration {
   // and differ by a translation: P_i = K [I | t_i].
   std::array<Matrix34d, 4> projection = {Matrix34d::Zero(), Matrix34d::Zero(), Matrix34d::Zero(),
                                          Matrix34d::Zero()};
-  Eigen::Matrix3d rect_from_cam0 = Eigen::Matrix3d::Identity();  // R0_rect
+  Eigen::Matrix3d rect_from_cam0 = Eigen::Matrix3d::Identity();      // R0_rect
   Eigen::Isometry3d cam0_from_velo = Eigen::Isometry3d::Identity();  // Tr_velo_to_cam
   Eigen::Isometry3d velo_from_imu = Eigen::Isometry3d::Identity();   // Tr_imu_to_velo
 
@@ -62,7 +62,8 @@ struct Calibration {
   void CheckStereo() const;
 };
 
-// A KITTI-like calibration (the numbers of KITTI object frame 000000), for tests and synthetic data.
+// A KITTI-like calibration (the numbers of KITTI object frame 000000), for tests and synthetic
+// data.
 Calibration KittiLikeCalibration();
 
 // Observation angle alpha (radians, in [-pi, pi)) of an object at rect-frame `location` with
@@ -75,7 +76,8 @@ double WrapAngle(double angle_rad);
 
 // Stereo depth uncertainty: the depth error (m) caused by a disparity error of `disparity_error_px`
 // at depth `depth_m`, to first order: dz = z^2 / (b f) * dd.
-double StereoDepthError(double depth_m, double baseline_m, double focal_px, double disparity_error_px);
+double StereoDepthError(double depth_m, double baseline_m, double focal_px,
+                        double disparity_error_px);
 
 }  // namespace stereodet
 

@@ -44,7 +44,10 @@ int ClipAxis(const Point* in, int n, int axis, double sign, double bound, Point*
       const double t = vp / (vp - vq);
       Point r{p.x + t * (q.x - p.x), p.z + t * (q.z - p.z)};
       // Put the crossing exactly on the line, so later clips and the area see no rounding residue.
-      if (axis == 0) r.x = sign * bound; else r.z = sign * bound;
+      if (axis == 0)
+        r.x = sign * bound;
+      else
+        r.z = sign * bound;
       out[m++] = r;
     }
   }
@@ -88,8 +91,8 @@ double BevIntersectionArea(const Box3D& a, const Box3D& b) {
   const double reach = std::hypot(hal, haw) + std::hypot(hbl, hbw);
   if (dx * dx + dz * dz >= reach * reach) return 0.0;
 
-  // Camera frame -> a's frame: rotate by -rotation_y of a. With x' = c x + s z, z' = -s x + c z for a
-  // rotation by theta, the inverse is x = c x' - s z', z = s x' + c z'.
+  // Camera frame -> a's frame: rotate by -rotation_y of a. With x' = c x + s z, z' = -s x + c z for
+  // a rotation by theta, the inverse is x = c x' - s z', z = s x' + c z'.
   double sa, ca;
   SnappedSinCos(a.rotation_y, &sa, &ca);
   const double cx = ca * dx - sa * dz;
@@ -132,7 +135,8 @@ double BevIou(const Box3D& a, const Box3D& b) {
 
 namespace {
 // The y extent [location.y - h, location.y] (y points down) and its length, computed from the same
-// two numbers as the overlap below, so that a box's overlap with itself equals its own height exactly.
+// two numbers as the overlap below, so that a box's overlap with itself equals its own height
+// exactly.
 double YExtent(const Box3D& box) { return box.location.y() - (box.location.y() - box.h); }
 }  // namespace
 

@@ -42,8 +42,9 @@ bool InsideConvex(const std::array<P, 4>& poly, const P& p) {
 
 double HullArea(std::vector<P> points) {
   if (points.size() < 3) return 0;
-  std::sort(points.begin(), points.end(),
-            [](const P& a, const P& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(points.begin(), points.end(), [](const P& a, const P& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
   std::vector<P> hull(2 * points.size());
   size_t k = 0;
   for (size_t i = 0; i < points.size(); ++i) {  // Andrew's monotone chain
@@ -57,7 +58,8 @@ double HullArea(std::vector<P> points) {
   hull.resize(k - 1);
   double twice = 0;
   for (size_t i = 0; i < hull.size(); ++i) {
-    twice += hull[i].x() * hull[(i + 1) % hull.size()].y() - hull[(i + 1) % hull.size()].x() * hull[i].y();
+    twice += hull[i].x() * hull[(i + 1) % hull.size()].y() -
+             hull[(i + 1) % hull.size()].x() * hull[i].y();
   }
   return std::abs(twice) / 2;
 }
@@ -65,8 +67,10 @@ double HullArea(std::vector<P> points) {
 double ReferenceBevIntersection(const Box3D& a, const Box3D& b) {
   const auto pa = BevCorners(a), pb = BevCorners(b);
   std::vector<P> points;
-  for (const P& p : pa) if (InsideConvex(pb, p)) points.push_back(p);
-  for (const P& p : pb) if (InsideConvex(pa, p)) points.push_back(p);
+  for (const P& p : pa)
+    if (InsideConvex(pb, p)) points.push_back(p);
+  for (const P& p : pb)
+    if (InsideConvex(pa, p)) points.push_back(p);
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 4; ++j) {
       const P& p1 = pa[i];
@@ -103,7 +107,7 @@ TEST(Iou2DTest, HandComputedCases) {
   const Box2D a{0, 0, 10, 10};
   EXPECT_EQ(Iou2D(a, a), 1.0);
   EXPECT_DOUBLE_EQ(Iou2D(a, Box2D{5, 0, 15, 10}), 50.0 / 150.0);
-  EXPECT_EQ(Iou2D(a, Box2D{10, 0, 20, 10}), 0.0);  // touching
+  EXPECT_EQ(Iou2D(a, Box2D{10, 0, 20, 10}), 0.0);                 // touching
   EXPECT_EQ(Iou2D(Box2D{0, 0, 0, 10}, Box2D{0, 0, 0, 10}), 0.0);  // zero area, no NaN
   // Two boxes of IoU exactly 1/2: a inside b, half its area.
   EXPECT_EQ(Iou2D(Box2D{0, 0, 10, 10}, Box2D{0, 0, 20, 10}), 0.5);
@@ -113,8 +117,8 @@ TEST(BevIouTest, IdenticalBoxesGiveExactlyOne) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> pos(-40, 40), size(0.3, 12), angle(-M_PI, M_PI);
   for (int i = 0; i < 10000; ++i) {
-    const Box3D box = MakeBox(pos(rng), pos(rng), size(rng), size(rng), angle(rng), pos(rng) / 10,
-                              size(rng));
+    const Box3D box =
+        MakeBox(pos(rng), pos(rng), size(rng), size(rng), angle(rng), pos(rng) / 10, size(rng));
     ASSERT_EQ(BevIou(box, box), 1.0) << i;
     ASSERT_EQ(Iou3D(box, box), 1.0) << i;
   }

@@ -18,7 +18,7 @@ namespace stereodet {
 
 // Paths of one frame's files. They need not exist; see FindMissingFiles.
 struct FramePaths {
-  std::string id;  // "000123"
+  std::string id;                     // "000123"
   std::filesystem::path image_left;   // image_2/ID.png
   std::filesystem::path image_right;  // image_3/ID.png
   std::filesystem::path label;        // label_2/ID.txt

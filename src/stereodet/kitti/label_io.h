@@ -14,7 +14,7 @@ namespace stereodet {
 enum class ObjectFileKind {
   kLabel,      // exactly 15 fields a line
   kDetection,  // exactly 16 fields a line, the score last
-  kAny,        // 15 or 16 fields, each line on its own (KITTI's devkit accepts both in result files)
+  kAny,  // 15 or 16 fields, each line on its own (KITTI's devkit accepts both in result files)
 };
 
 struct ObjectParseOptions {
@@ -44,11 +44,11 @@ ObjectFile ReadObjects(const std::filesystem::path& path, const ObjectParseOptio
 
 // One line, no newline. Detections (objects with a score) get 16 fields. Numbers are written with
 // two decimals when that reads back exactly (KITTI's own style, so real KITTI files round-trip byte
-// for byte), otherwise with the shortest text that reads back exactly; KITTI's sentinels are written
-// as KITTI writes them, as integers: truncated -1, alpha -10, dimensions -1, location -1000,
-// rotation_y -10 ("DontCare -1 -1 -10 503.89 169.71 590.61 190.13 -1 -1 -1 -1000 -1000 -1000 -10").
-// Throws std::invalid_argument for a number that is NaN or infinite, or a type that is empty or
-// holds whitespace (the file could not be read back).
+// for byte), otherwise with the shortest text that reads back exactly; KITTI's sentinels are
+// written as KITTI writes them, as integers: truncated -1, alpha -10, dimensions -1, location
+// -1000, rotation_y -10 ("DontCare -1 -1 -10 503.89 169.71 590.61 190.13 -1 -1 -1 -1000 -1000 -1000
+// -10"). Throws std::invalid_argument for a number that is NaN or infinite, or a type that is empty
+// or holds whitespace (the file could not be read back).
 std::string FormatObject(const Object& object);
 // Whole file: one line per object, each ending in '\n'.
 std::string FormatObjects(const std::vector<Object>& objects);

@@ -14,9 +14,12 @@ void Object::SetNot3DEstimated() {
 
 const char* DifficultyName(Difficulty difficulty) {
   switch (difficulty) {
-    case Difficulty::kEasy: return "Easy";
-    case Difficulty::kModerate: return "Moderate";
-    case Difficulty::kHard: return "Hard";
+    case Difficulty::kEasy:
+      return "Easy";
+    case Difficulty::kModerate:
+      return "Moderate";
+    case Difficulty::kHard:
+      return "Hard";
   }
   return "?";
 }
@@ -37,9 +40,12 @@ std::optional<Difficulty> ParseDifficulty(std::string_view text) {
 
 DifficultyLimits KittiDifficultyLimits(Difficulty difficulty) {
   switch (difficulty) {
-    case Difficulty::kEasy: return {40.0, 0, 0.15};
-    case Difficulty::kModerate: return {25.0, 1, 0.30};
-    case Difficulty::kHard: return {25.0, 2, 0.50};
+    case Difficulty::kEasy:
+      return {40.0, 0, 0.15};
+    case Difficulty::kModerate:
+      return {25.0, 1, 0.30};
+    case Difficulty::kHard:
+      return {25.0, 2, 0.50};
   }
   return {25.0, 2, 0.50};
 }

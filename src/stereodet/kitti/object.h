@@ -13,16 +13,16 @@ namespace stereodet {
 // A labelled or detected object, KITTI's 15 fields (labels) or 16 (detections, score last):
 //   type truncated occluded alpha left top right bottom h w l x y z rotation_y [score]
 // Units and frames as in geometry/box.h. Unknown class names are kept as they are.
-// KITTI's sentinels: DontCare regions have truncated = -1, occluded = -1, alpha = -10, dimensions -1,
-// location -1000 and rotation_y -10; a 2D-only detector writes the same "not estimated" 3D fields
-// (see SetNot3DEstimated).
+// KITTI's sentinels: DontCare regions have truncated = -1, occluded = -1, alpha = -10, dimensions
+// -1, location -1000 and rotation_y -10; a 2D-only detector writes the same "not estimated" 3D
+// fields (see SetNot3DEstimated).
 struct Object {
   std::string type;
-  double truncated = 0.0;  // fraction of the object outside the image, [0, 1]
-  int occluded = 0;        // 0 fully visible, 1 partly, 2 largely occluded, 3 unknown
-  double alpha = 0.0;      // observation angle, radians, [-pi, pi]
-  Box2D box;               // px, left image (camera 2)
-  Box3D box3d;             // rect frame
+  double truncated = 0.0;       // fraction of the object outside the image, [0, 1]
+  int occluded = 0;             // 0 fully visible, 1 partly, 2 largely occluded, 3 unknown
+  double alpha = 0.0;           // observation angle, radians, [-pi, pi]
+  Box2D box;                    // px, left image (camera 2)
+  Box3D box3d;                  // rect frame
   std::optional<double> score;  // detections only: confidence, higher is more confident
 
   bool IsDontCare() const { return type == "DontCare"; }

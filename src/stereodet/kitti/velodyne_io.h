@@ -8,8 +8,8 @@
 namespace stereodet {
 
 struct VeloPoint {
-  float x = 0, y = 0, z = 0;   // velo frame, metres
-  float reflectance = 0;       // [0, 1]
+  float x = 0, y = 0, z = 0;  // velo frame, metres
+  float reflectance = 0;      // [0, 1]
   bool operator==(const VeloPoint&) const = default;
 };
 static_assert(sizeof(VeloPoint) == 16, "VeloPoint must match KITTI's on-disk layout");

@@ -1,5 +1,4 @@
 #include "stereodet/kitti/velodyne_io.h"
-#include "stereodet/util/test_temp_dir.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -9,6 +8,8 @@
 #include <fstream>
 #include <random>
 
+#include "stereodet/util/test_temp_dir.h"
+
 namespace stereodet {
 namespace {
 
@@ -16,9 +17,7 @@ namespace fs = std::filesystem;
 
 class VelodyneIoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = temp_.path();
-  }
+  void SetUp() override { dir_ = temp_.path(); }
   TestTempDir temp_;
   fs::path dir_;
 };

@@ -36,7 +36,7 @@ struct DetectSsdOptions {
   StereoOptions stereo;
   ProgressOptions progress;
   std::string command_line;  // for OUT/run.json (empty from a library call)
-  void Check() const;  // throws std::invalid_argument
+  void Check() const;        // throws std::invalid_argument
 };
 
 struct DetectSsdSummary {

@@ -35,9 +35,9 @@ struct TrainSsdOptions {
   // Train a new model over one already in out_dir (its files are removed first). Without it (or
   // resume), a folder that holds a trained model is refused.
   bool force = false;
-  std::string command_line;         // for out_dir/run.json (empty from a library call)
-  int threads = 0;                  // LibTorch threads (0 = all cores)
-  int max_frames = 0;               // use only the first N frames of the split (0 = all)
+  std::string command_line;  // for out_dir/run.json (empty from a library call)
+  int threads = 0;           // LibTorch threads (0 = all cores)
+  int max_frames = 0;        // use only the first N frames of the split (0 = all)
   // Stop after this many epochs in this call (0 = run to `epochs`); --resume continues. The
   // schedule always spans `epochs`, so a run split this way ends exactly where an uninterrupted one
   // does.

@@ -19,7 +19,7 @@ namespace {
 using nlohmann::json;
 
 json OperatingPointJson(const OperatingPoint& op) {
-  return json{{"threshold", op.threshold}, {"tp", op.tp},     {"fp", op.fp}, {"fn", op.fn},
+  return json{{"threshold", op.threshold}, {"tp", op.tp},         {"fp", op.fp}, {"fn", op.fn},
               {"precision", op.precision}, {"recall", op.recall}, {"f1", op.f1}};
 }
 
@@ -79,8 +79,9 @@ json CurveJson(const std::vector<CurvePoint>& points, int64_t num_frames, bool w
 }
 
 json FilteredCurveJson(const FilteredCurve& c, int64_t num_frames, bool with_aos) {
-  return {{"ap_r40", c.ap_r40},   {"ap_r11", c.ap_r11},   {"ap_voc", c.ap_voc},
-          {"aos_r40", c.aos_r40}, {"aos_r11", c.aos_r11}, {"curve", CurveJson(c.curve, num_frames, with_aos)}};
+  return {{"ap_r40", c.ap_r40},   {"ap_r11", c.ap_r11},
+          {"ap_voc", c.ap_voc},   {"aos_r40", c.aos_r40},
+          {"aos_r11", c.aos_r11}, {"curve", CurveJson(c.curve, num_frames, with_aos)}};
 }
 
 }  // namespace
@@ -90,7 +91,8 @@ namespace {
 json ClassesJson(const std::vector<ClassSpec>& specs) {
   json classes = json::array();
   for (const ClassSpec& c : specs) {
-    classes.push_back({{"name", c.name}, {"neighbours", c.neighbours}, {"min_overlap", c.min_overlap}});
+    classes.push_back(
+        {{"name", c.name}, {"neighbours", c.neighbours}, {"min_overlap", c.min_overlap}});
   }
   return classes;
 }
@@ -332,11 +334,10 @@ int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult
       if (m.label >= 0) {
         const Object& l = f.labels[m.label];
         const std::optional<Difficulty> easiest = EasiestDifficulty(l);
-        fmt::format_to(out_it, "{},{:.6g},{:.6g},{},{},{},{},{}\n", l.type, l.box.Height(),
-                       l.box.Width(),
-                       l.Has3D() ? fmt::format("{}", l.box3d.location.z()) : std::string(),
-                       l.occluded, l.truncated, easiest ? DifficultyName(*easiest) : "",
-                       m.label_valid ? 1 : 0);
+        fmt::format_to(
+            out_it, "{},{:.6g},{:.6g},{},{},{},{},{}\n", l.type, l.box.Height(), l.box.Width(),
+            l.Has3D() ? fmt::format("{}", l.box3d.location.z()) : std::string(), l.occluded,
+            l.truncated, easiest ? DifficultyName(*easiest) : "", m.label_valid ? 1 : 0);
       } else {
         fmt::format_to(out_it, ",,,,,,,\n");
       }
@@ -498,9 +499,10 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
       const ClassResult* first = result.Find(spec.name, kind, op_difficulty);
       if (!first) continue;
       if (!first->evaluated) {
-        out << fmt::format("{:<12} {:<4} {:>5.2f} | not evaluated (no detection of this class with a "
-                           "valid {} box)\n",
-                           spec.name, OverlapKindName(kind), first->min_overlap, OverlapKindName(kind));
+        out << fmt::format(
+            "{:<12} {:<4} {:>5.2f} | not evaluated (no detection of this class with a "
+            "valid {} box)\n",
+            spec.name, OverlapKindName(kind), first->min_overlap, OverlapKindName(kind));
         continue;
       }
       auto cells = [&](auto format) {
@@ -520,18 +522,25 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
                     cells([&](const ClassResult& r) { return FormatNumber(get(r), decimals); }));
         if (with_op) {
           const OperatingPoint& op = first->at_threshold;
-          out << fmt::format("  TP {} FP {} FN {}  P {:.4f} R {:.4f} F1 {:.4f}  best F1 {:.4f} @ {:.4g}",
-                             op.tp, op.fp, op.fn, op.precision, op.recall, op.f1, first->best_f1.f1,
-                             first->best_f1.threshold);
+          out << fmt::format(
+              "  TP {} FP {} FN {}  P {:.4f} R {:.4f} F1 {:.4f}  best F1 {:.4f} @ {:.4g}", op.tp,
+              op.fp, op.fn, op.precision, op.recall, op.f1, first->best_f1.f1,
+              first->best_f1.threshold);
         }
         out << "\n";
       };
-      row("AP_R40", [](const ClassResult& r) { return r.ap_r40; }, true);
-      row("AP_R11", [](const ClassResult& r) { return r.ap_r11; }, false);
-      if (options.matcher != Matcher::kKitti) row("AP_VOC", [](const ClassResult& r) { return r.ap_voc; }, false);
+      row(
+          "AP_R40", [](const ClassResult& r) { return r.ap_r40; }, true);
+      row(
+          "AP_R11", [](const ClassResult& r) { return r.ap_r11; }, false);
+      if (options.matcher != Matcher::kKitti)
+        row(
+            "AP_VOC", [](const ClassResult& r) { return r.ap_voc; }, false);
       if (first->has_aos) {
-        row("AOS_R40", [](const ClassResult& r) { return r.aos_r40; }, false);
-        row("AOS_R11", [](const ClassResult& r) { return r.aos_r11; }, false);
+        row(
+            "AOS_R40", [](const ClassResult& r) { return r.aos_r40; }, false);
+        row(
+            "AOS_R11", [](const ClassResult& r) { return r.aos_r11; }, false);
       }
       out << line("labels", cells([&](const ClassResult& r) {
                     return std::to_string(r.num_valid_labels) +
@@ -544,13 +553,14 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
       row("ECE", ece, false, 4);
       if (first->filtered) {
         const FilteredStats& fs = *first->filtered;
-        out << fmt::format("{:<12} {:<4} {:>5} | filtered: naive TP {} FP {} FN {} P {:.4f} R {:.4f}; "
-                           "stable TP {} FP {} FN {} P {:.4f} R {:.4f}\n",
-                           "", "", "", fs.naive.tp, fs.naive.fp, fs.naive.fn, fs.naive.precision,
-                           fs.naive.recall, fs.stable.tp, fs.stable.fp, fs.stable.fn,
-                           fs.stable.precision, fs.stable.recall);
-        out << fmt::format("{:<12} {:<4} {:>5} | filtered AP_R40: naive {}, stable {}\n", "", "", "",
-                           FormatNumber(fs.naive_curve.ap_r40, 2), FormatNumber(fs.stable_curve.ap_r40, 2));
+        out << fmt::format(
+            "{:<12} {:<4} {:>5} | filtered: naive TP {} FP {} FN {} P {:.4f} R {:.4f}; "
+            "stable TP {} FP {} FN {} P {:.4f} R {:.4f}\n",
+            "", "", "", fs.naive.tp, fs.naive.fp, fs.naive.fn, fs.naive.precision, fs.naive.recall,
+            fs.stable.tp, fs.stable.fp, fs.stable.fn, fs.stable.precision, fs.stable.recall);
+        out << fmt::format("{:<12} {:<4} {:>5} | filtered AP_R40: naive {}, stable {}\n", "", "",
+                           "", FormatNumber(fs.naive_curve.ap_r40, 2),
+                           FormatNumber(fs.stable_curve.ap_r40, 2));
       }
     }
   }
@@ -574,15 +584,16 @@ std::string FormatEvalTable(const EvalResult& result, const EvalOptions& options
 
 std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound) {
   std::ostringstream out;
-  out << "class,metric,difficulty,filter,value,naive_tp,naive_fp,naive_fn,naive_precision,naive_recall,"
+  out << "class,metric,difficulty,filter,value,naive_tp,naive_fp,naive_fn,naive_precision,naive_"
+         "recall,"
          "stable_tp,stable_fp,stable_fn,stable_precision,stable_recall\n";
   for (const SweepRow& r : rows) {
     const OperatingPoint& n = r.stats.naive;
     const OperatingPoint& s = r.stats.stable;
-    out << r.class_name << ',' << OverlapKindName(r.metric) << ',' << DifficultyName(r.difficulty) << ','
-        << FilterBoundName(bound) << ',' << Csv(r.value) << ',' << n.tp << ',' << n.fp << ',' << n.fn
-        << ',' << Csv(n.precision) << ',' << Csv(n.recall) << ',' << s.tp << ',' << s.fp << ',' << s.fn
-        << ',' << Csv(s.precision) << ',' << Csv(s.recall) << '\n';
+    out << r.class_name << ',' << OverlapKindName(r.metric) << ',' << DifficultyName(r.difficulty)
+        << ',' << FilterBoundName(bound) << ',' << Csv(r.value) << ',' << n.tp << ',' << n.fp << ','
+        << n.fn << ',' << Csv(n.precision) << ',' << Csv(n.recall) << ',' << s.tp << ',' << s.fp
+        << ',' << s.fn << ',' << Csv(s.precision) << ',' << Csv(s.recall) << '\n';
   }
   return out.str();
 }
@@ -592,12 +603,13 @@ std::string FormatCompareCsv(const std::vector<CompareRow>& rows) {
       "class,metric,difficulty,lower_m,upper_m,count_a,abs_dz_mean_a,count_b,abs_dz_mean_b,"
       "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz\n";
   for (const CompareRow& r : rows) {
-    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name, OverlapKindName(r.metric),
-                       DifficultyName(r.difficulty), r.lower_m, r.upper_m, r.count_a,
-                       FormatNumber(r.abs_depth_error_mean_a_m, 6), r.count_b,
-                       FormatNumber(r.abs_depth_error_mean_b_m, 6), FormatNumber(r.difference_b_minus_a_m, 6),
-                       FormatNumber(r.centre_error_mean_a_m, 6), FormatNumber(r.centre_error_mean_b_m, 6),
-                       r.model_depth_error_m);
+    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name,
+                       OverlapKindName(r.metric), DifficultyName(r.difficulty), r.lower_m,
+                       r.upper_m, r.count_a, FormatNumber(r.abs_depth_error_mean_a_m, 6), r.count_b,
+                       FormatNumber(r.abs_depth_error_mean_b_m, 6),
+                       FormatNumber(r.difference_b_minus_a_m, 6),
+                       FormatNumber(r.centre_error_mean_a_m, 6),
+                       FormatNumber(r.centre_error_mean_b_m, 6), r.model_depth_error_m);
   }
   return csv;
 }

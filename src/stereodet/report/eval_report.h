@@ -5,10 +5,9 @@
 #define STEREODET_REPORT_EVAL_REPORT_H_
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/evaluator.h"
@@ -59,7 +58,8 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
                                                    const std::vector<EvalRun>& runs,
                                                    const EvalRunInfo& info);
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
-                                                   const EvalResult& result, const EvalOptions& options,
+                                                   const EvalResult& result,
+                                                   const EvalOptions& options,
                                                    const EvalRunInfo& info);
 
 // The per-detection records of every cell (ClassResult::records, EvalOptions::keep_records) as CSV,

@@ -23,8 +23,8 @@ TEST(EvalReport, WritesJsonAndCsvThatAgreeWithTheResult) {
   const EvalResult result = Evaluate(frames, options);
   EvalRunInfo info;
   info.tool_version = "test";
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("stereodet_report_test_" + std::to_string(::getpid()));
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("stereodet_report_test_" + std::to_string(::getpid()));
   const auto written = WriteEvalReport(dir, result, options, info);
   EXPECT_GE(written.size(), 2u);
   const nlohmann::json j = nlohmann::json::parse(ReadFile(dir / "results.json"));
@@ -119,8 +119,10 @@ TEST(EvalReport, WritesRocAndFilteredCurves) {
   for (const auto& r : j["results"]) {
     if (r["class"] == "Car" && r["difficulty"] == "Moderate") {
       EXPECT_DOUBLE_EQ(r["aos_r40"].get<double>(), car.aos_r40);
-      EXPECT_DOUBLE_EQ(r["filtered"]["stable_curve"]["ap_r40"].get<double>(), car.filtered->stable_curve.ap_r40);
-      EXPECT_EQ(r["filtered"]["naive_curve"]["curve"]["tp"].size(), car.filtered->naive_curve.curve.size());
+      EXPECT_DOUBLE_EQ(r["filtered"]["stable_curve"]["ap_r40"].get<double>(),
+                       car.filtered->stable_curve.ap_r40);
+      EXPECT_EQ(r["filtered"]["naive_curve"]["curve"]["tp"].size(),
+                car.filtered->naive_curve.curve.size());
       EXPECT_EQ(r["curve"]["orientation"].size(), car.curve.size());
       found = true;
     }

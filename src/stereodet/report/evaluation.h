@@ -102,8 +102,8 @@ struct EvaluationSweepOptions {
 struct EvaluationSweepResult {
   EvalInput input;
   std::vector<SweepRow> rows;
-  std::string csv;                 // FormatSweepCsv(rows, bound)
-  std::filesystem::path csv_path;  // OUT/sweep.csv; empty without out
+  std::string csv;                     // FormatSweepCsv(rows, bound)
+  std::filesystem::path csv_path;      // OUT/sweep.csv; empty without out
   std::filesystem::path report_index;  // with report: OUT/report/index.html
 };
 
@@ -131,8 +131,8 @@ struct EvaluationCompareResult {
   EvalResult result_a, result_b;
   CompareOptions compare;  // as used: baseline_m and focal_px from the calibration
   std::vector<CompareRow> rows;
-  std::string csv;                 // FormatCompareCsv(rows)
-  std::filesystem::path csv_path;  // OUT/compare.csv; empty without out
+  std::string csv;                     // FormatCompareCsv(rows)
+  std::filesystem::path csv_path;      // OUT/compare.csv; empty without out
   std::filesystem::path report_index;  // with report: OUT/report/index.html
 };
 

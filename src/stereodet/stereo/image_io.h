@@ -3,7 +3,6 @@
 #define STEREODET_STEREO_IMAGE_IO_H_
 
 #include <filesystem>
-
 #include <opencv2/core.hpp>
 
 namespace stereodet {
@@ -13,8 +12,8 @@ namespace stereodet {
 // header claiming 100000 x 100000 px trips its 2^30-pixel limit inside imread).
 cv::Mat ReadImage(const std::filesystem::path& path, int imread_flags, const char* what = "image");
 
-// Reads an image as 8-bit, 3-channel BGR (grey files are expanded). Throws std::runtime_error naming
-// the path if it is missing or not a readable image.
+// Reads an image as 8-bit, 3-channel BGR (grey files are expanded). Throws std::runtime_error
+// naming the path if it is missing or not a readable image.
 cv::Mat ReadColourImage(const std::filesystem::path& path);
 
 // Throws std::runtime_error naming both files when the two images of a stereo pair differ in size

@@ -70,7 +70,8 @@ void WriteFileAtomically(const fs::path& path, std::string_view contents) {
     std::FILE* file = std::fopen(out.temp_path().c_str(), "wb");
     STEREODET_CHECK_IO(file != nullptr)
         << "cannot write " << path.string() << ": " << std::strerror(errno);
-    const size_t written = contents.empty() ? 0 : std::fwrite(contents.data(), 1, contents.size(), file);
+    const size_t written =
+        contents.empty() ? 0 : std::fwrite(contents.data(), 1, contents.size(), file);
     const bool ok = written == contents.size() && std::fflush(file) == 0;
     const int close_status = std::fclose(file);
     STEREODET_CHECK_IO(ok && close_status == 0)

@@ -45,7 +45,8 @@ TEST_F(AtomicFileTest, UncommittedAtomicPathLeavesDestinationUntouched) {
   {
     AtomicPath out(path);
     EXPECT_EQ(out.temp_path().extension(), ".png");  // encoders choose by extension
-    EXPECT_EQ(out.temp_path().parent_path(), path.parent_path());  // same filesystem: rename is atomic
+    EXPECT_EQ(out.temp_path().parent_path(),
+              path.parent_path());  // same filesystem: rename is atomic
     std::ofstream(out.temp_path()) << "half written";
     // No Commit(): as if the writer threw.
   }

@@ -40,7 +40,8 @@ CheckFailure::~CheckFailure() noexcept(false) {
   std::string message = stream_.str();
   // Unconditional throws pass "false" as the condition; it says nothing, so leave it out.
   const bool has_condition = std::strcmp(condition_, "false") != 0;
-  if (message.empty()) message = has_condition ? std::string("check failed: ") + condition_ : "error";
+  if (message.empty())
+    message = has_condition ? std::string("check failed: ") + condition_ : "error";
   const char* base = std::strrchr(file_, '/');
   message += " [" + std::string(base != nullptr ? base + 1 : file_) + ":" + std::to_string(line_);
   if (has_condition) message += std::string(", ") + condition_;

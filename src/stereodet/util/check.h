@@ -96,9 +96,9 @@ struct Voidify {
 }  // namespace internal
 }  // namespace stereodet
 
-#define STEREODET_INTERNAL_CHECK(kind, cond)                                               \
-  (cond) ? (void)0                                                                         \
-         : ::stereodet::internal::Voidify() &                                              \
+#define STEREODET_INTERNAL_CHECK(kind, cond)  \
+  (cond) ? (void)0                            \
+         : ::stereodet::internal::Voidify() & \
                ::stereodet::internal::CheckFailure((kind), #cond, __FILE__, __LINE__)
 
 #define STEREODET_CHECK(cond) \

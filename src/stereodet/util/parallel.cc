@@ -10,7 +10,8 @@
 namespace stereodet {
 
 int EffectiveThreads(int num_threads) {
-  STEREODET_CHECK(num_threads >= 0) << "num_threads must be >= 0 (0 = all cores), got " << num_threads;
+  STEREODET_CHECK(num_threads >= 0)
+      << "num_threads must be >= 0 (0 = all cores), got " << num_threads;
   return num_threads == 0 ? tbb::info::default_concurrency() : num_threads;
 }
 

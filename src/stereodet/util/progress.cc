@@ -1,8 +1,7 @@
 #include "stereodet/util/progress.h"
 
-#include <unistd.h>
-
 #include <fmt/format.h>
+#include <unistd.h>
 
 namespace stereodet {
 
@@ -22,9 +21,15 @@ ProgressReporter::ProgressReporter(std::string label, int64_t total, ProgressOpt
   start_ = last_draw_ = Clock::now();
   if (options_.stream != nullptr) {
     switch (options_.mode) {
-      case ProgressOptions::Mode::kTerminal: terminal_ = true; break;
-      case ProgressOptions::Mode::kPlain: terminal_ = false; break;
-      case ProgressOptions::Mode::kAuto: terminal_ = ::isatty(::fileno(options_.stream)) != 0; break;
+      case ProgressOptions::Mode::kTerminal:
+        terminal_ = true;
+        break;
+      case ProgressOptions::Mode::kPlain:
+        terminal_ = false;
+        break;
+      case ProgressOptions::Mode::kAuto:
+        terminal_ = ::isatty(::fileno(options_.stream)) != 0;
+        break;
     }
   }
 }

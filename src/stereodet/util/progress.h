@@ -33,7 +33,8 @@ class ProgressReporter {
   ProgressReporter(const ProgressReporter&) = delete;
   ProgressReporter& operator=(const ProgressReporter&) = delete;
 
-  // Counts `n` more units done. `status` (e.g. "loss 0.41"), if not empty, replaces the status text.
+  // Counts `n` more units done. `status` (e.g. "loss 0.41"), if not empty, replaces the status
+  // text.
   void Add(int64_t n = 1, const std::string& status = "");
   // Prints the final line (count, rate, elapsed time). Idempotent.
   void Finish();

@@ -76,7 +76,8 @@ TEST(ProgressTest, CountsCorrectlyFromManyThreads) {
   ProgressOptions options;
   options.stream = nullptr;
   ProgressReporter progress("x", 10000, options);
-  ParallelFor(10000, [&](size_t) { progress.Add(); }, 2);
+  ParallelFor(
+      10000, [&](size_t) { progress.Add(); }, 2);
   EXPECT_EQ(progress.done(), 10000);
 }
 

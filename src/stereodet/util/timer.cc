@@ -1,9 +1,9 @@
 #include "stereodet/util/timer.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <vector>
-
-#include <fmt/format.h>
 
 namespace stereodet {
 

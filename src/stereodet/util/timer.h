@@ -33,8 +33,8 @@ class StageTimes {
   void Add(const std::string& stage, double seconds);
   // Stages in name order.
   std::map<std::string, Stage> Snapshot() const;
-  // One line per stage: "  disparity      41.2 ms/call  x 3769  = 155.3 s", in the order stages were
-  // first added.
+  // One line per stage: "  disparity      41.2 ms/call  x 3769  = 155.3 s", in the order stages
+  // were first added.
   std::string Format() const;
 
  private:
