@@ -13,32 +13,15 @@
 #include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/frame_data.h"
 #include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/test_objects.h"
 #include "stereodet/kitti/label_io.h"
 
 namespace stereodet {
 namespace {
 
-Object Line(const std::string& text) {
-  return ParseObjects(text, "test", {ObjectFileKind::kAny}).objects.at(0);
-}
-
-Box3D Footprint(double x, double z, double l, double w, double rotation_y, double y = 1.65,
-                double h = 1.5) {
-  Box3D b;
-  b.h = h;
-  b.w = w;
-  b.l = l;
-  b.location = Eigen::Vector3d(x, y, z);
-  b.rotation_y = rotation_y;
-  return b;
-}
-
-double Devkit(OverlapKind kind, const Box3D& det, const Box3D& label,
-              DevkitCriterion criterion = DevkitCriterion::kUnion) {
-  const std::optional<double> o = DevkitBoxOverlap(kind, criterion, det, label);
-  EXPECT_TRUE(o.has_value());
-  return o.value_or(-1.0);
-}
+using testing_objects::Devkit;
+using testing_objects::Footprint;
+using testing_objects::Line;
 
 TEST(DevkitOverlap, HandComputableCases) {
   const Box3D label = Footprint(3.0, 20.0, 3.9, 1.6, 0.0, 1.65, 2.0);

@@ -1,13 +1,18 @@
 // Test support (include from *_test.cc only): labels and detections with a 2D box and a fixed
 // KITTI-like car-sized 3D box (1.5 x 1.6 x 3.9 m, 20 m ahead, x from the box's left edge), so that
-// 2D cases can be written by hand and BEV / 3D fields are valid; and plain 2D cars.
+// 2D cases can be written by hand and BEV / 3D fields are valid; plain 2D cars; and, for the
+// devkit-overlap tests, objects from KITTI lines, footprints and the devkit's overlap of a pair.
 #ifndef STEREODET_EVAL_TEST_OBJECTS_H_
 #define STEREODET_EVAL_TEST_OBJECTS_H_
+
+#include <gtest/gtest.h>
 
 #include <optional>
 #include <string>
 
+#include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/eval_options.h"
+#include "stereodet/kitti/label_io.h"
 #include "stereodet/kitti/object.h"
 
 namespace stereodet::testing_objects {
@@ -62,6 +67,31 @@ inline EvalOptions CarModerate2D(Matcher matcher) {
   options.difficulties = {Difficulty::kModerate};
   options.matcher = matcher;
   return options;
+}
+
+// The first object of a KITTI label or detection line.
+inline Object Line(const std::string& text) {
+  return ParseObjects(text, "test", {ObjectFileKind::kAny}).objects.at(0);
+}
+
+// A 3D box at (x, y, z) in rect, l x w x h metres, turned by rotation_y.
+inline Box3D Footprint(double x, double z, double l, double w, double rotation_y, double y = 1.65,
+                       double h = 1.5) {
+  Box3D b;
+  b.h = h;
+  b.w = w;
+  b.l = l;
+  b.location = Eigen::Vector3d(x, y, z);
+  b.rotation_y = rotation_y;
+  return b;
+}
+
+// The devkit's overlap of a pair, which must be defined (a failure otherwise, and -1).
+inline double Devkit(OverlapKind kind, const Box3D& det, const Box3D& label,
+                     DevkitCriterion criterion = DevkitCriterion::kUnion) {
+  const std::optional<double> o = DevkitBoxOverlap(kind, criterion, det, label);
+  EXPECT_TRUE(o.has_value());
+  return o.value_or(-1.0);
 }
 
 }  // namespace stereodet::testing_objects

@@ -115,6 +115,26 @@ std::string ExpectedCount(ObjectFileKind kind) {
   return "15";
 }
 
+// The numeric fields of a parsed line (values[1..] in KITTI's order, occluded apart) into
+// `object`; the score only when the line has all 16 fields. Both parsing paths use it, so a line
+// reads the same on either.
+void AssignFields(const double* values, int occluded, int count, Object* object) {
+  object->truncated = values[1];
+  object->occluded = occluded;
+  object->alpha = values[3];
+  object->box = Box2D{values[4], values[5], values[6], values[7]};
+  object->box3d.h = values[8];
+  object->box3d.w = values[9];
+  object->box3d.l = values[10];
+  object->box3d.location = Eigen::Vector3d(values[11], values[12], values[13]);
+  object->box3d.rotation_y = values[14];
+  if (count == kDetectionFields) {
+    object->score = values[15];
+  } else {
+    object->score.reset();
+  }
+}
+
 // A line as KITTI's files write them, in one pass: the type, then 14 (label) or 15 (detection)
 // numbers, short decimals (ScanShortDecimal) or else any finite number (ReadFiniteDouble), with
 // occluded a short integer and dimensions >= 0 or -1. Returns false for any other line, without
@@ -169,20 +189,7 @@ bool ParseUsualLine(std::string_view line, ObjectFileKind kind, Object* object) 
     if (values[i] < 0 && values[i] != -1.0) return false;
   }
   object->type.assign(type.data(), type.size());
-  object->truncated = values[1];
-  object->occluded = occluded;
-  object->alpha = values[3];
-  object->box = Box2D{values[4], values[5], values[6], values[7]};
-  object->box3d.h = values[8];
-  object->box3d.w = values[9];
-  object->box3d.l = values[10];
-  object->box3d.location = Eigen::Vector3d(values[11], values[12], values[13]);
-  object->box3d.rotation_y = values[14];
-  if (count == kDetectionFields) {
-    object->score = values[15];
-  } else {
-    object->score.reset();
-  }
+  AssignFields(values, occluded, count, object);
   return true;
 }
 
@@ -240,20 +247,7 @@ bool ParseLine(std::string_view line, ObjectFileKind kind, Object* object, LineE
       return false;
     }
   }
-  object->truncated = values[1];
-  object->occluded = *occluded;
-  object->alpha = values[3];
-  object->box = Box2D{values[4], values[5], values[6], values[7]};
-  object->box3d.h = values[8];
-  object->box3d.w = values[9];
-  object->box3d.l = values[10];
-  object->box3d.location = Eigen::Vector3d(values[11], values[12], values[13]);
-  object->box3d.rotation_y = values[14];
-  if (count == kDetectionFields) {
-    object->score = values[15];
-  } else {
-    object->score.reset();
-  }
+  AssignFields(values, *occluded, count, object);
   return true;
 }
 
