@@ -589,8 +589,12 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
   STEREODET_CHECK(step > 0 && std::isfinite(from) && std::isfinite(to) && from <= to)
       << "sweep needs from <= to and step > 0, got from " << from << " to " << to << " step "
       << step;
-  const int num_values = static_cast<int>(std::floor((to - from) / step + 1e-9)) + 1;
-  STEREODET_CHECK(num_values <= 100000) << "sweep has too many values: " << num_values;
+  // Counted in double first: (to - from) / step can be far beyond an int (--step 1e-9), and the
+  // cast of such a value is undefined (the audit saw a sweep of only a header, exit 0).
+  const double values = std::floor((to - from) / step + 1e-9) + 1;
+  STEREODET_CHECK(values <= 100000) << "sweep has too many values: " << values << " (from " << from
+                                    << " to " << to << " step " << step << "; at most 100000)";
+  const int num_values = static_cast<int>(values);
   const int threads = options.num_threads;
   const double t_op = options.score_threshold;
   std::vector<SweepRow> rows;

@@ -181,6 +181,21 @@ TEST(Filter, ParsesAndRejects) {
   EXPECT_THROW(ParseFilterConditions("min-area"), std::invalid_argument);
 }
 
+TEST(Filter, ASweepOfMoreThan100000ValuesIsAnErrorNotAnOverflow) {
+  EvalFrame f;
+  f.labels = {Car2D(0, 0, 99, 100, 0)};
+  EvalOptions options = CarModerate2D(Matcher::kKitti);
+  EXPECT_EQ(FilterSweep({f}, options, FilterBound::kMinArea, 0, 100, 0.002).size(), 50001u);
+  for (double step : {0.0009, 1e-9, 1e-300}) {  // 111112 values, 1e11, 1e302
+    try {
+      FilterSweep({f}, options, FilterBound::kMinArea, 0, 100, step);
+      ADD_FAILURE() << "no error for step " << step;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("sweep has too many values"), std::string::npos);
+    }
+  }
+}
+
 TEST(Filter, FilterModeRoundTrip) {
   for (FilterMode m : {FilterMode::kNaive, FilterMode::kStable}) {
     EXPECT_EQ(ParseFilterMode(FilterModeName(m)), m) << FilterModeName(m);
