@@ -121,6 +121,32 @@ void EvaluationSweepOptions::Check() const {
   STEREODET_CHECK(!report || !out.empty()) << "sweep: report needs an output folder (out)";
 }
 
+namespace {
+
+struct CsvOutput {
+  std::filesystem::path csv_path;      // empty without an output folder
+  std::filesystem::path report_index;  // empty without a report
+};
+
+// The sweep's and the compare's outputs: OUT/NAME (atomically) when there is an output folder,
+// then, if asked, the report of that folder.
+CsvOutput WriteCsvAndReport(const std::filesystem::path& out, const char* name,
+                            const std::string& csv, bool report) {
+  CsvOutput written;
+  if (!out.empty()) {
+    written.csv_path = out / name;
+    WriteFileAtomically(written.csv_path, csv);
+  }
+  if (report) {
+    ReportOptions report_options;
+    report_options.results = {out};
+    written.report_index = WriteReport(report_options).index;
+  }
+  return written;
+}
+
+}  // namespace
+
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) {
   options.Check();
   EvaluationSweepResult result;
@@ -128,15 +154,9 @@ EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) 
   result.rows = FilterSweep(result.input.frames, options.eval, options.bound, options.from,
                             options.to, options.step);
   result.csv = FormatSweepCsv(result.rows, options.bound);
-  if (!options.out.empty()) {
-    result.csv_path = options.out / "sweep.csv";
-    WriteFileAtomically(result.csv_path, result.csv);
-  }
-  if (options.report) {
-    ReportOptions report;
-    report.results = {options.out};
-    result.report_index = WriteReport(report).index;
-  }
+  const CsvOutput written = WriteCsvAndReport(options.out, "sweep.csv", result.csv, options.report);
+  result.csv_path = written.csv_path;
+  result.report_index = written.report_index;
   return result;
 }
 
@@ -163,15 +183,10 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
   result.compare.disparity_error_px = options.disparity_error_px;
   result.rows = CompareLocalization(result.result_a, result.result_b, result.compare);
   result.csv = FormatCompareCsv(result.rows);
-  if (!options.out.empty()) {
-    result.csv_path = options.out / "compare.csv";
-    WriteFileAtomically(result.csv_path, result.csv);
-  }
-  if (options.report) {
-    ReportOptions report;
-    report.results = {options.out};
-    result.report_index = WriteReport(report).index;
-  }
+  const CsvOutput written =
+      WriteCsvAndReport(options.out, "compare.csv", result.csv, options.report);
+  result.csv_path = written.csv_path;
+  result.report_index = written.report_index;
   return result;
 }
 
