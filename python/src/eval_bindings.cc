@@ -174,14 +174,20 @@ PyFrames FramesFromAnnos(py::handle gt_annos, py::handle dt_annos) {
   return out;
 }
 
+EvalInputOptions InputOptions(const fs::path& gt, const fs::path& det, const std::string& split,
+                              bool lenient, int num_threads) {
+  EvalInputOptions input;
+  input.gt = gt;
+  input.det = det;
+  input.split = split;
+  input.lenient = lenient;
+  input.num_threads = num_threads;
+  return input;
+}
+
 PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const std::string& split,
                            bool lenient, int num_threads) {
-  EvalInputOptions options;
-  options.gt = gt;
-  options.det = det;
-  options.split = split;
-  options.lenient = lenient;
-  options.num_threads = num_threads;
+  const EvalInputOptions options = InputOptions(gt, det, split, lenient, num_threads);
   EvalInput input;
   {
     ReleaseGil release;
@@ -230,17 +236,6 @@ std::vector<EvalOptions> OverlapRuns(const EvalOptions& base,
   }
   if (sets.empty()) ThrowValueError("overlaps: no overlap set (strict, loose)");
   return OverlapSetRuns(base, sets);
-}
-
-EvalInputOptions InputOptions(const fs::path& gt, const fs::path& det, const std::string& split,
-                              bool lenient, int num_threads) {
-  EvalInputOptions input;
-  input.gt = gt;
-  input.det = det;
-  input.split = split;
-  input.lenient = lenient;
-  input.num_threads = num_threads;
-  return input;
 }
 
 // `stereodet eval` on folders: RunEvaluation, which with `out` writes the CLI's results folder
