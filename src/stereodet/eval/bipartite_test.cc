@@ -5,7 +5,7 @@
 namespace stereodet {
 namespace {
 
-TEST(Bipartite, IncrementalMatchingRemovingAMatchedLabelReroutes) {
+TEST(BipartiteTest, IncrementalMatchingRemovingAMatchedLabelReroutes) {
   // det 0 - {label 0, label 1}, det 1 - {label 0}.
   DetAdjacency adj;
   adj.num_labels = 2;

@@ -23,7 +23,7 @@ Object Car(double left, double z, double dz = 0.0, double score = -1) {
 // +0.2 m and -2.0 m; the 2D boxes are exact, so all four pairs match in 2D. Per bin: mean |dz| A
 // 0.5 and 1.0, B 0.2 and 2.0, B - A = -0.3 and +1.0; the centre error is |dz| (only z differs); the
 // model is z^2 / (b f) * dd at the bin centre (12.5 m and 22.5 m).
-TEST(Compare, LocalizationOfTwoDetectionSetsByHand) {
+TEST(CompareTest, LocalizationOfTwoDetectionSetsByHand) {
   EvalFrame fa, fb;
   fa.labels = fb.labels = {Car(100, 12), Car(600, 22)};
   fa.detections = {Car(100, 12, 0.5, 0.9), Car(600, 22, 1.0, 0.8)};

@@ -19,7 +19,7 @@ using testing_objects::CarModerate2D;
 // first taken by a detection of alpha pi (similarity 0); at a lower score a detection that only
 // fits A arrives while the first one also fits label B, so the maximum matching pairs both and the
 // similarity of A's pair changes.
-TEST(CurveEvents, OptimalSimilarityFollowsTheAssociationAtEachScore) {
+TEST(CurveEventsTest, OptimalSimilarityFollowsTheAssociationAtEachScore) {
   EvalFrame f;
   f.labels = {Car2D(0, 0, 100, 100, 0), Car2D(20, 0, 120, 100, 0)};
   f.detections = {Car2D(10, 0, 110, 100, M_PI, 0.9), Car2D(0, 0, 100, 100, 0, 0.8)};
@@ -36,7 +36,7 @@ TEST(CurveEvents, OptimalSimilarityFollowsTheAssociationAtEachScore) {
 
 // A component with more distinct scores than the exact AOS bound (256): the similarity is sampled
 // at 64 scores, the lowest included, so the last curve point is still exact.
-TEST(CurveEvents, HugeComponentIsSampledAndExactAtTheLowestScore) {
+TEST(CurveEventsTest, HugeComponentIsSampledAndExactAtTheLowestScore) {
   EvalFrame f;
   for (int i = 0; i < 3; ++i) f.labels.push_back(Car2D(10.0 * i, 0, 100 + 10.0 * i, 100, 0.1 * i));
   for (int k = 0; k < 400; ++k) {

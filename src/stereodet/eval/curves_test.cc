@@ -36,7 +36,7 @@ bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) =
 
 // Random curves with recall ties, recall exactly on the levels (k / 40, k / 10), points without a
 // detection, in and out of recall order: every summary bit for bit the reference's.
-TEST(Curves, InterpolatedApEqualsItsDefinitionOnRandomCurves) {
+TEST(CurvesTest, InterpolatedApEqualsItsDefinitionOnRandomCurves) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int n = 0; n < 3000; ++n) {
@@ -70,7 +70,7 @@ TEST(Curves, InterpolatedApEqualsItsDefinitionOnRandomCurves) {
   }
 }
 
-TEST(Curves, InterpolatedApOfAPerfectCurveIs100) {
+TEST(CurvesTest, InterpolatedApOfAPerfectCurveIs100) {
   // 40 labels, found one by one with precision 1: R40 = 100 (no devkit slot quirk here).
   std::vector<CurveEvent> events;
   for (int i = 0; i < 40; ++i) events.push_back(CurveEvent{1.0 - i / 100.0, 1, 0, -1});
@@ -81,7 +81,7 @@ TEST(Curves, InterpolatedApOfAPerfectCurveIs100) {
   EXPECT_DOUBLE_EQ(BestF1(curve).f1, 1.0);
 }
 
-TEST(Curves, EveryPointApIntegratesTheEnvelope) {
+TEST(CurvesTest, EveryPointApIntegratesTheEnvelope) {
   // Labels: 2. Scores: TP, FP, TP -> (P, R) = (1, .5), (.5, .5), (2/3, 1).
   const std::vector<CurvePoint> curve =
       BuildCurve({{0.9, 1, 0, -1}, {0.8, 0, 1, 0}, {0.7, 1, 0, -1}}, 2);

@@ -23,7 +23,7 @@ using testing_objects::Devkit;
 using testing_objects::Footprint;
 using testing_objects::Line;
 
-TEST(DevkitOverlap, HandComputableCases) {
+TEST(DevkitOverlapTest, HandComputableCases) {
   const Box3D label = Footprint(3.0, 20.0, 3.9, 1.6, 0.0, 1.65, 2.0);
   // Axis-aligned, shifted by half its length: intersection 1.95 x 1.6 of union 5.85 x 1.6.
   Box3D det = label;
@@ -43,7 +43,7 @@ TEST(DevkitOverlap, HandComputableCases) {
   EXPECT_EQ(Devkit(OverlapKind::k3D, det, label), 0.0);
 }
 
-TEST(DevkitOverlap, RejectsImageBoxes) {
+TEST(DevkitOverlapTest, RejectsImageBoxes) {
   const Box3D b = Footprint(0, 10, 4, 2, 0);
   EXPECT_THROW(DevkitBoxOverlap(OverlapKind::k2D, DevkitCriterion::kUnion, b, b),
                std::invalid_argument);
@@ -52,7 +52,7 @@ TEST(DevkitOverlap, RejectsImageBoxes) {
 // The band of KittiOverlapAtThreshold and PrepareClassFrame rests on this: away from the degenerate
 // cases below, the devkit's (rescaled) arithmetic stays within a fraction of kDevkitTieBand of the
 // exact overlap, so only values that close to tau, or to each other, can be decided otherwise.
-TEST(DevkitOverlap, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
+TEST(DevkitOverlapTest, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (const bool thin : {false, true}) {
@@ -90,7 +90,7 @@ TEST(DevkitOverlap, StaysWithinTheBandOfTheExactOverlapOnRandomBoxes) {
 // DevkitBoxOverlap keeps the last pairs' boost results per thread (BEV and 3D share the
 // intersection). Whatever was asked before, and after the memory has been emptied, every pair's
 // four overlaps come out the same: asked BEV first, 3D first, or with 70,000 other pairs between.
-TEST(DevkitOverlap, SameValuesWhateverWasAskedBefore) {
+TEST(DevkitOverlapTest, SameValuesWhateverWasAskedBefore) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   auto random_pair = [&] {
@@ -137,7 +137,7 @@ TEST(DevkitOverlap, SameValuesWhateverWasAskedBefore) {
 // Boost 1.74 loses the intersection of a footprint nested in a parallel one between common end
 // lines (same centre, length and rotation, 6 cm wider): the devkit sees overlap 0, not 0.976, and
 // KITTI mode follows it. Checked end to end against the devkit in evaluator_test.cc.
-TEST(DevkitOverlap, LosesSomeNestedParallelFootprintsLikeTheDevkit) {
+TEST(DevkitOverlapTest, LosesSomeNestedParallelFootprintsLikeTheDevkit) {
   const Object label = Line("Car 0.00 0 0.00 100 100 200 200 1.27 2.41 0.75 9.69 1.74 15.90 -1.57");
   const Object det =
       Line("Car -1 -1 0.00 100 100 200 200 1.27 2.47 0.75 9.69 1.74 15.90 -1.57 0.9");
@@ -152,7 +152,7 @@ TEST(DevkitOverlap, LosesSomeNestedParallelFootprintsLikeTheDevkit) {
 
 // A footprint with w = -1 and l > 0 is a reversed ring: boost returns no union and the devkit
 // crashes (tools' repro D). The devkit has no answer; KittiOverlap's 0 stays.
-TEST(DevkitOverlap, NoAnswerWhereTheDevkitCrashes) {
+TEST(DevkitOverlapTest, NoAnswerWhereTheDevkitCrashes) {
   const Object label =
       Line("Car 0.81 0 0.36 897.35 262.62 968.99 291.25 1.59 1.84 3.48 6.34 1.88 51.24 0.90");
   const Object det =

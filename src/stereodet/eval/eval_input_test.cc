@@ -58,7 +58,7 @@ std::string ErrorOf(const EvalInputOptions& options) {
   return "";
 }
 
-TEST(EvalInput, ReadsEveryLabelFileAndNotesFramesWithoutDetections) {
+TEST(EvalInputTest, ReadsEveryLabelFileAndNotesFramesWithoutDetections) {
   const Folders f;
   const EvalInput in = LoadEvalFrames(f.Options());
   ASSERT_EQ(in.frames.size(), 3u);
@@ -72,7 +72,7 @@ TEST(EvalInput, ReadsEveryLabelFileAndNotesFramesWithoutDetections) {
   EXPECT_THAT(in.Notices(), ElementsAre("frames without a detection file (no detections): 1"));
 }
 
-TEST(EvalInput, WarnsAboutDetectionFilesThatTheFoldersRunDidNotWrite) {
+TEST(EvalInputTest, WarnsAboutDetectionFilesThatTheFoldersRunDidNotWrite) {
   Folders f;
   // No run.json (KITTI's own results): nothing to check, nothing said.
   EvalInput in = LoadEvalFrames(f.Options());
@@ -102,7 +102,7 @@ TEST(EvalInput, WarnsAboutDetectionFilesThatTheFoldersRunDidNotWrite) {
   EXPECT_THAT(in.Notices().back(), HasSubstr("det/000001.txt"));
 }
 
-TEST(EvalInput, KittiRootAndDevkitDataFolderAreFound) {
+TEST(EvalInputTest, KittiRootAndDevkitDataFolderAreFound) {
   TestTempDir dir;
   Write(dir / "kitti/training/label_2/000007.txt", kLabel);
   Write(dir / "kitti/ImageSets/val.txt", "000007\n");
@@ -119,7 +119,7 @@ TEST(EvalInput, KittiRootAndDevkitDataFolderAreFound) {
   EXPECT_TRUE(in.Notices().empty());
 }
 
-TEST(EvalInput, StrayFilesAreIgnoredWithOneNotice) {
+TEST(EvalInputTest, StrayFilesAreIgnoredWithOneNotice) {
   Folders f;
   Write(f.det / "009999.txt", kDetection);  // a frame outside the split
   Write(f.det / "README.txt", "how these were made\n");
@@ -140,7 +140,7 @@ TEST(EvalInput, StrayFilesAreIgnoredWithOneNotice) {
   EXPECT_THAT(notices[0], HasSubstr("first: " + (f.det / "009999.txt").string()));
 }
 
-TEST(EvalInput, WithoutASplitADetectionFileWithoutALabelFileIsAnError) {
+TEST(EvalInputTest, WithoutASplitADetectionFileWithoutALabelFileIsAnError) {
   Folders f;
   Write(f.det / "README.txt", "not a frame: ignored\n");
   EXPECT_EQ(LoadEvalFrames(f.Options()).ignored_files.size(), 1u);
@@ -150,7 +150,7 @@ TEST(EvalInput, WithoutASplitADetectionFileWithoutALabelFileIsAnError) {
   EXPECT_THAT(error, HasSubstr("with --split"));
 }
 
-TEST(EvalInput, SplitFrameWithoutALabelFileIsAnError) {
+TEST(EvalInputTest, SplitFrameWithoutALabelFileIsAnError) {
   Folders f;
   Write(f.dir / "split.txt", "000000\n000005\n");
   EvalInputOptions o = f.Options();
@@ -166,7 +166,7 @@ TEST(EvalInput, SplitFrameWithoutALabelFileIsAnError) {
   }
 }
 
-TEST(EvalInput, SplitListingAFrameTwiceIsAnError) {
+TEST(EvalInputTest, SplitListingAFrameTwiceIsAnError) {
   Folders f;
   Write(f.dir / "split.txt", "000000\n000001\n000000\n");
   EvalInputOptions o = f.Options();
@@ -174,7 +174,7 @@ TEST(EvalInput, SplitListingAFrameTwiceIsAnError) {
   EXPECT_THAT(ErrorOf(o), HasSubstr("frame 000000 is listed more than once"));
 }
 
-TEST(EvalInput, HashesTheBytesReadIndependentlyOfThreads) {
+TEST(EvalInputTest, HashesTheBytesReadIndependentlyOfThreads) {
   Folders f;
   EvalInputOptions o = f.Options();
   const EvalInput two = LoadEvalFrames(o);
@@ -186,7 +186,7 @@ TEST(EvalInput, HashesTheBytesReadIndependentlyOfThreads) {
   EXPECT_NE(LoadEvalFrames(o).input_hash, one.input_hash);
 }
 
-TEST(EvalInput, SplitNameWithAPlainLabelFolderSaysWhereItLookedAndHowToPassAFile) {
+TEST(EvalInputTest, SplitNameWithAPlainLabelFolderSaysWhereItLookedAndHowToPassAFile) {
   TestTempDir dir;
   Write(dir / "kitti/training/label_2/000007.txt", kLabel);
   Write(dir / "kitti/ImageSets/val.txt", "000007\n");
@@ -209,7 +209,7 @@ TEST(EvalInput, SplitNameWithAPlainLabelFolderSaysWhereItLookedAndHowToPassAFile
   EXPECT_THAT(none, HasSubstr("--split ROOT/ImageSets/test.txt, or the KITTI root: --gt ROOT"));
 }
 
-TEST(EvalInput, LenientSkipsAndListsBadLinesStrictThrows) {
+TEST(EvalInputTest, LenientSkipsAndListsBadLinesStrictThrows) {
   Folders f;
   Write(f.det / "000001.txt", std::string(kDetection) + "Car 0 0 1 2 3 4 5 6 7 8 9 10 11 12 nan\n");
   Write(f.gt / "000002.txt", std::string("Car 0 0 x\n") + kLabel);
@@ -230,7 +230,7 @@ TEST(EvalInput, LenientSkipsAndListsBadLinesStrictThrows) {
   EXPECT_THAT(in.Notices(), ::testing::Contains("skipped bad lines (--lenient): 2"));
 }
 
-TEST(EvalInput, DetectionsWithFloatsInEveryFieldAreRead) {
+TEST(EvalInputTest, DetectionsWithFloatsInEveryFieldAreRead) {
   Folders f;
   Write(f.det / "000000.txt",
         "Car -1.0000 -1.0000 -1.5700 100.0000 100.0000 200.0000 200.0000 1.5000 1.6000 3.9000 "
@@ -240,7 +240,7 @@ TEST(EvalInput, DetectionsWithFloatsInEveryFieldAreRead) {
   EXPECT_EQ(*in.frames[0].detections[0].score, 0.9);
 }
 
-TEST(EvalInput, MissingFoldersAndEmptyOptionsAreErrors) {
+TEST(EvalInputTest, MissingFoldersAndEmptyOptionsAreErrors) {
   Folders f;
   EvalInputOptions o = f.Options();
   o.det = f.dir / "nowhere";

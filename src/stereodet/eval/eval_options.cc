@@ -62,18 +62,6 @@ std::optional<OverlapKind> ParseOverlapKind(std::string_view text) {
   return std::nullopt;
 }
 
-bool EqualsIgnoreCase(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (size_t i = 0; i < a.size(); ++i) {
-    if (a[i] == b[i]) continue;  // most comparisons are of equal names: no tolower call for them
-    if (std::tolower(static_cast<unsigned char>(a[i])) !=
-        std::tolower(static_cast<unsigned char>(b[i]))) {
-      return false;
-    }
-  }
-  return true;
-}
-
 ClassSpec KittiClassSpec(const std::string& name, bool loose) {
   ClassSpec spec;
   spec.name = name;

@@ -14,6 +14,7 @@
 
 #include "stereodet/eval/filter.h"
 #include "stereodet/kitti/object.h"
+#include "stereodet/util/strings.h"  // EqualsIgnoreCase, for the class names
 
 namespace stereodet {
 
@@ -71,9 +72,6 @@ enum class ScoreTransform {
 const char* ScoreTransformName(ScoreTransform transform);  // "none", "sigmoid"
 std::optional<ScoreTransform> ParseScoreTransform(std::string_view text);
 double ApplyScoreTransform(ScoreTransform transform, double score);
-
-// Case-insensitive ASCII comparison (strcasecmp).
-bool EqualsIgnoreCase(std::string_view a, std::string_view b);
 
 struct EvalOptions {
   std::vector<ClassSpec> classes = {KittiClassSpec("Car"), KittiClassSpec("Pedestrian"),

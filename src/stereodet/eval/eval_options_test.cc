@@ -8,7 +8,7 @@
 namespace stereodet {
 namespace {
 
-TEST(EvalOptions, CompatNamesRoundTrip) {
+TEST(EvalOptionsTest, CompatNamesRoundTrip) {
   for (EvalCompat c : {EvalCompat::kDevkit, EvalCompat::kOpenPcdet}) {
     EXPECT_EQ(ParseEvalCompat(EvalCompatName(c)), c);
   }
@@ -16,7 +16,7 @@ TEST(EvalOptions, CompatNamesRoundTrip) {
   EXPECT_FALSE(ParseEvalCompat("mmdet").has_value());
 }
 
-TEST(EvalOptions, OpenPcdetCompatNeedsTheKittiMatcher) {
+TEST(EvalOptionsTest, OpenPcdetCompatNeedsTheKittiMatcher) {
   EvalOptions options;
   options.compat = EvalCompat::kOpenPcdet;
   EXPECT_NO_THROW(options.Check());
@@ -25,7 +25,7 @@ TEST(EvalOptions, OpenPcdetCompatNeedsTheKittiMatcher) {
 }
 
 // Option checks name the field and its value (the comparison checks of util/check.h).
-TEST(EvalOptions, CheckMessagesNameTheFieldAndItsValue) {
+TEST(EvalOptionsTest, CheckMessagesNameTheFieldAndItsValue) {
   auto message = [](const EvalOptions& o) -> std::string {
     try {
       o.Check();
@@ -48,7 +48,7 @@ TEST(EvalOptions, CheckMessagesNameTheFieldAndItsValue) {
 
 // Every enum of the options: Name() then Parse() gives the value back, a bad name gives nullopt.
 
-TEST(EvalOptions, MatcherNamesRoundTrip) {
+TEST(EvalOptionsTest, MatcherNamesRoundTrip) {
   for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
     EXPECT_EQ(ParseMatcher(MatcherName(m)), m) << MatcherName(m);
   }
@@ -57,14 +57,14 @@ TEST(EvalOptions, MatcherNamesRoundTrip) {
   EXPECT_EQ(ParseMatcher(""), std::nullopt);
 }
 
-TEST(EvalOptions, EvalCompatNamesRoundTrip) {
+TEST(EvalOptionsTest, EvalCompatNamesRoundTrip) {
   for (EvalCompat c : {EvalCompat::kDevkit, EvalCompat::kOpenPcdet}) {
     EXPECT_EQ(ParseEvalCompat(EvalCompatName(c)), c) << EvalCompatName(c);
   }
   EXPECT_EQ(ParseEvalCompat("mmdet3d"), std::nullopt);
 }
 
-TEST(EvalOptions, OverlapKindNamesRoundTrip) {
+TEST(EvalOptionsTest, OverlapKindNamesRoundTrip) {
   for (OverlapKind k : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
     EXPECT_EQ(ParseOverlapKind(OverlapKindName(k)), k) << OverlapKindName(k);
   }
@@ -72,14 +72,14 @@ TEST(EvalOptions, OverlapKindNamesRoundTrip) {
   EXPECT_EQ(ParseOverlapKind("4d"), std::nullopt);
 }
 
-TEST(EvalOptions, OverlapSetNamesRoundTrip) {
+TEST(EvalOptionsTest, OverlapSetNamesRoundTrip) {
   for (OverlapSet s : {OverlapSet::kStrict, OverlapSet::kLoose}) {
     EXPECT_EQ(ParseOverlapSet(OverlapSetName(s)), s) << OverlapSetName(s);
   }
   EXPECT_EQ(ParseOverlapSet("custom"), std::nullopt);
 }
 
-TEST(EvalOptions, ScoreTransformNamesRoundTrip) {
+TEST(EvalOptionsTest, ScoreTransformNamesRoundTrip) {
   for (ScoreTransform t : {ScoreTransform::kNone, ScoreTransform::kSigmoid}) {
     EXPECT_EQ(ParseScoreTransform(ScoreTransformName(t)), t) << ScoreTransformName(t);
   }

@@ -40,7 +40,7 @@ std::vector<EvalFrame> ReadFixture(const fs::path& dir) {
 
 // The AP / AOS of KITTI's official devkit on tests/data/eval_small, summed from the arrays it wrote
 // (see that folder's README.md).
-TEST(Evaluator, AgreesWithTheDevkitOnTheFixture) {
+TEST(EvaluatorTest, AgreesWithTheDevkitOnTheFixture) {
   const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
   const std::vector<EvalFrame> frames = ReadFixture(dir);
   ASSERT_EQ(frames.size(), 12u);
@@ -74,7 +74,7 @@ TEST(Evaluator, AgreesWithTheDevkitOnTheFixture) {
 
 // The 41-slot precision and orientation arrays the official devkit wrote on tests/data/eval_small
 // (its stats_*.txt files, %f, one line per difficulty), slot by slot.
-TEST(Evaluator, AgreesWithTheOfficialDevkitsArraysOnTheFixture) {
+TEST(EvaluatorTest, AgreesWithTheOfficialDevkitsArraysOnTheFixture) {
   const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
   EvalOptions options;
   options.num_threads = 2;
@@ -121,7 +121,7 @@ struct DevkitCase {
   double ap[3][2];  // [2D, BEV, 3D][AP_R40, AP_R11]
 };
 
-TEST(Evaluator, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
+TEST(EvaluatorTest, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
   const DevkitCase cases[] = {
       {"A: car, same footprint 0.3 m lower: 3D IoU 0.7 exactly, > 0.7 for the devkit",
        "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n"
@@ -219,7 +219,7 @@ TEST(Evaluator, AgreesWithTheDevkitOnOverlapTiesAndItsGeometryQuirks) {
 //    AP_R40 = 2.5, AP_R11 = 100/11.
 // The official devkit's arrays give these (run on this frame). The prclibo fork (height < min)
 // counts 2 / 3 / 3 labels and gives AP_R40 2.5 / 5.0 / 5.0.
-TEST(Evaluator, LabelsExactly40And25PxTallAreIgnoredLikeTheOfficialDevkit) {
+TEST(EvaluatorTest, LabelsExactly40And25PxTallAreIgnoredLikeTheOfficialDevkit) {
   EvalFrame frame;
   frame.id = "000000";
   frame.labels =
@@ -271,7 +271,7 @@ TEST(Evaluator, LabelsExactly40And25PxTallAreIgnoredLikeTheOfficialDevkit) {
 // only x != -1000, resp. y != -1000, and would evaluate Car in 3D here). Checked with the official
 // devkit on this frame: it writes no stats_car_detection_3d.txt and no
 // stats_pedestrian_detection_3d.txt.
-TEST(Evaluator, ClassIsEvaluatedInBevAnd3DOnlyWithAValidBoxLikeTheOfficialDevkit) {
+TEST(EvaluatorTest, ClassIsEvaluatedInBevAnd3DOnlyWithAValidBoxLikeTheOfficialDevkit) {
   EvalFrame frame;
   frame.id = "000000";
   frame.labels =
@@ -306,7 +306,7 @@ TEST(Evaluator, ClassIsEvaluatedInBevAnd3DOnlyWithAValidBoxLikeTheOfficialDevkit
 // Ground truth evaluated against itself (every label but DontCare as a detection of score 1) on a
 // KITTI-val-sized set gives 100 in 2D, BEV and 3D, R40 and R11, in both matchers. (OpenPCDet's
 // kitti_object_eval_python is known to give 50 for BEV / 3D there.)
-TEST(Evaluator, GroundTruthAgainstItselfScores100) {
+TEST(EvaluatorTest, GroundTruthAgainstItselfScores100) {
   RandomFramesOptions ro;
   ro.num_frames = 3769;
   ro.seed = 7;
@@ -337,7 +337,7 @@ TEST(Evaluator, GroundTruthAgainstItselfScores100) {
   }
 }
 
-TEST(Evaluator, ClassWithoutDetectionsIsNotEvaluatedLikeTheDevkit) {
+TEST(EvaluatorTest, ClassWithoutDetectionsIsNotEvaluatedLikeTheDevkit) {
   RandomFramesOptions ro;
   ro.num_frames = 20;
   std::vector<EvalFrame> frames = RandomFrames(ro);
@@ -354,7 +354,7 @@ TEST(Evaluator, ClassWithoutDetectionsIsNotEvaluatedLikeTheDevkit) {
   EXPECT_EQ(all.Find("Cyclist", OverlapKind::k2D, Difficulty::kEasy)->ap_r40, 0.0);
 }
 
-TEST(Evaluator, AlphaMinus10AnywhereDisablesAos) {
+TEST(EvaluatorTest, AlphaMinus10AnywhereDisablesAos) {
   RandomFramesOptions ro;
   ro.num_frames = 10;
   std::vector<EvalFrame> frames = RandomFrames(ro);
@@ -368,7 +368,7 @@ TEST(Evaluator, AlphaMinus10AnywhereDisablesAos) {
 
 // The three matchers agree on TP counts at each threshold up to greedy's mistakes, and the optimal
 // curve's counts at the operating threshold equal its association's.
-TEST(Evaluator, OptimalCurveMatchesItsAssociationAndBeatsGreedy) {
+TEST(EvaluatorTest, OptimalCurveMatchesItsAssociationAndBeatsGreedy) {
   RandomFramesOptions ro;
   ro.num_frames = 60;
   ro.crowded = true;
@@ -402,7 +402,7 @@ TEST(Evaluator, OptimalCurveMatchesItsAssociationAndBeatsGreedy) {
 // 26 perfect detections of 27 labels: the devkit's AP_R40 is capped at (TP - 1) / 40 = 62.5 with 40
 // or fewer labels (every TP score is a threshold, 26 of its 41 slots are filled, slot 0 is not
 // summed); the exact curve of the optimal matcher gives 95 (38 of 40 recall positions reached).
-TEST(Evaluator, SmallSampleKittiApR40IsCappedAtFortyLabelsOrFewer) {
+TEST(EvaluatorTest, SmallSampleKittiApR40IsCappedAtFortyLabelsOrFewer) {
   EvalFrame f;
   for (int i = 0; i < 27; ++i) {
     const Box2D box{i * 45.0, 0, i * 45.0 + 40, 50};
@@ -430,7 +430,7 @@ TEST(Evaluator, SmallSampleKittiApR40IsCappedAtFortyLabelsOrFewer) {
 // AOS by hand for the exact matchers: two labels (alpha 0), found at scores 0.9 (alpha 0,
 // similarity 1) and 0.8 (alpha pi/2, similarity 1/2). Orientation ratio 1 at recall 1/2, 3/4 at
 // recall 1: AOS_R40 = (20 * 1 + 20 * 0.75) / 40 = 87.5 %, AOS_R11 = (6 + 5 * 0.75) / 11.
-TEST(Evaluator, AosOfExactMatchersByHand) {
+TEST(EvaluatorTest, AosOfExactMatchersByHand) {
   EvalFrame f;
   f.labels = {Car2D(0, 0, 100, 100, 0), Car2D(300, 0, 400, 100, 0)};
   f.detections = {Car2D(0, 0, 100, 100, 0, 0.9), Car2D(300, 0, 400, 100, M_PI / 2, 0.8)};
@@ -449,7 +449,7 @@ TEST(Evaluator, AosOfExactMatchersByHand) {
 
 // With every orientation right, AOS equals AP; and the optimal curve's similarity at each point
 // equals that of the association at that threshold, summed over frames.
-TEST(Evaluator, AosPerfectOrientationGivesApAndCurveAgreesWithAssociations) {
+TEST(EvaluatorTest, AosPerfectOrientationGivesApAndCurveAgreesWithAssociations) {
   RandomFramesOptions ro;
   ro.num_frames = 40;
   ro.crowded = true;

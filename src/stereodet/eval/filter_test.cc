@@ -18,7 +18,7 @@ using testing_objects::CarModerate2D;
 // The paper's instability of naive filtering: a label just under a min-area bound whose matched
 // detection is just above it. Naive: the label is struck, the detection becomes a FP. Stable: the
 // pair is dropped as a whole (neither TP nor FP).
-TEST(Filter, NaiveFilterTurnsAMatchedDetectionIntoAFalsePositive) {
+TEST(FilterTest, NaiveFilterTurnsAMatchedDetectionIntoAFalsePositive) {
   EvalFrame f;
   Object label, det;
   label.type = det.type = "Car";
@@ -54,7 +54,7 @@ TEST(Filter, NaiveFilterTurnsAMatchedDetectionIntoAFalsePositive) {
 // Curves under a filter, by hand: a passing pair (score 0.8) and a label of 9900 px^2 matched by a
 // detection of 10100 px^2 (score 0.9) under min-area=10000. Naive: the 0.9 detection is a FP, so
 // precision is 0 then 1/2 at recall 1: AP_R40 50. Stable: the failing pair drops out: AP_R40 100.
-TEST(Filter, CurvesOfExactMatchersByHand) {
+TEST(FilterTest, CurvesOfExactMatchersByHand) {
   EvalFrame f;
   f.labels = {Car2D(0, 0, 99, 100, 0), Car2D(300, 0, 500, 100, 0)};
   f.detections = {Car2D(0, 0, 101, 100, 0, 0.9), Car2D(300, 0, 500, 100, 0, 0.8)};
@@ -95,7 +95,7 @@ TEST(Filter, CurvesOfExactMatchersByHand) {
 // The mirror case: the label passes (10100 px^2) and its detection fails (9900 px^2). Naive: the
 // label is missed (FN); stable: the pair drops out, nothing counts. Every matcher, curve and
 // operating point.
-TEST(Filter, PassingLabelWithFailingDetectionDropsOutWhenStable) {
+TEST(FilterTest, PassingLabelWithFailingDetectionDropsOutWhenStable) {
   EvalFrame f;
   f.labels = {Car2D(0, 0, 101, 100, 0), Car2D(300, 0, 500, 100, 0)};
   f.detections = {Car2D(0, 0, 99, 100, 0, 0.9), Car2D(300, 0, 500, 100, 0, 0.8)};
@@ -122,7 +122,7 @@ TEST(Filter, PassingLabelWithFailingDetectionDropsOutWhenStable) {
 // Properties on random frames, every matcher: a filter everything passes leaves the curves and AP
 // unchanged in both modes; and under a real filter, each mode's curve at the operating threshold
 // has the counts of that mode's operating point.
-TEST(Filter, CurvesAgreeWithUnfilteredAndWithTheOperatingPoint) {
+TEST(FilterTest, CurvesAgreeWithUnfilteredAndWithTheOperatingPoint) {
   RandomFramesOptions ro;
   ro.num_frames = 30;
   ro.crowded = true;
@@ -171,7 +171,7 @@ TEST(Filter, CurvesAgreeWithUnfilteredAndWithTheOperatingPoint) {
   }
 }
 
-TEST(Filter, ParsesAndRejects) {
+TEST(FilterTest, ParsesAndRejects) {
   const auto c = ParseFilterConditions("min-height=25, max-distance=40,difficulty=moderate");
   ASSERT_EQ(c.size(), 3u);
   EXPECT_EQ(c[2].bound, FilterBound::kDifficulty);
@@ -181,7 +181,7 @@ TEST(Filter, ParsesAndRejects) {
   EXPECT_THROW(ParseFilterConditions("min-area"), std::invalid_argument);
 }
 
-TEST(Filter, ASweepOfMoreThan100000ValuesIsAnErrorNotAnOverflow) {
+TEST(FilterTest, ASweepOfMoreThan100000ValuesIsAnErrorNotAnOverflow) {
   EvalFrame f;
   f.labels = {Car2D(0, 0, 99, 100, 0)};
   EvalOptions options = CarModerate2D(Matcher::kKitti);
@@ -196,14 +196,14 @@ TEST(Filter, ASweepOfMoreThan100000ValuesIsAnErrorNotAnOverflow) {
   }
 }
 
-TEST(Filter, FilterModeRoundTrip) {
+TEST(FilterTest, FilterModeRoundTrip) {
   for (FilterMode m : {FilterMode::kNaive, FilterMode::kStable}) {
     EXPECT_EQ(ParseFilterMode(FilterModeName(m)), m) << FilterModeName(m);
   }
   EXPECT_EQ(ParseFilterMode("strict"), std::nullopt);
 }
 
-TEST(Filter, FilterBoundRoundTrip) {
+TEST(FilterTest, FilterBoundRoundTrip) {
   const FilterBound all[] = {
       FilterBound::kMinHeight,     FilterBound::kMaxHeight,   FilterBound::kMinWidth,
       FilterBound::kMaxWidth,      FilterBound::kMinArea,     FilterBound::kMaxArea,
@@ -219,7 +219,7 @@ TEST(Filter, FilterBoundRoundTrip) {
 }
 
 // difficulty= takes KITTI's level names (any case, as --difficulties) or their index.
-TEST(Filter, DifficultyConditionByNameOrIndex) {
+TEST(FilterTest, DifficultyConditionByNameOrIndex) {
   const std::vector<FilterCondition> c =
       ParseFilterConditions("difficulty=easy, difficulty=Moderate,difficulty=2");
   ASSERT_EQ(c.size(), 3u);

@@ -51,7 +51,7 @@ bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) =
 
 // Random pairs from overlapping to far apart, including pairs just beyond the reach of the
 // circumscribed circles and boxes of very different sizes; every overlap bit for bit the reference.
-TEST(FrameData, KittiOverlapBevAnd3DEqualTheirDefinitionOnRandomPairs) {
+TEST(FrameDataTest, KittiOverlapBevAnd3DEqualTheirDefinitionOnRandomPairs) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> size(0.05, 6.0), angle(-3.2, 3.2), unit(0.0, 1.0);
   int overlapping = 0, apart = 0;
@@ -94,7 +94,7 @@ struct TieCase {
   bool devkit_matches;  // the devkit's `overlap > tau`
 };
 
-TEST(FrameData, OverlapAtThresholdTiesAreDecidedByTheDevkitArithmetic) {
+TEST(FrameDataTest, OverlapAtThresholdTiesAreDecidedByTheDevkitArithmetic) {
   const TieCase cases[] = {
       {"A: car, same footprint, 0.3 m lower (3D IoU 1.4 / 2.0)", OverlapKind::k3D, 0.7,
        "Car 0.00 0 0.00 100 100 150 200 1.70 1.60 3.90 -4.10 1.65 22.70 0.00",
@@ -135,7 +135,7 @@ TEST(FrameData, OverlapAtThresholdTiesAreDecidedByTheDevkitArithmetic) {
   }
 }
 
-TEST(FrameData, OverlapAtThresholdAwayFromTheThresholdKeepsTheExactValue) {
+TEST(FrameDataTest, OverlapAtThresholdAwayFromTheThresholdKeepsTheExactValue) {
   // BEV IoU 1/3 (shift by half the length, rotated, so not a parallel-footprint case either way).
   const Box3D label = Footprint(3.0, 20.0, 3.9, 1.6, 0.3);
   Box3D moved = label;
@@ -156,7 +156,7 @@ TEST(FrameData, OverlapAtThresholdAwayFromTheThresholdKeepsTheExactValue) {
 // equal overlaps mathematically; tools' repro H): ours rank the second higher by an ulp, the
 // devkit's the first by ~4e-16, so its pass 2 gives the car the first one and the second car the
 // other. Not a tie at tau and not parallel: only the closeness rule of PrepareClassFrame applies.
-TEST(FrameData, PrepareClassFrameOrdersCloseOverlapsOfOneLabelByTheDevkit) {
+TEST(FrameDataTest, PrepareClassFrameOrdersCloseOverlapsOfOneLabelByTheDevkit) {
   EvalFrame frame;
   frame.labels = {Line("Car 0.00 0 0.00 100 100 200 200 1.50 1.60 3.90 -7.32 1.65 10.46 0.00"),
                   Line("Car 0.00 0 0.00 300 100 400 200 1.50 1.60 3.90 -7.65 1.65 10.66 0.00")};

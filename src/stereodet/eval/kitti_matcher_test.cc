@@ -223,7 +223,7 @@ using testing_objects::Label;
 
 // ------------------------------------------------------------------------------------------------
 
-TEST(KittiMatcher, ThresholdsOfAPerfectDetectorOn40LabelsKeepEveryScore) {
+TEST(KittiMatcherTest, ThresholdsOfAPerfectDetectorOn40LabelsKeepEveryScore) {
   std::vector<double> scores(40);
   std::iota(scores.begin(), scores.end(), 1.0);
   const std::vector<double> t = KittiThresholds(scores, 40);
@@ -232,7 +232,7 @@ TEST(KittiMatcher, ThresholdsOfAPerfectDetectorOn40LabelsKeepEveryScore) {
   EXPECT_EQ(t.back(), 1.0);
 }
 
-TEST(KittiMatcher, ThresholdsSubsampleToRecallStepsAndKeepTheLast) {
+TEST(KittiMatcherTest, ThresholdsSubsampleToRecallStepsAndKeepTheLast) {
   // 400 labels, 400 TPs: one score every 10 (recall steps of 1/40), plus the last.
   std::vector<double> scores(400);
   std::iota(scores.begin(), scores.end(), 0.0);
@@ -243,13 +243,13 @@ TEST(KittiMatcher, ThresholdsSubsampleToRecallStepsAndKeepTheLast) {
   EXPECT_TRUE(std::is_sorted(t.rbegin(), t.rend()));
 }
 
-TEST(KittiMatcher, ThresholdsEmptyWhenNoTruePositive) {
+TEST(KittiMatcherTest, ThresholdsEmptyWhenNoTruePositive) {
   EXPECT_TRUE(KittiThresholds({}, 10).empty());
 }
 
 // The quirk in the issue: a perfect detector on 40 labels gets AP_R40 = 97.5, since threshold i
 // sits in slot i (recall (i+1)/40) and slot 40 stays 0.
-TEST(KittiMatcher, PerfectDetectorOn40LabelsScores97Point5) {
+TEST(KittiMatcherTest, PerfectDetectorOn40LabelsScores97Point5) {
   std::vector<EvalFrame> frames(40);
   for (int i = 0; i < 40; ++i) {
     const Box2D box{100, 100, 200, 200};
@@ -266,7 +266,7 @@ TEST(KittiMatcher, PerfectDetectorOn40LabelsScores97Point5) {
   EXPECT_DOUBLE_EQ(r.precision[40], 0.0);
 }
 
-TEST(KittiMatcher, NeighbourClassAndDontCareAreNotFalsePositives) {
+TEST(KittiMatcherTest, NeighbourClassAndDontCareAreNotFalsePositives) {
   EvalFrame f;
   f.labels.push_back(Label("Car", {100, 100, 200, 200}));
   f.labels.push_back(Label("Van", {300, 100, 400, 200}));
@@ -292,7 +292,7 @@ TEST(KittiMatcher, NeighbourClassAndDontCareAreNotFalsePositives) {
 // Quirk: a detection lower than the minimum height is "ignored" whatever its class, and such a
 // detection may take a label: a 30 px Pedestrian detection on a Car label at Easy (min 40 px) makes
 // the car neither TP nor FN.
-TEST(KittiMatcher, LowDetectionOfAnotherClassAbsorbsALabel) {
+TEST(KittiMatcherTest, LowDetectionOfAnotherClassAbsorbsALabel) {
   EvalFrame f;
   f.labels.push_back(Label("Car", {100, 100, 200, 150}));                // 50 px: Easy
   f.detections.push_back(Det("Pedestrian", {100, 100, 200, 139}, 0.9));  // 39 px, IoU 0.78
@@ -307,7 +307,7 @@ TEST(KittiMatcher, LowDetectionOfAnotherClassAbsorbsALabel) {
 }
 
 // Pass 1 takes the highest score, pass 2 the largest overlap.
-TEST(KittiMatcher, ThresholdPassTakesHighestScorePrPassTakesLargestOverlap) {
+TEST(KittiMatcherTest, ThresholdPassTakesHighestScorePrPassTakesLargestOverlap) {
   EvalFrame f;
   f.labels.push_back(Label("Car", {100, 100, 200, 200}));
   f.detections.push_back(Det("Car", {100, 100, 200, 190}, 0.6));  // IoU 0.9
@@ -323,7 +323,7 @@ TEST(KittiMatcher, ThresholdPassTakesHighestScorePrPassTakesLargestOverlap) {
 }
 
 // Overlap must exceed the threshold strictly.
-TEST(KittiMatcher, OverlapEqualToThresholdIsNoMatch) {
+TEST(KittiMatcherTest, OverlapEqualToThresholdIsNoMatch) {
   EvalFrame f;
   f.labels.push_back(Label("Pedestrian", {0, 0, 100, 100}));
   f.detections.push_back(Det("Pedestrian", {0, 0, 100, 50}, 0.9));  // IoU exactly 0.5
@@ -332,9 +332,9 @@ TEST(KittiMatcher, OverlapEqualToThresholdIsNoMatch) {
   EXPECT_EQ(a.CountLabels(Outcome::kFn), 1);
 }
 
-class KittiMatcherBySeed : public ::testing::TestWithParam<int> {};
+class KittiMatcherBySeedTest : public ::testing::TestWithParam<int> {};
 
-TEST_P(KittiMatcherBySeed, MatchesTheReferenceOnRandomFrames) {
+TEST_P(KittiMatcherBySeedTest, MatchesTheReferenceOnRandomFrames) {
   RandomFramesOptions ro;
   ro.num_frames = 40;
   ro.seed = 100 + GetParam();
@@ -368,11 +368,11 @@ TEST_P(KittiMatcherBySeed, MatchesTheReferenceOnRandomFrames) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Seeds, KittiMatcherBySeed, ::testing::Range(0, 6));
+INSTANTIATE_TEST_SUITE_P(Seeds, KittiMatcherBySeedTest, ::testing::Range(0, 6));
 
 // KittiPasses, driven as Evaluate drives it (all difficulties of a frame at once) but with its
 // blocks in reverse order, gives each difficulty exactly EvaluateKittiClass's result, bit for bit.
-TEST(KittiMatcher, PassesOverAllDifficultiesInAnyBlockOrderEqualOneAtATime) {
+TEST(KittiMatcherTest, PassesOverAllDifficultiesInAnyBlockOrderEqualOneAtATime) {
   RandomFramesOptions ro;
   ro.num_frames = 300;  // five blocks
   ro.seed = 21;

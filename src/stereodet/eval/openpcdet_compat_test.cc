@@ -49,7 +49,7 @@ Object Footprint(double x, double z, double l, double w, double ry) {
 }
 
 // get_official_eval_result's overlap_0_7 / overlap_0_5 tables, class by class.
-TEST(OpenPcdetCompat, ClassSpecHasTheToolsOverlapsAndNeighbours) {
+TEST(OpenPcdetCompatTest, ClassSpecHasTheToolsOverlapsAndNeighbours) {
   EXPECT_EQ(OpenPcdetClassSpec("Car").min_overlap, (std::array<double, 3>{0.7, 0.7, 0.7}));
   EXPECT_EQ(OpenPcdetClassSpec("car", true).min_overlap, (std::array<double, 3>{0.7, 0.5, 0.5}));
   EXPECT_EQ(OpenPcdetClassSpec("Car").neighbours, std::vector<std::string>{"Van"});
@@ -68,7 +68,7 @@ TEST(OpenPcdetCompat, ClassSpecHasTheToolsOverlapsAndNeighbours) {
 }
 
 // Axis-aligned footprints: the float32 corners are exact, so the kernel's area is the true one.
-TEST(OpenPcdetCompat, IntersectionAreaOfAxisAlignedBoxesIsExact) {
+TEST(OpenPcdetCompatTest, IntersectionAreaOfAxisAlignedBoxesIsExact) {
   const PcdetRotatedBox a{0, 10, 4, 2, 0}, b{2, 10, 4, 2, 0}, far{9, 10, 4, 2, 0};
   EXPECT_EQ(PcdetIntersectionArea(a, b), 4.0);
   EXPECT_EQ(PcdetIntersectionArea(a, far), 0.0);
@@ -80,7 +80,7 @@ TEST(OpenPcdetCompat, IntersectionAreaOfAxisAlignedBoxesIsExact) {
 
 // The kernel loses corners of identical footprints to float32 rounding. Expected values: what
 // rotate_iou.py printed for these boxes under NUMBA_ENABLE_CUDASIM=1 (numba 0.56, numpy 1.24).
-TEST(OpenPcdetCompat, IntersectionAreaOfIdenticalFootprintsAsTheKernelComputesIt) {
+TEST(OpenPcdetCompatTest, IntersectionAreaOfIdenticalFootprintsAsTheKernelComputesIt) {
   struct Case {
     PcdetRotatedBox box;
     double iou;
@@ -101,7 +101,7 @@ TEST(OpenPcdetCompat, IntersectionAreaOfIdenticalFootprintsAsTheKernelComputesIt
 }
 
 // 3D: the footprint intersection times the y overlap, over the volumes (l * h * w) minus it.
-TEST(OpenPcdetCompat, OverlapIn3DIsFootprintTimesHeightOverlap) {
+TEST(OpenPcdetCompatTest, OverlapIn3DIsFootprintTimesHeightOverlap) {
   Object g = Footprint(0, 10, 4, 2, 0), d = g;
   d.box3d.location.y() = 1.0;                            // 0.5 m higher: y overlap 1.0 of 1.5
   EXPECT_EQ(PcdetOverlap(OverlapKind::k3D, d, g), 0.5);  // 8 / (12 + 12 - 8)
@@ -113,7 +113,7 @@ TEST(OpenPcdetCompat, OverlapIn3DIsFootprintTimesHeightOverlap) {
 }
 
 // clean_data: `height <= MIN_HEIGHT` ignores a label exactly 40 px tall at Easy.
-TEST(OpenPcdetCompat, LabelExactlyAtTheMinimumHeightIsIgnored) {
+TEST(OpenPcdetCompatTest, LabelExactlyAtTheMinimumHeightIsIgnored) {
   const EvalFrame frame =
       Frame("Car 0.00 0 0.00 100.00 100.00 200.00 140.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00\n",
             "Car -1 -1 0.00 100.00 100.00 200.00 140.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00 0.9\n");
@@ -132,7 +132,7 @@ TEST(OpenPcdetCompat, LabelExactlyAtTheMinimumHeightIsIgnored) {
 // row: the devkit's BEV DontCare test suppresses it (both are the 1 m square at (-1000, -1000)),
 // OpenPCDet tests DontCare in 2D only, so it is a BEV false positive there. Scores 0.9 (TP) and
 // 0.95 (the FP): one threshold, precision 1 or 1/2 in slot 0, AP_R11 = 100/11 or 50/11.
-TEST(OpenPcdetCompat, DontCareSuppressesFalsePositivesIn2DOnly) {
+TEST(OpenPcdetCompatTest, DontCareSuppressesFalsePositivesIn2DOnly) {
   const EvalFrame frame = Frame(
       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.70 1.60 3.90 3.00 1.65 30.00 0.00\n"
       "DontCare -1 -1 -10 600.00 100.00 700.00 150.00 -1 -1 -1 -1000 -1000 -1000 -10\n",
@@ -172,7 +172,7 @@ TEST(OpenPcdetCompat, DontCareSuppressesFalsePositivesIn2DOnly) {
 }
 
 // OpenPCDet looks at one alpha only: the first detection of the first frame with detections.
-TEST(OpenPcdetCompat, AosIsDecidedByTheFirstDetection) {
+TEST(OpenPcdetCompatTest, AosIsDecidedByTheFirstDetection) {
   const char* labels =
       "Car 0.00 0 0.50 100.00 100.00 200.00 200.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00\n";
   const EvalFrame empty = Frame(labels, "");
@@ -195,7 +195,7 @@ TEST(OpenPcdetCompat, AosIsDecidedByTheFirstDetection) {
 
 // OpenPCDet evaluates (and prints) every requested class, 0 where there is no detection of it; the
 // devkit skips such a class.
-TEST(OpenPcdetCompat, ClassWithoutDetectionsIsEvaluatedAsZero) {
+TEST(OpenPcdetCompatTest, ClassWithoutDetectionsIsEvaluatedAsZero) {
   const EvalFrame frame =
       Frame("Cyclist 0.00 0 0.00 100.00 100.00 150.00 200.00 1.70 0.60 1.80 0.00 1.50 10.00 0.00\n",
             "Car -1 -1 0.00 300.00 100.00 400.00 200.00 1.50 1.60 3.90 3.00 1.50 10.00 0.00 0.9\n");
@@ -214,7 +214,7 @@ TEST(OpenPcdetCompat, ClassWithoutDetectionsIsEvaluatedAsZero) {
 
 // np.max over slots i..40 is NaN if any of them is; the devkit's max_element loop skips a NaN that
 // is not the first.
-TEST(OpenPcdetCompat, EnvelopePropagatesNanToEarlierSlots) {
+TEST(OpenPcdetCompatTest, EnvelopePropagatesNanToEarlierSlots) {
   std::array<double, 41> c{};
   c[0] = 0.25;
   c[1] = kNaN;
@@ -230,7 +230,7 @@ TEST(OpenPcdetCompat, EnvelopePropagatesNanToEarlierSlots) {
 
 // Labels evaluated against themselves: 2D is perfect, BEV and 3D lose the footprints the kernel
 // loses. Four cars, easy, scores 1: four thresholds of score 1, so a perfect 2D gives AP_R40 3/40.
-TEST(OpenPcdetCompat, LabelsAgainstThemselvesLoseTheFootprintsTheKernelLoses) {
+TEST(OpenPcdetCompatTest, LabelsAgainstThemselvesLoseTheFootprintsTheKernelLoses) {
   const char* labels =
       "Car 0.00 0 0.00 100.00 100.00 200.00 200.00 1.50 1.60 3.90 1.23 1.50 20.50 -1.21\n"
       "Car 0.00 0 0.00 300.00 100.00 400.00 200.00 1.50 1.70 4.20 -4.50 1.50 30.20 1.57\n"
@@ -258,7 +258,7 @@ TEST(OpenPcdetCompat, LabelsAgainstThemselvesLoseTheFootprintsTheKernelLoses) {
               1e-9);
 }
 
-TEST(OpenPcdetCompat, FormatResultPrintsLikeGetOfficialEvalResult) {
+TEST(OpenPcdetCompatTest, FormatResultPrintsLikeGetOfficialEvalResult) {
   const EvalFrame frame =
       Frame("Car 0.00 0 0.50 100.00 100.00 200.00 200.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00\n",
             "Car -1 -1 0.50 100.00 100.00 200.00 200.00 1.50 1.60 3.90 0.00 1.50 10.00 0.00 0.9\n");
@@ -291,7 +291,7 @@ TEST(OpenPcdetCompat, FormatResultPrintsLikeGetOfficialEvalResult) {
 
 // tests/data/eval_small/openpcdet_expected.txt is what OpenPCDet's get_official_eval_result (commit
 // 8cacccec, numba 0.56.4 CUDA simulator) printed for Car, Pedestrian and Cyclist on these frames.
-TEST(OpenPcdetCompat, PrintoutEqualsTheToolsOnTheFixture) {
+TEST(OpenPcdetCompatTest, PrintoutEqualsTheToolsOnTheFixture) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
   std::vector<fs::path> labels;

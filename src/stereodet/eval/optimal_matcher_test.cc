@@ -64,7 +64,7 @@ ClassFrame HandFrame(const std::vector<std::vector<double>>& overlap,
 
 // The paper's Figure: two overlapping labels. KITTI's greedy (largest overlap, label order) and
 // VOC's (score order, best label) find 1 TP, 1 FP, 1 FN; the optimal matcher 2 TP.
-TEST(OptimalMatcher, PapersTwoOverlappingLabels) {
+TEST(OptimalMatcherTest, PapersTwoOverlappingLabels) {
   EvalFrame f;
   f.labels.push_back(Box("Pedestrian", 0, 0, 100, 100));
   f.labels.push_back(Box("Pedestrian", 40, 0, 140, 100));
@@ -95,7 +95,7 @@ TEST(OptimalMatcher, PapersTwoOverlappingLabels) {
 
 // tau = 0.5, three labels and three detections: the matching of largest plain IoU sum has 2 pairs
 // (0.95 + 0.95), yet 3 pairs exist (0.55 * 3). The lexicographic weights find the 3.
-TEST(OptimalMatcher, PlainIouSumPicksFewerTruePositives) {
+TEST(OptimalMatcherTest, PlainIouSumPicksFewerTruePositives) {
   const std::vector<std::vector<double>> iou = {
       {0.95, 0.55, 0.0}, {0.0, 0.95, 0.55}, {0.55, 0.0, 0.0}};
   std::vector<WeightedEdge> plain;
@@ -115,7 +115,7 @@ TEST(OptimalMatcher, PlainIouSumPicksFewerTruePositives) {
   EXPECT_EQ(a.label_det[2], 0);
 }
 
-TEST(OptimalMatcher, AmongMaximumMatchingsTakesLargestOverlap) {
+TEST(OptimalMatcherTest, AmongMaximumMatchingsTakesLargestOverlap) {
   // Both perfect matchings have 2 pairs; {0-0, 1-1} sums 1.5, {0-1, 1-0} sums 1.7.
   const ClassFrame cf = HandFrame({{0.8, 0.9}, {0.8, 0.7}}, {0.9, 0.8}, 0.5);
   const FrameAssociation a = OptimalAssociate(cf, Difficulty::kModerate, 0.0);
@@ -211,7 +211,7 @@ EvalFrame RandomSmallFrame(std::mt19937_64& rng) {
   return f;
 }
 
-TEST(OptimalMatcher, EqualsBruteForceAtEveryThresholdOnThousandsOfFrames) {
+TEST(OptimalMatcherTest, EqualsBruteForceAtEveryThresholdOnThousandsOfFrames) {
   std::mt19937_64 rng(7);
   ClassSpec spec = KittiClassSpec("Car");
   spec.min_overlap = {0.4, 0.4, 0.4};

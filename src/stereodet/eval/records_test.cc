@@ -28,10 +28,10 @@ EvalOptions CarModerate2D(Matcher matcher) {
   return o;
 }
 
-class RecordsByMatcher : public ::testing::TestWithParam<Matcher> {};
+class RecordsByMatcherTest : public ::testing::TestWithParam<Matcher> {};
 
 // One frame where every outcome occurs, the same in all three matchers.
-TEST_P(RecordsByMatcher, EveryOutcomeOfAHandMadeFrame) {
+TEST_P(RecordsByMatcherTest, EveryOutcomeOfAHandMadeFrame) {
   EvalFrame f;
   f.id = "000007";
   f.labels.push_back(Label("Car", {100, 100, 200, 200}));  // 0: found
@@ -73,11 +73,11 @@ TEST_P(RecordsByMatcher, EveryOutcomeOfAHandMadeFrame) {
   EXPECT_EQ(op.fn, 1);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllMatchers, RecordsByMatcher,
+INSTANTIATE_TEST_SUITE_P(AllMatchers, RecordsByMatcherTest,
                          ::testing::Values(Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc),
                          [](const auto& info) { return std::string(MatcherName(info.param)); });
 
-TEST(Records, NoneWithoutTheOption) {
+TEST(RecordsTest, NoneWithoutTheOption) {
   RandomFramesOptions ro;
   ro.num_frames = 20;
   EvalOptions o = CarModerate2D(Matcher::kKitti);
@@ -90,7 +90,7 @@ TEST(Records, NoneWithoutTheOption) {
 // table's TP / FP / FN and its Brier scores over labels and over detections, to the last bit (sums
 // taken in the order the evaluator takes them: frames in order, labels by index, detections by
 // index).
-TEST(Records, ReSumToTheTableExactly) {
+TEST(RecordsTest, ReSumToTheTableExactly) {
   RandomFramesOptions ro;
   ro.num_frames = 150;
   ro.seed = 11;

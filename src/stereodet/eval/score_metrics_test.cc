@@ -14,7 +14,7 @@ namespace {
 using testing_objects::Car;
 
 // Brier three ways, by hand: one TP (s = 0.9), one FP (s = 0.4), one FN.
-TEST(ScoreMetrics, BrierThreeWaysByHand) {
+TEST(ScoreMetricsTest, BrierThreeWaysByHand) {
   EvalFrame f;
   Object l1, l2, d1, d2;
   l1.type = l2.type = d1.type = d2.type = "Car";
@@ -49,7 +49,7 @@ TEST(ScoreMetrics, BrierThreeWaysByHand) {
 // (0.9) and misses l2; B finds l1 (0.9) and covers l2 with a 24 px detection, which Moderate
 // ignores (< 25 px), so l2 is excused (neither TP nor FN). Both are scored over 2 label terms:
 // ((1 - 0.9)^2 + 1) / 2 = 0.505. (Before, B's l2 dropped out: 1 term, 0.01.)
-TEST(ScoreMetrics, BrierOverLabelsHasAFixedSupport) {
+TEST(ScoreMetricsTest, BrierOverLabelsHasAFixedSupport) {
   const Object l1 = Car({0, 0, 100, 100}), l2 = Car({300, 0, 400, 30});
   EvalFrame a, b;
   a.labels = b.labels = {l1, l2};
@@ -79,7 +79,7 @@ TEST(ScoreMetrics, BrierOverLabelsHasAFixedSupport) {
 
 // Brier and ECE need probabilities. Logit scores (2.0 TP, -1.0 FP): left out (NaN) unless
 // --score-transform sigmoid; AP, the curve and the operating point are the raw scores' either way.
-TEST(ScoreMetrics, ScoresOutsideTheUnitIntervalLeaveBrierOutUnlessTransformed) {
+TEST(ScoreMetricsTest, ScoresOutsideTheUnitIntervalLeaveBrierOutUnlessTransformed) {
   EvalFrame f;
   f.labels = {Car({0, 0, 100, 100}), Car({300, 0, 400, 100})};
   f.detections = {Car({0, 0, 100, 100}, 2.0), Car({600, 0, 700, 100}, -1.0),

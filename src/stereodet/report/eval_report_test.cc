@@ -14,7 +14,7 @@
 namespace stereodet {
 namespace {
 
-TEST(EvalReport, WritesJsonAndCsvThatAgreeWithTheResult) {
+TEST(EvalReportTest, WritesJsonAndCsvThatAgreeWithTheResult) {
   RandomFramesOptions ro;
   ro.num_frames = 30;
   const std::vector<EvalFrame> frames = RandomFrames(ro);
@@ -49,7 +49,7 @@ TEST(EvalReport, WritesJsonAndCsvThatAgreeWithTheResult) {
 
 // The curve CSVs of a hand-made two-point curve, byte for byte: shortest round-trip numbers,
 // integers as integers, NaN as an empty field.
-TEST(EvalReport, CurveCsvTextByHand) {
+TEST(EvalReportTest, CurveCsvTextByHand) {
   CurvePoint a;
   a.threshold = 0.9;
   a.tp = 1;
@@ -81,7 +81,7 @@ TEST(EvalReport, CurveCsvTextByHand) {
 // With a filter and the optimal matcher: the ROC file is the curve's (FP per frame, recall) in
 // ascending FP order, the filtered curves have their own files, and the JSON carries the filtered
 // curves' AP and the orientation column where AOS is computed.
-TEST(EvalReport, WritesRocAndFilteredCurves) {
+TEST(EvalReportTest, WritesRocAndFilteredCurves) {
   RandomFramesOptions ro;
   ro.num_frames = 20;
   const std::vector<EvalFrame> frames = RandomFrames(ro);
@@ -134,7 +134,7 @@ TEST(EvalReport, WritesRocAndFilteredCurves) {
 // --overlaps strict,loose: one block per set in the table, results tagged in results.json and in
 // summary.csv, curve files suffixed; the input record (ignored files, skipped lines) and the notes
 // (small samples) are written.
-TEST(EvalReport, SeveralOverlapSetsAreTaggedAndNotesAreWritten) {
+TEST(EvalReportTest, SeveralOverlapSetsAreTaggedAndNotesAreWritten) {
   RandomFramesOptions ro;
   ro.num_frames = 8;  // few labels per cell: small samples
   const std::vector<EvalFrame> frames = RandomFrames(ro);
@@ -185,7 +185,7 @@ TEST(EvalReport, SeveralOverlapSetsAreTaggedAndNotesAreWritten) {
 }
 
 // Scores that are not probabilities: the table and results.json say so, and Brier / ECE are null.
-TEST(EvalReport, ScoresOutsideTheUnitIntervalAreReported) {
+TEST(EvalReportTest, ScoresOutsideTheUnitIntervalAreReported) {
   RandomFramesOptions ro;
   ro.num_frames = 5;
   std::vector<EvalFrame> frames = RandomFrames(ro);

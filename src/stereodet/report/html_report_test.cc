@@ -112,7 +112,7 @@ const json& Entry(const json& results, const std::string& cls, const std::string
 
 // Every figure's plotted numbers are results.json's: the PR and ROC curves point for point, the
 // devkit's 41 slots, the reliability bins, the Brier scores and the localization medians.
-TEST(Report, FiguresPlotTheCurvesOfResultsJson) {
+TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
   TestTempDir dir;
   const fs::path out = dir.path() / "eval";
   const EvaluationResult evaluation = EvaluateSmall(out, Matcher::kKitti);
@@ -203,7 +203,7 @@ TEST(Report, FiguresPlotTheCurvesOfResultsJson) {
 
 // The pixels agree with the data too: every polyline vertex of the exact PR curve maps back, with
 // the figure's frame, to the curve's (recall, precision) within the SVG's 0.01 px rounding.
-TEST(Report, PolylineVerticesMapBackToTheCurve) {
+TEST(ReportTest, PolylineVerticesMapBackToTheCurve) {
   TestTempDir dir;
   EvaluateSmall(dir.path() / "eval", Matcher::kOptimal);
   const ReportSource source = ReadReportSource(dir.path() / "eval", "optimal");
@@ -238,7 +238,7 @@ TEST(Report, PolylineVerticesMapBackToTheCurve) {
 }
 
 // The page holds every figure inline, its data as JSON, and nothing it would fetch.
-TEST(Report, PageIsSelfContainedAndHoldsEveryFigure) {
+TEST(ReportTest, PageIsSelfContainedAndHoldsEveryFigure) {
   TestTempDir dir;
   EvaluateSmall(dir.path() / "eval", Matcher::kKitti);
   const std::string html = ReadFile(dir.path() / "eval/report/index.html");
@@ -267,7 +267,7 @@ TEST(Report, PageIsSelfContainedAndHoldsEveryFigure) {
 }
 
 // Two results folders: each series twice, one colour per folder, names in the legend.
-TEST(Report, SeveralResultsAreOverlaidOneColourEach) {
+TEST(ReportTest, SeveralResultsAreOverlaidOneColourEach) {
   TestTempDir dir;
   EvaluateSmall(dir.path() / "kitti", Matcher::kKitti);
   EvaluateSmall(dir.path() / "optimal", Matcher::kOptimal);
@@ -308,7 +308,7 @@ TEST(Report, SeveralResultsAreOverlaidOneColourEach) {
 // `eval compare` (tests/data/eval_compare, README): A errs +0.5 m / +1.0 m, B +0.2 m / -2.0 m at
 // 12 m / 22 m, so B - A is -0.3 m in the 10-15 m bin and +1.0 m in the 20-25 m bin; the model's
 // line is compare.csv's model_dz at every bin centre.
-TEST(Report, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
+TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   TestTempDir dir;
   EvaluationCompareOptions compare;
   compare.input.gt = kData / "eval_compare";
@@ -344,7 +344,7 @@ TEST(Report, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
 }
 
 // `eval sweep`: the naive and the stable precision and recall of sweep.csv against the value.
-TEST(Report, SweepFigurePlotsSweepCsv) {
+TEST(ReportTest, SweepFigurePlotsSweepCsv) {
   TestTempDir dir;
   EvaluationSweepOptions sweep;
   sweep.input.gt = kData / "eval_small";
@@ -384,7 +384,7 @@ TEST(Report, SweepFigurePlotsSweepCsv) {
   EXPECT_THROW(WriteReport(mixed), std::invalid_argument);
 }
 
-TEST(Report, PngFilesAreTheSvgRasterizedAtTwiceTheSize) {
+TEST(ReportTest, PngFilesAreTheSvgRasterizedAtTwiceTheSize) {
   if (!PngFromSvgAvailable()) GTEST_SKIP() << "built without librsvg: no PNG output";
   TestTempDir dir;
   EvaluateSmall(dir.path() / "eval", Matcher::kKitti, /*png=*/true, /*car_2d_only=*/true);

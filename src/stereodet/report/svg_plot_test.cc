@@ -50,7 +50,7 @@ Plot UnitPlot() {
   return p;
 }
 
-TEST(NiceTicks, MultiplesOfOneTwoFiveCoveringTheRange) {
+TEST(NiceTicksTest, MultiplesOfOneTwoFiveCoveringTheRange) {
   EXPECT_THAT(NiceTicks(0, 1), ElementsAre(0, 0.2, 0.4, ::testing::DoubleNear(0.6, 1e-12), 0.8, 1));
   EXPECT_THAT(NiceTicks(0, 37), ElementsAre(0, 10, 20, 30, 40));
   EXPECT_THAT(NiceTicks(-3, 3, 3), ElementsAre(-4, -2, 0, 2, 4));
@@ -58,7 +58,7 @@ TEST(NiceTicks, MultiplesOfOneTwoFiveCoveringTheRange) {
 }
 
 // A 480 x 340 plot has its area at x 64..464 and y 30..294 px: (0.5, 0.5) lands at (264, 162).
-TEST(RenderSvg, PointsLandWhereTheFrameSays) {
+TEST(RenderSvgTest, PointsLandWhereTheFrameSays) {
   const Plot p = UnitPlot();
   const PlotFrame f = LayOutPlot(p);
   EXPECT_EQ(f.left, 64);
@@ -73,7 +73,7 @@ TEST(RenderSvg, PointsLandWhereTheFrameSays) {
   EXPECT_EQ(lines[0][2], std::make_pair(464.0, 30.0));
 }
 
-TEST(RenderSvg, NanBreaksTheLineAndStaysNullInTheData) {
+TEST(RenderSvgTest, NanBreaksTheLineAndStaysNullInTheData) {
   Plot p = UnitPlot();
   p.series[0].x = {0, 0.25, 0.5, 0.75, 1};
   p.series[0].y = {0, 0.25, NAN, 0.75, 1};
@@ -89,7 +89,7 @@ TEST(RenderSvg, NanBreaksTheLineAndStaysNullInTheData) {
   EXPECT_EQ(data["series"][0]["x"].size(), 5u);
 }
 
-TEST(RenderSvg, RangesFromTheDataWidenToNiceTicks) {
+TEST(RenderSvgTest, RangesFromTheDataWidenToNiceTicks) {
   Plot p;
   p.id = "auto";
   PlotSeries s;
@@ -103,7 +103,7 @@ TEST(RenderSvg, RangesFromTheDataWidenToNiceTicks) {
   EXPECT_DOUBLE_EQ(f.y_max, 0.35);
 }
 
-TEST(RenderSvg, BarsStartAtZeroAndCategoriesLabelTheAxis) {
+TEST(RenderSvgTest, BarsStartAtZeroAndCategoriesLabelTheAxis) {
   Plot p;
   p.id = "bars";
   p.categories = {"Easy", "Hard"};
@@ -127,7 +127,7 @@ TEST(RenderSvg, BarsStartAtZeroAndCategoriesLabelTheAxis) {
 
 // A legend entry longer than the figure is wide wraps at spaces: (480 - 44) / 7 = 62 characters a
 // line, one 17 px row each, and the SVG grows by the rows.
-TEST(RenderSvg, LongLegendEntriesWrapAndTheFigureGrows) {
+TEST(RenderSvgTest, LongLegendEntriesWrapAndTheFigureGrows) {
   Plot p = UnitPlot();
   p.series[0].name = std::string(40, 'a') + " " + std::string(40, 'b') + " c";
   const std::string svg = RenderSvg(p);
@@ -138,7 +138,7 @@ TEST(RenderSvg, LongLegendEntriesWrapAndTheFigureGrows) {
   EXPECT_THAT(RenderSvg(p), HasSubstr("height=\"363.00\""));  // 340 + 17 + 6
 }
 
-TEST(RenderSvg, EscapesTextAndChecksItsInput) {
+TEST(RenderSvgTest, EscapesTextAndChecksItsInput) {
   Plot p = UnitPlot();
   p.series[0].name = "A<B & \"C\"";
   EXPECT_THAT(RenderSvg(p), HasSubstr("A&lt;B &amp; &quot;C&quot;"));

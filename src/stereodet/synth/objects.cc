@@ -10,9 +10,9 @@
 
 namespace stereodet {
 
-namespace {
-
 double Round2(double x) { return std::round(x * 100.0) / 100.0; }
+
+namespace {
 
 // Object parts, built in the object's local frame: x forward (the length), y down, z across (the
 // width), the origin on the ground. Heights are given positive (metres above the ground).

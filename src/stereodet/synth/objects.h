@@ -32,6 +32,10 @@ namespace stereodet {
 // centimetres. Random details (wheel size, cabin shape, colours, stride) come from `rng`.
 // Requires: `type` is one of the eight classes above (throws std::invalid_argument otherwise, after
 // adding materials), positive sizes.
+// `x` rounded to the two decimals that KITTI label files carry, so that a scene's boxes, poses
+// and yaws equal their labels read back (metres or radians alike).
+double Round2(double x);
+
 int AddObject(Scene& scene, const std::string& type, const Box3D& box, Rng& rng);
 
 // AddObject with a generator seeded by `seed`.

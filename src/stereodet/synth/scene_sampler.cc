@@ -14,8 +14,6 @@ namespace stereodet {
 
 namespace {
 
-double Round2(double x) { return std::round(x * 100.0) / 100.0; }
-
 enum class StreetKind { kCity, kResidential, kRoad };
 
 // Sizes (l, w, h) by class, after KITTI's means and spreads.

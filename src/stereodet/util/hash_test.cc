@@ -5,16 +5,18 @@
 namespace stereodet {
 namespace {
 
-TEST(Hash, Fnv1a64ReferenceValues) {
+TEST(HashTest, Fnv1a64ReferenceValues) {
   // The published FNV-1a 64 test vectors.
   EXPECT_EQ(Fnv1a64(""), 0xcbf29ce484222325ULL);
   EXPECT_EQ(Fnv1a64("a"), 0xaf63dc4c8601ec8cULL);
   EXPECT_EQ(Fnv1a64("foobar"), 0x85944171f73967e8ULL);
 }
 
-TEST(Hash, IncrementalEqualsWhole) { EXPECT_EQ(Fnv1a64("bar", Fnv1a64("foo")), Fnv1a64("foobar")); }
+TEST(HashTest, IncrementalEqualsWhole) {
+  EXPECT_EQ(Fnv1a64("bar", Fnv1a64("foo")), Fnv1a64("foobar"));
+}
 
-TEST(Hash, HexIsSixteenDigits) {
+TEST(HashTest, HexIsSixteenDigits) {
   EXPECT_EQ(HashHex(0xcbf29ce484222325ULL), "cbf29ce484222325");
   EXPECT_EQ(HashHex(1), "0000000000000001");
 }

@@ -1,5 +1,6 @@
 #include "stereodet/util/strings.h"
 
+#include <cctype>
 #include <charconv>
 #include <system_error>
 
@@ -70,5 +71,17 @@ std::string_view Trim(std::string_view text) {
 
 std::string FormatShortest(double value) { return FormatShortestImpl(value); }
 std::string FormatShortest(float value) { return FormatShortestImpl(value); }
+
+bool EqualsIgnoreCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i] == b[i]) continue;  // most comparisons are of equal names: no tolower call for them
+    if (std::tolower(static_cast<unsigned char>(a[i])) !=
+        std::tolower(static_cast<unsigned char>(b[i]))) {
+      return false;
+    }
+  }
+  return true;
+}
 
 }  // namespace stereodet

@@ -22,6 +22,10 @@ std::vector<std::string_view> Split(std::string_view text, char separator);
 
 std::string_view Trim(std::string_view text);
 
+// Case-insensitive ASCII comparison (strcasecmp): "car" equals "Car"; bytes >= 0x80 compare
+// exactly.
+bool EqualsIgnoreCase(std::string_view a, std::string_view b);
+
 // Shortest decimal text that reads back to exactly `value` (std::to_chars round-trip form), e.g.
 // 1.5 -> "1.5", 0.1f -> "0.1". Used by writers that must round-trip exactly.
 std::string FormatShortest(double value);

@@ -56,4 +56,15 @@ TEST(StringsTest, FormatShortestRoundTripsRandomValues) {
 }
 
 }  // namespace
+TEST(StringsTest, EqualsIgnoreCaseComparesAsciiLettersOnlyCaseInsensitively) {
+  EXPECT_TRUE(EqualsIgnoreCase("DontCare", "dontcare"));
+  EXPECT_TRUE(EqualsIgnoreCase("", ""));
+  EXPECT_FALSE(EqualsIgnoreCase("Car", "Cars"));
+  EXPECT_FALSE(EqualsIgnoreCase("Car", "Bar"));
+  EXPECT_FALSE(
+      EqualsIgnoreCase("\xc3\x84", "\xc3\xa4"));  // UTF-8 letters are compared byte for byte
+  EXPECT_FALSE(
+      EqualsIgnoreCase("a[", "A{"));  // '[' and '{' differ by the case bit, but are no letters
+}
+
 }  // namespace stereodet
