@@ -51,6 +51,7 @@ using AddCommandFn = void (*)(CLI::App&);
 void AddInfoCommand(CLI::App& app);    // info_command.cc (kitti helper)
 void AddEvalCommand(CLI::App& app);    // eval_command.cc (eval, eval sweep, eval compare)
 void AddReportCommand(CLI::App& app);  // report_command.cc (figures and the HTML report)
+void AddViewCommand(CLI::App& app);    // report_command.cc (frame views)
 void AddSynthCommand(CLI::App& app);   // synth_command.cc
 void AddStereoCommand(CLI::App& app);  // stereo_command.cc
 void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect ssd)

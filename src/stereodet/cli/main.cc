@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
       {"info", AddInfoCommand},
       {"eval", AddEvalCommand},
       {"report", AddReportCommand},
+      {"view", AddViewCommand},
   };
   return RunCli(argc, argv, Program::kFrontEnd, kOwn);
 }

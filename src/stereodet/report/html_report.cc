@@ -537,6 +537,7 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
   STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
                      source.results["results"].is_array())
       << path.string() << " is not a stereodet results.json (it has no \"results\" array)";
+  source.records = MatchRecordsFile(folder, source.results);
   return source;
 }
 
@@ -599,8 +600,65 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
   return figures;
 }
 
+namespace {
+
+std::string WorstFramesHtml(const std::vector<ReportFrameViews>& views) {
+  if (views.empty()) return "";
+  std::string html =
+      "<h2 id=\"worst-frames\">Worst frames</h2>\n<p style=\"font-size:12px\">Per class, the "
+      "frames with most false negatives and most false positives at the operating point, from the "
+      "per-detection records (matches.csv): their labels (dashed) and detections (solid) on the "
+      "left image, TP green, FP red, FN blue, ignored grey, and the bird's-eye view.</p>\n";
+  bool any = false;
+  for (const ReportFrameViews& v : views) {
+    if (!v.has_records) {
+      html += fmt::format(
+          "<p class=\"no-views\">{}: no frame views: the folder has no matches.csv (evaluate with "
+          "<code>--records</code>).</p>\n",
+          XmlEscape(v.label));
+      continue;
+    }
+    for (const std::string& note : v.views.notes) {
+      html += "<p style=\"font-size:12px\">note: " + XmlEscape(note) + "</p>\n";
+    }
+    any = any || !v.views.views.empty();
+  }
+  if (!any) return html;
+  html +=
+      "<table id=\"worst-frames\">\n<tr><th>results</th><th>cell</th><th>frames with</th>"
+      "<th>frame</th><th>TP</th><th>FP</th><th>FN</th><th>image view</th><th>bird's-eye "
+      "view</th></tr>\n";
+  for (const ReportFrameViews& v : views) {
+    for (const WrittenFrameView& w : v.views.views) {
+      auto links = [&](const std::string& svg, const std::string& png, const char* kind) {
+        std::string s = fmt::format(
+            "<a class=\"stereodet-view-link\" data-frame=\"{}\" data-view=\"{}\" "
+            "href=\"{}/{}\">SVG</a>",
+            XmlEscape(w.frame_id), kind, v.folder, XmlEscape(svg));
+        if (!png.empty()) {
+          s += fmt::format(
+              " <a class=\"stereodet-view-link\" data-frame=\"{}\" data-view=\"{}\" "
+              "href=\"{}/{}\">PNG</a>",
+              XmlEscape(w.frame_id), kind, v.folder, XmlEscape(png));
+        }
+        return s;
+      };
+      html += fmt::format(
+          "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
+          "<td class=\"t\">{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"t\">{}</td>"
+          "<td class=\"t\">{}</td></tr>\n",
+          XmlEscape(v.label), ViewCellName(w.cell), w.reason, XmlEscape(w.frame_id), w.tp, w.fp,
+          w.fn, links(w.image_svg, w.image_png, "image"), links(w.bev_svg, w.bev_png, "bev"));
+    }
+  }
+  return html + "</table>\n";
+}
+
+}  // namespace
+
 std::string ReportHtml(const std::vector<ReportSource>& sources,
-                       const std::vector<ReportFigure>& figures, bool with_png) {
+                       const std::vector<ReportFigure>& figures, bool with_png,
+                       const std::vector<ReportFrameViews>& views) {
   std::string html =
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<title>stereodet evaluation report</title>\n<style>\n"
@@ -676,6 +734,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
         "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
         "(docs/metrics.md, small samples).</p>\n";
   }
+  html += WorstFramesHtml(views);
 
   // Figures, one section per class x metric (x overlap set).
   json data = json::array();
@@ -714,7 +773,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
 }
 
 ReportResult WriteReportFiles(const fs::path& dir, const std::vector<ReportSource>& sources,
-                              bool png, double png_scale) {
+                              bool png, double png_scale, int worst_frames) {
   const std::vector<ReportFigure> figures = ReportFigures(sources);
   ReportResult result;
   result.png = png && PngFromSvgAvailable();
@@ -736,8 +795,29 @@ ReportResult WriteReportFiles(const fs::path& dir, const std::vector<ReportSourc
       result.files.push_back(png_path);
     }
   }
+  // The worst frames' views, at the image's own resolution.
+  std::vector<ReportFrameViews> views;
+  for (size_t i = 0; i < sources.size() && worst_frames > 0; ++i) {
+    const ReportSource& s = sources[i];
+    if (s.kind != ReportKind::kEval) continue;
+    ReportFrameViews v;
+    v.label = s.label;
+    v.folder = sources.size() == 1 ? "views" : fmt::format("views/{}", i + 1);
+    v.has_records = !s.records.empty();
+    if (v.has_records) {
+      FrameViewsOptions options;
+      options.results = s.folder;
+      options.worst = worst_frames;
+      options.png = result.png;
+      v.views = WriteWorstFrameViews(s.results, s.records, dir / v.folder, options);
+      result.files.insert(result.files.end(), v.views.files.begin(), v.views.files.end());
+      result.num_views += static_cast<int>(v.views.views.size());
+      for (const std::string& note : v.views.notes) result.notes.push_back(s.label + ": " + note);
+    }
+    views.push_back(std::move(v));
+  }
   result.index = dir / "index.html";
-  WriteFileAtomically(result.index, ReportHtml(sources, figures, result.png));
+  WriteFileAtomically(result.index, ReportHtml(sources, figures, result.png, views));
   result.files.push_back(result.index);
   result.num_figures = static_cast<int>(figures.size());
   return result;
@@ -751,6 +831,7 @@ void ReportOptions::Check() const {
       << "report: with several results folders, say where the report goes (out)";
   STEREODET_CHECK(png_scale > 0 && png_scale <= 8)
       << "report: png_scale " << png_scale << " is not in (0, 8]";
+  STEREODET_CHECK(worst_frames >= 0) << "report: worst_frames " << worst_frames << " is negative";
 }
 
 ReportResult WriteReport(const ReportOptions& options) {
@@ -766,7 +847,8 @@ ReportResult WriteReport(const ReportOptions& options) {
   }
   const fs::path out = options.out.empty() ? options.results.front() / "report" : options.out;
   StagedFolder staged(out, "index.html");
-  ReportResult result = WriteReportFiles(staged.path(), sources, options.png, options.png_scale);
+  ReportResult result = WriteReportFiles(staged.path(), sources, options.png, options.png_scale,
+                                         options.worst_frames);
   staged.Commit();
   for (fs::path& f : result.files) f = out / f.lexically_relative(staged.path());
   result.index = out / "index.html";
