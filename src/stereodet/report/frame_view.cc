@@ -511,6 +511,7 @@ FrameViewsResult WriteViews(
   for (const auto& job : jobs) total += static_cast<int64_t>(job.second.size());
   ProgressReporter progress("view", total, options.progress);
   std::set<std::string> without_image;
+  std::map<std::string, WrittenFrameView> drawn;  // by file stem: a frame with most FN and FP
   for (const auto& [cell, frames] : jobs) {
     std::map<std::string, std::vector<ViewRecord>> by_frame;
     for (const ViewRecord& r : records) {
@@ -518,6 +519,14 @@ FrameViewsResult WriteViews(
     }
     const std::vector<FrameCounts> counts = CountByFrame(records, cell);
     for (const auto& [frame_id, reason] : frames) {
+      const std::string stem = frame_id + "_" + ViewCellName(cell);
+      if (const auto done = drawn.find(stem); done != drawn.end()) {
+        WrittenFrameView again = done->second;
+        again.reason = reason;
+        result.views.push_back(std::move(again));
+        progress.Add();
+        continue;
+      }
       const auto it = dataset.index.find(frame_id);
       STEREODET_CHECK_IO(it != dataset.index.end())
           << "view: frame " << frame_id << " is not one of the evaluation's frames";
@@ -549,7 +558,6 @@ FrameViewsResult WriteViews(
           w.fn = c.fn;
         }
       }
-      const std::string stem = frame_id + "_" + ViewCellName(cell);
       w.image_svg = stem + "_image.svg";
       w.bev_svg = stem + "_bev.svg";
       const std::string header = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
@@ -565,6 +573,7 @@ FrameViewsResult WriteViews(
         result.files.push_back(out / w.image_png);
         result.files.push_back(out / w.bev_png);
       }
+      drawn[stem] = w;
       result.views.push_back(std::move(w));
       progress.Add();
     }
