@@ -503,8 +503,10 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
                                   sources.size() > 1 ? sources[i].label + ": " : "", pairs_a,
                                   pairs_b));
   }
-  p.caption = fmt::format("{}; empty bins are not drawn; the model at the bin centre.",
-                          fmt::join(caption, "; "));
+  p.caption = fmt::format(
+      "{}; B - A is positive where B errs more (A - B, its negative, is compare.csv's "
+      "difference_a_minus_b); empty bins are not drawn; the model at the bin centre.",
+      fmt::join(caption, "; "));
   return p;
 }
 

@@ -343,6 +343,42 @@ TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   EXPECT_TRUE(SameNumbers(model, csv["model_dz"]));
 }
 
+// compare.csv also says A - B (the sign issue 13 words): the negative of B - A in every row, +0.3 m
+// in the 10-15 m bin (A errs 0.5 m, B 0.2 m), appended after the earlier columns.
+TEST(ReportTest, CompareCsvHasTheDifferenceAMinusBAsItsLastColumn) {
+  TestTempDir dir;
+  EvaluationCompareOptions compare;
+  compare.input.gt = kData / "eval_compare";
+  compare.input.det = kData / "eval_compare/det_a";
+  compare.det_b = kData / "eval_compare/det_b";
+  compare.eval.classes = {KittiClassSpec("Car")};
+  compare.eval.metrics = {OverlapKind::k2D};
+  compare.out = dir.path() / "compare";
+  RunEvaluationCompare(compare);
+  const std::string text = ReadFile(dir.path() / "compare/compare.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "class,metric,difficulty,lower_m,upper_m,count_a,abs_dz_mean_a,count_b,abs_dz_mean_b,"
+            "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz,"
+            "difference_a_minus_b");
+  auto csv = ReadCsv(dir.path() / "compare/compare.csv");
+  const std::vector<double>& b_minus_a = csv["difference_b_minus_a"];
+  const std::vector<double>& a_minus_b = csv["difference_a_minus_b"];
+  ASSERT_EQ(a_minus_b.size(), b_minus_a.size());
+  int compared = 0;
+  for (size_t i = 0; i < a_minus_b.size(); ++i) {
+    EXPECT_EQ(std::isnan(a_minus_b[i]), std::isnan(b_minus_a[i])) << i;
+    if (std::isnan(a_minus_b[i])) continue;
+    EXPECT_NEAR(a_minus_b[i], -b_minus_a[i], 1e-12) << i;
+    ++compared;
+  }
+  EXPECT_GE(compared, 2);
+  const std::vector<double>& lower = csv["lower_m"];
+  const size_t near =
+      static_cast<size_t>(std::find(lower.begin(), lower.end(), 10.0) - lower.begin());
+  ASSERT_LT(near, lower.size());
+  EXPECT_NEAR(a_minus_b[near], 0.3, 1e-9);
+}
+
 // `eval sweep`: the naive and the stable precision and recall of sweep.csv against the value.
 TEST(ReportTest, SweepFigurePlotsSweepCsv) {
   TestTempDir dir;
