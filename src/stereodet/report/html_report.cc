@@ -604,6 +604,69 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
 
 namespace {
 
+// The paper's Table 1 (issue 17): with several results folders, one table per class (Car,
+// Pedestrian, Cyclist, in that order, those the first folder evaluated), one row per folder, at
+// Moderate, the first overlap set (KITTI's: Car 0.7, Pedestrian and Cyclist 0.5) and 2D where
+// evaluated (else the first metric): AP_R40 and AP_R11 of the folder's matcher, the exact AP
+// (every score; the optimal and VOC matchers compute it, the KITTI matcher does not: "-"), and
+// the Brier score over labels.
+std::string Table1Html(const std::vector<ReportSource>& sources) {
+  if (sources.size() < 2) return "";
+  const json& first = sources.front().results["results"];
+  std::string metric, overlaps;
+  for (const json& e : first) {
+    if (!e.value("evaluated", false)) continue;
+    if (overlaps.empty()) overlaps = Str(e, "overlaps");
+    if (metric.empty() || Str(e, "metric") == "2d") metric = Str(e, "metric");
+  }
+  std::string html;
+  for (const char* class_name : {"Car", "Pedestrian", "Cyclist"}) {
+    auto find = [&](const ReportSource& s) -> const json* {
+      for (const json& e : s.results["results"]) {
+        if (e.value("evaluated", false) && Str(e, "class") == class_name &&
+            Str(e, "metric") == metric && Str(e, "difficulty") == "Moderate" &&
+            Str(e, "overlaps") == overlaps) {
+          return &e;
+        }
+      }
+      return nullptr;
+    };
+    const json* cell = find(sources.front());
+    if (cell == nullptr) continue;
+    html += fmt::format(
+        "<h3>{0}, {1} Moderate, IoU {2}</h3>\n<table class=\"table1\" id=\"table1-{3}\">\n"
+        "<tr><th>results</th><th>matcher</th><th>labels</th><th>AP_R40</th><th>AP_R11</th>"
+        "<th>AP exact</th><th>Brier over labels</th></tr>\n",
+        class_name, XmlEscape(metric), Fixed(Num(*cell, "min_overlap"), 2), Lower(class_name));
+    for (const ReportSource& s : sources) {
+      const json* e = find(s);
+      const std::string matcher = Str(s.results["options"], "matcher");
+      if (e == nullptr) {
+        html += fmt::format(
+            "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td colspan=\"5\" "
+            "class=\"t\">not evaluated</td></tr>\n",
+            XmlEscape(s.label), XmlEscape(matcher));
+        continue;
+      }
+      html += fmt::format(
+          "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}{}</td><td>{}</td><td>{}</td>"
+          "<td>{}</td><td>{}</td></tr>\n",
+          XmlEscape(s.label), XmlEscape(matcher), e->value("num_valid_labels", 0),
+          e->value("small_sample", false) ? "*" : "", Fixed(Num(*e, "ap_r40"), 2),
+          Fixed(Num(*e, "ap_r11"), 2), Fixed(Num(*e, "ap_voc"), 2),
+          Fixed(Num((*e)["brier"], "over_labels"), 4));
+    }
+    html += "</table>\n";
+  }
+  if (html.empty()) return "";
+  return "<h2 id=\"table1\">Table 1: one row per model</h2>\n<p style=\"font-size:12px\">As "
+         "the paper's Table 1: AP in percent (AP_R40 and AP_R11 with each folder's matcher; AP "
+         "exact over every score, which the optimal and VOC matchers compute and the KITTI matcher "
+         "does not), the Brier score over labels (docs/metrics.md); * 40 or fewer valid "
+         "labels.</p>\n" +
+         html;
+}
+
 std::string WorstFramesHtml(const std::vector<ReportFrameViews>& views) {
   if (views.empty()) return "";
   std::string html =
@@ -736,6 +799,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
         "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
         "(docs/metrics.md, small samples).</p>\n";
   }
+  if (eval) html += Table1Html(sources);
   html += WorstFramesHtml(views);
 
   // Figures, one section per class x metric (x overlap set).
