@@ -58,9 +58,9 @@ else
     step "$name: KITTI-compatible AP"
     "$bin" eval --gt "$data" --det "$demo_dir/detections-$name" --split val --metrics 2d --matcher kitti
 
-    step "$name: optimal matching, with results.json and curves ($demo_dir/eval-$name)"
+    step "$name: optimal matching, with results.json, curves, per-detection records and the views of the worst frames ($demo_dir/eval-$name)"
     "$bin" eval --gt "$data" --det "$demo_dir/detections-$name" --split val --metrics 2d --matcher optimal \
-      --out "$demo_dir/eval-$name" --report
+      --out "$demo_dir/eval-$name" --records --report
     evals+=("$demo_dir/eval-$name")
   done
 fi

@@ -63,6 +63,10 @@ std::span<const Command> CommandTable() {
       {"report", Program::kFrontEnd,
        "figures (SVG, PNG) and one self-contained HTML page of one or several `eval --out` "
        "results folders: PR, recall vs FP per frame, reliability and Brier, 3D error vs distance"},
+      {"view", Program::kFrontEnd,
+       "frame views of an `eval --out --records` results folder: labels and detections on the "
+       "left image coloured TP / FP / FN with score and IoU, and the bird's-eye view with the "
+       "points and 3D boxes (SVG, PNG); by default the worst frames"},
       {"train", Program::kModels, "train a detector on a KITTI-format split"},
       {"detect", Program::kModels, "run a trained detector, write KITTI detection files"},
   };

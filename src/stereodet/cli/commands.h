@@ -1,9 +1,9 @@
 // The `stereodet` commands and the executables that hold them.
 //
 // `stereodet` is a git-style front end: it runs the commands that need neither OpenCV nor LibTorch
-// (info, eval, report) itself and hands the others to a sibling executable in its own folder, so
+// (info, eval, report, view) itself and hands the others to a sibling executable in its own folder, so
 // that a command loads only the libraries it uses:
-//   stereodet         info, eval, report    (util, geometry, kitti, eval, report)
+//   stereodet         info, eval, report, view  (util, geometry, kitti, eval, report)
 //   stereodet-vision  synth, stereo         (+ OpenCV)
 //   stereodet-models  train, detect         (+ OpenCV, LibTorch; only with STEREODET_BUILD_MODELS)
 // CommandTable() below is the one list of commands (name, owner, description) that every executable
@@ -51,6 +51,7 @@ using AddCommandFn = void (*)(CLI::App&);
 void AddInfoCommand(CLI::App& app);    // info_command.cc (kitti helper)
 void AddEvalCommand(CLI::App& app);    // eval_command.cc (eval, eval sweep, eval compare)
 void AddReportCommand(CLI::App& app);  // report_command.cc (figures and the HTML report)
+void AddViewCommand(CLI::App& app);    // report_command.cc (frame views)
 void AddSynthCommand(CLI::App& app);   // synth_command.cc
 void AddStereoCommand(CLI::App& app);  // stereo_command.cc
 void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect ssd)

@@ -1,6 +1,6 @@
 // stereodet: stereo features, detectors and safety-grade evaluation for KITTI-format data.
-// The front end: runs info, eval and report itself (no OpenCV, no LibTorch loaded) and hands every
-// other command to its sibling executable (see commands.h).
+// The front end: runs info, eval, report and view itself (no OpenCV, no LibTorch loaded) and hands
+// every other command to its sibling executable (see commands.h).
 #include <string_view>
 #include <utility>
 
@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
       {"info", AddInfoCommand},
       {"eval", AddEvalCommand},
       {"report", AddReportCommand},
+      {"view", AddViewCommand},
   };
   return RunCli(argc, argv, Program::kFrontEnd, kOwn);
 }

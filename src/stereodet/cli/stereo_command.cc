@@ -156,6 +156,8 @@ void RunFrame(FrameArgs& args) {
                100.0 * result.stereo_pixels / result.total_pixels, result.points);
     fmt::print("{}", GroundFitLine(result.ground));
     fmt::print("wrote {}/{}_{{disparity,depth,height,bev}}.png\n", args.shared.out, args.id);
+    fmt::print("wrote {}/{}_{{disparity,depth,height,bev}}_key.png (with colour bar and caption)\n",
+               args.shared.out, args.id);
   }
 }
 

@@ -5,6 +5,10 @@
 #   - the console shows only the page's own line "stereodet-report: N figures drawn, N in data"
 #     (any other message, an error, an uncaught exception, a refused load, fails the test; Chromium
 #     logs every console message at one level, so the test accepts that one line and nothing else);
+#   - the worst frames' views are linked: the evaluation keeps its records (--records), so the page
+#     has a table of the frames with most FNs / FPs, and the DOM holds one link
+#     (a.stereodet-view-link) per view file of OUT/report/views/, each to a file that is there
+#     (a frame with most FNs and most FPs is linked twice, to the same files).
 #   - a screenshot is not blank (enough non-white pixels and colours).
 # Usage: browser_test.sh STEREODET_BIN DATA_DIR WORK_DIR [--control]
 #   --control adds one console.error() to the generated page: the test must then fail (ctest runs
@@ -24,7 +28,7 @@ fi
 
 rm -rf "$work"
 mkdir -p "$work"
-"$bin" eval --gt "$data" --det "$data/det" --out "$work/eval" --report >"$work/eval.log"
+"$bin" eval --gt "$data" --det "$data/det" --out "$work/eval" --records --report >"$work/eval.log"
 report="$work/eval/report"
 index="$report/index.html"
 if [[ "$control" == --control ]]; then
@@ -53,6 +57,19 @@ if missing:
 m = re.search(r'<body[^>]*data-figures="(\d+)"', dom)
 if not m or int(m.group(1)) != len(ids):
     failures.append(f"the page counted {m.group(1) if m else 'no'} figures, the folder has {len(ids)}")
+
+views_dir = os.path.join(report, "views")
+view_files = sorted(f for f in os.listdir(views_dir)) if os.path.isdir(views_dir) else []
+links = re.findall(r'<a class="stereodet-view-link"[^>]*href="([^"]+)"', dom)
+if not view_files:
+    failures.append("no frame views in " + views_dir)
+if sorted(set(os.path.basename(l) for l in links)) != view_files:
+    failures.append(f"the DOM's view links ({len(set(links))} files) are not the {len(view_files)} view files")
+dangling = [l for l in links if not os.path.isfile(os.path.join(report, l))]
+if dangling:
+    failures.append(f"view links to missing files: {dangling[:3]}")
+if 'id="worst-frames"' not in dom:
+    failures.append("no worst-frames table in the DOM")
 
 console = [l for l in open(os.path.join(work, "console.log"), errors="replace") if ":CONSOLE" in l]
 expected = f'"stereodet-report: {len(ids)} figures drawn, {len(ids)} in data"'
@@ -100,6 +117,6 @@ if non_white < 0.01 * len(pixels) or colours < 16:
 if failures:
     print("FAILED:\n  " + "\n  ".join(failures))
     sys.exit(1)
-print(f"passed: {len(ids)} figures in the DOM, console clean, screenshot {width}x{height} with "
+print(f"passed: {len(ids)} figures and {len(links)} frame-view links in the DOM, console clean, screenshot {width}x{height} with "
       f"{100 * non_white / len(pixels):.1f}% non-white pixels, {colours} colours")
 PY

@@ -601,15 +601,18 @@ std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound)
 std::string FormatCompareCsv(const std::vector<CompareRow>& rows) {
   std::string csv =
       "class,metric,difficulty,lower_m,upper_m,count_a,abs_dz_mean_a,count_b,abs_dz_mean_b,"
-      "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz\n";
+      "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz,"
+      "difference_a_minus_b\n";
   for (const CompareRow& r : rows) {
-    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name,
-                       OverlapKindName(r.metric), DifficultyName(r.difficulty), r.lower_m,
-                       r.upper_m, r.count_a, FormatNumber(r.abs_depth_error_mean_a_m, 6), r.count_b,
-                       FormatNumber(r.abs_depth_error_mean_b_m, 6),
-                       FormatNumber(r.difference_b_minus_a_m, 6),
-                       FormatNumber(r.centre_error_mean_a_m, 6),
-                       FormatNumber(r.centre_error_mean_b_m, 6), r.model_depth_error_m);
+    // difference_a_minus_b (the sign issue 13 words the figure in) is appended, so that readers of
+    // the earlier columns, by name or by position, read what they read before.
+    csv += fmt::format(
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name, OverlapKindName(r.metric),
+        DifficultyName(r.difficulty), r.lower_m, r.upper_m, r.count_a,
+        FormatNumber(r.abs_depth_error_mean_a_m, 6), r.count_b,
+        FormatNumber(r.abs_depth_error_mean_b_m, 6), FormatNumber(r.difference_b_minus_a_m, 6),
+        FormatNumber(r.centre_error_mean_a_m, 6), FormatNumber(r.centre_error_mean_b_m, 6),
+        r.model_depth_error_m, FormatNumber(0.0 - r.difference_b_minus_a_m, 6));
   }
   return csv;
 }

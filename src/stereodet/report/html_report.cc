@@ -503,8 +503,10 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
                                   sources.size() > 1 ? sources[i].label + ": " : "", pairs_a,
                                   pairs_b));
   }
-  p.caption = fmt::format("{}; empty bins are not drawn; the model at the bin centre.",
-                          fmt::join(caption, "; "));
+  p.caption = fmt::format(
+      "{}; B - A is positive where B errs more (A - B, its negative, is compare.csv's "
+      "difference_a_minus_b); empty bins are not drawn; the model at the bin centre.",
+      fmt::join(caption, "; "));
   return p;
 }
 
@@ -537,6 +539,7 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
   STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
                      source.results["results"].is_array())
       << path.string() << " is not a stereodet results.json (it has no \"results\" array)";
+  source.records = MatchRecordsFile(folder, source.results);
   return source;
 }
 
@@ -599,8 +602,128 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
   return figures;
 }
 
+namespace {
+
+// The paper's Table 1 (issue 17): with several results folders, one table per class (Car,
+// Pedestrian, Cyclist, in that order, those the first folder evaluated), one row per folder, at
+// Moderate, the first overlap set (KITTI's: Car 0.7, Pedestrian and Cyclist 0.5) and 2D where
+// evaluated (else the first metric): AP_R40 and AP_R11 of the folder's matcher, the exact AP
+// (every score; the optimal and VOC matchers compute it, the KITTI matcher does not: "-"), and
+// the Brier score over labels.
+std::string Table1Html(const std::vector<ReportSource>& sources) {
+  if (sources.size() < 2) return "";
+  const json& first = sources.front().results["results"];
+  std::string metric, overlaps;
+  for (const json& e : first) {
+    if (!e.value("evaluated", false)) continue;
+    if (overlaps.empty()) overlaps = Str(e, "overlaps");
+    if (metric.empty() || Str(e, "metric") == "2d") metric = Str(e, "metric");
+  }
+  std::string html;
+  for (const char* class_name : {"Car", "Pedestrian", "Cyclist"}) {
+    auto find = [&](const ReportSource& s) -> const json* {
+      for (const json& e : s.results["results"]) {
+        if (e.value("evaluated", false) && Str(e, "class") == class_name &&
+            Str(e, "metric") == metric && Str(e, "difficulty") == "Moderate" &&
+            Str(e, "overlaps") == overlaps) {
+          return &e;
+        }
+      }
+      return nullptr;
+    };
+    const json* cell = find(sources.front());
+    if (cell == nullptr) continue;
+    html += fmt::format(
+        "<h3>{0}, {1} Moderate, IoU {2}</h3>\n<table class=\"table1\" id=\"table1-{3}\">\n"
+        "<tr><th>results</th><th>matcher</th><th>labels</th><th>AP_R40</th><th>AP_R11</th>"
+        "<th>AP exact</th><th>Brier over labels</th></tr>\n",
+        class_name, XmlEscape(metric), Fixed(Num(*cell, "min_overlap"), 2), Lower(class_name));
+    for (const ReportSource& s : sources) {
+      const json* e = find(s);
+      const std::string matcher = Str(s.results["options"], "matcher");
+      if (e == nullptr) {
+        html += fmt::format(
+            "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td colspan=\"5\" "
+            "class=\"t\">not evaluated</td></tr>\n",
+            XmlEscape(s.label), XmlEscape(matcher));
+        continue;
+      }
+      html += fmt::format(
+          "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}{}</td><td>{}</td><td>{}</td>"
+          "<td>{}</td><td>{}</td></tr>\n",
+          XmlEscape(s.label), XmlEscape(matcher), e->value("num_valid_labels", 0),
+          e->value("small_sample", false) ? "*" : "", Fixed(Num(*e, "ap_r40"), 2),
+          Fixed(Num(*e, "ap_r11"), 2), Fixed(Num(*e, "ap_voc"), 2),
+          Fixed(Num((*e)["brier"], "over_labels"), 4));
+    }
+    html += "</table>\n";
+  }
+  if (html.empty()) return "";
+  return "<h2 id=\"table1\">Table 1: one row per model</h2>\n<p style=\"font-size:12px\">As "
+         "the paper's Table 1: AP in percent (AP_R40 and AP_R11 with each folder's matcher; AP "
+         "exact over every score, which the optimal and VOC matchers compute and the KITTI matcher "
+         "does not), the Brier score over labels (docs/metrics.md); * 40 or fewer valid "
+         "labels.</p>\n" +
+         html;
+}
+
+std::string WorstFramesHtml(const std::vector<ReportFrameViews>& views) {
+  if (views.empty()) return "";
+  std::string html =
+      "<h2 id=\"worst-frames\">Worst frames</h2>\n<p style=\"font-size:12px\">Per class, the "
+      "frames with most false negatives and most false positives at the operating point, from the "
+      "per-detection records (matches.csv): their labels (dashed) and detections (solid) on the "
+      "left image, TP green, FP red, FN blue, ignored grey, and the bird's-eye view.</p>\n";
+  bool any = false;
+  for (const ReportFrameViews& v : views) {
+    if (!v.has_records) {
+      html += fmt::format(
+          "<p class=\"no-views\">{}: no frame views: the folder has no matches.csv (evaluate with "
+          "<code>--records</code>).</p>\n",
+          XmlEscape(v.label));
+      continue;
+    }
+    for (const std::string& note : v.views.notes) {
+      html += "<p style=\"font-size:12px\">note: " + XmlEscape(note) + "</p>\n";
+    }
+    any = any || !v.views.views.empty();
+  }
+  if (!any) return html;
+  html +=
+      "<table id=\"worst-frames\">\n<tr><th>results</th><th>cell</th><th>frames with</th>"
+      "<th>frame</th><th>TP</th><th>FP</th><th>FN</th><th>image view</th><th>bird's-eye "
+      "view</th></tr>\n";
+  for (const ReportFrameViews& v : views) {
+    for (const WrittenFrameView& w : v.views.views) {
+      auto links = [&](const std::string& svg, const std::string& png, const char* kind) {
+        std::string s = fmt::format(
+            "<a class=\"stereodet-view-link\" data-frame=\"{}\" data-view=\"{}\" "
+            "href=\"{}/{}\">SVG</a>",
+            XmlEscape(w.frame_id), kind, v.folder, XmlEscape(svg));
+        if (!png.empty()) {
+          s += fmt::format(
+              " <a class=\"stereodet-view-link\" data-frame=\"{}\" data-view=\"{}\" "
+              "href=\"{}/{}\">PNG</a>",
+              XmlEscape(w.frame_id), kind, v.folder, XmlEscape(png));
+        }
+        return s;
+      };
+      html += fmt::format(
+          "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
+          "<td class=\"t\">{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"t\">{}</td>"
+          "<td class=\"t\">{}</td></tr>\n",
+          XmlEscape(v.label), ViewCellName(w.cell), w.reason, XmlEscape(w.frame_id), w.tp, w.fp,
+          w.fn, links(w.image_svg, w.image_png, "image"), links(w.bev_svg, w.bev_png, "bev"));
+    }
+  }
+  return html + "</table>\n";
+}
+
+}  // namespace
+
 std::string ReportHtml(const std::vector<ReportSource>& sources,
-                       const std::vector<ReportFigure>& figures, bool with_png) {
+                       const std::vector<ReportFigure>& figures, bool with_png,
+                       const std::vector<ReportFrameViews>& views) {
   std::string html =
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<title>stereodet evaluation report</title>\n<style>\n"
@@ -676,6 +799,8 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
         "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
         "(docs/metrics.md, small samples).</p>\n";
   }
+  if (eval) html += Table1Html(sources);
+  html += WorstFramesHtml(views);
 
   // Figures, one section per class x metric (x overlap set).
   json data = json::array();
@@ -714,7 +839,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
 }
 
 ReportResult WriteReportFiles(const fs::path& dir, const std::vector<ReportSource>& sources,
-                              bool png, double png_scale) {
+                              bool png, double png_scale, int worst_frames) {
   const std::vector<ReportFigure> figures = ReportFigures(sources);
   ReportResult result;
   result.png = png && PngFromSvgAvailable();
@@ -736,8 +861,29 @@ ReportResult WriteReportFiles(const fs::path& dir, const std::vector<ReportSourc
       result.files.push_back(png_path);
     }
   }
+  // The worst frames' views, at the image's own resolution.
+  std::vector<ReportFrameViews> views;
+  for (size_t i = 0; i < sources.size() && worst_frames > 0; ++i) {
+    const ReportSource& s = sources[i];
+    if (s.kind != ReportKind::kEval) continue;
+    ReportFrameViews v;
+    v.label = s.label;
+    v.folder = sources.size() == 1 ? "views" : fmt::format("views/{}", i + 1);
+    v.has_records = !s.records.empty();
+    if (v.has_records) {
+      FrameViewsOptions options;
+      options.results = s.folder;
+      options.worst = worst_frames;
+      options.png = result.png;
+      v.views = WriteWorstFrameViews(s.results, s.records, dir / v.folder, options);
+      result.files.insert(result.files.end(), v.views.files.begin(), v.views.files.end());
+      result.num_views += static_cast<int>(v.views.views.size());
+      for (const std::string& note : v.views.notes) result.notes.push_back(s.label + ": " + note);
+    }
+    views.push_back(std::move(v));
+  }
   result.index = dir / "index.html";
-  WriteFileAtomically(result.index, ReportHtml(sources, figures, result.png));
+  WriteFileAtomically(result.index, ReportHtml(sources, figures, result.png, views));
   result.files.push_back(result.index);
   result.num_figures = static_cast<int>(figures.size());
   return result;
@@ -751,6 +897,7 @@ void ReportOptions::Check() const {
       << "report: with several results folders, say where the report goes (out)";
   STEREODET_CHECK(png_scale > 0 && png_scale <= 8)
       << "report: png_scale " << png_scale << " is not in (0, 8]";
+  STEREODET_CHECK(worst_frames >= 0) << "report: worst_frames " << worst_frames << " is negative";
 }
 
 ReportResult WriteReport(const ReportOptions& options) {
@@ -766,7 +913,8 @@ ReportResult WriteReport(const ReportOptions& options) {
   }
   const fs::path out = options.out.empty() ? options.results.front() / "report" : options.out;
   StagedFolder staged(out, "index.html");
-  ReportResult result = WriteReportFiles(staged.path(), sources, options.png, options.png_scale);
+  ReportResult result = WriteReportFiles(staged.path(), sources, options.png, options.png_scale,
+                                         options.worst_frames);
   staged.Commit();
   for (fs::path& f : result.files) f = out / f.lexically_relative(staged.path());
   result.index = out / "index.html";

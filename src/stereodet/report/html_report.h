@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/report/frame_view.h"
 #include "stereodet/report/svg_plot.h"
 
 namespace stereodet {
@@ -38,6 +39,9 @@ struct ReportSource {
   };
   std::vector<Row> rows;
   std::filesystem::path folder;  // where it was read from (shown in the page; may be empty)
+  // kEval: the per-detection records (matches.csv of `eval --records`, MatchRecordsFile) where
+  // the folder has them, for the worst frames' views; empty otherwise.
+  std::filesystem::path records;
 };
 
 // Reads FOLDER/results.json, or else FOLDER/sweep.csv, or else FOLDER/compare.csv. Throws
@@ -78,8 +82,18 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
 // figures/ID.svg and figures/ID.png (when `with_png`); a <script type="application/json"
 // id="stereodet-figures"> with every PlotToJson; and a few lines of script that log the number of
 // figures to the console (the browser test's control).
+// With `views`, a section "Worst frames" (<table id="worst-frames">): per results folder and class,
+// the frames with most FNs and most FPs, their counts, and links (<a class="stereodet-view-link">)
+// to their image and bird's-eye views under the report folder.
+struct ReportFrameViews {
+  std::string label;         // the results folder's label
+  std::string folder;        // the views' folder under the report: "views" or "views/N"
+  bool has_records = false;  // false: the folder has no matches.csv (no views; the page says why)
+  FrameViewsResult views;
+};
 std::string ReportHtml(const std::vector<ReportSource>& sources,
-                       const std::vector<ReportFigure>& figures, bool with_png);
+                       const std::vector<ReportFigure>& figures, bool with_png,
+                       const std::vector<ReportFrameViews>& views = {});
 
 struct ReportOptions {
   // Results folders, all of one kind: each holds results.json, sweep.csv or compare.csv.
@@ -90,6 +104,7 @@ struct ReportOptions {
   std::filesystem::path out;
   bool png = true;  // also figures/*.png (skipped with a note where PngFromSvgAvailable() is false)
   double png_scale = 2.0;  // PNG pixels per SVG px
+  int worst_frames = 3;    // views of this many worst frames per class and kind (0: none)
   void Check() const;      // throws std::invalid_argument
 };
 
@@ -97,14 +112,19 @@ struct ReportResult {
   std::filesystem::path index;               // OUT/index.html
   std::vector<std::filesystem::path> files;  // every file written, under OUT
   int num_figures = 0;
+  int num_views = 0;               // frame views written (each an image and a bird's-eye view)
   bool png = false;                // PNG files were written
   std::vector<std::string> notes;  // e.g. why PNG files are missing
 };
 
 // Writes index.html and figures/ID.svg (and .png) for `sources` into `dir` (created; files written
-// atomically). WriteReport and RunEvaluation's report call this.
+// atomically), and for every eval source with records the views of its worst frames (`worst`
+// with most FNs and as many with most FPs per class, first metric, moderate;
+// WriteWorstFrameViews) into dir/views/ (dir/views/N/ for source N with several). WriteReport and
+// RunEvaluation's report call this.
 ReportResult WriteReportFiles(const std::filesystem::path& dir,
-                              const std::vector<ReportSource>& sources, bool png, double png_scale);
+                              const std::vector<ReportSource>& sources, bool png, double png_scale,
+                              int worst_frames = ReportOptions().worst_frames);
 
 // `stereodet report`: reads the folders and writes the report folder, replacing it whole.
 ReportResult WriteReport(const ReportOptions& options);

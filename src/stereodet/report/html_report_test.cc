@@ -343,6 +343,93 @@ TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   EXPECT_TRUE(SameNumbers(model, csv["model_dz"]));
 }
 
+// With several results folders the page has the paper's Table 1: per class a table, one row per
+// folder, at Car / Pedestrian / Cyclist Moderate 2D (first overlap set): AP_R40, AP_R11, the exact
+// AP and the Brier score over labels, each as results.json has it.
+TEST(ReportTest, SeveralResultsGetTable1OneRowPerModelPerClass) {
+  TestTempDir dir;
+  EvaluateSmall(dir.path() / "kitti", Matcher::kKitti);
+  EvaluateSmall(dir.path() / "optimal", Matcher::kOptimal);
+  ReportOptions options;
+  options.results = {dir.path() / "kitti", dir.path() / "optimal"};
+  options.out = dir.path() / "both";
+  options.png = false;
+  const std::string html = ReadFile(WriteReport(options).index);
+  for (const std::string class_name : {"Car", "Pedestrian", "Cyclist"}) {
+    std::string lower = class_name;
+    for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const size_t start = html.find("<table class=\"table1\" id=\"table1-" + lower + "\">");
+    ASSERT_NE(start, std::string::npos) << class_name;
+    const std::string table = html.substr(start, html.find("</table>", start) - start);
+    std::vector<std::string> expected_rows;
+    for (const char* name : {"kitti", "optimal"}) {
+      const json results = json::parse(ReadFile(dir.path() / name / "results.json"));
+      for (const json& e : results["results"]) {
+        if (e["class"] != class_name || e["metric"] != "2d" || e["difficulty"] != "Moderate") {
+          continue;
+        }
+        auto fixed = [&](const json& v, int decimals) {
+          return v.is_number() && std::isfinite(v.get<double>())
+                     ? fmt::format("{:.{}f}", v.get<double>(), decimals)
+                     : std::string("-");
+        };
+        expected_rows.push_back(fmt::format(
+            "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}{}</td><td>{}</td>"
+            "<td>{}</td><td>{}</td><td>{}</td></tr>",
+            name, name, e["num_valid_labels"].get<int>(), e.value("small_sample", false) ? "*" : "",
+            fixed(e["ap_r40"], 2), fixed(e["ap_r11"], 2), fixed(e["ap_voc"], 2),
+            fixed(e["brier"]["over_labels"], 4)));
+      }
+    }
+    ASSERT_EQ(expected_rows.size(), 2u) << class_name;
+    for (const std::string& row : expected_rows) EXPECT_THAT(table, HasSubstr(row)) << class_name;
+    EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 4) << table;  // header, 2 rows
+  }
+  // (The KITTI matcher computes no exact AP: its rows expect "-" there, from ap_voc null.)
+  EXPECT_THAT(html, HasSubstr("Table 1: one row per model"));
+  // One folder: no Table 1.
+  ReportOptions one = options;
+  one.results = {dir.path() / "kitti"};
+  one.out = dir.path() / "one";
+  EXPECT_THAT(ReadFile(WriteReport(one).index), Not(HasSubstr("table1")));
+}
+
+// compare.csv also says A - B (the sign issue 13 words): the negative of B - A in every row, +0.3 m
+// in the 10-15 m bin (A errs 0.5 m, B 0.2 m), appended after the earlier columns.
+TEST(ReportTest, CompareCsvHasTheDifferenceAMinusBAsItsLastColumn) {
+  TestTempDir dir;
+  EvaluationCompareOptions compare;
+  compare.input.gt = kData / "eval_compare";
+  compare.input.det = kData / "eval_compare/det_a";
+  compare.det_b = kData / "eval_compare/det_b";
+  compare.eval.classes = {KittiClassSpec("Car")};
+  compare.eval.metrics = {OverlapKind::k2D};
+  compare.out = dir.path() / "compare";
+  RunEvaluationCompare(compare);
+  const std::string text = ReadFile(dir.path() / "compare/compare.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "class,metric,difficulty,lower_m,upper_m,count_a,abs_dz_mean_a,count_b,abs_dz_mean_b,"
+            "difference_b_minus_a,centre_error_mean_a,centre_error_mean_b,model_dz,"
+            "difference_a_minus_b");
+  auto csv = ReadCsv(dir.path() / "compare/compare.csv");
+  const std::vector<double>& b_minus_a = csv["difference_b_minus_a"];
+  const std::vector<double>& a_minus_b = csv["difference_a_minus_b"];
+  ASSERT_EQ(a_minus_b.size(), b_minus_a.size());
+  int compared = 0;
+  for (size_t i = 0; i < a_minus_b.size(); ++i) {
+    EXPECT_EQ(std::isnan(a_minus_b[i]), std::isnan(b_minus_a[i])) << i;
+    if (std::isnan(a_minus_b[i])) continue;
+    EXPECT_NEAR(a_minus_b[i], -b_minus_a[i], 1e-12) << i;
+    ++compared;
+  }
+  EXPECT_GE(compared, 2);
+  const std::vector<double>& lower = csv["lower_m"];
+  const size_t near =
+      static_cast<size_t>(std::find(lower.begin(), lower.end(), 10.0) - lower.begin());
+  ASSERT_LT(near, lower.size());
+  EXPECT_NEAR(a_minus_b[near], 0.3, 1e-9);
+}
+
 // `eval sweep`: the naive and the stable precision and recall of sweep.csv against the value.
 TEST(ReportTest, SweepFigurePlotsSweepCsv) {
   TestTempDir dir;

@@ -37,6 +37,11 @@ struct Rsvg {
   decltype(&cairo_surface_write_to_png) write_to_png = nullptr;
   decltype(&cairo_surface_destroy) surface_destroy = nullptr;
   decltype(&cairo_status_to_string) status_to_string = nullptr;
+  decltype(&cairo_surface_flush) surface_flush = nullptr;
+  decltype(&cairo_image_surface_get_data) surface_data = nullptr;
+  decltype(&cairo_image_surface_get_stride) surface_stride = nullptr;
+  decltype(&cairo_image_surface_get_width) surface_width = nullptr;
+  decltype(&cairo_image_surface_get_height) surface_height = nullptr;
 };
 
 template <typename F>
@@ -70,6 +75,11 @@ const Rsvg& LoadRsvg() {
     ok &= Find(library, "cairo_surface_write_to_png", rsvg.write_to_png, e);
     ok &= Find(library, "cairo_surface_destroy", rsvg.surface_destroy, e);
     ok &= Find(library, "cairo_status_to_string", rsvg.status_to_string, e);
+    ok &= Find(library, "cairo_surface_flush", rsvg.surface_flush, e);
+    ok &= Find(library, "cairo_image_surface_get_data", rsvg.surface_data, e);
+    ok &= Find(library, "cairo_image_surface_get_stride", rsvg.surface_stride, e);
+    ok &= Find(library, "cairo_image_surface_get_width", rsvg.surface_width, e);
+    ok &= Find(library, "cairo_image_surface_get_height", rsvg.surface_height, e);
     rsvg.loaded = ok;  // the library stays loaded for the process
   });
   return rsvg;
@@ -86,24 +96,25 @@ bool PngFromSvgAvailable() {
 #endif
 }
 
-void WritePngFromSvg(const std::filesystem::path& path, const std::string& svg, double scale) {
-  STEREODET_CHECK(scale > 0 && scale <= 8) << "PNG scale " << scale << " is not in (0, 8]";
 #ifdef STEREODET_HAVE_RSVG
-  const Rsvg& r = LoadRsvg();
-  STEREODET_CHECK_IO(r.loaded) << path.string() << ": cannot load librsvg (" << r.error
-                               << "); install librsvg2-2";
+namespace {
+
+// The SVG drawn at `scale` on white; the caller destroys the surface. `what` names the output in
+// messages.
+cairo_surface_t* Render(const Rsvg& r, const std::string& what, const std::string& svg,
+                        double scale) {
   GError* error = nullptr;
   RsvgHandle* handle =
       r.new_from_data(reinterpret_cast<const guint8*>(svg.data()), svg.size(), &error);
   if (handle == nullptr) {
     const std::string message = error != nullptr ? error->message : "unknown error";
     if (error != nullptr) r.error_free(error);
-    STEREODET_THROW_IO() << path.string() << ": librsvg cannot read the SVG: " << message;
+    STEREODET_THROW_IO() << what << ": librsvg cannot read the SVG: " << message;
   }
   gdouble width = 0, height = 0;
   if (!r.intrinsic_size(handle, &width, &height)) {
     r.object_unref(handle);
-    STEREODET_THROW_IO() << path.string() << ": the SVG has no size in px";
+    STEREODET_THROW_IO() << what << ": the SVG has no size in px";
   }
   const int w = static_cast<int>(std::ceil(width * scale));
   const int h = static_cast<int>(std::ceil(height * scale));
@@ -115,16 +126,33 @@ void WritePngFromSvg(const std::filesystem::path& path, const std::string& svg, 
   const gboolean rendered = r.render_document(handle, cr, &viewport, &error);
   r.destroy(cr);
   r.object_unref(handle);
-  std::string message;
   if (!rendered) {
-    message = error != nullptr ? error->message : "unknown error";
+    const std::string message = error != nullptr ? error->message : "unknown error";
     if (error != nullptr) r.error_free(error);
+    r.surface_destroy(surface);
+    STEREODET_THROW_IO() << what << ": librsvg cannot draw the SVG: " << message;
   }
-  cairo_status_t status = CAIRO_STATUS_SUCCESS;
+  return surface;
+}
+
+const Rsvg& LoadedRsvg(const std::string& what) {
+  const Rsvg& r = LoadRsvg();
+  STEREODET_CHECK_IO(r.loaded) << what << ": cannot load librsvg (" << r.error
+                               << "); install librsvg2-2";
+  return r;
+}
+
+}  // namespace
+#endif
+
+void WritePngFromSvg(const std::filesystem::path& path, const std::string& svg, double scale) {
+  STEREODET_CHECK(scale > 0 && scale <= 8) << "PNG scale " << scale << " is not in (0, 8]";
+#ifdef STEREODET_HAVE_RSVG
+  const Rsvg& r = LoadedRsvg(path.string());
+  cairo_surface_t* surface = Render(r, path.string(), svg, scale);
   AtomicPath out(path);
-  if (rendered) status = r.write_to_png(surface, out.temp_path().c_str());
+  const cairo_status_t status = r.write_to_png(surface, out.temp_path().c_str());
   r.surface_destroy(surface);
-  STEREODET_CHECK_IO(rendered) << path.string() << ": librsvg cannot draw the SVG: " << message;
   STEREODET_CHECK_IO(status == CAIRO_STATUS_SUCCESS)
       << path.string() << ": cannot write the PNG: " << r.status_to_string(status);
   out.Commit();
@@ -132,6 +160,33 @@ void WritePngFromSvg(const std::filesystem::path& path, const std::string& svg, 
   (void)svg;
   STEREODET_THROW_IO() << path.string()
                        << ": this build has no PNG output (librsvg2-dev was not found)";
+#endif
+}
+
+RasterImage RasterizeSvg(const std::string& svg, double scale) {
+  STEREODET_CHECK(scale > 0 && scale <= 8) << "raster scale " << scale << " is not in (0, 8]";
+#ifdef STEREODET_HAVE_RSVG
+  const Rsvg& r = LoadedRsvg("SVG raster");
+  cairo_surface_t* surface = Render(r, "SVG raster", svg, scale);
+  r.surface_flush(surface);
+  RasterImage image;
+  const unsigned char* data = r.surface_data(surface);
+  const int stride = r.surface_stride(surface);
+  // CAIRO_FORMAT_RGB24: one native-endian 32-bit word per pixel, 0x00RRGGBB.
+  image.width = r.surface_width(surface);
+  image.height = r.surface_height(surface);
+  image.rgb.resize(static_cast<size_t>(image.width) * image.height);
+  for (int y = 0; y < image.height; ++y) {
+    const auto* row = reinterpret_cast<const uint32_t*>(data + static_cast<size_t>(y) * stride);
+    for (int x = 0; x < image.width; ++x) {
+      image.rgb[static_cast<size_t>(y) * image.width + x] = row[x] & 0xFFFFFFu;
+    }
+  }
+  r.surface_destroy(surface);
+  return image;
+#else
+  (void)svg;
+  STEREODET_THROW_IO() << "SVG raster: this build has no librsvg (librsvg2-dev was not found)";
 #endif
 }
 

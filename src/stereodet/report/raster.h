@@ -4,8 +4,10 @@
 #ifndef STEREODET_REPORT_RASTER_H_
 #define STEREODET_REPORT_RASTER_H_
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace stereodet {
 
@@ -17,6 +19,15 @@ bool PngFromSvgAvailable();
 // std::invalid_argument for scale outside (0, 8], std::runtime_error naming the path if librsvg
 // cannot read the SVG, the file cannot be written, or the build has no librsvg.
 void WritePngFromSvg(const std::filesystem::path& path, const std::string& svg, double scale = 2);
+
+// The SVG rasterized as WritePngFromSvg draws it, as pixels: row-major, 0xRRGGBB each. For tests
+// of what a figure or view shows where. Throws what WritePngFromSvg throws.
+struct RasterImage {
+  int width = 0, height = 0;
+  std::vector<uint32_t> rgb;
+  uint32_t At(int x, int y) const { return rgb[static_cast<size_t>(y) * width + x]; }
+};
+RasterImage RasterizeSvg(const std::string& svg, double scale = 1);
 
 }  // namespace stereodet
 

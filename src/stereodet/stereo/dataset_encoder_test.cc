@@ -13,6 +13,7 @@
 #include "stereodet/stereo/frame_pictures.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/planar_scene.h"
+#include "stereodet/stereo/visualize.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_temp_dir.h"
@@ -446,6 +447,36 @@ TEST(FramePicturesTest, WritesFourPicturesOfTheImageSize) {
   EXPECT_LE(result.stereo_pixels, result.total_pixels);
   EXPECT_GT(result.points, 0);
   EXPECT_THROW(WriteFramePictures(dataset, "000009", dir / "out", options), std::runtime_error);
+}
+
+// The keyed pictures: the picture unchanged on top, then the colour bar, the turbo map from t = 0
+// at the bar's left end to t = 1 at its right end, on a white band.
+TEST(FramePicturesTest, KeyedPicturesAddAColourBarBelowThePicture) {
+  TestTempDir dir;
+  WriteScenes(dir / "data", 1);
+  const KittiDataset dataset(dir / "data");
+  StereoOptions options;
+  options.disparity.num_disparities = 64;
+  const FramePicturesResult result = WriteFramePictures(dataset, "000000", dir / "out", options);
+  ASSERT_EQ(result.keyed_files.size(), 4u);
+  EXPECT_EQ(result.keyed_files[0], dir / "out/000000_disparity_key.png");
+  for (size_t i = 0; i < 4; ++i) {
+    const cv::Mat picture = ReadColourImage(result.files[i]);
+    const cv::Mat keyed = ReadColourImage(result.keyed_files[i]);
+    ASSERT_EQ(keyed.cols, picture.cols) << result.keyed_files[i];
+    ASSERT_EQ(keyed.rows, picture.rows + ColourBarBandHeight()) << result.keyed_files[i];
+    EXPECT_EQ(cv::norm(keyed(cv::Rect(0, 0, picture.cols, picture.rows)), picture, cv::NORM_INF),
+              0);
+    const int y = ColourBarTopPx(picture.rows) + ColourBarHeightPx() / 2;
+    const int left = ColourBarMarginPx(), right = picture.cols - ColourBarMarginPx() - 1;
+    EXPECT_EQ(keyed.at<cv::Vec3b>(y, left), TurboColour(0)) << i;
+    EXPECT_EQ(keyed.at<cv::Vec3b>(y, right), TurboColour(1)) << i;
+    EXPECT_EQ(keyed.at<cv::Vec3b>(y, 2), cv::Vec3b(255, 255, 255)) << i;  // the white margin
+  }
+  EXPECT_NE(TurboColour(0), TurboColour(1));
+  ColourBar bad;
+  bad.ticks = {{1.5, "x"}};
+  EXPECT_THROW(WithColourBar(cv::Mat(10, 100, CV_8UC3), bad), std::invalid_argument);
 }
 
 }  // namespace

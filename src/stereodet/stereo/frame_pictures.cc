@@ -1,5 +1,7 @@
 #include "stereodet/stereo/frame_pictures.h"
 
+#include <fmt/format.h>
+
 #include <opencv2/core.hpp>
 #include <utility>
 
@@ -29,10 +31,37 @@ FramePicturesResult WriteFramePictures(const KittiDataset& dataset, const std::s
       {"depth", ColourizeDepth(depth)},
       {"height", ColourizeHeight(height, options.height.min_m, options.height.max_m)},
       {"bev", RenderBirdsEye(encoding.points)}};
+  // The keys: where each colour sits on the turbo map, in the picture's units.
+  auto linear = [](double lo, double hi, const char* unit) {
+    std::vector<std::pair<double, std::string>> ticks;
+    for (int i = 0; i <= 4; ++i) {
+      ticks.push_back({i / 4.0, fmt::format("{:g} {}", lo + (hi - lo) * i / 4.0, unit)});
+    }
+    return ticks;
+  };
+  // Depth is drawn as inverse depth t = min / z (ColourizeDepth's default min, 3 m).
+  constexpr double kMinDepthM = 3.0;
+  std::vector<std::pair<double, std::string>> depth_ticks = {{0.0, "inf"}};
+  for (const double z : {60.0, 30.0, 15.0, 6.0, kMinDepthM}) {
+    depth_ticks.push_back({kMinDepthM / z, fmt::format("{:g} m", z)});
+  }
+  const BirdsEyeOptions bev;
+  const std::vector<ColourBar> bars = {
+      {fmt::format("{} disparity (px), left image; black: no stereo", id),
+       linear(0, options.disparity.num_disparities, "px")},
+      {fmt::format("{} depth (m), colour by 1/depth; black: no stereo", id), depth_ticks},
+      {fmt::format("{} height above the ground plane (m); black: no stereo", id),
+       linear(options.height.min_m, options.height.max_m, "m")},
+      {fmt::format("{} stereo points from above, {:g} x {:g} m, rings every 10 m; colour: velo z",
+                   id, bev.forward_m, 2 * bev.side_m),
+       linear(bev.min_z_m, bev.max_z_m, "m")}};
   FramePicturesResult result;
-  for (const auto& [name, picture] : pictures) {
+  for (size_t i = 0; i < pictures.size(); ++i) {
+    const auto& [name, picture] = pictures[i];
     result.files.push_back(out / (id + "_" + name + ".png"));
     WriteImageAtomically(result.files.back(), picture);
+    result.keyed_files.push_back(out / (id + "_" + name + "_key.png"));
+    WriteImageAtomically(result.keyed_files.back(), WithColourBar(picture, bars[i]));
   }
   result.stereo_pixels = cv::countNonZero(encoding.height_code);
   result.total_pixels = static_cast<int64_t>(encoding.height_code.total());

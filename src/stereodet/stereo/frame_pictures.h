@@ -17,6 +17,10 @@ struct FramePicturesResult {
   // OUT/ID_disparity.png, OUT/ID_depth.png, OUT/ID_height.png (colourized, black = no stereo) and
   // OUT/ID_bev.png (the point cloud from above, 80 x 80 m), in this order.
   std::vector<std::filesystem::path> files;
+  // The same four pictures for a reader: OUT/ID_disparity_key.png, ..._depth_key, ..._height_key,
+  // ..._bev_key: the picture unchanged, and below it a caption and a colour bar in its units
+  // (disparity px, depth m, height above ground m, velo z m; WithColourBar), in this order.
+  std::vector<std::filesystem::path> keyed_files;
   int64_t stereo_pixels = 0;  // pixels with a valid height code (stereo and inside the code range)
   int64_t total_pixels = 0;   // pixels of the image
   int64_t points = 0;         // points of the stereo point cloud

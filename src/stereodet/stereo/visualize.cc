@@ -1,5 +1,6 @@
 #include "stereodet/stereo/visualize.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -101,6 +102,54 @@ cv::Mat RenderBirdsEye(const std::vector<VeloPoint>& points, const BirdsEyeOptio
     image.at<cv::Vec3b>(row, col) = palette.at<cv::Vec3b>(static_cast<int>(std::lround(255 * t)));
   }
   return image;
+}
+
+cv::Vec3b TurboColour(double t) {
+  cv::Mat level(1, 1, CV_8UC1,
+                cv::Scalar(static_cast<int>(std::lround(255 * std::clamp(t, 0.0, 1.0)))));
+  cv::Mat colour;
+  cv::applyColorMap(level, colour, cv::COLORMAP_TURBO);
+  return colour.at<cv::Vec3b>(0, 0);
+}
+
+// The band's layout: caption baseline at 16 px, the bar 12 px tall from 24 px, tick texts below.
+int ColourBarBandHeight() { return 56; }
+int ColourBarMarginPx() { return 12; }
+int ColourBarTopPx(int picture_rows) { return picture_rows + 24; }
+int ColourBarHeightPx() { return 12; }
+
+cv::Mat WithColourBar(const cv::Mat& picture, const ColourBar& bar) {
+  STEREODET_CHECK(!picture.empty() && picture.type() == CV_8UC3)
+      << "colour bar: the picture must be 8-bit BGR and not empty";
+  const int margin = ColourBarMarginPx();
+  STEREODET_CHECK(picture.cols >= 4 * margin)
+      << "colour bar: a picture " << picture.cols << " px wide is too narrow";
+  for (const auto& [t, text] : bar.ticks) {
+    STEREODET_CHECK(t >= 0 && t <= 1)
+        << "colour bar: tick '" << text << "' at " << t << " is outside [0, 1]";
+  }
+  cv::Mat out(picture.rows + ColourBarBandHeight(), picture.cols, CV_8UC3, cv::Scalar::all(255));
+  picture.copyTo(out(cv::Rect(0, 0, picture.cols, picture.rows)));
+  const int left = margin, right = picture.cols - margin, top = ColourBarTopPx(picture.rows);
+  const double font = picture.cols >= 600 ? 0.45 : 0.35;
+  cv::putText(out, bar.caption, cv::Point(left, picture.rows + 16), cv::FONT_HERSHEY_SIMPLEX, font,
+              cv::Scalar::all(20), 1, cv::LINE_AA);
+  for (int x = left; x < right; ++x) {
+    const cv::Vec3b c = TurboColour(static_cast<double>(x - left) / (right - 1 - left));
+    cv::line(out, cv::Point(x, top), cv::Point(x, top + ColourBarHeightPx() - 1),
+             cv::Scalar(c[0], c[1], c[2]));
+  }
+  for (const auto& [t, text] : bar.ticks) {
+    const int x = left + static_cast<int>(std::lround(t * (right - 1 - left)));
+    const int bottom = top + ColourBarHeightPx();
+    cv::line(out, cv::Point(x, bottom), cv::Point(x, bottom + 3), cv::Scalar::all(20));
+    int baseline = 0;
+    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline);
+    const int text_x = std::clamp(x - size.width / 2, 0, std::max(0, picture.cols - size.width));
+    cv::putText(out, text, cv::Point(text_x, bottom + 5 + size.height), cv::FONT_HERSHEY_SIMPLEX,
+                font, cv::Scalar::all(20), 1, cv::LINE_AA);
+  }
+  return out;
 }
 
 }  // namespace stereodet
