@@ -337,6 +337,12 @@ void BindOptions(py::module_& m) {
       .Field("nominal_camera_height_m", &GroundPlaneOptions::nominal_camera_height_m,
              "the fallback plane's camera height, m")
       .Field("enabled", &GroundPlaneOptions::enabled, "False: always the nominal plane")
+      .Field("warn_tilt_deg", &GroundPlaneOptions::warn_tilt_deg,
+             "an accepted fit tilted more is suspect, degrees")
+      .Field("warn_camera_height_m", &GroundPlaneOptions::warn_camera_height_m,
+             "an accepted fit this far from the nominal camera height is suspect, m")
+      .Field("suspect_uses_prior", &GroundPlaneOptions::suspect_uses_prior,
+             "True: the nominal plane replaces a suspect fit")
       .Finish();
   OptionsClass<HeightQuantization>(m, "HeightQuantization",
                                    "Height (m) -> codes 1..511: [min_m, max_m] linearly.")

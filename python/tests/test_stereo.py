@@ -67,6 +67,13 @@ def test_every_opencv_matcher_setting_is_a_keyword():
         stereo.disparity(left, right, num_disparities=32, wls={"enabled": True, "lambda_": -1.0})
 
 
+def test_ground_tolerance_settings_are_keywords():
+    o = stereo.GroundPlaneOptions(warn_tilt_deg=2.5, suspect_uses_prior=True)
+    assert (o.warn_tilt_deg, o.warn_camera_height_m, o.suspect_uses_prior) == (2.5, 0.25, True)
+    with pytest.raises(ValueError, match="warn_tilt_deg"):
+        stereo.GroundPlaneOptions(warn_tilt_deg=-1.0).check()
+
+
 def synthetic_disparity():
     d = np.full((40, 60), -1.0, dtype=np.float32)
     d[10:, 5:] = np.linspace(4, 60, d[10:, 5:].size, dtype=np.float32).reshape(30, 55)
