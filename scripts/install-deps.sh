@@ -13,6 +13,7 @@ packages=(
   libtbb-dev              # util: parallel-for over frames
   libeigen3-dev           # geometry: small matrices, calibration
   libopencv-dev           # stereo, synth: block matching, image I/O
+  libopencv-contrib-dev   # stereo: ximgproc's WLS disparity post-filter (--wls)
   libboost-dev            # eval: boost::geometry (header-only), the KITTI devkit's BEV/3D overlaps
   opencv-doc              # stereo tests: Middlebury "Aloe" pair with ground truth
   libtorch-dev            # models: LibTorch detectors (CPU)

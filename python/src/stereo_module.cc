@@ -270,11 +270,31 @@ void BindOptions(py::module_& m) {
              ">= 0: windows with less texture are invalid")
       .Finish();
   OptionsClass<SemiGlobalOptions>(m, "SemiGlobalOptions", "OpenCV StereoSGBM's settings.")
-      .Field("block_size", &SemiGlobalOptions::block_size, "odd, >= 1: window side, px")
-      .Field("p1_per_pixel", &SemiGlobalOptions::p1_per_pixel, "P1 = p1_per_pixel * block^2")
-      .Field("p2_per_pixel", &SemiGlobalOptions::p2_per_pixel, "P2 = p2_per_pixel * block^2 (> P1)")
-      .Field("prefilter_cap", &SemiGlobalOptions::prefilter_cap, ">= 1")
-      .Field("full_8_directions", &SemiGlobalOptions::full_8_directions, "MODE_HH (8 paths)")
+      .Field("block_size", &SemiGlobalOptions::block_size, "odd, 1..255: window side, px")
+      .Field("p1_per_pixel", &SemiGlobalOptions::p1_per_pixel,
+             "P1 = p1_per_pixel * channels * block^2 unless p1")
+      .Field("p2_per_pixel", &SemiGlobalOptions::p2_per_pixel,
+             "P2 = p2_per_pixel * channels * block^2 unless p2 (> P1)")
+      .Field("p1", &SemiGlobalOptions::p1, "OpenCV's P1 itself, or None (the per-pixel rule)")
+      .Field("p2", &SemiGlobalOptions::p2, "OpenCV's P2 itself, or None (the per-pixel rule)")
+      .Field("prefilter_cap", &SemiGlobalOptions::prefilter_cap, "1..1023")
+      .Property(
+          "mode", [](const SemiGlobalOptions& o) { return std::string(SgbmModeName(o.mode)); },
+          [](SemiGlobalOptions& o, const std::string& name) {
+            o.mode = ParseChoice([](const std::string& s) { return ParseSgbmMode(s); }, name,
+                                 "mode", "sgbm, hh, sgbm3way, hh4");
+          },
+          "'sgbm' (MODE_SGBM, the default), 'hh', 'sgbm3way' or 'hh4'")
+      .Field("colour", &SemiGlobalOptions::colour, "match the BGR images (3-channel costs)")
+      .Finish();
+  OptionsClass<WlsFilterOptions>(m, "WlsFilterOptions",
+                                 "OpenCV ximgproc's DisparityWLSFilter post-filter.")
+      .Field("enabled", &WlsFilterOptions::enabled, "False (the default): no post-filter")
+      .Field("lambda_", &WlsFilterOptions::lambda, "> 0: OpenCV's lambda")
+      .Field("sigma_color", &WlsFilterOptions::sigma_color, "> 0: OpenCV's sigmaColor")
+      .Field("lrc_threshold", &WlsFilterOptions::lrc_threshold, ">= 0, 1/16 px: LRCthresh")
+      .Field("depth_discontinuity_radius", &WlsFilterOptions::depth_discontinuity_radius,
+             ">= 0, px")
       .Finish();
   OptionsClass<DisparityOptions>(m, "DisparityOptions",
                                  "Disparity settings (stereo/disparity.h, docs/stereo.md).")
@@ -296,6 +316,7 @@ void BindOptions(py::module_& m) {
              "left-right consistency, px (BM: < 0 disables)")
       .Field("bm", &DisparityOptions::bm, "BlockMatchingOptions (or a dict of its fields)")
       .Field("sgbm", &DisparityOptions::sgbm, "SemiGlobalOptions (or a dict of its fields)")
+      .Field("wls", &DisparityOptions::wls, "WlsFilterOptions (or a dict of its fields)")
       .Finish();
   OptionsClass<GroundPlaneOptions>(m, "GroundPlaneOptions",
                                    "RANSAC ground fit (stereo/reprojection.h).")
@@ -316,6 +337,12 @@ void BindOptions(py::module_& m) {
       .Field("nominal_camera_height_m", &GroundPlaneOptions::nominal_camera_height_m,
              "the fallback plane's camera height, m")
       .Field("enabled", &GroundPlaneOptions::enabled, "False: always the nominal plane")
+      .Field("warn_tilt_deg", &GroundPlaneOptions::warn_tilt_deg,
+             "an accepted fit tilted more is suspect, degrees")
+      .Field("warn_camera_height_m", &GroundPlaneOptions::warn_camera_height_m,
+             "an accepted fit this far from the nominal camera height is suspect, m")
+      .Field("suspect_uses_prior", &GroundPlaneOptions::suspect_uses_prior,
+             "True: the nominal plane replaces a suspect fit")
       .Finish();
   OptionsClass<HeightQuantization>(m, "HeightQuantization",
                                    "Height (m) -> codes 1..511: [min_m, max_m] linearly.")

@@ -25,13 +25,13 @@ from . import _core  # noqa: F401  (registers Calibration and the error types fi
 from . import _stereo
 from ._stereo import (BlockMatchingOptions, BlurOptions, DepthQuantization, DisparityOptions,
                       GroundPlaneOptions, HeightQuantization, PointCloudOptions, SemiGlobalOptions,
-                      StereoOptions)
+                      StereoOptions, WlsFilterOptions)
 from .kitti import Calibration
 
 __all__ = [
     "BlockMatchingOptions", "BlurOptions", "DepthQuantization", "DisparityOptions",
     "GroundPlaneOptions", "HeightQuantization", "PointCloudOptions", "SemiGlobalOptions",
-    "StereoOptions",
+    "StereoOptions", "WlsFilterOptions",
     "depth_from_disparity", "disparity", "encode", "fit_ground_plane", "height_from_disparity",
     "pack_rgbh", "point_cloud", "points_in_rect", "quantize_depth", "quantize_height",
     "rgb_planar", "rgbd_planar", "rgbh_planar", "unpack_rgbh",
@@ -39,7 +39,7 @@ __all__ = [
 
 for _options in (BlockMatchingOptions, BlurOptions, DepthQuantization, DisparityOptions,
                  GroundPlaneOptions, HeightQuantization, PointCloudOptions, SemiGlobalOptions,
-                 StereoOptions):
+                 StereoOptions, WlsFilterOptions):
     _options.__module__ = __name__
 
 Ground = Optional[Mapping[str, Any]]
@@ -51,7 +51,9 @@ def disparity(left: np.ndarray, right: np.ndarray, **options: Any) -> np.ndarray
     left, right: (H, W, 3) BGR or (H, W) grey uint8 images of the same size.
     options: DisparityOptions' fields (method="bm"|"sgbm", num_disparities=128, min_disparity,
     uniqueness_ratio, speckle_window_px, speckle_range_px, left_right_max_diff_px, bm={...},
-    sgbm={...}).
+    sgbm={...} with mode="sgbm"|"hh"|"sgbm3way"|"hh4", colour=True for SGBM on the BGR images,
+    p1/p2 for OpenCV's P1/P2 themselves, wls={"enabled": True, "lambda_": 8000, ...} for
+    ximgproc's WLS post-filter).
     Returns (H, W) float32 pixels (u_left - u_right, 1/16 px steps), -1 where there is no match.
     """
     return _stereo.disparity(left, right, DisparityOptions(**options))

@@ -37,6 +37,43 @@ def test_disparity_of_a_shifted_texture_is_the_shift():
     assert np.mean(abs(sgbm[sgbm > 0] - SHIFT) <= 0.25) > 0.95
 
 
+def test_every_opencv_matcher_setting_is_a_keyword():
+    left, right = textured_pair()
+    o = stereo.DisparityOptions(method="sgbm", num_disparities=32,
+                                sgbm={"mode": "sgbm3way", "colour": True, "p1": 100, "p2": 400},
+                                wls={"enabled": True, "lambda_": 4000.0})
+    assert (o.sgbm.mode, o.sgbm.colour, o.sgbm.p1, o.sgbm.p2) == ("sgbm3way", True, 100, 400)
+    assert (o.wls.enabled, o.wls.lambda_, o.wls.sigma_color) == (True, 4000.0, 1.5)
+    assert stereo.DisparityOptions().sgbm.p1 is None  # the per-pixel rule by default
+    # SGBM on colour finds the shift of the colour pair as grey SGBM does.
+    colour = stereo.disparity(left, right, method="sgbm", num_disparities=32,
+                              sgbm={"colour": True})
+    assert np.mean(abs(colour[colour > 0] - SHIFT) <= 0.25) > 0.95
+    # The WLS post-filter fills the holes: denser than BM alone, still the shift where BM matched.
+    flat = left.copy()
+    flat[30:60, 100:150] = 128  # a textureless patch, where BM finds nothing
+    flat_right = np.roll(flat, -SHIFT, axis=1)
+    bm = stereo.disparity(flat, flat_right, num_disparities=32)
+    wls = stereo.disparity(flat, flat_right, num_disparities=32, wls={"enabled": True})
+    inside = (slice(8, -8), slice(48, -8))  # the matcher's margins and search range left out
+    assert (wls[inside] > 0).mean() > (bm[inside] > 0).mean()
+    assert np.median(abs(wls[(bm > 0) & (wls > 0)] - SHIFT)) <= 0.5
+    with pytest.raises(ValueError, match="mode: unknown"):
+        stereo.DisparityOptions(sgbm={"mode": "fast"})
+    with pytest.raises(ValueError, match="P1 < P2"):
+        stereo.disparity(left, right, method="sgbm", num_disparities=32,
+                         sgbm={"p1": 500, "p2": 400})
+    with pytest.raises(ValueError, match="WLS lambda"):
+        stereo.disparity(left, right, num_disparities=32, wls={"enabled": True, "lambda_": -1.0})
+
+
+def test_ground_tolerance_settings_are_keywords():
+    o = stereo.GroundPlaneOptions(warn_tilt_deg=2.5, suspect_uses_prior=True)
+    assert (o.warn_tilt_deg, o.warn_camera_height_m, o.suspect_uses_prior) == (2.5, 0.25, True)
+    with pytest.raises(ValueError, match="warn_tilt_deg"):
+        stereo.GroundPlaneOptions(warn_tilt_deg=-1.0).check()
+
+
 def synthetic_disparity():
     d = np.full((40, 60), -1.0, dtype=np.float32)
     d[10:, 5:] = np.linspace(4, 60, d[10:, 5:].size, dtype=np.float32).reshape(30, 55)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/cli/stereo_flags.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/frame_pictures.h"
@@ -26,7 +27,7 @@ struct StereoArgs {
   std::string data;
   std::string subset = "training";
   std::string out;
-  std::string method = DisparityMethodName(DisparityOptions().method);
+  StereoFlagText stereo;
   std::string blur_mode = BlurModeName(BlurOptions().mode);
   bool quiet = false;
 };
@@ -38,21 +39,7 @@ void AddSharedOptions(CLI::App* cmd, StereoArgs& args, StereoOptions& options) {
       ->check(CLI::IsMember({"training", "testing"}))
       ->capture_default_str();
   cmd->add_option("--out", args.out, "output folder");
-  cmd->add_option("--method", args.method, "disparity: bm (OpenCV StereoBM) or sgbm (StereoSGBM)")
-      ->check(CLI::IsMember({"bm", "sgbm"}))
-      ->capture_default_str();
-  cmd->add_option("--num-disparities", options.disparity.num_disparities,
-                  "disparity search range, px, a multiple of 16")
-      ->capture_default_str();
-  // One flag for the window of both matchers, whose defaults differ.
-  cmd->add_option_function<int>(
-      "--block-size",
-      [&options](const int& block_size) {
-        options.disparity.bm.block_size = block_size;
-        options.disparity.sgbm.block_size = block_size;
-      },
-      fmt::format("matching window side, px, odd (default BM {}, SGBM {})",
-                  options.disparity.bm.block_size, options.disparity.sgbm.block_size));
+  AddStereoFlags(cmd, options, args.stereo);
   cmd->add_option("--blur-sigma", options.blur.sigma_px,
                   "Gaussian blur sigma in px (0 = none), to model defocus")
       ->check(CLI::NonNegativeNumber)
@@ -68,23 +55,16 @@ void AddSharedOptions(CLI::App* cmd, StereoArgs& args, StereoOptions& options) {
   cmd->add_option("--max-depth", options.points.max_depth_m,
                   "point clouds: drop points beyond this depth, m")
       ->capture_default_str();
-  cmd->add_flag(
-      "--no-ground-fit", [&options](int64_t) { options.ground.enabled = false; },
-      "use the nominal ground plane (camera 1.65 m up) instead of fitting it");
   cmd->add_flag("--quiet", args.quiet, "no progress or summary output");
 }
 
 // The named settings into `options`, then its Check().
 void FinishOptions(const StereoArgs& args, StereoOptions& options) {
-  const auto method = ParseDisparityMethod(args.method);
-  STEREODET_CHECK(method.has_value())
-      << "disparity method must be 'bm' or 'sgbm', got '" << args.method << "'";
-  options.disparity.method = *method;
   const auto blur_mode = ParseBlurMode(args.blur_mode);
   STEREODET_CHECK(blur_mode.has_value())
       << "blur mode must be 'image' or 'both', got '" << args.blur_mode << "'";
   options.blur.mode = *blur_mode;
-  options.Check();
+  FinishStereoFlags(args.stereo, options);
 }
 
 struct RunArgs {
@@ -126,12 +106,31 @@ void RunStereo(RunArgs& args) {
     }
     fmt::print("stage times:\n{}", result.stage_times);
   }
+  if (!result.ground_suspect.empty()) {
+    const GroundPlaneOptions& ground = options.stereo.ground;
+    std::string first;
+    for (size_t i = 0; i < result.ground_suspect.size() && i < 5; ++i) {
+      first += (i > 0 ? ", " : "") + result.ground_suspect[i];
+    }
+    fmt::print(stderr,
+               "stereodet: warning: the ground fit of {} frames is beyond the tolerance (tilt > {} "
+               "deg or camera height off {} m by > {} m), e.g. {}; {}: see {}/{}\n",
+               result.ground_suspect.size(), ground.warn_tilt_deg, ground.nominal_camera_height_m,
+               ground.warn_camera_height_m, first,
+               ground.suspect_uses_prior ? "the nominal plane was used there"
+                                         : "--ground-prior uses the nominal plane there",
+               args.shared.out, kGroundSummaryFile);
+  }
   const DisparityErrorStats& error = result.disparity_error;
   if (options.evaluate && error.estimated_pixels > 0) {
     fmt::print(
         "disparity vs ground truth ({} frames): density {:.4f}, D1 {:.4f}, bad-2.0 {:.4f}, mean "
         "|error| {:.3f} px\n",
         result.encoded, error.density, error.d1_rate, error.bad_rate, error.mean_abs_error_px);
+    fmt::print(
+        "  D1-all (KITTI: over ground-truth pixels, a missing estimate is an error) {:.4f}; D1 of "
+        "the estimated pixels {:.4f} at density {:.4f}; in {}/{}\n",
+        error.d1_all_rate, error.d1_rate, error.density, args.shared.out, kDisparityEvaluationFile);
   }
   std::fflush(stdout);
 }

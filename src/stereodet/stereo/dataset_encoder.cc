@@ -3,9 +3,13 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
+#include <sstream>
 
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/velodyne_io.h"
@@ -62,6 +66,65 @@ void Flatten(const nlohmann::json& j, const std::string& prefix,
   }
 }
 
+// The settings stereo.json recorded before every matcher and ground setting was (session 5). Those
+// added since are left out of the frame hash while they hold their default, and read as their
+// default when an older stereo.json lacks them: folders written before keep resuming.
+bool IsOriginalSetting(const std::string& key) {
+  static const std::set<std::string> kOriginal = {"encode",
+                                                  "disparity.method",
+                                                  "disparity.num_disparities",
+                                                  "disparity.min_disparity",
+                                                  "disparity.uniqueness_ratio",
+                                                  "disparity.speckle_window_px",
+                                                  "disparity.speckle_range_px",
+                                                  "disparity.left_right_max_diff_px",
+                                                  "disparity.bm_block_size",
+                                                  "disparity.sgbm_block_size",
+                                                  "ground.enabled",
+                                                  "ground.nominal_camera_height_m",
+                                                  "height_code.min_m",
+                                                  "height_code.max_m",
+                                                  "height_code.levels",
+                                                  "height_code.no_stereo",
+                                                  "depth_code.min_m",
+                                                  "depth_code.max_m",
+                                                  "depth_code.bits",
+                                                  "depth_code.no_stereo",
+                                                  "points.max_depth_m",
+                                                  "points.min_height_m",
+                                                  "points.max_height_m",
+                                                  "points.beams",
+                                                  "blur.sigma_px",
+                                                  "blur.mode"};
+  return kOriginal.count(key) > 0;
+}
+
+// The JSON text of a setting's default ("a.b" keys of the default options' manifest).
+std::string DefaultSetting(const std::string& key) {
+  static const std::map<std::string, std::string> kDefaults = [] {
+    std::map<std::string, std::string> flat;
+    Flatten(nlohmann::json::parse(DatasetManifest(EncodeDatasetOptions{})), "", flat);
+    return flat;
+  }();
+  const auto it = kDefaults.find(key);
+  return it == kDefaults.end() ? std::string() : it->second;
+}
+
+// `manifest` without the settings added since session 5 that hold their default.
+std::string WithoutAddedDefaults(const std::string& manifest) {
+  nlohmann::json j = nlohmann::json::parse(manifest);
+  for (auto& [section, values] : j.items()) {
+    if (!values.is_object()) continue;
+    std::vector<std::string> drop;
+    for (const auto& [name, value] : values.items()) {
+      const std::string key = section + "." + name;
+      if (!IsOriginalSetting(key) && value.dump() == DefaultSetting(key)) drop.push_back(name);
+    }
+    for (const std::string& name : drop) values.erase(name);
+  }
+  return j.dump(2) + "\n";
+}
+
 // The settings of two manifests that differ, "key: OLD (this run: NEW)", joined by "; "; the
 // outputs
 // ("encode") are left out. Empty when only the outputs differ (or nothing).
@@ -86,6 +149,8 @@ std::string DifferingSettings(const std::string& old_text, const std::string& ne
     if (key == "encode") continue;
     const auto it = before.find(key);
     if (it == before.end()) {
+      // A setting recorded only since session 5 reads as its default in an older manifest.
+      if (!IsOriginalSetting(key) && value == DefaultSetting(key)) continue;
       add(key, "not recorded", value);
     } else if (it->second != value) {
       add(key, it->second, value);
@@ -121,6 +186,15 @@ std::string RecordedFrameHash(const fs::path& ground) {
   if (at == std::string::npos) return {};
   const size_t begin = at + key.size();
   return text.substr(begin, text.find('\n', begin) - begin);
+}
+
+// The plane line of ground/ID.txt (its second line; ground/ID.txt exists).
+std::string ReadGroundFitLine(const fs::path& ground) {
+  const std::string text = ReadFile(ground);
+  const size_t begin = text.find('\n');
+  if (begin == std::string::npos) return {};
+  const size_t end = text.find('\n', begin + 1);
+  return text.substr(begin + 1, end == std::string::npos ? std::string::npos : end - begin - 1);
 }
 
 constexpr const char* kGroundFileHeader =
@@ -173,21 +247,8 @@ void EncodeDatasetOptions::Check() const {
 
 std::string DatasetManifest(const EncodeDatasetOptions& options) {
   const StereoOptions& o = options.stereo;
-  nlohmann::json j;
+  nlohmann::json j = nlohmann::json::parse(StereoSettingsJson(o));
   j["encode"] = DatasetOutputsName(options.outputs);
-  j["disparity"] = {{"method", DisparityMethodName(o.disparity.method)},
-                    {"num_disparities", o.disparity.num_disparities},
-                    {"min_disparity", o.disparity.min_disparity},
-                    {"uniqueness_ratio", o.disparity.uniqueness_ratio},
-                    {"speckle_window_px", o.disparity.speckle_window_px},
-                    {"speckle_range_px", o.disparity.speckle_range_px},
-                    {"left_right_max_diff_px", o.disparity.left_right_max_diff_px},
-                    {"bm_block_size", o.disparity.bm.block_size},
-                    {"sgbm_block_size", o.disparity.sgbm.block_size}};
-  j["ground"] = {{"enabled", o.ground.enabled},
-                 {"nominal_camera_height_m", o.ground.nominal_camera_height_m}};
-  j["height_code"] = {
-      {"min_m", o.height.min_m}, {"max_m", o.height.max_m}, {"levels", 511}, {"no_stereo", 0}};
   j["depth_code"] = {
       {"min_m", o.depth.min_m}, {"max_m", o.depth.max_m}, {"bits", o.depth.bits}, {"no_stereo", 0}};
   j["points"] = {{"max_depth_m", o.points.max_depth_m},
@@ -195,6 +256,119 @@ std::string DatasetManifest(const EncodeDatasetOptions& options) {
                  {"max_height_m", o.points.max_height_m},
                  {"beams", o.points.beams}};
   j["blur"] = {{"sigma_px", o.blur.sigma_px}, {"mode", BlurModeName(o.blur.mode)}};
+  return j.dump(2) + "\n";
+}
+
+std::string DisparityEvaluationJson(
+    const DisparityErrorStats& pooled,
+    const std::vector<std::pair<std::string, DisparityErrorStats>>& frames,
+    const DisparityErrorOptions& options) {
+  auto stats_json = [](const DisparityErrorStats& s) {
+    return nlohmann::ordered_json{{"d1_all", s.d1_all_rate},
+                                  {"d1_estimated", s.d1_rate},
+                                  {"density", s.density},
+                                  {"bad", s.bad_rate},
+                                  {"mean_abs_error_px", s.mean_abs_error_px},
+                                  {"ground_truth_pixels", s.ground_truth_pixels},
+                                  {"estimated_pixels", s.estimated_pixels},
+                                  {"d1_outlier_pixels", s.d1_outlier_pixels},
+                                  {"bad_pixels", s.bad_pixels}};
+  };
+  nlohmann::ordered_json j;
+  j["definition"] = {
+      {"d1_outlier", fmt::format("|error| > {} px and > {} x ground truth", options.d1_abs_px,
+                                 options.d1_relative)},
+      {"d1_all",
+       "(D1 outliers + pixels with ground truth but no estimate) / pixels with ground truth; "
+       "no interpolation of the holes (KITTI's devkit interpolates them first), so an upper "
+       "bound of the devkit's D1-all"},
+      {"d1_estimated", "D1 outliers / pixels with ground truth and an estimate"},
+      {"density", "pixels with ground truth and an estimate / pixels with ground truth"},
+      {"bad", fmt::format("|error| > {} px, over the estimated pixels", options.bad_threshold_px)}};
+  j["frames"] = frames.size();
+  j["all"] = stats_json(pooled);
+  nlohmann::ordered_json per_frame = nlohmann::ordered_json::object();
+  for (const auto& [id, stats] : frames) per_frame[id] = stats_json(stats);
+  j["per_frame"] = per_frame;
+  return j.dump(2) + "\n";
+}
+
+GroundPlaneFit ParseGroundFitLine(const std::string& line, const std::string& source,
+                                  const GroundPlaneOptions& options) {
+  std::istringstream in(line);
+  std::string fitted_key, normal_key, offset_key, inliers_key, samples_key, tilt_key, reason_key;
+  int fitted = 0;
+  GroundPlaneFit fit;
+  Eigen::Vector3d& n = fit.plane.normal_in_rect;
+  in >> fitted_key >> fitted >> normal_key >> n.x() >> n.y() >> n.z() >> offset_key >>
+      fit.plane.offset_m >> inliers_key >> fit.inliers >> samples_key >> fit.samples >> tilt_key >>
+      fit.tilt_deg >> reason_key;
+  if (!in || fitted_key != "fitted" || normal_key != "normal" || offset_key != "offset_m" ||
+      inliers_key != "inliers" || samples_key != "samples" || tilt_key != "tilt_deg" ||
+      reason_key != "reason") {
+    throw ParseError(source, 2, "", "not a ground plane line: '" + line + "'");
+  }
+  std::getline(in, fit.reason);
+  fit.reason = std::string(Trim(fit.reason));
+  fit.fitted = fitted == 1;
+  fit.camera_height_m = fit.plane.offset_m;
+  fit.suspect = fit.reason.rfind("suspect", 0) == 0 ||
+                (fit.fitted && (fit.tilt_deg > options.warn_tilt_deg ||
+                                std::abs(fit.plane.offset_m - options.nominal_camera_height_m) >
+                                    options.warn_camera_height_m));
+  return fit;
+}
+
+std::string GroundSummaryJson(const std::vector<std::pair<std::string, GroundPlaneFit>>& frames,
+                              const GroundPlaneOptions& options) {
+  int fitted = 0;
+  double tilt_sum = 0, tilt_max = 0, height_sum = 0;
+  double height_min = std::numeric_limits<double>::infinity(), height_max = -height_min;
+  nlohmann::ordered_json suspect = nlohmann::ordered_json::array();
+  nlohmann::ordered_json per_frame = nlohmann::ordered_json::object();
+  // At ground/ID.txt's precision, so that a resumed run, which reads the frames already done from
+  // there, writes the same summary.
+  auto round_to = [](double value, double step) { return std::round(value / step) * step; };
+  for (const auto& [id, exact] : frames) {
+    GroundPlaneFit fit = exact;
+    fit.tilt_deg = round_to(fit.tilt_deg, 1e-3);
+    fit.camera_height_m = round_to(fit.camera_height_m, 1e-4);
+    if (fit.suspect) suspect.push_back(id);
+    if (fit.fitted) {
+      ++fitted;
+      tilt_sum += fit.tilt_deg;
+      tilt_max = std::max(tilt_max, fit.tilt_deg);
+      height_sum += fit.camera_height_m;
+      height_min = std::min(height_min, fit.camera_height_m);
+      height_max = std::max(height_max, fit.camera_height_m);
+    }
+    per_frame[id] = {{"fitted", fit.fitted},
+                     {"suspect", fit.suspect},
+                     {"tilt_deg", fit.tilt_deg},
+                     {"camera_height_m", fit.camera_height_m},
+                     {"inliers", fit.inliers},
+                     {"samples", fit.samples},
+                     {"inlier_fraction", round_to(fit.InlierFraction(), 1e-6)},
+                     {"reason", fit.reason}};
+  }
+  nlohmann::ordered_json j;
+  j["tolerance"] = {{"warn_tilt_deg", options.warn_tilt_deg},
+                    {"warn_camera_height_m", options.warn_camera_height_m},
+                    {"nominal_camera_height_m", options.nominal_camera_height_m},
+                    {"suspect_uses_prior", options.suspect_uses_prior}};
+  nlohmann::ordered_json summary;
+  summary["frames"] = frames.size();
+  summary["fitted"] = fitted;
+  summary["fallback"] = static_cast<int>(frames.size()) - fitted;
+  summary["suspect"] = suspect.size();
+  if (fitted > 0) {
+    summary["tilt_deg"] = {{"mean", tilt_sum / fitted}, {"max", tilt_max}};
+    summary["camera_height_m"] = {
+        {"mean", height_sum / fitted}, {"min", height_min}, {"max", height_max}};
+  }
+  summary["suspect_frames"] = suspect;
+  j["summary"] = summary;
+  j["per_frame"] = per_frame;
   return j.dump(2) + "\n";
 }
 
@@ -263,8 +437,9 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
   const std::string settings = DatasetManifest(recorded);
   EncodeDatasetOptions without_outputs = options;
   without_outputs.outputs = DatasetOutputs{};
-  const std::string frame_hash = HashHex(Fnv1a64(
-      data_dir, Fnv1a64(std::string_view("\0", 1), Fnv1a64(DatasetManifest(without_outputs)))));
+  const std::string frame_hash = HashHex(
+      Fnv1a64(data_dir, Fnv1a64(std::string_view("\0", 1),
+                                Fnv1a64(WithoutAddedDefaults(DatasetManifest(without_outputs))))));
   WriteFileAtomically(settings_path, settings);
 
   RunManifest manifest;
@@ -287,10 +462,10 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
   const bool blurred = options.stereo.blur.sigma_px > 0;
   StageTimes times;
   std::atomic<int> done{0}, skipped{0}, kept{0}, fitted{0};
-  std::mutex mutex;  // guards the fallback reasons and the disparity error sums
+  std::mutex mutex;  // guards the fallback reasons
   std::map<std::string, int> fallback_reasons;
-  DisparityErrorStats total_error;
-  double bad_sum = 0, d1_sum = 0;  // pixel counts, for the pooled rates
+  std::vector<std::optional<DisparityErrorStats>> frame_errors(ids.size());  // with evaluate
+  std::vector<GroundPlaneFit> ground_fits(ids.size());  // every frame's, for ground_summary.json
   ProgressReporter progress("stereo", static_cast<int64_t>(ids.size()), options.progress);
 
   ParallelFor(
@@ -308,6 +483,8 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
           complete = complete && fs::exists(path);
         }
         if (complete && !options.evaluate) {
+          ground_fits[i] = ParseGroundFitLine(ReadGroundFitLine(paths.ground),
+                                              paths.ground.string(), options.stereo.ground);
           ++skipped;
           progress.Add();
           return;
@@ -355,6 +532,7 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
         }
         times.Add("write", timer.ElapsedSeconds());
 
+        ground_fits[i] = encoding.ground;
         if (encoding.ground.fitted) {
           ++fitted;
         } else {
@@ -366,12 +544,7 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
               << "--evaluate: no ground-truth disparity " << in.disparity;
           const DisparityErrorStats stats =
               EvaluateDisparity(encoding.disparity_px, ReadKittiDisparity(in.disparity));
-          std::lock_guard lock(mutex);
-          total_error.ground_truth_pixels += stats.ground_truth_pixels;
-          total_error.estimated_pixels += stats.estimated_pixels;
-          bad_sum += stats.bad_rate * stats.estimated_pixels;
-          d1_sum += stats.d1_rate * stats.estimated_pixels;
-          total_error.mean_abs_error_px += stats.mean_abs_error_px * stats.estimated_pixels;
+          frame_errors[i] = stats;
         }
         ++done;
         progress.Add();
@@ -388,13 +561,25 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
   result.ground_fitted = fitted.load();
   result.ground_fallbacks = std::move(fallback_reasons);
   result.stage_times = times.Format();
-  if (total_error.estimated_pixels > 0) {
-    const double n = static_cast<double>(total_error.estimated_pixels);
-    result.disparity_error = total_error;
-    result.disparity_error.density = n / total_error.ground_truth_pixels;
-    result.disparity_error.bad_rate = bad_sum / n;
-    result.disparity_error.d1_rate = d1_sum / n;
-    result.disparity_error.mean_abs_error_px = total_error.mean_abs_error_px / n;
+  std::vector<std::pair<std::string, GroundPlaneFit>> fits;
+  for (size_t i = 0; i < ids.size(); ++i) {
+    fits.emplace_back(ids[i], ground_fits[i]);
+    if (ground_fits[i].suspect) result.ground_suspect.push_back(ids[i]);
+  }
+  WriteFileAtomically(out / kGroundSummaryFile, GroundSummaryJson(fits, options.stereo.ground));
+  if (options.evaluate) {
+    std::vector<DisparityErrorStats> evaluated;
+    std::vector<std::pair<std::string, DisparityErrorStats>> per_frame;
+    for (size_t i = 0; i < ids.size(); ++i) {
+      if (!frame_errors[i]) continue;
+      evaluated.push_back(*frame_errors[i]);
+      per_frame.emplace_back(ids[i], *frame_errors[i]);
+    }
+    const DisparityErrorStats pooled = PoolDisparityErrors(evaluated);
+    // Kept all zero when no pixel was estimated, as before D1-all existed.
+    if (pooled.estimated_pixels > 0) result.disparity_error = pooled;
+    WriteFileAtomically(out / kDisparityEvaluationFile,
+                        DisparityEvaluationJson(pooled, per_frame, DisparityErrorOptions{}));
   }
   return result;
 }

@@ -14,9 +14,13 @@
 //   velodyne/ID.bin    the stereo point cloud in KITTI's velodyne format (outputs.points)
 //   disparity/ID.png   KITTI-format disparity (outputs.disparity)
 //   ground/ID.txt      the ground plane (always; written last, so it marks the frame done)
+// and OUT/ground_summary.json, every frame's ground fit (tilt, camera height, inliers and their
+// share, suspect beyond the tolerance of GroundPlaneOptions) with a summary,
 // and OUT/stereo.json, the manifest of every setting that changes those bytes (DatasetManifest),
 // and OUT/run.json (util/run_manifest.h: version, command line, the data folder, every frame with
-// the hash of the settings and data that produced it).
+// the hash of the settings and data that produced it); with evaluate, OUT/disparity_evaluation.json
+// (DisparityEvaluationJson: KITTI's D1-all, the estimated-only D1 and the density, per frame and
+// pooled).
 // Resumable: ground/ID.txt, written last, records the frame's settings hash ("settings HASH"), and
 // a frame is done only when its files are all there and that hash is this run's; other frames are
 // redone (so an interrupted --force with new settings resumes correctly). A folder whose
@@ -30,6 +34,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
@@ -87,12 +92,45 @@ struct EncodeDatasetResult {
   // fallback's reason (GroundPlaneFit::reason without its parenthesised detail) -> frames.
   int ground_fitted = 0;
   std::map<std::string, int> ground_fallbacks;
+  // Of all the frames asked for (encoded or already done): those whose accepted ground fit lies
+  // beyond the warning tolerance (GroundPlaneFit::suspect), in the order of `ids`. Every frame's
+  // fit is in OUT/ground_summary.json (GroundSummaryJson).
+  std::vector<std::string> ground_suspect;
   std::string stage_times;  // StageTimes::Format(): decode, the encoder's stages, write
-  // With evaluate: the encoded frames' disparity against ground truth, pooled over pixels (counts
-  // summed; density = estimated / ground truth; rates and mean error weighted by each frame's
-  // estimated pixels). All zero without evaluate or when no pixel was estimated.
+  // With evaluate: the encoded frames' disparity against ground truth, pooled over pixels
+  // (PoolDisparityErrors: D1-all as KITTI reports it, the estimated-only D1, the density). All
+  // zero without evaluate or when no pixel was estimated. Also written to
+  // OUT/disparity_evaluation.json (DisparityEvaluationJson).
   DisparityErrorStats disparity_error;
 };
+
+// The ground plane of every frame asked for, and their summary, written by every EncodeDataset.
+inline constexpr const char* kGroundSummaryFile = "ground_summary.json";
+
+// Its text (pretty JSON, trailing newline): "tolerance" (the warning thresholds of `options`),
+// "summary" {frames, fitted, fallback, suspect, tilt_deg {mean, max}, camera_height_m {mean, min,
+// max} over the fitted frames, the suspect frames' ids}, and "per_frame" (ID -> {fitted, suspect,
+// tilt_deg, camera_height_m, inliers, samples, inlier_fraction, reason}), in the order given.
+std::string GroundSummaryJson(const std::vector<std::pair<std::string, GroundPlaneFit>>& frames,
+                              const GroundPlaneOptions& options);
+
+// Reads back the line GroundFitLine writes (the plane, fitted, inliers, samples, tilt, reason;
+// camera_height_m = the offset). `suspect` is recomputed from `options`' tolerance. Throws
+// ParseError naming `source` for a line of another form.
+GroundPlaneFit ParseGroundFitLine(const std::string& line, const std::string& source,
+                                  const GroundPlaneOptions& options);
+
+// The file EncodeDataset writes with evaluate.
+inline constexpr const char* kDisparityEvaluationFile = "disparity_evaluation.json";
+
+// Its text (pretty JSON, trailing newline): "definition" (what each figure means, with the
+// thresholds of `options`), "frames", "all" (the pooled figures: d1_all, d1_estimated, density,
+// bad, mean_abs_error_px and the pixel counts) and "per_frame" (ID -> the same figures), in the
+// order given.
+std::string DisparityEvaluationJson(
+    const DisparityErrorStats& pooled,
+    const std::vector<std::pair<std::string, DisparityErrorStats>>& frames,
+    const DisparityErrorOptions& options);
 
 // The text of OUT/stereo.json for these options (pretty JSON, 2 spaces, trailing newline): the
 // outputs ("encode", DatasetOutputsName) and every stereo setting that changes the outputs' bytes.

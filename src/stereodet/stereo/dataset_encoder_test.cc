@@ -1,10 +1,12 @@
 #include "stereodet/stereo/dataset_encoder.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -15,6 +17,7 @@
 #include "stereodet/stereo/planar_scene.h"
 #include "stereodet/stereo/visualize.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_temp_dir.h"
 
@@ -102,6 +105,32 @@ TEST(GroundFitLineTest, FormatsEveryField) {
             "tilt_deg 0.500 reason fitted\n");
 }
 
+TEST(GroundFitLineTest, ParsesWhatItWrites) {
+  GroundPlaneFit fit;
+  fit.fitted = true;
+  fit.plane.normal_in_rect = Eigen::Vector3d(0, -0.998, 0.0523);
+  fit.plane.offset_m = 1.6;
+  fit.inliers = 900;
+  fit.samples = 1000;
+  fit.tilt_deg = 3.0;
+  fit.reason = "fitted";
+  std::string line = GroundFitLine(fit);
+  line.pop_back();
+  const GroundPlaneFit back = ParseGroundFitLine(line, "g.txt", GroundPlaneOptions{});
+  EXPECT_TRUE(back.fitted);
+  EXPECT_TRUE(back.suspect);  // 3 degrees > 1.5
+  EXPECT_EQ(back.inliers, 900);
+  EXPECT_DOUBLE_EQ(back.InlierFraction(), 0.9);
+  EXPECT_DOUBLE_EQ(back.camera_height_m, 1.6);
+  EXPECT_EQ(back.reason, "fitted");
+  fit.fitted = false;
+  fit.reason = "too few ground inliers (12 < 200)";
+  line = GroundFitLine(fit);
+  EXPECT_EQ(ParseGroundFitLine(line, "g.txt", {}).reason, fit.reason);
+  EXPECT_FALSE(ParseGroundFitLine(line, "g.txt", {}).suspect);
+  EXPECT_THROW(ParseGroundFitLine("fitted x", "g.txt", {}), ParseError);
+}
+
 TEST(DatasetManifestTest, RecordsOutputsAndSettingsButNotHowTheRunGoes) {
   EncodeDatasetOptions options;
   options.outputs = ParseDatasetOutputs("points,rgbh");
@@ -163,20 +192,39 @@ TEST(EncodeDatasetTest, EncodesEveryFrameThenResumesWhereFilesAreMissing) {
   EXPECT_EQ(first.ground_fitted + fallbacks, 2);
   EXPECT_THAT(first.stage_times, HasSubstr("disparity"));
   EXPECT_EQ(first.disparity_error.estimated_pixels, 0);  // not asked to evaluate
-  EXPECT_EQ(
-      ListFiles(out),
-      (std::vector<fs::path>{"disparity/000000.png", "disparity/000001.png", "ground/000000.txt",
-                             "ground/000001.txt", "rgbh/000000.png", "rgbh/000001.png", "run.json",
-                             "stereo.json", "velodyne/000000.bin", "velodyne/000001.bin"}));
+  EXPECT_EQ(ListFiles(out),
+            (std::vector<fs::path>{"disparity/000000.png", "disparity/000001.png",
+                                   "ground/000000.txt", "ground/000001.txt", "ground_summary.json",
+                                   "rgbh/000000.png", "rgbh/000001.png", "run.json", "stereo.json",
+                                   "velodyne/000000.bin", "velodyne/000001.bin"}));
   EXPECT_EQ(ReadFile(out / "stereo.json"), DatasetManifest(options));
   const std::string ground = ReadFile(out / "ground/000000.txt");
   EXPECT_EQ(ground.substr(0, 1), "#");
   EXPECT_THAT(ground, HasSubstr("\nfitted "));
 
+  // Every frame's ground fit in the summary, as ground/ID.txt has it.
+  const std::string summary_text = ReadFile(out / kGroundSummaryFile);
+  const nlohmann::json summary = nlohmann::json::parse(summary_text);
+  EXPECT_EQ(summary["summary"]["frames"], 2);
+  EXPECT_EQ(summary["summary"]["fitted"], first.ground_fitted);
+  for (const std::string& id : ids) {
+    const nlohmann::json& frame = summary["per_frame"][id];
+    const std::string line = ReadFile(out / "ground" / (id + ".txt"));
+    EXPECT_THAT(line, HasSubstr(fmt::format("inliers {} samples {}", frame["inliers"].get<int>(),
+                                            frame["samples"].get<int>())));
+    EXPECT_NEAR(frame["inlier_fraction"].get<double>(),
+                frame["samples"].get<int>() > 0
+                    ? frame["inliers"].get<double>() / frame["samples"].get<int>()
+                    : 0.0,
+                1e-6);
+  }
+
   // Everything there: nothing recomputed.
   const EncodeDatasetResult again = EncodeDataset(dataset, ids, out, options);
   EXPECT_EQ(again.encoded, 0);
   EXPECT_EQ(again.skipped, 2);
+  // The summary of a resumed run covers the frames already done, read from ground/ID.txt.
+  EXPECT_EQ(ReadFile(out / kGroundSummaryFile), summary_text);
 
   // One frame lost a file: only that frame is recomputed.
   fs::remove(out / "velodyne/000001.bin");
@@ -312,13 +360,14 @@ TEST(EncodeDatasetTest, BlurredRgbdAlsoWritesTheNetworkImage) {
   options.outputs = ParseDatasetOutputs("rgbd");
   EncodeDataset(dataset, ids, dir / "sharp", options);
   EXPECT_EQ(ListFiles(dir / "sharp"),
-            (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "height/000000.png",
-                                   "run.json", "stereo.json"}));
+            (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "ground_summary.json",
+                                   "height/000000.png", "run.json", "stereo.json"}));
   options.stereo.blur.sigma_px = 1.5;
   EncodeDataset(dataset, ids, dir / "blurred", options);
   EXPECT_EQ(ListFiles(dir / "blurred"),
-            (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "height/000000.png",
-                                   "image_2/000000.png", "run.json", "stereo.json"}));
+            (std::vector<fs::path>{"depth/000000.png", "ground/000000.txt", "ground_summary.json",
+                                   "height/000000.png", "image_2/000000.png", "run.json",
+                                   "stereo.json"}));
 }
 
 TEST(EncodeDatasetTest, OutputsDoNotDependOnTheThreadCount) {
@@ -349,7 +398,7 @@ TEST(EncodeDatasetTest, EvaluatePoolsTheFramesDisparityError) {
   const EncodeDatasetResult result = EncodeDataset(dataset, ids, dir / "out", options);
   EXPECT_EQ(result.encoded, 3);
 
-  long truth = 0, estimated = 0;
+  long truth = 0, estimated = 0, outliers = 0;
   double bad = 0, d1 = 0, abs_error = 0;
   for (const std::string& id : ids) {
     const FramePaths in = dataset.Paths(id);
@@ -363,6 +412,7 @@ TEST(EncodeDatasetTest, EvaluatePoolsTheFramesDisparityError) {
     estimated += stats.estimated_pixels;
     bad += stats.bad_rate * stats.estimated_pixels;
     d1 += stats.d1_rate * stats.estimated_pixels;
+    outliers += stats.d1_outlier_pixels;
     abs_error += stats.mean_abs_error_px * stats.estimated_pixels;
   }
   ASSERT_GT(estimated, 0);
@@ -375,6 +425,22 @@ TEST(EncodeDatasetTest, EvaluatePoolsTheFramesDisparityError) {
   EXPECT_NEAR(pooled.mean_abs_error_px, abs_error / estimated, 1e-12);
   // The scenes' disparity is exact, so BM is close to it almost everywhere.
   EXPECT_LT(pooled.d1_rate, 0.05);
+  // KITTI's D1-all: the outliers plus every ground-truth pixel BM left without a disparity.
+  EXPECT_NEAR(pooled.d1_all_rate, static_cast<double>(outliers + truth - estimated) / truth, 1e-12);
+  EXPECT_GT(pooled.d1_all_rate, pooled.d1_rate);
+  // The same figures in OUT/disparity_evaluation.json, pooled and per frame.
+  const nlohmann::json saved =
+      nlohmann::json::parse(ReadFile(dir / "out" / kDisparityEvaluationFile));
+  EXPECT_EQ(saved["frames"], 3);
+  EXPECT_DOUBLE_EQ(saved["all"]["d1_all"].get<double>(), pooled.d1_all_rate);
+  EXPECT_DOUBLE_EQ(saved["all"]["d1_estimated"].get<double>(), pooled.d1_rate);
+  EXPECT_DOUBLE_EQ(saved["all"]["density"].get<double>(), pooled.density);
+  EXPECT_EQ(saved["all"]["ground_truth_pixels"].get<long>(), truth);
+  long per_frame_truth = 0;
+  for (const std::string& id : ids) {
+    per_frame_truth += saved["per_frame"][id]["ground_truth_pixels"].get<long>();
+  }
+  EXPECT_EQ(per_frame_truth, truth);
 
   // Evaluating again recomputes every frame (nothing is skipped) for the comparison, but keeps the
   // files of the frames already done.

@@ -5,6 +5,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
@@ -23,6 +24,45 @@ std::optional<DisparityMethod> ParseDisparityMethod(std::string_view text) {
   return std::nullopt;
 }
 
+const char* SgbmModeName(SgbmMode mode) {
+  switch (mode) {
+    case SgbmMode::kSgbm:
+      return "sgbm";
+    case SgbmMode::kHh:
+      return "hh";
+    case SgbmMode::kSgbm3Way:
+      return "sgbm3way";
+    case SgbmMode::kHh4:
+      return "hh4";
+  }
+  return "sgbm";
+}
+
+std::optional<SgbmMode> ParseSgbmMode(std::string_view text) {
+  for (SgbmMode mode : {SgbmMode::kSgbm, SgbmMode::kHh, SgbmMode::kSgbm3Way, SgbmMode::kHh4}) {
+    if (text == SgbmModeName(mode)) return mode;
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+int OpenCvSgbmMode(SgbmMode mode) {
+  switch (mode) {
+    case SgbmMode::kSgbm:
+      return cv::StereoSGBM::MODE_SGBM;
+    case SgbmMode::kHh:
+      return cv::StereoSGBM::MODE_HH;
+    case SgbmMode::kSgbm3Way:
+      return cv::StereoSGBM::MODE_SGBM_3WAY;
+    case SgbmMode::kHh4:
+      return cv::StereoSGBM::MODE_HH4;
+  }
+  return cv::StereoSGBM::MODE_SGBM;
+}
+
+}  // namespace
+
 void BlockMatchingOptions::Check() const {
   STEREODET_CHECK(block_size >= 5 && block_size <= 255 && block_size % 2 == 1)
       << "BM block_size must be odd and in 5..255, got " << block_size;
@@ -35,25 +75,54 @@ void BlockMatchingOptions::Check() const {
 }
 
 void SemiGlobalOptions::Check() const {
-  STEREODET_CHECK(block_size >= 1 && block_size % 2 == 1)
-      << "SGBM block_size must be odd and >= 1, got " << block_size;
-  STEREODET_CHECK(p1_per_pixel > 0 && p2_per_pixel > p1_per_pixel)
-      << "SGBM penalties must satisfy 0 < p1 < p2, got p1 " << p1_per_pixel << ", p2 "
+  STEREODET_CHECK(block_size >= 1 && block_size <= 255 && block_size % 2 == 1)
+      << "SGBM block_size must be odd and in 1..255, got " << block_size;
+  // In 64-bit first: a large per-pixel penalty times 3 x 255^2 would overflow an int.
+  STEREODET_CHECK(p1_per_pixel > 0 && p1_per_pixel <= 10000 && p2_per_pixel > 0 &&
+                  p2_per_pixel <= 10000)
+      << "SGBM p1_per_pixel and p2_per_pixel must be in 1..10000, got " << p1_per_pixel << ", "
       << p2_per_pixel;
-  STEREODET_CHECK(prefilter_cap >= 1) << "SGBM prefilter_cap must be >= 1, got " << prefilter_cap;
+  STEREODET_CHECK(!p1 || (*p1 > 0 && *p1 < 1000000000))
+      << "SGBM P1 must be in 1..999999999, got " << *p1;
+  STEREODET_CHECK(!p2 || (*p2 > 0 && *p2 < 1000000000))
+      << "SGBM P2 must be in 1..999999999, got " << *p2;
+  const int64_t area = static_cast<int64_t>(Channels()) * block_size * block_size;
+  const int64_t p1_value = p1 ? *p1 : p1_per_pixel * area;
+  const int64_t p2_value = p2 ? *p2 : p2_per_pixel * area;
+  STEREODET_CHECK(p1_value < p2_value)
+      << "SGBM penalties must satisfy 0 < P1 < P2, got P1 " << p1_value << ", P2 " << p2_value;
+  STEREODET_CHECK(prefilter_cap >= 1 && prefilter_cap <= 1023)
+      << "SGBM prefilter_cap must be in 1..1023, got " << prefilter_cap;
+}
+
+void WlsFilterOptions::Check() const {
+  STEREODET_CHECK(std::isfinite(lambda) && lambda > 0 && lambda <= 1e9)
+      << "WLS lambda must be in (0, 1e9], got " << lambda;
+  STEREODET_CHECK(std::isfinite(sigma_color) && sigma_color > 0 && sigma_color <= 1000)
+      << "WLS sigma_color must be in (0, 1000], got " << sigma_color;
+  STEREODET_CHECK(lrc_threshold >= 0 && lrc_threshold <= 16 * 1024)
+      << "WLS lrc_threshold must be in 0..16384 (1/16 px), got " << lrc_threshold;
+  STEREODET_CHECK(depth_discontinuity_radius >= 0 && depth_discontinuity_radius <= 255)
+      << "WLS depth_discontinuity_radius must be in 0..255 px, got " << depth_discontinuity_radius;
 }
 
 void DisparityOptions::Check() const {
-  STEREODET_CHECK(num_disparities > 0 && num_disparities % 16 == 0)
-      << "num_disparities must be a positive multiple of 16, got " << num_disparities;
-  STEREODET_CHECK(min_disparity >= 0)
-      << "min_disparity must be >= 0 (negative disparities have no depth), got " << min_disparity;
+  // 2048 px: above any rectified width stereodet reads (KITTI's is 1242), below int16 x 16.
+  STEREODET_CHECK(num_disparities > 0 && num_disparities <= 2048 && num_disparities % 16 == 0)
+      << "num_disparities must be a positive multiple of 16 up to 2048, got " << num_disparities;
+  STEREODET_CHECK(min_disparity >= 0 && min_disparity <= 2048)
+      << "min_disparity must be in 0..2048 (negative disparities have no depth), got "
+      << min_disparity;
+  STEREODET_CHECK(left_right_max_diff_px >= -1 && left_right_max_diff_px <= 2048)
+      << "left_right_max_diff_px (disp12MaxDiff) must be in -1..2048 (-1 = off), got "
+      << left_right_max_diff_px;
   STEREODET_CHECK(uniqueness_ratio >= 0 && uniqueness_ratio <= 100)
       << "uniqueness_ratio must be in 0..100, got " << uniqueness_ratio;
   STEREODET_CHECK(speckle_window_px >= 0)
       << "speckle_window_px must be >= 0, got " << speckle_window_px;
-  STEREODET_CHECK(speckle_range_px >= 0)
-      << "speckle_range_px must be >= 0, got " << speckle_range_px;
+  STEREODET_CHECK(speckle_range_px >= 0 && speckle_range_px <= 2048)
+      << "speckle_range_px must be in 0..2048, got " << speckle_range_px;
+  if (wls.enabled) wls.Check();
   if (method == DisparityMethod::kBlockMatching) {
     bm.Check();
   } else {
@@ -79,13 +148,21 @@ DisparityMatcher::DisparityMatcher(const DisparityOptions& options) : options_(o
     bm->setDisp12MaxDiff(o.left_right_max_diff_px);
     matcher_ = bm;
   } else {
-    const int area = o.sgbm.block_size * o.sgbm.block_size;
     // SGBM multiplies its speckle range by 16 itself, so it takes whole pixels.
-    matcher_ = cv::StereoSGBM::create(
-        o.min_disparity, o.num_disparities, o.sgbm.block_size, o.sgbm.p1_per_pixel * area,
-        o.sgbm.p2_per_pixel * area, o.left_right_max_diff_px, o.sgbm.prefilter_cap,
-        o.uniqueness_ratio, o.speckle_window_px, o.speckle_range_px,
-        o.sgbm.full_8_directions ? cv::StereoSGBM::MODE_HH : cv::StereoSGBM::MODE_SGBM);
+    matcher_ = cv::StereoSGBM::create(o.min_disparity, o.num_disparities, o.sgbm.block_size,
+                                      o.sgbm.P1(), o.sgbm.P2(), o.left_right_max_diff_px,
+                                      o.sgbm.prefilter_cap, o.uniqueness_ratio, o.speckle_window_px,
+                                      o.speckle_range_px, OpenCvSgbmMode(o.sgbm.mode));
+  }
+  if (o.wls.enabled) {
+    const cv::Ptr<cv::StereoMatcher> left = matcher_.dynamicCast<cv::StereoMatcher>();
+    right_matcher_ = cv::ximgproc::createRightMatcher(left);
+    cv::Ptr<cv::ximgproc::DisparityWLSFilter> filter = cv::ximgproc::createDisparityWLSFilter(left);
+    filter->setLambda(o.wls.lambda);
+    filter->setSigmaColor(o.wls.sigma_color);
+    filter->setLRCthresh(o.wls.lrc_threshold);
+    filter->setDepthDiscontinuityRadius(o.wls.depth_discontinuity_radius);
+    wls_filter_ = filter;
   }
 }
 
@@ -98,10 +175,12 @@ cv::Mat ToGrey(const cv::Mat& image) {
   return grey;
 }
 
-cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::Mat& right_grey) {
-  STEREODET_CHECK(left_grey.type() == CV_8UC1 && right_grey.type() == CV_8UC1)
-      << "disparity needs 8-bit grey images, got types " << left_grey.type() << " and "
-      << right_grey.type();
+cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::Mat& right_grey,
+                                            const cv::Mat& guide) {
+  const int expected = options_.MatchesColour() ? CV_8UC3 : CV_8UC1;
+  STEREODET_CHECK(left_grey.type() == expected && right_grey.type() == expected)
+      << "disparity needs 8-bit " << (options_.MatchesColour() ? "BGR" : "grey")
+      << " images, got types " << left_grey.type() << " and " << right_grey.type();
   STEREODET_CHECK(left_grey.size() == right_grey.size())
       << "left and right images differ in size: " << left_grey.cols << "x" << left_grey.rows
       << " vs " << right_grey.cols << "x" << right_grey.rows;
@@ -118,10 +197,25 @@ cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::
       << " px";
   cv::Mat fixed_point;
   matcher_.dynamicCast<cv::StereoMatcher>()->compute(left_grey, right_grey, fixed_point);
-  return fixed_point;
+  if (!wls_filter_) return fixed_point;
+  const cv::Mat& view = guide.empty() ? left_grey : guide;
+  STEREODET_CHECK(view.size() == left_grey.size() && view.depth() == CV_8U &&
+                  (view.channels() == 1 || view.channels() == 3))
+      << "the WLS filter's guide must be an 8-bit grey or BGR image of the left's size";
+  cv::Mat right_disparity, filtered;
+  right_matcher_.dynamicCast<cv::StereoMatcher>()->compute(right_grey, left_grey, right_disparity);
+  wls_filter_.dynamicCast<cv::ximgproc::DisparityWLSFilter>()->filter(fixed_point, view, filtered,
+                                                                      right_disparity);
+  // The filter's output is CV_16S x16 like the matcher's; it may carry values beyond the search
+  // range at borders, so clamp to it (the depth tables of the encoders are sized by it).
+  const int16_t max_raw =
+      static_cast<int16_t>((options_.min_disparity + options_.num_disparities) * 16);
+  cv::min(filtered, cv::Scalar(max_raw), filtered);
+  return filtered;
 }
 
 cv::Mat DisparityMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
+  if (options_.MatchesColour()) return DisparityFromFixedPoint(ComputeFixedPoint(left, right));
   return DisparityFromFixedPoint(ComputeFixedPoint(ToGrey(left), ToGrey(right)));
 }
 
@@ -182,6 +276,28 @@ void DisparityErrorOptions::Check() const {
       << "disparity error thresholds must be >= 0";
 }
 
+namespace {
+
+// The rates from the counts; mean_abs_error_px holds the sum of the errors on entry.
+void FinishRates(DisparityErrorStats& stats) {
+  if (stats.ground_truth_pixels > 0) {
+    const double truth = static_cast<double>(stats.ground_truth_pixels);
+    stats.density = stats.estimated_pixels / truth;
+    stats.d1_all_rate =
+        (stats.d1_outlier_pixels + (stats.ground_truth_pixels - stats.estimated_pixels)) / truth;
+  }
+  if (stats.estimated_pixels > 0) {
+    const double estimated = static_cast<double>(stats.estimated_pixels);
+    stats.bad_rate = stats.bad_pixels / estimated;
+    stats.d1_rate = stats.d1_outlier_pixels / estimated;
+    stats.mean_abs_error_px /= estimated;
+  } else {
+    stats.mean_abs_error_px = 0;
+  }
+}
+
+}  // namespace
+
 DisparityErrorStats EvaluateDisparity(const cv::Mat& estimate_px, const cv::Mat& truth_px,
                                       const DisparityErrorOptions& options) {
   options.Check();
@@ -206,15 +322,24 @@ DisparityErrorStats EvaluateDisparity(const cv::Mat& estimate_px, const cv::Mat&
       if (error > options.d1_abs_px && error > options.d1_relative * truth[u]) ++d1;
     }
   }
-  if (stats.ground_truth_pixels > 0) {
-    stats.density = static_cast<double>(stats.estimated_pixels) / stats.ground_truth_pixels;
-  }
-  if (stats.estimated_pixels > 0) {
-    stats.bad_rate = static_cast<double>(bad) / stats.estimated_pixels;
-    stats.d1_rate = static_cast<double>(d1) / stats.estimated_pixels;
-    stats.mean_abs_error_px = abs_sum / stats.estimated_pixels;
-  }
+  stats.bad_pixels = bad;
+  stats.d1_outlier_pixels = d1;
+  stats.mean_abs_error_px = abs_sum;  // a sum until FinishRates divides it
+  FinishRates(stats);
   return stats;
+}
+
+DisparityErrorStats PoolDisparityErrors(const std::vector<DisparityErrorStats>& frames) {
+  DisparityErrorStats pooled;
+  for (const DisparityErrorStats& frame : frames) {
+    pooled.ground_truth_pixels += frame.ground_truth_pixels;
+    pooled.estimated_pixels += frame.estimated_pixels;
+    pooled.bad_pixels += frame.bad_pixels;
+    pooled.d1_outlier_pixels += frame.d1_outlier_pixels;
+    pooled.mean_abs_error_px += frame.mean_abs_error_px * frame.estimated_pixels;
+  }
+  FinishRates(pooled);
+  return pooled;
 }
 
 }  // namespace stereodet

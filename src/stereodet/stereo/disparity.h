@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace stereodet {
 
@@ -37,13 +38,44 @@ struct BlockMatchingOptions {
   void Check() const;            // throws std::invalid_argument
 };
 
+// StereoSGBM's `mode`: MODE_SGBM (5 paths, the default), MODE_HH (8 paths, full-size buffers, ~2x
+// slower), MODE_SGBM_3WAY (3 paths, fastest), MODE_HH4 (4 paths).
+enum class SgbmMode { kSgbm, kHh, kSgbm3Way, kHh4 };
+const char* SgbmModeName(SgbmMode mode);  // "sgbm", "hh", "sgbm3way", "hh4"
+std::optional<SgbmMode> ParseSgbmMode(std::string_view text);
+
 // StereoSGBM settings.
 struct SemiGlobalOptions {
-  int block_size = 5;      // odd, >= 1: matching window side, pixels
-  int p1_per_pixel = 8;    // smoothness penalty for +-1 px changes, P1 = p1_per_pixel * block^2
-  int p2_per_pixel = 32;   // penalty for larger changes, P2 = p2_per_pixel * block^2 (> P1)
-  int prefilter_cap = 63;  // >= 1: clips the x-derivative pre-filter
-  bool full_8_directions = false;  // MODE_HH (8 paths, ~2x slower) instead of MODE_SGBM (5 paths)
+  int block_size = 5;  // odd, 1..255: matching window side, pixels
+  // Smoothness penalties: for +-1 px changes P1 = p1_per_pixel * channels * block^2 and for larger
+  // ones P2 = p2_per_pixel * channels * block^2 (OpenCV's rule; channels = 3 with `colour`), unless
+  // `p1` / `p2` give OpenCV's P1 / P2 themselves. Requires 0 < P1 < P2.
+  int p1_per_pixel = 8;
+  int p2_per_pixel = 32;
+  std::optional<int> p1;   // OpenCV's P1 itself (--P1), replacing the per-pixel rule
+  std::optional<int> p2;   // OpenCV's P2 itself (--P2)
+  int prefilter_cap = 63;  // 1..1023: clips the x-derivative pre-filter (OpenCV's preFilterCap)
+  SgbmMode mode = SgbmMode::kSgbm;
+  // Match the BGR images as OpenCV takes them (3-channel costs) instead of their grey versions.
+  bool colour = false;
+  int Channels() const { return colour ? 3 : 1; }
+  int P1() const { return p1 ? *p1 : p1_per_pixel * Channels() * block_size * block_size; }
+  int P2() const { return p2 ? *p2 : p2_per_pixel * Channels() * block_size * block_size; }
+  void Check() const;
+};
+
+// OpenCV ximgproc's weighted-least-squares post-filter (DisparityWLSFilter): the left disparity is
+// smoothed edge-aware, guided by the left image, with a right matcher's disparity for the
+// left-right confidence. It fills the matcher's holes, so the map becomes dense. Off by default.
+struct WlsFilterOptions {
+  bool enabled = false;
+  double lambda = 8000.0;    // > 0: regularization strength (OpenCV's lambda; 8000 typical)
+  double sigma_color = 1.5;  // > 0: sensitivity to the guide's edges (OpenCV's sigmaColor)
+  int lrc_threshold = 24;    // >= 0: left-right check threshold in 1/16 px (OpenCV's LRCthresh)
+  // >= 0: radius around depth discontinuities with low confidence, px (OpenCV's
+  // DepthDiscontinuityRadius; OpenCV sets it from the matcher's window, which is this default for
+  // a block of 11: ceil(0.33 * 11)).
+  int depth_discontinuity_radius = 4;
   void Check() const;
 };
 
@@ -62,7 +94,10 @@ struct DisparityOptions {
   int left_right_max_diff_px = 1;
   BlockMatchingOptions bm;
   SemiGlobalOptions sgbm;
+  WlsFilterOptions wls;
   void Check() const;  // throws std::invalid_argument, also for a bad setting of the chosen method
+  // True when the matcher reads the BGR images themselves (SGBM with colour), not grey ones.
+  bool MatchesColour() const { return method == DisparityMethod::kSemiGlobal && sgbm.colour; }
 };
 
 // Runs OpenCV's matcher. Not thread-safe (OpenCV's matcher keeps buffers); use one per thread. The
@@ -73,17 +108,22 @@ class DisparityMatcher {
   const DisparityOptions& options() const { return options_; }
 
   // Requires: rectified 8-bit images of equal size, grey (CV_8UC1) or BGR (CV_8UC3, converted to
-  // grey). Returns CV_32FC1 disparity in pixels of the left image, kInvalidDisparity where there is
-  // none.
+  // grey unless options().MatchesColour()). Returns CV_32FC1 disparity in pixels of the left image,
+  // kInvalidDisparity where there is none.
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
 
   // The same, but returns OpenCV's raw CV_16SC1 output: disparity * 16, values <= 0 invalid (this
-  // is what the fused encoders read). Requires grey images.
-  cv::Mat ComputeFixedPoint(const cv::Mat& left_grey, const cv::Mat& right_grey);
+  // is what the fused encoders read). Requires grey images, or BGR ones when MatchesColour(). With
+  // the WLS filter, `guide` (8-bit grey or BGR of the left's size; empty: the left image) guides
+  // it.
+  cv::Mat ComputeFixedPoint(const cv::Mat& left, const cv::Mat& right,
+                            const cv::Mat& guide = cv::Mat());
 
  private:
   DisparityOptions options_;
-  cv::Ptr<cv::Algorithm> matcher_;  // cv::StereoBM or cv::StereoSGBM
+  cv::Ptr<cv::Algorithm> matcher_;        // cv::StereoBM or cv::StereoSGBM
+  cv::Ptr<cv::Algorithm> right_matcher_;  // with WLS: ximgproc's right matcher
+  cv::Ptr<cv::Algorithm> wls_filter_;     // with WLS: ximgproc::DisparityWLSFilter
 };
 
 // Converts OpenCV's CV_16SC1 (disparity * 16) to CV_32FC1 pixels with kInvalidDisparity for <= 0.
@@ -110,17 +150,32 @@ struct DisparityErrorOptions {
   void Check() const;
 };
 
+// Two D1 figures: KITTI's D1-all is over every pixel with ground truth, so a pixel the matcher left
+// without a disparity counts as an outlier (KITTI's devkit first fills such pixels by background
+// interpolation and scores the filled value; stereodet does not interpolate, so its D1-all is the
+// devkit's figure for an estimate whose holes are all wrong: an upper bound, equal when the map is
+// dense). d1_rate is over the estimated pixels only, the figure BM's sparse maps are usually quoted
+// with; read it beside the density.
 struct DisparityErrorStats {
   long ground_truth_pixels = 0;  // pixels with a valid ground truth
   long estimated_pixels = 0;     // ... of which the estimate is valid too
+  long bad_pixels = 0;           // ... of which |error| > bad_threshold
+  long d1_outlier_pixels = 0;    // ... of which the error is a D1 outlier
   double density = 0;            // estimated_pixels / ground_truth_pixels
   double bad_rate = 0;  // fraction of estimated_pixels that are bad (error > bad_threshold)
-  double d1_rate = 0;   // fraction of estimated_pixels that are D1 outliers
+  double d1_rate = 0;   // fraction of estimated_pixels that are D1 outliers (estimated only)
+  // KITTI's D1-all: (D1 outliers + pixels with ground truth but no estimate) / ground_truth_pixels.
+  double d1_all_rate = 0;
   double mean_abs_error_px = 0;  // over estimated_pixels
 };
 
+// Pools per-frame stats: sums the counts and recomputes every rate from them (mean error weighted
+// by each frame's estimated pixels). Rates are 0 where their denominator is.
+DisparityErrorStats PoolDisparityErrors(const std::vector<DisparityErrorStats>& frames);
+
 // Compares an estimate with ground truth (both CV_32FC1, same size; invalid = !IsValidDisparity).
-// Rates are over pixels where both are valid (0 when there are none).
+// Rates but d1_all_rate are over pixels where both are valid; d1_all_rate over ground-truth pixels
+// (0 when there are none).
 DisparityErrorStats EvaluateDisparity(const cv::Mat& estimate_px, const cv::Mat& truth_px,
                                       const DisparityErrorOptions& options = {});
 

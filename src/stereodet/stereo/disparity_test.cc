@@ -73,6 +73,120 @@ TEST(DisparityOptionsTest, ParsesMethodNames) {
   EXPECT_EQ(ParseDisparityMethod("BM"), std::nullopt);
 }
 
+TEST(DisparityOptionsTest, ChecksTheRangeOfEveryOpenCvSetting) {
+  auto rejects = [](auto change) {
+    DisparityOptions options;
+    change(options);
+    return [&] {
+      try {
+        options.Check();
+        return false;
+      } catch (const std::invalid_argument&) {
+        return true;
+      }
+    }();
+  };
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.num_disparities = 100000; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.min_disparity = 5000; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.uniqueness_ratio = 101; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.speckle_range_px = -1; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.left_right_max_diff_px = -2; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.bm.prefilter_cap = 64; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) { o.bm.texture_threshold = -1; }));
+  auto sgbm = [](auto change) {
+    return [change](DisparityOptions& o) {
+      o.method = DisparityMethod::kSemiGlobal;
+      change(o.sgbm);
+    };
+  };
+  EXPECT_TRUE(rejects(sgbm([](SemiGlobalOptions& o) { o.prefilter_cap = 1024; })));
+  EXPECT_TRUE(rejects(sgbm([](SemiGlobalOptions& o) { o.p1 = 900; })));  // P1 900 > P2 800
+  EXPECT_TRUE(rejects(sgbm([](SemiGlobalOptions& o) { o.p2_per_pixel = 2000000000; })));
+  EXPECT_FALSE(rejects(sgbm([](SemiGlobalOptions& o) { o.p1 = 100; })));
+  // The WLS settings are checked only when the filter is on.
+  EXPECT_FALSE(rejects([](DisparityOptions& o) { o.wls.lambda = -1; }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) {
+    o.wls.enabled = true;
+    o.wls.lambda = -1;
+  }));
+  EXPECT_TRUE(rejects([](DisparityOptions& o) {
+    o.wls.enabled = true;
+    o.wls.sigma_color = std::nan("");
+  }));
+}
+
+TEST(DisparityOptionsTest, SgbmPenaltiesFollowOpenCvsRule) {
+  SemiGlobalOptions o;  // block 5: P1 = 8 x 25, P2 = 32 x 25
+  EXPECT_EQ(o.P1(), 200);
+  EXPECT_EQ(o.P2(), 800);
+  o.colour = true;  // OpenCV's 8 x channels x block^2
+  EXPECT_EQ(o.P1(), 600);
+  EXPECT_EQ(o.P2(), 2400);
+  o.p1 = 50;
+  o.p2 = 70;
+  EXPECT_EQ(o.P1(), 50);
+  EXPECT_EQ(o.P2(), 70);
+}
+
+TEST(DisparityOptionsTest, ParsesSgbmModeNames) {
+  for (SgbmMode mode : {SgbmMode::kSgbm, SgbmMode::kHh, SgbmMode::kSgbm3Way, SgbmMode::kHh4}) {
+    EXPECT_EQ(ParseSgbmMode(SgbmModeName(mode)), mode);
+  }
+  EXPECT_EQ(ParseSgbmMode("HH"), std::nullopt);
+  EXPECT_STREQ(SgbmModeName(SgbmMode::kSgbm3Way), "sgbm3way");
+}
+
+// SGBM on the colour pair, every SGBM mode, and the WLS filter all recover a whole-pixel shift; WLS
+// fills BM's holes.
+TEST(DisparityTest, ColourModesAndWlsRecoverAShift) {
+  const int shift = 20;
+  cv::Mat wide_bgr;
+  cv::merge(std::vector<cv::Mat>{Texture(120, 380, 1), Texture(120, 380, 2), Texture(120, 380, 3)},
+            wide_bgr);
+  const cv::Mat left = wide_bgr.colRange(0, 360).clone();
+  const cv::Mat right = wide_bgr.colRange(shift, 360 + shift).clone();
+  for (SgbmMode mode : {SgbmMode::kSgbm, SgbmMode::kHh, SgbmMode::kSgbm3Way, SgbmMode::kHh4}) {
+    for (bool colour : {false, true}) {
+      DisparityOptions options;
+      options.method = DisparityMethod::kSemiGlobal;
+      options.num_disparities = 48;
+      options.sgbm.mode = mode;
+      options.sgbm.colour = colour;
+      DisparityMatcher matcher(options);
+      const auto [accuracy, density] =
+          AccuracyAndDensity(matcher.Compute(left, right), shift, 0.25, 64);
+      EXPECT_GT(density, 0.85) << SgbmModeName(mode) << " colour " << colour;
+      EXPECT_GT(accuracy, 0.98) << SgbmModeName(mode) << " colour " << colour;
+    }
+  }
+  DisparityOptions bm_options;
+  bm_options.num_disparities = 48;
+  DisparityOptions wls_options = bm_options;
+  wls_options.wls.enabled = true;
+  // A textureless patch of the scene, where BM finds nothing.
+  cv::Mat flat = wide_bgr.clone();
+  flat(cv::Rect(150, 40, 60, 40)).setTo(cv::Scalar(128, 128, 128));
+  const cv::Mat flat_left = flat.colRange(0, 360).clone();
+  const cv::Mat flat_right = flat.colRange(shift, 360 + shift).clone();
+  const cv::Mat bm = DisparityMatcher(bm_options).Compute(flat_left, flat_right);
+  const cv::Mat wls = DisparityMatcher(wls_options).Compute(flat_left, flat_right);
+  // Inside the filter's region of interest (the matcher's window margins and the search range left
+  // out: 5 rows top and bottom, 5 columns at the right, 48 + 5 at the left).
+  const cv::Rect inside(64, 8, 360 - 64 - 8, 120 - 16);
+  const double bm_density = AccuracyAndDensity(bm(inside), shift, 0.25, 0).second;
+  const auto [wls_accuracy, wls_density] = AccuracyAndDensity(wls(inside), shift, 0.5, 0);
+  EXPECT_GT(wls_density, bm_density);
+  EXPECT_GT(wls_density, 0.99);
+  EXPECT_GT(wls_accuracy, 0.95);
+  // Colour SGBM needs colour images: grey ones are refused with the reason.
+  DisparityOptions colour;
+  colour.method = DisparityMethod::kSemiGlobal;
+  colour.sgbm.colour = true;
+  colour.num_disparities = 48;
+  DisparityMatcher matcher(colour);
+  EXPECT_THROW(matcher.ComputeFixedPoint(ToGrey(left), ToGrey(right)), std::invalid_argument);
+}
+
 TEST(DisparityTest, ValidityConvention) {
   EXPECT_FALSE(IsValidDisparity(kInvalidDisparity));
   EXPECT_FALSE(IsValidDisparity(0.0f));
@@ -208,6 +322,47 @@ TEST(EvaluateDisparityTest, HandComputedRates) {
   EXPECT_DOUBLE_EQ(stats.bad_rate, 0.75);  // errors 0.5, 3.5, 4, 6: three over 2 px
   EXPECT_DOUBLE_EQ(stats.d1_rate, 0.5);    // 3.5 (> 3 and > 0.5) and 6 (> 3 and > 5); 4 < 5
   EXPECT_DOUBLE_EQ(stats.mean_abs_error_px, (0.5 + 3.5 + 4 + 6) / 4);
+  // KITTI's D1-all: the two outliers and the ground-truth pixel without an estimate, of 5.
+  EXPECT_EQ(stats.d1_outlier_pixels, 2);
+  EXPECT_EQ(stats.bad_pixels, 3);
+  EXPECT_DOUBLE_EQ(stats.d1_all_rate, 3.0 / 5.0);
+}
+
+TEST(EvaluateDisparityTest, D1AllCountsEveryMissingEstimate) {
+  const float x = kInvalidDisparity;
+  const cv::Mat truth = (cv::Mat_<float>(1, 4) << 20, 20, 20, 20);
+  const cv::Mat none = (cv::Mat_<float>(1, 4) << x, x, x, x);
+  const DisparityErrorStats empty = EvaluateDisparity(none, truth);
+  EXPECT_DOUBLE_EQ(empty.d1_all_rate, 1.0);  // nothing estimated: every pixel is an error
+  EXPECT_DOUBLE_EQ(empty.d1_rate, 0.0);      // no estimated pixel to rate
+  EXPECT_DOUBLE_EQ(empty.density, 0.0);
+  const cv::Mat exact = truth.clone();
+  EXPECT_DOUBLE_EQ(EvaluateDisparity(exact, truth).d1_all_rate, 0.0);
+}
+
+TEST(EvaluateDisparityTest, PoolingEqualsOneEvaluationOfTheConcatenation) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> value(1, 60), noise(-6, 6), coin(0, 1);
+  cv::Mat truth(3, 40, CV_32FC1), estimate(3, 40, CV_32FC1);
+  for (int v = 0; v < 3; ++v) {
+    for (int u = 0; u < 40; ++u) {
+      truth.at<float>(v, u) = coin(rng) < 0.2f ? kInvalidDisparity : value(rng);
+      estimate.at<float>(v, u) =
+          coin(rng) < 0.3f ? kInvalidDisparity : std::max(0.5f, truth.at<float>(v, u) + noise(rng));
+    }
+  }
+  std::vector<DisparityErrorStats> rows;
+  for (int v = 0; v < 3; ++v) rows.push_back(EvaluateDisparity(estimate.row(v), truth.row(v)));
+  const DisparityErrorStats pooled = PoolDisparityErrors(rows);
+  const DisparityErrorStats whole = EvaluateDisparity(estimate, truth);
+  EXPECT_EQ(pooled.ground_truth_pixels, whole.ground_truth_pixels);
+  EXPECT_EQ(pooled.estimated_pixels, whole.estimated_pixels);
+  EXPECT_EQ(pooled.d1_outlier_pixels, whole.d1_outlier_pixels);
+  EXPECT_DOUBLE_EQ(pooled.d1_all_rate, whole.d1_all_rate);
+  EXPECT_DOUBLE_EQ(pooled.d1_rate, whole.d1_rate);
+  EXPECT_DOUBLE_EQ(pooled.bad_rate, whole.bad_rate);
+  EXPECT_NEAR(pooled.mean_abs_error_px, whole.mean_abs_error_px, 1e-12);
+  EXPECT_GT(whole.d1_all_rate, whole.d1_rate);  // the holes count in D1-all
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "stereodet/stereo/reprojection.h"
 
+#include <fmt/format.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -109,7 +111,12 @@ void GroundPlaneOptions::Check() const {
       << "ground max_tilt_deg must be in [0, 90)";
   STEREODET_CHECK(min_camera_height_m < max_camera_height_m)
       << "ground camera height range is empty";
-  STEREODET_CHECK(nominal_camera_height_m > 0) << "nominal camera height must be > 0";
+  STEREODET_CHECK(nominal_camera_height_m > 0 && nominal_camera_height_m < 100)
+      << "nominal camera height must be in (0, 100) m, got " << nominal_camera_height_m;
+  STEREODET_CHECK(warn_tilt_deg >= 0 && warn_tilt_deg < 90)
+      << "ground warn_tilt_deg must be in [0, 90), got " << warn_tilt_deg;
+  STEREODET_CHECK(warn_camera_height_m >= 0 && warn_camera_height_m < 100)
+      << "ground warn_camera_height_m must be in [0, 100), got " << warn_camera_height_m;
 }
 
 GroundPlaneFit FitGroundPlane(const cv::Mat& disparity_px, const StereoGeometry& geometry,
@@ -259,12 +266,20 @@ GroundPlaneFit FitGroundPlane(const cv::Mat& disparity_px, const StereoGeometry&
                  std::to_string(options.min_camera_height_m) + ", " +
                  std::to_string(options.max_camera_height_m) + "]";
   } else {
-    fit.fitted = true;
-    fit.reason = "fitted";
-    fit.inliers = inliers;
-    fit.plane.normal_in_rect = normal;
-    fit.plane.offset_m = offset;
-    return fit;
+    fit.suspect = tilt > options.warn_tilt_deg ||
+                  std::abs(offset - options.nominal_camera_height_m) > options.warn_camera_height_m;
+    if (!fit.suspect || !options.suspect_uses_prior) {
+      fit.fitted = true;
+      fit.reason = "fitted";
+      fit.inliers = inliers;
+      fit.plane.normal_in_rect = normal;
+      fit.plane.offset_m = offset;
+      return fit;
+    }
+    fit.reason = fmt::format(
+        "suspect fit (tilt {:.3f} deg, camera height {:.4f} m, {} of {} inliers), nominal prior "
+        "used",
+        tilt, offset, inliers, n);
   }
   // Fallback: report the rejected fit's numbers but use the nominal plane.
   fit.camera_height_m = options.nominal_camera_height_m;

@@ -91,6 +91,15 @@ struct GroundPlaneOptions {
   double max_camera_height_m = 2.5;
   double nominal_camera_height_m = 1.65;  // KITTI's camera height
   bool enabled = true;                    // false: always the nominal plane
+  // Tolerance of an accepted fit (docs/stereo.md): on a flat road a level camera's ground is within
+  // about a degree of rect -y (KITTI's pitch on its springs) and the camera at its nominal height
+  // within a few centimetres. An accepted fit tilted more than warn_tilt_deg, or whose camera
+  // height differs from nominal_camera_height_m by more than warn_camera_height_m, is `suspect`:
+  // reported and warned about, and with suspect_uses_prior replaced by the prior (the nominal
+  // mounting plane). The default keeps the fit, as before.
+  double warn_tilt_deg = 1.5;
+  double warn_camera_height_m = 0.25;
+  bool suspect_uses_prior = false;
   void Check() const;
 };
 
@@ -102,6 +111,11 @@ struct GroundPlaneFit {
   int inliers = 0;      // inliers of the accepted fit (0 for the fallback)
   double camera_height_m = 0;  // height of the rect origin above `plane`
   double tilt_deg = 0;         // angle between the plane normal and rect -y
+  // The RANSAC fit passed acceptance but lies beyond the warning tolerance (GroundPlaneOptions);
+  // `fitted` is then false when suspect_uses_prior replaced it by the nominal plane.
+  bool suspect = false;
+  // inliers / samples of the accepted fit (0 for a fallback).
+  double InlierFraction() const { return samples > 0 ? static_cast<double>(inliers) / samples : 0; }
 };
 
 // Fits the ground to the stereo points of the lower image. Never throws for bad data: it falls

@@ -165,6 +165,46 @@ INSTANTIATE_TEST_SUITE_P(Roads, GroundFitTest,
                          ::testing::Values(GroundCase{0, 0, 1.65}, GroundCase{2.0, 0, 1.65},
                                            GroundCase{-1.5, 1.5, 1.65}, GroundCase{0, 0, 1.9}));
 
+// A road tilted 3 degrees, beyond the 1.5 degree tolerance: the fit is accepted but suspect, and
+// with suspect_uses_prior the nominal plane (the prior) replaces it. A 1 degree tilt is within it.
+TEST(GroundFitTest, FlagsAFitBeyondTheToleranceAndUsesThePriorWhenAsked) {
+  const StereoGeometry geometry = StereoGeometry::FromCalibration(KittiLikeCalibration());
+  auto scene_with = [](double pitch_deg, double camera_height_m) {
+    PlanarSceneOptions scene_options;
+    scene_options.ground_pitch_deg = pitch_deg;
+    scene_options.camera_height_m = camera_height_m;
+    return RenderPlanarScene(KittiLikeCalibration(), scene_options).disparity_px;
+  };
+  const cv::Mat tilted = scene_with(3.0, 1.65);
+  GroundPlaneOptions options;
+  const GroundPlaneFit kept = FitGroundPlane(tilted, geometry, options);
+  EXPECT_TRUE(kept.fitted);
+  EXPECT_TRUE(kept.suspect);
+  EXPECT_NEAR(kept.tilt_deg, 3.0, 0.05);
+  EXPECT_GT(kept.InlierFraction(), 0.9);
+  EXPECT_DOUBLE_EQ(kept.InlierFraction(), static_cast<double>(kept.inliers) / kept.samples);
+
+  options.suspect_uses_prior = true;
+  const GroundPlaneFit prior = FitGroundPlane(tilted, geometry, options);
+  EXPECT_FALSE(prior.fitted);
+  EXPECT_TRUE(prior.suspect);
+  EXPECT_EQ(prior.plane.normal_in_rect, Eigen::Vector3d(0, -1, 0));
+  EXPECT_DOUBLE_EQ(prior.plane.offset_m, 1.65);
+  EXPECT_EQ(prior.reason.rfind("suspect fit (tilt 3.0", 0), 0u) << prior.reason;
+
+  const GroundPlaneFit level = FitGroundPlane(scene_with(1.0, 1.65), geometry, options);
+  EXPECT_TRUE(level.fitted);
+  EXPECT_FALSE(level.suspect);
+  // A camera 0.35 m above its nominal height is suspect as well (tolerance 0.25 m).
+  const GroundPlaneFit high = FitGroundPlane(scene_with(0.0, 2.0), geometry, options);
+  EXPECT_TRUE(high.suspect);
+  EXPECT_FALSE(high.fitted);
+  options.warn_camera_height_m = 0.4;
+  EXPECT_TRUE(FitGroundPlane(scene_with(0.0, 2.0), geometry, options).fitted);
+  options.warn_tilt_deg = -1;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
 TEST(GroundFitTest, FallsBackWithoutStereo) {
   const StereoGeometry geometry = StereoGeometry::FromCalibration(KittiLikeCalibration());
   const cv::Mat nothing(375, 1242, CV_32FC1, cv::Scalar(kInvalidDisparity));

@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
+#include <optional>
+#include <stdexcept>
+#include <type_traits>
 
 #include "stereodet/stereo/rgbh.h"
 #include "stereodet/util/check.h"
@@ -16,6 +20,167 @@ void StereoOptions::Check() const {
   depth.Check();
   points.Check();
   blur.Check();
+}
+
+namespace {
+
+nlohmann::json SettingsJson(const StereoOptions& o) {
+  const DisparityOptions& d = o.disparity;
+  nlohmann::json j;
+  j["disparity"] = {{"method", DisparityMethodName(d.method)},
+                    {"num_disparities", d.num_disparities},
+                    {"min_disparity", d.min_disparity},
+                    {"uniqueness_ratio", d.uniqueness_ratio},
+                    {"speckle_window_px", d.speckle_window_px},
+                    {"speckle_range_px", d.speckle_range_px},
+                    {"left_right_max_diff_px", d.left_right_max_diff_px},
+                    {"bm_block_size", d.bm.block_size},
+                    {"bm_xsobel_prefilter", d.bm.xsobel_prefilter},
+                    {"bm_prefilter_size", d.bm.prefilter_size},
+                    {"bm_prefilter_cap", d.bm.prefilter_cap},
+                    {"bm_texture_threshold", d.bm.texture_threshold},
+                    {"sgbm_block_size", d.sgbm.block_size},
+                    {"sgbm_p1_per_pixel", d.sgbm.p1_per_pixel},
+                    {"sgbm_p2_per_pixel", d.sgbm.p2_per_pixel},
+                    {"sgbm_p1", d.sgbm.p1 ? nlohmann::json(*d.sgbm.p1) : nlohmann::json()},
+                    {"sgbm_p2", d.sgbm.p2 ? nlohmann::json(*d.sgbm.p2) : nlohmann::json()},
+                    {"sgbm_prefilter_cap", d.sgbm.prefilter_cap},
+                    {"sgbm_mode", SgbmModeName(d.sgbm.mode)},
+                    {"sgbm_colour", d.sgbm.colour},
+                    {"wls_enabled", d.wls.enabled},
+                    {"wls_lambda", d.wls.lambda},
+                    {"wls_sigma_color", d.wls.sigma_color},
+                    {"wls_lrc_threshold", d.wls.lrc_threshold},
+                    {"wls_depth_discontinuity_radius", d.wls.depth_discontinuity_radius}};
+  const GroundPlaneOptions& g = o.ground;
+  j["ground"] = {{"enabled", g.enabled},
+                 {"nominal_camera_height_m", g.nominal_camera_height_m},
+                 {"roi_fraction", g.roi_fraction},
+                 {"sample_step_px", g.sample_step_px},
+                 {"min_depth_m", g.min_depth_m},
+                 {"max_depth_m", g.max_depth_m},
+                 {"max_lateral_m", g.max_lateral_m},
+                 {"max_samples", g.max_samples},
+                 {"iterations", g.iterations},
+                 {"inlier_threshold_m", g.inlier_threshold_m},
+                 {"seed", g.seed},
+                 {"min_inliers", g.min_inliers},
+                 {"min_inlier_fraction", g.min_inlier_fraction},
+                 {"max_tilt_deg", g.max_tilt_deg},
+                 {"min_camera_height_m", g.min_camera_height_m},
+                 {"max_camera_height_m", g.max_camera_height_m},
+                 {"suspect_uses_prior", g.suspect_uses_prior}};
+  j["height_code"] = {
+      {"min_m", o.height.min_m}, {"max_m", o.height.max_m}, {"levels", 511}, {"no_stereo", 0}};
+  return j;
+}
+
+// Reads `section`.`key` of `j` into `field` when present.
+template <typename T>
+void Read(const nlohmann::json& j, const char* section, const char* key, const std::string& source,
+          T& field) {
+  if (!j.contains(section) || !j[section].is_object() || !j[section].contains(key)) return;
+  const nlohmann::json& value = j[section][key];
+  try {
+    if constexpr (std::is_same_v<T, std::optional<int>>) {
+      field = value.is_null() ? std::nullopt : std::optional<int>(value.get<int>());
+    } else {
+      field = value.get<T>();
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, std::string(section) + "." + key, e.what());
+  }
+}
+
+}  // namespace
+
+std::string StereoSettingsJson(const StereoOptions& options) {
+  return SettingsJson(options).dump(2) + "\n";
+}
+
+StereoOptions StereoOptionsFromJson(const std::string& text, const std::string& source,
+                                    const StereoOptions& defaults) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
+  }
+  StereoOptions o = defaults;
+  DisparityOptions& d = o.disparity;
+  std::string method = DisparityMethodName(d.method), mode = SgbmModeName(d.sgbm.mode);
+  Read(j, "disparity", "method", source, method);
+  const auto parsed_method = ParseDisparityMethod(method);
+  if (!parsed_method) throw ParseError(source, 0, "disparity.method", "unknown '" + method + "'");
+  d.method = *parsed_method;
+  Read(j, "disparity", "num_disparities", source, d.num_disparities);
+  Read(j, "disparity", "min_disparity", source, d.min_disparity);
+  Read(j, "disparity", "uniqueness_ratio", source, d.uniqueness_ratio);
+  Read(j, "disparity", "speckle_window_px", source, d.speckle_window_px);
+  Read(j, "disparity", "speckle_range_px", source, d.speckle_range_px);
+  Read(j, "disparity", "left_right_max_diff_px", source, d.left_right_max_diff_px);
+  Read(j, "disparity", "bm_block_size", source, d.bm.block_size);
+  Read(j, "disparity", "bm_xsobel_prefilter", source, d.bm.xsobel_prefilter);
+  Read(j, "disparity", "bm_prefilter_size", source, d.bm.prefilter_size);
+  Read(j, "disparity", "bm_prefilter_cap", source, d.bm.prefilter_cap);
+  Read(j, "disparity", "bm_texture_threshold", source, d.bm.texture_threshold);
+  Read(j, "disparity", "sgbm_block_size", source, d.sgbm.block_size);
+  Read(j, "disparity", "sgbm_p1_per_pixel", source, d.sgbm.p1_per_pixel);
+  Read(j, "disparity", "sgbm_p2_per_pixel", source, d.sgbm.p2_per_pixel);
+  Read(j, "disparity", "sgbm_p1", source, d.sgbm.p1);
+  Read(j, "disparity", "sgbm_p2", source, d.sgbm.p2);
+  Read(j, "disparity", "sgbm_prefilter_cap", source, d.sgbm.prefilter_cap);
+  Read(j, "disparity", "sgbm_mode", source, mode);
+  const auto parsed_mode = ParseSgbmMode(mode);
+  if (!parsed_mode) throw ParseError(source, 0, "disparity.sgbm_mode", "unknown '" + mode + "'");
+  d.sgbm.mode = *parsed_mode;
+  Read(j, "disparity", "sgbm_colour", source, d.sgbm.colour);
+  Read(j, "disparity", "wls_enabled", source, d.wls.enabled);
+  Read(j, "disparity", "wls_lambda", source, d.wls.lambda);
+  Read(j, "disparity", "wls_sigma_color", source, d.wls.sigma_color);
+  Read(j, "disparity", "wls_lrc_threshold", source, d.wls.lrc_threshold);
+  Read(j, "disparity", "wls_depth_discontinuity_radius", source, d.wls.depth_discontinuity_radius);
+  GroundPlaneOptions& g = o.ground;
+  Read(j, "ground", "enabled", source, g.enabled);
+  Read(j, "ground", "nominal_camera_height_m", source, g.nominal_camera_height_m);
+  Read(j, "ground", "roi_fraction", source, g.roi_fraction);
+  Read(j, "ground", "sample_step_px", source, g.sample_step_px);
+  Read(j, "ground", "min_depth_m", source, g.min_depth_m);
+  Read(j, "ground", "max_depth_m", source, g.max_depth_m);
+  Read(j, "ground", "max_lateral_m", source, g.max_lateral_m);
+  Read(j, "ground", "max_samples", source, g.max_samples);
+  Read(j, "ground", "iterations", source, g.iterations);
+  Read(j, "ground", "inlier_threshold_m", source, g.inlier_threshold_m);
+  Read(j, "ground", "seed", source, g.seed);
+  Read(j, "ground", "min_inliers", source, g.min_inliers);
+  Read(j, "ground", "min_inlier_fraction", source, g.min_inlier_fraction);
+  Read(j, "ground", "max_tilt_deg", source, g.max_tilt_deg);
+  Read(j, "ground", "min_camera_height_m", source, g.min_camera_height_m);
+  Read(j, "ground", "max_camera_height_m", source, g.max_camera_height_m);
+  Read(j, "ground", "suspect_uses_prior", source, g.suspect_uses_prior);
+  Read(j, "height_code", "min_m", source, o.height.min_m);
+  Read(j, "height_code", "max_m", source, o.height.max_m);
+  try {
+    o.Check();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  }
+  return o;
+}
+
+std::string DifferingStereoSettings(const StereoOptions& recorded, const StereoOptions& requested) {
+  const nlohmann::json a = SettingsJson(recorded), b = SettingsJson(requested);
+  std::string differences;
+  for (const auto& [section, values] : b.items()) {
+    for (const auto& [key, value] : values.items()) {
+      const nlohmann::json& old_value = a[section][key];
+      if (old_value == value) continue;
+      if (!differences.empty()) differences += "; ";
+      differences +=
+          section + "." + key + ": " + old_value.dump() + " (requested: " + value.dump() + ")";
+    }
+  }
+  return differences;
 }
 
 StereoEncoder::StereoEncoder(const StereoOptions& options)
@@ -46,9 +211,14 @@ StereoEncoding StereoEncoder::Encode(const cv::Mat& left_bgr, const cv::Mat& rig
     stage("blur");
   }
   const cv::Mat left_grey = ToGrey(match_left);
-  const cv::Mat right_grey = ToGrey(match_right);
+  const bool colour = options_.disparity.MatchesColour();
+  const cv::Mat right_grey = colour ? cv::Mat() : ToGrey(match_right);
   stage("grey");
-  const cv::Mat fixed_point = matcher_.ComputeFixedPoint(left_grey, right_grey);
+  // SGBM on colour reads the BGR pair as OpenCV takes it; the WLS filter is guided by the left
+  // colour image either way.
+  const cv::Mat fixed_point = colour
+                                  ? matcher_.ComputeFixedPoint(match_left, match_right, match_left)
+                                  : matcher_.ComputeFixedPoint(left_grey, right_grey, match_left);
   stage("disparity");
   return EncodeFromFixedPoint(fixed_point, network_image, left_grey, geometry, outputs, times);
 }

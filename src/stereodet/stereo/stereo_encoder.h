@@ -9,6 +9,7 @@
 #define STEREODET_STEREO_STEREO_ENCODER_H_
 
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "stereodet/kitti/velodyne_io.h"
@@ -29,6 +30,25 @@ struct StereoOptions {
   BlurOptions blur;
   void Check() const;
 };
+
+// The settings that decide the disparity, the ground plane and the height codes, as one JSON object
+// (pretty, 2 spaces, trailing newline): {"disparity": {...}, "ground": {...}, "height_code":
+// {...}}, every field under its name in DisparityOptions (bm_*, sgbm_*, wls_* for the nested
+// ones), GroundPlaneOptions and HeightQuantization. OUT/stereo.json holds these (with the other
+// outputs' settings) and model.json records them for RGB-H models.
+std::string StereoSettingsJson(const StereoOptions& options);
+
+// Reads those settings back into `defaults` (a copy is returned): a key that is absent keeps its
+// value in `defaults`, so a file written before a setting was recorded reads as that default.
+// Throws ParseError naming `source` and the key for a value of the wrong type or a bad name, and
+// std::invalid_argument (Check) for a value out of range.
+StereoOptions StereoOptionsFromJson(const std::string& text, const std::string& source,
+                                    const StereoOptions& defaults = {});
+
+// The settings of StereoSettingsJson that differ between `recorded` and `requested`, as "key:
+// RECORDED (requested: REQUESTED)" joined by "; " (keys "disparity.uniqueness_ratio"); empty when
+// they agree.
+std::string DifferingStereoSettings(const StereoOptions& recorded, const StereoOptions& requested);
 
 // What Encode should produce besides the disparity, the ground fit and the height codes.
 struct StereoOutputs {

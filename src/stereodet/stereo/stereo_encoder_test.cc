@@ -4,6 +4,7 @@
 
 #include "stereodet/stereo/planar_scene.h"
 #include "stereodet/stereo/rgbh.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 namespace {
@@ -106,6 +107,46 @@ TEST(StereoEncoderTest, BlurModes) {
   StereoOptions bad;
   bad.blur.sigma_px = -1;
   EXPECT_THROW(StereoEncoder{bad}, std::invalid_argument);
+}
+
+// Every setting of StereoSettingsJson reads back, and a file without a setting reads as the default
+// given (an older model.json or stereo.json).
+TEST(StereoSettingsJsonTest, RoundTripsAndDefaultsWhatIsMissing) {
+  StereoOptions options;
+  options.disparity.method = DisparityMethod::kSemiGlobal;
+  options.disparity.uniqueness_ratio = 7;
+  options.disparity.bm.xsobel_prefilter = false;
+  options.disparity.sgbm.mode = SgbmMode::kHh4;
+  options.disparity.sgbm.colour = true;
+  options.disparity.sgbm.p1 = 300;
+  options.disparity.wls.enabled = true;
+  options.disparity.wls.lambda = 1234.5;
+  options.ground.max_tilt_deg = 4.5;
+  options.height.max_m = 3.5;
+  const std::string text = StereoSettingsJson(options);
+  const StereoOptions back = StereoOptionsFromJson(text, "x.json");
+  EXPECT_EQ(StereoSettingsJson(back), text);
+  EXPECT_EQ(DifferingStereoSettings(back, options), "");
+  EXPECT_EQ(back.disparity.sgbm.p1, 300);
+  EXPECT_EQ(back.disparity.sgbm.p2, std::nullopt);
+
+  const StereoOptions from_empty = StereoOptionsFromJson("{}", "old.json");
+  EXPECT_EQ(StereoSettingsJson(from_empty), StereoSettingsJson(StereoOptions{}));
+  EXPECT_NE(DifferingStereoSettings(from_empty, options)
+                .find("disparity.method: \"bm\" "
+                      "(requested: \"sgbm\")"),
+            std::string::npos);
+  EXPECT_NE(DifferingStereoSettings(from_empty, options)
+                .find("disparity.uniqueness_ratio: 15 "
+                      "(requested: 7)"),
+            std::string::npos);
+  EXPECT_THROW(StereoOptionsFromJson(R"({"disparity": {"sgbm_mode": "fast"}})", "m.json"),
+               ParseError);
+  EXPECT_THROW(StereoOptionsFromJson(R"({"disparity": {"uniqueness_ratio": "x"}})", "m.json"),
+               ParseError);
+  EXPECT_THROW(StereoOptionsFromJson(R"({"disparity": {"uniqueness_ratio": 500}})", "m.json"),
+               std::invalid_argument);
+  EXPECT_THROW(StereoOptionsFromJson("{", "m.json"), ParseError);
 }
 
 }  // namespace
