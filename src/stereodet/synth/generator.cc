@@ -33,8 +33,9 @@ enum Stream : uint64_t {
 // The version of the scene and rendering model, recorded in synth_settings.txt: a folder written
 // by another version is refused rather than mixed. 1: the first street model; 2: issue 16's
 // textures (asphalt, paving, kerbs, facades, fences), car details, sun glints, per-frame white
-// balance and sensor noise.
-constexpr int kSettingsVersion = 2;
+// balance and sensor noise; 3: issue 16's curved car hulls (saloon, hatchback, estate) and the
+// street mirrored in paint and glass.
+constexpr int kSettingsVersion = 3;
 
 // The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b
 // (this run)", for the refusal message.
