@@ -12,6 +12,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/kitti/plane_io.h"
 #include "stereodet/synth/random.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -165,6 +166,8 @@ SynthFrame GenerateFrame(const SynthOptions& options, uint64_t seed, int index, 
   out.image_right = right_render.image;
   out.depth_left = left_render.depth;
   out.object_id = left_render.object_id;
+  // The scene's ground is the plane y = ground_y_m: -y + ground_y_m = 0.
+  out.ground_plane = Eigen::Vector4d(0.0, -1.0, 0.0, out.scene.ground_y_m);
   return out;
 }
 
@@ -223,7 +226,7 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
             std::filesystem::exists(paths.image_left) &&
             std::filesystem::exists(paths.image_right) && std::filesystem::exists(paths.label) &&
             std::filesystem::exists(paths.calib) && std::filesystem::exists(paths.velodyne) &&
-            std::filesystem::exists(paths.disparity);
+            std::filesystem::exists(paths.disparity) && std::filesystem::exists(paths.planes);
         if (complete) {
           ++skipped;
           progress.Add(1);
@@ -239,6 +242,8 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
           WriteCalibration(paths.calib, frame.calib);
           std::filesystem::create_directories(paths.velodyne.parent_path());
           WriteVelodyne(paths.velodyne, frame.scan);
+          std::filesystem::create_directories(paths.planes.parent_path());
+          WriteGroundPlane(paths.planes, frame.ground_plane);
           // The label file last: its presence marks a frame most readers consider complete.
           std::filesystem::create_directories(paths.label.parent_path());
           WriteObjects(paths.label, frame.labels);
