@@ -62,6 +62,7 @@ FramePaths KittiDataset::Paths(const std::string& id) const {
   paths.calib = dir / "calib" / (id + ".txt");
   paths.velodyne = dir / "velodyne" / (id + ".bin");
   paths.disparity = dir / "disp_noc_0" / (id + ".png");
+  paths.planes = dir / "planes" / (id + ".txt");
   return paths;
 }
 

@@ -3,7 +3,8 @@
 //   ROOT/testing/{image_2,image_3,calib,velodyne}/...
 //   ROOT/ImageSets/{train,val,trainval,test}.txt   (one frame id per line)
 // plus, for data written by `stereodet synth`, ROOT/training/disp_noc_0/NNNNNN.png (ground-truth
-// disparity in KITTI's stereo format).
+// disparity in KITTI's stereo format) and ROOT/training/planes/NNNNNN.txt (the true ground plane,
+// in the layout KITTI tools use: plane_io.h).
 #ifndef STEREODET_KITTI_DATASET_H_
 #define STEREODET_KITTI_DATASET_H_
 
@@ -25,6 +26,7 @@ struct FramePaths {
   std::filesystem::path calib;        // calib/ID.txt
   std::filesystem::path velodyne;     // velodyne/ID.bin
   std::filesystem::path disparity;    // disp_noc_0/ID.png (synthetic data only)
+  std::filesystem::path planes;       // planes/ID.txt (ground plane; synthetic data, some tools)
 };
 
 class KittiDataset {

@@ -356,11 +356,11 @@ CameraRender RenderCamera(const Scene& scene, const Calibration& calib,
         color = albedo.cwiseProduct(irradiance);
         const float specular = scene.materials[hit.material].specular;
         if (specular > 0.0f) {
-          // Mirror the sky, more at grazing angles (a cheap Fresnel term) ...
+          // Mirror the street and the sky, more at grazing angles (a cheap Fresnel term) ...
           const Eigen::Vector3f reflected = dir_unit - 2.0f * dir_unit.dot(hit.normal) * hit.normal;
           const float grazing = 1.0f - cos_view;
           const float fresnel = specular * (0.3f + 0.7f * grazing * grazing * grazing);
-          color += fresnel * SkyRadiance(light, reflected);
+          color += fresnel * ReflectedRadiance(light, reflected);
           // ... and the sun's glint on the clear coat (view-dependent, as real highlights).
           if (lit) {
             const float r = std::max(0.0f, reflected.dot(light.to_sun));

@@ -12,6 +12,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/kitti/plane_io.h"
 #include "stereodet/synth/random.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -33,8 +34,9 @@ enum Stream : uint64_t {
 // The version of the scene and rendering model, recorded in synth_settings.txt: a folder written
 // by another version is refused rather than mixed. 1: the first street model; 2: issue 16's
 // textures (asphalt, paving, kerbs, facades, fences), car details, sun glints, per-frame white
-// balance and sensor noise.
-constexpr int kSettingsVersion = 2;
+// balance and sensor noise; 3: issue 16's curved car hulls (saloon, hatchback, estate) and the
+// street mirrored in paint and glass.
+constexpr int kSettingsVersion = 3;
 
 // The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b
 // (this run)", for the refusal message.
@@ -164,6 +166,8 @@ SynthFrame GenerateFrame(const SynthOptions& options, uint64_t seed, int index, 
   out.image_right = right_render.image;
   out.depth_left = left_render.depth;
   out.object_id = left_render.object_id;
+  // The scene's ground is the plane y = ground_y_m: -y + ground_y_m = 0.
+  out.ground_plane = Eigen::Vector4d(0.0, -1.0, 0.0, out.scene.ground_y_m);
   return out;
 }
 
@@ -222,7 +226,7 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
             std::filesystem::exists(paths.image_left) &&
             std::filesystem::exists(paths.image_right) && std::filesystem::exists(paths.label) &&
             std::filesystem::exists(paths.calib) && std::filesystem::exists(paths.velodyne) &&
-            std::filesystem::exists(paths.disparity);
+            std::filesystem::exists(paths.disparity) && std::filesystem::exists(paths.planes);
         if (complete) {
           ++skipped;
           progress.Add(1);
@@ -238,6 +242,8 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
           WriteCalibration(paths.calib, frame.calib);
           std::filesystem::create_directories(paths.velodyne.parent_path());
           WriteVelodyne(paths.velodyne, frame.scan);
+          std::filesystem::create_directories(paths.planes.parent_path());
+          WriteGroundPlane(paths.planes, frame.ground_plane);
           // The label file last: its presence marks a frame most readers consider complete.
           std::filesystem::create_directories(paths.label.parent_path());
           WriteObjects(paths.label, frame.labels);

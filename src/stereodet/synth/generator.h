@@ -52,6 +52,9 @@ struct SynthFrame {
   Scene scene;                  // what was rendered (for statistics and pictures)
   cv::Mat depth_left;           // CV_32FC1, depth in front of camera 2 (m), 0 = sky
   cv::Mat object_id;            // CV_32SC1, Scene::objects index per left pixel, -1 = background
+  // The true ground as a x + b y + c z + d = 0 in the rect frame, normal up (b < 0): written to
+  // planes/NNNNNN.txt so that a ground-plane fit can be checked against it.
+  Eigen::Vector4d ground_plane = Eigen::Vector4d(0.0, -1.0, 0.0, 1.65);
 };
 
 // Makes frame `index` of the data set with `seed`. `times` (optional) receives per-stage times.
@@ -80,10 +83,11 @@ struct DatasetSummaryLine {
   std::string stage_times;  // StageTimes::Format() of this run
 };
 
-// Writes the data set: training/{image_2,image_3,label_2,calib,velodyne,disp_noc_0}/NNNNNN.* and
-// ImageSets/{train,val,trainval}.txt. Every file is written atomically; frames whose six files all
-// exist are skipped, so an interrupted run resumes where it stopped. ROOT/synth_settings.txt
-// records the seed and settings; resuming with different ones throws std::invalid_argument.
+// Writes the data set: training/{image_2,image_3,label_2,calib,velodyne,disp_noc_0,planes}/NNNNNN.*
+// and ImageSets/{train,val,trainval}.txt. Every file is written atomically; frames whose seven
+// files all exist are skipped, so an interrupted run resumes where it stopped.
+// ROOT/synth_settings.txt records the seed and settings; resuming with different ones throws
+// std::invalid_argument.
 DatasetSummaryLine GenerateDataset(const DatasetOptions& options);
 
 // The frame ids in the val split: round(frames * val_fraction) of them, chosen by a hash of

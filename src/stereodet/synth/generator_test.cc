@@ -9,6 +9,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/kitti/plane_io.h"
 #include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_temp_dir.h"
@@ -107,6 +108,46 @@ TEST(GeneratorTest, DatasetRoundTripsThroughTheKittiModule) {
   EXPECT_THROW(GenerateDataset(options), std::invalid_argument);
 }
 
+// The planes file holds the true ground: the scan's ground returns lie on it (within the range
+// noise), nothing lies below it, and the labelled objects stand on it (road) or on a kerb above
+// it. A missing planes file makes its frame be redone.
+TEST(GeneratorTest, PlanesFileHoldsTheGroundTheScanAndLabelsStandOn) {
+  const TestTempDir dir;
+  DatasetOptions options;
+  options.out = dir.path();
+  options.frames = 1;
+  options.seed = 8;
+  options.threads = 1;
+  options.progress.stream = nullptr;
+  options.synth = TinyOptions();
+  GenerateDataset(options);
+  const FramePaths paths = KittiDataset(dir.path()).Paths("000000");
+  const Eigen::Vector4d plane = ReadGroundPlane(paths.planes);
+  const SynthFrame frame = GenerateFrame(options.synth, 8, 0);
+  EXPECT_EQ(plane.head<3>(), Eigen::Vector3d(0.0, -1.0, 0.0));
+  EXPECT_NEAR(plane[3], frame.scene.ground_y_m, 1e-6);  // seven digits
+  EXPECT_GT(std::abs(plane[3] - 1.65), 1e-4) << "this frame's camera height is jittered";
+  const Eigen::Affine3d rect_from_velo = frame.calib.RectFromVelo();
+  int on_plane = 0;
+  for (const VeloPoint& p : frame.scan) {
+    const Eigen::Vector3d x = rect_from_velo * Eigen::Vector3d(p.x, p.y, p.z);
+    const double height = plane.head<3>().dot(x) + plane[3];  // above the ground (normal up)
+    EXPECT_GT(height, -0.1) << "a return below the ground";
+    on_plane += std::abs(height) < 0.06;
+  }
+  EXPECT_GT(on_plane, static_cast<int>(frame.scan.size()) / 5);
+  for (const Object& o : frame.labels) {
+    if (o.type == "DontCare") continue;
+    const double height = plane.head<3>().dot(o.box3d.location) + plane[3];
+    EXPECT_GE(height, -0.006);  // two-decimal labels
+    EXPECT_LE(height, 0.2);     // a kerb at most
+  }
+  fs::remove(paths.planes);
+  const DatasetSummaryLine again = GenerateDataset(options);
+  EXPECT_EQ(again.generated, 1);
+  EXPECT_EQ(ReadGroundPlane(paths.planes), plane);
+}
+
 // A folder written by another version of the scene model (here: version 1, before issue 16's
 // textures) is refused, and the message names the setting that differs.
 TEST(GeneratorTest, RefusesAFolderOfAnotherVersionNamingTheSetting) {
@@ -156,7 +197,8 @@ TEST(GeneratorTest, SameSeedSameBytesWithOneAndTwoThreads) {
     EXPECT_EQ(ReadFile(entry.path()), ReadFile(two.path() / relative)) << relative;
     ++files;
   }
-  EXPECT_EQ(files, 3 * 6 + 3 + 1);  // six files a frame, three splits, the settings
+  EXPECT_EQ(files, 3 * 7 + 3 + 1);  // seven files a frame (planes/ since issue 16), three splits,
+                                    // the settings
 }
 
 TEST(GeneratorTest, ValFramesAreExactAndStable) {

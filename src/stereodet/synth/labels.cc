@@ -12,7 +12,7 @@ namespace {
 double Round2(double x) { return std::round(x * 100.0) / 100.0; }
 
 // Points whose convex hull is the primitive (boxes: exact; cylinders and ellipsoids: inscribed
-// polygons, 16 sides, within 2% of the radius).
+// polygons, 16 sides, within 2% of the radius; rounded boxes: points on a 32 x 17 direction grid).
 void HullPoints(const Primitive& p, std::vector<Eigen::Vector3d>* out) {
   const Eigen::Matrix3d r = p.world_from_local.cast<double>();
   const Eigen::Vector3d c = p.centre.cast<double>();
@@ -33,6 +33,32 @@ void HullPoints(const Primitive& p, std::vector<Eigen::Vector3d>* out) {
         }
       }
       break;
+    case ShapeKind::kRoundedBox: {
+      // Its boundary along rays from the centre (a convex set is star-shaped about it): 32
+      // azimuths x 17 elevations (poles included), each point on the box or the ellipsoid,
+      // whichever the ray leaves first. The six face centres are among them, so the hull keeps
+      // the tight extent along the local axes.
+      const Eigen::Vector3d rc = p.round_centre.cast<double>();
+      const Eigen::Vector3d rr = p.round_radii.cast<double>();
+      for (int j = 0; j <= 16; ++j) {
+        const double elevation = M_PI * (j / 16.0 - 0.5);
+        for (int k = 0; k < (j == 0 || j == 16 ? 1 : 2 * kSides); ++k) {
+          const double a = M_PI * k / kSides;
+          const Eigen::Vector3d u(std::cos(elevation) * std::cos(a), std::sin(elevation),
+                                  std::cos(elevation) * std::sin(a));
+          double t = 1e18;
+          for (int i = 0; i < 3; ++i) {
+            if (std::abs(u[i]) > 1e-12) t = std::min(t, h[i] / std::abs(u[i]));
+          }
+          // Exit of the ray from the origin (inside the ellipsoid) through the ellipsoid.
+          const Eigen::Vector3d os = (-rc).cwiseQuotient(rr), ds = u.cwiseQuotient(rr);
+          const double qa = ds.squaredNorm(), qb = os.dot(ds), qc = os.squaredNorm() - 1.0;
+          t = std::min(t, (-qb + std::sqrt(std::max(0.0, qb * qb - qa * qc))) / qa);
+          out->push_back(c + r * (t * u));
+        }
+      }
+      break;
+    }
     case ShapeKind::kEllipsoid:
       for (int k = 0; k < kSides; ++k) {
         const double a = 2.0 * M_PI * k / kSides, ca = std::cos(a), sa = std::sin(a);

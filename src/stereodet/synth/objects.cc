@@ -25,6 +25,16 @@ class Parts {
                              Eigen::Vector3f(0.5f * (x1 - x0), 0.5f * (h1 - h0), 0.5f * (z1 - z0)),
                              Eigen::Matrix3f::Identity(), material));
   }
+  // Box() rounded by an ellipsoid with radii `radii` (x, height, z) whose centre is offset from the
+  // box's centre by `offset` (x, up, z): curved panels (see kRoundedBox).
+  void RoundedBox(float x0, float x1, float h0, float h1, float z0, float z1,
+                  const Eigen::Vector3f& offset, const Eigen::Vector3f& radii, int material) {
+    parts_.push_back(
+        MakeRoundedBox(Eigen::Vector3f(0.5f * (x0 + x1), -0.5f * (h0 + h1), 0.5f * (z0 + z1)),
+                       Eigen::Vector3f(0.5f * (x1 - x0), 0.5f * (h1 - h0), 0.5f * (z1 - z0)),
+                       Eigen::Matrix3f::Identity(),
+                       Eigen::Vector3f(offset.x(), -offset.y(), offset.z()), radii, material));
+  }
   // A wheel: a cylinder with its axis across (local z).
   void Wheel(float x, float z, float radius, float width, int material) {
     Eigen::Matrix3f axis_z;
@@ -79,18 +89,82 @@ VehicleMaterials AddVehicleMaterials(Scene& scene, Rng& rng, const Eigen::Vector
 }
 
 // Returns the axles' distance from the body's centre (for the wheel arches of the paint).
+// A curved hull in three body types: a saloon (bonnet, cabin, boot), a hatchback (the cabin runs to
+// a steep tail) and an estate or SUV (a long cabin, more of them among the tall cars). Parts: the
+// lower body (rounded: curved bonnet, nose, tail and flanks), the glass cabin (rounded from its
+// bottom: raked windscreen and rear window, tumblehome), the roof over it, four wheels. The lower
+// body spans the length and width, the roof the height, so the label box stays tight.
+// It takes four draws from `rng` (as the box-shaped car before it did, so a scene's layout and
+// colours do not change with the car model) and draws the shape from a generator seeded by one.
 float BuildCar(Parts& p, float l, float w, float h, const VehicleMaterials& m, Rng& rng) {
-  const float r = static_cast<float>(rng.Uniform(0.29, 0.33));
-  const float body_half_w = 0.5f * w - 0.03f;
-  const float shoulder = h * static_cast<float>(rng.Uniform(0.56, 0.63));
-  p.Box(-0.5f * l, 0.5f * l, 0.2f, shoulder, -body_half_w, body_half_w, m.paint);
-  const float cabin_l = l * static_cast<float>(rng.Uniform(0.44, 0.54));
-  const float cabin_x = -0.06f * l;
-  p.Box(cabin_x - 0.5f * cabin_l, cabin_x + 0.5f * cabin_l, shoulder, h - 0.05f,
-        -body_half_w + 0.08f, body_half_w - 0.08f, m.glass);
-  p.Box(cabin_x - 0.45f * cabin_l, cabin_x + 0.4f * cabin_l, h - 0.05f, h, -body_half_w + 0.1f,
-        body_half_w - 0.1f, m.paint);
+  const bool tall = h > 1.6f;
+  const float r = static_cast<float>(rng.Uniform(0.29, 0.33)) + (tall ? 0.03f : 0.0f);
+  const float shoulder = h * static_cast<float>(rng.Uniform(0.55, 0.62));
+  Rng shape(rng.Next());
   const float axle = 0.5f * l - static_cast<float>(rng.Uniform(0.68, 0.85));
+  const double pick = shape.Uniform(0.0, 1.0);
+  enum { kSaloon, kHatchback, kEstate } body;
+  if (tall) {
+    body = pick < 0.6 ? kEstate : pick < 0.85 ? kHatchback : kSaloon;
+  } else {
+    body = pick < 0.45 ? kSaloon : pick < 0.8 ? kHatchback : kEstate;
+  }
+  const float body_half_w = 0.5f * w - 0.03f;
+  // Lower body: the ellipsoid's centre lies below the box's, so the shoulders and the bonnet's
+  // front are rounded more than the sills.
+  const float hx = 0.5f * l, hy = 0.5f * (shoulder - 0.2f), hz = body_half_w;
+  // (Named draws: the order of a call's arguments is unspecified.) The plan stays nearly
+  // rectangular along the doors, the corners round off.
+  const float round_x = static_cast<float>(shape.Uniform(1.2, 1.3));
+  const float round_y = static_cast<float>(shape.Uniform(1.5, 1.8));
+  const float round_z = static_cast<float>(shape.Uniform(1.1, 1.18));
+  p.RoundedBox(-hx, hx, 0.2f, shoulder, -hz, hz, Eigen::Vector3f(0.0f, -0.3f * hy, 0.0f),
+               Eigen::Vector3f(round_x * hx, round_y * hy, round_z * hz), m.paint);
+  // Cabin: length, rear end, and where its rounding centre sits (behind the middle: a steeper
+  // tail than windscreen).
+  float cabin_l = 0.0f, cabin_rear = 0.0f, lean = 0.0f, top = 0.0f;
+  switch (body) {
+    case kSaloon:
+      cabin_l = l * static_cast<float>(shape.Uniform(0.44, 0.52));
+      cabin_rear = -0.05f * l - 0.5f * cabin_l;
+      lean = static_cast<float>(shape.Uniform(-0.1, 0.05));
+      top = static_cast<float>(shape.Uniform(0.42, 0.55));
+      break;
+    case kHatchback:
+      cabin_l = l * static_cast<float>(shape.Uniform(0.5, 0.58));
+      cabin_rear = -0.5f * l + static_cast<float>(shape.Uniform(0.15, 0.3));
+      lean = static_cast<float>(shape.Uniform(-0.3, -0.15));
+      top = static_cast<float>(shape.Uniform(0.45, 0.58));
+      break;
+    case kEstate:
+      cabin_l = l * static_cast<float>(shape.Uniform(0.58, 0.68));
+      cabin_rear = -0.5f * l + static_cast<float>(shape.Uniform(0.1, 0.2));
+      lean = static_cast<float>(shape.Uniform(-0.4, -0.25));
+      top = static_cast<float>(shape.Uniform(0.55, 0.68));
+      break;
+  }
+  const float roof_t = 0.05f;
+  const float cabin_bottom = shoulder - 0.06f, cabin_top = h - roof_t + 0.02f;
+  const float cx = 0.5f * cabin_l, cy = 0.5f * (cabin_top - cabin_bottom);
+  const float cz = body_half_w - 0.1f;
+  const float cabin_mid = cabin_rear + cx;
+  // The rounding ellipsoid sits at the cabin's bottom, at `lean` half lengths from its middle: it
+  // reaches the cabin's front at the bottom and `top` of its half length above the centre at
+  // the top; across, the top is 80 % of the width (tumblehome).
+  const float ox = lean * cx;
+  const float rx = 1.02f * (cx - ox);
+  const float top_reach = top * cx / rx;  // sqrt(1 - (2 cy / ry)^2) at the top
+  const float ry = 2.0f * cy / std::sqrt(1.0f - top_reach * top_reach);
+  const float rz = 0.8f * cz / top_reach;
+  p.RoundedBox(cabin_rear, cabin_rear + cabin_l, cabin_bottom, cabin_top, -cz, cz,
+               Eigen::Vector3f(ox, -cy, 0.0f), Eigen::Vector3f(rx, ry, rz), m.glass);
+  // Roof: over the cabin's top, its plan rounded like the glass's elliptical top.
+  const float roof_front = std::min(cx, ox + rx * top_reach) + 0.02f;
+  const float roof_rear = std::max(-cx, ox - rx * top_reach) - 0.02f;
+  const float roof_hx = 0.5f * (roof_front - roof_rear), roof_hz = std::min(cz, rz * top_reach);
+  p.RoundedBox(cabin_mid + roof_rear, cabin_mid + roof_front, h - roof_t, h, -roof_hz, roof_hz,
+               Eigen::Vector3f::Zero(),
+               Eigen::Vector3f(1.15f * roof_hx, 4.0f * roof_t, 1.15f * roof_hz), m.paint);
   for (float x : {-axle, axle}) {
     for (float z : {-0.5f * w + 0.1f, 0.5f * w - 0.1f}) p.Wheel(x, z, r, 0.2f, m.tyre);
   }

@@ -200,6 +200,48 @@ TEST(ObjectsTest, LabelBoxIsTheTightExtentOfTheParts) {
   }
 }
 
+// The curved hull reaches its label box: rays cast at each of the six faces of a car's box
+// (along its axes, on a grid over the face) first hit the car on the face itself, and no part
+// pokes out (no hit before it).
+TEST(ObjectsTest, CurvedCarReachesEveryFaceOfItsBox) {
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Scene scene = GroundOnlyScene();
+    const double h = seed % 2 ? 1.45 : 1.7;  // low cars and tall ones (SUVs, estates)
+    const Box3D box = MakeBox3D(h, 1.75, 4.3, 0.0, 1.65, 20.0, 0.0);
+    const SceneObject& car = scene.objects[AddSimpleObject(scene, "Car", box, seed)];
+    const Eigen::Vector3f centre(0.0f, 1.65f - 0.5f * static_cast<float>(h), 20.0f);
+    const Eigen::Vector3f half(2.15f, 0.5f * static_cast<float>(h), 0.875f);
+    const auto first_hit = [&](const Ray& ray) {
+      float best = kNoHit;
+      for (int i = 0; i < car.num_primitives; ++i) {
+        best = std::min(best, scene.primitives[car.first_primitive + i].Intersect(ray, 0, best));
+      }
+      return best;
+    };
+    for (int axis = 0; axis < 3; ++axis) {
+      for (float side : {-1.0f, 1.0f}) {
+        float nearest = kNoHit;
+        const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+        for (int i = 0; i <= 40; ++i) {
+          for (int j = 0; j <= 40; ++j) {
+            Eigen::Vector3f origin = centre;
+            origin[axis] += side * (half[axis] + 5.0f);
+            origin[a] += half[a] * (i / 20.0f - 1.0f);
+            origin[b] += half[b] * (j / 20.0f - 1.0f);
+            Eigen::Vector3f dir = Eigen::Vector3f::Zero();
+            dir[axis] = -side;
+            nearest = std::min(nearest, first_hit(Ray(origin, dir)));
+          }
+        }
+        // The box is rounded to 0.01 m (5 mm), the grid's step is under 11 cm.
+        EXPECT_GE(nearest, 5.0f - 0.006f) << "axis " << axis << " side " << side;
+        EXPECT_LE(nearest, 5.0f + 0.02f) << "axis " << axis << " side " << side;
+      }
+    }
+  }
+}
+
 TEST(ObjectsTest, UnknownTypeThrows) {
   Scene scene = GroundOnlyScene();
   EXPECT_THROW(AddSimpleObject(scene, "Bus", MakeBox3D(3, 2.5, 12, 0, 1.65, 20, 0), 1),

@@ -90,6 +90,8 @@ struct Lighting {
   // sensor noise relative to RenderOptions::noise_sigma (gain, temperature), both per frame.
   Eigen::Vector3f white_balance = Eigen::Vector3f::Ones();
   float noise_scale = 1.0f;
+  // Shifts the skyline that paint and glass mirror (ReflectedRadiance), per frame.
+  float skyline_offset = 0.0f;
 };
 
 // What a ray hit.

@@ -569,6 +569,7 @@ void StreetBuilder::Build() {
   const double wb_blue = rng_.Uniform(0.94, 1.06) - warm;
   light.white_balance = Rgb(wb_red, 1.0, wb_blue);
   light.noise_scale = static_cast<float>(rng_.Uniform(0.8, 1.5));
+  light.skyline_offset = static_cast<float>(rng_.Uniform(0.0, 1000.0));
   scene_.Finalize();
 }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "stereodet/util/check.h"
+
 namespace stereodet {
 
 float Aabb::SurfaceArea() const {
@@ -16,6 +18,7 @@ Aabb Primitive::Bounds() const {
   const Eigen::Matrix3f abs_r = world_from_local.cwiseAbs();
   switch (kind) {
     case ShapeKind::kBox:
+    case ShapeKind::kRoundedBox:  // the box encloses it
       extent = abs_r * half_extent;
       break;
     case ShapeKind::kCylinder: {
@@ -57,6 +60,47 @@ float IntersectLocalBox(const Eigen::Vector3f& o, const Eigen::Vector3f& d,
     far = std::min(far, t1);
     if (near > far) return kNoHit;
   }
+  if (near > t_min && near < t_max) return near;
+  if (far > t_min && far < t_max && near <= t_min) return far;  // starts inside
+  return kNoHit;
+}
+
+// The ray's parameter interval [near, far] inside the local box, or false if it misses.
+bool LocalBoxInterval(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eigen::Vector3f& h,
+                      float* near_out, float* far_out) {
+  float near = -kNoHit, far = kNoHit;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0f) {
+      if (o[a] < -h[a] || o[a] > h[a]) return false;
+      continue;
+    }
+    const float inv = 1.0f / d[a];
+    float t0 = (-h[a] - o[a]) * inv;
+    float t1 = (h[a] - o[a]) * inv;
+    if (t0 > t1) std::swap(t0, t1);
+    near = std::max(near, t0);
+    far = std::min(far, t1);
+    if (near > far) return false;
+  }
+  *near_out = near;
+  *far_out = far;
+  return true;
+}
+
+// Intersection of two convex sets: the ray is inside both on the intersection of its intervals.
+float IntersectLocalRoundedBox(const Eigen::Vector3f& o, const Eigen::Vector3f& d,
+                               const Primitive& p, float t_min, float t_max) {
+  float near = 0.0f, far = 0.0f;
+  if (!LocalBoxInterval(o, d, p.half_extent, &near, &far)) return kNoHit;
+  const Eigen::Vector3f inv = p.round_radii.cwiseInverse();
+  const Eigen::Vector3f os = (o - p.round_centre).cwiseProduct(inv), ds = d.cwiseProduct(inv);
+  const float a = ds.squaredNorm(), b = os.dot(ds), c = os.squaredNorm() - 1.0f;
+  const float disc = b * b - a * c;
+  if (disc < 0.0f || a <= 0.0f) return kNoHit;
+  const float s = std::sqrt(disc);
+  near = std::max(near, (-b - s) / a);
+  far = std::min(far, (-b + s) / a);
+  if (near > far) return kNoHit;
   if (near > t_min && near < t_max) return near;
   if (far > t_min && far < t_max && near <= t_min) return far;  // starts inside
   return kNoHit;
@@ -125,6 +169,8 @@ float Primitive::Intersect(const Ray& ray, float t_min, float t_max) const {
       return SmallestRoot(ds.squaredNorm(), os.dot(ds), os.squaredNorm() - 1.0f, t_min, t_max,
                           &other);
     }
+    case ShapeKind::kRoundedBox:
+      return IntersectLocalRoundedBox(o, d, *this, t_min, t_max);
   }
   return kNoHit;
 }
@@ -133,6 +179,19 @@ Eigen::Vector3f Primitive::Normal(const Eigen::Vector3f& point) const {
   const Eigen::Vector3f p = ToLocal(point);
   Eigen::Vector3f n = Eigen::Vector3f::Zero();
   switch (kind) {
+    case ShapeKind::kRoundedBox: {
+      // The ellipsoid's surface if the point is nearer to it than to every face: the distance to
+      // it is estimated to first order, (1 - e) / |grad e| with e the ellipsoid's quadratic form.
+      const Eigen::Vector3f q = (p - round_centre).cwiseQuotient(round_radii);
+      const Eigen::Vector3f grad = 2.0f * q.cwiseQuotient(round_radii);
+      const float gap = (1.0f - q.squaredNorm()) / std::max(grad.norm(), 1e-6f);
+      const float box_gap = (half_extent - p.cwiseAbs()).minCoeff();
+      if (gap < box_gap) {
+        n = grad.normalized();
+        break;
+      }
+      [[fallthrough]];
+    }
     case ShapeKind::kBox: {
       // The face whose slab the point is closest to (relative to the half extent).
       int best = 0;
@@ -176,6 +235,11 @@ bool Primitive::Contains(const Eigen::Vector3f& point, float tolerance) const {
       const Eigen::Vector3f grown = half_extent.array() + tolerance;
       return p.cwiseQuotient(grown).squaredNorm() <= 1.0f;
     }
+    case ShapeKind::kRoundedBox: {
+      const Eigen::Vector3f grown = round_radii.array() + tolerance;
+      return (p.cwiseAbs().array() <= half_extent.array() + tolerance).all() &&
+             (p - round_centre).cwiseQuotient(grown).squaredNorm() <= 1.0f;
+    }
   }
   return false;
 }
@@ -213,6 +277,22 @@ Primitive MakeEllipsoid(const Eigen::Vector3f& centre, const Eigen::Vector3f& ra
                         const Eigen::Matrix3f& world_from_local, int material, int object) {
   Primitive p = MakeBox(centre, radii, world_from_local, material, object);
   p.kind = ShapeKind::kEllipsoid;
+  return p;
+}
+
+Primitive MakeRoundedBox(const Eigen::Vector3f& centre, const Eigen::Vector3f& half_extent,
+                         const Eigen::Matrix3f& world_from_local,
+                         const Eigen::Vector3f& round_centre, const Eigen::Vector3f& round_radii,
+                         int material, int object) {
+  STEREODET_CHECK((round_radii.array() > 0.0f).all())
+      << "rounded box: radii must be positive, got " << round_radii.transpose();
+  STEREODET_CHECK(round_centre.cwiseQuotient(round_radii).squaredNorm() < 1.0f)
+      << "rounded box: the ellipsoid (centre " << round_centre.transpose() << ", radii "
+      << round_radii.transpose() << ") does not hold the box's centre";
+  Primitive p = MakeBox(centre, half_extent, world_from_local, material, object);
+  p.kind = ShapeKind::kRoundedBox;
+  p.round_centre = round_centre;
+  p.round_radii = round_radii;
   return p;
 }
 

@@ -6,6 +6,11 @@
 //   kBox:       |local x| <= half_extent.x, |local y| <= half_extent.y, |local z| <= half_extent.z
 //   kCylinder:  axis along local y, |local y| <= half_extent.y, radius half_extent.x (z ignored)
 //   kEllipsoid: (x/hx)^2 + (y/hy)^2 + (z/hz)^2 <= 1
+//   kRoundedBox: the box above intersected with the ellipsoid centred at `round_centre` (local)
+//               with radii `round_radii`: a box whose edges and corners are rounded away, a
+//               convex hull with curved panels (car bodies). Bounds() are the box's; the shape
+//               reaches a face only where the ellipsoid holds points of it (always, when it
+//               holds the face's centre), which builders that need a tight extent ensure.
 // Single precision: scenes span a few hundred metres, so positions are good to well under a
 // millimetre, which is far below a pixel at any depth we render.
 #ifndef STEREODET_SYNTH_SHAPES_H_
@@ -70,7 +75,7 @@ struct Aabb {
   }
 };
 
-enum class ShapeKind : uint8_t { kBox, kCylinder, kEllipsoid };
+enum class ShapeKind : uint8_t { kBox, kCylinder, kEllipsoid, kRoundedBox };
 
 struct Primitive {
   ShapeKind kind = ShapeKind::kBox;
@@ -81,6 +86,9 @@ struct Primitive {
   int object = -1;  // index into Scene::objects, -1 for unlabelled background
   // Offsets the texture coordinates so that copies of one material do not look identical.
   Eigen::Vector2f texture_offset = Eigen::Vector2f::Zero();
+  // kRoundedBox only: the rounding ellipsoid, in the local frame (m).
+  Eigen::Vector3f round_centre = Eigen::Vector3f::Zero();
+  Eigen::Vector3f round_radii = Eigen::Vector3f::Constant(kNoHit);
 
   Aabb Bounds() const;
   // Smallest t in (t_min, t_max) where `ray` enters the shape, or kNoHit. Rays starting inside
@@ -104,6 +112,13 @@ Primitive MakeCylinder(const Eigen::Vector3f& centre, float radius, float half_l
                        const Eigen::Matrix3f& world_from_local, int material, int object = -1);
 Primitive MakeEllipsoid(const Eigen::Vector3f& centre, const Eigen::Vector3f& radii,
                         const Eigen::Matrix3f& world_from_local, int material, int object = -1);
+// A box rounded by an ellipsoid (see kRoundedBox). Requires: positive radii and an ellipsoid
+// (round_centre, round_radii, local frame) that holds the box's centre; throws
+// std::invalid_argument otherwise.
+Primitive MakeRoundedBox(const Eigen::Vector3f& centre, const Eigen::Vector3f& half_extent,
+                         const Eigen::Matrix3f& world_from_local,
+                         const Eigen::Vector3f& round_centre, const Eigen::Vector3f& round_radii,
+                         int material, int object = -1);
 
 }  // namespace stereodet
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <stdexcept>
 
 #include "stereodet/synth/bvh.h"
 #include "stereodet/synth/random.h"
@@ -55,6 +56,93 @@ TEST(ShapesTest, EllipsoidHit) {
               1e-5);
   EXPECT_NEAR(e.Intersect(Ray(Eigen::Vector3f(0, -5, 10), Eigen::Vector3f(0, 1, 0)), 0, kNoHit),
               3.0f, 1e-5);
+}
+
+// A unit-half cube rounded by a sphere of radius 1.2 about its centre: hand-computable hits.
+TEST(ShapesTest, RoundedBoxHitsTheBoxOrTheSphereWhicheverIsInside) {
+  const Primitive p = MakeRoundedBox(Eigen::Vector3f(0, 0, 10), Eigen::Vector3f(1, 1, 1),
+                                     Eigen::Matrix3f::Identity(), Eigen::Vector3f::Zero(),
+                                     Eigen::Vector3f::Constant(1.2f), 0);
+  // Through the face's centre the sphere lies outside the face: the flat face at z = 9.
+  EXPECT_NEAR(p.Intersect(Ray(Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(0, 0, 1)), 0, kNoHit), 9.0f,
+              1e-5);
+  const Eigen::Vector3f n0 = p.Normal(Eigen::Vector3f(0.1f, 0.1f, 9.0f));
+  EXPECT_NEAR(n0.z(), -1.0f, 1e-6);
+  // At (0.6, 0.6) the sphere cuts the corner: z = 10 - sqrt(1.44 - 0.72), normal along the radius.
+  const float t =
+      p.Intersect(Ray(Eigen::Vector3f(0.6f, 0.6f, 0), Eigen::Vector3f(0, 0, 1)), 0, kNoHit);
+  const float z = 10.0f - std::sqrt(0.72f);
+  EXPECT_NEAR(t, z, 1e-5);
+  const Eigen::Vector3f n = p.Normal(Eigen::Vector3f(0.6f, 0.6f, z));
+  EXPECT_NEAR(n.x(), 0.6f / 1.2f, 1e-5);
+  EXPECT_NEAR(n.y(), 0.6f / 1.2f, 1e-5);
+  EXPECT_NEAR(n.z(), -std::sqrt(0.72f) / 1.2f, 1e-5);
+  // At (0.9, 0.9) the sphere (0.81 + 0.81 > 1.44) leaves nothing: a miss, though the box is hit.
+  EXPECT_EQ(p.Intersect(Ray(Eigen::Vector3f(0.9f, 0.9f, 0), Eigen::Vector3f(0, 0, 1)), 0, kNoHit),
+            kNoHit);
+  EXPECT_FALSE(p.Contains(Eigen::Vector3f(0.9f, 0.9f, 10.0f)));
+  EXPECT_TRUE(p.Contains(Eigen::Vector3f(0.9f, 0.0f, 10.0f)));
+  // From inside: the exit point.
+  EXPECT_NEAR(p.Intersect(Ray(Eigen::Vector3f(0, 0, 10), Eigen::Vector3f(1, 0, 0)), 0, kNoHit),
+              1.0f, 1e-5);
+  // Bounds are the box's.
+  EXPECT_NEAR(p.Bounds().min.z(), 9.0f, 1e-6);
+  EXPECT_NEAR(p.Bounds().max.x(), 1.0f, 1e-6);
+}
+
+TEST(ShapesTest, RoundedBoxRejectsAnEllipsoidAwayFromItsCentre) {
+  EXPECT_THROW(
+      MakeRoundedBox(Eigen::Vector3f::Zero(), Eigen::Vector3f::Ones(), Eigen::Matrix3f::Identity(),
+                     Eigen::Vector3f(2, 0, 0), Eigen::Vector3f::Ones(), 0),
+      std::invalid_argument);
+  EXPECT_THROW(
+      MakeRoundedBox(Eigen::Vector3f::Zero(), Eigen::Vector3f::Ones(), Eigen::Matrix3f::Identity(),
+                     Eigen::Vector3f::Zero(), Eigen::Vector3f(1, 0, 1), 0),
+      std::invalid_argument);
+}
+
+// Property: the first hit of a random rounded box equals the first point of the ray that a fine
+// march finds inside it (brute force on Contains), and the normal points out of it.
+TEST(ShapesTest, RoundedBoxHitMatchesAMarchAlongTheRay) {
+  Rng rng(11);
+  int hits = 0;
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector3f h(rng.Uniform(0.3, 2), rng.Uniform(0.3, 2), rng.Uniform(0.3, 2));
+    const Eigen::Vector3f rc(rng.Uniform(-0.3, 0.3) * h.x(), rng.Uniform(-0.3, 0.3) * h.y(),
+                             rng.Uniform(-0.3, 0.3) * h.z());
+    const Eigen::Vector3f rr = h.cwiseProduct(
+        Eigen::Vector3f(rng.Uniform(0.9, 2), rng.Uniform(0.9, 2), rng.Uniform(0.9, 2)));
+    const Eigen::Matrix3f r =
+        Eigen::AngleAxisf(static_cast<float>(rng.Uniform(0, 6.3)), Eigen::Vector3f::UnitY())
+            .toRotationMatrix();
+    const Primitive p = MakeRoundedBox(Eigen::Vector3f(0, 0, 0), h, r, rc, rr, 0);
+    for (int k = 0; k < 25; ++k) {
+      const Eigen::Vector3f origin(rng.Uniform(-6, 6), rng.Uniform(-6, 6), rng.Uniform(-6, 6));
+      const Eigen::Vector3f target(rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1));
+      const Ray ray(origin, (target - origin).normalized());
+      if (p.Contains(origin, 0.0f)) continue;
+      const float t = p.Intersect(ray, 0.0f, kNoHit);
+      constexpr float kStep = 1e-3f;
+      float march = kNoHit;
+      for (float s = 0.0f; s < 20.0f; s += kStep) {
+        if (p.Contains(ray.At(s), 0.0f)) {
+          march = s;
+          break;
+        }
+      }
+      if (march == kNoHit) {
+        EXPECT_EQ(t, kNoHit);
+        continue;
+      }
+      ++hits;
+      ASSERT_NE(t, kNoHit);
+      EXPECT_NEAR(t, march, 2 * kStep);
+      const Eigen::Vector3f n = p.Normal(ray.At(t));
+      EXPECT_NEAR(n.norm(), 1.0f, 1e-4);
+      EXPECT_FALSE(p.Contains(ray.At(t) + 0.01f * n, 0.0f));
+    }
+  }
+  EXPECT_GT(hits, 200);
 }
 
 // Random primitives of all kinds and orientations.

@@ -71,6 +71,11 @@ struct FaceInfo {
   float sign = 1.0f;                             // direction of the normal along that axis
   Eigen::Vector3f local = Eigen::Vector3f::Zero();
   Eigen::Vector3f half = Eigen::Vector3f::Zero();
+  // Where the shape's surface lies along each local axis through the point (boxes: -+half;
+  // rounded boxes: where the line leaves the ellipsoid, within the box): the pillars, frames and
+  // lamps follow a curved panel's outline.
+  Eigen::Vector3f span_lo = Eigen::Vector3f::Zero();
+  Eigen::Vector3f span_hi = Eigen::Vector3f::Zero();
 };
 
 FaceInfo Face(const Scene& scene, const SurfaceHit& hit) {
@@ -84,8 +89,11 @@ FaceInfo Face(const Scene& scene, const SurfaceHit& hit) {
   f.half = p.half_extent;
   const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
   const float height = p.half_extent.y() - f.local.y();  // above the primitive's bottom (y down)
+  f.span_lo = -p.half_extent;
+  f.span_hi = p.half_extent;
   switch (p.kind) {
-    case ShapeKind::kBox: {
+    case ShapeKind::kBox:
+    case ShapeKind::kRoundedBox: {  // curved panels: the face the normal mostly faces
       n.cwiseAbs().maxCoeff(&f.axis);
       f.sign = n[f.axis] >= 0.0f ? 1.0f : -1.0f;
       if (f.axis == 1) {
@@ -109,6 +117,19 @@ FaceInfo Face(const Scene& scene, const SurfaceHit& hit) {
           std::atan2(f.local.z(), f.local.x()) * 0.5f * (p.half_extent.x() + p.half_extent.z()),
           height);
       break;
+  }
+  if (p.kind == ShapeKind::kRoundedBox) {
+    // The outline as seen along the face's axis: the ellipsoid's reach along each other axis
+    // through the point, in the plane of the ellipsoid's centre across the face.
+    Eigen::Vector3f q = (f.local - p.round_centre).cwiseQuotient(p.round_radii);
+    q[f.axis] = 0.0f;
+    const float q2 = q.squaredNorm();
+    for (int a = 0; a < 3; ++a) {
+      if (a == f.axis) continue;
+      const float reach = p.round_radii[a] * std::sqrt(std::max(0.0f, 1.0f - (q2 - q[a] * q[a])));
+      f.span_lo[a] = std::max(-p.half_extent[a], p.round_centre[a] - reach);
+      f.span_hi[a] = std::min(p.half_extent[a], p.round_centre[a] + reach);
+    }
   }
   f.uv += p.texture_offset;
   return f;
@@ -310,7 +331,7 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       if (f.axis == 0) {
         // Front (+x) and rear (-x): lamps at the outer edges, a number plate in the middle, a
         // grille between the headlamps.
-        const float z = std::abs(f.local.z()), edge = f.half.z();
+        const float z = std::abs(f.local.z()), edge = f.span_hi.z();
         const bool lamp_row = v > 0.32f && v < 0.5f;
         if (lamp_row && z > edge - 0.32f) {
           const float rim = LineCoverage(z, 1000.0f, edge - 0.3f, 0.02f, fp);
@@ -327,8 +348,15 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
           return Eigen::Vector3f(0.03f, 0.03f, 0.035f) + slat * Eigen::Vector3f(0.2f, 0.2f, 0.2f);
         }
       } else {
-        // Sides: a rubbing strip, door seams and handles, dark wheel arches.
+        // Sides: a rubbing strip, door seams and handles, dark wheel arches; on a rounded body
+        // the lamps wrap round from the front and the rear.
         const float x = f.local.x();
+        if (v > 0.32f && v < 0.5f && f.span_hi.x() < f.half.x() &&
+            (x > f.span_hi.x() - 0.12f || x < f.span_lo.x() + 0.12f)) {
+          const Eigen::Vector3f lamp =
+              x > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f) : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
+          return lamp * (1.0f + 0.15f * dirt);
+        }
         const float strip = LineCoverage(v, 1000.0f, 0.3f, 0.05f, fp);
         const float seam = LineCoverage(x, 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
         const float handle =
@@ -351,15 +379,18 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       float frame = 0.0f;
       if (f.axis == 2) {
         // Sides: A, B and C pillars and the frame at the sill, in the body colour.
+        // On a rounded cabin the A and C pillars follow the glass's outline at this height.
         const float x = f.local.x(), hx = f.half.x();
-        frame = std::max({IntervalCoverage(x, hx - 0.14f, hx + 1.0f, fp),
-                          IntervalCoverage(x, -hx - 1.0f, -hx + 0.18f, fp),
+        const float front = f.span_hi.x(), rear = f.span_lo.x();
+        frame = std::max({IntervalCoverage(x, front - 0.14f, front + 1.0f, fp),
+                          IntervalCoverage(x, rear - 1.0f, rear + 0.18f, fp),
                           IntervalCoverage(x, -0.05f * hx - 0.06f, -0.05f * hx + 0.06f, fp),
                           IntervalCoverage(v, -1.0f, 0.05f, fp)});
       } else if (f.axis == 0) {
         const float z = std::abs(f.local.z());
-        frame = std::max(IntervalCoverage(z, f.half.z() - 0.08f, f.half.z() + 1.0f, fp),
-                         IntervalCoverage(v, -1.0f, 0.05f, fp));
+        // Windscreen and rear window: A or C pillars at the sides, a frame at the bottom.
+        frame = std::max(IntervalCoverage(z, f.span_hi.z() - 0.13f, f.span_hi.z() + 1.0f, fp),
+                         IntervalCoverage(v, -1.0f, 0.07f, fp));
       }
       return glass + frame * (m.albedo2 - glass);
     }
@@ -409,6 +440,32 @@ Eigen::Vector3f SkyRadiance(const Lighting& light, const Eigen::Vector3f& direct
     sky += cover * (Eigen::Vector3f(0.95f, 0.95f, 0.97f) - sky);
   }
   return sky;
+}
+
+Eigen::Vector3f ReflectedRadiance(const Lighting& light, const Eigen::Vector3f& direction) {
+  const float elevation = -direction.y();  // sine of the elevation (y is down)
+  // Azimuth in radians times 8: the skyline's features are a few degrees wide.
+  const float a = 8.0f * std::atan2(direction.x(), direction.z()) + light.skyline_offset;
+  if (elevation < 0.0f) {
+    // The road and the pavements, lit by the sky and the sun; darker towards the nadir (the car's
+    // own shadow and the street under it).
+    const float tone = 0.12f + 0.05f * Noise(3.0f * a, 40.0f * elevation) +
+                       0.06f * Clamp01(1.0f + 4.0f * elevation);
+    return tone * (light.sky_ambient + 0.5f * light.sun);
+  }
+  // Facades and trees around the street, up to 10-35 degrees, with gaps of sky between them.
+  const float skyline =
+      0.1f + 0.25f * Clamp01(0.5f + 0.8f * Noise(a, 3.0f)) + 0.04f * Noise(5.0f * a, 9.0f);
+  if (elevation < skyline) {
+    const float building = Clamp01(0.5f + 2.0f * Noise(0.5f * a + 11.0f, 1.0f));
+    // Windows: columns in azimuth, rows in elevation; foliage: plain noise.
+    const float windows = (Fract(4.0f * a) < 0.55f) * (Fract(40.0f * elevation) < 0.6f);
+    const float facade = 0.35f + 0.2f * Noise(2.0f * a, 7.0f) - 0.22f * windows;
+    const float foliage = 0.18f + 0.1f * Noise(6.0f * a, 60.0f * elevation);
+    const float tone = building * facade + (1.0f - building) * foliage;
+    return tone * (light.sky_ambient + 0.4f * light.sun);
+  }
+  return SkyRadiance(light, direction);
 }
 
 }  // namespace stereodet

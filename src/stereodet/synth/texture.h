@@ -36,6 +36,12 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
 // Radiance of the sky in unit direction `direction` (rect frame).
 Eigen::Vector3f SkyRadiance(const Lighting& light, const Eigen::Vector3f& direction);
 
+// What paint and glass mirror in unit direction `direction` (rect frame): the sky above a skyline
+// of facades and trees (its profile set by light.skyline_offset), the street below the horizon.
+// No rays are cast: a distant environment, as a renderer's environment map. On a curved panel the
+// mirrored direction turns along the body, so the reflection varies over it as on a real car.
+Eigen::Vector3f ReflectedRadiance(const Lighting& light, const Eigen::Vector3f& direction);
+
 }  // namespace stereodet
 
 #endif  // STEREODET_SYNTH_TEXTURE_H_
