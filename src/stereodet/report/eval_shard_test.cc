@@ -134,7 +134,12 @@ INSTANTIATE_TEST_SUITE_P(Matchers, EvalShardByMatcherTest,
                                            Case{Matcher::kOptimal, FilterMode::kStable, 3},
                                            Case{Matcher::kOptimal, FilterMode::kNaive, 2},
                                            Case{Matcher::kVoc, FilterMode::kStable, 2},
-                                           Case{Matcher::kVoc, FilterMode::kNaive, 3}));
+                                           Case{Matcher::kVoc, FilterMode::kNaive, 3}),
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                           return std::string(MatcherName(info.param.matcher)) + "_" +
+                                  FilterModeName(info.param.mode) + "_" +
+                                  std::to_string(info.param.shards) + "shards";
+                         });
 
 TEST(EvalShardTest, RefusesMissingDuplicateOrMismatchedShards) {
   const RandomFolders data(9, 3);
