@@ -31,7 +31,6 @@ import argparse
 import math
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import time
@@ -76,15 +75,15 @@ def find_bin_dir(given: Optional[str] = None) -> Path:
                             ", ".join(str(c) for c in candidates) + "); pass --bin DIR")
 
 
-def _die_with_parent() -> None:
+def _with_parent_death_signal(argv: List[str]) -> List[str]:
     # The task's process ends when its worker dies (SIGKILL included), so a rerun of the task
-    # never races an orphan of the first try. Linux only; elsewhere a no-op.
-    try:
-        import ctypes
-        libc = ctypes.CDLL("libc.so.6", use_errno=True)
-        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except OSError:
-        pass
+    # never races an orphan of the first try: util-linux's setpriv (Essential in Debian) sets
+    # PR_SET_PDEATHSIG and execs the command, with no Python code between fork and exec (a
+    # preexec_fn is unsafe in a threaded worker). Left open: a worker that dies in the few ms
+    # between the fork and setpriv's prctl leaves an orphan. Without setpriv the command runs as
+    # it is.
+    setpriv = shutil.which("setpriv")
+    return [setpriv, "--pdeathsig", "KILL", *argv] if setpriv else list(argv)
 
 
 def run_task(task: Task) -> dict:
@@ -95,8 +94,8 @@ def run_task(task: Task) -> dict:
     start = time.monotonic()
     env = dict(os.environ)
     env.update(task.env)
-    result = subprocess.run(task.argv, capture_output=True, text=True, env=env,
-                            preexec_fn=_die_with_parent)
+    result = subprocess.run(_with_parent_death_signal(task.argv), capture_output=True, text=True,
+                            env=env)
     if result.returncode != 0:
         raise RuntimeError(f"task {task.index}/{task.count} failed (exit {result.returncode}): "
                            f"{' '.join(task.argv)}\n{result.stderr.strip()}")
