@@ -1,6 +1,7 @@
 """stereodet.scale on a local Dask cluster of 2 workers (docs/scale.md): sharded synth output is byte
 for byte that of one process, the merged sharded evaluation is the single-process evaluation, and
-a worker killed in the middle of a run changes nothing."""
+a worker killed in the middle of a run changes nothing; sharded stereo writes one process's
+files."""
 
 import json
 import os
@@ -129,3 +130,19 @@ def test_a_worker_killed_mid_run_changes_nothing(client, bin_dir, tmp_path):
     assert [k for k in one if one[k] != sharded[k]] == []
     # The nanny brought the worker back: the cluster still has 2 workers for the next test.
     client.wait_for_workers(2, timeout=60)
+
+
+def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_path):
+    data = tmp_path / "data"
+    one_process_synth(bin_dir, data, 4, 9, SYNTH_FLAGS + ["--no-lidar"])
+    subprocess.run([str(bin_dir / "stereodet-vision"), "stereo", "--data", str(data), "--out",
+                    str(tmp_path / "one"), "--threads", "1", "--quiet"], check=True)
+    tasks = scale.stereo_tasks(bin_dir, data, tmp_path / "sharded", None, 2, ["--threads", "1"])
+    assert len(tasks) == 2
+    scale.run_tasks(client, tasks, lambda line: None)
+    one, sharded = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded")
+    assert one.keys() == sharded.keys() and "rgbh/000003.png" in one
+    assert [k for k in one if k != "run.json" and one[k] != sharded[k]] == []
+    a, b = (json.loads(one["run.json"]), json.loads(sharded["run.json"]))
+    a.pop("command_line"), b.pop("command_line")
+    assert a == b and len(a["frames"]) == 4
