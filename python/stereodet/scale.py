@@ -34,6 +34,7 @@ import shutil
 import subprocess
 import sys
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, List, Optional, Sequence
@@ -204,7 +205,10 @@ def run_tasks(client, tasks: Sequence[Task], progress: Callable[[str], None] = p
     Returns the tasks' results in task order."""
     from distributed import as_completed
 
-    futures = {client.submit(run_task, t, key=f"stereodet-{os.path.basename(t.done)}-{t.index}",
+    # A fresh key per submission: a key the scheduler still holds from an earlier call would hand
+    # back that call's result instead of running the task (and skipping it) again.
+    run = uuid.uuid4().hex[:8]
+    futures = {client.submit(run_task, t, key=f"stereodet-{t.index}-of-{t.count}-{run}",
                              retries=retries, pure=False): t for t in tasks}
     results = {}
     done = 0
