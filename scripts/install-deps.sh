@@ -27,6 +27,7 @@ packages=(
   pybind11-dev python3-dev   # the stereodet Python module (python/)
   python3-numpy python3-pytest  # ... its arrays and its tests
   python3-pip python3-setuptools python3-wheel python3-venv  # ... `pip install .` (docs/python.md)
+  python3-dask python3-distributed  # stereodet.scale: sharded runs on Dask distributed (docs/scale.md)
 )
 # shellcheck disable=SC2206
 extra=(${STEREODET_DEPS_EXTRA:-})

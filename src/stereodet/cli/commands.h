@@ -21,6 +21,8 @@
 #include <string_view>
 #include <utility>
 
+#include "stereodet/util/shard.h"
+
 namespace stereodet::cli {
 
 // The executables of the CLI, all built into the same folder (build/bin/).
@@ -61,6 +63,25 @@ void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect s
 // another executable is dispatched with execv() to that executable beside /proc/self/exe, with
 // argv unchanged; if it is missing, one line says so and the exit code is 1. Returns the exit
 // code: 0, CLI11's code for a usage error, or 1 for an error thrown by a command.
+// Adds `--shard K/N` to `cmd`, parsed into `shard` (util/shard.h; a bad text is a usage error that
+// names the flag). Shared by synth, stereo, detect and eval (docs/scale.md).
+inline CLI::Option* AddShardOption(CLI::App* cmd, Shard* shard) {
+  return cmd
+      ->add_option_function<std::string>(
+          "--shard",
+          [shard](const std::string& text) {
+            const std::optional<Shard> parsed = ParseShard(text);
+            if (!parsed) {
+              throw CLI::ValidationError(
+                  "--shard", "expected K/N with 0 <= K < N <= 1000000, got '" + text + "'");
+            }
+            *shard = *parsed;
+          },
+          "only shard K/N (K = 0..N-1) of the frames: the K-th of N contiguous ranges of the frame "
+          "list (docs/scale.md)")
+      ->default_str(ShardName(*shard));
+}
+
 // The command line of this process (/proc/self/cmdline), arguments joined by spaces, those with
 // spaces or quotes in single quotes, for provenance records. Empty where /proc is not there.
 std::string ProcessCommandLine();

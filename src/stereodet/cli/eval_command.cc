@@ -7,6 +7,8 @@
 //                  [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
 //                  [--disparity-error-px 1]
+//   stereodet eval --shard K/N --gt DIR --det DIR --out SHARD_DIR ...   (docs/scale.md)
+//   stereodet eval merge SHARD_DIR... --out DIR ...  (the shards' evaluation flags)
 // Each is one library call (report/evaluation.h: RunEvaluation, RunEvaluationSweep,
 // RunEvaluationCompare); this file binds the flags to their options and prints the results.
 #include <fmt/format.h>
@@ -262,6 +264,42 @@ void RunEval(const EvalArgs& a) {
   if (a.report) fmt::print("report: open {}\n", result.report_index.string());
 }
 
+// `eval --shard` and `eval merge` (docs/scale.md).
+void RunMerge(const EvalArgs& given, const std::vector<std::string>& shards) {
+  STEREODET_CHECK(!given.out.empty()) << "eval merge: --out is required";
+  STEREODET_CHECK(!shards.empty()) << "eval merge: give the shard folders";
+  const EvalShardInfo first = ReadEvalShard(shards.front());
+  STEREODET_CHECK(given.input.gt.empty() || given.input.gt == first.input.gt)
+      << "eval merge: --gt " << given.input.gt.string() << " is not the shards' ("
+      << first.input.gt.string() << "); leave it out: the merge reads the shards";
+  STEREODET_CHECK(given.input.det.empty() || given.input.det == first.input.det)
+      << "eval merge: --det " << given.input.det.string() << " is not the shards' ("
+      << first.input.det.string() << "); leave it out: the merge reads the shards";
+  EvalArgs a = given;
+  a.input.gt = first.input.gt;
+  a.input.det = first.input.det;
+  EvaluationMergeOptions options;
+  options.shards.assign(shards.begin(), shards.end());
+  EvaluationOptions& e = options.evaluation;
+  e.runs = OverlapSetRuns(MakeOptions(a), OverlapSets(a));
+  e.input.num_threads = a.eval.num_threads;
+  e.out = a.out;
+  e.records = a.records;
+  e.report = a.report;
+  e.tool_version = StereodetVersion();
+  e.command_line = ProcessCommandLine();
+  const EvaluationResult result = RunEvaluationMerge(options);
+  PrintNotices(result.input);
+  fmt::print("{}", FormatEvalTable(result.runs));
+  fmt::print("merged {} shards, {} frames; evaluated in {:.3f} s\n", shards.size(),
+             result.input.frames.size(), result.seconds);
+  for (const EvaluationResult::RecordsFile& records : result.records) {
+    fmt::print("per-detection records: {} rows in {}\n", records.rows, records.name);
+  }
+  fmt::print("wrote {} files to {}\n", result.files.size(), a.out);
+  if (a.report) fmt::print("report: open {}\n", result.report_index.string());
+}
+
 void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOptions options) {
   options.eval = MakeSingleOptions(a);  // its filter: the fixed conditions of --where
   const auto parsed = ParseFilterBound(bound);
@@ -314,6 +352,10 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--report", args->report,
                  "also write OUT/report/: index.html and figures/ as SVG and PNG, as `stereodet "
                  "report OUT` does (docs/report.md)");
+  AddShardOption(eval, &args->input.shard)
+      ->description(
+          "only shard K/N (K = 0..N-1) of the frames, a contiguous range of the frame list; with "
+          "--out the folder also holds what `eval merge` needs (docs/scale.md)");
   eval->require_subcommand(0, 1);
   // Options of eval itself must come before a sub-subcommand; the sub-subcommands have their own.
   eval->fallthrough(false);
@@ -355,8 +397,24 @@ void AddEvalCommand(CLI::App& app) {
   compare->callback(
       [compare_common, compare_options] { RunCompare(*compare_common, *compare_options); });
 
-  eval->callback([eval, sweep, compare, args] {
-    if (eval->got_subcommand(sweep) || eval->got_subcommand(compare)) return;
+  auto merge_common = std::make_shared<EvalArgs>();
+  auto merge_shards = std::make_shared<std::vector<std::string>>();
+  CLI::App* merge = eval->add_subcommand(
+      "merge",
+      "combine the folders of `eval --shard K/N --out DIR` (all N) into the results folder of "
+      "one run, exactly (docs/scale.md); give the shards' evaluation flags");
+  AddCommonOptions(merge, merge_common.get(), true);
+  merge->add_option("shards", *merge_shards, "the shard folders, in any order")->required();
+  merge->add_option("--out", merge_common->out, "the merged results folder")->required();
+  merge->add_flag("--records", merge_common->records, "also write OUT/matches.csv");
+  merge->add_flag("--report", merge_common->report, "also write OUT/report/");
+  merge->callback([merge_common, merge_shards] { RunMerge(*merge_common, *merge_shards); });
+
+  eval->callback([eval, sweep, compare, merge, args] {
+    if (eval->got_subcommand(sweep) || eval->got_subcommand(compare) ||
+        eval->got_subcommand(merge)) {
+      return;
+    }
     RunEval(*args);
   });
 }

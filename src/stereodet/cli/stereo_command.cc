@@ -189,6 +189,7 @@ void AddStereoCommand(CLI::App& app) {
   cmd->add_flag("--force", run->options.force,
                 "recompute every frame, accept other settings or --data, and remove the outputs "
                 "not chosen this time");
+  AddShardOption(cmd, &run->options.shard);
   cmd->add_flag("--evaluate", run->options.evaluate,
                 "compare the disparity with the dataset's ground truth (disp_noc_0/, written by "
                 "`stereodet synth`) and print density and KITTI D1");

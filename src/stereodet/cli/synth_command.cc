@@ -32,6 +32,7 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_flag(
       "--no-lidar", [options](int64_t) { options->synth.lidar = false; },
       "write empty velodyne scans (faster)");
+  AddShardOption(cmd, &options->shard);
   cmd->add_flag("--quiet", *quiet, "no progress output");
   cmd->callback([options, quiet] {
     if (*quiet) options->progress.stream = nullptr;

@@ -118,6 +118,51 @@ std::vector<std::string> ReadIds(const fs::path& gt, const std::string& split) {
 }
 
 // Fills det_run and det_not_from_run from DET/run.json, when there is one.
+// One frame parsed from its bytes, and its hash (EvalInput::input_hash).
+struct ParsedFrame {
+  EvalFrame frame;
+  bool has_detections = false;
+  std::vector<std::string> problems;
+  uint64_t hash = 0;
+};
+
+// The one place a frame's bytes become an EvalFrame (LoadEvalFrames and EvalInputFromSources).
+ParsedFrame ParseSource(const EvalFrameSource& source, bool lenient) {
+  const std::string_view nul("\0", 1);
+  ParsedFrame out;
+  out.frame.id = source.id;
+  out.has_detections = source.has_detections;
+  ObjectFile labels =
+      ParseObjects(source.label_text, source.label_path, {ObjectFileKind::kLabel, lenient});
+  out.frame.labels = std::move(labels.objects);
+  out.problems = std::move(labels.problems);
+  out.hash = Fnv1a64(nul, Fnv1a64(source.label_text, Fnv1a64(nul, Fnv1a64(source.id))));
+  if (source.has_detections) {
+    ObjectFile dets =
+        ParseObjects(source.det_text, source.det_path, {ObjectFileKind::kDetection, lenient});
+    out.frame.detections = std::move(dets.objects);
+    out.problems.insert(out.problems.end(), dets.problems.begin(), dets.problems.end());
+    out.hash = Fnv1a64(source.det_text, out.hash);
+  }
+  return out;
+}
+
+// The frames, frames without detections, skipped lines (frame order, then line order) and the
+// input hash of `parsed`, into `in`.
+void FinishFrames(std::vector<ParsedFrame> parsed, EvalInput* in) {
+  uint64_t input_hash = kFnv1a64Offset;
+  in->frames.reserve(parsed.size());
+  for (ParsedFrame& p : parsed) {
+    if (!p.has_detections) in->frames_without_detections.push_back(p.frame.id);
+    in->skipped_lines.insert(in->skipped_lines.end(), p.problems.begin(), p.problems.end());
+    char bytes[8];
+    for (int b = 0; b < 8; ++b) bytes[b] = static_cast<char>(p.hash >> (8 * b) & 0xff);
+    input_hash = Fnv1a64(std::string_view(bytes, 8), input_hash);
+    in->frames.push_back(std::move(p.frame));
+  }
+  in->input_hash = HashHex(input_hash);
+}
+
 void CheckDetectionRun(EvalInput& in) {
   const std::optional<RunManifest> manifest = ReadRunManifest(in.det_dir);
   if (!manifest) return;
@@ -141,6 +186,7 @@ void EvalInputOptions::Check() const {
   STEREODET_CHECK(!gt.empty()) << "--gt is required";
   STEREODET_CHECK(!det.empty()) << "--det is required";
   STEREODET_CHECK(num_threads >= 0) << "num_threads = " << num_threads << ", must be >= 0";
+  shard.Check();
 }
 
 std::vector<std::string> EvalInput::Notices() const {
@@ -211,48 +257,43 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options) {
   in.ignored_files.insert(in.ignored_files.end(), label_not_ids.begin(), label_not_ids.end());
   STEREODET_CHECK_IO(!ids.empty()) << "no frame to evaluate in " << in.label_dir.string();
 
-  in.frames.resize(ids.size());
-  std::vector<uint8_t> missing(ids.size(), 0);
-  std::vector<std::vector<std::string>> problems(ids.size());
-  std::vector<uint64_t> frame_hash(ids.size(), 0);
-  const std::string_view nul("\0", 1);
+  const size_t first = options.shard.Begin(ids.size()), last = options.shard.End(ids.size());
+  std::vector<EvalFrameSource> sources(last - first);
+  std::vector<ParsedFrame> parsed(sources.size());
   ParallelFor(
-      ids.size(),
+      sources.size(),
       [&](size_t i) {
-        EvalFrame& f = in.frames[i];
-        f.id = ids[i];
-        // Read the bytes once: parsed here and hashed for InputHash.
-        const fs::path label_path = in.label_dir / (ids[i] + ".txt");
-        const std::string label_text = ReadFile(label_path);
-        ObjectFile labels = ParseObjects(label_text, label_path.string(),
-                                         {ObjectFileKind::kLabel, options.lenient});
-        f.labels = std::move(labels.objects);
-        problems[i] = std::move(labels.problems);
-        uint64_t hash = Fnv1a64(nul, Fnv1a64(label_text, Fnv1a64(nul, Fnv1a64(ids[i]))));
-        if (det_stems.count(ids[i])) {
-          const fs::path det_path = in.det_dir / (ids[i] + ".txt");
-          const std::string det_text = ReadFile(det_path);
-          ObjectFile dets = ParseObjects(det_text, det_path.string(),
-                                         {ObjectFileKind::kDetection, options.lenient});
-          f.detections = std::move(dets.objects);
-          problems[i].insert(problems[i].end(), dets.problems.begin(), dets.problems.end());
-          hash = Fnv1a64(det_text, hash);
-        } else {
-          missing[i] = 1;
+        EvalFrameSource source;
+        source.id = ids[first + i];
+        const fs::path label_path = in.label_dir / (source.id + ".txt");
+        source.label_path = label_path.string();
+        source.label_text = ReadFile(label_path);
+        source.has_detections = det_stems.count(source.id) > 0;
+        if (source.has_detections) {
+          const fs::path det_path = in.det_dir / (source.id + ".txt");
+          source.det_path = det_path.string();
+          source.det_text = ReadFile(det_path);
         }
-        frame_hash[i] = hash;
+        parsed[i] = ParseSource(source, options.lenient);
+        // Without keep_sources the bytes go now: one frame's at a time per thread.
+        if (options.keep_sources) sources[i] = std::move(source);
       },
       options.num_threads);
-  uint64_t input_hash = kFnv1a64Offset;
-  for (size_t i = 0; i < ids.size(); ++i) {
-    if (missing[i]) in.frames_without_detections.push_back(ids[i]);
-    in.skipped_lines.insert(in.skipped_lines.end(), problems[i].begin(), problems[i].end());
-    char bytes[8];
-    for (int b = 0; b < 8; ++b) bytes[b] = static_cast<char>(frame_hash[i] >> (8 * b) & 0xff);
-    input_hash = Fnv1a64(std::string_view(bytes, 8), input_hash);
-  }
-  in.input_hash = HashHex(input_hash);
+  FinishFrames(std::move(parsed), &in);
+  if (options.keep_sources) in.sources = std::move(sources);
   CheckDetectionRun(in);
+  return in;
+}
+
+EvalInput EvalInputFromSources(std::vector<EvalFrameSource> sources, bool lenient, int num_threads,
+                               bool keep_sources) {
+  STEREODET_CHECK(num_threads >= 0) << "num_threads = " << num_threads << ", must be >= 0";
+  EvalInput in;
+  std::vector<ParsedFrame> parsed(sources.size());
+  ParallelFor(
+      sources.size(), [&](size_t i) { parsed[i] = ParseSource(sources[i], lenient); }, num_threads);
+  FinishFrames(std::move(parsed), &in);
+  if (keep_sources) in.sources = std::move(sources);
   return in;
 }
 

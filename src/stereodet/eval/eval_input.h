@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "stereodet/eval/frame_data.h"
+#include "stereodet/util/shard.h"
 
 namespace stereodet {
 
@@ -31,9 +32,26 @@ struct EvalInputOptions {
   // file, line and field. Lenient: bad lines are skipped and listed in EvalInput::skipped_lines.
   bool lenient = false;
   int num_threads = 0;  // 0 = all hardware threads
+  // Read only this shard of the frame list (util/shard.h: a contiguous range of the split's order,
+  // or of the sorted label files). What is checked and reported about the folders (ignored files,
+  // detection files without labels) is the whole list's, so every shard says the same.
+  Shard shard;
+  // Keep every read file's bytes in EvalInput::sources (for a shard's frames file).
+  bool keep_sources = false;
 
-  // Throws std::invalid_argument when gt or det is empty or num_threads < 0.
+  // Throws std::invalid_argument when gt or det is empty, num_threads < 0 or a bad shard.
   void Check() const;
+};
+
+// The bytes one frame's evaluation reads: what `eval --shard` keeps so that `eval merge` can
+// evaluate the frames exactly as one process would (report/evaluation.h).
+struct EvalFrameSource {
+  std::string id;
+  std::string label_path;  // as LoadEvalFrames named it (in messages and lenient notices)
+  std::string label_text;
+  bool has_detections = false;  // false: no detection file (evaluated with no detections)
+  std::string det_path;
+  std::string det_text;
 };
 
 struct EvalInput {
@@ -59,6 +77,8 @@ struct EvalInput {
   // With a manifest: the evaluated detection files (full paths, frame order) that it does not list
   // with their content hash, i.e. files another run wrote or changed. Empty without a manifest.
   std::vector<std::string> det_not_from_run;
+  // With EvalInputOptions::keep_sources: the bytes of every frame, in frame order.
+  std::vector<EvalFrameSource> sources;
 
   // One line each (no newline) for the user: frames without detections, ignored files (count and
   // the first), skipped lines (count), detection files not from the folder's run (count and the
@@ -73,6 +93,14 @@ struct EvalInput {
 // a bad label or detection line. A split name ("val") with a plain label folder is an error that
 // says where it looked and how to pass the file.
 EvalInput LoadEvalFrames(const EvalInputOptions& options);
+
+// The frames, skipped lines, frames without detections and input hash of `sources`, parsed and
+// hashed by the very code LoadEvalFrames uses (so the frames of N shards' sources, concatenated in
+// shard order, are bit for bit those of one LoadEvalFrames of the whole list). Folder-level fields
+// (label_dir, det_dir, ignored_files, det_run, det_not_from_run) are left empty; `sources` is
+// moved into EvalInput::sources when keep_sources. Throws ParseError as LoadEvalFrames does.
+EvalInput EvalInputFromSources(std::vector<EvalFrameSource> sources, bool lenient, int num_threads,
+                               bool keep_sources = false);
 
 }  // namespace stereodet
 

@@ -8,13 +8,12 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/report/evaluation_internal.h"
 #include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
-namespace {
-
 namespace fs = std::filesystem;
 
 // What results.json records about the input, from what LoadEvalFrames read.
@@ -32,8 +31,6 @@ EvalRunInfo MakeRunInfo(const EvalInputOptions& options, const EvalInput& input)
   info.det_not_from_run = input.det_not_from_run;
   return info;
 }
-
-}  // namespace
 
 std::vector<EvalOptions> OverlapSetRuns(const EvalOptions& base,
                                         const std::vector<OverlapSet>& sets) {
@@ -65,15 +62,28 @@ void EvaluationOptions::Check() const {
 
 EvaluationResult RunEvaluation(const EvaluationOptions& options) {
   options.Check();
+  // Refuse a folder of something else before the work, not after it.
+  std::optional<StagedFolder> out;
+  if (!options.out.empty()) out.emplace(options.out, "results.json");
+  const bool shard = !options.input.shard.Whole();
+  EvalInputOptions input_options = options.input;
+  input_options.keep_sources = input_options.keep_sources || (shard && out);
+  EvalInput input = LoadEvalFrames(input_options);
+  return EvaluateAndWrite(options, out, std::move(input),
+                          [&](const fs::path& staging, const EvaluationResult& result) {
+                            if (shard) WriteEvalShardFiles(staging, options.input, result.input);
+                          });
+}
+
+EvaluationResult EvaluateAndWrite(
+    const EvaluationOptions& options, std::optional<StagedFolder>& out, EvalInput input,
+    const std::function<void(const fs::path&, const EvaluationResult&)>& before_commit) {
   EvaluationResult result;
   for (const EvalOptions& run : options.runs) {
     result.runs.push_back(EvalRun{run, {}});
     if (options.records) result.runs.back().options.keep_records = true;
   }
-  // Refuse a folder of something else before the work, not after it.
-  std::optional<StagedFolder> out;
-  if (!options.out.empty()) out.emplace(options.out, "results.json");
-  result.input = LoadEvalFrames(options.input);
+  result.input = std::move(input);
   result.info = MakeRunInfo(options.input, result.input);
   result.info.tool_version = options.tool_version;
   result.info.command_line = options.command_line;
@@ -111,6 +121,7 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
     result.report_index = options.out / "report" / "index.html";
     result.report_notes = report.notes;
   }
+  if (before_commit) before_commit(staging, result);
   out->Commit();
   return result;
 }

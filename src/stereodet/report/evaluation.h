@@ -81,7 +81,52 @@ struct EvaluationResult {
 // at the end (nothing is left there if a step throws). Throws what those steps throw:
 // std::invalid_argument for bad options, std::runtime_error or ParseError for bad inputs or a
 // failed write.
+//
+// With options.input.shard (util/shard.h) it evaluates only that shard's frames, and the results
+// folder also holds what `eval merge` needs (RunEvaluationMerge): OUT/eval_shard.json (the shard,
+// its input options and the folder-level facts LoadEvalFrames found) and OUT/eval_frames.dat (the
+// bytes of the shard's label and detection files).
 EvaluationResult RunEvaluation(const EvaluationOptions& options);
+
+// `stereodet eval merge`: N shard folders of one evaluation -> the results folder of one run.
+//
+// The merge is exact by construction, for every matcher and every metric: it concatenates the
+// shards' frame bytes (eval_frames.dat) in shard order, which is the whole frame list in order,
+// parses them with LoadEvalFrames' own code (EvalInputFromSources) and evaluates them once, as
+// one process would; results.json, summary.csv, curves/, matches.csv and the report are those of
+// `stereodet eval` on the whole list, with the same input_hash, except for the provenance
+// (command_line, tool version, seconds). See docs/scale.md for what it costs.
+struct EvaluationMergeOptions {
+  // Folders written by RunEvaluation with input.shard, in any order: shards 0..N-1 of one N,
+  // each once, of the same input (gt, det, split, lenient).
+  std::vector<std::filesystem::path> shards;
+  // runs, out, records, report and provenance as for RunEvaluation. `input` is the shards' (its
+  // gt, det, split and lenient are filled from them; input.num_threads is used). Every run's
+  // options must be those the shards were evaluated with (results.json's "options" and
+  // "overlap_sets", num_threads aside): a merge with other options is refused.
+  EvaluationOptions evaluation;
+
+  // Throws std::invalid_argument for no shards, no evaluation.out or bad evaluation options
+  // (input aside).
+  void Check() const;
+};
+
+// What a shard folder says about itself (OUT/eval_shard.json).
+struct EvalShardInfo {
+  Shard shard;
+  int64_t frames = 0;      // frames of the shard
+  EvalInputOptions input;  // gt, det, split, lenient as the shard read them
+};
+
+// Reads DIR/eval_shard.json. Throws std::runtime_error naming the folder when it is not a shard
+// folder (no eval_shard.json), ParseError for a malformed one.
+EvalShardInfo ReadEvalShard(const std::filesystem::path& dir);
+
+// Checks the shards (all of 0..N-1 once, one input), claims `out`, reads the shards' frames,
+// evaluates and writes as RunEvaluation does; refuses before the commit, naming the shard, when
+// its options differ. Throws std::invalid_argument for a bad set of shards or options,
+// std::runtime_error / ParseError for unreadable shard files.
+EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options);
 
 // `stereodet eval sweep`: precision and recall of the naive and the stable filter along a sweep of
 // one filter bound (FilterSweep).

@@ -243,6 +243,9 @@ void EncodeDatasetOptions::Check() const {
   stereo.Check();
   STEREODET_CHECK(outputs.Any()) << "EncodeDatasetOptions: no output chosen";
   STEREODET_CHECK_GE(num_threads, 0);
+  shard.Check();
+  STEREODET_CHECK(shard.Whole() || !force)
+      << "a shard cannot --force (it would remove the other shards' outputs)";
 }
 
 std::string DatasetManifest(const EncodeDatasetOptions& options) {
@@ -381,9 +384,13 @@ std::string GroundFitLine(const GroundPlaneFit& fit) {
       fit.tilt_deg, fit.reason);
 }
 
-EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector<std::string>& ids,
-                                  const fs::path& out, const EncodeDatasetOptions& options) {
+EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
+                                  const std::vector<std::string>& all_ids, const fs::path& out,
+                                  const EncodeDatasetOptions& options) {
   options.Check();
+  const Shard& shard = options.shard;
+  const std::vector<std::string> ids(all_ids.begin() + shard.Begin(all_ids.size()),
+                                     all_ids.begin() + shard.End(all_ids.size()));
   STEREODET_CHECK_IO(!ids.empty()) << "no frames to process in " << dataset.SubsetDir();
   const std::vector<std::string> missing =
       FindMissingFiles(dataset, ids, {.image_left = true, .image_right = true, .calib = true});
@@ -392,7 +399,10 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
 
   CheckOutputDoesNotOverlapInputs(
       "--out", out, {{"--data", dataset.SubsetDir()}, {"--data", dataset.root() / "ImageSets"}});
-  const OutputLock lock(out);  // two runs into one folder would interleave
+  // Two runs into one folder would interleave; the shards of one run write disjoint frames.
+  const OutputLock lock(out, shard.Whole()
+                                 ? std::string("lock")
+                                 : fmt::format("shard-{}-of-{}.lock", shard.index, shard.count));
   const std::string data_dir = fs::weakly_canonical(fs::absolute(dataset.SubsetDir())).string();
   // Resuming with other settings would mix outputs; refuse, naming the settings, unless force
   // recomputes everything. Other outputs ("encode") are added to the folder's.
@@ -453,6 +463,16 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset, const std::vector
     for (const auto& [id, hash] : previous->frames) frames[id] = hash;
   }
   auto write_manifest = [&] {
+    if (!shard.Whole()) {
+      // The other shards' frames, as they are now: read, merged and written under one lock.
+      const OutputLock manifest_lock(out, "manifest.lock", /*wait=*/true);
+      if (const std::optional<RunManifest> now = ReadRunManifest(out)) {
+        for (const auto& [id, hash] : now->frames) frames.emplace(id, hash);
+      }
+      manifest.frames.assign(frames.begin(), frames.end());
+      WriteRunManifest(out, manifest);
+      return;
+    }
     manifest.frames.assign(frames.begin(), frames.end());
     WriteRunManifest(out, manifest);
   };

@@ -42,6 +42,7 @@
 #include "stereodet/stereo/reprojection.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/util/progress.h"
+#include "stereodet/util/shard.h"
 
 namespace stereodet {
 
@@ -77,8 +78,14 @@ struct EncodeDatasetOptions {
   int num_threads = 0;       // frames in parallel (0 = all cores); results do not depend on it
   ProgressOptions progress;  // the "stereo" progress line (stream nullptr: silent)
   std::string command_line;  // for OUT/run.json (empty from a library call)
+  // Encode only this shard of `ids` (util/shard.h: a contiguous range). Shards of one folder may
+  // run at once (docs/scale.md): each holds its own lock (.OUT.shard-K-of-N.lock, so the same
+  // shard twice is refused) and merges its frames into OUT/run.json under a short lock; the
+  // files are those of one run. Not with force (a forced shard would remove the others' outputs).
+  Shard shard;
 
-  // Throws std::invalid_argument for a bad stereo setting, no output chosen or num_threads < 0.
+  // Throws std::invalid_argument for a bad stereo setting, no output chosen, num_threads < 0, a
+  // bad shard or a shard with force.
   void Check() const;
 };
 

@@ -180,6 +180,7 @@ void DatasetOptions::Check() const {
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0 (0 = all cores), got " << threads;
   STEREODET_CHECK(png_compression >= 0 && png_compression <= 9)
       << "png_compression must be in 0..9, got " << png_compression;
+  shard.Check();
   synth.Check();
 }
 
@@ -216,11 +217,13 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
   StageTimes times;
   std::atomic<int> generated{0}, skipped{0};
   std::atomic<int64_t> objects{0};
-  ProgressReporter progress("synth", options.frames, options.progress);
+  const size_t first = options.shard.Begin(static_cast<size_t>(options.frames));
+  const size_t last = options.shard.End(static_cast<size_t>(options.frames));
+  ProgressReporter progress("synth", static_cast<int64_t>(last - first), options.progress);
   ParallelFor(
-      static_cast<size_t>(options.frames),
+      last - first,
       [&](size_t i) {
-        const int index = static_cast<int>(i);
+        const int index = static_cast<int>(first + i);
         const FramePaths paths = dataset.Paths(FrameId(index));
         const bool complete =
             std::filesystem::exists(paths.image_left) &&

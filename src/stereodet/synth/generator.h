@@ -21,6 +21,7 @@
 #include "stereodet/synth/lidar.h"
 #include "stereodet/synth/scene_sampler.h"
 #include "stereodet/util/progress.h"
+#include "stereodet/util/shard.h"
 #include "stereodet/util/timer.h"
 
 namespace stereodet {
@@ -70,6 +71,10 @@ struct DatasetOptions {
   int png_compression = 1;    // zlib level 0..9 for the PNGs (1: fast; output is deterministic)
   ProgressOptions progress;
   SynthOptions synth;
+  // Make only this shard's frames (util/shard.h: a contiguous range of 0 .. frames-1); the splits
+  // and synth_settings.txt are those of the whole data set, so N shards writing into one folder
+  // (at once or one after another) leave exactly the folder of one run.
+  Shard shard;
 
   void Check() const;  // throws std::invalid_argument
 };
@@ -87,7 +92,8 @@ struct DatasetSummaryLine {
 // and ImageSets/{train,val,trainval}.txt. Every file is written atomically; frames whose seven
 // files all exist are skipped, so an interrupted run resumes where it stopped.
 // ROOT/synth_settings.txt records the seed and settings; resuming with different ones throws
-// std::invalid_argument.
+// std::invalid_argument. With options.shard, only that shard's frames are made (generated +
+// skipped = the shard's size); the split files still list all `frames`.
 DatasetSummaryLine GenerateDataset(const DatasetOptions& options);
 
 // The frame ids in the val split: round(frames * val_fraction) of them, chosen by a hash of

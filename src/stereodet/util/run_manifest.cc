@@ -140,10 +140,10 @@ void CheckFolderWritable(const fs::path& dir) {
   fs::remove(dir / ".write-probe", ec);
 }
 
-OutputLock::OutputLock(const fs::path& dir) {
+OutputLock::OutputLock(const fs::path& dir, const std::string& kind, bool wait) {
   fs::path folder = dir.lexically_normal();
   if (!folder.has_filename() && folder.has_parent_path()) folder = folder.parent_path();
-  path_ = folder.parent_path() / ("." + folder.filename().string() + ".lock");
+  path_ = folder.parent_path() / ("." + folder.filename().string() + "." + kind);
   std::error_code ec;
   if (!path_.parent_path().empty()) fs::create_directories(path_.parent_path(), ec);
   // The file may be unlinked by the holder between our open and our flock: then we hold a lock on
@@ -152,7 +152,7 @@ OutputLock::OutputLock(const fs::path& dir) {
     const int fd = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     STEREODET_CHECK_IO(fd >= 0) << "cannot create the lock " << path_.string() << " for "
                                 << folder.string() << ": " << std::strerror(errno);
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    if (::flock(fd, wait ? LOCK_EX : LOCK_EX | LOCK_NB) != 0) {
       const int error = errno;
       ::close(fd);
       STEREODET_CHECK_IO(error != EWOULDBLOCK)

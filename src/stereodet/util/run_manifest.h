@@ -68,9 +68,14 @@ void CheckFolderWritable(const std::filesystem::path& dir);
 // when the process dies), so it never shows among the folder's outputs. Throws
 // std::runtime_error naming the folder when another process holds it: "another run is writing
 // into OUT (lock .OUT.lock held); wait for it or use another --out".
+//
+// `kind` names the lock file `.NAME.KIND` (default "lock"): a sharded run holds its shard's lock
+// ("shard-K-of-N.lock") for its whole run and "manifest.lock" only while it merges its frames
+// into DIR/run.json; with `wait` the constructor waits for the holder instead of throwing.
 class OutputLock {
  public:
-  explicit OutputLock(const std::filesystem::path& dir);
+  explicit OutputLock(const std::filesystem::path& dir, const std::string& kind = "lock",
+                      bool wait = false);
   OutputLock(const OutputLock&) = delete;
   OutputLock& operator=(const OutputLock&) = delete;
   ~OutputLock();

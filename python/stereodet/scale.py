@@ -1,0 +1,303 @@
+"""Running stereodet past one machine on Dask distributed (docs/scale.md).
+
+    python3 -m stereodet.scale [--workers N | --scheduler tcp://HOST:8786] [--task-frames 200]
+        synth  --out DIR --frames N [--seed S] [-- more `stereodet synth` flags]
+        stereo --data DIR --out DIR [--split val] [-- more `stereodet stereo` flags]
+        eval   --gt DIR --det DIR --out DIR [--split val] [-- more `stereodet eval` flags]
+
+The work is cut into tasks of about --task-frames frames: task K of N runs the command line's
+engine-agnostic contract, `stereodet CMD ... --shard K/N`, as a subprocess on a Dask worker (one
+thread per worker: each task uses the worker's cores through the command's own threads). Each
+task's outputs are whole files written atomically, and a task whose outputs are complete is
+skipped, so an interrupted run resumes and a task that dies with its worker is simply run again
+by the scheduler (same bytes: every shard's output is a function of its frames alone).
+
+- synth: the shards write disjoint frames into one data set folder (the same bytes as one
+  `stereodet synth`); a task is done when OUT/.scale/synth-K-of-N.done exists.
+- stereo: the shards write disjoint frames into one output folder, merging their frames into
+  OUT/run.json under a short lock; done marker OUT/.scale/stereo-K-of-N.done.
+- eval: shard K of N writes OUT/shards/K-of-N/ (a results folder with the shard's frame bytes);
+  when every shard is there, `stereodet eval merge` writes OUT/merged/, exactly the results
+  folder of one `stereodet eval` run.
+
+Without --scheduler a LocalCluster of --workers processes is started and closed; with it the
+driver joins a running scheduler (`dask scheduler` and `dask worker --nthreads 1` on each node,
+all seeing the same file system at the same paths).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, List, Optional, Sequence
+
+# What a task needs: the command line and where its done marker goes. Plain data, so that it
+# pickles to any worker.
+
+
+@dataclass
+class Task:
+    index: int  # K
+    count: int  # N
+    argv: List[str]  # the full command line, binary first
+    done: str  # the file whose presence means the task's outputs are complete
+    # True: run_task writes `done` after the command succeeds; False: the command writes it.
+    write_done: bool = True
+    env: dict = field(default_factory=dict)
+
+
+def find_bin_dir(given: Optional[str] = None) -> Path:
+    """The folder of the stereodet executables: --bin, $STEREODET_BIN, the build tree this
+    package was built in (build/python/stereodet -> build/bin), or the folder of `stereodet` on
+    PATH."""
+    candidates = []
+    if given:
+        candidates.append(Path(given))
+    if os.environ.get("STEREODET_BIN"):
+        candidates.append(Path(os.environ["STEREODET_BIN"]))
+    if os.environ.get("STEREODET_BUILD_DIR"):
+        candidates.append(Path(os.environ["STEREODET_BUILD_DIR"]) / "bin")
+    candidates.append(Path(__file__).resolve().parents[2] / "bin")
+    on_path = shutil.which("stereodet")
+    if on_path:
+        candidates.append(Path(on_path).parent)
+    for c in candidates:
+        if (c / "stereodet").exists():
+            return c.resolve()
+    raise FileNotFoundError("stereodet executables not found (tried " +
+                            ", ".join(str(c) for c in candidates) + "); pass --bin DIR")
+
+
+def _with_parent_death_signal(argv: List[str]) -> List[str]:
+    # The task's process ends when its worker dies (SIGKILL included), so a rerun of the task
+    # never races an orphan of the first try: util-linux's setpriv (Essential in Debian) sets
+    # PR_SET_PDEATHSIG and execs the command, with no Python code between fork and exec (a
+    # preexec_fn is unsafe in a threaded worker). Left open: a worker that dies in the few ms
+    # between the fork and setpriv's prctl leaves an orphan. Without setpriv the command runs as
+    # it is.
+    setpriv = shutil.which("setpriv")
+    return [setpriv, "--pdeathsig", "KILL", *argv] if setpriv else list(argv)
+
+
+def run_task(task: Task) -> dict:
+    """Runs one task on this machine (what a Dask worker calls); returns what it did. Skips the
+    task when its done marker exists. Raises RuntimeError with the command's stderr on failure."""
+    if os.path.exists(task.done):
+        return {"index": task.index, "skipped": True, "seconds": 0.0}
+    start = time.monotonic()
+    env = dict(os.environ)
+    env.update(task.env)
+    result = subprocess.run(_with_parent_death_signal(task.argv), capture_output=True, text=True,
+                            env=env)
+    if result.returncode != 0:
+        raise RuntimeError(f"task {task.index}/{task.count} failed (exit {result.returncode}): "
+                           f"{' '.join(task.argv)}\n{result.stderr.strip()}")
+    if not task.write_done:
+        return {"index": task.index, "skipped": False, "seconds": time.monotonic() - start}
+    Path(task.done).parent.mkdir(parents=True, exist_ok=True)
+    tmp = f"{task.done}.tmp-{os.getpid()}"
+    with open(tmp, "w") as f:
+        f.write(" ".join(task.argv) + "\n")
+    os.replace(tmp, task.done)
+    return {"index": task.index, "skipped": False, "seconds": time.monotonic() - start}
+
+
+def num_tasks(frames: int, task_frames: int) -> int:
+    """N: tasks of at most task_frames frames (at least one task, at most one per frame)."""
+    if task_frames < 1:
+        raise ValueError(f"--task-frames must be >= 1, got {task_frames}")
+    return max(1, math.ceil(frames / task_frames))
+
+
+def _read_ids(root: Path, split: str) -> List[str]:
+    path = Path(split)
+    if not path.is_file():
+        path = root / "ImageSets" / f"{split}.txt"
+    if not path.is_file():
+        raise FileNotFoundError(f"split {split}: neither a file nor {path}")
+    return [line.strip() for line in path.read_text().splitlines() if line.strip()]
+
+
+def count_stereo_frames(data: Path, split: Optional[str]) -> int:
+    """The frames `stereodet stereo --data DATA [--split S]` would encode (the split, or every
+    left image)."""
+    if split:
+        return len(_read_ids(data, split))
+    images = data / "training" / "image_2"
+    if not images.is_dir():
+        images = data / "image_2"
+    return sum(1 for p in images.glob("*.png") if p.stem.isdigit())
+
+
+def count_eval_frames(gt: Path, split: Optional[str]) -> int:
+    """The frames `stereodet eval --gt GT [--split S]` would read (the split, or every label)."""
+    if split:
+        return len(_read_ids(gt, split))
+    for labels in (gt / "training" / "label_2", gt / "label_2", gt):
+        if labels.is_dir():
+            return sum(1 for p in labels.glob("*.txt") if p.stem.isdigit())
+    raise FileNotFoundError(f"--gt {gt}: no label folder")
+
+
+def synth_tasks(bin_dir: Path, out: Path, frames: int, seed: int, task_frames: int,
+                extra: Sequence[str]) -> List[Task]:
+    n = num_tasks(frames, task_frames)
+    return [Task(k, n, [str(bin_dir / "stereodet-vision"), "synth", "--out", str(out),
+                        "--frames", str(frames), "--seed", str(seed), "--shard", f"{k}/{n}",
+                        "--quiet", *extra],
+                 str(out / ".scale" / f"synth-{k}-of-{n}.done")) for k in range(n)]
+
+
+def stereo_tasks(bin_dir: Path, data: Path, out: Path, split: Optional[str], task_frames: int,
+                 extra: Sequence[str]) -> List[Task]:
+    n = num_tasks(count_stereo_frames(data, split), task_frames)
+    split_args = ["--split", split] if split else []
+    return [Task(k, n, [str(bin_dir / "stereodet-vision"), "stereo", "--data", str(data),
+                        "--out", str(out), *split_args, "--shard", f"{k}/{n}", "--quiet",
+                        *extra],
+                 str(out / ".scale" / f"stereo-{k}-of-{n}.done")) for k in range(n)]
+
+
+def eval_shard_dir(out: Path, k: int, n: int) -> Path:
+    return out / "shards" / f"{k}-of-{n}"
+
+
+def eval_tasks(bin_dir: Path, gt: Path, det: Path, out: Path, split: Optional[str],
+               task_frames: int, extra: Sequence[str]) -> List[Task]:
+    n = num_tasks(count_eval_frames(gt, split), task_frames)
+    split_args = ["--split", split] if split else []
+    tasks = []
+    for k in range(n):
+        shard = eval_shard_dir(out, k, n)
+        # The shard's results folder is committed whole (StagedFolder): its eval_shard.json is
+        # the done marker.
+        tasks.append(Task(k, n, [str(bin_dir / "stereodet"), "eval", "--gt", str(gt), "--det",
+                                 str(det), *split_args, "--shard", f"{k}/{n}", "--out",
+                                 str(shard), *extra], str(shard / "eval_shard.json"),
+                          write_done=False))
+    return tasks
+
+
+def eval_merge(bin_dir: Path, out: Path, n: int, extra: Sequence[str]) -> str:
+    """`stereodet eval merge` of the N shards into OUT/merged; returns its printout."""
+    argv = [str(bin_dir / "stereodet"), "eval", "merge",
+            *[str(eval_shard_dir(out, k, n)) for k in range(n)], "--out", str(out / "merged"),
+            *extra]
+    result = subprocess.run(argv, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"eval merge failed (exit {result.returncode}):\n{result.stderr}")
+    return result.stdout
+
+
+def run_tasks(client, tasks: Sequence[Task], progress: Callable[[str], None] = print,
+              retries: int = 3) -> List[dict]:
+    """Submits every task to the Dask client and waits; reports each finished task through
+    `progress`. A task whose worker dies is rerun by the scheduler (up to its allowed failures,
+    distributed.scheduler.allowed-failures) and, here, up to `retries` more times after an error.
+    Returns the tasks' results in task order."""
+    from distributed import as_completed
+
+    # A fresh key per submission: a key the scheduler still holds from an earlier call would hand
+    # back that call's result instead of running the task (and skipping it) again.
+    run = uuid.uuid4().hex[:8]
+    futures = {client.submit(run_task, t, key=f"stereodet-{t.index}-of-{t.count}-{run}",
+                             retries=retries, pure=False): t for t in tasks}
+    results = {}
+    done = 0
+    start = time.monotonic()
+    for future in as_completed(list(futures)):
+        task = futures[future]
+        r = future.result()  # raises the task's error after its retries
+        results[task.index] = r
+        done += 1
+        state = "skipped (done before)" if r["skipped"] else f"{r['seconds']:.1f} s"
+        progress(f"[{done}/{len(tasks)}] task {task.index}/{task.count} {state}; "
+                 f"{time.monotonic() - start:.1f} s elapsed")
+    return [results[t.index] for t in tasks]
+
+
+def make_client(workers: int, scheduler: Optional[str]):
+    """A client of the given scheduler, or of a new LocalCluster of `workers` processes with one
+    thread each. Returns (client, cluster or None)."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler), None
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    return Client(cluster), cluster
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python3 -m stereodet.scale", description=__doc__.split(
+        "\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--workers", type=int, default=2,
+                   help="local cluster size (processes, one thread each); default 2")
+    p.add_argument("--scheduler", help="join this Dask scheduler (tcp://HOST:8786) instead")
+    p.add_argument("--task-frames", type=int, default=200, help="frames per task; default 200")
+    p.add_argument("--bin", help="folder of the stereodet executables (default: found)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    sub = p.add_subparsers(dest="command", required=True)
+    s = sub.add_parser("synth", help="sharded `stereodet synth`")
+    s.add_argument("--out", required=True, type=Path)
+    s.add_argument("--frames", required=True, type=int)
+    s.add_argument("--seed", type=int, default=0)
+    st = sub.add_parser("stereo", help="sharded `stereodet stereo`")
+    st.add_argument("--data", required=True, type=Path)
+    st.add_argument("--out", required=True, type=Path)
+    st.add_argument("--split")
+    e = sub.add_parser("eval", help="sharded `stereodet eval`, then `eval merge`")
+    e.add_argument("--gt", required=True, type=Path)
+    e.add_argument("--det", required=True, type=Path)
+    e.add_argument("--out", required=True, type=Path)
+    e.add_argument("--split")
+    for parser in (s, st, e):
+        parser.add_argument("extra", nargs=argparse.REMAINDER,
+                            help="after --: more flags of the stereodet command")
+    return p
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    args = build_parser().parse_args(argv)
+    extra = [a for a in args.extra if a != "--"] if args.extra else []
+    bin_dir = find_bin_dir(args.bin)
+    if args.command == "synth":
+        tasks = synth_tasks(bin_dir, args.out.resolve(), args.frames, args.seed, args.task_frames,
+                            extra)
+    elif args.command == "stereo":
+        tasks = stereo_tasks(bin_dir, args.data.resolve(), args.out.resolve(), args.split,
+                             args.task_frames, extra)
+    else:
+        tasks = eval_tasks(bin_dir, args.gt.resolve(), args.det.resolve(), args.out.resolve(),
+                           args.split, args.task_frames, extra)
+    progress = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    client, cluster = make_client(args.workers, args.scheduler)
+    try:
+        start = time.monotonic()
+        progress(f"{args.command}: {len(tasks)} tasks on {len(client.scheduler_info()['workers'])}"
+                 f" workers")
+        results = run_tasks(client, tasks, progress)
+        ran = sum(1 for r in results if not r["skipped"])
+        progress(f"{args.command}: {ran} tasks run, {len(tasks) - ran} skipped, "
+                 f"{time.monotonic() - start:.1f} s")
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    if args.command == "eval":
+        out = eval_merge(bin_dir, args.out.resolve(), tasks[0].count, extra)
+        if not args.quiet:
+            print(out, end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

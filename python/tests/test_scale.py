@@ -1,0 +1,148 @@
+"""stereodet.scale on a local Dask cluster of 2 workers (docs/scale.md): sharded synth output is byte
+for byte that of one process, the merged sharded evaluation is the single-process evaluation, and
+a worker killed in the middle of a run changes nothing; sharded stereo writes one process's
+files."""
+
+import json
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+distributed = pytest.importorskip(
+    "distributed", reason="Dask distributed is not installed (Debian python3-distributed, "
+    "scripts/install-deps.sh): stereodet.scale is not tested")
+
+from stereodet import scale  # noqa: E402
+
+SYNTH_FLAGS = ["--width", "160", "--height", "48", "--threads", "1"]
+
+
+def folder_bytes(root: Path, skip_hidden: bool = False) -> dict:
+    """relative path -> bytes of every file under root, the driver's .scale/ markers aside, and
+    with skip_hidden every hidden file (the temporaries .NAME.tmp-PID-N.EXT of a killed writer,
+    which no reader takes for a frame)."""
+    out = {}
+    for p in sorted(root.rglob("*")):
+        rel = p.relative_to(root)
+        if not p.is_file() or rel.parts[0] == ".scale":
+            continue
+        if skip_hidden and any(part.startswith(".") for part in rel.parts):
+            continue
+        out[str(rel)] = p.read_bytes()
+    return out
+
+
+def without_provenance(path: Path) -> dict:
+    j = json.loads(path.read_text())
+    for key in ("command_line", "seconds", "tool"):
+        j.pop(key, None)
+    return j
+
+
+@pytest.fixture(scope="module")
+def client():
+    # Nannies restart a killed worker; one thread per worker, as stereodet.scale starts them.
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def bin_dir(build):
+    return scale.find_bin_dir(str(build / "bin"))
+
+
+def one_process_synth(bin_dir, out, frames, seed, flags=SYNTH_FLAGS):
+    subprocess.run([str(bin_dir / "stereodet-vision"), "synth", "--out", str(out), "--frames",
+                    str(frames), "--seed", str(seed), "--quiet", *flags], check=True)
+
+
+def test_sharded_synth_is_one_process_byte_for_byte_and_resumes(client, bin_dir, tmp_path):
+    flags = SYNTH_FLAGS + ["--no-lidar"]
+    one_process_synth(bin_dir, tmp_path / "one", 7, 3, flags)
+    tasks = scale.synth_tasks(bin_dir, tmp_path / "sharded", 7, 3, 3, flags)
+    assert [t.count for t in tasks] == [3, 3, 3]
+    lines = []
+    results = scale.run_tasks(client, tasks, lines.append)
+    assert [r["skipped"] for r in results] == [False] * 3
+    assert len(lines) == 3 and lines[-1].startswith("[3/3] task ")
+    one, sharded = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded")
+    assert len(one) == 7 * 6 + 4  # six files a frame, three splits, synth_settings.txt
+    assert one.keys() == sharded.keys()
+    assert [k for k in one if one[k] != sharded[k]] == []
+    # Resume: every task's outputs are there, so every task is skipped.
+    assert [r["skipped"] for r in scale.run_tasks(client, tasks, lines.append)] == [True] * 3
+
+
+@pytest.mark.parametrize("matcher", ["kitti", "optimal"])
+def test_merged_sharded_eval_is_the_single_process_eval(client, bin_dir, cli, data, tmp_path,
+                                                        matcher):
+    gt, det = data / "eval_small", data / "eval_small" / "det"
+    flags = ["--matcher", matcher, "--filter", "min-area=300", "--overlaps", "strict,loose",
+             "--records"]
+    cli("eval", "--gt", gt, "--det", det, "--out", tmp_path / "one", *flags)
+    tasks = scale.eval_tasks(bin_dir, gt, det, tmp_path / "sharded", None, 5, flags)
+    assert len(tasks) == 3  # 12 frames in tasks of at most 5
+    scale.run_tasks(client, tasks, lambda line: None)
+    scale.eval_merge(bin_dir, tmp_path / "sharded", len(tasks), flags)
+    merged = tmp_path / "sharded" / "merged"
+    one, got = folder_bytes(tmp_path / "one"), folder_bytes(merged)
+    assert one.keys() == got.keys()
+    assert "matches_strict.csv" in one and "summary.csv" in one
+    assert [k for k in one if k != "results.json" and one[k] != got[k]] == []
+    a, b = without_provenance(tmp_path / "one" / "results.json"), without_provenance(
+        merged / "results.json")
+    assert a["results"]  # not vacuous
+    assert a == b
+
+
+def test_a_worker_killed_mid_run_changes_nothing(client, bin_dir, tmp_path):
+    frames = 8
+    one_process_synth(bin_dir, tmp_path / "one", frames, 5)
+    # One frame a task, LiDAR on: each task lasts long enough to be killed in the middle.
+    tasks = scale.synth_tasks(bin_dir, tmp_path / "sharded", frames, 5, 1, SYNTH_FLAGS)
+    futures = [client.submit(scale.run_task, t, key=f"kill-test-{t.index}", pure=False,
+                             retries=3) for t in tasks]
+    pids = client.run(os.getpid)  # worker address -> pid
+    killed = None
+    deadline = time.monotonic() + 30
+    while killed is None and time.monotonic() < deadline:
+        for address, keys in client.processing().items():
+            if keys and address in pids:
+                os.kill(pids[address], signal.SIGKILL)
+                killed = (address, list(keys))
+                break
+        time.sleep(0.01)
+    assert killed is not None, "no task was seen running"
+    distributed.wait(futures, timeout=120)
+    errors = [f"{f.key}: {f.exception()!r}" for f in futures if f.status != "finished"]
+    assert errors == [], f"killed {killed}"
+    one = folder_bytes(tmp_path / "one")
+    sharded = folder_bytes(tmp_path / "sharded", skip_hidden=True)
+    assert one.keys() == sharded.keys()
+    assert [k for k in one if one[k] != sharded[k]] == []
+    # The nanny brought the worker back: the cluster still has 2 workers for the next test.
+    client.wait_for_workers(2, timeout=60)
+
+
+def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_path):
+    data = tmp_path / "data"
+    one_process_synth(bin_dir, data, 4, 9, SYNTH_FLAGS + ["--no-lidar"])
+    subprocess.run([str(bin_dir / "stereodet-vision"), "stereo", "--data", str(data), "--out",
+                    str(tmp_path / "one"), "--threads", "1", "--quiet"], check=True)
+    tasks = scale.stereo_tasks(bin_dir, data, tmp_path / "sharded", None, 2, ["--threads", "1"])
+    assert len(tasks) == 2
+    scale.run_tasks(client, tasks, lambda line: None)
+    one, sharded = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded")
+    assert one.keys() == sharded.keys() and "rgbh/000003.png" in one
+    assert [k for k in one if k != "run.json" and one[k] != sharded[k]] == []
+    a, b = (json.loads(one["run.json"]), json.loads(sharded["run.json"]))
+    a.pop("command_line"), b.pop("command_line")
+    assert a == b and len(a["frames"]) == 4

@@ -1,0 +1,174 @@
+// eval --shard and eval merge (report/evaluation.h): random frames split into 2 and 3 shards,
+// evaluated shard by shard and merged, give the files of one run byte for byte (results.json up
+// to its provenance), with every matcher, a filter in both modes, two overlap sets and records.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/eval/random_frames.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/report/evaluation.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_temp_dir.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// Every file under `root` but the shard's own: relative path -> bytes.
+std::map<std::string, std::string> FolderBytes(const fs::path& root) {
+  std::map<std::string, std::string> out;
+  for (const fs::directory_entry& e : fs::recursive_directory_iterator(root)) {
+    if (!e.is_regular_file()) continue;
+    const std::string name = e.path().lexically_relative(root).string();
+    if (name == "eval_shard.json" || name == "eval_frames.dat") continue;
+    out[name] = ReadFile(e.path());
+  }
+  return out;
+}
+
+// results.json without what differs between two runs of the same evaluation.
+nlohmann::json WithoutProvenance(const std::string& text) {
+  nlohmann::json j = nlohmann::json::parse(text);
+  j.erase("command_line");
+  j.erase("seconds");
+  j.erase("tool");
+  return j;
+}
+
+// Random frames as label and detection folders; frame 5 has no detection file.
+struct RandomFolders {
+  TestTempDir dir{"shard-data"};
+  fs::path gt = dir.path() / "label_2";
+  fs::path det = dir.path() / "det";
+  explicit RandomFolders(int frames, uint64_t seed) {
+    RandomFramesOptions o;
+    o.num_frames = frames;
+    o.seed = seed;
+    o.score_decimals = 2;  // ties, as in KITTI files
+    for (const EvalFrame& f : RandomFrames(o)) {
+      WriteObjects(gt / (f.id + ".txt"), f.labels);
+      if (f.id != "000005") WriteObjects(det / (f.id + ".txt"), f.detections);
+    }
+  }
+};
+
+EvaluationOptions Options(const RandomFolders& data, Matcher matcher, FilterMode mode,
+                          const fs::path& out) {
+  EvaluationOptions options;
+  options.input.gt = data.gt;
+  options.input.det = data.det;
+  EvalOptions run;
+  run.matcher = matcher;
+  run.filter.conditions = ParseFilterConditions("min-area=400,max-distance=45");
+  run.filter.mode = mode;
+  run.score_threshold = 0.3;
+  options.runs = OverlapSetRuns(run, {OverlapSet::kStrict, OverlapSet::kLoose});
+  options.records = true;
+  options.out = out;
+  return options;
+}
+
+struct Case {
+  Matcher matcher;
+  FilterMode mode;
+  int shards;
+};
+
+class EvalShardByMatcherTest : public ::testing::TestWithParam<Case> {};
+
+TEST_P(EvalShardByMatcherTest, MergedShardsAreOneRun) {
+  const Case c = GetParam();
+  const RandomFolders data(41, 7 + c.shards);
+  const TestTempDir out("shard-out");
+  const EvaluationResult whole =
+      RunEvaluation(Options(data, c.matcher, c.mode, out.path() / "whole"));
+
+  EvaluationMergeOptions merge;
+  for (int k = c.shards - 1; k >= 0; --k) {  // given in reverse order
+    const fs::path dir = out.path() / ("shard" + std::to_string(k));
+    EvaluationOptions part = Options(data, c.matcher, c.mode, dir);
+    part.input.shard = Shard{k, c.shards};
+    part.input.num_threads = 1 + k % 2;
+    const EvaluationResult r = RunEvaluation(part);
+    EXPECT_EQ(static_cast<size_t>(r.input.frames.size()),
+              part.input.shard.End(41) - part.input.shard.Begin(41));
+    merge.shards.push_back(dir);
+  }
+  merge.evaluation = Options(data, c.matcher, c.mode, out.path() / "merged");
+  merge.evaluation.input = EvalInputOptions{};  // the merge takes the shards' input
+  const EvaluationResult merged = RunEvaluationMerge(merge);
+  EXPECT_EQ(merged.input.input_hash, whole.input.input_hash);
+  EXPECT_EQ(merged.input.frames_without_detections, std::vector<std::string>{"000005"});
+
+  const std::map<std::string, std::string> a = FolderBytes(out.path() / "whole");
+  const std::map<std::string, std::string> b = FolderBytes(out.path() / "merged");
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_GT(a.size(), 4u);
+  for (const auto& [name, bytes] : a) {
+    ASSERT_TRUE(b.count(name)) << name;
+    if (name == "results.json") {
+      EXPECT_EQ(WithoutProvenance(bytes), WithoutProvenance(b.at(name)));
+    } else {
+      EXPECT_TRUE(bytes == b.at(name)) << name << " differs";
+    }
+  }
+  // Not vacuous: the results hold curves and records.
+  ASSERT_FALSE(whole.runs.front().result.results.empty());
+  EXPECT_FALSE(whole.runs.front().result.results.front().records.empty());
+  EXPECT_GT(whole.runs.front().result.results.front().num_valid_labels, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Matchers, EvalShardByMatcherTest,
+                         ::testing::Values(Case{Matcher::kKitti, FilterMode::kStable, 2},
+                                           Case{Matcher::kKitti, FilterMode::kNaive, 3},
+                                           Case{Matcher::kOptimal, FilterMode::kStable, 3},
+                                           Case{Matcher::kOptimal, FilterMode::kNaive, 2},
+                                           Case{Matcher::kVoc, FilterMode::kStable, 2},
+                                           Case{Matcher::kVoc, FilterMode::kNaive, 3}),
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                           return std::string(MatcherName(info.param.matcher)) + "_" +
+                                  FilterModeName(info.param.mode) + "_" +
+                                  std::to_string(info.param.shards) + "shards";
+                         });
+
+TEST(EvalShardTest, RefusesMissingDuplicateOrMismatchedShards) {
+  const RandomFolders data(9, 3);
+  const TestTempDir out("shard-bad");
+  std::vector<fs::path> dirs;
+  for (int k = 0; k < 3; ++k) {
+    EvaluationOptions part =
+        Options(data, Matcher::kKitti, FilterMode::kStable, out.path() / ("s" + std::to_string(k)));
+    part.input.shard = Shard{k, 3};
+    RunEvaluation(part);
+    dirs.push_back(part.out);
+  }
+  EvaluationMergeOptions merge;
+  merge.evaluation = Options(data, Matcher::kKitti, FilterMode::kStable, out.path() / "m");
+  merge.shards = {dirs[0], dirs[2]};
+  EXPECT_THAT([&] { RunEvaluationMerge(merge); },
+              ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("shard 1/3 is missing")));
+  merge.shards = {dirs[0], dirs[1], dirs[1]};
+  EXPECT_THAT([&] { RunEvaluationMerge(merge); },
+              ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("given twice")));
+  merge.shards = {dirs[0], dirs[1], dirs[2]};
+  merge.evaluation.runs.front().score_threshold = 0.5;
+  EXPECT_THAT([&] { RunEvaluationMerge(merge); },
+              ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("other options")));
+  EXPECT_FALSE(fs::exists(out.path() / "m"));  // nothing committed
+  merge.shards = {data.gt};
+  EXPECT_THAT([&] { RunEvaluationMerge(merge); },
+              ::testing::ThrowsMessage<std::runtime_error>(HasSubstr("not an evaluation shard")));
+}
+
+}  // namespace
+}  // namespace stereodet
