@@ -11,6 +11,8 @@
 
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/planar_scene.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/fuzz_corpus.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -208,6 +210,36 @@ TEST(EvaluateDisparityTest, HandComputedRates) {
   EXPECT_DOUBLE_EQ(stats.bad_rate, 0.75);  // errors 0.5, 3.5, 4, 6: three over 2 px
   EXPECT_DOUBLE_EQ(stats.d1_rate, 0.5);    // 3.5 (> 3 and > 0.5) and 6 (> 3 and > 5); 4 < 5
   EXPECT_DOUBLE_EQ(stats.mean_abs_error_px, (0.5 + 3.5 + 4 + 6) / 4);
+}
+
+// The disparity fuzzer's corpus (fuzz/disparity_fuzzer.cc), replayed: each PNG decodes to valid
+// disparities or throws std::runtime_error naming the file (a header claiming 100000x100000 px,
+// a truncated file, an 8-bit or colour image); never a crash or an OpenCV assertion.
+TEST(DisparityTest, FuzzCorpusInputsDecodeOrThrowNamingTheFile) {
+  const std::vector<std::filesystem::path> files = FuzzCorpusFiles("disparity");
+  ASSERT_GE(files.size(), 4u) << "the disparity corpus is missing";
+  int decoded = 0, rejected = 0;
+  for (const std::filesystem::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    const std::string bytes = ReadFile(path);
+    try {
+      const cv::Mat disparity = DecodeKittiDisparity(bytes, path.string());
+      ASSERT_EQ(disparity.type(), CV_32FC1);
+      EXPECT_EQ(cv::norm(ReadKittiDisparity(path), disparity, cv::NORM_INF), 0.0);
+      for (int v = 0; v < disparity.rows; ++v) {
+        for (int u = 0; u < disparity.cols; ++u) {
+          const float d = disparity.at<float>(v, u);
+          EXPECT_TRUE(!IsValidDisparity(d) || (d > 0.0f && d < 256.0f)) << d;
+        }
+      }
+      ++decoded;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      ++rejected;
+    }
+  }
+  EXPECT_GT(decoded, 0);
+  EXPECT_GT(rejected, 0);
 }
 
 }  // namespace
