@@ -61,6 +61,22 @@ const Command* FindCommand(std::string_view name) {
   return nullptr;
 }
 
+// "unknown command 'x' (commands: synth, stereo, ...); ...", the word quoted printable and short.
+std::string UnknownCommandMessage(std::string_view name) {
+  constexpr size_t kMaxShown = 40;
+  std::string quoted;
+  for (size_t i = 0; i < name.size() && i < kMaxShown; ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    quoted += c >= 0x20 && c < 0x7f ? std::string(1, static_cast<char>(c)) : "?";
+  }
+  if (name.size() > kMaxShown) quoted += "...";
+  std::string names;
+  for (const Command& command : CommandTable()) {
+    names += (names.empty() ? "" : ", ") + std::string(command.name);
+  }
+  return "unknown command '" + quoted + "' (commands: " + names + "); run `stereodet --help`";
+}
+
 AddCommandFn FindOwn(std::span<const std::pair<std::string_view, AddCommandFn>> own,
                      std::string_view name) {
   for (const auto& [own_name, add] : own) {
@@ -107,7 +123,9 @@ int RunCli(int argc, char** argv, Program self,
     for (int i = 1; i < argc; ++i) {
       if (argv[i][0] == '-') continue;
       const Command* command = FindCommand(argv[i]);
-      if (command != nullptr && command->program != self) ExecOwner(*command, argv);
+      // CLI11 would say only "A subcommand is required", naming neither the word nor the commands.
+      if (command == nullptr) throw std::invalid_argument(UnknownCommandMessage(argv[i]));
+      if (command->program != self) ExecOwner(*command, argv);
       break;
     }
     std::set<AddCommandFn> added;

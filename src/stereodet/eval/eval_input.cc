@@ -97,19 +97,7 @@ std::vector<std::string> ReadSplitFile(const fs::path& gt, const std::string& sp
                          << (found.empty() ? "ROOT/" + image_sets : found)
                          << ", or the KITTI root: --gt ROOT";
   }
-  std::vector<std::string> ids;
-  const std::string text = ReadFile(split);
-  int line_no = 0;
-  for (std::string_view line : Split(text, '\n')) {
-    ++line_no;
-    line = Trim(line);
-    if (line.empty()) continue;
-    if (!IsFrameId(line)) {
-      throw ParseError(split, line_no, "frame id", "'" + std::string(line) + "' is not a frame id");
-    }
-    ids.emplace_back(line);
-  }
-  return ids;
+  return ParseSplit(ReadFile(split), split);
 }
 
 std::vector<std::string> ReadIds(const fs::path& gt, const std::string& split) {

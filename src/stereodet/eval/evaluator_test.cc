@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "stereodet/eval/associate_internal.h"
 #include "stereodet/eval/frame_data_internal.h"
@@ -492,6 +496,132 @@ TEST(EvaluatorTest, AosPerfectOrientationGivesApAndCurveAgreesWithAssociations) 
       if (!r.evaluated) continue;
       EXPECT_NEAR(r.aos_r40, r.ap_r40, 1e-9) << r.class_name;
       EXPECT_NEAR(r.aos_r11, r.ap_r11, 1e-9) << r.class_name;
+    }
+  }
+}
+
+// Both NaN, or equal: "identical" for results where NaN marks "not computed".
+bool Same(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+void ExpectSameCurve(const std::vector<CurvePoint>& a, const std::vector<CurvePoint>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_TRUE(Same(a[k].threshold, b[k].threshold)) << k;
+    EXPECT_EQ(a[k].tp, b[k].tp) << k;
+    EXPECT_EQ(a[k].fp, b[k].fp) << k;
+    EXPECT_EQ(a[k].fn, b[k].fn) << k;
+    EXPECT_TRUE(Same(a[k].precision, b[k].precision)) << k;
+    EXPECT_TRUE(Same(a[k].recall, b[k].recall)) << k;
+    EXPECT_TRUE(Same(a[k].similarity, b[k].similarity)) << k;
+  }
+}
+
+void ExpectSamePoint(const OperatingPoint& a, const OperatingPoint& b) {
+  EXPECT_TRUE(Same(a.threshold, b.threshold));
+  EXPECT_EQ(a.tp, b.tp);
+  EXPECT_EQ(a.fp, b.fp);
+  EXPECT_EQ(a.fn, b.fn);
+  EXPECT_TRUE(Same(a.f1, b.f1));
+}
+
+void ExpectSameFilteredCurve(const FilteredCurve& a, const FilteredCurve& b) {
+  ExpectSameCurve(a.curve, b.curve);
+  for (auto [x, y] : {std::pair{a.ap_r40, b.ap_r40},
+                      {a.ap_r11, b.ap_r11},
+                      {a.ap_voc, b.ap_voc},
+                      {a.aos_r40, b.aos_r40},
+                      {a.aos_r11, b.aos_r11}}) {
+    EXPECT_TRUE(Same(x, y)) << x << " vs " << y;
+  }
+}
+
+// Everything a ClassResult holds, exactly (no tolerance: the number of threads must not change a
+// bit of the evaluation).
+void ExpectSameClassResult(const ClassResult& a, const ClassResult& b) {
+  SCOPED_TRACE(a.class_name + " " + OverlapKindName(a.metric) + " " + DifficultyName(a.difficulty));
+  ASSERT_EQ(a.class_name, b.class_name);
+  ASSERT_EQ(a.metric, b.metric);
+  ASSERT_EQ(a.difficulty, b.difficulty);
+  ASSERT_EQ(a.evaluated, b.evaluated);
+  EXPECT_EQ(a.num_valid_labels, b.num_valid_labels);
+  EXPECT_EQ(a.num_detections, b.num_detections);
+  for (auto [x, y] : {std::pair{a.ap_r40, b.ap_r40},
+                      {a.ap_r11, b.ap_r11},
+                      {a.ap_voc, b.ap_voc},
+                      {a.aos_r40, b.aos_r40},
+                      {a.aos_r11, b.aos_r11}}) {
+    EXPECT_TRUE(Same(x, y)) << x << " vs " << y;
+  }
+  ExpectSameCurve(a.curve, b.curve);
+  EXPECT_EQ(a.kitti_precision.size(), b.kitti_precision.size());
+  for (size_t k = 0; k < std::min(a.kitti_precision.size(), b.kitti_precision.size()); ++k) {
+    EXPECT_TRUE(Same(a.kitti_precision[k], b.kitti_precision[k])) << k;
+  }
+  EXPECT_EQ(a.kitti_thresholds, b.kitti_thresholds);
+  ExpectSamePoint(a.at_threshold, b.at_threshold);
+  ExpectSamePoint(a.best_f1, b.best_f1);
+  ASSERT_EQ(a.filtered.has_value(), b.filtered.has_value());
+  if (a.filtered) {
+    ExpectSamePoint(a.filtered->naive, b.filtered->naive);
+    ExpectSamePoint(a.filtered->stable, b.filtered->stable);
+    ExpectSameFilteredCurve(a.filtered->naive_curve, b.filtered->naive_curve);
+    ExpectSameFilteredCurve(a.filtered->stable_curve, b.filtered->stable_curve);
+  }
+  EXPECT_TRUE(Same(a.brier.over_labels, b.brier.over_labels));
+  EXPECT_TRUE(Same(a.brier.over_detections, b.brier.over_detections));
+  EXPECT_TRUE(Same(a.brier.over_all, b.brier.over_all));
+  EXPECT_EQ(a.brier.num_all_terms, b.brier.num_all_terms);
+  EXPECT_TRUE(Same(a.calibration.ece, b.calibration.ece));
+  EXPECT_EQ(a.calibration.num_detections, b.calibration.num_detections);
+  ASSERT_EQ(a.localization.size(), b.localization.size());
+  for (size_t k = 0; k < a.localization.size(); ++k) {
+    EXPECT_EQ(a.localization[k].count, b.localization[k].count);
+    EXPECT_TRUE(Same(a.localization[k].centre_error_mean_m, b.localization[k].centre_error_mean_m));
+    EXPECT_TRUE(Same(a.localization[k].depth_error_mean_m, b.localization[k].depth_error_mean_m));
+  }
+  ASSERT_EQ(a.records.size(), b.records.size());
+  for (size_t k = 0; k < a.records.size(); ++k) {
+    EXPECT_EQ(a.records[k].frame, b.records[k].frame) << k;
+    EXPECT_EQ(a.records[k].detection, b.records[k].detection) << k;
+    EXPECT_EQ(a.records[k].label, b.records[k].label) << k;
+    EXPECT_EQ(a.records[k].outcome, b.records[k].outcome) << k;
+    EXPECT_EQ(a.records[k].label_valid, b.records[k].label_valid) << k;
+    EXPECT_TRUE(Same(a.records[k].iou, b.records[k].iou)) << k;
+  }
+}
+
+// Property: the evaluation does not depend on the number of threads (CONTRIBUTING.md), for every
+// matcher, with every part switched on (filters in both modes, records, 3D), on random frames.
+TEST(EvaluatorTest, OneAndManyThreadsGiveIdenticalEvaluations) {
+  for (const uint64_t seed : {3u, 4u}) {
+    RandomFramesOptions ro;
+    ro.num_frames = 24;
+    ro.crowded = seed == 3;
+    ro.score_decimals = seed == 4 ? 2 : 0;  // ties in score, as KITTI files have
+    ro.seed = seed;
+    const std::vector<EvalFrame> frames = RandomFrames(ro);
+    for (const Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+      SCOPED_TRACE(std::string(MatcherName(m)) + " seed " + std::to_string(seed));
+      EvalOptions options;
+      options.matcher = m;
+      options.filter.conditions = ParseFilterConditions("min-area=2000,max-distance=35");
+      options.score_threshold = 0.4;
+      options.keep_records = true;
+      options.num_threads = 1;
+      const EvalResult one = Evaluate(frames, options);
+      int evaluated = 0;
+      for (const int threads : {2, 5}) {
+        options.num_threads = threads;
+        const EvalResult many = Evaluate(frames, options);
+        EXPECT_EQ(many.aos_computed, one.aos_computed);
+        EXPECT_EQ(many.scores.num_scores, one.scores.num_scores);
+        ASSERT_EQ(many.results.size(), one.results.size());
+        for (size_t i = 0; i < one.results.size(); ++i) {
+          ExpectSameClassResult(one.results[i], many.results[i]);
+          evaluated += one.results[i].evaluated && !one.results[i].records.empty() ? 1 : 0;
+        }
+      }
+      EXPECT_GT(evaluated, 0);  // the comparison compared something
     }
   }
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "stereodet/eval/evaluator.h"
@@ -169,6 +170,86 @@ TEST(FilterTest, CurvesAgreeWithUnfilteredAndWithTheOperatingPoint) {
     }
     EXPECT_GT(nontrivial, 0);
   }
+}
+
+// The stable filter's property (docs/metrics.md, "Filters"): its counts are the unfiltered
+// association recounted under the filter - a matched pair is a TP when label and detection both
+// pass and drops out otherwise, an unmatched detection (label) is a FP (FN) when it passes. So it
+// never creates an error: every FP and FN it counts is one of the unfiltered evaluation, and
+// moving an object across the filter's bound changes only that object's own term. Checked against
+// the per-row records of the unfiltered association on random frames, for every matcher; the naive
+// filter, the control, does create errors there (a pair whose label fails leaves its detection a
+// FP).
+TEST(FilterTest, StableFilterRecountsTheUnfilteredAssociationOnRandomFrames) {
+  const std::vector<FilterCondition> conditions =
+      ParseFilterConditions("min-height=45,max-distance=30");
+  int naive_created_errors = 0, cells = 0;
+  for (const uint64_t seed : {11u, 12u, 13u}) {
+    RandomFramesOptions ro;
+    ro.num_frames = 40;
+    ro.crowded = seed != 13;
+    ro.position_noise = 0.08;  // boxes that straddle the filter's bound, label or detection first
+    ro.seed = seed;
+    const std::vector<EvalFrame> frames = RandomFrames(ro);
+    for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+      EvalOptions options;
+      options.matcher = m;
+      options.metrics = {OverlapKind::k2D, OverlapKind::kBev};
+      options.filter.conditions = conditions;
+      options.score_threshold = 0.3;
+      options.keep_records = true;
+      options.num_threads = 1;
+      const EvalResult result = Evaluate(frames, options);
+      for (const ClassResult& r : result.results) {
+        if (!r.evaluated) continue;
+        SCOPED_TRACE(std::string(MatcherName(m)) + " seed " + std::to_string(seed) + " " +
+                     r.class_name + " " + OverlapKindName(r.metric) + " " +
+                     DifficultyName(r.difficulty));
+        int64_t tp = 0, fp = 0, fn = 0, all_tp = 0, all_fp = 0, all_fn = 0;
+        for (const MatchRecord& row : r.records) {
+          const EvalFrame& frame = frames.at(row.frame);
+          const bool label_passes =
+              row.label >= 0 && PassesFilter(frame.labels.at(row.label), true, conditions);
+          const bool det_passes =
+              row.detection >= 0 &&
+              PassesFilter(frame.detections.at(row.detection), false, conditions);
+          switch (row.outcome) {
+            case Outcome::kTp:
+              ++all_tp;
+              tp += label_passes && det_passes ? 1 : 0;
+              break;
+            case Outcome::kFp:
+              ++all_fp;
+              fp += det_passes ? 1 : 0;
+              break;
+            case Outcome::kFn:
+              ++all_fn;
+              fn += label_passes ? 1 : 0;
+              break;
+            default:
+              break;
+          }
+        }
+        ASSERT_TRUE(r.filtered.has_value());
+        const OperatingPoint& stable = r.filtered->stable;
+        EXPECT_EQ(stable.tp, tp);
+        EXPECT_EQ(stable.fp, fp);
+        EXPECT_EQ(stable.fn, fn);
+        // Hence no error created: at most the unfiltered evaluation's.
+        EXPECT_LE(stable.fp, all_fp);
+        EXPECT_LE(stable.fn, all_fn);
+        EXPECT_LE(stable.tp, all_tp);
+        // The records are the unfiltered operating point's.
+        EXPECT_EQ(all_tp, r.at_threshold.tp);
+        EXPECT_EQ(all_fp, r.at_threshold.fp);
+        EXPECT_EQ(all_fn, r.at_threshold.fn);
+        ++cells;
+        naive_created_errors += r.filtered->naive.fp > fp || r.filtered->naive.fn > fn ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(cells, 20);
+  EXPECT_GT(naive_created_errors, 0);  // the control: the property is not true of any filter
 }
 
 TEST(FilterTest, ParsesAndRejects) {

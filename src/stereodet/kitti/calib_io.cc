@@ -8,6 +8,7 @@
 #include "stereodet/kitti/text_number.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
 
 namespace stereodet {
 
@@ -56,6 +57,8 @@ Calibration ParseCalibration(std::string_view text, const std::string& source) {
   // Values land here first and are copied into the Calibration once all keys are known.
   std::array<std::array<double, 12>, kNumKeys> values{};
   std::array<int, kNumKeys> seen_on_line{};  // 0 = not seen
+  // A UTF-8 byte-order mark would otherwise make the first key unknown, and skipped.
+  text = StripUtf8Bom(text);
   int line_number = 0;
   size_t pos = 0;
   while (pos < text.size()) {

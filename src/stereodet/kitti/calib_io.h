@@ -16,7 +16,8 @@ namespace stereodet {
 // Tr_velo_to_cam are required; Tr_imu_to_velo is optional (identity if absent). Throws ParseError
 // naming the line and key for a missing key (line 0), a wrong number count, a non-number, NaN or
 // infinity (field "P2(1,3)": key, row, column), or a duplicate key. Keys may be written with or
-// without the colon; other keys (KITTI raw's "calib_time") and blank lines are ignored.
+// without the colon; other keys (KITTI raw's "calib_time"), blank lines and a UTF-8 byte-order mark
+// at the start of the text are ignored.
 Calibration ParseCalibration(std::string_view text, const std::string& source);
 
 // Throws ParseError naming `source` and the field when the calibration cannot describe KITTI's

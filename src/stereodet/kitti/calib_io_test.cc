@@ -139,6 +139,12 @@ TEST(CalibIoTest, IgnoresBlankLinesCrlfAndOtherKeys) {
   ExpectSameCalibration(ParseCalibration(text, "x"), KittiLikeCalibration());
 }
 
+TEST(CalibIoTest, ALeadingUtf8ByteOrderMarkIsIgnored) {
+  // Without the strip the first key would read "\xef\xbb\xbfP0", unknown, and P0 be "missing".
+  ExpectSameCalibration(ParseCalibration(std::string("\xEF\xBB\xBF") + kKittiCalib000000, "x"),
+                        KittiLikeCalibration());
+}
+
 TEST(CalibIoErrorTest, MissingKeyIsNamed) {
   const ParseError e = ExpectParseError(WithLine(2, ""));
   EXPECT_EQ(e.file(), "calib/000042.txt");

@@ -7,6 +7,7 @@
 #include "stereodet/kitti/text_number.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
 
 namespace stereodet {
 
@@ -86,23 +87,24 @@ std::vector<std::string> KittiDataset::ReadSplit(const fs::path& split) const {
         << " exists";
     path = in_image_sets;
   }
-  const std::string text = ReadFile(path);
+  return ParseSplit(ReadFile(path), path.string());
+}
+
+std::vector<std::string> ParseSplit(std::string_view text, const std::string& source) {
+  text = StripUtf8Bom(text);
   std::vector<std::string> ids;
   int line_number = 0;
   size_t pos = 0;
   while (pos < text.size()) {
     ++line_number;
-    size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    std::string_view line = std::string_view(text).substr(pos, end - pos);
-    pos = end + 1;
+    std::string_view line = kitti_internal::NextLine(text, &pos);
     while (!line.empty() && (line.front() == ' ' || line.front() == '\t')) line.remove_prefix(1);
     while (!line.empty() && (line.back() == ' ' || line.back() == '\t' || line.back() == '\r')) {
       line.remove_suffix(1);
     }
     if (line.empty()) continue;
     if (!IsFrameId(line)) {
-      throw ParseError(path.string(), line_number, "frame id",
+      throw ParseError(source, line_number, "frame id",
                        kitti_internal::QuoteToken(line) + " is not a frame id (digits only)");
     }
     ids.emplace_back(line);

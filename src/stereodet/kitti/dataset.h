@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/geometry/calibration.h"
@@ -63,6 +64,12 @@ struct RequiredFiles {
 std::vector<std::string> FindMissingFiles(const KittiDataset& dataset,
                                           const std::vector<std::string>& ids,
                                           const RequiredFiles& required);
+
+// The ids of a split file's text, in file order: one id per line, blanks around it and blank lines
+// ignored, and a UTF-8 byte-order mark at the start of the text too. Throws ParseError(source,
+// line, "frame id", ...) for a line that is not a frame id (digits only), quoting it escaped and
+// shortened.
+std::vector<std::string> ParseSplit(std::string_view text, const std::string& source);
 
 // Writes a split file atomically, one id per line.
 void WriteSplit(const std::filesystem::path& path, const std::vector<std::string>& ids);

@@ -103,6 +103,31 @@ TEST_F(DatasetTest, ReadSplitRejectsNonIdsWithFileAndLine) {
   }
 }
 
+TEST(ParseSplitTest, ALeadingByteOrderMarkIsIgnoredAndANulByteIsNamedEscaped) {
+  EXPECT_THAT(ParseSplit("\xEF\xBB\xBF"
+                         "000004\n000002\n",
+                         "s.txt"),
+              ElementsAre("000004", "000002"));
+  try {
+    ParseSplit(std::string("000001\n0000\0"
+                           "2\n",
+                           13),
+               "s.txt");
+    ADD_FAILURE() << "no error";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.file(), "s.txt");
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_EQ(e.field(), "frame id");
+    EXPECT_THAT(e.message(), HasSubstr("'0000\\x002'"));
+  }
+  try {
+    ParseSplit(std::string(1000000, '7') + "x\n", "s.txt");
+    ADD_FAILURE() << "no error";
+  } catch (const ParseError& e) {
+    EXPECT_LT(e.message().size(), 200u);  // shortened, not echoed in full
+  }
+}
+
 TEST_F(DatasetTest, WriteSplitRoundTrips) {
   const KittiDataset dataset(root_);
   const std::vector<std::string> ids = {"000004", "000002", "000100"};

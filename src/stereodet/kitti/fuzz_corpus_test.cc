@@ -1,6 +1,10 @@
-// Replays the libFuzzer corpora (fuzz/corpus/{label,calib}/) through the parsers in every normal
-// build: each input either parses or throws ParseError (or std::runtime_error), never anything
-// else, and what parses round-trips. Keeps every crash the fuzzers once found fixed.
+// Replays the libFuzzer corpora of the kitti parsers (fuzz/corpus/{label,calib,split,velodyne}/)
+// in every normal build: each input either parses or throws ParseError (or std::runtime_error),
+// never anything else, and what parses round-trips. Keeps every crash the fuzzers once found fixed.
+// The other corpora are replayed beside their parsers (run_manifest: util, disparity: stereo,
+// model_json: models); EveryCorpusIsReplayed keeps that list complete.
+#include "stereodet/util/fuzz_corpus.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,8 +13,10 @@
 #include <vector>
 
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/kitti/text_number.h"
+#include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
@@ -19,15 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::vector<fs::path> CorpusFiles(const std::string& name) {
-  const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "fuzz" / "corpus" / name;
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.is_regular_file()) files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
+std::vector<fs::path> CorpusFiles(const std::string& name) { return FuzzCorpusFiles(name); }
 
 TEST(FuzzCorpusTest, LabelInputsParseOrThrowParseError) {
   const std::vector<fs::path> files = CorpusFiles("label");
@@ -91,6 +89,71 @@ TEST(FuzzCorpusTest, CalibInputsParseOrThrowParseError) {
   }
   EXPECT_GT(parsed, 0);
   EXPECT_GT(rejected, 0);
+}
+
+TEST(FuzzCorpusTest, SplitInputsParseOrThrowParseError) {
+  const std::vector<fs::path> files = CorpusFiles("split");
+  ASSERT_GE(files.size(), 5u) << "the split corpus is missing";
+  int parsed = 0, rejected = 0;
+  for (const fs::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    const std::string text = ReadFile(path);
+    try {
+      const std::vector<std::string> ids = ParseSplit(text, "corpus");
+      std::string written;
+      for (const std::string& id : ids) written += id + "\n";
+      EXPECT_EQ(ParseSplit(written, "written"), ids);
+      ++parsed;
+    } catch (const ParseError& e) {
+      EXPECT_GE(e.line(), 1);
+      EXPECT_EQ(e.field(), "frame id");
+      EXPECT_LT(e.message().size(), 200u);
+      ++rejected;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "unexpected exception: " << e.what();
+    }
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(rejected, 0);
+}
+
+TEST(FuzzCorpusTest, VelodyneInputsParseOrThrowNamingTheFile) {
+  const std::vector<fs::path> files = CorpusFiles("velodyne");
+  ASSERT_GE(files.size(), 3u) << "the velodyne corpus is missing";
+  int parsed = 0, rejected = 0;
+  for (const fs::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    const std::string bytes = ReadFile(path);
+    try {
+      const std::vector<VeloPoint> points = ReadVelodyne(path);
+      EXPECT_EQ(bytes.size() % 16, 0u);
+      ASSERT_EQ(points.size() * 16, bytes.size());
+      EXPECT_EQ(std::string(reinterpret_cast<const char*>(points.data()), bytes.size()), bytes);
+      ++parsed;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(bytes.size() % 16, 0u);
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      ++rejected;
+    }
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(rejected, 0);
+}
+
+TEST(FuzzCorpusTest, EveryCorpusIsReplayed) {
+  // A corpus folder that no test replays would let a fixed crash come back unnoticed.
+  const std::vector<std::string> replayed = {"calib",        "disparity", "label",   "model_json",
+                                             "run_manifest", "split",     "velodyne"};
+  std::vector<std::string> found;
+  for (const auto& entry : fs::directory_iterator(fs::path(STEREODET_SOURCE_DIR) / "fuzz/corpus")) {
+    if (entry.is_directory()) found.push_back(entry.path().filename().string());
+  }
+  std::sort(found.begin(), found.end());
+  EXPECT_EQ(found, replayed);
+  for (const std::string& name : replayed) {
+    EXPECT_TRUE(fs::exists(fs::path(STEREODET_SOURCE_DIR) / "fuzz" / (name + "_fuzzer.cc")))
+        << name;
+  }
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "stereodet/kitti/text_number.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
 
 namespace stereodet {
 
@@ -36,6 +37,28 @@ constexpr std::array<double, kDetectionFields> kSentinels = {
     0, -1, 0, -10, 0, 0, 0, 0, -1, -1, -1, -1000, -1000, -1000, -10, 0};
 
 bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// Whether `type` is a class token this parser accepts (kMaxObjectTypeLength, printable ASCII).
+bool IsValidType(std::string_view type) {
+  if (type.empty() || type.size() > kMaxObjectTypeLength) return false;
+  for (char c : type) {
+    if (c < 0x21 || c > 0x7e) return false;  // a char is signed: bytes >= 0x80 are < 0 here
+  }
+  return true;
+}
+
+// Why `type` is not a valid class token, for the error message; requires !IsValidType(type).
+std::string TypeProblem(std::string_view type) {
+  const std::string quoted = QuoteToken(type);
+  if (type.size() > kMaxObjectTypeLength) {
+    return quoted + " (" + std::to_string(type.size()) + " bytes) is longer than " +
+           std::to_string(kMaxObjectTypeLength) + " characters: not a class name";
+  }
+  size_t i = 0;
+  while (i < type.size() && type[i] >= 0x21 && type[i] <= 0x7e) ++i;
+  return quoted + " holds a byte that is not printable ASCII (at offset " + std::to_string(i) +
+         "): a class name is printable ASCII (Car, Pedestrian, DontCare, ...)";
+}
 
 // The numbers of KITTI's files are short decimals ("-1.57", "712.40", "0", "-1000"): read as
 // m / 10^k with m < 10^15 and k <= 15, both exact doubles, the quotient is the decimal's correctly
@@ -152,6 +175,7 @@ bool ParseUsualLine(std::string_view line, ObjectFileKind kind, Object* object) 
   while (p < end && !IsBlank(*p)) ++p;
   if (p == type_begin) return false;
   const std::string_view type(type_begin, static_cast<size_t>(p - type_begin));
+  if (!IsValidType(type)) return false;
   double values[kDetectionFields];
   int occluded = 0;
   int count = 1;
@@ -212,6 +236,11 @@ bool ParseLine(std::string_view line, ObjectFileKind kind, Object* object, LineE
     return false;
   }
 
+  if (!IsValidType(tokens[0])) {
+    error->field = 0;
+    error->message = TypeProblem(tokens[0]);
+    return false;
+  }
   object->type.assign(tokens[0].data(), tokens[0].size());
   double values[kDetectionFields];
   for (int i = 1; i < count; ++i) {
@@ -263,9 +292,9 @@ void AppendField(std::string* out, double value, int field) {
 }
 
 void AppendObject(std::string* out, const Object& object) {
-  STEREODET_CHECK(!object.type.empty() && object.type.find_first_of(" \t\r\n") == std::string::npos)
-      << "cannot write a KITTI object: type '" << object.type
-      << "' must be one word without spaces";
+  STEREODET_CHECK(IsValidType(object.type))
+      << "cannot write a KITTI object: type " << QuoteToken(object.type)
+      << " must be one word of printable ASCII, at most " << kMaxObjectTypeLength << " characters";
   out->append(object.type);
   AppendField(out, object.truncated, 1);
   out->push_back(' ');
@@ -294,6 +323,8 @@ const char* ObjectFieldName(int index) {
 
 ObjectFile ParseObjects(std::string_view text, const std::string& source,
                         const ObjectParseOptions& options) {
+  // A UTF-8 byte-order mark (Windows editors write one) is no part of the first line's type.
+  text = StripUtf8Bom(text);
   ObjectFile file;
   // One object per line at most: counting the newlines (a vectorized scan) reserves about the
   // right size, where a guess from the byte count left a third of every frame's objects unused.

@@ -2,6 +2,7 @@
 #ifndef STEREODET_KITTI_LABEL_IO_H_
 #define STEREODET_KITTI_LABEL_IO_H_
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -16,6 +17,10 @@ enum class ObjectFileKind {
   kDetection,  // exactly 16 fields a line, the score last
   kAny,  // 15 or 16 fields, each line on its own (KITTI's devkit accepts both in result files)
 };
+
+// The longest class token (an object's type) the parser accepts; KITTI's longest is
+// "Person_sitting" (14).
+inline constexpr size_t kMaxObjectTypeLength = 64;
 
 struct ObjectParseOptions {
   ObjectFileKind kind = ObjectFileKind::kLabel;
@@ -32,7 +37,9 @@ struct ObjectFile {
 };
 
 // Parses the text of a label or detection file. `source` names the file in error messages. Blank
-// lines are ignored. A bad line (wrong field count; text, NaN or infinity where a number belongs;
+// lines are ignored, and so is a UTF-8 byte-order mark at the start of the text. A bad line (wrong
+// field count; a type that is not 1 to kMaxObjectTypeLength bytes of printable ASCII, reported
+// escaped and shortened to 40 characters; text, NaN or infinity where a number belongs;
 // a negative dimension other than KITTI's -1 "not estimated"; occluded not an integer) throws
 // ParseError(source, line, field, ...), or is skipped in lenient mode. In a detection line (16
 // fields, kDetection or kAny) occluded may be any finite number, as the devkit reads it as a
@@ -47,8 +54,9 @@ ObjectFile ReadObjects(const std::filesystem::path& path, const ObjectParseOptio
 // for byte), otherwise with the shortest text that reads back exactly; KITTI's sentinels are
 // written as KITTI writes them, as integers: truncated -1, alpha -10, dimensions -1, location
 // -1000, rotation_y -10 ("DontCare -1 -1 -10 503.89 169.71 590.61 190.13 -1 -1 -1 -1000 -1000 -1000
-// -10"). Throws std::invalid_argument for a number that is NaN or infinite, or a type that is empty
-// or holds whitespace (the file could not be read back).
+// -10"). Throws std::invalid_argument for a number that is NaN or infinite, or a type the parser
+// would refuse (empty, longer than kMaxObjectTypeLength, not printable ASCII): the file could not
+// be read back.
 std::string FormatObject(const Object& object);
 // Whole file: one line per object, each ending in '\n'.
 std::string FormatObjects(const std::vector<Object>& objects);

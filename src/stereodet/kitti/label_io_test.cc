@@ -140,7 +140,68 @@ TEST(LabelIoTest, EmptyTextGivesNoObjects) {
   EXPECT_TRUE(ParseObjects("\n\n \r\n", "x").objects.empty());
 }
 
+TEST(LabelIoTest, ALeadingUtf8ByteOrderMarkIsIgnored) {
+  // A Windows editor writes EF BB BF first; the first object must still be a Pedestrian, not an
+  // unknown class "\xef\xbb\xbfPedestrian".
+  const std::string text = std::string("\xEF\xBB\xBF") + kPedestrian + "\n" + kCyclist + "\n";
+  const ObjectFile file = ParseObjects(text, "x");
+  ASSERT_EQ(file.objects.size(), 2u);
+  EXPECT_EQ(file.objects[0].type, "Pedestrian");
+  EXPECT_EQ(file.objects, ParseObjects(std::string(kPedestrian) + "\n" + kCyclist, "x").objects);
+  // Only at the very start: a mark on the second line stays in that line's type, and is refused.
+  const ParseError e = ExpectParseError(std::string(kCyclist) + "\n\xEF\xBB\xBF" + kPedestrian);
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.field(), "type");
+  EXPECT_THAT(e.what(), HasSubstr("'\\xef\\xbb\\xbfPedestrian'"));
+}
+
 // --- Error cases: each names the file, the 1-based line and the field. ---
+
+TEST(LabelIoErrorTest, AHugeClassNameIsRefusedShortened) {
+  const std::string name(10 * 1000 * 1000, 'a');
+  const ParseError e = ExpectParseError(std::string(kCyclist) + "\n" + name +
+                                        " 0.00 0 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5");
+  EXPECT_EQ(e.file(), "label_2/000042.txt");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.field(), "type");
+  EXPECT_THAT(e.what(), HasSubstr("'" + std::string(40, 'a') + "...'"));
+  EXPECT_THAT(e.what(), HasSubstr("10000000 bytes"));
+  EXPECT_LT(std::strlen(e.what()), 300u);  // not echoed in full
+  // The longest accepted name, and one byte more.
+  const std::string numbers = " 0.00 0 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5";
+  const std::string longest(kMaxObjectTypeLength, 'T');
+  EXPECT_EQ(ParseObjects(longest + numbers, "x").objects.at(0).type, longest);
+  EXPECT_EQ(ExpectParseError(longest + "T" + numbers).field(), "type");
+}
+
+TEST(LabelIoErrorTest, ANulOrNonAsciiByteInAClassNameIsRefusedEscaped) {
+  const std::string numbers = " 0.00 0 1 1 2 3 4 1.5 1.6 3.9 1 1.6 20 0.5";
+  const ParseError nul = ExpectParseError(std::string("Car\0x", 5) + numbers);
+  EXPECT_EQ(nul.line(), 1);
+  EXPECT_EQ(nul.field(), "type");
+  EXPECT_THAT(nul.what(), HasSubstr("'Car\\x00x'"));
+  EXPECT_THAT(nul.what(), HasSubstr("offset 3"));
+  EXPECT_EQ(std::string(nul.what()).find('\0'), std::string::npos);
+  const ParseError utf8 = ExpectParseError("Fu\xC3\x9Fg\xC3\xA4nger" + numbers);
+  EXPECT_THAT(utf8.what(), HasSubstr("'Fu\\xc3\\x9fg\\xc3\\xa4nger'"));
+  const ParseError bell = ExpectParseError("Car\x07" + numbers, ObjectFileKind::kAny);
+  EXPECT_EQ(bell.field(), "type");
+  // Lenient mode skips such a line and keeps the others.
+  ObjectParseOptions lenient;
+  lenient.lenient = true;
+  const ObjectFile file =
+      ParseObjects(std::string("Car\0", 4) + numbers + "\n" + kCyclist, "x", lenient);
+  ASSERT_EQ(file.objects.size(), 1u);
+  EXPECT_EQ(file.objects[0].type, "Cyclist");
+  EXPECT_EQ(file.skipped_lines, 1);
+  // And the writer refuses what the parser would refuse, so every file it writes reads back.
+  Object object = ParseObjects(kCyclist, "x").objects.at(0);
+  for (const std::string& bad : {std::string("Car\0", 4), std::string("Caf\xC3\xA9"),
+                                 std::string(kMaxObjectTypeLength + 1, 'a'), std::string()}) {
+    object.type = bad;
+    EXPECT_THROW(FormatObject(object), std::invalid_argument);
+  }
+}
 
 TEST(LabelIoErrorTest, WrongFieldCountNamesTheMissingField) {
   const ParseError e = ExpectParseError(std::string(kCyclist) + "\nCar 0.00 0 1.00 1 2 3 4\n");

@@ -15,15 +15,18 @@ namespace stereodet {
 static_assert(std::endian::native == std::endian::little,
               "velodyne_io reads KITTI's little-endian floats by copying bytes");
 
-std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path) {
-  const std::string bytes = ReadFile(path);
+std::vector<VeloPoint> ParseVelodyne(std::string_view bytes, const std::string& source) {
   STEREODET_CHECK_IO(bytes.size() % sizeof(VeloPoint) == 0)
-      << path.string() << ": size " << bytes.size()
+      << source << ": size " << bytes.size()
       << " bytes is not a multiple of 16 (4 float32 a point: x, y, z, reflectance); the file is "
          "truncated or not a KITTI velodyne scan";
   std::vector<VeloPoint> points(bytes.size() / sizeof(VeloPoint));
   if (!points.empty()) std::memcpy(points.data(), bytes.data(), bytes.size());
   return points;
+}
+
+std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path) {
+  return ParseVelodyne(ReadFile(path), path.string());
 }
 
 void WriteVelodyne(const std::filesystem::path& path, const std::vector<VeloPoint>& points) {

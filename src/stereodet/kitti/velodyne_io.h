@@ -3,6 +3,8 @@
 #define STEREODET_KITTI_VELODYNE_IO_H_
 
 #include <filesystem>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace stereodet {
@@ -14,6 +16,9 @@ struct VeloPoint {
 };
 static_assert(sizeof(VeloPoint) == 16, "VeloPoint must match KITTI's on-disk layout");
 
+// The points of a velodyne file's bytes (little-endian float32 x, y, z, reflectance a point).
+// Throws std::runtime_error naming `source` when the size is not a multiple of 16 bytes.
+std::vector<VeloPoint> ParseVelodyne(std::string_view bytes, const std::string& source);
 // Throws std::runtime_error naming the file if it cannot be read or its size is not a multiple of
 // 16 bytes.
 std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path);

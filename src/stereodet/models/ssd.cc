@@ -1,6 +1,8 @@
 // SsdModel and SsdTrainer: the pimpl boundary between the torch-free API (ssd.h) and LibTorch.
 #include "stereodet/models/ssd.h"
 
+#include <cstdint>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "stereodet/models/ssd_net.h"
@@ -16,6 +18,37 @@ namespace {
 constexpr char kConfigFile[] = "model.json";
 constexpr char kWeightsFile[] = "model.pt";
 constexpr int kConfigVersion = 1;
+
+// j[field] as an int: a JSON integer in int's range. nlohmann's get<int>() would cast a float such
+// as 1e300 (undefined behaviour) or cut a large integer silently.
+int GetInt(const nlohmann::json& j, const std::string& field, const std::string& source) {
+  const nlohmann::json& value = j.at(field);
+  if (!value.is_number_integer()) {
+    throw ParseError(source, 0, field, "expected an integer, got " + value.dump().substr(0, 40));
+  }
+  const bool in_range =
+      value.is_number_unsigned()
+          ? value.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<int>::max())
+          : value.get<int64_t>() >= std::numeric_limits<int>::min() &&
+                value.get<int64_t>() <= std::numeric_limits<int>::max();
+  if (!in_range) throw ParseError(source, 0, field, value.dump() + " is out of range");
+  return value.is_number_unsigned() ? static_cast<int>(value.get<uint64_t>())
+                                    : static_cast<int>(value.get<int64_t>());
+}
+
+// "encoding: \"rgbh-fixed\" here, \"rgb\" in the model" for the first top-level key whose value
+// differs between two config JSON texts, or "" when none does.
+std::string FirstDifference(const std::string& recorded_text, const std::string& model_text) {
+  const nlohmann::json recorded = nlohmann::json::parse(recorded_text, nullptr, false);
+  const nlohmann::json model = nlohmann::json::parse(model_text);
+  if (!recorded.is_object()) return "its recorded config is not a JSON object";
+  for (const auto& [key, value] : model.items()) {
+    const auto it = recorded.find(key);
+    const std::string here = it == recorded.end() ? "nothing" : it->dump();
+    if (here != value.dump()) return key + ": " + here + " here, " + value.dump() + " in the model";
+  }
+  return "";
+}
 
 }  // namespace
 
@@ -54,6 +87,7 @@ std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weight
                     {"fnv1a64", weights.fnv1a64},
                     {"input_channels", weights.input_channels},
                     {"parameters", weights.parameters}};
+    if (!weights.training_run.empty()) j["weights"]["training_run"] = weights.training_run;
   }
   return j.dump(2) + "\n";
 }
@@ -69,7 +103,7 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
   try {
     SsdConfig config;
     field = "version";
-    const int version = j.at(field).get<int>();
+    const int version = GetInt(j, field, source);
     if (version != kConfigVersion) {
       throw ParseError(source, 0, field, "unsupported version " + std::to_string(version));
     }
@@ -89,19 +123,19 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
     field = "classes";
     config.classes = j.at(field).get<std::vector<std::string>>();
     field = "input_width";
-    config.boxes.input_width = j.at(field).get<int>();
+    config.boxes.input_width = GetInt(j, field, source);
     field = "input_height";
-    config.boxes.input_height = j.at(field).get<int>();
+    config.boxes.input_height = GetInt(j, field, source);
     field = "num_maps";
-    config.boxes.num_maps = j.at(field).get<int>();
+    config.boxes.num_maps = GetInt(j, field, source);
     field = "first_map_stride_log2";
-    config.boxes.first_map_stride_log2 = j.at(field).get<int>();
+    config.boxes.first_map_stride_log2 = GetInt(j, field, source);
     field = "min_size_fraction";
     config.boxes.min_size_fraction = j.at(field).get<double>();
     field = "aspect_ratios";
     config.boxes.aspect_ratios = j.at(field).get<std::vector<double>>();
     field = "base_channels";
-    config.base_channels = j.at(field).get<int>();
+    config.base_channels = GetInt(j, field, source);
     field = "";
     config.Check();
     return config;
@@ -120,8 +154,12 @@ WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& sour
     if (!j.contains("weights")) return record;
     const nlohmann::json& w = j.at("weights");
     record.fnv1a64 = w.at("fnv1a64").get<std::string>();
-    record.input_channels = w.at("input_channels").get<int>();
+    record.input_channels = GetInt(w, "input_channels", source);
+    if (!w.at("parameters").is_number_integer()) {
+      throw ParseError(source, 0, "weights.parameters", "expected an integer");
+    }
     record.parameters = w.at("parameters").get<int64_t>();
+    if (w.contains("training_run")) record.training_run = w.at("training_run").get<std::string>();
   } catch (const nlohmann::json::exception& e) {
     throw ParseError(source, 0, "weights", e.what());
   }
@@ -151,6 +189,16 @@ void SetTorchThreads(int num_threads) {
 
 // --- SsdModel
 // ---------------------------------------------------------------------------------------
+
+namespace {
+
+int64_t CountParameters(internal::SsdNetImpl& net) {
+  int64_t count = 0;
+  for (const auto& p : net.parameters()) count += p.numel();
+  return count;
+}
+
+}  // namespace
 
 struct SsdModel::Impl {
   explicit Impl(const SsdConfig& c)
@@ -219,7 +267,7 @@ SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
   return model;
 }
 
-void SsdModel::Save(const std::filesystem::path& model_dir) const {
+void SsdModel::Save(const std::filesystem::path& model_dir, const std::string& training_run) const {
   std::filesystem::create_directories(model_dir);
   AtomicPath weights(model_dir / kWeightsFile);
   torch::serialize::OutputArchive archive;
@@ -234,7 +282,8 @@ void SsdModel::Save(const std::filesystem::path& model_dir) const {
       SsdConfigToJson(impl_->config,
                       {.fnv1a64 = hash,
                        .input_channels = NetworkInputChannels(impl_->config.encoding),
-                       .parameters = ParameterCount()}));
+                       .parameters = ParameterCount(),
+                       .training_run = training_run}));
 }
 
 const SsdConfig& SsdModel::config() const { return impl_->config; }
@@ -272,11 +321,7 @@ std::vector<std::vector<ScoredBox>> SsdModel::Detect(const std::vector<PlanarIma
   return detections;
 }
 
-int64_t SsdModel::ParameterCount() const {
-  int64_t count = 0;
-  for (const auto& p : impl_->net->parameters()) count += p.numel();
-  return count;
-}
+int64_t SsdModel::ParameterCount() const { return CountParameters(*impl_->net); }
 
 int64_t SsdModel::CompressionParameterCount() const {
   return impl_->net->CompressionParameterCount();
@@ -371,25 +416,55 @@ LossParts SsdTrainer::Evaluate(const TrainBatch& batch) const {
   return Impl::Parts(impl_->Loss(batch));
 }
 
-void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const {
+void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
+                                const std::string& training_run) const {
   torch::serialize::OutputArchive root, model, optimizer;
   impl_->model.net->save(model);
   impl_->optimizer.save(optimizer);
   root.write("model", model);
   root.write("optimizer", optimizer);
   root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
+  root.write("config", c10::IValue(SsdConfigToJson(impl_->model.config)));
+  root.write("parameters", torch::tensor(CountParameters(*impl_->model.net)));
+  root.write("training_run", c10::IValue(training_run));
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   AtomicPath out(path);
   root.save_to(out.temp_path().string());
   out.Commit();
 }
 
-int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path) {
+int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run) {
   STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
       << "missing checkpoint " << path.string();
   try {
     torch::serialize::InputArchive root, model, optimizer;
     root.load_from(path.string());
+    // Its own record first: LibTorch's shape errors would name neither the file nor the setting.
+    c10::IValue recorded_config, recorded_run;
+    if (root.try_read("config", recorded_config)) {
+      const std::string mismatch =
+          FirstDifference(recorded_config.toStringRef(), SsdConfigToJson(impl_->model.config));
+      STEREODET_CHECK_IO(mismatch.empty())
+          << path.string() << " was written for another model: " << mismatch
+          << "; it is not this model folder's checkpoint (copy a model folder whole, or train "
+             "anew with --force)";
+      torch::Tensor parameters;
+      root.read("parameters", parameters);
+      const int64_t expected = CountParameters(*impl_->model.net);
+      STEREODET_CHECK_IO(parameters.item<int64_t>() == expected)
+          << path.string() << " holds " << parameters.item<int64_t>() << " parameters, the model "
+          << expected;
+    }
+    if (!training_run.empty()) {
+      const std::string found =
+          root.try_read("training_run", recorded_run) ? recorded_run.toStringRef() : "";
+      STEREODET_CHECK_IO(found == training_run)
+          << path.string() << " is from another training run ("
+          << (found.empty() ? "none recorded" : found) << ") than the folder's model.json ("
+          << training_run
+          << "): a checkpoint copied from another model folder? Copy a model folder whole, or "
+             "train anew with --force";
+    }
     root.read("model", model);
     root.read("optimizer", optimizer);
     torch::Tensor epochs;

@@ -8,8 +8,8 @@
 //                   the hash, input channels and parameter count of its model.pt (WeightsRecord)
 //   model.pt        the weights (LibTorch archive)
 //   run.json        the run manifest (util/run_manifest.h): command line, version, data, settings
-//   checkpoint.pt   training state for --resume (weights, optimizer, epochs done); not needed to
-//                   detect
+//   checkpoint.pt   training state for --resume (weights, optimizer, epochs done, the config and
+//                   the training run it was written by); not needed to detect
 //   train_log.csv   one line per epoch (ssd_train.h)
 #ifndef STEREODET_MODELS_SSD_H_
 #define STEREODET_MODELS_SSD_H_
@@ -48,12 +48,15 @@ struct WeightsRecord {
   std::string fnv1a64;      // FNV-1a 64 of model.pt's bytes, 16 hex digits; empty = not recorded
   int input_channels = 0;   // NetworkInputChannels(encoding)
   int64_t parameters = -1;  // SsdModel::ParameterCount(); -1 = not recorded
+  // The training run (train ssd) that wrote model.pt, 16 hex digits; its checkpoint.pt records the
+  // same, so --resume refuses a checkpoint copied from another folder. Empty = not recorded.
+  std::string training_run;
 };
 
 // JSON text of a config, and back. Parse errors throw ParseError naming `source`. With a
 // non-empty `weights.fnv1a64` the text has a "weights" object {file, fnv1a64, input_channels,
-// parameters}, which SsdConfigFromJson ignores and ReadWeightsRecord reads (empty record when
-// absent).
+// parameters, and training_run when not empty}, which SsdConfigFromJson ignores and
+// ReadWeightsRecord reads (empty record when absent).
 std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights = {});
 SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source);
 WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source);
@@ -97,9 +100,9 @@ class SsdModel {
   // Reads model.json and model.pt from `model_dir`. Throws std::runtime_error naming the file, and
   // naming both when model.json records another model.pt (its hash or parameter count differ).
   static SsdModel Load(const std::filesystem::path& model_dir);
-  // Writes model.pt, then model.json with the weights' hash (WeightsRecord), into `model_dir`
-  // (created if missing), each atomically.
-  void Save(const std::filesystem::path& model_dir) const;
+  // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord),
+  // into `model_dir` (created if missing), each atomically.
+  void Save(const std::filesystem::path& model_dir, const std::string& training_run = {}) const;
 
   const SsdConfig& config() const;
   // The default boxes, in the order of the outputs' box dimension.
@@ -165,11 +168,18 @@ class SsdTrainer {
   // mode, no gradients).
   LossParts Evaluate(const TrainBatch& batch) const;
 
-  // Weights + optimizer state + `epochs_done`, written atomically.
-  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;
+  // Weights + optimizer state + `epochs_done`, the model's config (SsdConfigToJson: encoding,
+  // classes, input size, boxes, width, hence every tensor's shape) and `training_run` (the id that
+  // model.json's WeightsRecord holds), written atomically.
+  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
+                      const std::string& training_run = {}) const;
   // Restores what SaveCheckpoint wrote (into the model given to the constructor); returns
-  // epochs_done. Throws std::runtime_error if the file is missing or does not fit the model.
-  int LoadCheckpoint(const std::filesystem::path& path);
+  // epochs_done. Throws std::runtime_error naming the file if it is missing or does not fit the
+  // model: its recorded config differs from the model's (the message names the first field that
+  // differs, e.g. "encoding"), or its parameter count does, or `training_run` is not empty and the
+  // checkpoint records another run or none (a checkpoint of another training, copied in). A
+  // checkpoint written before configs were recorded is checked by LibTorch's shapes only.
+  int LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run = {});
 
  private:
   struct Impl;

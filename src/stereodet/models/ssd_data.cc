@@ -142,6 +142,7 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
           const cv::Mat left = ReadColourImage(paths.image_left);
           const cv::Mat right = ReadColourImage(paths.image_right);
           CheckStereoPairSize(left, right, paths.image_left, paths.image_right);
+          CheckImageFitsMatcher(options.stereo.disparity, left.size(), paths.image_left);
           const StereoEncoding encoding = encoder.Encode(left, right, geometry, outputs);
           frame.height_code = ResizeHeightCodes(encoding.height_code, network_size);
         }

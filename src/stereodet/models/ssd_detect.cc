@@ -119,6 +119,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
               right = ReadColourImage(paths.image_right);
             }
             CheckStereoPairSize(left, right, paths.image_left, paths.image_right);
+            CheckImageFitsMatcher(stereo.disparity, left.size(), paths.image_left);
             ScopedStage stage(times, "stereo");
             StereoEncoder encoder(stereo);
             StereoOutputs outputs;

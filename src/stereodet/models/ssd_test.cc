@@ -1,6 +1,7 @@
 // Tests of the network through the public, torch-free API (tiny inputs, a few steps: fast).
 #include "stereodet/models/ssd.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,9 +10,12 @@
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/fuzz_corpus.h"
 
 namespace stereodet {
 namespace {
+
+using ::testing::HasSubstr;
 
 SsdConfig TinyConfig(InputEncoding encoding) {
   SsdConfig config;
@@ -237,6 +241,93 @@ TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
   EXPECT_DOUBLE_EQ(resumed.Step(batch, 1e-2).total, continued);
   // The optimizer's moments were restored too, so the step after matches as well.
   EXPECT_DOUBLE_EQ(resumed.Step(batch, 1e-2).total, next);
+}
+
+TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
+  SetTorchThreads(1);
+  const std::filesystem::path path =
+      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "tied" / "checkpoint.pt";
+  std::filesystem::remove_all(path.parent_path());
+  SsdModel model(TinyConfig(InputEncoding::kRgb), 4);
+  SsdTrainer(model).SaveCheckpoint(path, 3, "00000000000000aa");
+
+  SsdModel same(TinyConfig(InputEncoding::kRgb), 5);
+  SsdTrainer same_trainer(same);
+  EXPECT_EQ(same_trainer.LoadCheckpoint(path, "00000000000000aa"), 3);
+  EXPECT_EQ(same_trainer.LoadCheckpoint(path), 3);  // no run to check against: config only
+  try {
+    same_trainer.LoadCheckpoint(path, "00000000000000bb");
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(),
+                HasSubstr(path.string() + " is from another training run "
+                                          "(00000000000000aa) than the folder's model.json "
+                                          "(00000000000000bb)"));
+  }
+  // Another input encoding: the first setting that differs is named, before LibTorch's shapes.
+  SsdModel other(TinyConfig(InputEncoding::kRgbhFixed), 5);
+  SsdTrainer other_trainer(other);
+  try {
+    other_trainer.LoadCheckpoint(path);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr(path.string() + " was written for another model: encoding: "
+                                                    "\"rgb\" here, \"rgbh-fixed\" in the model"));
+  }
+  SsdConfig wider = TinyConfig(InputEncoding::kRgb);
+  wider.base_channels *= 2;
+  SsdModel wide(wider, 5);
+  SsdTrainer wide_trainer(wide);
+  EXPECT_THROW(
+      {
+        try {
+          wide_trainer.LoadCheckpoint(path);
+        } catch (const std::runtime_error& e) {
+          EXPECT_THAT(e.what(), HasSubstr("base_channels: "));
+          throw;
+        }
+      },
+      std::runtime_error);
+}
+
+// The model_json fuzzer's corpus (fuzz/model_json_fuzzer.cc), replayed: each model.json parses
+// or throws ParseError naming the file (1e300 or 99999999999 where an int belongs included: no
+// undefined behaviour), and what parses round-trips.
+TEST(SsdTest, ModelJsonFuzzCorpusParsesOrThrowsParseError) {
+  const std::vector<std::filesystem::path> files = FuzzCorpusFiles("model_json");
+  ASSERT_GE(files.size(), 5u) << "the model_json corpus is missing";
+  int parsed = 0, rejected = 0;
+  for (const std::filesystem::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    const std::string text = ReadFile(path);
+    try {
+      (void)ReadWeightsRecord(text, path.string());
+    } catch (const ParseError& e) {
+      EXPECT_EQ(e.file(), path.string());
+    }
+    try {
+      const SsdConfig config = SsdConfigFromJson(text, path.string());
+      const std::string written = SsdConfigToJson(config);
+      EXPECT_EQ(SsdConfigToJson(SsdConfigFromJson(written, "written")), written);
+      ++parsed;
+    } catch (const ParseError& e) {
+      EXPECT_EQ(e.file(), path.string());
+      ++rejected;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "unexpected exception: " << e.what();
+    }
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(rejected, 0);
+  try {
+    SsdConfigFromJson(
+        ReadFile(FuzzCorpusFiles("model_json").at(0).parent_path() / "float_width.json"),
+        "model.json");
+    ADD_FAILURE() << "no error";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.field(), "input_width");
+    EXPECT_THAT(e.message(), HasSubstr("expected an integer"));
+  }
 }
 
 }  // namespace

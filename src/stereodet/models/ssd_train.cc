@@ -3,11 +3,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <random>
 #include <sstream>
+#include <string>
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/strings.h"
 #include "stereodet/util/timer.h"
@@ -21,6 +25,14 @@ constexpr char kCheckpointFile[] = "checkpoint.pt";
 constexpr char kLogFile[] = "train_log.csv";
 constexpr char kLogHeader[] =
     "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
+
+// A new training run's id: 16 hex digits that no other run draws (the random device, the clock).
+std::string NewTrainingRunId() {
+  std::random_device device;
+  const uint64_t random = (static_cast<uint64_t>(device()) << 32) ^ device();
+  const auto now = std::chrono::system_clock::now().time_since_epoch().count();
+  return HashHex(Fnv1a64(std::to_string(now), random));
+}
 
 // The log's lines for epochs <= `epochs_done` (a resumed run drops what came after its checkpoint).
 std::string KeptLogLines(const std::filesystem::path& path, int epochs_done) {
@@ -104,8 +116,13 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
       fs::remove(options.out_dir / file);
     }
   }
+  // The id that ties model.json to checkpoint.pt: kept by a resumed run, new for a new one (and
+  // for a folder written before ids were recorded).
+  std::string recorded_run;
   if (resuming) {
-    const SsdConfig saved = SsdConfigFromJson(ReadFile(config_path), config_path.string());
+    const std::string saved_text = ReadFile(config_path);
+    recorded_run = ReadWeightsRecord(saved_text, config_path.string()).training_run;
+    const SsdConfig saved = SsdConfigFromJson(saved_text, config_path.string());
     STEREODET_CHECK(saved.encoding == config.encoding)
         << "--resume: " << config_path.string() << " was trained with --input "
         << InputEncodingName(saved.encoding) << ", not " << InputEncodingName(config.encoding);
@@ -127,7 +144,8 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
-  int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path) : 0;
+  int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path, recorded_run) : 0;
+  const std::string training_run = recorded_run.empty() ? NewTrainingRunId() : recorded_run;
   STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << checkpoint_path.string();
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
@@ -199,8 +217,8 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
 
     // Weights and config first, then the checkpoint: a crash in between resumes from the previous
     // epoch and redoes this one.
-    model.Save(options.out_dir);
-    trainer.SaveCheckpoint(checkpoint_path, epoch + 1);
+    model.Save(options.out_dir, training_run);
+    trainer.SaveCheckpoint(checkpoint_path, epoch + 1, training_run);
     log += fmt::format("{},{},{},{:.6f},{:.6f},{:.6f},{:.6g},{:.3f},{:.1f}\n", epoch + 1, steps,
                        images, loss_sum / steps, loc_sum / steps, conf_sum / steps, lr,
                        images / epoch_seconds, epoch_seconds);

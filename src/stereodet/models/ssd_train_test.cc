@@ -277,6 +277,42 @@ TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
   }
 }
 
+TEST(SsdTrainTest, ResumeRefusesACheckpointOfAnotherFolder) {
+  // The audit's model.pt case, for checkpoint.pt: another training's checkpoint of the same shapes
+  // copied in would resume silently from the other run's weights.
+  const fs::path root = WriteTinyDataset("tied_data", 2);
+  TrainSsdOptions a = TinyTraining(root, TempDir("tied_a"));
+  a.model.encoding = InputEncoding::kRgb;
+  a.epochs = 2;
+  a.max_epochs_this_run = 1;
+  TrainSsdOptions b = a;
+  b.out_dir = TempDir("tied_b");
+  EXPECT_EQ(TrainSsd(a).epochs_done, 1);
+  EXPECT_EQ(TrainSsd(b).epochs_done, 1);
+  fs::copy_file(b.out_dir / "checkpoint.pt", a.out_dir / "checkpoint.pt",
+                fs::copy_options::overwrite_existing);
+  const std::string weights = ReadFile(a.out_dir / "model.pt");
+  a.resume = true;
+  try {
+    TrainSsd(a);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find((a.out_dir / "checkpoint.pt").string() +
+                                         " is from another training run ("),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(a.out_dir / "model.pt"), weights);  // nothing trained over
+  // Its own checkpoint resumes, and the resumed run keeps the folder's id.
+  b.resume = true;
+  b.max_epochs_this_run = 0;
+  const std::string run_b = ReadWeightsRecord(ReadFile(b.out_dir / "model.json"), "b").training_run;
+  EXPECT_EQ(run_b.size(), 16u);
+  EXPECT_EQ(TrainSsd(b).epochs_done, 2);
+  EXPECT_EQ(ReadWeightsRecord(ReadFile(b.out_dir / "model.json"), "b").training_run, run_b);
+  EXPECT_NE(ReadWeightsRecord(ReadFile(a.out_dir / "model.json"), "a").training_run, run_b);
+}
+
 TEST(SsdDetectTest, ToKittiDetectionsScalesClipsAndMarks3DUnknown) {
   const std::vector<ScoredBox> boxes = {{{10, 5, 20, 15}, 0.9f, 2},
                                         {{-5, -5, 700, 200}, 0.5f, 1},

@@ -513,6 +513,7 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
         const cv::Mat left = ReadColourImage(in.image_left);
         const cv::Mat right = ReadColourImage(in.image_right);
         CheckStereoPairSize(left, right, in.image_left, in.image_right);
+        CheckImageFitsMatcher(options.stereo.disparity, left.size(), in.image_left);
         const StereoGeometry geometry = StereoGeometry::FromCalibration(ReadCalibration(in.calib));
         times.Add("decode", timer.ElapsedSeconds());
 

@@ -492,6 +492,36 @@ TEST(EncodeDatasetTest, APairOfUnequalSizesNamesBothFiles) {
   }
 }
 
+TEST(EncodeDatasetTest, AnImageSmallerThanTheBlockNamesTheFile) {
+  // The audit: "block size 15 does not fit the 8x8 image" named no file or frame.
+  TestTempDir dir;
+  std::vector<std::string> ids = WriteScenes(dir / "data");
+  const KittiDataset dataset(dir / "data");
+  const fs::path left = dir / "data/training/image_2/000001.png";
+  const cv::Mat tiny(8, 8, CV_8UC3, cv::Scalar(0, 0, 0));
+  WriteImageAtomically(left, tiny);
+  WriteImageAtomically(dir / "data/training/image_3/000001.png", tiny);
+  try {
+    EncodeDataset(dataset, ids, dir / "out", SmallOptions());
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr(left.string() + ": the 8x8 px image is smaller than the "));
+    EXPECT_THAT(e.what(), HasSubstr("block"));
+  }
+  // The same folder with a search range as wide as the image.
+  const cv::Mat narrow(kHeight, 32, CV_8UC3, cv::Scalar(0, 0, 0));
+  WriteImageAtomically(left, narrow);
+  WriteImageAtomically(dir / "data/training/image_3/000001.png", narrow);
+  EncodeDatasetOptions options = SmallOptions();
+  options.stereo.disparity.num_disparities = 32;
+  try {
+    EncodeDataset(dataset, ids, dir / "out2", options);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr(left.string() + ": the image is 32 px wide"));
+  }
+}
+
 TEST(FramePicturesTest, WritesFourPicturesOfTheImageSize) {
   TestTempDir dir;
   WriteScenes(dir / "data", 1);

@@ -214,6 +214,21 @@ cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::
   return filtered;
 }
 
+void CheckImageFitsMatcher(const DisparityOptions& options, const cv::Size& size,
+                           const std::filesystem::path& image) {
+  const int block = options.method == DisparityMethod::kBlockMatching ? options.bm.block_size
+                                                                      : options.sgbm.block_size;
+  STEREODET_CHECK_IO(block < std::min(size.width, size.height))
+      << image.string() << ": the " << size.width << "x" << size.height
+      << " px image is smaller than the matcher's " << block << "x" << block
+      << " px block (--block-size); a stereo image must be larger than its block";
+  STEREODET_CHECK_IO(options.min_disparity + options.num_disparities < size.width)
+      << image.string() << ": the image is " << size.width
+      << " px wide, no wider than the disparity search (min disparity " << options.min_disparity
+      << " + " << options.num_disparities
+      << " disparities), so no pixel could be matched; lower --num-disparities";
+}
+
 cv::Mat DisparityMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
   if (options_.MatchesColour()) return DisparityFromFixedPoint(ComputeFixedPoint(left, right));
   return DisparityFromFixedPoint(ComputeFixedPoint(ToGrey(left), ToGrey(right)));
@@ -255,10 +270,12 @@ void WriteKittiDisparity(const std::filesystem::path& path, const cv::Mat& dispa
   out.Commit();
 }
 
-cv::Mat ReadKittiDisparity(const std::filesystem::path& path) {
-  cv::Mat encoded = ReadImage(path, cv::IMREAD_UNCHANGED, "disparity image");
+namespace {
+
+// The CV_32FC1 disparity of KITTI's encoding (uint16, round(d * 256), 0 = invalid).
+cv::Mat FromKittiEncoding(const cv::Mat& encoded, const std::string& source) {
   STEREODET_CHECK_IO(encoded.type() == CV_16UC1)
-      << path << ": a KITTI disparity image must be a 16-bit grey PNG, got OpenCV type "
+      << source << ": a KITTI disparity image must be a 16-bit grey PNG, got OpenCV type "
       << encoded.type();
   cv::Mat disparity(encoded.size(), CV_32FC1);
   for (int v = 0; v < encoded.rows; ++v) {
@@ -269,6 +286,25 @@ cv::Mat ReadKittiDisparity(const std::filesystem::path& path) {
     }
   }
   return disparity;
+}
+
+}  // namespace
+
+cv::Mat ReadKittiDisparity(const std::filesystem::path& path) {
+  return FromKittiEncoding(ReadImage(path, cv::IMREAD_UNCHANGED, "disparity image"), path.string());
+}
+
+cv::Mat DecodeKittiDisparity(std::string_view bytes, const std::string& source) {
+  cv::Mat encoded;
+  try {
+    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
+                         const_cast<char*>(bytes.data()));
+    if (!bytes.empty()) encoded = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    STEREODET_THROW_IO() << "cannot read disparity image " << source << ": " << e.err;
+  }
+  STEREODET_CHECK_IO(!encoded.empty()) << "cannot read disparity image " << source;
+  return FromKittiEncoding(encoded, source);
 }
 
 void DisparityErrorOptions::Check() const {

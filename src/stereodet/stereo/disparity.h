@@ -126,6 +126,13 @@ class DisparityMatcher {
   cv::Ptr<cv::Algorithm> wls_filter_;     // with WLS: ximgproc::DisparityWLSFilter
 };
 
+// Throws std::runtime_error naming `image` when an image of `size` is too small for the matcher of
+// `options`: its block must be smaller than the image's shorter side, and min_disparity +
+// num_disparities less than its width (else OpenCV fails, or marks every pixel invalid). The
+// matcher checks the same, but knows no file; the readers of a stereo pair call this after reading.
+void CheckImageFitsMatcher(const DisparityOptions& options, const cv::Size& size,
+                           const std::filesystem::path& image);
+
 // Converts OpenCV's CV_16SC1 (disparity * 16) to CV_32FC1 pixels with kInvalidDisparity for <= 0.
 cv::Mat DisparityFromFixedPoint(const cv::Mat& fixed_point);
 
@@ -139,6 +146,8 @@ void WriteKittiDisparity(const std::filesystem::path& path, const cv::Mat& dispa
 // Returns CV_32FC1 with kInvalidDisparity where the file holds 0. Throws std::runtime_error naming
 // the file if it is missing, unreadable or not a 16-bit single-channel image.
 cv::Mat ReadKittiDisparity(const std::filesystem::path& path);
+// The same from a PNG file's bytes (the fuzz target's entry); `source` names it in errors.
+cv::Mat DecodeKittiDisparity(std::string_view bytes, const std::string& source);
 
 // --- Accuracy against ground truth. ---
 

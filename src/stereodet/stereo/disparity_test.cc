@@ -11,6 +11,8 @@
 
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/planar_scene.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/fuzz_corpus.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -363,6 +365,36 @@ TEST(EvaluateDisparityTest, PoolingEqualsOneEvaluationOfTheConcatenation) {
   EXPECT_DOUBLE_EQ(pooled.bad_rate, whole.bad_rate);
   EXPECT_NEAR(pooled.mean_abs_error_px, whole.mean_abs_error_px, 1e-12);
   EXPECT_GT(whole.d1_all_rate, whole.d1_rate);  // the holes count in D1-all
+}
+
+// The disparity fuzzer's corpus (fuzz/disparity_fuzzer.cc), replayed: each PNG decodes to valid
+// disparities or throws std::runtime_error naming the file (a header claiming 100000x100000 px,
+// a truncated file, an 8-bit or colour image); never a crash or an OpenCV assertion.
+TEST(DisparityTest, FuzzCorpusInputsDecodeOrThrowNamingTheFile) {
+  const std::vector<std::filesystem::path> files = FuzzCorpusFiles("disparity");
+  ASSERT_GE(files.size(), 4u) << "the disparity corpus is missing";
+  int decoded = 0, rejected = 0;
+  for (const std::filesystem::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    const std::string bytes = ReadFile(path);
+    try {
+      const cv::Mat disparity = DecodeKittiDisparity(bytes, path.string());
+      ASSERT_EQ(disparity.type(), CV_32FC1);
+      EXPECT_EQ(cv::norm(ReadKittiDisparity(path), disparity, cv::NORM_INF), 0.0);
+      for (int v = 0; v < disparity.rows; ++v) {
+        for (int u = 0; u < disparity.cols; ++u) {
+          const float d = disparity.at<float>(v, u);
+          EXPECT_TRUE(!IsValidDisparity(d) || (d > 0.0f && d < 256.0f)) << d;
+        }
+      }
+      ++decoded;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      ++rejected;
+    }
+  }
+  EXPECT_GT(decoded, 0);
+  EXPECT_GT(rejected, 0);
 }
 
 }  // namespace

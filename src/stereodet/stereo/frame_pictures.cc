@@ -19,6 +19,7 @@ FramePicturesResult WriteFramePictures(const KittiDataset& dataset, const std::s
   const cv::Mat left = ReadColourImage(in.image_left);
   const cv::Mat right = ReadColourImage(in.image_right);
   CheckStereoPairSize(left, right, in.image_left, in.image_right);
+  CheckImageFitsMatcher(options.disparity, left.size(), in.image_left);
   const StereoGeometry geometry = StereoGeometry::FromCalibration(ReadCalibration(in.calib));
   const StereoEncoding encoding =
       encoder.Encode(left, right, geometry, {.rgbh = false, .depth = false, .points = true});

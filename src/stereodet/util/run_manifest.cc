@@ -53,6 +53,11 @@ RunManifest RunManifestFromJson(const std::string& text, const std::string& sour
     manifest.version = j.at(field).get<std::string>();
     field = "command_line";
     manifest.command_line = j.at(field).get<std::string>();
+    // Objects, as RunManifestToJson writes them (and can write back).
+    for (const char* object_field : {"inputs", "settings", "frames"}) {
+      field = object_field;
+      if (!j.at(field).is_object()) throw ParseError(source, 0, field, "must be a JSON object");
+    }
     field = "inputs";
     for (const auto& [name, path] : j.at(field).items()) {
       manifest.inputs.emplace_back(name, path.get<std::string>());

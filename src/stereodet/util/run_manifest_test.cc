@@ -10,6 +10,7 @@
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/fuzz_corpus.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/test_temp_dir.h"
 
@@ -56,6 +57,35 @@ TEST(RunManifestTest, ReadsNothingFromAFolderWithoutOneAndNamesABadFile) {
     EXPECT_THAT(e.what(), HasSubstr("run.json"));
     EXPECT_THAT(e.what(), HasSubstr("version"));
   }
+}
+
+// The run_manifest fuzzer's corpus (fuzz/run_manifest_fuzzer.cc), replayed: each input parses or
+// throws ParseError, and what parses is written and read back unchanged.
+TEST(RunManifestTest, FuzzCorpusInputsParseOrThrowParseError) {
+  const std::vector<fs::path> files = FuzzCorpusFiles("run_manifest");
+  ASSERT_GE(files.size(), 5u) << "the run_manifest corpus is missing";
+  int parsed = 0, rejected = 0;
+  for (const fs::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    try {
+      const RunManifest manifest = RunManifestFromJson(ReadFile(path), path.string());
+      const std::string written = RunManifestToJson(manifest);
+      const RunManifest again = RunManifestFromJson(written, "written");
+      EXPECT_EQ(again.tool, manifest.tool);
+      EXPECT_EQ(again.inputs, manifest.inputs);
+      EXPECT_EQ(again.frames, manifest.frames);
+      EXPECT_EQ(again.settings_json, manifest.settings_json);
+      EXPECT_EQ(RunManifestToJson(again), written);
+      ++parsed;
+    } catch (const ParseError& e) {
+      EXPECT_EQ(e.file(), path.string());
+      ++rejected;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "unexpected exception: " << e.what();
+    }
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(rejected, 0);
 }
 
 TEST(OverlapCheckTest, RefusesTheSameFolderInsideAndAroundButNotASibling) {

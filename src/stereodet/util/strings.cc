@@ -69,6 +69,11 @@ std::string_view Trim(std::string_view text) {
   return text;
 }
 
+std::string_view StripUtf8Bom(std::string_view text) {
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  return text;
+}
+
 std::string FormatShortest(double value) { return FormatShortestImpl(value); }
 std::string FormatShortest(float value) { return FormatShortestImpl(value); }
 

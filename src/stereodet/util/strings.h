@@ -22,6 +22,11 @@ std::vector<std::string_view> Split(std::string_view text, char separator);
 
 std::string_view Trim(std::string_view text);
 
+// `text` without a leading UTF-8 byte-order mark (EF BB BF), which Windows editors put at the start
+// of a text file; the text parsers (labels, detections, calibrations, splits) read a file through
+// this, so the mark never becomes part of its first token.
+std::string_view StripUtf8Bom(std::string_view text);
+
 // Case-insensitive ASCII comparison (strcasecmp): "car" equals "Car"; bytes >= 0x80 compare
 // exactly.
 bool EqualsIgnoreCase(std::string_view a, std::string_view b);

@@ -67,4 +67,19 @@ TEST(StringsTest, EqualsIgnoreCaseComparesAsciiLettersOnlyCaseInsensitively) {
       EqualsIgnoreCase("a[", "A{"));  // '[' and '{' differ by the case bit, but are no letters
 }
 
+TEST(StringsTest, StripUtf8BomRemovesOnlyALeadingMark) {
+  EXPECT_EQ(StripUtf8Bom("\xEF\xBB\xBF"
+                         "Car 0"),
+            "Car 0");
+  EXPECT_EQ(StripUtf8Bom("Car 0"), "Car 0");
+  EXPECT_EQ(StripUtf8Bom("\xEF\xBB\xBF"), "");
+  EXPECT_EQ(StripUtf8Bom(""), "");
+  EXPECT_EQ(StripUtf8Bom("\xEF\xBB"), "\xEF\xBB");            // a part of one: kept
+  EXPECT_EQ(StripUtf8Bom("x\xEF\xBB\xBF"), "x\xEF\xBB\xBF");  // not at the start
+  EXPECT_EQ(StripUtf8Bom("\xEF\xBB\xBF\xEF\xBB\xBF"
+                         "a"),
+            "\xEF\xBB\xBF"
+            "a");  // only one
+}
+
 }  // namespace stereodet
