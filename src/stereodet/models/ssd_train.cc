@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "stereodet/models/train_common.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/run_manifest.h"
@@ -17,26 +18,8 @@ namespace stereodet {
 
 namespace {
 
-constexpr char kCheckpointFile[] = "checkpoint.pt";
-constexpr char kLogFile[] = "train_log.csv";
 constexpr char kLogHeader[] =
     "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
-
-// The log's lines for epochs <= `epochs_done` (a resumed run drops what came after its checkpoint).
-std::string KeptLogLines(const std::filesystem::path& path, int epochs_done) {
-  std::string kept = std::string(kLogHeader) + "\n";
-  if (!std::filesystem::exists(path)) return kept;
-  std::istringstream in(ReadFile(path));
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    const std::vector<std::string_view> fields = Split(line, ',');
-    if (fields.empty()) continue;
-    const std::optional<long long> epoch = ParseInt(fields[0]);
-    if (epoch && *epoch <= epochs_done) kept += line + "\n";
-  }
-  return kept;
-}
 
 }  // namespace
 
@@ -59,20 +42,18 @@ void TrainSsdOptions::Check() const {
       << "max_epochs_this_run must be >= 0, got " << max_epochs_this_run;
   STEREODET_CHECK(loader_capacity >= 1) << "loader_capacity must be >= 1, got " << loader_capacity;
   STEREODET_CHECK(!(resume && force)) << "--resume and --force exclude each other";
+  STEREODET_CHECK(ParseComputeDevice(device).has_value())
+      << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
 double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps) {
-  const double warmup =
-      options.warmup_steps > 0 ? std::min(1.0, (step + 1.0) / options.warmup_steps) : 1.0;
-  const double progress =
-      total_steps > 1 ? std::clamp(static_cast<double>(step) / (total_steps - 1), 0.0, 1.0) : 1.0;
-  const double cosine = 0.5 * (1.0 + std::cos(M_PI * progress));
-  const double f = options.final_lr_fraction;
-  return options.learning_rate * warmup * (f + (1.0 - f) * cosine);
+  return WarmupCosineLearningRate(options.learning_rate, options.warmup_steps,
+                                  options.final_lr_fraction, step, total_steps);
 }
 
 TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   options.Check();
+  const ComputeDevice device = ResolveComputeDevice(options.device);
   const Timer total_timer;
   SetTorchThreads(options.threads);
   TrainSsdSummary summary;
@@ -86,24 +67,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   SsdConfig config = options.model;
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
-  const fs::path weights_path = options.out_dir / "model.pt";
-  const bool resuming = options.resume && fs::exists(checkpoint_path);
-  // Never train over a model silently: it is resumed (with its checkpoint) or replaced on request.
-  const bool has_model = fs::exists(weights_path) || fs::exists(checkpoint_path);
-  if (has_model && !resuming && !options.force) {
-    STEREODET_THROW_ARG() << options.out_dir.string() << " holds a trained model ("
-                          << (fs::exists(weights_path) ? "model.pt" : "checkpoint.pt") << ")"
-                          << (options.resume ? " but no checkpoint.pt to resume from" : "")
-                          << "; use --resume to continue its training, --force to train a new "
-                             "model over it, or another --out";
-  }
-  CheckFolderWritable(options.out_dir);
-  if (has_model && options.force) {
-    for (const char* file :
-         {"model.pt", "model.json", kCheckpointFile, kLogFile, kRunManifestFile}) {
-      fs::remove(options.out_dir / file);
-    }
-  }
+  const bool resuming = PrepareModelFolder(options.out_dir, options.resume, options.force);
   if (resuming) {
     const SsdConfig saved = SsdConfigFromJson(ReadFile(config_path), config_path.string());
     STEREODET_CHECK(saved.encoding == config.encoding)
@@ -123,7 +87,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   }
   STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
 
-  SsdModel model(config, options.seed);
+  SsdModel model(config, options.seed, device);
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
@@ -157,8 +121,8 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
     WriteRunManifest(options.out_dir, manifest);
   };
   write_manifest(start_epoch);
-  const std::filesystem::path log_path = options.out_dir / kLogFile;
-  std::string log = KeptLogLines(log_path, start_epoch);
+  const std::filesystem::path log_path = options.out_dir / kTrainLogFile;
+  std::string log = KeptLogLines(log_path, kLogHeader, start_epoch);
 
   const int64_t steps_per_epoch = (data.size() + options.batch_size - 1) / options.batch_size;
   const int64_t total_steps = steps_per_epoch * options.epochs;
