@@ -1,4 +1,5 @@
-// `stereodet train ssd` and `stereodet detect ssd`: the single-shot image detector (issue 6).
+// `stereodet train ssd|det3d` and `stereodet detect ssd|det3d`: the single-shot image detector
+// (issue 6) and the single-stage 3D point detector (issue 14).
 //   stereodet train ssd --data DIR --split train --input rgb|rgbh-fixed|rgbh-learned --out
 //   MODEL_DIR
 //                       [--epochs N] [--resume | --force] [--seed S] [--threads N]
@@ -12,6 +13,9 @@
 #include <string>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/models/det3d/det3d_detect.h"
+#include "stereodet/models/det3d/det3d_train.h"
+#include "stereodet/models/device.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/models/ssd_train.h"
@@ -78,6 +82,129 @@ void RunDetect(DetectArgs& a) {
   }
 }
 
+struct TrainDet3dArgs {
+  TrainDet3dOptions options;
+  std::string input = PointSourceName(Det3dConfig().input);
+  bool quiet = false;
+};
+
+struct DetectDet3dArgs {
+  DetectDet3dOptions options;
+  bool quiet = false;
+};
+
+void RunTrainDet3d(TrainDet3dArgs& a) {
+  TrainDet3dOptions& options = a.options;
+  options.model.input = *ParsePointSource(a.input);  // CLI::IsMember checked it
+  if (a.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
+  const TrainDet3dSummary s = TrainDet3d(options);
+  if (!a.quiet) {
+    std::fprintf(stderr,
+                 "trained det3d on %s: %d frames (%d objects), epochs %d/%d (%d this run), final "
+                 "loss %.4f, %.2f frames/s, %.3f s/step, %.0f s; %lld parameters (%lld in the "
+                 "auxiliary network, training only)\nmodel: %s\n",
+                 a.input.c_str(), s.frames, s.objects, s.epochs_done, options.epochs, s.epochs_run,
+                 s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
+                 static_cast<long long>(s.parameters),
+                 static_cast<long long>(s.auxiliary_parameters), options.out_dir.c_str());
+  }
+}
+
+void RunDetectDet3d(DetectDet3dArgs& a) {
+  DetectDet3dOptions& options = a.options;
+  if (a.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
+  const DetectDet3dSummary s = DetectDet3d(options);
+  if (!a.quiet) {
+    std::fprintf(stderr,
+                 "detected %lld objects in %d frames, %.1f frames/s (network %.3f s); wrote %s\n",
+                 static_cast<long long>(s.detections), s.frames, s.frames_per_second,
+                 s.network_seconds, options.out_dir.c_str());
+  }
+}
+
+void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
+  auto targs = std::make_shared<TrainDet3dArgs>();
+  TrainDet3dOptions& t = targs->options;
+  CLI::App* ts = train->add_subcommand(
+      "det3d",
+      "single-stage 3D detector (pillars, BEV CNN, SA-SSD auxiliary net, PSWarp) on "
+      "lidar scans or stereo point clouds");
+  ts->add_option("--data", t.data_root, "dataset root (training/, ImageSets/)")->required();
+  ts->add_option("--points", t.points_dir,
+                 "stereo input: the folder `stereodet stereo --encode points` wrote");
+  ts->add_option("--split", t.split, "split name in ImageSets/ or a split file")
+      ->capture_default_str();
+  ts->add_option("--input", targs->input, "point source")
+      ->check(CLI::IsMember({"lidar", "stereo"}))
+      ->capture_default_str();
+  ts->add_option("--out", t.out_dir, "model folder (model.json, model.pt, checkpoint, log)")
+      ->required();
+  ts->add_option("--epochs", t.epochs, "epochs")->check(CLI::PositiveNumber)->capture_default_str();
+  ts->add_option("--batch-size", t.batch_size, "frames per step")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ts->add_option("--lr", t.learning_rate, "peak learning rate (AdamW, warm-up then cosine)")
+      ->capture_default_str();
+  ts->add_flag("--resume", t.resume, "continue from MODEL_DIR/checkpoint.pt if present");
+  ts->add_flag("--force", t.force,
+               "train a new model over one already in MODEL_DIR (its files are removed)");
+  ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
+      ->capture_default_str();
+  ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
+  ts->add_option("--device", t.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
+  ts->add_option("--width", t.model.base_channels, "base channels of the BEV backbone")
+      ->capture_default_str();
+  ts->add_option("--pillar", t.model.grid.pillar_m, "pillar size, m")->capture_default_str();
+  ts->add_option("--max-distance", t.filter.stereo_max_distance_m,
+                 "stereo: drop points farther than this, m (0 = keep all)")
+      ->capture_default_str();
+  ts->add_flag("!--no-augment", t.augment.enabled, "no augmentation (flip, noise)");
+  ts->add_flag("!--no-auxiliary", t.loss.auxiliary, "do not train the auxiliary network");
+  ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
+      ->capture_default_str();
+  ts->add_option("--stop-after", t.max_epochs_this_run,
+                 "stop after N epochs in this run (0 = all); continue later with --resume")
+      ->capture_default_str();
+  ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
+  ts->callback([targs] { RunTrainDet3d(*targs); });
+
+  auto dargs = std::make_shared<DetectDet3dArgs>();
+  DetectDet3dOptions& d = dargs->options;
+  CLI::App* ds = detect->add_subcommand("det3d", "run a model from `stereodet train det3d`");
+  ds->add_option("--model", d.model_dir, "model folder")->required();
+  ds->add_option("--data", d.data_root, "dataset root")->required();
+  ds->add_option("--points", d.points_dir,
+                 "stereo models: the folder `stereodet stereo --encode points` wrote");
+  ds->add_option("--subset", d.subset, "training or testing")
+      ->check(CLI::IsMember({"training", "testing"}))
+      ->capture_default_str();
+  ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
+      ->capture_default_str();
+  ds->add_option("--out", d.out_dir,
+                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
+      ->required();
+  ds->add_option("--score-threshold", d.decode.score_threshold, "drop detections scoring below")
+      ->capture_default_str();
+  ds->add_option("--max-distance", d.filter.stereo_max_distance_m,
+                 "stereo: drop points farther than this, m (0 = keep all)")
+      ->capture_default_str();
+  ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
+  ds->add_option("--device", d.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
+  ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
+      ->capture_default_str();
+  ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
+  ds->callback([dargs] { RunDetectDet3d(*dargs); });
+}
+
 }  // namespace
 
 void AddModelsCommand(CLI::App& app) {
@@ -108,6 +235,9 @@ void AddModelsCommand(CLI::App& app) {
   ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
       ->capture_default_str();
   ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
+  ts->add_option("--device", t.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
   ts->add_option("--width", t.model.boxes.input_width, "network input width, px")
       ->capture_default_str();
   ts->add_option("--height", t.model.boxes.input_height, "network input height, px")
@@ -143,10 +273,15 @@ void AddModelsCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
+  ds->add_option("--device", d.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });
+
+  AddDet3dCommands(train, detect);
 }
 
 }  // namespace stereodet::cli

@@ -5,6 +5,8 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "stereodet/models/checkpoint_internal.h"
+#include "stereodet/models/device_internal.h"
 #include "stereodet/models/ssd_net.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -201,10 +203,16 @@ int64_t CountParameters(internal::SsdNetImpl& net) {
 }  // namespace
 
 struct SsdModel::Impl {
-  explicit Impl(const SsdConfig& c)
-      : config(c), default_boxes(GenerateDefaultBoxes(c.boxes)), net(c) {}
+  Impl(const SsdConfig& c, ComputeDevice d)
+      : config(c),
+        device(internal::TorchDevice(d)),
+        default_boxes(GenerateDefaultBoxes(c.boxes)),
+        net(c) {
+    net->to(device);
+  }
 
   SsdConfig config;
+  torch::Device device;
   std::vector<DefaultBox> default_boxes;
   // LibTorch's forward() is not const; inference does not change the weights.
   mutable internal::SsdNet net;
@@ -216,14 +224,15 @@ struct SsdModel::Impl {
                planar.data(),
                {static_cast<int64_t>(inputs.size()), c, config.InputHeight(), config.InputWidth()},
                torch::kFloat32)
-        .clone();
+        .clone()
+        .to(device);
   }
 };
 
-SsdModel::SsdModel(const SsdConfig& config, uint64_t seed) {
+SsdModel::SsdModel(const SsdConfig& config, uint64_t seed, ComputeDevice device) {
   config.Check();
   torch::manual_seed(seed);
-  impl_ = std::make_unique<Impl>(config);
+  impl_ = std::make_unique<Impl>(config, device);
 }
 
 SsdModel::SsdModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -231,11 +240,11 @@ SsdModel::~SsdModel() = default;
 SsdModel::SsdModel(SsdModel&&) noexcept = default;
 SsdModel& SsdModel::operator=(SsdModel&&) noexcept = default;
 
-SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
+SsdModel SsdModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
   const std::filesystem::path config_path = model_dir / kConfigFile;
   const std::string config_text = ReadFile(config_path);
   const SsdConfig config = SsdConfigFromJson(config_text, config_path.string());
-  auto impl = std::make_unique<Impl>(config);
+  auto impl = std::make_unique<Impl>(config, device);
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
   STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
       << "missing weights file " << weights_path.string();
@@ -250,14 +259,7 @@ SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
         << ": its hash is " << hash << ", model.json records " << record.fnv1a64
         << " (weights of another training?); copy the model folder whole";
   }
-  try {
-    torch::serialize::InputArchive archive;
-    archive.load_from(weights_path.string());
-    impl->net->load(archive);
-  } catch (const c10::Error& e) {
-    STEREODET_THROW_IO() << "cannot load weights " << weights_path.string() << " for the model in "
-                         << config_path.string() << ": " << e.what_without_backtrace();
-  }
+  internal::LoadWeights(weights_path, config_path.string(), *impl->net, impl->device);
   SsdModel model(std::move(impl));
   if (record.parameters >= 0) {
     STEREODET_CHECK_IO(model.ParameterCount() == record.parameters)
@@ -269,12 +271,7 @@ SsdModel SsdModel::Load(const std::filesystem::path& model_dir) {
 
 void SsdModel::Save(const std::filesystem::path& model_dir, const std::string& training_run) const {
   std::filesystem::create_directories(model_dir);
-  AtomicPath weights(model_dir / kWeightsFile);
-  torch::serialize::OutputArchive archive;
-  impl_->net->save(archive);
-  archive.save_to(weights.temp_path().string());
-  const std::string hash = HashFileHex(weights.temp_path());
-  weights.Commit();
+  const std::string hash = internal::SaveWeights(model_dir / kWeightsFile, *impl_->net);
   // Written second, with the weights' hash: until it is in place, model.json still names the
   // previous weights, and Load refuses the pair rather than mixing them.
   WriteFileAtomically(
@@ -300,8 +297,8 @@ SsdOutputs SsdModel::Forward(const std::vector<PlanarImage>& inputs) const {
   auto [deltas, logits] = impl_->net->forward(impl_->ToTensor(inputs));
   STEREODET_CHECK(deltas.size(1) == outputs.num_boxes)
       << "network emits " << deltas.size(1) << " boxes, default boxes are " << outputs.num_boxes;
-  const torch::Tensor probabilities = torch::softmax(logits, 2).contiguous();
-  deltas = deltas.contiguous();
+  const torch::Tensor probabilities = torch::softmax(logits, 2).to(torch::kCPU).contiguous();
+  deltas = deltas.to(torch::kCPU).contiguous();
   outputs.deltas.assign(deltas.data_ptr<float>(), deltas.data_ptr<float>() + deltas.numel());
   outputs.probabilities.assign(probabilities.data_ptr<float>(),
                                probabilities.data_ptr<float>() + probabilities.numel());
@@ -374,12 +371,16 @@ struct SsdTrainer::Impl {
     auto* images = const_cast<float*>(batch.images.data());
     auto* labels = const_cast<int64_t*>(batch.labels.data());
     auto* deltas = const_cast<float*>(batch.deltas.data());
-    const torch::Tensor x = torch::from_blob(
-        images, {batch.batch_size, batch.channels, batch.height, batch.width}, torch::kFloat32);
+    // On the CPU these stay views; on another device they are copies.
+    const torch::Device& device = model.device;
+    const torch::Tensor x =
+        torch::from_blob(images, {batch.batch_size, batch.channels, batch.height, batch.width},
+                         torch::kFloat32)
+            .to(device);
     const torch::Tensor target_labels =
-        torch::from_blob(labels, {batch.batch_size, boxes}, torch::kInt64);
+        torch::from_blob(labels, {batch.batch_size, boxes}, torch::kInt64).to(device);
     const torch::Tensor target_deltas =
-        torch::from_blob(deltas, {batch.batch_size, boxes, 4}, torch::kFloat32);
+        torch::from_blob(deltas, {batch.batch_size, boxes, 4}, torch::kFloat32).to(device);
     auto [pred_deltas, logits] = model.net->forward(x);
     return internal::MultiBoxLoss(pred_deltas, logits, target_labels, target_deltas, options.loss);
   }
@@ -438,7 +439,7 @@ int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path, const std::str
       << "missing checkpoint " << path.string();
   try {
     torch::serialize::InputArchive root, model, optimizer;
-    root.load_from(path.string());
+    root.load_from(path.string(), impl_->model.device);
     // Its own record first: LibTorch's shape errors would name neither the file nor the setting.
     c10::IValue recorded_config, recorded_run;
     if (root.try_read("config", recorded_config)) {

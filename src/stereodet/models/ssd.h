@@ -22,6 +22,7 @@
 
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/default_boxes.h"
+#include "stereodet/models/device.h"
 #include "stereodet/models/input_encoding.h"
 
 namespace stereodet {
@@ -91,15 +92,17 @@ void SetTorchThreads(int num_threads);
 // Not thread-safe: one thread at a time may call Forward/Detect (LibTorch parallelises inside).
 class SsdModel {
  public:
-  // A new network, its weights drawn from `seed` (the same seed gives the same weights).
-  SsdModel(const SsdConfig& config, uint64_t seed);
+  // A new network, its weights drawn from `seed` (the same seed gives the same weights), on
+  // `device` (inputs and outputs stay host arrays).
+  SsdModel(const SsdConfig& config, uint64_t seed, ComputeDevice device = ComputeDevice::kCpu);
   ~SsdModel();
   SsdModel(SsdModel&&) noexcept;
   SsdModel& operator=(SsdModel&&) noexcept;
 
   // Reads model.json and model.pt from `model_dir`. Throws std::runtime_error naming the file, and
   // naming both when model.json records another model.pt (its hash or parameter count differ).
-  static SsdModel Load(const std::filesystem::path& model_dir);
+  static SsdModel Load(const std::filesystem::path& model_dir,
+                       ComputeDevice device = ComputeDevice::kCpu);
   // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord),
   // into `model_dir` (created if missing), each atomically.
   void Save(const std::filesystem::path& model_dir, const std::string& training_run = {}) const;

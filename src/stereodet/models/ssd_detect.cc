@@ -33,6 +33,8 @@ void DetectSsdOptions::Check() const {
   STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
   STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+  STEREODET_CHECK(ParseComputeDevice(device).has_value())
+      << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
 std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
@@ -71,7 +73,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   // Refuse a folder of something else before the work, not after it.
   StagedFolder out(options.out_dir, kRunManifestFile);
   SetTorchThreads(options.threads);
-  const SsdModel model = SsdModel::Load(options.model_dir);
+  const SsdModel model = SsdModel::Load(options.model_dir, ResolveComputeDevice(options.device));
   const SsdConfig& config = model.config();
   const bool height = UsesHeight(config.encoding);
 

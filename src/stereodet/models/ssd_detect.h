@@ -31,6 +31,7 @@ struct DetectSsdOptions {
   int batch_size = 8;
   int threads = 0;       // LibTorch and the per-frame preparation (0 = all cores)
   int max_frames = 0;    // only the first N frames of the split (0 = all)
+  std::string device = "cpu";  // cpu | cuda (device.h)
   DecodeOptions decode;  // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
   // Stereo pipeline for RGB-H models. Must be what the model was trained with (the defaults).
   StereoOptions stereo;

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "stereodet/models/train_common.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -21,8 +22,6 @@ namespace stereodet {
 
 namespace {
 
-constexpr char kCheckpointFile[] = "checkpoint.pt";
-constexpr char kLogFile[] = "train_log.csv";
 constexpr char kLogHeader[] =
     "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
 
@@ -32,22 +31,6 @@ std::string NewTrainingRunId() {
   const uint64_t random = (static_cast<uint64_t>(device()) << 32) ^ device();
   const auto now = std::chrono::system_clock::now().time_since_epoch().count();
   return HashHex(Fnv1a64(std::to_string(now), random));
-}
-
-// The log's lines for epochs <= `epochs_done` (a resumed run drops what came after its checkpoint).
-std::string KeptLogLines(const std::filesystem::path& path, int epochs_done) {
-  std::string kept = std::string(kLogHeader) + "\n";
-  if (!std::filesystem::exists(path)) return kept;
-  std::istringstream in(ReadFile(path));
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    const std::vector<std::string_view> fields = Split(line, ',');
-    if (fields.empty()) continue;
-    const std::optional<long long> epoch = ParseInt(fields[0]);
-    if (epoch && *epoch <= epochs_done) kept += line + "\n";
-  }
-  return kept;
 }
 
 }  // namespace
@@ -71,20 +54,18 @@ void TrainSsdOptions::Check() const {
       << "max_epochs_this_run must be >= 0, got " << max_epochs_this_run;
   STEREODET_CHECK(loader_capacity >= 1) << "loader_capacity must be >= 1, got " << loader_capacity;
   STEREODET_CHECK(!(resume && force)) << "--resume and --force exclude each other";
+  STEREODET_CHECK(ParseComputeDevice(device).has_value())
+      << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
 double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps) {
-  const double warmup =
-      options.warmup_steps > 0 ? std::min(1.0, (step + 1.0) / options.warmup_steps) : 1.0;
-  const double progress =
-      total_steps > 1 ? std::clamp(static_cast<double>(step) / (total_steps - 1), 0.0, 1.0) : 1.0;
-  const double cosine = 0.5 * (1.0 + std::cos(M_PI * progress));
-  const double f = options.final_lr_fraction;
-  return options.learning_rate * warmup * (f + (1.0 - f) * cosine);
+  return WarmupCosineLearningRate(options.learning_rate, options.warmup_steps,
+                                  options.final_lr_fraction, step, total_steps);
 }
 
 TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   options.Check();
+  const ComputeDevice device = ResolveComputeDevice(options.device);
   const Timer total_timer;
   SetTorchThreads(options.threads);
   TrainSsdSummary summary;
@@ -98,24 +79,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   SsdConfig config = options.model;
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
-  const fs::path weights_path = options.out_dir / "model.pt";
-  const bool resuming = options.resume && fs::exists(checkpoint_path);
-  // Never train over a model silently: it is resumed (with its checkpoint) or replaced on request.
-  const bool has_model = fs::exists(weights_path) || fs::exists(checkpoint_path);
-  if (has_model && !resuming && !options.force) {
-    STEREODET_THROW_ARG() << options.out_dir.string() << " holds a trained model ("
-                          << (fs::exists(weights_path) ? "model.pt" : "checkpoint.pt") << ")"
-                          << (options.resume ? " but no checkpoint.pt to resume from" : "")
-                          << "; use --resume to continue its training, --force to train a new "
-                             "model over it, or another --out";
-  }
-  CheckFolderWritable(options.out_dir);
-  if (has_model && options.force) {
-    for (const char* file :
-         {"model.pt", "model.json", kCheckpointFile, kLogFile, kRunManifestFile}) {
-      fs::remove(options.out_dir / file);
-    }
-  }
+  const bool resuming = PrepareModelFolder(options.out_dir, options.resume, options.force);
   // The id that ties model.json to checkpoint.pt: kept by a resumed run, new for a new one (and
   // for a folder written before ids were recorded).
   std::string recorded_run;
@@ -140,7 +104,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   }
   STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
 
-  SsdModel model(config, options.seed);
+  SsdModel model(config, options.seed, device);
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
@@ -175,8 +139,8 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
     WriteRunManifest(options.out_dir, manifest);
   };
   write_manifest(start_epoch);
-  const std::filesystem::path log_path = options.out_dir / kLogFile;
-  std::string log = KeptLogLines(log_path, start_epoch);
+  const std::filesystem::path log_path = options.out_dir / kTrainLogFile;
+  std::string log = KeptLogLines(log_path, kLogHeader, start_epoch);
 
   const int64_t steps_per_epoch = (data.size() + options.batch_size - 1) / options.batch_size;
   const int64_t total_steps = steps_per_epoch * options.epochs;

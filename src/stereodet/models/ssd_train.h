@@ -43,6 +43,7 @@ struct TrainSsdOptions {
   // does.
   int max_epochs_this_run = 0;
   int loader_capacity = 3;  // batches prepared ahead
+  std::string device = "cpu";  // cpu | cuda (device.h); bit-identical resume needs the same one
   SsdDataOptions data;
   SsdTrainerOptions trainer;
   ProgressOptions progress;

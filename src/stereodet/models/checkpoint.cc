@@ -1,0 +1,66 @@
+#include "stereodet/models/checkpoint_internal.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/run_manifest.h"
+
+namespace stereodet::internal {
+
+void SaveTrainingCheckpoint(const std::filesystem::path& path, const torch::nn::Module& module,
+                            const torch::optim::Optimizer& optimizer, int epochs_done) {
+  torch::serialize::OutputArchive root, model, optim;
+  module.save(model);
+  optimizer.save(optim);
+  root.write("model", model);
+  root.write("optimizer", optim);
+  root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  AtomicPath out(path);
+  root.save_to(out.temp_path().string());
+  out.Commit();
+}
+
+int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module& module,
+                           torch::optim::Optimizer& optimizer, const torch::Device& device) {
+  STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
+      << "missing checkpoint " << path.string();
+  try {
+    torch::serialize::InputArchive root, model, optim;
+    root.load_from(path.string(), device);
+    root.read("model", model);
+    root.read("optimizer", optim);
+    torch::Tensor epochs;
+    root.read("epochs_done", epochs);
+    module.load(model);
+    optimizer.load(optim);
+    return static_cast<int>(epochs.item<int64_t>());
+  } catch (const c10::Error& e) {
+    STEREODET_THROW_IO() << "cannot load checkpoint " << path.string() << ": "
+                         << e.what_without_backtrace();
+  }
+  return 0;
+}
+
+std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Module& module) {
+  AtomicPath weights(path);
+  torch::serialize::OutputArchive archive;
+  module.save(archive);
+  archive.save_to(weights.temp_path().string());
+  const std::string hash = HashFileHex(weights.temp_path());
+  weights.Commit();
+  return hash;
+}
+
+void LoadWeights(const std::filesystem::path& path, const std::string& config_source,
+                 torch::nn::Module& module, const torch::Device& device) {
+  try {
+    torch::serialize::InputArchive archive;
+    archive.load_from(path.string(), device);
+    module.load(archive);
+  } catch (const c10::Error& e) {
+    STEREODET_THROW_IO() << "cannot load weights " << path.string() << " for the model in "
+                         << config_source << ": " << e.what_without_backtrace();
+  }
+}
+
+}  // namespace stereodet::internal

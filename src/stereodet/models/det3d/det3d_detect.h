@@ -1,0 +1,47 @@
+// Running a trained 3D detector over a KITTI-format split: `stereodet detect det3d`. Writes one
+// KITTI detection file per frame (OUT/ID.txt: type, truncated -1, occluded -1, alpha, the 2D box
+// of the projected 3D box, dimensions, location, rotation_y, score in [0, 1]) and OUT/run.json;
+// OUT is a StagedFolder (one run, swapped in whole at the end), as `detect ssd` writes it.
+#ifndef STEREODET_MODELS_DET3D_DET3D_DETECT_H_
+#define STEREODET_MODELS_DET3D_DET3D_DETECT_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "stereodet/models/det3d/det3d_model.h"
+#include "stereodet/util/progress.h"
+
+namespace stereodet {
+
+struct DetectDet3dOptions {
+  std::filesystem::path model_dir;
+  std::filesystem::path data_root;
+  std::filesystem::path points_dir;  // stereo models: the `stereo --encode points` folder
+  std::string subset = "training";
+  std::string split = "val";
+  std::filesystem::path out_dir;
+  int batch_size = 1;
+  int threads = 0;
+  int max_frames = 0;
+  std::string device = "cpu";
+  Det3dDecodeOptions decode;  // score >= 0.1, BEV NMS 0.1, at most 100 boxes a frame
+  PointFilterOptions filter;  // as in training (LiDAR: the camera's view; stereo: 50 m)
+  ProgressOptions progress;
+  std::string command_line;
+  void Check() const;
+};
+
+struct DetectDet3dSummary {
+  int frames = 0;
+  int64_t detections = 0;
+  double seconds = 0;
+  double frames_per_second = 0;  // end to end: reading, pillars, network, NMS, writing
+  double network_seconds = 0;    // forward + decoding alone
+};
+
+DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_DET3D_DET3D_DETECT_H_

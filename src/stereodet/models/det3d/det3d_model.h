@@ -1,0 +1,132 @@
+// The single-stage 3D detector (issue 14): SA-SSD's ideas (He et al. 2020) on a dense pillar / BEV
+// backbone, as no sparse convolution is available. LibTorch stays inside det3d_model.cc.
+//
+//   points --Pillarize--> pillar feature net (linear + BN + ReLU, max over a pillar's points)
+//   --scatter--> BEV canvas [C, rows, cols] --> 3 conv blocks (strides 2, 4, 8 of the canvas)
+//   --> upsampled to stride 2 and concatenated --> 1x1 heads per anchor: class logit, 7 box
+//   residuals, 2 direction logits; and part-sensitive class maps (PSWarp).
+//   Training only: the auxiliary network samples the 3 blocks' maps bilinearly at each point
+//   (plus its height) and predicts foreground and the offset to its box's centre.
+//   Score = mean of sigmoid(class logit) and the PSWarp confidence (the part maps sampled at the
+//   predicted box's part centres, averaged, sigmoid).
+//
+// A model folder is the SSD's (ssd.h): model.json (Det3dConfig + weights record), model.pt,
+// run.json, checkpoint.pt, train_log.csv.
+#ifndef STEREODET_MODELS_DET3D_DET3D_MODEL_H_
+#define STEREODET_MODELS_DET3D_DET3D_MODEL_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "stereodet/models/det3d/det3d_data.h"
+#include "stereodet/models/det3d/det3d_targets.h"
+#include "stereodet/models/device.h"
+#include "stereodet/models/ssd.h"
+
+namespace stereodet {
+
+struct Det3dConfig {
+  PointSource input = PointSource::kLidar;
+  std::vector<std::string> classes = {"Car"};  // KITTI spelling; anchors from DefaultAnchorClass
+  BevGridOptions grid;                         // 48 x 48 m at 0.4 m: a 120 x 120 canvas
+  int base_channels = 32;                      // pillar features; blocks have 1, 2, 4 x this
+  int max_points_per_pillar = 32;              // points beyond are dropped (first ones kept)
+  int parts_l = 2, parts_w = 2;                // PSWarp's part grid over a box
+  void Check() const;                          // throws std::invalid_argument
+  static constexpr int kHeadStride = 2;        // head map cells per canvas cell
+  std::vector<AnchorClass> AnchorClasses() const;
+};
+
+std::string Det3dConfigToJson(const Det3dConfig& config, const WeightsRecord& weights = {});
+// Parse errors throw ParseError naming `source` and the field.
+Det3dConfig Det3dConfigFromJson(const std::string& text, const std::string& source);
+
+// One frame's network input and (training) targets.
+struct Det3dSample {
+  Pillars pillars;
+  AnchorTargets anchors;       // training only
+  PointTargets points;         // training only, for aux_xyz
+  std::vector<float> aux_xyz;  // [point][3] the auxiliary network's points (a subsample)
+};
+
+// Builds a frame's sample: pillars, and with `with_targets` the anchor and auxiliary targets
+// (at most `max_aux_points` points, an even subsample).
+Det3dSample MakeDet3dSample(const Det3dFrame& frame, const Det3dConfig& config,
+                            const std::vector<LidarBox>& anchors, bool with_targets,
+                            int max_aux_points = 4096);
+
+struct Det3dLossParts {
+  double total = 0, classification = 0, box = 0, direction = 0, part_warp = 0, segmentation = 0,
+         centre = 0;
+  int num_positive = 0;
+};
+
+struct Det3dDecodeOptions {
+  float score_threshold = 0.1f;
+  RotatedNmsOptions nms;  // BEV IoU 0.1, 1000 candidates, at most 100 boxes a frame
+  void Check() const;
+};
+
+// Not thread-safe: one thread at a time.
+class Det3dModel {
+ public:
+  Det3dModel(const Det3dConfig& config, uint64_t seed, ComputeDevice device = ComputeDevice::kCpu);
+  ~Det3dModel();
+  Det3dModel(Det3dModel&&) noexcept;
+  Det3dModel& operator=(Det3dModel&&) noexcept;
+
+  // Reads model.json and model.pt; refuses weights model.json does not record (hash, parameter
+  // count), naming both files.
+  static Det3dModel Load(const std::filesystem::path& model_dir,
+                         ComputeDevice device = ComputeDevice::kCpu);
+  void Save(const std::filesystem::path& model_dir) const;
+
+  const Det3dConfig& config() const;
+  const std::vector<LidarBox>& anchors() const;
+  ComputeDevice device() const;
+
+  // Inference (no gradients, BN in evaluation mode; the auxiliary network is not run): per sample,
+  // scored boxes after rotated NMS, best first.
+  std::vector<std::vector<ScoredLidarBox>> Detect(const std::vector<Det3dSample>& samples,
+                                                  const Det3dDecodeOptions& options = {}) const;
+
+  int64_t ParameterCount() const;           // all trainable parameters
+  int64_t AuxiliaryParameterCount() const;  // of the auxiliary network (unused at inference)
+
+ private:
+  friend class Det3dTrainer;
+  struct Impl;
+  explicit Det3dModel(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+struct Det3dLossOptions {
+  double box_weight = 2.0;        // SA-SSD's omega
+  double direction_weight = 0.2;  // SECOND
+  double part_warp_weight = 1.0;
+  double segmentation_weight = 0.9;  // SA-SSD's mu
+  double centre_weight = 2.0;        // SA-SSD's lambda
+  bool auxiliary = true;             // train the auxiliary network
+  void Check() const;
+};
+
+class Det3dTrainer {
+ public:
+  Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss = {}, double weight_decay = 1e-2);
+  ~Det3dTrainer();
+  Det3dLossParts Step(const std::vector<Det3dSample>& batch, double learning_rate);
+  Det3dLossParts Evaluate(const std::vector<Det3dSample>& batch) const;
+  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;
+  int LoadCheckpoint(const std::filesystem::path& path);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_DET3D_DET3D_MODEL_H_

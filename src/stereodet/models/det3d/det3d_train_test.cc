@@ -1,0 +1,230 @@
+// The 3D detector end to end on a tiny KITTI-format dataset written by the test (seconds): it
+// overfits a few frames and detects its own boxes, resumes bit-identically, writes KITTI files.
+#include "stereodet/models/det3d/det3d_train.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <sstream>
+
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/geometry/iou.h"
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/models/det3d/det3d_detect.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/run_manifest.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Frames with one or two cars (labels in the camera frame), a LiDAR scan of points inside each
+// car and a flat ground 1.73 m under the sensor; also a copy of the scans as "stereo" points.
+fs::path WriteTinyDataset(const std::string& name, int frames) {
+  const fs::path root = TempDir(name);
+  for (const char* folder : {"image_2", "label_2", "calib", "velodyne"}) {
+    fs::create_directories(root / "training" / folder);
+  }
+  fs::create_directories(root / "stereo/velodyne");
+  const Calibration calib = KittiLikeCalibration();
+  const cv::Mat image(375, 1242, CV_8UC3, cv::Scalar(0, 0, 0));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<std::string> ids;
+  for (int i = 0; i < frames; ++i) {
+    const std::string id = FrameId(i);
+    ids.push_back(id);
+    cv::imwrite((root / "training/image_2" / (id + ".png")).string(), image);
+    WriteCalibration(root / "training/calib" / (id + ".txt"), calib);
+    std::vector<Object> labels;
+    for (int k = 0; k < 1 + i % 2; ++k) {
+      Object o;
+      o.type = "Car";
+      o.box3d.h = 1.5;
+      o.box3d.w = 1.6;
+      o.box3d.l = 3.9;
+      o.box3d.location = {-3.0 + 6.0 * k + u(rng), 1.65, 8.0 + 3 * i + 4 * u(rng)};
+      o.box3d.rotation_y = (i + k) % 2 == 0 ? 0.2 : 1.7;
+      o.alpha = AlphaFromRotationY(o.box3d.rotation_y, o.box3d.location);
+      o.box = {100, 100, 200, 200};
+      labels.push_back(o);
+    }
+    WriteObjects(root / "training/label_2" / (id + ".txt"), labels);
+    std::vector<VeloPoint> points;
+    for (double x = 2; x < 25; x += 0.5) {
+      for (double y = -10; y < 10; y += 0.5) {
+        points.push_back({float(x + 0.2 * u(rng)), float(y + 0.2 * u(rng)), -1.73f, 0.1f});
+      }
+    }
+    for (const Object& o : labels) {
+      const LidarBox b = LidarBoxFromObject(o, calib);
+      for (int n = 0; n < 300; ++n) {
+        const double along = (u(rng) - 0.5) * b.l, across = (u(rng) - 0.5) * b.w;
+        points.push_back({float(b.x + std::cos(b.yaw) * along - std::sin(b.yaw) * across),
+                          float(b.y + std::sin(b.yaw) * along + std::cos(b.yaw) * across),
+                          float(b.z + (u(rng) - 0.5) * b.h), 0.8f});
+      }
+    }
+    WriteVelodyne(root / "training/velodyne" / (id + ".bin"), points);
+    WriteVelodyne(root / "stereo/velodyne" / (id + ".bin"), points);
+  }
+  WriteSplit(root / "ImageSets/train.txt", ids);
+  WriteSplit(root / "ImageSets/val.txt", ids);
+  return root;
+}
+
+Det3dConfig TinyConfig() {
+  Det3dConfig c;
+  c.grid.min_x_m = 0;
+  c.grid.max_x_m = 25.6;
+  c.grid.min_y_m = -12.8;
+  c.grid.max_y_m = 12.8;
+  c.base_channels = 16;
+  return c;
+}
+
+TrainDet3dOptions TinyTraining(const fs::path& root, const fs::path& out) {
+  TrainDet3dOptions o;
+  o.data_root = root;
+  o.out_dir = out;
+  o.model = TinyConfig();
+  o.batch_size = 2;
+  o.warmup_steps = 4;
+  o.learning_rate = 5e-3;
+  o.threads = 1;
+  o.augment.enabled = false;
+  o.progress.stream = nullptr;
+  return o;
+}
+
+TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
+  const fs::path root = WriteTinyDataset("det3d_data", 4);
+  const fs::path out = TempDir("det3d_model");
+  TrainDet3dOptions options = TinyTraining(root, out);
+  options.epochs = 40;
+  const TrainDet3dSummary s = TrainDet3d(options);
+  EXPECT_EQ(s.frames, 4);
+  EXPECT_EQ(s.objects, 6);
+  EXPECT_EQ(s.epochs_done, 40);
+  EXPECT_GT(s.auxiliary_parameters, 0);
+  EXPECT_LT(s.auxiliary_parameters, s.parameters);
+  // The loss fell (first epoch's against the last's, from the CSV log).
+  std::ifstream log(out / "train_log.csv");
+  std::string header, first, line, last;
+  std::getline(log, header);
+  std::getline(log, first);
+  while (std::getline(log, line)) last = line;
+  auto loss = [](const std::string& l) {
+    return std::stod(l.substr(l.find(',', l.find(',', l.find(',') + 1) + 1) + 1));
+  };
+  EXPECT_LT(loss(last), 0.5 * loss(first)) << first << "\n" << last;
+
+  DetectDet3dOptions d;
+  d.model_dir = out;
+  d.data_root = root;
+  d.out_dir = root / "detections";
+  d.threads = 1;
+  d.progress.stream = nullptr;
+  const DetectDet3dSummary ds = DetectDet3d(d);
+  EXPECT_EQ(ds.frames, 4);
+  EXPECT_TRUE(fs::exists(d.out_dir / "run.json"));
+  const Calibration calib = KittiLikeCalibration();
+  for (int i = 0; i < 4; ++i) {
+    const std::string id = FrameId(i);
+    const std::vector<Object> labels =
+        ReadObjects(root / "training/label_2" / (id + ".txt")).objects;
+    const std::vector<Object> dets =
+        ReadObjects(d.out_dir / (id + ".txt"), {.kind = ObjectFileKind::kDetection}).objects;
+    ASSERT_GE(dets.size(), labels.size()) << id;
+    EXPECT_LE(dets.size(), 100u);
+    for (const Object& label : labels) {
+      double best = 0;
+      for (const Object& det : dets) {
+        ASSERT_TRUE(det.score.has_value());
+        EXPECT_GE(*det.score, 0.0);
+        EXPECT_LE(*det.score, 1.0);
+        if (*det.score < 0.3) continue;
+        best = std::max(best, BevIou(det.box3d, label.box3d));
+      }
+      EXPECT_GT(best, 0.5) << "frame " << id << ": no confident detection of its car";
+    }
+  }
+}
+
+TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
+  const fs::path root = WriteTinyDataset("det3d_resume_data", 2);
+  const fs::path out = TempDir("det3d_resume");
+  TrainDet3dOptions options = TinyTraining(root, out);
+  options.augment.enabled = true;  // seeded per (seed, epoch, frame): resumes exactly
+  options.epochs = 2;
+  options.max_epochs_this_run = 1;
+  EXPECT_EQ(TrainDet3d(options).epochs_done, 1);
+  // Into a folder with a model, without --resume or --force: refused.
+  options.max_epochs_this_run = 0;
+  EXPECT_THROW(TrainDet3d(options), std::invalid_argument);
+  options.resume = true;
+  EXPECT_EQ(TrainDet3d(options).epochs_run, 1);
+
+  const fs::path straight = TempDir("det3d_straight");
+  TrainDet3dOptions direct = TinyTraining(root, straight);
+  direct.augment.enabled = true;
+  direct.epochs = 2;
+  TrainDet3d(direct);
+  // The same weights (LibTorch's archive bytes differ run to run, so compare what they compute:
+  // the best 100 boxes and their scores, bit for bit) and the same losses in the log.
+  const Det3dModel a = Det3dModel::Load(out), b = Det3dModel::Load(straight);
+  const KittiDataset dataset(root);
+  const Det3dFrame frame =
+      LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(1), {"Car"}, {}, false);
+  const std::vector<Det3dSample> samples = {MakeDet3dSample(frame, a.config(), a.anchors(), false)};
+  Det3dDecodeOptions all;
+  all.score_threshold = 0.0f;
+  const auto da = a.Detect(samples, all), db = b.Detect(samples, all);
+  ASSERT_EQ(da[0].size(), 100u);
+  ASSERT_EQ(db[0].size(), 100u);
+  for (size_t i = 0; i < 100; ++i) {
+    EXPECT_EQ(da[0][i].box, db[0][i].box) << i;
+    EXPECT_EQ(da[0][i].score, db[0][i].score) << i;
+  }
+  auto losses = [](const std::string& log) {  // the lines without the two timing columns
+    std::string kept;
+    std::istringstream in(log);
+    for (std::string line; std::getline(in, line);) {
+      kept += line.substr(0, line.rfind(',', line.rfind(',') - 1)) + "\n";
+    }
+    return kept;
+  };
+  EXPECT_EQ(losses(ReadFile(out / "train_log.csv")), losses(ReadFile(straight / "train_log.csv")));
+
+  // Weights of another training are refused.
+  fs::copy_file(straight / "model.pt", out / "model.pt", fs::copy_options::overwrite_existing);
+  std::string text = ReadFile(out / "model.json");
+  text.replace(text.find("\"fnv1a64\": \"") + 12, 4, "0000");
+  WriteFileAtomically(out / "model.json", text);
+  EXPECT_THROW(Det3dModel::Load(out), std::runtime_error);
+
+  // A stereo model reads its points from --points.
+  const fs::path stereo_out = TempDir("det3d_stereo");
+  TrainDet3dOptions stereo = TinyTraining(root, stereo_out);
+  stereo.model.input = PointSource::kStereo;
+  stereo.epochs = 1;
+  EXPECT_THROW(TrainDet3d(stereo), std::invalid_argument);  // no --points
+  stereo.points_dir = root / "stereo";
+  EXPECT_EQ(TrainDet3d(stereo).objects, 3);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,63 @@
+#include "stereodet/models/train_common.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/run_manifest.h"
+#include "stereodet/util/strings.h"
+
+namespace stereodet {
+
+double WarmupCosineLearningRate(double peak, int warmup_steps, double final_fraction, int64_t step,
+                                int64_t total_steps) {
+  const double warmup = warmup_steps > 0 ? std::min(1.0, (step + 1.0) / warmup_steps) : 1.0;
+  const double progress =
+      total_steps > 1 ? std::clamp(static_cast<double>(step) / (total_steps - 1), 0.0, 1.0) : 1.0;
+  const double cosine = 0.5 * (1.0 + std::cos(M_PI * progress));
+  return peak * warmup * (final_fraction + (1.0 - final_fraction) * cosine);
+}
+
+bool PrepareModelFolder(const std::filesystem::path& out_dir, bool resume, bool force) {
+  namespace fs = std::filesystem;
+  const fs::path checkpoint_path = out_dir / kCheckpointFile;
+  const fs::path weights_path = out_dir / "model.pt";
+  const bool resuming = resume && fs::exists(checkpoint_path);
+  // Never train over a model silently: it is resumed (with its checkpoint) or replaced on request.
+  const bool has_model = fs::exists(weights_path) || fs::exists(checkpoint_path);
+  if (has_model && !resuming && !force) {
+    STEREODET_THROW_ARG() << out_dir.string() << " holds a trained model ("
+                          << (fs::exists(weights_path) ? "model.pt" : "checkpoint.pt") << ")"
+                          << (resume ? " but no checkpoint.pt to resume from" : "")
+                          << "; use --resume to continue its training, --force to train a new "
+                             "model over it, or another --out";
+  }
+  CheckFolderWritable(out_dir);
+  if (has_model && force) {
+    for (const char* file :
+         {"model.pt", "model.json", kCheckpointFile, kTrainLogFile, kRunManifestFile}) {
+      fs::remove(out_dir / file);
+    }
+  }
+  return resuming;
+}
+
+std::string KeptLogLines(const std::filesystem::path& path, const std::string& header,
+                         int epochs_done) {
+  std::string kept = header + "\n";
+  if (!std::filesystem::exists(path)) return kept;
+  std::istringstream in(ReadFile(path));
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    const std::vector<std::string_view> fields = Split(line, ',');
+    if (fields.empty()) continue;
+    const std::optional<long long> epoch = ParseInt(fields[0]);
+    if (epoch && *epoch <= epochs_done) kept += line + "\n";
+  }
+  return kept;
+}
+
+}  // namespace stereodet
