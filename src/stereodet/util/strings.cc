@@ -1,7 +1,12 @@
 #include "stereodet/util/strings.h"
 
+#include <fmt/format.h>
+
+#include <bit>
 #include <cctype>
 #include <charconv>
+#include <cstring>
+#include <iterator>
 #include <system_error>
 
 namespace stereodet {
@@ -71,6 +76,73 @@ std::string_view Trim(std::string_view text) {
 
 std::string FormatShortest(double value) { return FormatShortestImpl(value); }
 std::string FormatShortest(float value) { return FormatShortestImpl(value); }
+
+void AppendFmtShortest(std::string& out, double value) {
+  // fmt 9's default double format (write(out, double) -> dragonbox::to_decimal -> do_write_float
+  // with general format, no precision): the shortest digits, fixed notation when the exponent of
+  // the first digit is in [-4, 16), else d[.ddd]e+XX with at least two exponent digits.
+  constexpr uint64_t kExponentMask = 0x7ff0000000000000ULL;
+  uint64_t bits = std::bit_cast<uint64_t>(value);
+  if ((bits & kExponentMask) == kExponentMask) {  // nan, inf: fmt itself, rare
+    fmt::format_to(std::back_inserter(out), "{}", value);
+    return;
+  }
+  char text[40];
+  char* it = text;
+  if (bits >> 63) {
+    *it++ = '-';
+    value = -value;
+  }
+  const auto dec = fmt::detail::dragonbox::to_decimal(value);
+  char digits[24];
+  const int n = static_cast<int>(
+      std::to_chars(digits, digits + sizeof(digits), dec.significand).ptr - digits);
+  const int exponent = dec.exponent;  // value = significand * 10^exponent
+  const int first_exp = exponent + n - 1;
+  if (first_exp < -4 || first_exp >= 16) {
+    *it++ = digits[0];
+    if (n > 1) {
+      *it++ = '.';
+      std::memcpy(it, digits + 1, n - 1);
+      it += n - 1;
+    }
+    *it++ = 'e';
+    int e = first_exp;
+    *it++ = e < 0 ? '-' : '+';
+    if (e < 0) e = -e;
+    if (e >= 100) {
+      if (e >= 1000) *it++ = static_cast<char>('0' + e / 1000);
+      *it++ = static_cast<char>('0' + e / 100 % 10);
+    }
+    *it++ = static_cast<char>('0' + e / 10 % 10);
+    *it++ = static_cast<char>('0' + e % 10);
+  } else if (exponent >= 0) {  // 1234e2 -> 123400
+    std::memcpy(it, digits, n);
+    it += n;
+    std::memset(it, '0', exponent);
+    it += exponent;
+  } else if (n + exponent > 0) {  // 1234e-2 -> 12.34
+    const int whole = n + exponent;
+    std::memcpy(it, digits, whole);
+    it += whole;
+    *it++ = '.';
+    std::memcpy(it, digits + whole, n - whole);
+    it += n - whole;
+  } else {  // 1234e-6 -> 0.001234
+    *it++ = '0';
+    *it++ = '.';
+    std::memset(it, '0', -(n + exponent));
+    it += -(n + exponent);
+    std::memcpy(it, digits, n);
+    it += n;
+  }
+  out.append(text, it);
+}
+
+void AppendInt(std::string& out, int64_t value) {
+  char text[24];
+  out.append(text, std::to_chars(text, text + sizeof(text), value).ptr);
+}
 
 bool EqualsIgnoreCase(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
