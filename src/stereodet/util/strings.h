@@ -37,6 +37,10 @@ std::string FormatShortest(float value);
 // "1e-05", "1e+16", "-0", "nan", "inf"). fmt's own call costs about twice as much, which matters
 // to the writers of exact curves (millions of numbers; see docs/BENCHMARKS.md).
 void AppendFmtShortest(std::string& out, double value);
+// The same text written at `out`, which must have room for kFmtShortestMaxChars (the text is at
+// most 25 characters; the bytes after it may be overwritten); returns its end.
+inline constexpr int kFmtShortestMaxChars = 48;
+char* WriteFmtShortest(char* out, double value);
 // Appends the decimal text of `value` ("-12").
 void AppendInt(std::string& out, int64_t value);
 
