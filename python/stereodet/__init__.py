@@ -12,17 +12,19 @@ dicts of OpenPCDet / mmdetection3d, get_official_eval_result() (a drop-in for Op
 filter_sweep(), compare().
 
 Submodules: stereodet.kitti (labels, detections, calibrations, velodyne scans to and from numpy),
+stereodet.mmdet3d (kitti_eval, a drop-in for mmdetection3d's),
 stereodet.stereo (disparity, depth, height, RGB-H / RGB-D, point clouds from numpy images; loads
 OpenCV on first use). The evaluation functions are at the top level. docs/python.md is the guide.
 """
 
-from . import kitti
+from . import kitti, mmdet3d
 from ._core import ParseError, __version__
 from .evaluation import (ClassResult, ClassSpec, EvalOptions, EvalResult, compare, evaluate,
                          filter_sweep, get_official_eval_result)
 
 __all__ = ["ClassResult", "ClassSpec", "EvalOptions", "EvalResult", "ParseError", "__version__",
-           "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti", "stereo"]
+           "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti", "mmdet3d",
+           "stereo"]
 
 
 def __getattr__(name: str):

@@ -1,8 +1,8 @@
 #include "stereodet/report/eval_report.h"
 
-#include <fmt/compile.h>
 #include <fmt/format.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <iterator>
@@ -11,6 +11,7 @@
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
 
 namespace stereodet {
 
@@ -39,11 +40,6 @@ std::string Csv(double v) {
   return fmt::format("{}", v);
 }
 
-// Csv(v) appended to `out`.
-void AppendCsv(fmt::memory_buffer* out, double v) {
-  if (!std::isnan(v)) fmt::format_to(fmt::appender(*out), FMT_COMPILE("{}"), v);
-}
-
 }  // namespace
 
 std::string FormatNumber(double value, int decimals) {
@@ -57,31 +53,22 @@ double FpPerFrame(const CurvePoint& p, int64_t num_frames) {
   return num_frames > 0 ? static_cast<double>(p.fp) / static_cast<double>(num_frames) : 0.0;
 }
 
-json CurveJson(const std::vector<CurvePoint>& points, int64_t num_frames, bool with_aos) {
-  // Column by column into reserved arrays: an exact curve has one point per distinct score (tens
-  // of thousands per cell), and a push_back per value through curve["name"] costs a map look-up.
-  auto column = [&](auto value_of) {
-    json::array_t values;
-    values.reserve(points.size());
-    for (const CurvePoint& p : points) values.emplace_back(value_of(p));
-    return values;
-  };
-  json curve = {
-      {"threshold", column([](const CurvePoint& p) { return p.threshold; })},
-      {"tp", column([](const CurvePoint& p) { return p.tp; })},
-      {"fp", column([](const CurvePoint& p) { return p.fp; })},
-      {"fn", column([](const CurvePoint& p) { return p.fn; })},
-      {"precision", column([](const CurvePoint& p) { return p.precision; })},
-      {"recall", column([](const CurvePoint& p) { return p.recall; })},
-      {"fp_per_frame", column([&](const CurvePoint& p) { return FpPerFrame(p, num_frames); })}};
-  if (with_aos) curve["orientation"] = column([](const CurvePoint& p) { return p.orientation; });
-  return curve;
+// Where a curve is: results.json names the CSV (relative to the results folder) that holds it
+// exactly, and its number of points; the points themselves are too many for JSON (an exact curve
+// has one per distinct score).
+void AddCurveFile(json& e, const std::string& file, size_t points) {
+  e["curve_csv"] = file;
+  e["curve_points"] = points;
 }
 
-json FilteredCurveJson(const FilteredCurve& c, int64_t num_frames, bool with_aos) {
-  return {{"ap_r40", c.ap_r40},   {"ap_r11", c.ap_r11},
-          {"ap_voc", c.ap_voc},   {"aos_r40", c.aos_r40},
-          {"aos_r11", c.aos_r11}, {"curve", CurveJson(c.curve, num_frames, with_aos)}};
+json FilteredCurveJson(const FilteredCurve& c, const std::string& file) {
+  json e = {{"ap_r40", c.ap_r40},
+            {"ap_r11", c.ap_r11},
+            {"ap_voc", c.ap_voc},
+            {"aos_r40", c.aos_r40},
+            {"aos_r11", c.aos_r11}};
+  AddCurveFile(e, file, c.curve.size());
+  return e;
 }
 
 }  // namespace
@@ -122,7 +109,20 @@ json OptionsJson(const EvalOptions& options) {
           {"num_threads", options.num_threads}};
 }
 
-json ClassResultJson(const ClassResult& r, int64_t num_frames, const std::string& overlaps) {
+// The curve CSVs' names of a cell: "curves/" + prefix + CurveStem + suffix + ".csv" (suffix: ""
+// or "_OVERLAPS" with several runs).
+std::string CurveFile(const std::string& prefix, const ClassResult& r, const std::string& suffix) {
+  return "curves/" + prefix + CurveStem(r) + suffix + ".csv";
+}
+
+std::string RunSuffix(const std::vector<EvalRun>& runs, const EvalRun& run) {
+  // (append, not "_" + string: g++ 12 warns falsely on the latter, -Wrestrict)
+  std::string suffix;
+  if (runs.size() > 1) suffix.append("_").append(DescribeOverlaps(run.options.classes));
+  return suffix;
+}
+
+json ClassResultJson(const ClassResult& r, const std::string& overlaps, const std::string& suffix) {
   json e;
   e["class"] = r.class_name;
   e["metric"] = OverlapKindName(r.metric);
@@ -143,12 +143,14 @@ json ClassResultJson(const ClassResult& r, int64_t num_frames, const std::string
   e["best_f1"] = OperatingPointJson(r.best_f1);
   if (r.filtered) {
     const FilteredStats& fs = *r.filtered;
-    e["filtered"] = {{"naive", OperatingPointJson(fs.naive)},
-                     {"stable", OperatingPointJson(fs.stable)},
-                     {"naive_curve", FilteredCurveJson(fs.naive_curve, num_frames, r.has_aos)},
-                     {"stable_curve", FilteredCurveJson(fs.stable_curve, num_frames, r.has_aos)}};
+    e["filtered"] = {
+        {"naive", OperatingPointJson(fs.naive)},
+        {"stable", OperatingPointJson(fs.stable)},
+        {"naive_curve", FilteredCurveJson(fs.naive_curve, CurveFile("pr_naive_", r, suffix))},
+        {"stable_curve", FilteredCurveJson(fs.stable_curve, CurveFile("pr_stable_", r, suffix))}};
   }
-  e["curve"] = CurveJson(r.curve, num_frames, r.has_aos);
+  AddCurveFile(e, CurveFile("pr_", r, suffix), r.curve.size());
+  e["roc_csv"] = CurveFile("roc_", r, suffix);
   if (!r.kitti_precision.empty()) {
     e["kitti"] = {
         {"precision", r.kitti_precision}, {"aos", r.kitti_aos}, {"thresholds", r.kitti_thresholds}};
@@ -277,7 +279,7 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
   for (const EvalRun& run : runs) {
     const std::string tag = DescribeOverlaps(run.options.classes);
     for (const ClassResult& r : run.result.results) {
-      results.push_back(ClassResultJson(r, run.result.num_frames, tag));
+      results.push_back(ClassResultJson(r, tag, RunSuffix(runs, run)));
     }
   }
   j["results"] = results;
@@ -351,44 +353,76 @@ int64_t WriteMatchRecordsCsv(const std::filesystem::path& path, const EvalResult
   return rows;
 }
 
-std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos) {
-  // fmt into one buffer rather than a stream and a string per number: an exact curve is tens of
-  // thousands of rows. The text is Csv's, number for number.
-  fmt::memory_buffer pr;
-  pr.reserve(128 * (curve.size() + 1));
-  fmt::format_to(fmt::appender(pr), "threshold,tp,fp,fn,precision,recall,fp_per_frame{}\n",
-                 with_aos ? ",orientation" : "");
-  for (const CurvePoint& p : curve) {
-    AppendCsv(&pr, p.threshold);
-    fmt::format_to(fmt::appender(pr), FMT_COMPILE(",{},{},{},"), p.tp, p.fp, p.fn);
-    AppendCsv(&pr, p.precision);
-    pr.push_back(',');
-    AppendCsv(&pr, p.recall);
-    pr.push_back(',');
-    AppendCsv(&pr, FpPerFrame(p, num_frames));
-    if (with_aos) {
-      pr.push_back(',');
-      AppendCsv(&pr, p.orientation);
-    }
-    pr.push_back('\n');
+namespace {
+
+// Csv(v) written at `out` (fmt's text, WriteFmtShortest: the same bytes at half fmt's cost).
+char* WriteCsv(char* out, double v) { return std::isnan(v) ? out : WriteFmtShortest(out, v); }
+
+char* WriteInt(char* out, int64_t v) { return std::to_chars(out, out + 24, v).ptr; }
+
+// PrCsv's and RocCsv's text of `curve` appended to `pr` and `roc` (either may be null) in one pass:
+// an exact curve is tens of thousands of rows, and the ROC's five columns are the PR's, so each
+// number is formatted once, into the PR row, and copied from there.
+void AppendCurveCsvs(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos,
+                     std::string* pr, std::string* roc) {
+  if (pr) {
+    pr->reserve(pr->size() + 96 * (curve.size() + 1));
+    pr->append("threshold,tp,fp,fn,precision,recall,fp_per_frame");
+    pr->append(with_aos ? ",orientation\n" : "\n");
   }
-  return fmt::to_string(pr);
+  if (roc) {
+    roc->reserve(roc->size() + 64 * (curve.size() + 1));
+    roc->append("fp_per_frame,recall,threshold,tp,fp\n");
+  }
+  // A row has 5 numbers of at most kFmtShortestMaxChars and 3 counts of at most 20 characters.
+  char row[8 * kFmtShortestMaxChars + 16];
+  // The curve is in descending threshold order, so FP per frame ascends.
+  for (const CurvePoint& p : curve) {
+    char* it = WriteCsv(row, p.threshold);
+    char* const tp = it + 1;  // tp,fp
+    *it++ = ',';
+    it = WriteInt(it, p.tp);
+    *it++ = ',';
+    it = WriteInt(it, p.fp);
+    char* const tp_end = it;
+    *it++ = ',';
+    it = WriteInt(it, p.fn);
+    *it++ = ',';
+    it = WriteCsv(it, p.precision);
+    *it++ = ',';
+    char* const recall = it;
+    it = WriteCsv(it, p.recall);
+    *it++ = ',';
+    char* const fp_per_frame = it;
+    it = WriteCsv(it, FpPerFrame(p, num_frames));
+    char* const fp_per_frame_end = it;
+    if (with_aos) {
+      *it++ = ',';
+      it = WriteCsv(it, p.orientation);
+    }
+    *it++ = '\n';
+    if (pr) pr->append(row, static_cast<size_t>(it - row));
+    if (roc) {
+      roc->append(fp_per_frame, fp_per_frame_end).push_back(',');
+      roc->append(recall, fp_per_frame - 1).push_back(',');  // recall
+      roc->append(row, tp - 1);                              // threshold
+      roc->append(tp - 1, tp_end).push_back('\n');           // ,tp,fp
+    }
+  }
+}
+
+}  // namespace
+
+std::string PrCsv(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos) {
+  std::string pr;
+  AppendCurveCsvs(curve, num_frames, with_aos, &pr, nullptr);
+  return pr;
 }
 
 std::string RocCsv(const std::vector<CurvePoint>& curve, int64_t num_frames) {
-  fmt::memory_buffer roc;
-  roc.reserve(96 * (curve.size() + 1));
-  fmt::format_to(fmt::appender(roc), "fp_per_frame,recall,threshold,tp,fp\n");
-  // The curve is in descending threshold order, so FP per frame ascends.
-  for (const CurvePoint& p : curve) {
-    AppendCsv(&roc, FpPerFrame(p, num_frames));
-    roc.push_back(',');
-    AppendCsv(&roc, p.recall);
-    roc.push_back(',');
-    AppendCsv(&roc, p.threshold);
-    fmt::format_to(fmt::appender(roc), FMT_COMPILE(",{},{}\n"), p.tp, p.fp);
-  }
-  return fmt::to_string(roc);
+  std::string roc;
+  AppendCurveCsvs(curve, num_frames, false, nullptr, &roc);
+  return roc;
 }
 
 std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& out_dir,
@@ -430,19 +464,19 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
 
   for (const EvalRun& run : runs) {
     const EvalResult& result = run.result;
-    // (append, not "_" + string: g++ 12 warns falsely on the latter, -Wrestrict)
-    std::string suffix;
-    if (runs.size() > 1) suffix.append("_").append(DescribeOverlaps(run.options.classes));
+    const std::string suffix = RunSuffix(runs, run);
     for (const ClassResult& r : result.results) {
       if (!r.evaluated) continue;
       const std::string stem = CurveStem(r) + suffix;
-      write(out_dir / "curves" / ("pr_" + stem + ".csv"),
-            PrCsv(r.curve, result.num_frames, r.has_aos));
-      write(out_dir / "curves" / ("roc_" + stem + ".csv"), RocCsv(r.curve, result.num_frames));
+      // The names results.json gives (ClassResultJson).
+      std::string pr, roc;
+      AppendCurveCsvs(r.curve, result.num_frames, r.has_aos, &pr, &roc);
+      write(out_dir / CurveFile("pr_", r, suffix), pr);
+      write(out_dir / CurveFile("roc_", r, suffix), roc);
       if (r.filtered) {
-        write(out_dir / "curves" / ("pr_naive_" + stem + ".csv"),
+        write(out_dir / CurveFile("pr_naive_", r, suffix),
               PrCsv(r.filtered->naive_curve.curve, result.num_frames, r.has_aos));
-        write(out_dir / "curves" / ("pr_stable_" + stem + ".csv"),
+        write(out_dir / CurveFile("pr_stable_", r, suffix),
               PrCsv(r.filtered->stable_curve.curve, result.num_frames, r.has_aos));
       }
       std::ostringstream rel;

@@ -1,5 +1,6 @@
-// Writing evaluation results: results.json (every number and curve, the options, the tool version),
-// one CSV per curve, the filter-sweep CSV and the KITTI-like text table. Every file is written
+// Writing evaluation results: results.json (every number, the options, the tool version, and per
+// cell the name of its curve CSV: "curve_csv", "roc_csv", "curve_points"), one CSV per curve (the
+// exact curve, lossless), the filter-sweep CSV and the KITTI-like text table. Every file is written
 // atomically (temp file + rename).
 #ifndef STEREODET_REPORT_EVAL_REPORT_H_
 #define STEREODET_REPORT_EVAL_REPORT_H_

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -35,7 +36,14 @@ TEST(EvalReportTest, WritesJsonAndCsvThatAgreeWithTheResult) {
   for (const auto& r : j["results"]) {
     if (r["class"] == "Car" && r["metric"] == "2d" && r["difficulty"] == "Moderate") {
       EXPECT_DOUBLE_EQ(r["ap_r40"].get<double>(), car.ap_r40);
-      EXPECT_EQ(r["curve"]["tp"].size(), car.curve.size());
+      // The curve is in the CSV results.json names (one row per point), not in results.json.
+      EXPECT_FALSE(r.contains("curve"));
+      EXPECT_EQ(r["curve_csv"], "curves/pr_car_2d_moderate.csv");
+      EXPECT_EQ(r["roc_csv"], "curves/roc_car_2d_moderate.csv");
+      EXPECT_EQ(r["curve_points"], car.curve.size());
+      const std::string csv = ReadFile(dir / r["curve_csv"].get<std::string>());
+      EXPECT_EQ(csv, PrCsv(car.curve, result.num_frames, car.has_aos));
+      EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), car.curve.size() + 1);
       EXPECT_TRUE(r["ap_voc"].is_null());  // NaN: not computed by the KITTI matcher
       found = true;
     }
@@ -121,9 +129,15 @@ TEST(EvalReportTest, WritesRocAndFilteredCurves) {
       EXPECT_DOUBLE_EQ(r["aos_r40"].get<double>(), car.aos_r40);
       EXPECT_DOUBLE_EQ(r["filtered"]["stable_curve"]["ap_r40"].get<double>(),
                        car.filtered->stable_curve.ap_r40);
-      EXPECT_EQ(r["filtered"]["naive_curve"]["curve"]["tp"].size(),
+      EXPECT_EQ(r["filtered"]["naive_curve"]["curve_points"],
                 car.filtered->naive_curve.curve.size());
-      EXPECT_EQ(r["curve"]["orientation"].size(), car.curve.size());
+      EXPECT_EQ(r["filtered"]["naive_curve"]["curve_csv"],
+                "curves/pr_naive_" + r["curve_csv"].get<std::string>().substr(10));
+      EXPECT_EQ(
+          ReadFile(dir.path() / r["filtered"]["stable_curve"]["curve_csv"].get<std::string>()),
+          PrCsv(car.filtered->stable_curve.curve, 20, true));
+      EXPECT_EQ(ReadFile(dir.path() / r["curve_csv"].get<std::string>()),
+                PrCsv(car.curve, 20, true));  // with its orientation column
       found = true;
     }
   }
@@ -169,6 +183,16 @@ TEST(EvalReportTest, SeveralOverlapSetsAreTaggedAndNotesAreWritten) {
   EXPECT_NE(j["notes"].dump().find("40 or fewer valid labels"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "curves" / "pr_car_bev_moderate_strict.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "curves" / "pr_car_bev_moderate_loose.csv"));
+  // Every evaluated cell names its own run's curve files, which are there.
+  for (const auto& r : j["results"]) {
+    if (!r["evaluated"].get<bool>()) continue;
+    const std::string file = r["curve_csv"].get<std::string>();
+    const std::string tail = "_" + r["overlaps"].get<std::string>() + ".csv";
+    ASSERT_GE(file.size(), tail.size());
+    EXPECT_EQ(file.substr(file.size() - tail.size()), tail);
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / file)) << file;
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / r["roc_csv"].get<std::string>()));
+  }
   const std::string summary = ReadFile(dir.path() / "summary.csv");
   EXPECT_NE(summary.find(",loose\n"), std::string::npos);
   EXPECT_NE(summary.find(",strict\n"), std::string::npos);

@@ -12,6 +12,7 @@
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
 
 namespace stereodet {
 
@@ -510,6 +511,43 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
   return p;
 }
 
+// A curve CSV of WriteEvalReport (curves/pr_*.csv) as the JSON object of columns the figures read:
+// one array per column, the counts tp, fp, fn as integers, the other columns as numbers (null for
+// an empty field: NaN). Exact: the CSV holds every number's shortest round-trip text.
+json ReadCurveCsv(const fs::path& path) {
+  const std::string text = ReadFile(path);
+  std::vector<std::string_view> lines = Split(text, '\n');
+  if (!lines.empty() && lines.back().empty()) lines.pop_back();
+  STEREODET_CHECK_IO(!lines.empty()) << path.string() << ": empty, not a curve CSV";
+  const std::vector<std::string_view> header = Split(lines.front(), ',');
+  std::vector<json::array_t> columns(header.size());
+  for (json::array_t& c : columns) c.reserve(lines.size() - 1);
+  for (size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string_view> fields = Split(lines[i], ',');
+    STEREODET_CHECK_IO(fields.size() == header.size())
+        << path.string() << ":" << i + 1 << ": " << fields.size() << " fields, the header has "
+        << header.size();
+    for (size_t c = 0; c < fields.size(); ++c) {
+      if (fields[c].empty()) {
+        columns[c].emplace_back(nullptr);
+      } else if (header[c] == "tp" || header[c] == "fp" || header[c] == "fn") {
+        const std::optional<long long> v = ParseInt(fields[c]);
+        STEREODET_CHECK_IO(v.has_value()) << path.string() << ":" << i + 1 << ": " << header[c]
+                                          << " '" << fields[c] << "' is not a count";
+        columns[c].emplace_back(static_cast<int64_t>(*v));
+      } else {
+        const std::optional<double> v = ParseDouble(fields[c]);
+        STEREODET_CHECK_IO(v.has_value()) << path.string() << ":" << i + 1 << ": " << header[c]
+                                          << " '" << fields[c] << "' is not a number";
+        columns[c].emplace_back(*v);
+      }
+    }
+  }
+  json curve = json::object();
+  for (size_t c = 0; c < header.size(); ++c) curve[std::string(header[c])] = std::move(columns[c]);
+  return curve;
+}
+
 }  // namespace
 
 ReportSource ReadReportSource(const fs::path& folder, const std::string& label) {
@@ -539,6 +577,13 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
   STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
                      source.results["results"].is_array())
       << path.string() << " is not a stereodet results.json (it has no \"results\" array)";
+  // The exact curves are in the CSVs results.json names; the figures read them as "curve".
+  for (json& e : source.results["results"]) {
+    if (e.is_object() && e.contains("curve_csv") && e["curve_csv"].is_string() &&
+        !e.contains("curve")) {
+      e["curve"] = ReadCurveCsv(folder / e["curve_csv"].get<std::string>());
+    }
+  }
   source.records = MatchRecordsFile(folder, source.results);
   return source;
 }

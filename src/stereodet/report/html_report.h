@@ -30,7 +30,10 @@ enum class ReportKind { kEval, kSweep, kCompare };
 struct ReportSource {
   std::string label;
   ReportKind kind = ReportKind::kEval;
-  nlohmann::json results;  // kEval: results.json as written by WriteEvalReport
+  // kEval: results.json as written by WriteEvalReport, with each cell's exact curve read from the
+  // CSV its "curve_csv" names into "curve" (an object of columns: threshold, tp, fp, fn,
+  // precision, recall, fp_per_frame and, with AOS, orientation; null for an empty field).
+  nlohmann::json results;
   // kSweep, kCompare: the CSV's rows, each column as a number (NaN for "-" or empty), the text
   // columns (class, metric, difficulty, filter) as text.
   struct Row {
@@ -44,14 +47,15 @@ struct ReportSource {
   std::filesystem::path records;
 };
 
-// Reads FOLDER/results.json, or else FOLDER/sweep.csv, or else FOLDER/compare.csv. Throws
-// std::runtime_error naming the folder if it holds none of them, or the file if it is not one of
-// stereodet's (results.json without a "results" array, a CSV without its columns).
+// Reads FOLDER/results.json (and the curve CSVs it names), or else FOLDER/sweep.csv, or else
+// FOLDER/compare.csv. Throws std::runtime_error naming the folder if it holds none of them, or the
+// file if it is not one of stereodet's (results.json without a "results" array, a CSV without its
+// columns).
 ReportSource ReadReportSource(const std::filesystem::path& folder, const std::string& label);
 
 // The figures of `sources`, per evaluated cell (class x metric x difficulty x overlap set) of the
 // first source, each source's series overlaid (one colour per source with several):
-//   pr_CELL           precision vs recall: the exact curve ("curve" in results.json) and, for the
+//   pr_CELL           precision vs recall: the exact curve (curves/pr_CELL.csv) and, for the
 //                     KITTI matcher, the devkit's 41 slots ("kitti.precision" at recall i/40);
 //                     AP_R40 / AP_R11 in the legend
 //   roc_CELL          recall vs false positives per frame (the same curve points)

@@ -117,7 +117,8 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
   const fs::path out = dir.path() / "eval";
   const EvaluationResult evaluation = EvaluateSmall(out, Matcher::kKitti);
   EXPECT_EQ(evaluation.report_index, out / "report/index.html");
-  const json results = json::parse(ReadFile(out / "results.json"));
+  // results.json names each cell's curve CSV; the report reads it as "curve".
+  const json results = ReadReportSource(out, "kitti").results;
   int checked_pr = 0, checked_devkit = 0, checked_reliability = 0, checked_localization = 0;
   for (const json& e : results["results"]) {
     if (!e["evaluated"].get<bool>()) continue;
@@ -199,6 +200,41 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
     EXPECT_EQ(brier["series"][1]["y"][d], b["over_detections"]);
     EXPECT_EQ(brier["series"][2]["y"][d], b["over_all"]);
   }
+}
+
+// The curves results.json names come back exactly, point for point and bit for bit, as the
+// evaluation computed them (the optimal matcher: one point per distinct score; NaN as null).
+TEST(ReportTest, ReadReportSourceLoadsTheExactCurvesOfTheCsvsResultsJsonNames) {
+  TestTempDir dir;
+  const EvaluationResult evaluation = EvaluateSmall(dir.path() / "eval", Matcher::kOptimal);
+  const ReportSource source = ReadReportSource(dir.path() / "eval", "optimal");
+  const EvalResult& result = evaluation.runs.front().result;
+  auto same = [](const json& v, double x) { return std::isnan(x) ? v.is_null() : v == x; };
+  int cells = 0;
+  for (const ClassResult& r : result.results) {
+    if (!r.evaluated) continue;
+    const json& e = Entry(source.results, r.class_name, OverlapKindName(r.metric),
+                          DifficultyName(r.difficulty));
+    const json& c = e["curve"];
+    ASSERT_EQ(c["tp"].size(), r.curve.size());
+    ASSERT_EQ(e["curve_points"], r.curve.size());
+    EXPECT_EQ(c.contains("orientation"), r.has_aos);
+    for (size_t i = 0; i < r.curve.size(); ++i) {
+      const CurvePoint& p = r.curve[i];
+      ASSERT_TRUE(same(c["threshold"][i], p.threshold)) << i;
+      ASSERT_EQ(c["tp"][i], p.tp);
+      ASSERT_EQ(c["fp"][i], p.fp);
+      ASSERT_EQ(c["fn"][i], p.fn);
+      ASSERT_TRUE(same(c["precision"][i], p.precision)) << i;
+      ASSERT_TRUE(same(c["recall"][i], p.recall)) << i;
+      ASSERT_TRUE(same(c["fp_per_frame"][i], static_cast<double>(p.fp) / result.num_frames));
+      if (r.has_aos) {
+        ASSERT_TRUE(same(c["orientation"][i], p.orientation)) << i;
+      }
+    }
+    ++cells;
+  }
+  EXPECT_GT(cells, 10);
 }
 
 // The pixels agree with the data too: every polyline vertex of the exact PR curve maps back, with

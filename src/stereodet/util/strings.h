@@ -2,6 +2,7 @@
 #ifndef STEREODET_UTIL_STRINGS_H_
 #define STEREODET_UTIL_STRINGS_H_
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -35,6 +36,18 @@ bool EqualsIgnoreCase(std::string_view a, std::string_view b);
 // 1.5 -> "1.5", 0.1f -> "0.1". Used by writers that must round-trip exactly.
 std::string FormatShortest(double value);
 std::string FormatShortest(float value);
+
+// Appends exactly the text of fmt::format("{}", value) to `out`: the shortest decimal that reads
+// back to `value`, in fixed notation for decimal exponents in [-4, 16) ("0.0001", "1", "0.5",
+// "1e-05", "1e+16", "-0", "nan", "inf"). fmt's own call costs about twice as much, which matters
+// to the writers of exact curves (millions of numbers; see docs/BENCHMARKS.md).
+void AppendFmtShortest(std::string& out, double value);
+// The same text written at `out`, which must have room for kFmtShortestMaxChars (the text is at
+// most 25 characters; the bytes after it may be overwritten); returns its end.
+inline constexpr int kFmtShortestMaxChars = 48;
+char* WriteFmtShortest(char* out, double value);
+// Appends the decimal text of `value` ("-12").
+void AppendInt(std::string& out, int64_t value);
 
 }  // namespace stereodet
 
