@@ -74,7 +74,7 @@ def test_sharded_synth_is_one_process_byte_for_byte_and_resumes(client, bin_dir,
     assert [r["skipped"] for r in results] == [False] * 3
     assert len(lines) == 3 and lines[-1].startswith("[3/3] task ")
     one, sharded = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded")
-    assert len(one) == 7 * 6 + 4  # six files a frame, three splits, synth_settings.txt
+    assert len(one) == 7 * 7 + 4  # seven files a frame, three splits, synth_settings.txt
     assert one.keys() == sharded.keys()
     assert [k for k in one if one[k] != sharded[k]] == []
     # Resume: every task's outputs are there, so every task is skipped.

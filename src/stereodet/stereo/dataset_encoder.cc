@@ -587,7 +587,23 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
     fits.emplace_back(ids[i], ground_fits[i]);
     if (ground_fits[i].suspect) result.ground_suspect.push_back(ids[i]);
   }
-  WriteFileAtomically(out / kGroundSummaryFile, GroundSummaryJson(fits, options.stereo.ground));
+  if (shard.Whole()) {
+    WriteFileAtomically(out / kGroundSummaryFile, GroundSummaryJson(fits, options.stereo.ground));
+  } else {
+    // The summary is the folder's, as one run writes it: every frame of the whole list whose
+    // ground file records this run's settings, read under the manifest's lock. The last shard to
+    // finish therefore writes the summary of all frames.
+    const OutputLock manifest_lock(out, "manifest.lock", /*wait=*/true);
+    std::vector<std::pair<std::string, GroundPlaneFit>> all_fits;
+    for (const std::string& id : all_ids) {
+      const fs::path ground = OutputPaths(out, id).ground;
+      if (RecordedFrameHash(ground) != frame_hash) continue;
+      all_fits.emplace_back(id, ParseGroundFitLine(ReadGroundFitLine(ground), ground.string(),
+                                                   options.stereo.ground));
+    }
+    WriteFileAtomically(out / kGroundSummaryFile,
+                        GroundSummaryJson(all_fits, options.stereo.ground));
+  }
   if (options.evaluate) {
     std::vector<DisparityErrorStats> evaluated;
     std::vector<std::pair<std::string, DisparityErrorStats>> per_frame;

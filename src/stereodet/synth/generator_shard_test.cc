@@ -58,7 +58,7 @@ TEST(GeneratorShardTest, ShardsInAnyOrderGiveTheBytesOfOneRun) {
   EXPECT_EQ(generated, 7);
   const std::map<std::string, std::string> a = FolderBytes(whole.path());
   const std::map<std::string, std::string> b = FolderBytes(sharded.path());
-  EXPECT_EQ(a.size(), 7u * 6 + 3 + 1);  // six files a frame, three splits, synth_settings.txt
+  EXPECT_EQ(a.size(), 7u * 7 + 3 + 1);  // seven files a frame, three splits, synth_settings.txt
   ASSERT_EQ(a.size(), b.size());
   for (const auto& [name, bytes] : a) {
     ASSERT_TRUE(b.count(name)) << name;
