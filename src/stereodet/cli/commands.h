@@ -1,8 +1,8 @@
 // The `stereodet` commands and the executables that hold them.
 //
 // `stereodet` is a git-style front end: it runs the commands that need neither OpenCV nor LibTorch
-// (info, eval, report, view) itself and hands the others to a sibling executable in its own folder, so
-// that a command loads only the libraries it uses:
+// (info, eval, report, view) itself and hands the others to a sibling executable in its own folder,
+// so that a command loads only the libraries it uses:
 //   stereodet         info, eval, report, view  (util, geometry, kitti, eval, report)
 //   stereodet-vision  synth, stereo         (+ OpenCV)
 //   stereodet-models  train, detect         (+ OpenCV, LibTorch; only with STEREODET_BUILD_MODELS)

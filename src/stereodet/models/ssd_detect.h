@@ -29,10 +29,10 @@ struct DetectSsdOptions {
   // the sharp pair, as in the paper's degradation study. 0 = off.
   double blur_sigma_px = 0.0;
   int batch_size = 8;
-  int threads = 0;       // LibTorch and the per-frame preparation (0 = all cores)
-  int max_frames = 0;    // only the first N frames of the split (0 = all)
+  int threads = 0;             // LibTorch and the per-frame preparation (0 = all cores)
+  int max_frames = 0;          // only the first N frames of the split (0 = all)
   std::string device = "cpu";  // cpu | cuda (device.h)
-  DecodeOptions decode;  // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
+  DecodeOptions decode;        // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
   // Stereo pipeline for RGB-H models. Must be what the model was trained with (the defaults).
   StereoOptions stereo;
   ProgressOptions progress;

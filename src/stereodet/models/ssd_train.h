@@ -42,7 +42,7 @@ struct TrainSsdOptions {
   // schedule always spans `epochs`, so a run split this way ends exactly where an uninterrupted one
   // does.
   int max_epochs_this_run = 0;
-  int loader_capacity = 3;  // batches prepared ahead
+  int loader_capacity = 3;     // batches prepared ahead
   std::string device = "cpu";  // cpu | cuda (device.h); bit-identical resume needs the same one
   SsdDataOptions data;
   SsdTrainerOptions trainer;
