@@ -63,4 +63,24 @@ void LoadWeights(const std::filesystem::path& path, const std::string& config_so
   }
 }
 
+void CheckWeightsFile(const std::filesystem::path& weights_path, const std::string& config_source,
+                      const std::string& recorded_fnv1a64) {
+  STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
+      << "missing weights file " << weights_path.string();
+  if (recorded_fnv1a64.empty()) return;
+  const std::string hash = HashFileHex(weights_path);
+  STEREODET_CHECK_IO(hash == recorded_fnv1a64)
+      << weights_path.string() << " does not belong to " << config_source << ": its hash is "
+      << hash << ", model.json records " << recorded_fnv1a64
+      << " (weights of another training?); copy the model folder whole";
+}
+
+void CheckParameterCount(int64_t count, int64_t recorded, const std::filesystem::path& weights_path,
+                         const std::string& config_source) {
+  if (recorded < 0) return;
+  STEREODET_CHECK_IO(count == recorded)
+      << weights_path.string() << " holds " << count << " parameters, " << config_source
+      << " records " << recorded;
+}
+
 }  // namespace stereodet::internal

@@ -5,7 +5,9 @@
 
 #include <torch/torch.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <string>
 
 namespace stereodet::internal {
 
@@ -23,6 +25,16 @@ std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Modu
 // Loads weights into `module` on `device`; throws std::runtime_error naming both files.
 void LoadWeights(const std::filesystem::path& path, const std::string& config_source,
                  torch::nn::Module& module, const torch::Device& device = torch::kCPU);
+
+// Checks, before loading, that `weights_path` exists and, when model.json (`config_source`) records
+// a hash (`recorded_fnv1a64` not empty), that the file has it: another training's model.pt of the
+// same shapes would load and detect garbage. A model.json written before hashes were recorded is
+// loaded unchecked. Throws std::runtime_error naming both files.
+void CheckWeightsFile(const std::filesystem::path& weights_path, const std::string& config_source,
+                      const std::string& recorded_fnv1a64);
+// Checks a loaded model's parameter count against model.json's record (none when `recorded` < 0).
+void CheckParameterCount(int64_t count, int64_t recorded, const std::filesystem::path& weights_path,
+                         const std::string& config_source);
 
 }  // namespace stereodet::internal
 

@@ -246,26 +246,12 @@ SsdModel SsdModel::Load(const std::filesystem::path& model_dir, ComputeDevice de
   const SsdConfig config = SsdConfigFromJson(config_text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
-  STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
-      << "missing weights file " << weights_path.string();
-  // The weights must be the ones model.json was written with: another training's model.pt of the
-  // same shapes would load and detect garbage. A model.json without "weights" (written before
-  // they were recorded) is loaded unchecked.
   const WeightsRecord record = ReadWeightsRecord(config_text, config_path.string());
-  if (!record.fnv1a64.empty()) {
-    const std::string hash = HashFileHex(weights_path);
-    STEREODET_CHECK_IO(hash == record.fnv1a64)
-        << weights_path.string() << " does not belong to " << config_path.string()
-        << ": its hash is " << hash << ", model.json records " << record.fnv1a64
-        << " (weights of another training?); copy the model folder whole";
-  }
+  internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
   internal::LoadWeights(weights_path, config_path.string(), *impl->net, impl->device);
   SsdModel model(std::move(impl));
-  if (record.parameters >= 0) {
-    STEREODET_CHECK_IO(model.ParameterCount() == record.parameters)
-        << weights_path.string() << " holds " << model.ParameterCount() << " parameters, "
-        << config_path.string() << " records " << record.parameters;
-  }
+  internal::CheckParameterCount(model.ParameterCount(), record.parameters, weights_path,
+                                config_path.string());
   return model;
 }
 

@@ -482,23 +482,12 @@ Det3dModel Det3dModel::Load(const std::filesystem::path& model_dir, ComputeDevic
   const Det3dConfig config = Det3dConfigFromJson(config_text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
-  STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
-      << "missing weights file " << weights_path.string();
   const WeightsRecord record = ReadWeightsRecord(config_text, config_path.string());
-  if (!record.fnv1a64.empty()) {
-    const std::string hash = HashFileHex(weights_path);
-    STEREODET_CHECK_IO(hash == record.fnv1a64)
-        << weights_path.string() << " does not belong to " << config_path.string()
-        << ": its hash is " << hash << ", model.json records " << record.fnv1a64
-        << " (weights of another training?); copy the model folder whole";
-  }
+  internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
   internal::LoadWeights(weights_path, config_path.string(), *impl->net, impl->torch_device);
   Det3dModel model(std::move(impl));
-  if (record.parameters >= 0) {
-    STEREODET_CHECK_IO(model.ParameterCount() == record.parameters)
-        << weights_path.string() << " holds " << model.ParameterCount() << " parameters, "
-        << config_path.string() << " records " << record.parameters;
-  }
+  internal::CheckParameterCount(model.ParameterCount(), record.parameters, weights_path,
+                                config_path.string());
   return model;
 }
 
