@@ -447,7 +447,11 @@ Plot SweepFigure(const std::vector<ReportSource>& sources,
       s.name = st.Name(sources[i], kSeries[k][1]);
       for (const ReportSource::Row* row : rows[i]) {
         s.x.push_back(RowNumber(*row, "value"));
-        s.y.push_back(RowNumber(*row, kSeries[k][0]));
+        double y = RowNumber(*row, kSeries[k][0]);
+        // compare.csv written before difference_a_minus_b existed: the negative of B - A.
+        if (k == 2 && !row->number.count(kSeries[k][0]))
+          y = -RowNumber(*row, "difference_b_minus_a");
+        s.y.push_back(y);
       }
       s.colour = st.Colour(i, k);
       s.dashed = k % 2 == 1;  // stable
@@ -478,7 +482,7 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
   p.x_min = 0;
   static constexpr const char* kSeries[][2] = {{"abs_dz_mean_a", "A: mean |depth error|"},
                                                {"abs_dz_mean_b", "B: mean |depth error|"},
-                                               {"difference_b_minus_a", "B - A"},
+                                               {"difference_a_minus_b", "A - B"},
                                                {"model_dz", "stereo model dz = z^2 / (b f) dd"}};
   std::vector<std::string> caption;
   for (size_t i = 0; i < sources.size(); ++i) {
@@ -489,7 +493,11 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
       s.name = st.Name(sources[i], kSeries[k][1]);
       for (const ReportSource::Row* row : rows[i]) {
         s.x.push_back((RowNumber(*row, "lower_m") + RowNumber(*row, "upper_m")) / 2);
-        s.y.push_back(RowNumber(*row, kSeries[k][0]));
+        double y = RowNumber(*row, kSeries[k][0]);
+        // compare.csv written before difference_a_minus_b existed: the negative of B - A.
+        if (k == 2 && !row->number.count(kSeries[k][0]))
+          y = -RowNumber(*row, "difference_b_minus_a");
+        s.y.push_back(y);
       }
       s.colour = k == 3 ? "#777777" : st.Colour(i, k);
       s.dashed = k >= 2;
@@ -505,8 +513,8 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
                                   pairs_b));
   }
   p.caption = fmt::format(
-      "{}; B - A is positive where B errs more (A - B, its negative, is compare.csv's "
-      "difference_a_minus_b); empty bins are not drawn; the model at the bin centre.",
+      "{}; A - B (compare.csv's difference_a_minus_b) is positive where A errs more; empty bins "
+      "are not drawn; the model at the bin centre.",
       fmt::join(caption, "; "));
   return p;
 }

@@ -342,7 +342,7 @@ TEST(ReportTest, SeveralResultsAreOverlaidOneColourEach) {
 }
 
 // `eval compare` (tests/data/eval_compare, README): A errs +0.5 m / +1.0 m, B +0.2 m / -2.0 m at
-// 12 m / 22 m, so B - A is -0.3 m in the 10-15 m bin and +1.0 m in the 20-25 m bin; the model's
+// 12 m / 22 m, so A - B is +0.3 m in the 10-15 m bin and -1.0 m in the 20-25 m bin; the model's
 // line is compare.csv's model_dz at every bin centre.
 TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   TestTempDir dir;
@@ -361,14 +361,14 @@ TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   EXPECT_EQ(report.num_figures, 3);  // Easy, Moderate, Hard
   const json fig = SvgData(dir.path() / "compare/report/figures/compare_car_2d_easy.svg");
   ASSERT_EQ(fig["series"].size(), 4u);
-  EXPECT_EQ(fig["series"][2]["name"], "B - A");
+  EXPECT_EQ(fig["series"][2]["name"], "A - B");  // the sign issue 13 words the figure in
   const std::vector<double> x = Column(fig["series"][2]["x"]);
   const std::vector<double> diff = Column(fig["series"][2]["y"]);
   const auto at = [&](double centre) {
     return diff[static_cast<size_t>(std::find(x.begin(), x.end(), centre) - x.begin())];
   };
-  EXPECT_NEAR(at(12.5), -0.3, 1e-9);
-  EXPECT_NEAR(at(22.5), 1.0, 1e-9);
+  EXPECT_NEAR(at(12.5), 0.3, 1e-9);
+  EXPECT_NEAR(at(22.5), -1.0, 1e-9);
   EXPECT_TRUE(std::isnan(at(2.5)));                          // an empty bin: not drawn
   EXPECT_NEAR(Column(fig["series"][0]["y"])[2], 0.5, 1e-9);  // A at 10-15 m
   EXPECT_NEAR(Column(fig["series"][1]["y"])[4], 2.0, 1e-9);  // |B| at 20-25 m
