@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -295,6 +296,37 @@ std::string DisparityEvaluationJson(
   j["per_frame"] = per_frame;
   return j.dump(2) + "\n";
 }
+
+namespace {
+
+// The per-frame figures of a disparity_evaluation.json (empty when there is none), exactly as
+// written: counts as integers, rates as the shortest doubles that read back to the same bits.
+std::map<std::string, DisparityErrorStats> ReadPerFrameDisparityErrors(const fs::path& path) {
+  std::map<std::string, DisparityErrorStats> frames;
+  if (!fs::exists(path)) return frames;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(ReadFile(path));
+    for (const auto& [id, f] : j.at("per_frame").items()) {
+      DisparityErrorStats s;
+      s.d1_all_rate = f.at("d1_all").get<double>();
+      s.d1_rate = f.at("d1_estimated").get<double>();
+      s.density = f.at("density").get<double>();
+      s.bad_rate = f.at("bad").get<double>();
+      s.mean_abs_error_px = f.at("mean_abs_error_px").get<double>();
+      s.ground_truth_pixels = f.at("ground_truth_pixels").get<long>();
+      s.estimated_pixels = f.at("estimated_pixels").get<long>();
+      s.d1_outlier_pixels = f.at("d1_outlier_pixels").get<long>();
+      s.bad_pixels = f.at("bad_pixels").get<long>();
+      frames[id] = s;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    STEREODET_THROW_IO() << path.string() << ": not a disparity evaluation of this tool ("
+                         << e.what() << "); remove it and rerun the shards";
+  }
+  return frames;
+}
+
+}  // namespace
 
 GroundPlaneFit ParseGroundFitLine(const std::string& line, const std::string& source,
                                   const GroundPlaneOptions& options) {
@@ -615,8 +647,29 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
     const DisparityErrorStats pooled = PoolDisparityErrors(evaluated);
     // Kept all zero when no pixel was estimated, as before D1-all existed.
     if (pooled.estimated_pixels > 0) result.disparity_error = pooled;
-    WriteFileAtomically(out / kDisparityEvaluationFile,
-                        DisparityEvaluationJson(pooled, per_frame, DisparityErrorOptions{}));
+    if (shard.Whole()) {
+      WriteFileAtomically(out / kDisparityEvaluationFile,
+                          DisparityEvaluationJson(pooled, per_frame, DisparityErrorOptions{}));
+    } else {
+      // The folder's file, as one run writes it: the other shards' frames as the file holds them
+      // (its numbers read back exactly), this shard's as evaluated, pooled in the order of the
+      // whole list, under the manifest's lock; the last shard to finish writes that of one run.
+      const OutputLock manifest_lock(out, "manifest.lock", /*wait=*/true);
+      std::map<std::string, DisparityErrorStats> by_id =
+          ReadPerFrameDisparityErrors(out / kDisparityEvaluationFile);
+      for (const auto& [id, stats] : per_frame) by_id[id] = stats;
+      std::vector<DisparityErrorStats> all_evaluated;
+      std::vector<std::pair<std::string, DisparityErrorStats>> all_per_frame;
+      for (const std::string& id : all_ids) {
+        auto it = by_id.find(id);
+        if (it == by_id.end()) continue;
+        all_evaluated.push_back(it->second);
+        all_per_frame.emplace_back(id, it->second);
+      }
+      WriteFileAtomically(out / kDisparityEvaluationFile,
+                          DisparityEvaluationJson(PoolDisparityErrors(all_evaluated), all_per_frame,
+                                                  DisparityErrorOptions{}));
+    }
   }
   return result;
 }

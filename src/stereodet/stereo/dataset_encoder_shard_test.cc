@@ -78,5 +78,30 @@ TEST(DatasetEncoderShardTest, ShardsAtOnceIntoOneFolderAreOneRun) {
   EXPECT_THROW(EncodeDataset(dataset, ids, dir / "sharded", again), std::invalid_argument);
 }
 
+// With --evaluate, disparity_evaluation.json is the folder's: the shards, in any order, leave the
+// file of one run (every frame, the pooled figures of all), not the last shard's frames.
+TEST(DatasetEncoderShardTest, ShardedEvaluationIsTheWholeRunsFile) {
+  const TestTempDir dir;
+  PlanarSceneDatasetOptions scenes;
+  scenes.frames = 5;
+  scenes.width_px = 256;
+  scenes.height_px = 96;
+  const std::vector<std::string> ids = WritePlanarSceneDataset(dir / "data", scenes);
+  const KittiDataset dataset(dir / "data", "training");
+  EncodeDatasetOptions options = Small();
+  options.outputs.points = false;
+  options.outputs.disparity = true;
+  options.evaluate = true;
+  EncodeDataset(dataset, ids, dir / "whole", options);
+  for (const int k : {2, 0, 1}) {
+    EncodeDatasetOptions part = options;
+    part.shard = Shard{k, 3};
+    EncodeDataset(dataset, ids, dir / "sharded", part);
+  }
+  const std::string whole = ReadFile(dir / "whole" / kDisparityEvaluationFile);
+  EXPECT_NE(whole.find("\"frames\": 5"), std::string::npos) << whole;
+  EXPECT_EQ(ReadFile(dir / "sharded" / kDisparityEvaluationFile), whole);
+}
+
 }  // namespace
 }  // namespace stereodet
