@@ -5,6 +5,7 @@
 //                       [--epochs N] [--resume | --force] [--seed S] [--threads N]
 //                       [--width W --height H]
 //   stereodet detect ssd --model MODEL_DIR --data DIR --split val --out DIR [--blur-sigma S]
+//                        [stereo flags: cli/stereo_flags.h; default: the model.json's settings]
 // Each is one library call (TrainSsd, DetectSsd); the flags bind to their options' fields.
 #include <fmt/format.h>
 
@@ -13,6 +14,7 @@
 #include <string>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/cli/stereo_flags.h"
 #include "stereodet/models/det3d/det3d_detect.h"
 #include "stereodet/models/det3d/det3d_train.h"
 #include "stereodet/models/device.h"
@@ -39,12 +41,16 @@ CLI::App* Group(CLI::App& app, const std::string& name) {
 struct TrainArgs {
   TrainSsdOptions options;
   std::string input = InputEncodingName(SsdConfig().encoding);
+  StereoFlagText stereo;  // the stereo flags, bound to options.data.stereo
   bool quiet = false;
 };
 
 // The flags of `detect ssd` that are not DetectSsdOptions fields.
 struct DetectArgs {
   DetectSsdOptions options;
+  StereoOptions stereo;  // the stereo flags' values; options.stereo only when one was given
+  StereoFlagText stereo_text;
+  std::vector<CLI::Option*> stereo_flags;
   bool quiet = false;
 };
 
@@ -54,6 +60,7 @@ void RunTrain(TrainArgs& a) {
   STEREODET_CHECK(encoding.has_value())
       << "unknown input encoding '" << a.input << "' (expected rgb, rgbh-fixed or rgbh-learned)";
   options.model.encoding = *encoding;
+  FinishStereoFlags(a.stereo, options.data.stereo);
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
@@ -72,6 +79,17 @@ void RunTrain(TrainArgs& a) {
 
 void RunDetect(DetectArgs& a) {
   DetectSsdOptions& options = a.options;
+  if (AnyGiven(a.stereo_flags)) {
+    FinishStereoFlags(a.stereo_text, a.stereo);
+    options.stereo = a.stereo;
+    const std::string mismatch = StereoMismatch(options);
+    if (!mismatch.empty()) {
+      std::fprintf(stderr,
+                   "warning: the stereo flags differ from the settings %s/model.json was trained "
+                   "with: %s; using the flags\n",
+                   options.model_dir.c_str(), mismatch.c_str());
+    }
+  }
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
   const DetectSsdSummary s = DetectSsd(options);
@@ -247,6 +265,7 @@ void AddModelsCommand(CLI::App& app) {
   ts->add_option("--stop-after", t.max_epochs_this_run,
                  "stop after N epochs in this run (0 = all); continue later with --resume")
       ->capture_default_str();
+  AddStereoFlags(ts, t.data.stereo, targs->stereo);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrain(*targs); });
 
@@ -278,6 +297,7 @@ void AddModelsCommand(CLI::App& app) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });
 

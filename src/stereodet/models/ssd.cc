@@ -71,7 +71,8 @@ void SsdConfig::Check() const {
       << "base_channels must be in [4, 256], got " << base_channels;
 }
 
-std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights) {
+std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights,
+                            const std::optional<StereoOptions>& stereo) {
   nlohmann::json j;
   j["version"] = kConfigVersion;
   j["architecture"] = "ssd";
@@ -91,6 +92,7 @@ std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weight
                     {"parameters", weights.parameters}};
     if (!weights.training_run.empty()) j["weights"]["training_run"] = weights.training_run;
   }
+  if (stereo) j["stereo"] = nlohmann::json::parse(StereoSettingsJson(*stereo));
   return j.dump(2) + "\n";
 }
 
@@ -146,6 +148,18 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
   } catch (const std::invalid_argument& e) {
     throw ParseError(source, 0, field, e.what());
   }
+}
+
+StereoOptions ReadStereoRecord(const std::string& text, const std::string& source) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object() || !j.contains("stereo")) return StereoOptions();
+  if (!j["stereo"].is_object()) throw ParseError(source, 0, "stereo", "expected an object");
+  return StereoOptionsFromJson(j["stereo"].dump(), source);
 }
 
 WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source) {
@@ -212,6 +226,7 @@ struct SsdModel::Impl {
   }
 
   SsdConfig config;
+  StereoOptions stereo;
   torch::Device device;
   std::vector<DefaultBox> default_boxes;
   // LibTorch's forward() is not const; inference does not change the weights.
@@ -245,6 +260,7 @@ SsdModel SsdModel::Load(const std::filesystem::path& model_dir, ComputeDevice de
   const std::string config_text = ReadFile(config_path);
   const SsdConfig config = SsdConfigFromJson(config_text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
+  impl->stereo = ReadStereoRecord(config_text, config_path.string());
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
   const WeightsRecord record = ReadWeightsRecord(config_text, config_path.string());
   internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
@@ -262,14 +278,21 @@ void SsdModel::Save(const std::filesystem::path& model_dir, const std::string& t
   // previous weights, and Load refuses the pair rather than mixing them.
   WriteFileAtomically(
       model_dir / kConfigFile,
-      SsdConfigToJson(impl_->config,
-                      {.fnv1a64 = hash,
-                       .input_channels = NetworkInputChannels(impl_->config.encoding),
-                       .parameters = ParameterCount(),
-                       .training_run = training_run}));
+      SsdConfigToJson(
+          impl_->config,
+          {.fnv1a64 = hash,
+           .input_channels = NetworkInputChannels(impl_->config.encoding),
+           .parameters = ParameterCount(),
+           .training_run = training_run},
+          UsesHeight(impl_->config.encoding) ? std::optional(impl_->stereo) : std::nullopt));
 }
 
 const SsdConfig& SsdModel::config() const { return impl_->config; }
+const StereoOptions& SsdModel::stereo() const { return impl_->stereo; }
+void SsdModel::set_stereo(const StereoOptions& stereo) {
+  stereo.Check();
+  impl_->stereo = stereo;
+}
 const std::vector<DefaultBox>& SsdModel::default_boxes() const { return impl_->default_boxes; }
 
 SsdOutputs SsdModel::Forward(const std::vector<PlanarImage>& inputs) const {

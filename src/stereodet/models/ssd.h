@@ -4,8 +4,9 @@
 // mining, per-class NMS. LibTorch is an implementation detail: nothing here exposes a torch type.
 //
 // A model folder holds:
-//   model.json      the SsdConfig (input encoding, classes, input size, default boxes, width) and
+//   model.json      the SsdConfig (input encoding, classes, input size, default boxes, width),
 //                   the hash, input channels and parameter count of its model.pt (WeightsRecord)
+//                   and, for RGB-H models, the stereo settings its heights were made with
 //   model.pt        the weights (LibTorch archive)
 //   run.json        the run manifest (util/run_manifest.h): command line, version, data, settings
 //   checkpoint.pt   training state for --resume (weights, optimizer, epochs done, the config and
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +26,7 @@
 #include "stereodet/models/default_boxes.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/input_encoding.h"
+#include "stereodet/stereo/stereo_encoder.h"
 
 namespace stereodet {
 
@@ -57,10 +60,16 @@ struct WeightsRecord {
 // JSON text of a config, and back. Parse errors throw ParseError naming `source`. With a
 // non-empty `weights.fnv1a64` the text has a "weights" object {file, fnv1a64, input_channels,
 // parameters, and training_run when not empty}, which SsdConfigFromJson ignores and
-// ReadWeightsRecord reads (empty record when absent).
-std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights = {});
+// ReadWeightsRecord reads (empty record when absent). With `stereo` the text has a "stereo" object,
+// StereoSettingsJson's (disparity, ground, height_code), which ReadStereoRecord reads.
+std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights = {},
+                            const std::optional<StereoOptions>& stereo = std::nullopt);
 SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source);
 WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source);
+// The stereo settings model.json records; a setting (or the whole "stereo" object: rgb models,
+// model.json written before session 5) that is absent reads as StereoOptions' documented default.
+// Throws ParseError naming `source` and the key for a bad value.
+StereoOptions ReadStereoRecord(const std::string& text, const std::string& source);
 
 // Raw network outputs for a batch, row-major: deltas [image][default box][4], probabilities
 // [image][default box][class] (softmax over background + classes).
@@ -99,15 +108,21 @@ class SsdModel {
   SsdModel(SsdModel&&) noexcept;
   SsdModel& operator=(SsdModel&&) noexcept;
 
-  // Reads model.json and model.pt from `model_dir`. Throws std::runtime_error naming the file, and
-  // naming both when model.json records another model.pt (its hash or parameter count differ).
+  // Reads model.json (with its stereo settings) and model.pt from `model_dir`. Throws
+  // std::runtime_error naming the file, and naming both when model.json records another model.pt
+  // (its hash or parameter count differ).
   static SsdModel Load(const std::filesystem::path& model_dir,
                        ComputeDevice device = ComputeDevice::kCpu);
-  // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord),
-  // into `model_dir` (created if missing), each atomically.
+  // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord)
+  // and, when the encoding uses heights, stereo(), into `model_dir` (created if missing), each
+  // atomically.
   void Save(const std::filesystem::path& model_dir, const std::string& training_run = {}) const;
 
   const SsdConfig& config() const;
+  // The stereo settings the model's heights are made with (RGB-H): those of model.json after Load,
+  // StereoOptions' defaults for a new model until set_stereo. Unused by rgb models.
+  const StereoOptions& stereo() const;
+  void set_stereo(const StereoOptions& stereo);
   // The default boxes, in the order of the outputs' box dimension.
   const std::vector<DefaultBox>& default_boxes() const;
 

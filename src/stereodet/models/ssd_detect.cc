@@ -24,7 +24,7 @@ namespace stereodet {
 
 void DetectSsdOptions::Check() const {
   decode.Check();
-  stereo.Check();
+  if (stereo) stereo->Check();
   STEREODET_CHECK(!model_dir.empty()) << "--model is required";
   STEREODET_CHECK(!data_root.empty()) << "--data is required";
   STEREODET_CHECK(!out_dir.empty()) << "--out is required";
@@ -35,6 +35,14 @@ void DetectSsdOptions::Check() const {
   STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
   STEREODET_CHECK(ParseComputeDevice(device).has_value())
       << "unknown device '" << device << "' (expected cpu or cuda)";
+}
+
+std::string StereoMismatch(const DetectSsdOptions& options) {
+  if (!options.stereo) return "";
+  const std::filesystem::path config_path = options.model_dir / "model.json";
+  const std::string text = ReadFile(config_path);
+  if (!UsesHeight(SsdConfigFromJson(text, config_path.string()).encoding)) return "";
+  return DifferingStereoSettings(ReadStereoRecord(text, config_path.string()), *options.stereo);
 }
 
 std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
@@ -91,7 +99,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
                          << dataset.SubsetDir().string() << ", e.g. " << missing.front();
   }
 
-  StereoOptions stereo = options.stereo;
+  StereoOptions stereo = options.stereo.value_or(model.stereo());
   stereo.blur.sigma_px = options.blur_sigma_px;
   stereo.blur.mode = BlurMode::kNetworkImage;
 

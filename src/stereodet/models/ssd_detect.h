@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,8 +34,10 @@ struct DetectSsdOptions {
   int max_frames = 0;          // only the first N frames of the split (0 = all)
   std::string device = "cpu";  // cpu | cuda (device.h)
   DecodeOptions decode;        // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
-  // Stereo pipeline for RGB-H models. Must be what the model was trained with (the defaults).
-  StereoOptions stereo;
+  // Stereo pipeline for RGB-H models. Unset: the settings model.json records (what the model was
+  // trained with; the defaults for a model.json written before they were recorded). Set: these,
+  // even where they differ (StereoMismatch tells which; `detect ssd` warns).
+  std::optional<StereoOptions> stereo;
   ProgressOptions progress;
   std::string command_line;  // for OUT/run.json (empty from a library call)
   void Check() const;        // throws std::invalid_argument
@@ -47,6 +50,12 @@ struct DetectSsdSummary {
   double images_per_second = 0;  // end to end: reading, stereo, encoding, network, writing
   std::string stage_times;       // StageTimes::Format(): read, stereo, encode, network, write
 };
+
+// The stereo settings `options.stereo` changes from those the RGB-H model in `options.model_dir`
+// was trained with (model.json), as DifferingStereoSettings words them
+// ("disparity.uniqueness_ratio: 15 (requested: 5)"); empty when unset, equal, or the model is rgb.
+// Throws as ReadStereoRecord.
+std::string StereoMismatch(const DetectSsdOptions& options);
 
 // Before any work it throws std::invalid_argument when out_dir overlaps the data's subset folder,
 // its ImageSets/ or the model folder, and std::runtime_error when out_dir is a non-empty folder

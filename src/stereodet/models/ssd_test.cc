@@ -175,6 +175,43 @@ TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {
   EXPECT_NO_THROW(SsdModel::Load(dir / "a"));
 }
 
+TEST(SsdTest, ModelJsonRecordsTheStereoSettingsOfRgbhModels) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "stereo_record";
+  fs::remove_all(dir);
+  StereoOptions stereo;
+  stereo.disparity.uniqueness_ratio = 5;
+  stereo.disparity.num_disparities = 32;
+  stereo.ground.enabled = false;
+  SsdModel rgbh(TinyConfig(InputEncoding::kRgbhFixed), 1);
+  EXPECT_TRUE(DifferingStereoSettings(rgbh.stereo(), StereoOptions()).empty());  // new: defaults
+  rgbh.set_stereo(stereo);
+  rgbh.Save(dir / "rgbh");
+  const std::string json = ReadFile(dir / "rgbh/model.json");
+  EXPECT_NE(json.find("\"stereo\": {"), std::string::npos) << json;
+  const SsdModel back = SsdModel::Load(dir / "rgbh");
+  EXPECT_EQ(DifferingStereoSettings(back.stereo(), stereo), "");
+  EXPECT_EQ(back.stereo().disparity.uniqueness_ratio, 5);
+  EXPECT_EQ(back.stereo().disparity.num_disparities, 32);
+  EXPECT_FALSE(back.stereo().ground.enabled);
+  // The record is StereoSettingsJson's object; the comparison names each setting.
+  EXPECT_NE(DifferingStereoSettings(back.stereo(), StereoOptions())
+                .find("disparity.uniqueness_ratio: 5 (requested: 15)"),
+            std::string::npos);
+  // An rgb model records none; a model.json written before the record existed reads as defaults.
+  SsdModel(TinyConfig(InputEncoding::kRgb), 1).Save(dir / "rgb");
+  EXPECT_EQ(ReadFile(dir / "rgb/model.json").find("\"stereo\""), std::string::npos);
+  WriteFileAtomically(dir / "rgbh/model.json",
+                      SsdConfigToJson(TinyConfig(InputEncoding::kRgbhFixed),
+                                      ReadWeightsRecord(json, "model.json")));
+  EXPECT_EQ(DifferingStereoSettings(SsdModel::Load(dir / "rgbh").stereo(), StereoOptions()), "");
+  EXPECT_EQ(DifferingStereoSettings(ReadStereoRecord("{}", "m"), StereoOptions()), "");
+  EXPECT_THROW(ReadStereoRecord("{\"stereo\": 3}", "m"), ParseError);
+  EXPECT_THROW(
+      ReadStereoRecord("{\"stereo\": {\"disparity\": {\"uniqueness_ratio\": \"x\"}}}", "m"),
+      ParseError);
+}
+
 TEST(SsdTest, LoadReportsMissingFiles) {
   EXPECT_THROW(SsdModel::Load("/nonexistent/model"), std::runtime_error);
 }

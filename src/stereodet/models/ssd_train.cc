@@ -94,6 +94,12 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
                     saved.InputHeight() == config.InputHeight())
         << "--resume: " << config_path.string() << " has input size " << saved.InputWidth() << "x"
         << saved.InputHeight() << ", not " << config.InputWidth() << "x" << config.InputHeight();
+    if (UsesHeight(saved.encoding)) {
+      const std::string differ = DifferingStereoSettings(
+          ReadStereoRecord(saved_text, config_path.string()), options.data.stereo);
+      STEREODET_CHECK(differ.empty()) << "--resume: " << config_path.string()
+                                      << " was trained with other stereo settings: " << differ;
+    }
     config = saved;
   }
 
@@ -105,6 +111,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
 
   SsdModel model(config, options.seed, device);
+  model.set_stereo(options.data.stereo);  // model.json records what the heights were made with
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
