@@ -61,7 +61,7 @@ fuzz:
 SANITIZE_DIR ?= build-sanitize
 SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  LSAN_OPTIONS=suppressions=$(CURDIR)/scripts/lsan-suppressions.txt
+  LSAN_OPTIONS=suppressions=$(CURDIR)/scripts/lsan-suppressions.txt:print_suppressions=0
 sanitize: deps
 	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTEREODET_SANITIZE=ON \
 	  -DSTEREODET_BUILD_MODELS=OFF -DSTEREODET_BUILD_BENCHMARKS=OFF -DSTEREODET_BUILD_PYTHON=OFF \

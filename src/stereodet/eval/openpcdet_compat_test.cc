@@ -203,8 +203,8 @@ TEST(OpenPcdetCompatTest, ClassWithoutDetectionsIsEvaluatedAsZero) {
   EvalOptions pcdet = Options(EvalCompat::kOpenPcdet, "Cyclist");
   EXPECT_FALSE(
       Evaluate({frame}, devkit).Find("Cyclist", OverlapKind::k2D, Difficulty::kEasy)->evaluated);
-  const ClassResult* r =
-      Evaluate({frame}, pcdet).Find("Cyclist", OverlapKind::kBev, Difficulty::kEasy);
+  const EvalResult pcdet_result = Evaluate({frame}, pcdet);  // r points into it
+  const ClassResult* r = pcdet_result.Find("Cyclist", OverlapKind::kBev, Difficulty::kEasy);
   ASSERT_NE(r, nullptr);
   EXPECT_TRUE(r->evaluated);
   EXPECT_EQ(r->num_valid_labels, 1);
