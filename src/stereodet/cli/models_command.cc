@@ -54,6 +54,29 @@ struct DetectArgs {
   bool quiet = false;
 };
 
+// The flags every `train` command shares (the model folder, the schedule, resume/force, seed,
+// threads, device), bound to the fields of the same names in each family's options.
+template <typename TrainOptions>
+void AddTrainingFlags(CLI::App* ts, TrainOptions& t) {
+  ts->add_option("--out", t.out_dir, "model folder (model.json, model.pt, checkpoint, log)")
+      ->required();
+  ts->add_option("--epochs", t.epochs, "epochs")->check(CLI::PositiveNumber)->capture_default_str();
+  ts->add_option("--batch-size", t.batch_size, "frames per step")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ts->add_option("--lr", t.learning_rate, "peak learning rate (AdamW, warm-up then cosine)")
+      ->capture_default_str();
+  ts->add_flag("--resume", t.resume, "continue from MODEL_DIR/checkpoint.pt if present");
+  ts->add_flag("--force", t.force,
+               "train a new model over one already in MODEL_DIR (its files are removed)");
+  ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
+      ->capture_default_str();
+  ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
+  ts->add_option("--device", t.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
+}
+
 void RunTrain(TrainArgs& a) {
   TrainSsdOptions& options = a.options;
   const auto encoding = ParseInputEncoding(a.input);
@@ -157,23 +180,7 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
   ts->add_option("--input", targs->input, "point source")
       ->check(CLI::IsMember({"lidar", "stereo"}))
       ->capture_default_str();
-  ts->add_option("--out", t.out_dir, "model folder (model.json, model.pt, checkpoint, log)")
-      ->required();
-  ts->add_option("--epochs", t.epochs, "epochs")->check(CLI::PositiveNumber)->capture_default_str();
-  ts->add_option("--batch-size", t.batch_size, "frames per step")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  ts->add_option("--lr", t.learning_rate, "peak learning rate (AdamW, warm-up then cosine)")
-      ->capture_default_str();
-  ts->add_flag("--resume", t.resume, "continue from MODEL_DIR/checkpoint.pt if present");
-  ts->add_flag("--force", t.force,
-               "train a new model over one already in MODEL_DIR (its files are removed)");
-  ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
-      ->capture_default_str();
-  ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
-  ts->add_option("--device", t.device, "cpu or cuda")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
-      ->capture_default_str();
+  AddTrainingFlags(ts, t);
   ts->add_option("--width", t.model.base_channels, "base channels of the BEV backbone")
       ->capture_default_str();
   ts->add_option("--pillar", t.model.grid.pillar_m, "pillar size, m")->capture_default_str();
@@ -239,23 +246,7 @@ void AddModelsCommand(CLI::App& app) {
   ts->add_option("--input", targs->input, "input encoding")
       ->check(CLI::IsMember({"rgb", "rgbh-fixed", "rgbh-learned"}))
       ->capture_default_str();
-  ts->add_option("--out", t.out_dir, "model folder (model.json, model.pt, checkpoint, log)")
-      ->required();
-  ts->add_option("--epochs", t.epochs, "epochs")->check(CLI::PositiveNumber)->capture_default_str();
-  ts->add_option("--batch-size", t.batch_size, "frames per step")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  ts->add_option("--lr", t.learning_rate, "peak learning rate (AdamW, warm-up then cosine)")
-      ->capture_default_str();
-  ts->add_flag("--resume", t.resume, "continue from MODEL_DIR/checkpoint.pt if present");
-  ts->add_flag("--force", t.force,
-               "train a new model over one already in MODEL_DIR (its files are removed)");
-  ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
-      ->capture_default_str();
-  ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
-  ts->add_option("--device", t.device, "cpu or cuda")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
-      ->capture_default_str();
+  AddTrainingFlags(ts, t);
   ts->add_option("--width", t.model.boxes.input_width, "network input width, px")
       ->capture_default_str();
   ts->add_option("--height", t.model.boxes.input_height, "network input height, px")
