@@ -30,10 +30,9 @@ function(stereodet_add_test name)
     set(ARG_TIMEOUT 300)
   endif()
   add_executable(${name} ${ARG_SRCS})
-  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main GTest::gmock)
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} stereodet::test_paths
+    GTest::gtest GTest::gtest_main GTest::gmock)
   target_compile_options(${name} PRIVATE ${STEREODET_WARNINGS})
-  target_compile_definitions(${name} PRIVATE
-    STEREODET_SOURCE_DIR="${PROJECT_SOURCE_DIR}" STEREODET_BINARY_DIR="${PROJECT_BINARY_DIR}")
   if(ARG_WHOLE_PROGRAM)
     add_test(NAME ${ARG_WHOLE_PROGRAM} COMMAND ${name} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
     set_tests_properties(${ARG_WHOLE_PROGRAM} PROPERTIES TIMEOUT ${ARG_TIMEOUT})

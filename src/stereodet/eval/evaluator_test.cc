@@ -17,6 +17,7 @@
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/eval/test_objects.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/util/test_paths.h"
 
 namespace stereodet {
 namespace {
@@ -45,7 +46,7 @@ std::vector<EvalFrame> ReadFixture(const fs::path& dir) {
 // The AP / AOS of KITTI's official devkit on tests/data/eval_small, summed from the arrays it wrote
 // (see that folder's README.md).
 TEST(EvaluatorTest, AgreesWithTheDevkitOnTheFixture) {
-  const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
+  const fs::path dir = ::stereodet::TestSourceDir() / "tests/data/eval_small";
   const std::vector<EvalFrame> frames = ReadFixture(dir);
   ASSERT_EQ(frames.size(), 12u);
   EvalOptions options;
@@ -79,7 +80,7 @@ TEST(EvaluatorTest, AgreesWithTheDevkitOnTheFixture) {
 // The 41-slot precision and orientation arrays the official devkit wrote on tests/data/eval_small
 // (its stats_*.txt files, %f, one line per difficulty), slot by slot.
 TEST(EvaluatorTest, AgreesWithTheOfficialDevkitsArraysOnTheFixture) {
-  const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
+  const fs::path dir = ::stereodet::TestSourceDir() / "tests/data/eval_small";
   EvalOptions options;
   options.num_threads = 2;
   const EvalResult result = Evaluate(ReadFixture(dir), options);

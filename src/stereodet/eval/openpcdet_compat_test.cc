@@ -15,6 +15,7 @@
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/openpcdet_compat_internal.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/util/test_paths.h"
 
 namespace stereodet {
 namespace {
@@ -293,7 +294,7 @@ TEST(OpenPcdetCompatTest, FormatResultPrintsLikeGetOfficialEvalResult) {
 // 8cacccec, numba 0.56.4 CUDA simulator) printed for Car, Pedestrian and Cyclist on these frames.
 TEST(OpenPcdetCompatTest, PrintoutEqualsTheToolsOnTheFixture) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(STEREODET_SOURCE_DIR) / "tests/data/eval_small";
+  const fs::path dir = ::stereodet::TestSourceDir() / "tests/data/eval_small";
   std::vector<fs::path> labels;
   for (const auto& e : fs::directory_iterator(dir / "label_2")) labels.push_back(e.path());
   std::sort(labels.begin(), labels.end());

@@ -19,6 +19,7 @@
 #include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/test_paths.h"
 
 namespace stereodet {
 namespace {
@@ -145,14 +146,13 @@ TEST(FuzzCorpusTest, EveryCorpusIsReplayed) {
   const std::vector<std::string> replayed = {"calib",        "disparity", "label",   "model_json",
                                              "run_manifest", "split",     "velodyne"};
   std::vector<std::string> found;
-  for (const auto& entry : fs::directory_iterator(fs::path(STEREODET_SOURCE_DIR) / "fuzz/corpus")) {
+  for (const auto& entry : fs::directory_iterator(::stereodet::TestSourceDir() / "fuzz/corpus")) {
     if (entry.is_directory()) found.push_back(entry.path().filename().string());
   }
   std::sort(found.begin(), found.end());
   EXPECT_EQ(found, replayed);
   for (const std::string& name : replayed) {
-    EXPECT_TRUE(fs::exists(fs::path(STEREODET_SOURCE_DIR) / "fuzz" / (name + "_fuzzer.cc")))
-        << name;
+    EXPECT_TRUE(fs::exists(::stereodet::TestSourceDir() / "fuzz" / (name + "_fuzzer.cc"))) << name;
   }
 }
 

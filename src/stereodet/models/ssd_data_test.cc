@@ -8,12 +8,13 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
+#include "stereodet/util/test_paths.h"
+
 namespace stereodet {
 namespace {
 
 std::filesystem::path TempDir(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / name;
+  const std::filesystem::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

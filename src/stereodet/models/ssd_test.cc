@@ -11,6 +11,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/fuzz_corpus.h"
+#include "stereodet/util/test_paths.h"
 
 namespace stereodet {
 namespace {
@@ -123,8 +124,7 @@ TEST(SsdTest, SameSeedSameWeights) {
 }
 
 TEST(SsdTest, SaveThenLoadGivesIdenticalOutputs) {
-  const std::filesystem::path dir =
-      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "save_load";
+  const std::filesystem::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "save_load";
   std::filesystem::remove_all(dir);
   SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 3);
   // Train one step so batch-norm statistics differ from their initial values.
@@ -149,7 +149,7 @@ TEST(SsdTest, SaveThenLoadGivesIdenticalOutputs) {
 
 TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "tied";
+  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "tied";
   fs::remove_all(dir);
   // Same encoding and shapes, other weights: LibTorch alone would load them silently.
   SsdModel(TinyConfig(InputEncoding::kRgb), 1).Save(dir / "a");
@@ -177,7 +177,7 @@ TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {
 
 TEST(SsdTest, ModelJsonRecordsTheStereoSettingsOfRgbhModels) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "stereo_record";
+  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "stereo_record";
   fs::remove_all(dir);
   StereoOptions stereo;
   stereo.disparity.uniqueness_ratio = 5;
@@ -261,7 +261,7 @@ TEST(SsdTest, AFewStepsLowerTheLoss) {
 TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
   SetTorchThreads(1);
   const std::filesystem::path path =
-      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "resume" / "checkpoint.pt";
+      ::stereodet::TestBinaryDir() / "models_test_tmp" / "resume" / "checkpoint.pt";
   std::filesystem::remove_all(path.parent_path());
   SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 4);
   SsdTrainer trainer(model);
@@ -283,7 +283,7 @@ TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
 TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
   SetTorchThreads(1);
   const std::filesystem::path path =
-      std::filesystem::path(STEREODET_BINARY_DIR) / "models_test_tmp" / "tied" / "checkpoint.pt";
+      ::stereodet::TestBinaryDir() / "models_test_tmp" / "tied" / "checkpoint.pt";
   std::filesystem::remove_all(path.parent_path());
   SsdModel model(TinyConfig(InputEncoding::kRgb), 4);
   SsdTrainer(model).SaveCheckpoint(path, 3, "00000000000000aa");

@@ -17,6 +17,7 @@
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
+#include "stereodet/util/test_paths.h"
 
 namespace stereodet {
 namespace {
@@ -24,7 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::path(STEREODET_BINARY_DIR) / "models_test_tmp" / name;
+  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

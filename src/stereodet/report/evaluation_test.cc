@@ -13,6 +13,7 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -21,7 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-const fs::path kData = fs::path(STEREODET_SOURCE_DIR) / "tests/data";
+const fs::path kData = ::stereodet::TestSourceDir() / "tests/data";
 
 // tests/data/eval_small (README): KITTI's devkit gives Car 2D AP_R40 6.25 / 15.77 / 15.77.
 EvaluationOptions SmallCar2d() {

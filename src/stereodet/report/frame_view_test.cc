@@ -14,6 +14,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/report/evaluation.h"
 #include "stereodet/report/raster.h"
+#include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -22,7 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-const fs::path kViewData = fs::path(STEREODET_SOURCE_DIR) / "tests/data/view_small";
+const fs::path kViewData = ::stereodet::TestSourceDir() / "tests/data/view_small";
 
 // tests/data/view_small evaluated with records (KITTI matcher, Car / Pedestrian / Cyclist, every
 // metric) into `out`.

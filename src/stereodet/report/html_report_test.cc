@@ -19,6 +19,7 @@
 #include "stereodet/report/evaluation.h"
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -29,7 +30,7 @@ using nlohmann::json;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-const fs::path kData = fs::path(STEREODET_SOURCE_DIR) / "tests/data";
+const fs::path kData = ::stereodet::TestSourceDir() / "tests/data";
 
 // tests/data/eval_small with the KITTI matcher (41-slot arrays) or the optimal one, every class,
 // metric and difficulty (or Car 2D only), written with its report (SVG only unless `png`).

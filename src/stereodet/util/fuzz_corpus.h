@@ -8,12 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/util/test_paths.h"
+
 namespace stereodet {
 
 // The regular files of fuzz/corpus/`name`/ in name order (empty when the folder is missing).
 inline std::vector<std::filesystem::path> FuzzCorpusFiles(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::path(STEREODET_SOURCE_DIR) / "fuzz/corpus" / name;
+  const std::filesystem::path dir = ::stereodet::TestSourceDir() / "fuzz/corpus" / name;
   std::vector<std::filesystem::path> files;
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
