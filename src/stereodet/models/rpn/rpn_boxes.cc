@@ -35,7 +35,7 @@ void AnchorOptions::Check() const {
   }
 }
 
-std::vector<Box2D> GenerateAnchors(int map_width, int map_height, const AnchorOptions& options) {
+std::vector<Box2D> GenerateRpnAnchors(int map_width, int map_height, const AnchorOptions& options) {
   options.Check();
   STEREODET_CHECK(map_width >= 1 && map_height >= 1)
       << "feature map must be at least 1 x 1, got " << map_width << " x " << map_height;
@@ -102,9 +102,9 @@ std::vector<int> RandomSubset(int n, int k, std::mt19937_64& rng) {
   return order;
 }
 
-AnchorTargets SampleAnchors(const std::vector<Box2D>& anchors,
-                            const std::vector<TargetBox>& objects,
-                            const AnchorSamplingOptions& options, std::mt19937_64& rng) {
+RpnAnchorTargets SampleAnchors(const std::vector<Box2D>& anchors,
+                               const std::vector<TargetBox>& objects,
+                               const AnchorSamplingOptions& options, std::mt19937_64& rng) {
   options.Check();
   const int n = static_cast<int>(anchors.size());
   std::vector<const TargetBox*> positives_of, ignores;
@@ -160,7 +160,7 @@ AnchorTargets SampleAnchors(const std::vector<Box2D>& anchors,
   }
   const int max_positive = std::max(
       1, static_cast<int>(std::floor(options.samples_per_image * options.positive_fraction)));
-  AnchorTargets targets;
+  RpnAnchorTargets targets;
   targets.labels.assign(n, -1);
   targets.deltas.assign(static_cast<size_t>(n) * 4, 0.0f);
   for (int i : RandomSubset(static_cast<int>(positive.size()), max_positive, rng)) {

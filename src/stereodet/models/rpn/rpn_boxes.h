@@ -30,7 +30,7 @@ struct AnchorOptions {
 // Anchors of a map_width x map_height feature map, in the order [row][column][size][ratio] (the
 // order of the RPN's outputs). The anchor of cell (row, column), size s and ratio r is centred on
 // ((column + 0.5) * stride, (row + 0.5) * stride), width s / sqrt(r), height s * sqrt(r).
-std::vector<Box2D> GenerateAnchors(int map_width, int map_height, const AnchorOptions& options);
+std::vector<Box2D> GenerateRpnAnchors(int map_width, int map_height, const AnchorOptions& options);
 
 // Faster R-CNN's box coding relative to a reference box: d = (wx (cx - rcx) / rw, wy (cy - rcy) /
 // rh, ww log(w / rw), wh log(h / rh)). The RPN uses weights 1, the box head 10, 10, 5, 5.
@@ -58,7 +58,7 @@ struct AnchorSamplingOptions {
 };
 
 // Per anchor: 1 sampled positive, 0 sampled negative, -1 not in the loss.
-struct AnchorTargets {
+struct RpnAnchorTargets {
   std::vector<int8_t> labels;
   std::vector<float> deltas;  // 4 per anchor (RPN coding, weights 1); zeros unless positive
   int num_positive = 0;
@@ -69,9 +69,9 @@ struct AnchorTargets {
 // says, then at most samples_per_image * positive_fraction positives and samples_per_image minus
 // the positives kept negatives, each a uniform random subset drawn from `rng`. Objects with an
 // empty box are skipped.
-AnchorTargets SampleAnchors(const std::vector<Box2D>& anchors,
-                            const std::vector<TargetBox>& objects,
-                            const AnchorSamplingOptions& options, std::mt19937_64& rng);
+RpnAnchorTargets SampleAnchors(const std::vector<Box2D>& anchors,
+                               const std::vector<TargetBox>& objects,
+                               const AnchorSamplingOptions& options, std::mt19937_64& rng);
 
 struct ProposalOptions {
   int pre_nms_top_n = 1000;  // highest-scored anchors decoded into candidates

@@ -23,7 +23,7 @@ TEST(RpnBoxesTest, AnchorsByHandInOutputOrder) {
   AnchorOptions options;
   options.sizes_px = {16.0};
   options.ratios = {1.0, 4.0};
-  const std::vector<Box2D> anchors = GenerateAnchors(2, 1, options);
+  const std::vector<Box2D> anchors = GenerateRpnAnchors(2, 1, options);
   ASSERT_EQ(anchors.size(), 4u);
   // Cell (0, 0), centre (8, 8): 16 x 16, then width 16 / 2 = 8, height 16 * 2 = 32.
   ExpectBox(anchors[0], {0, 0, 16, 16});
@@ -34,14 +34,14 @@ TEST(RpnBoxesTest, AnchorsByHandInOutputOrder) {
   // Default: 4 sizes x 3 ratios per cell, row-major cells.
   const AnchorOptions defaults;
   EXPECT_EQ(defaults.AnchorsPerCell(), 12);
-  const std::vector<Box2D> all = GenerateAnchors(40, 12, defaults);
+  const std::vector<Box2D> all = GenerateRpnAnchors(40, 12, defaults);
   ASSERT_EQ(all.size(), 40u * 12u * 12u);
   const Box2D& last = all.back();  // row 11, column 39, size 128, ratio 2
   EXPECT_NEAR((last.left + last.right) / 2, 39.5 * 16, 1e-9);
   EXPECT_NEAR((last.top + last.bottom) / 2, 11.5 * 16, 1e-9);
   EXPECT_NEAR(last.Height() / last.Width(), 2.0, 1e-9);
   EXPECT_NEAR(std::sqrt(last.Height() * last.Width()), 128.0, 1e-9);
-  EXPECT_THROW(GenerateAnchors(0, 1, defaults), std::invalid_argument);
+  EXPECT_THROW(GenerateRpnAnchors(0, 1, defaults), std::invalid_argument);
 }
 
 TEST(RpnBoxesTest, DeltasByHandAndRoundTrip) {
@@ -83,7 +83,7 @@ TEST(RpnBoxesTest, AnchorAssignmentByHand) {
   const std::vector<TargetBox> objects = {
       {{0, 0, 10, 10}, 1}, {{200, 0, 210, 10}, kIgnoreLabel}, {{300, 0, 310, 10}, 2}};
   std::mt19937_64 rng(1);
-  const AnchorTargets t = SampleAnchors(anchors, objects, {}, rng);
+  const RpnAnchorTargets t = SampleAnchors(anchors, objects, {}, rng);
   ASSERT_EQ(t.labels.size(), 5u);
   EXPECT_EQ(t.labels[0], 1);
   EXPECT_EQ(t.labels[1], -1);  // IoU 1/3 in [0.3, 0.7): neither
@@ -101,16 +101,16 @@ TEST(RpnBoxesTest, AnchorAssignmentByHand) {
 
 TEST(RpnBoxesTest, AnchorSamplingCountsAndSeeds) {
   AnchorOptions a;
-  const std::vector<Box2D> anchors = GenerateAnchors(20, 8, a);
+  const std::vector<Box2D> anchors = GenerateRpnAnchors(20, 8, a);
   std::vector<TargetBox> objects;
   for (int i = 0; i < 6; ++i) objects.push_back({{20.0 + 50 * i, 30, 60.0 + 50 * i, 60}, 1});
   AnchorSamplingOptions options;
   options.samples_per_image = 16;
   options.positive_fraction = 0.25;
   std::mt19937_64 r1(7), r2(7), r3(8);
-  const AnchorTargets t1 = SampleAnchors(anchors, objects, options, r1);
-  const AnchorTargets t2 = SampleAnchors(anchors, objects, options, r2);
-  const AnchorTargets t3 = SampleAnchors(anchors, objects, options, r3);
+  const RpnAnchorTargets t1 = SampleAnchors(anchors, objects, options, r1);
+  const RpnAnchorTargets t2 = SampleAnchors(anchors, objects, options, r2);
+  const RpnAnchorTargets t3 = SampleAnchors(anchors, objects, options, r3);
   EXPECT_EQ(t1.labels, t2.labels);
   EXPECT_NE(t1.labels, t3.labels);
   EXPECT_EQ(t1.num_positive, 4);  // more positives exist than 16 * 0.25
@@ -136,7 +136,7 @@ TEST(RpnBoxesTest, AnchorSamplingCountsAndSeeds) {
   }
   // No objects: only negatives, up to the sample size.
   std::mt19937_64 r4(1);
-  const AnchorTargets empty = SampleAnchors(anchors, {}, options, r4);
+  const RpnAnchorTargets empty = SampleAnchors(anchors, {}, options, r4);
   EXPECT_EQ(empty.num_positive, 0);
   EXPECT_EQ(empty.num_negative, 16);
 }

@@ -360,7 +360,7 @@ std::pair<torch::Tensor, torch::Tensor> RpnNetImpl::Rpn(const torch::Tensor& fea
   const torch::Tensor h = torch::relu(rpn_conv(features));
   const int64_t b = features.size(0), fh = features.size(2), fw = features.size(3);
   const int64_t a = config.anchors.AnchorsPerCell();
-  // [B, A, H, W] -> [B, H, W, A]: GenerateAnchors' order [row][column][anchor].
+  // [B, A, H, W] -> [B, H, W, A]: GenerateRpnAnchors' order [row][column][anchor].
   torch::Tensor objectness = rpn_objectness(h).permute({0, 2, 3, 1}).reshape({b, fh * fw * a});
   torch::Tensor deltas =
       rpn_deltas(h).view({b, a, 4, fh, fw}).permute({0, 3, 4, 1, 2}).reshape({b, fh * fw * a, 4});
@@ -400,7 +400,7 @@ struct RpnModel::Impl {
   Impl(const RpnConfig& c, ComputeDevice d)
       : config(c),
         device(internal::TorchDevice(d)),
-        anchors(GenerateAnchors(c.FeatureWidth(), c.FeatureHeight(), c.anchors)),
+        anchors(GenerateRpnAnchors(c.FeatureWidth(), c.FeatureHeight(), c.anchors)),
         net(c) {
     net->to(device);
   }
@@ -648,7 +648,8 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
   std::vector<float> anchor_deltas(b * n * 4);
   RpnLossParts parts;
   for (int64_t i = 0; i < b; ++i) {
-    const AnchorTargets t = SampleAnchors(m.anchors, batch.objects[i], impl_->options.anchors, rng);
+    const RpnAnchorTargets t =
+        SampleAnchors(m.anchors, batch.objects[i], impl_->options.anchors, rng);
     std::copy(t.labels.begin(), t.labels.end(), anchor_labels.begin() + i * n);
     std::copy(t.deltas.begin(), t.deltas.end(), anchor_deltas.begin() + i * n * 4);
     parts.positive_anchors += t.num_positive;

@@ -112,7 +112,7 @@ class RpnModel {
   const RpnConfig& config() const;
   const StereoOptions& stereo() const;  // the depth/height settings (rgbd)
   void set_stereo(const StereoOptions& stereo);
-  const std::vector<Box2D>& anchors() const;  // GenerateAnchors of the feature map
+  const std::vector<Box2D>& anchors() const;  // GenerateRpnAnchors of the feature map
 
   // Inference (evaluation-mode batch norm, no gradients): per input, boxes in network px, labels
   // >= 1, scores (softmax probabilities) in [0, 1], best first.

@@ -50,7 +50,7 @@ struct RpnNetImpl : torch::nn::Module {
   explicit RpnNetImpl(const RpnConfig& config);
   // [B, 3 or 6, H, W] -> the (fused) stride-16 features [B, FeatureChannels, H / 16, W / 16].
   torch::Tensor Features(const torch::Tensor& x);
-  // Objectness logits [B, N] and deltas [B, N, 4], N anchors in GenerateAnchors' order.
+  // Objectness logits [B, N] and deltas [B, N, 4], N anchors in GenerateRpnAnchors' order.
   std::pair<torch::Tensor, torch::Tensor> Rpn(const torch::Tensor& features);
   // [R, C, P, P] -> class logits [R, K + 1] and per-class deltas [R, K * 4].
   std::pair<torch::Tensor, torch::Tensor> Head(const torch::Tensor& pooled);

