@@ -160,6 +160,22 @@ RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) 
   }
 }
 
+StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source) {
+  StereoOptions stereo = ReadStereoRecord(text, source);
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_object() && j.contains("depth_code")) {
+    try {
+      stereo.depth.min_m = j["depth_code"].at("min_m").get<double>();
+      stereo.depth.max_m = j["depth_code"].at("max_m").get<double>();
+      stereo.depth.bits = j["depth_code"].at("bits").get<int>();
+      stereo.depth.Check();
+    } catch (const std::exception& e) {
+      throw ParseError(source, 0, "depth_code", e.what());
+    }
+  }
+  return stereo;
+}
+
 PlanarImage EncodeRpnInput(const cv::Mat& bgr, const cv::Mat& depth_code,
                            const cv::Mat& height_code, RpnInput input,
                            const DepthQuantization& depth) {
@@ -454,18 +470,7 @@ RpnModel RpnModel::Load(const std::filesystem::path& model_dir, ComputeDevice de
   const std::string text = ReadFile(config_path);
   const RpnConfig config = RpnConfigFromJson(text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
-  impl->stereo = ReadStereoRecord(text, config_path.string());
-  const nlohmann::json j = nlohmann::json::parse(text);
-  if (j.contains("depth_code")) {
-    try {
-      impl->stereo.depth.min_m = j["depth_code"].at("min_m").get<double>();
-      impl->stereo.depth.max_m = j["depth_code"].at("max_m").get<double>();
-      impl->stereo.depth.bits = j["depth_code"].at("bits").get<int>();
-      impl->stereo.depth.Check();
-    } catch (const std::exception& e) {
-      throw ParseError(config_path.string(), 0, "depth_code", e.what());
-    }
-  }
+  impl->stereo = ReadRpnStereoRecord(text, config_path.string());
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
   const WeightsRecord record = ReadWeightsRecord(text, config_path.string());
   internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);

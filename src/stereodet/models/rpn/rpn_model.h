@@ -70,6 +70,9 @@ struct RpnConfig {
 std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weights = {},
                             const std::optional<StereoOptions>& stereo = std::nullopt);
 RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source);
+// The stereo settings model.json records (ssd.h's ReadStereoRecord, plus the depth code's range
+// and bits); absent ones read as StereoOptions' defaults. Throws ParseError naming `source`.
+StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source);
 
 // The network input of one frame at the network's size. `bgr` is CV_8UC3 of the network size;
 // `depth_code` and `height_code` CV_16UC1 of the same size (0 = no stereo), ignored for rgb.
