@@ -308,6 +308,9 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   ts->add_option("--geometry-width", t.model.geometry_width,
                  "base channels of the geometry branch (rgbd)")
       ->capture_default_str();
+  ts->add_option("--warmup", t.warmup_steps, "steps of the linear learning-rate warm-up")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   ts->add_option("--init-from", t.init_from,
                  "rgb model folder whose image branch, RPN and box head initialise this model "
                  "(\"mirroring\"; rgbd: the fusion starts as image features only)");
