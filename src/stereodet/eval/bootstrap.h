@@ -41,8 +41,7 @@
 namespace stereodet {
 
 struct BootstrapOptions {
-  // Resamples (>= 1). The percentile interval's ends move by about 1 / sqrt(this) of its width
-  // from run to run; 1000 is the usual choice for 95 % intervals.
+  // Resamples, in [1, 10^6]; 1000 is the usual choice for 95 % intervals.
   int num_resamples = 1000;
   // Resample r's frame counts depend on (seed, r) only: the same seed gives the same intervals on
   // any number of threads.
