@@ -111,8 +111,10 @@ std::optional<BootstrapOptions> MakeBootstrapOptions(const EvalArgs& a) {
         << "--bootstrap-seed and --bootstrap-confidence need --bootstrap N";
     return std::nullopt;
   }
-  STEREODET_CHECK(a.bootstrap.num_resamples >= 1 && a.bootstrap.num_resamples <= 1000000)
-      << "--bootstrap: resamples must be in [1, 1000000], got " << a.bootstrap.num_resamples;
+  STEREODET_CHECK(a.bootstrap.num_resamples >= 1 &&
+                  a.bootstrap.num_resamples <= kMaxBootstrapResamples)
+      << "--bootstrap: resamples must be in [1, " << kMaxBootstrapResamples << "], got "
+      << a.bootstrap.num_resamples;
   STEREODET_CHECK(a.bootstrap.confidence > 0 && a.bootstrap.confidence < 1)
       << "--bootstrap-confidence: must be in (0, 1), got " << a.bootstrap.confidence;
   return a.bootstrap;

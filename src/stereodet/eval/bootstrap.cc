@@ -398,8 +398,9 @@ std::vector<Values> Difference(const std::vector<Values>& a, const std::vector<V
 }  // namespace
 
 void BootstrapOptions::Check() const {
-  STEREODET_CHECK(num_resamples >= 1 && num_resamples <= 1000000)
-      << "bootstrap: resamples must be in [1, 1000000], got " << num_resamples;
+  STEREODET_CHECK(num_resamples >= 1 && num_resamples <= kMaxBootstrapResamples)
+      << "bootstrap: resamples must be in [1, " << kMaxBootstrapResamples << "], got "
+      << num_resamples;
   STEREODET_CHECK(confidence > 0 && confidence < 1)
       << "bootstrap: confidence must be in (0, 1), got " << confidence;
 }

@@ -40,8 +40,12 @@
 
 namespace stereodet {
 
+// At most this many resamples: Bootstrap keeps every resample's values until the end, 48 bytes per
+// cell and resample (27 cells x 10^5 resamples: 130 MB).
+inline constexpr int kMaxBootstrapResamples = 100000;
+
 struct BootstrapOptions {
-  // Resamples, in [1, 10^6]; 1000 is the usual choice for 95 % intervals.
+  // Resamples, in [1, kMaxBootstrapResamples]; 1000 is the usual choice for 95 % intervals.
   int num_resamples = 1000;
   // Resample r's frame counts depend on (seed, r) only: the same seed gives the same intervals on
   // any number of threads.
@@ -53,7 +57,8 @@ struct BootstrapOptions {
   bool keep_samples = false;
   int num_threads = 0;  // 0 = all hardware threads; the result does not depend on it
 
-  // Throws std::invalid_argument for num_resamples < 1 or > 10^6, or confidence outside (0, 1).
+  // Throws std::invalid_argument for num_resamples outside [1, kMaxBootstrapResamples], or
+  // confidence outside (0, 1).
   void Check() const;
 };
 

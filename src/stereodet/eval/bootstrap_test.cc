@@ -122,6 +122,7 @@ TEST(BootstrapTest, MatchesEvaluateOnEveryResampleVocAndOperatingPoint) {
 TEST(BootstrapTest, MatchesEvaluateOnEveryResampleOpenPcdet) {
   EvalOptions eval;
   eval.compat = EvalCompat::kOpenPcdet;
+  eval.score_threshold = 0.4;
   eval.metrics = {OverlapKind::k2D, OverlapKind::kBev};
   eval.num_threads = 2;
   ExpectExact(SmallFrames(6, 16), eval, 6);
@@ -207,6 +208,20 @@ TEST(BootstrapTest, OneFrameGivesADegenerateInterval) {
       EXPECT_EQ(i.lower, i.estimate);
       EXPECT_EQ(i.upper, i.estimate);
     }
+  }
+}
+
+TEST(BootstrapTest, NoFramesGiveWhatEvaluateGives) {
+  EvalOptions eval;
+  eval.require_detections = false;
+  BootstrapOptions b;
+  b.num_resamples = 3;
+  const BootstrapResult boot = Bootstrap({}, eval, b);
+  const EvalResult whole = Evaluate({}, eval);
+  ASSERT_EQ(boot.cells.size(), whole.results.size());
+  for (size_t c = 0; c < boot.cells.size(); ++c) {
+    EXPECT_TRUE(Same(boot.cells[c].Get(BootstrapMetric::kApR40).estimate, whole.results[c].ap_r40));
+    EXPECT_TRUE(std::isnan(boot.cells[c].Get(BootstrapMetric::kBrierLabels).estimate));
   }
 }
 
@@ -341,6 +356,8 @@ TEST(BootstrapTest, OptionsCheckAndNames) {
   BootstrapOptions o;
   EXPECT_NO_THROW(o.Check());
   o.num_resamples = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o.num_resamples = kMaxBootstrapResamples + 1;
   EXPECT_THROW(o.Check(), std::invalid_argument);
   o.num_resamples = 10;
   o.confidence = 1.0;
