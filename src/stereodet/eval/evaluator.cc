@@ -294,7 +294,7 @@ std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& fram
   std::vector<MatchRecord>* out = &rows;
   auto pair_overlap = [&](int i, int j) {
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
-      if (cf.edge_det[e] == j) return cf.edge_overlap[e];
+      if (cf.edge_det[e] == j) return KittiRecordedOverlap(kind, frame, cf, i, e);
     }
     return KittiOverlap(kind, frame.detections[cf.det_object[j]], frame.labels[cf.label_object[i]]);
   };

@@ -68,6 +68,8 @@ struct ClassFrame {
   std::vector<int32_t> edge_det;
   std::vector<double> edge_overlap;
   double min_overlap = 0.5;
+  // Made by PrepareClassFrame with OverlapArithmetic::kDevkit (see KittiRecordedOverlap).
+  bool devkit_overlaps = false;
 
   int num_labels() const { return static_cast<int>(label_object.size()); }
   int num_dets() const { return static_cast<int>(det_object.size()); }
@@ -120,6 +122,17 @@ class ClassFrameBuilder {
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit,
                              ClassFrame reuse = {});
+
+// The overlap of label `label_index`'s edge `edge` (an index into cf.edge_det) that records
+// (matches.csv) report: cf.edge_overlap[edge], except in a ClassFrame of PrepareClassFrame with
+// OverlapArithmetic::kDevkit, BEV or 3D, where it is the devkit's own value wherever the devkit may
+// be asked: near the threshold, between close candidates of the label, and for EVERY parallel,
+// non-identical pair. PrepareClassFrame itself keeps KittiOverlap's value for parallel footprints
+// whose edge lines are all apart: there the two stay within 3e-6 of each other, far from the
+// threshold and from the label's other candidates, so every decision is the same (the set of
+// edges included), but the value differs in the last digits, and records print the devkit's.
+double KittiRecordedOverlap(OverlapKind kind, const EvalFrame& frame, const ClassFrame& cf,
+                            int label_index, int edge);
 
 }  // namespace stereodet
 
