@@ -298,6 +298,11 @@ void ClassFrameBuilder::AddDetections(const EvalFrame& frame, const ClassSpec& s
   cf->det_score.reserve(most);
   cf->det_alpha.reserve(most);
   cf->det_dontcare.reserve(most);
+  cf->det_state.reserve(most * kNumDifficulties);
+  double min_height[kNumDifficulties];
+  for (int d = 0; d < kNumDifficulties; ++d) {
+    min_height[d] = KittiDifficultyLimits(static_cast<Difficulty>(d)).min_height_px;
+  }
   for (size_t j = 0; j < frame.detections.size(); ++j) {
     const Object& det = frame.detections[j];
     STEREODET_CHECK(det.score.has_value())
@@ -311,6 +316,10 @@ void ClassFrameBuilder::AddDetections(const EvalFrame& frame, const ClassSpec& s
     cf->det_score.push_back(*det.score);
     cf->det_alpha.push_back(det.alpha);
     cf->det_dontcare.push_back(is_class && in_dontcare(det) ? 1 : 0);
+    const double truncated = std::trunc(height);
+    for (int d = 0; d < kNumDifficulties; ++d) {
+      cf->det_state.push_back(truncated < min_height[d] ? 1 : (is_class ? 0 : -1));
+    }
   }
 }
 
@@ -325,6 +334,7 @@ void ClassFrame::Clear() {
   det_score.clear();
   det_alpha.clear();
   det_dontcare.clear();
+  det_state.clear();
   edge_begin.clear();
   edge_det.clear();
   edge_overlap.clear();

@@ -62,6 +62,13 @@ struct ClassFrame {
   std::vector<double> det_score;
   std::vector<double> det_alpha;
   std::vector<uint8_t> det_dontcare;  // overlaps a DontCare region by > the threshold (criterion 0)
+  // The devkit's ignored_det of each detection for each difficulty, det_state[j * kNumDifficulties
+  // + d]: 1 if lower than d's minimum height (std::trunc(det_height) < min), else 0 for the
+  // evaluated class and -1 for another. Derived from det_height and det_is_class by
+  // ClassFrameBuilder (once per frame, class and overlap kind, instead of once per KITTI pass and
+  // difficulty); a ClassFrame put together by hand may leave it empty, and the KITTI matcher then
+  // derives it itself.
+  std::vector<int8_t> det_state;
   // Overlaps >= min_overlap, by label (CSR): label i's edges are [edge_begin[i], edge_begin[i+1]),
   // in ascending detection order.
   std::vector<int32_t> edge_begin;

@@ -15,18 +15,36 @@ namespace {
 // The devkit's NO_DETECTION: in pass 1 a detection is chosen only if its score is above it.
 constexpr double kNoDetection = -10000000;
 
-// The devkit's ignored_det: 1 if lower than the difficulty's minimum height (any class; the devkit
-// truncates the height to an int, which for an integer minimum compares the same), else 0 for the
-// class, -1 for other classes.
-void DetStates(const ClassFrame& f, Difficulty difficulty, std::vector<int8_t>* states) {
-  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+// The devkit's ignored_det of each detection for `difficulty` (ClassFrame::det_state), read with a
+// stride, so that the states ClassFrameBuilder derived are used in place.
+class DetStateView {
+ public:
+  DetStateView(const int8_t* first, int stride) : first_(first), stride_(stride) {}
+  int8_t operator[](int j) const { return first_[static_cast<ptrdiff_t>(j) * stride_]; }
+
+ private:
+  const int8_t* first_;
+  int stride_;
+};
+
+// ClassFrame::det_state for `difficulty`: the frame's own, or, for a ClassFrame put together
+// without it, derived into `scratch`: 1 if lower than the difficulty's minimum height (any class;
+// the devkit truncates the height to an int, which for an integer minimum compares the same), else
+// 0 for the class, -1 for other classes.
+DetStateView DetStates(const ClassFrame& f, Difficulty difficulty, std::vector<int8_t>* scratch) {
   const int n = f.num_dets();
-  states->resize(n);
-  int8_t* out = states->data();
+  const int d = static_cast<int>(difficulty);
+  if (f.det_state.size() == static_cast<size_t>(n) * kNumDifficulties) {
+    return DetStateView(f.det_state.data() + d, kNumDifficulties);
+  }
+  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+  scratch->resize(n);
+  int8_t* out = scratch->data();
   const double* height = f.det_height.data();
   const uint8_t* is_class = f.det_is_class.data();
   for (int j = 0; j < n; ++j)
     out[j] = std::trunc(height[j]) < min_height ? 1 : (is_class[j] ? 0 : -1);
+  return DetStateView(out, 1);
 }
 
 // Memory reused by one thread from call to call: the functions below run once per frame, class,
@@ -52,7 +70,7 @@ struct Pass2Result {
 // the unassigned detection (score >= threshold) with overlap > tau of largest overlap; a valid
 // detection replaces an earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records
 // pairs.
-Pass2Result RunPass2(const ClassFrame& f, Difficulty difficulty, const std::vector<int8_t>& states,
+Pass2Result RunPass2(const ClassFrame& f, Difficulty difficulty, DetStateView states,
                      double threshold, std::vector<uint8_t>* assigned, FrameAssociation* assoc) {
   Pass2Result r;
   const double tau = f.min_overlap;
@@ -121,8 +139,7 @@ KittiTpScores KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty,
   out.scores = std::move(append_to);
   std::vector<double>* tp_scores = &out.scores;
   ThreadScratch& scratch = Scratch();
-  std::vector<int8_t>& states = scratch.states;
-  DetStates(f, difficulty, &states);
+  const DetStateView states = DetStates(f, difficulty, &scratch.states);
   std::vector<uint8_t>& assigned = scratch.assigned;
   assigned.assign(f.num_dets(), 0);
   const double tau = f.min_overlap;
@@ -209,8 +226,7 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
     return;
   }
   ThreadScratch& scratch = Scratch();
-  std::vector<int8_t>& states = scratch.states;
-  DetStates(f, difficulty, &states);
+  const DetStateView states = DetStates(f, difficulty, &scratch.states);
   const double tau = f.min_overlap;
   // Detections that can be chosen by some label; only their presence above the threshold changes
   // the greedy's outcome. The others are FPs (valid, not in DontCare) or nothing.
@@ -262,15 +278,19 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
         }
       }
     }
-    // The run ends at the first threshold at which the next detection of either list enters.
+    // The run ends at the first threshold after t at which the next detection of either list
+    // enters (score >= threshold). The thresholds descend (and hold no NaN: they are TP scores), so
+    // the thresholds a score does not reach are a prefix: a binary search finds the end.
     size_t end = n_t;
-    if (k_inter < n_inter || k_free < n_free) {
-      end = t + 1;
-      while (end < n_t && !(k_inter < n_inter && interacting_scores[k_inter] >= thresholds[end]) &&
-             !(k_free < n_free && free_fp_scores[k_free] >= thresholds[end])) {
-        ++end;
-      }
-    }
+    auto first_entered = [&](double score) {
+      return static_cast<size_t>(
+          std::partition_point(thresholds.begin() + static_cast<ptrdiff_t>(t) + 1,
+                               thresholds.begin() + static_cast<ptrdiff_t>(n_t),
+                               [score](double threshold) { return !(score >= threshold); }) -
+          thresholds.begin());
+    };
+    if (k_inter < n_inter) end = std::min(end, first_entered(interacting_scores[k_inter]));
+    if (k_free < n_free) end = std::min(end, first_entered(free_fp_scores[k_free]));
     counts->AddRun(t, end, cached.tp, cached.fp + static_cast<int64_t>(k_free), cached.fn,
                    cached.similarity);
     t = end;
@@ -292,8 +312,7 @@ std::vector<KittiCounts> KittiAddFrameCounts(const ClassFrame& f, Difficulty dif
 FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
                                 FrameAssociation reuse) {
   ThreadScratch& scratch = Scratch();
-  std::vector<int8_t>& states = scratch.states;
-  DetStates(f, difficulty, &states);
+  const DetStateView states = DetStates(f, difficulty, &scratch.states);
   FrameAssociation a = std::move(reuse);
   a.label_outcome.assign(f.num_labels(), Outcome::kIgnored);
   a.label_det.assign(f.num_labels(), -1);
