@@ -71,8 +71,8 @@ bool ImageOverlap(const Box2D& d, const Box2D& g, ImageOverlapParts* parts) {
   return true;
 }
 
-double IntersectionVolumeDevkit(const Box3D& d, const Box3D& g) {
-  const double inter_area = FootprintIntersection(d, g);
+// The 3D intersection of d and g from their footprint intersection `inter_area`.
+double IntersectionVolumeDevkit(double inter_area, const Box3D& d, const Box3D& g) {
   const double ymax = std::min(d.location.y(), g.location.y());
   const double ymin = std::max(d.location.y() - d.h, g.location.y() - g.h);
   return inter_area * std::max(0.0, ymax - ymin);
@@ -183,6 +183,40 @@ void UseDevkitForCloseCandidates(OverlapKind kind, const EvalFrame& frame, const
 
 }  // namespace
 
+namespace {
+
+// KittiOverlap's BEV and 3D values from the pair's footprint intersection (FootprintIntersection),
+// which the two share: PrepareClassFrame computes it once for both.
+double BevOverlapFromFootprint(const Box3D& d, const Box3D& g, double footprint_intersection) {
+  const double inter = footprint_intersection;
+  if (inter <= 0) return 0.0;
+  const double uni = d.l * d.w + g.l * g.w - inter;
+  return inter / uni;
+}
+
+double ThreeDOverlapFromFootprint(const Box3D& d, const Box3D& g, double footprint_intersection) {
+  const double inter = IntersectionVolumeDevkit(footprint_intersection, d, g);
+  if (inter <= 0) return 0.0;
+  return inter / (d.h * d.l * d.w + g.h * g.l * g.w - inter);
+}
+
+// KittiOverlap's BEV or 3D value from the footprint intersection.
+double OverlapFromFootprint(OverlapKind kind, const Box3D& d, const Box3D& g,
+                            double footprint_intersection) {
+  return kind == OverlapKind::kBev ? BevOverlapFromFootprint(d, g, footprint_intersection)
+                                   : ThreeDOverlapFromFootprint(d, g, footprint_intersection);
+}
+
+// KittiOverlapAtThreshold from KittiOverlap's value.
+double OverlapAtThreshold(OverlapKind kind, double overlap, const Object& detection,
+                          const Object& label, double tau) {
+  if (!DevkitMayDecideOtherwise(kind, overlap, tau, detection.box3d, label.box3d)) return overlap;
+  return DevkitBoxOverlap(kind, DevkitCriterion::kUnion, detection.box3d, label.box3d)
+      .value_or(overlap);
+}
+
+}  // namespace
+
 double KittiOverlap(OverlapKind kind, const Object& detection, const Object& label) {
   switch (kind) {
     case OverlapKind::k2D: {
@@ -190,20 +224,10 @@ double KittiOverlap(OverlapKind kind, const Object& detection, const Object& lab
       if (!ImageOverlap(detection.box, label.box, &p)) return 0.0;
       return p.inter / (p.det_area + p.label_area - p.inter);
     }
-    case OverlapKind::kBev: {
-      const double inter = FootprintIntersection(detection.box3d, label.box3d);
-      if (inter <= 0) return 0.0;
-      const double uni =
-          detection.box3d.l * detection.box3d.w + label.box3d.l * label.box3d.w - inter;
-      return inter / uni;
-    }
-    case OverlapKind::k3D: {
-      const Box3D& d = detection.box3d;
-      const Box3D& g = label.box3d;
-      const double inter = IntersectionVolumeDevkit(d, g);
-      if (inter <= 0) return 0.0;
-      return inter / (d.h * d.l * d.w + g.h * g.l * g.w - inter);
-    }
+    case OverlapKind::kBev:
+    case OverlapKind::k3D:
+      return OverlapFromFootprint(kind, detection.box3d, label.box3d,
+                                  FootprintIntersection(detection.box3d, label.box3d));
   }
   return 0.0;
 }
@@ -222,7 +246,8 @@ double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Obj
     }
     case OverlapKind::k3D: {
       const Box3D& d = detection.box3d;
-      const double inter = IntersectionVolumeDevkit(d, dontcare.box3d);
+      const double inter =
+          IntersectionVolumeDevkit(FootprintIntersection(d, dontcare.box3d), d, dontcare.box3d);
       if (inter <= 0) return 0.0;
       return inter / (d.h * d.l * d.w);
     }
@@ -232,10 +257,7 @@ double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Obj
 
 double KittiOverlapAtThreshold(OverlapKind kind, const Object& detection, const Object& label,
                                double tau) {
-  const double overlap = KittiOverlap(kind, detection, label);
-  if (!DevkitMayDecideOtherwise(kind, overlap, tau, detection.box3d, label.box3d)) return overlap;
-  return DevkitBoxOverlap(kind, DevkitCriterion::kUnion, detection.box3d, label.box3d)
-      .value_or(overlap);
+  return OverlapAtThreshold(kind, KittiOverlap(kind, detection, label), detection, label, tau);
 }
 
 double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection,
@@ -338,38 +360,76 @@ void ClassFrame::Clear() {
   edge_begin.clear();
   edge_det.clear();
   edge_overlap.clear();
+  pair_footprint.clear();
   devkit_overlaps = false;
 }
 
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                             OverlapArithmetic arithmetic, ClassFrame reuse) {
+                             OverlapArithmetic arithmetic, ClassFrame reuse, bool reuse_selection) {
   const double tau = spec.min_overlap[static_cast<int>(kind)];
   const bool devkit = arithmetic == OverlapArithmetic::kDevkit;
-
-  ClassFrameBuilder builder(std::move(reuse));
-  builder.AddLabels(frame, spec, false);
-  const std::vector<const Object*>& dontcares = builder.dontcares();
-  builder.AddDetections(frame, spec, [&](const Object& det) {
+  auto in_dontcare = [&](const Object& det, const std::vector<const Object*>& dontcares) {
     for (const Object* dc : dontcares) {
       const double overlap = devkit ? KittiDontCareOverlapAtThreshold(kind, det, *dc, tau)
                                     : KittiDontCareOverlap(kind, det, *dc);
       if (overlap > tau) return true;
     }
     return false;
-  });
-  ClassFrame cf = builder.Take();
+  };
+
+  ClassFrame cf;
+  if (reuse_selection) {
+    // The labels and detections of `reuse` are this frame's for this class: only what depends on
+    // the overlap kind is made anew (the DontCare flags here, the edges below).
+    cf = std::move(reuse);
+    std::vector<const Object*> dontcares;
+    for (const Object& label : frame.labels) {
+      if (IsDontCare(label)) dontcares.push_back(&label);
+    }
+    for (int j = 0; j < cf.num_dets(); ++j) {
+      cf.det_dontcare[j] =
+          cf.det_is_class[j] && in_dontcare(frame.detections[cf.det_object[j]], dontcares) ? 1 : 0;
+    }
+    cf.edge_begin.clear();
+    cf.edge_det.clear();
+    cf.edge_overlap.clear();
+  } else {
+    ClassFrameBuilder builder(std::move(reuse));
+    builder.AddLabels(frame, spec, false);
+    const std::vector<const Object*>* dontcares = &builder.dontcares();
+    // One pointer captured: std::function keeps it without allocating.
+    const auto dontcare_test = [&in_dontcare, dontcares](const Object& det) {
+      return in_dontcare(det, *dontcares);
+    };
+    builder.AddDetections(frame, spec,
+                          [test = &dontcare_test](const Object& det) { return (*test)(det); });
+    cf = builder.Take();
+  }
   cf.min_overlap = tau;
   cf.devkit_overlaps = devkit;
 
+  // BEV and 3D share each pair's footprint intersection: the first of them for this selection
+  // keeps it in pair_footprint, the second reads it there.
+  const bool footprint_kind = kind != OverlapKind::k2D;
+  const size_t num_pairs = static_cast<size_t>(cf.num_labels()) * cf.num_dets();
+  const bool have_footprints = footprint_kind && cf.pair_footprint.size() == num_pairs;
+  if (footprint_kind && !have_footprints) cf.pair_footprint.resize(num_pairs);
   cf.edge_begin.assign(1, 0);
   std::vector<std::pair<double, size_t>> scratch;
   for (int i = 0; i < cf.num_labels(); ++i) {
     const Object& label = frame.labels[cf.label_object[i]];
     const size_t first = cf.edge_det.size();
+    double* footprints = footprint_kind ? cf.pair_footprint.data() + i * cf.num_dets() : nullptr;
     for (int j = 0; j < cf.num_dets(); ++j) {
       const Object& det = frame.detections[cf.det_object[j]];
-      const double overlap =
-          devkit ? KittiOverlapAtThreshold(kind, det, label, tau) : KittiOverlap(kind, det, label);
+      double overlap;
+      if (footprint_kind) {
+        if (!have_footprints) footprints[j] = FootprintIntersection(det.box3d, label.box3d);
+        overlap = OverlapFromFootprint(kind, det.box3d, label.box3d, footprints[j]);
+      } else {
+        overlap = KittiOverlap(kind, det, label);
+      }
+      if (devkit) overlap = OverlapAtThreshold(kind, overlap, det, label, tau);
       if (overlap >= tau) {  // NaN fails
         cf.edge_det.push_back(j);
         cf.edge_overlap.push_back(overlap);

@@ -77,6 +77,10 @@ struct ClassFrame {
   double min_overlap = 0.5;
   // Made by PrepareClassFrame with OverlapArithmetic::kDevkit (see KittiRecordedOverlap).
   bool devkit_overlaps = false;
+  // PrepareClassFrame's memory for the next overlap kind of the same frame and class: the footprint
+  // intersection of label i and detection j, pair_footprint[i * num_dets() + j], once a BEV or 3D
+  // ClassFrame of this selection was made (empty otherwise).
+  std::vector<double> pair_footprint;
 
   int num_labels() const { return static_cast<int>(label_object.size()); }
   int num_dets() const { return static_cast<int>(det_object.size()); }
@@ -124,11 +128,14 @@ class ClassFrameBuilder {
 // KittiOverlap does, e.g. two detections shifted by the same distance either side of a label. All
 // of this is rare; every other overlap is KittiOverlap's. `reuse` lends its memory to the result
 // (its contents are discarded): an evaluation prepares every frame once per class and overlap kind,
-// and reusing the previous ClassFrame's lists saves allocating them afresh each time. Requires:
-// every detection has a score.
+// and reusing the previous ClassFrame's lists saves allocating them afresh each time. With
+// `reuse_selection`, `reuse` must be a result of PrepareClassFrame for this very frame and `spec`
+// (any overlap kind, any arithmetic): its labels and detections are kept instead of being selected
+// again, and BEV and 3D share each pair's footprint intersection (ClassFrame::pair_footprint); the
+// result is the same, bit for bit. Requires: every detection has a score.
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit,
-                             ClassFrame reuse = {});
+                             ClassFrame reuse = {}, bool reuse_selection = false);
 
 // The overlap of label `label_index`'s edge `edge` (an index into cf.edge_det) that records
 // (matches.csv) report: cf.edge_overlap[edge], except in a ClassFrame of PrepareClassFrame with

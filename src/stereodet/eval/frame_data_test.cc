@@ -13,6 +13,7 @@
 #include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/frame_data_internal.h"
 #include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/random_frames.h"
 #include "stereodet/eval/test_objects.h"
 #include "stereodet/geometry/iou.h"
 #include "stereodet/kitti/label_io.h"
@@ -318,6 +319,80 @@ TEST(FrameDataTest, RecordedOverlapIsTheDevkitsForParallelFootprints) {
   // 2D: the stored value, the devkit's arithmetic being KittiOverlap's own.
   const ClassFrame cf = PrepareClassFrame(frame, KittiClassSpec("Car"), OverlapKind::k2D);
   EXPECT_EQ(KittiRecordedOverlap(OverlapKind::k2D, frame, cf, 0, 0), cf.edge_overlap[0]);
+}
+
+// A ClassFrame made again from the previous overlap kind's (reuse_selection: labels and detections
+// kept, BEV and 3D sharing the footprint intersections) equals a fresh one in every field, bit for
+// bit, whatever the order of the kinds and the arithmetic, DontCare regions and parallel pairs
+// included.
+TEST(FrameDataTest, ReusingTheSelectionOfAnotherOverlapKindGivesTheSameClassFrame) {
+  RandomFramesOptions ro;
+  ro.num_frames = 60;
+  ro.seed = 8;
+  ro.crowded = true;
+  std::vector<EvalFrame> frames = RandomFrames(ro);
+  // Two-decimal boxes, as KITTI writes them: parallel pairs and ties at tau occur. And detections
+  // on the DontCare regions (2D box and the "not estimated" 3D fields: inside in 2D and BEV).
+  for (EvalFrame& f : frames) {
+    for (size_t i = 0, n = f.labels.size(); i < n; ++i) {
+      if (f.labels[i].type != "DontCare") continue;
+      for (const char* type : {"Car", "Pedestrian", "Cyclist"}) {
+        Object det = f.labels[i];
+        det.type = type;
+        det.score = 0.5;
+        f.detections.push_back(det);
+      }
+    }
+    for (std::vector<Object>* list : {&f.labels, &f.detections}) {
+      for (Object& o : *list)
+        o = ParseObjects(FormatObject(o), "x", {ObjectFileKind::kAny}).objects[0];
+    }
+  }
+  auto same = [](const ClassFrame& a, const ClassFrame& b) {
+    auto bits = [](const std::vector<double>& x, const std::vector<double>& y) {
+      if (x.size() != y.size()) return false;
+      for (size_t k = 0; k < x.size(); ++k)
+        if (!SameBits(x[k], y[k])) return false;
+      return true;
+    };
+    return a.label_object == b.label_object && a.label_neighbour == b.label_neighbour &&
+           a.label_difficulty == b.label_difficulty && bits(a.label_alpha, b.label_alpha) &&
+           a.det_object == b.det_object && a.det_is_class == b.det_is_class &&
+           bits(a.det_height, b.det_height) && bits(a.det_score, b.det_score) &&
+           bits(a.det_alpha, b.det_alpha) && a.det_dontcare == b.det_dontcare &&
+           a.det_state == b.det_state && a.edge_begin == b.edge_begin && a.edge_det == b.edge_det &&
+           bits(a.edge_overlap, b.edge_overlap) && SameBits(a.min_overlap, b.min_overlap) &&
+           a.devkit_overlaps == b.devkit_overlaps;
+  };
+  const std::vector<std::vector<OverlapKind>> orders = {
+      {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D},
+      {OverlapKind::k3D, OverlapKind::k2D, OverlapKind::kBev},
+      {OverlapKind::kBev, OverlapKind::kBev, OverlapKind::k3D}};
+  int edges = 0, dontcare_flags = 0;
+  for (const char* name : {"Car", "Pedestrian", "Cyclist"}) {
+    const ClassSpec spec = KittiClassSpec(name);
+    for (const std::vector<OverlapKind>& order : orders) {
+      for (const OverlapArithmetic first :
+           {OverlapArithmetic::kDevkit, OverlapArithmetic::kExact}) {
+        for (const EvalFrame& frame : frames) {
+          ClassFrame cf = PrepareClassFrame(frame, spec, order[0], first);
+          for (size_t k = 1; k < order.size(); ++k) {
+            for (const OverlapArithmetic arithmetic :
+                 {OverlapArithmetic::kDevkit, OverlapArithmetic::kExact}) {
+              const ClassFrame fresh = PrepareClassFrame(frame, spec, order[k], arithmetic);
+              cf = PrepareClassFrame(frame, spec, order[k], arithmetic, std::move(cf), true);
+              ASSERT_TRUE(same(cf, fresh))
+                  << name << " frame " << frame.id << " kind " << OverlapKindName(order[k]);
+              edges += static_cast<int>(fresh.edge_det.size());
+              for (uint8_t flag : fresh.det_dontcare) dontcare_flags += flag;
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(edges, 4000);
+  EXPECT_GT(dontcare_flags, 20);
 }
 
 }  // namespace
