@@ -234,6 +234,7 @@ void BM_Det3dSample(benchmark::State& state) {
 
 BENCHMARK(BM_Det3dTrainStep)
     ->Args({32, 40, 20000})
+    ->Args({32, 40, 160000})
     ->Args({16, 40, 20000})
     ->Args({16, 50, 20000})
     ->Unit(benchmark::kMillisecond)
@@ -241,13 +242,14 @@ BENCHMARK(BM_Det3dTrainStep)
     ->MinTime(3.0);
 BENCHMARK(BM_Det3dDetect)
     ->Args({32, 40, 20000})
+    ->Args({32, 40, 160000})
     ->Args({16, 40, 20000})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);
 BENCHMARK(BM_Det3dSample)
     ->Args({32, 40, 20000})
-    ->Args({32, 40, 100000})
+    ->Args({32, 40, 160000})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);

@@ -142,12 +142,14 @@ void RunTrainDet3d(TrainDet3dArgs& a) {
   const TrainDet3dSummary s = TrainDet3d(options);
   if (!a.quiet) {
     std::fprintf(stderr,
-                 "trained det3d on %s: %d frames (%d objects, %lld in the GT database), epochs "
+                 "trained det3d on %s: %d frames (%d objects, %lld in the GT database with %lld "
+                 "points), epochs "
                  "%d/%d (%d this run), final "
                  "loss %.4f, %.2f frames/s, %.3f s/step, %.0f s; %lld parameters (%lld in the "
                  "auxiliary network, training only)\nmodel: %s\n",
                  a.input.c_str(), s.frames, s.objects,
-                 static_cast<long long>(s.gt_database_objects), s.epochs_done, options.epochs,
+                 static_cast<long long>(s.gt_database_objects),
+                 static_cast<long long>(s.gt_database_points), s.epochs_done, options.epochs,
                  s.epochs_run, s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
                  static_cast<long long>(s.parameters),
                  static_cast<long long>(s.auxiliary_parameters), options.out_dir.c_str());

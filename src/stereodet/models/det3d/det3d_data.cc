@@ -72,6 +72,9 @@ Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
     }
     frame.points.push_back(p);
   }
+  // A training holds every frame: give back what the filters freed (a LiDAR scan keeps ~15% of
+  // its points after the camera-view cut; the reserve above was for all of them).
+  frame.points.shrink_to_fit();
   if (with_labels) {
     for (const Object& o : ReadObjects(paths.label).objects) {
       const auto it = std::find(classes.begin(), classes.end(), o.type);

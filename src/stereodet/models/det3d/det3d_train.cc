@@ -122,6 +122,7 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
                                   options.gt_database);
   }
   summary.gt_database_objects = gt_database.ObjectCount();
+  summary.gt_database_points = gt_database.PointCount();
 
   RunManifest manifest;
   manifest.tool = "train det3d";

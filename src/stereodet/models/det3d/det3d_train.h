@@ -53,6 +53,7 @@ struct TrainDet3dSummary {
   int frames = 0;
   int objects = 0;                  // ground-truth boxes of the model's classes over the frames
   int64_t gt_database_objects = 0;  // objects in the GT database (0 without GT sampling)
+  int64_t gt_database_points = 0;   // their points (16 bytes each in memory)
   int epochs_done = 0;
   int epochs_run = 0;
   double final_loss = 0;

@@ -291,6 +291,9 @@ TEST(Det3dTrainTest, LoadDropsPointsOutsideTheGridAndPillarsDoNotChange) {
       EXPECT_LT(inside, all.points.size());  // the grid cuts the scan
       EXPECT_GT(inside, 100u);
       for (const VeloPoint& p : cropped.points) EXPECT_TRUE(grid.Contains(p.x, p.y, p.z));
+      // The memory is given back too, not only the points dropped (libstdc++ honours
+      // shrink_to_fit).
+      EXPECT_EQ(cropped.points.capacity(), cropped.points.size());
       EXPECT_EQ(cropped.boxes, all.boxes);
       const Pillars a = Pillarize(all.points, grid), b = Pillarize(cropped.points, grid);
       EXPECT_EQ(a.cell, b.cell);
