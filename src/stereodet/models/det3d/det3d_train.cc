@@ -176,6 +176,8 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
           batch.size(),
           [&](size_t k) {
             const int index = order[begin + k];
+            // GT sampling draws from ~seed: a stream apart from AugmentFrame's, both fixed by
+            // (seed, epoch, frame), so a resumed training samples the same objects.
             const uint64_t seed = SampleSeed(options.seed, epoch, index);
             const Det3dFrame augmented =
                 gt_sampling ? AugmentFrame(SampleGtObjects(frames[index], gt_database,
