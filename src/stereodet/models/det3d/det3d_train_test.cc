@@ -205,6 +205,16 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
     EXPECT_EQ(da[0][i].box, db[0][i].box) << i;
     EXPECT_EQ(da[0][i].score, db[0][i].score) << i;
   }
+  // GT sampling took part: each frame of this data set gets objects of the other pasted.
+  std::vector<Det3dFrame> labelled;
+  for (int i = 0; i < 2; ++i) {
+    labelled.push_back(LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(i), {"Car"},
+                                      a.config().grid, {}, true));
+  }
+  const GtDatabase database = BuildGtDatabase(labelled, 1, PointSource::kLidar, {});
+  for (const Det3dFrame& f : labelled) {
+    EXPECT_GT(SampleGtObjects(f, database, {}, 1).pasted_per_class[0], 0) << f.id;
+  }
   auto losses = [](const std::string& log) {  // the lines without the two timing columns
     std::string kept;
     std::istringstream in(log);
