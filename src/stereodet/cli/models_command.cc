@@ -142,11 +142,15 @@ void RunTrainDet3d(TrainDet3dArgs& a) {
   const TrainDet3dSummary s = TrainDet3d(options);
   if (!a.quiet) {
     std::fprintf(stderr,
-                 "trained det3d on %s: %d frames (%d objects), epochs %d/%d (%d this run), final "
+                 "trained det3d on %s: %d frames (%d objects, %lld in the GT database with %lld "
+                 "points), epochs "
+                 "%d/%d (%d this run), final "
                  "loss %.4f, %.2f frames/s, %.3f s/step, %.0f s; %lld parameters (%lld in the "
                  "auxiliary network, training only)\nmodel: %s\n",
-                 a.input.c_str(), s.frames, s.objects, s.epochs_done, options.epochs, s.epochs_run,
-                 s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
+                 a.input.c_str(), s.frames, s.objects,
+                 static_cast<long long>(s.gt_database_objects),
+                 static_cast<long long>(s.gt_database_points), s.epochs_done, options.epochs,
+                 s.epochs_run, s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
                  static_cast<long long>(s.parameters),
                  static_cast<long long>(s.auxiliary_parameters), options.out_dir.c_str());
   }
@@ -188,6 +192,14 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
                  "stereo: drop points farther than this, m (0 = keep all)")
       ->capture_default_str();
   ts->add_flag("!--no-augment", t.augment.enabled, "no augmentation (flip, noise)");
+  ts->add_flag("!--no-gt-sampling", t.gt_sampling.enabled,
+               "no GT-database cut-and-paste (objects of other training frames)");
+  ts->add_option("--gt-per-class", t.gt_sampling.max_per_class,
+                 "GT sampling: objects drawn per class and frame, pasted unless they collide")
+      ->capture_default_str();
+  ts->add_option("--gt-min-points", t.gt_database.min_points,
+                 "GT database: leave out objects with fewer points")
+      ->capture_default_str();
   ts->add_flag("!--no-auxiliary", t.loss.auxiliary, "do not train the auxiliary network");
   ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
       ->capture_default_str();
