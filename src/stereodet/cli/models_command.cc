@@ -288,6 +288,9 @@ void AddModelsCommand(CLI::App& app) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  ds->add_flag("!--no-pipeline", d.pipeline,
+               "prepare each batch (reading, stereo) only after the network's previous one "
+               "(default: the next batch is prepared while the network runs; same detections)");
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -203,6 +204,69 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
         EXPECT_TRUE(o.score.has_value());
       }
     }
+    // run.json records the stereo settings the heights were made with.
+    EXPECT_NE(ReadFile(detect.out_dir / "run.json").find("\"num_disparities\": 32"),
+              std::string::npos);
+    // The pipelined frame loop (the default) writes exactly what the sequential one writes, for
+    // one and for several frames a batch.
+    for (int batch_size : {1, 3}) {
+      DetectSsdOptions sequential = detect;
+      sequential.pipeline = false;
+      sequential.batch_size = batch_size;
+      sequential.out_dir = TempDir("e2e_det_sequential");
+      DetectSsdOptions pipelined = sequential;
+      pipelined.pipeline = true;
+      pipelined.out_dir = TempDir("e2e_det_pipelined");
+      DetectSsd(sequential);
+      DetectSsd(pipelined);
+      for (int i = 0; i < 4; ++i) {
+        const std::string file = FrameId(i) + ".txt";
+        const std::string text = ReadFile(pipelined.out_dir / file);
+        EXPECT_FALSE(text.empty()) << file;
+        EXPECT_TRUE(text == ReadFile(sequential.out_dir / file))
+            << file << ", batch " << batch_size;
+        // (LibTorch's kernels round differently for another batch size: compare like with like.)
+        if (batch_size == detect.batch_size) {
+          EXPECT_TRUE(text == ReadFile(detect.out_dir / file)) << file;
+        }
+      }
+    }
+  }
+}
+
+TEST(SsdDetectTest, TwoStagePipelineConsumesInOrderAndRethrows) {
+  for (bool overlap : {false, true}) {
+    for (int n : {0, 1, 2, 7}) {
+      std::vector<int> slot(2, -1), consumed;
+      RunTwoStagePipeline(
+          n, overlap, [&](int k) { slot[k % 2] = k * 10; },
+          [&](int k) {
+            EXPECT_EQ(slot[k % 2], k * 10);  // its own preparation, not the next one's
+            consumed.push_back(k);
+          });
+      std::vector<int> expected(n);
+      std::iota(expected.begin(), expected.end(), 0);
+      EXPECT_EQ(consumed, expected) << "overlap " << overlap << ", " << n << " batches";
+    }
+    // A failing preparation stops the loop: nothing after it is consumed.
+    std::vector<int> consumed;
+    EXPECT_THROW(RunTwoStagePipeline(
+                     5, overlap,
+                     [](int k) {
+                       if (k == 2) throw std::runtime_error("frame 2 unreadable");
+                     },
+                     [&](int k) { consumed.push_back(k); }),
+                 std::runtime_error);
+    EXPECT_EQ(consumed, (std::vector<int>{0, 1}));
+    // So does a failing consumer, after the preparation in flight has finished.
+    int prepared = 0;
+    EXPECT_THROW(RunTwoStagePipeline(
+                     5, overlap, [&](int) { ++prepared; },
+                     [](int k) {
+                       if (k == 1) throw std::invalid_argument("bad batch");
+                     }),
+                 std::invalid_argument);
+    EXPECT_EQ(prepared, overlap ? 3 : 2);
   }
 }
 
