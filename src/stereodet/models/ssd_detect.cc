@@ -39,12 +39,18 @@ void DetectSsdOptions::Check() const {
       << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
+std::optional<StereoOptions> ModelStereoSettings(const std::filesystem::path& model_dir) {
+  const std::filesystem::path config_path = model_dir / "model.json";
+  const std::string text = ReadFile(config_path);
+  if (!UsesHeight(SsdConfigFromJson(text, config_path.string()).encoding)) return std::nullopt;
+  return ReadStereoRecord(text, config_path.string());
+}
+
 std::string StereoMismatch(const DetectSsdOptions& options) {
   if (!options.stereo) return "";
-  const std::filesystem::path config_path = options.model_dir / "model.json";
-  const std::string text = ReadFile(config_path);
-  if (!UsesHeight(SsdConfigFromJson(text, config_path.string()).encoding)) return "";
-  return DifferingStereoSettings(ReadStereoRecord(text, config_path.string()), *options.stereo);
+  const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
+  if (!recorded) return "";
+  return DifferingStereoSettings(*recorded, *options.stereo);
 }
 
 std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,

@@ -55,6 +55,11 @@ struct DetectSsdSummary {
   std::string stage_times;       // StageTimes::Format(): read, stereo, encode, network, write
 };
 
+// The stereo settings the model in `model_dir` was trained with (model.json's "stereo", the
+// defaults for a model.json written before they were recorded); nullopt for an rgb model, which
+// uses none. Throws std::runtime_error / ParseError naming model.json.
+std::optional<StereoOptions> ModelStereoSettings(const std::filesystem::path& model_dir);
+
 // The stereo settings `options.stereo` changes from those the RGB-H model in `options.model_dir`
 // was trained with (model.json), as DifferingStereoSettings words them
 // ("disparity.uniqueness_ratio: 15 (requested: 5)"); empty when unset, equal, or the model is rgb.
