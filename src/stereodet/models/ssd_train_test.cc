@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
@@ -16,6 +17,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
+#include "stereodet/models/train_common.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_paths.h"
@@ -298,6 +300,50 @@ TEST(SsdDetectTest, RefusesAnOutputInsideTheInputsOrAForeignFolder) {
     EXPECT_NE(std::string(e.what()).find("holds no run.json"), std::string::npos) << e.what();
   }
   EXPECT_EQ(ReadFile(detect.out_dir / "notes.txt"), "mine");
+}
+
+TEST(SsdTrainTest, WarmupWarningOnlyWhenTheWarmupOutlastsTheTraining) {
+  EXPECT_EQ(WarmupWarning(100, 6, 2),
+            "warning: this training has 12 steps (2 epochs of 6), fewer than the learning-rate "
+            "warm-up's 100; it never reaches the peak rate (more --epochs, more frames or a "
+            "smaller --batch-size)\n");
+  EXPECT_NE(WarmupWarning(13, 6, 2), "");
+  EXPECT_NE(WarmupWarning(2, 1, 1).find("(1 epoch of 1)"), std::string::npos);
+  EXPECT_EQ(WarmupWarning(12, 6, 2), "");
+  EXPECT_EQ(WarmupWarning(0, 1, 1), "");
+}
+
+// Reads what a training wrote to its progress stream.
+std::string TrainAndCaptureProgress(TrainSsdOptions options) {
+  std::FILE* stream = std::tmpfile();
+  options.progress.stream = stream;
+  options.progress.mode = ProgressOptions::Mode::kPlain;
+  TrainSsd(options);
+  std::fflush(stream);
+  std::rewind(stream);
+  std::string text;
+  char buffer[4096];
+  while (size_t n = std::fread(buffer, 1, sizeof buffer, stream)) text.append(buffer, n);
+  std::fclose(stream);
+  return text;
+}
+
+TEST(SsdTrainTest, TrainingShorterThanTheWarmupWarnsOnce) {
+  const fs::path root = WriteTinyDataset("warmup_data", 2);
+  TrainSsdOptions options = TinyTraining(root, TempDir("warmup_model"));
+  options.model.encoding = InputEncoding::kRgb;
+  options.epochs = 1;  // 1 step of 2 frames
+  options.warmup_steps = 5;
+  std::string text = TrainAndCaptureProgress(options);
+  size_t at = text.find(
+      "warning: this training has 1 steps (1 epoch of 1), fewer than the "
+      "learning-rate warm-up's 5");
+  EXPECT_NE(at, std::string::npos) << text;
+  EXPECT_EQ(text.find("warning:", at + 1), std::string::npos) << text;  // once
+  options.force = true;
+  options.warmup_steps = 1;
+  text = TrainAndCaptureProgress(options);
+  EXPECT_EQ(text.find("warning:"), std::string::npos) << text;
 }
 
 TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
