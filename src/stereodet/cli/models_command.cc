@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -42,6 +43,7 @@ struct TrainArgs {
   TrainSsdOptions options;
   std::string input = InputEncodingName(SsdConfig().encoding);
   StereoFlagText stereo;  // the stereo flags, bound to options.data.stereo
+  std::vector<CLI::Option*> stereo_flags;
   bool quiet = false;
 };
 
@@ -83,7 +85,19 @@ void RunTrain(TrainArgs& a) {
   STEREODET_CHECK(encoding.has_value())
       << "unknown input encoding '" << a.input << "' (expected rgb, rgbh-fixed or rgbh-learned)";
   options.model.encoding = *encoding;
-  FinishStereoFlags(a.stereo, options.data.stereo);
+  const std::filesystem::path saved = options.out_dir / "model.json";
+  if (AnyGiven(a.stereo_flags) && !UsesHeight(options.model.encoding)) {
+    std::fprintf(stderr, "warning: an rgb model uses no stereo: %s ignored\n",
+                 GivenFlagNames(a.stereo_flags).c_str());
+  }
+  if (options.resume && std::filesystem::exists(saved)) {
+    // Partial stereo flags change only what they name of the settings the model was trained with.
+    const std::optional<StereoOptions> recorded = ModelStereoSettings(options.out_dir);
+    options.data.stereo = ApplyGivenStereoFlags(a.stereo_flags, recorded.value_or(StereoOptions()),
+                                                options.data.stereo, a.stereo);
+  } else {
+    FinishStereoFlags(a.stereo, options.data.stereo);
+  }
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
@@ -103,8 +117,14 @@ void RunTrain(TrainArgs& a) {
 void RunDetect(DetectArgs& a) {
   DetectSsdOptions& options = a.options;
   if (AnyGiven(a.stereo_flags)) {
-    FinishStereoFlags(a.stereo_text, a.stereo);
-    options.stereo = a.stereo;
+    const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
+    if (!recorded) {
+      std::fprintf(stderr, "warning: %s is an rgb model, which uses no stereo: %s ignored\n",
+                   options.model_dir.c_str(), GivenFlagNames(a.stereo_flags).c_str());
+    } else {
+      // Partial stereo flags change only what they name of the model's settings.
+      options.stereo = ApplyGivenStereoFlags(a.stereo_flags, *recorded, a.stereo, a.stereo_text);
+    }
     const std::string mismatch = StereoMismatch(options);
     if (!mismatch.empty()) {
       std::fprintf(stderr,
@@ -268,7 +288,7 @@ void AddModelsCommand(CLI::App& app) {
   ts->add_option("--stop-after", t.max_epochs_this_run,
                  "stop after N epochs in this run (0 = all); continue later with --resume")
       ->capture_default_str();
-  AddStereoFlags(ts, t.data.stereo, targs->stereo);
+  targs->stereo_flags = AddStereoFlags(ts, t.data.stereo, targs->stereo);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrain(*targs); });
 
@@ -300,6 +320,9 @@ void AddModelsCommand(CLI::App& app) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  ds->add_flag("!--no-pipeline", d.pipeline,
+               "prepare each batch (reading, stereo) only after the network's previous one "
+               "(default: the next batch is prepared while the network runs; same detections)");
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });

@@ -155,6 +155,11 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   const int n = static_cast<int>(frames.size());
   const int64_t steps_per_epoch = (n + options.batch_size - 1) / options.batch_size;
   const int64_t total_steps = steps_per_epoch * options.epochs;
+  if (const std::string warning =
+          WarmupWarning(options.warmup_steps, steps_per_epoch, options.epochs);
+      !warning.empty() && options.progress.stream != nullptr) {
+    std::fputs(warning.c_str(), options.progress.stream);
+  }
   const int end_epoch = options.max_epochs_this_run > 0
                             ? std::min(options.epochs, start_epoch + options.max_epochs_this_run)
                             : options.epochs;
