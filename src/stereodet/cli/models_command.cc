@@ -6,7 +6,10 @@
 //                       [--width W --height H]
 //   stereodet detect ssd --model MODEL_DIR --data DIR --split val --out DIR [--blur-sigma S]
 //                        [stereo flags: cli/stereo_flags.h; default: the model.json's settings]
-// Each is one library call (TrainSsd, DetectSsd); the flags bind to their options' fields.
+//                        [--shard K/N: OUT is shard K's folder (models/detect_shard.h)]
+//   stereodet detect merge SHARD_DIR... --out DIR   (the N shard folders into one run's folder)
+// Each is one library call (TrainSsd, DetectSsd, MergeDetections); the flags bind to their
+// options' fields.
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -18,6 +21,7 @@
 #include "stereodet/cli/stereo_flags.h"
 #include "stereodet/models/det3d/det3d_detect.h"
 #include "stereodet/models/det3d/det3d_train.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
@@ -258,8 +262,34 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetectDet3d(*dargs); });
+}
+
+struct DetectMergeArgs {
+  MergeDetectionsOptions options;
+  bool quiet = false;
+};
+
+void AddDetectMergeCommand(CLI::App* detect) {
+  auto args = std::make_shared<DetectMergeArgs>();
+  MergeDetectionsOptions& m = args->options;
+  CLI::App* cmd = detect->add_subcommand(
+      "merge",
+      "combine the folders of `detect ssd|det3d --shard K/N --out DIR` (all N) into the detection "
+      "folder of one run, byte for byte (docs/scale.md)");
+  cmd->add_option("shards", m.shards, "the shard folders, in any order")->required();
+  cmd->add_option("--out", m.out_dir, "the detection folder (one run: replaced whole)")->required();
+  cmd->add_flag("--quiet", args->quiet, "no summary output");
+  cmd->callback([args] {
+    args->options.command_line = ProcessCommandLine();
+    const MergeDetectionsResult r = MergeDetections(args->options);
+    if (!args->quiet) {
+      std::fprintf(stderr, "merged %d shards of %s, %d frames, in %.2f s; wrote %s\n", r.shards,
+                   r.tool.c_str(), r.frames, r.seconds, args->options.out_dir.c_str());
+    }
+  });
 }
 
 }  // namespace
@@ -323,11 +353,13 @@ void AddModelsCommand(CLI::App& app) {
   ds->add_flag("!--no-pipeline", d.pipeline,
                "prepare each batch (reading, stereo) only after the network's previous one "
                "(default: the next batch is prepared while the network runs; same detections)");
+  AddShardOption(ds, &d.shard);
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });
 
   AddDet3dCommands(train, detect);
+  AddDetectMergeCommand(detect);
 }
 
 }  // namespace stereodet::cli

@@ -3,7 +3,9 @@
 // --det OUT` and KITTI's devkit read, and OUT/run.json (util/run_manifest.h): the model (path and
 // the hash of its model.pt), the data, the settings and every frame written with its file's hash.
 // OUT holds one run: it is written as a StagedFolder (a hidden sibling, swapped in at the end), so
-// no detection file of an earlier run survives beside the new ones.
+// no detection file of an earlier run survives beside the new ones. With a shard K/N, OUT is the
+// shard's folder (detect_shard.h): its frames' files, its run.json and detect_shard.json, which
+// `detect merge` (MergeDetections) turns into the folder of one run.
 #ifndef STEREODET_MODELS_SSD_DETECT_H_
 #define STEREODET_MODELS_SSD_DETECT_H_
 
@@ -18,6 +20,7 @@
 #include "stereodet/models/box_coder.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/util/progress.h"
+#include "stereodet/util/shard.h"
 
 namespace stereodet {
 
@@ -31,8 +34,12 @@ struct DetectSsdOptions {
   // the sharp pair, as in the paper's degradation study. 0 = off.
   double blur_sigma_px = 0.0;
   int batch_size = 8;
-  int threads = 0;             // LibTorch and the per-frame preparation (0 = all cores)
-  int max_frames = 0;          // only the first N frames of the split (0 = all)
+  int threads = 0;     // LibTorch and the per-frame preparation (0 = all cores)
+  int max_frames = 0;  // only the first N frames of the split (0 = all)
+  // Only shard K/N of those frames (after max_frames), in whole batches (detect_shard.h); 1/1 =
+  // all. A shard's folder also holds detect_shard.json; its detection files are those of one run
+  // of the same batch_size (DetectSsdShardTest).
+  Shard shard;
   std::string device = "cpu";  // cpu | cuda (device.h)
   DecodeOptions decode;        // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
   // Prepare the next batch (reading, stereo, encoding) on a second thread while the network runs

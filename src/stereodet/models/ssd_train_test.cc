@@ -15,6 +15,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/models/train_common.h"
@@ -422,6 +423,49 @@ TEST(SsdTrainTest, ResumeRefusesACheckpointOfAnotherFolder) {
   EXPECT_EQ(TrainSsd(b).epochs_done, 2);
   EXPECT_EQ(ReadWeightsRecord(ReadFile(b.out_dir / "model.json"), "b").training_run, run_b);
   EXPECT_NE(ReadWeightsRecord(ReadFile(a.out_dir / "model.json"), "a").training_run, run_b);
+}
+
+// Shards of a real model's detection, merged, are the folder of one run byte for byte (run.json
+// but its command line). 5 frames in batches of 3 in 2 shards: shard 0 is frames 0-2 (the one
+// run's first batch), not 0-1 as frame shards would be (then frame 0's scores differed from the
+// one run's in the sixth decimal: LibTorch's floats depend on the batch size).
+TEST(DetectSsdShardTest, MergedShardsAreOneRunByteForByte) {
+  const fs::path root = WriteTinyDataset("shard_data", 5);
+  TrainSsdOptions training = TinyTraining(root, TempDir("shard_model"));
+  training.epochs = 1;
+  TrainSsd(training);
+  DetectSsdOptions detect;
+  detect.model_dir = training.out_dir;
+  detect.data_root = root;
+  detect.threads = 1;
+  detect.batch_size = 3;
+  detect.decode.score_threshold = 0.0;  // every box: many scores, compared to the last digit
+  detect.progress.stream = nullptr;
+  detect.out_dir = TempDir("shard_one");
+  detect.command_line = "the command line";
+  EXPECT_EQ(DetectSsd(detect).frames, 5);
+  MergeDetectionsOptions merge;
+  for (int k : {1, 0}) {
+    DetectSsdOptions shard = detect;
+    shard.shard = {k, 2};
+    shard.out_dir = TempDir("shard_" + std::to_string(k));
+    EXPECT_EQ(DetectSsd(shard).frames, k == 0 ? 3 : 2);
+    EXPECT_TRUE(fs::exists(shard.out_dir / kDetectShardFile));
+    merge.shards.push_back(shard.out_dir);
+  }
+  merge.out_dir = TempDir("shard_merged");
+  merge.command_line = detect.command_line;
+  EXPECT_EQ(MergeDetections(merge).frames, 5);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(detect.out_dir)) {
+    const fs::path merged = merge.out_dir / e.path().filename();
+    ASSERT_TRUE(fs::exists(merged)) << merged;
+    EXPECT_EQ(ReadFile(merged), ReadFile(e.path())) << merged;
+    ++files;
+  }
+  EXPECT_EQ(files, 6);  // five frames and run.json
+  EXPECT_GT(fs::file_size(detect.out_dir / (FrameId(4) + ".txt")), 100u);  // not vacuous
+  EXPECT_FALSE(fs::exists(merge.out_dir / kDetectShardFile));
 }
 
 TEST(SsdDetectTest, ToKittiDetectionsScalesClipsAndMarks3DUnknown) {
