@@ -78,7 +78,7 @@ VehicleMaterials AddVehicleMaterials(Scene& scene, Rng& rng, const Eigen::Vector
   paint.specular = 0.12f;
   paint.scale_m = 0.0f;  // no wheel arches unless the builder sets the axle position
   Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.05, 0.055, 0.06), 0.8f, 0.05f);
-  glass.specular = 0.3f;
+  glass.specular = 0.22f;
   glass.albedo2 = colour;  // pillars and frames
   Material tyre = MakeMaterial(Pattern::kWheel, Rgb(0.055, 0.055, 0.055), 0.45f, 0.04f);
   // Rims: silver alloy mostly, some black or dark grey.
