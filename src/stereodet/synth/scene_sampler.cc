@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "stereodet/synth/clutter.h"
 #include "stereodet/synth/materials.h"
 #include "stereodet/synth/objects.h"
 #include "stereodet/synth/random.h"
@@ -141,6 +142,7 @@ class StreetBuilder {
   void Sidewalk(int side);
   void Roadside(int side);
   void Pedestrians();
+  void StreetFurniture(int side, Rng& rng);
 
   Scene& scene_;
   const SceneOptions& options_;
@@ -517,6 +519,53 @@ void StreetBuilder::Pedestrians() {
   }
 }
 
+// Sign posts, street lamps, bins, bollards (sometimes in a row) and utility cabinets on the
+// sidewalk of `side` (synth/clutter.h): near the kerb, cabinets also at the back of the sidewalk;
+// on country roads only sign posts and bollards on the verge. Kept clear of the objects and
+// trees already placed (Free), so they occlude what stands behind them without intersecting it.
+void StreetBuilder::StreetFurniture(int side, Rng& rng) {
+  const double sign = side == 0 ? -1.0 : 1.0;
+  const double inner = sidewalk_inner_[side], outer = sidewalk_outer_[side];
+  const double width = std::abs(outer - inner);
+  const bool sidewalk = width >= 1.0;
+  const double spacing = kind_ == StreetKind::kCity          ? 11.0
+                         : kind_ == StreetKind::kResidential ? 22.0
+                                                             : 45.0;
+  // Towards the road from this side (the front of cabinets, lamp arms) and towards the camera
+  // (sign faces: against the road's forward direction).
+  const Eigen::Vector2f to_road = static_cast<float>(-sign) * scene_.road.RightXz();
+  const float yaw_to_road = std::atan2(-to_road.y(), to_road.x());
+  const float yaw_to_traffic = static_cast<float>(WrapYaw(scene_.road.ForwardYaw() + M_PI));
+  const double height = sidewalk ? curb_height_ : 0.0;
+  for (double a = options_.min_along_m + rng.Uniform(0.0, spacing); a < options_.max_along_m;
+       a += spacing * rng.Uniform(0.5, 1.5)) {
+    ClutterKind kind;
+    if (kind_ == StreetKind::kRoad || !sidewalk) {
+      kind = rng.Bernoulli(0.6) ? ClutterKind::kSignPost : ClutterKind::kBollard;
+    } else {
+      kind = kAllClutterKinds[rng.Categorical({0.28, 0.14, 0.2, 0.2, 0.18})];
+    }
+    const double r = ClutterFootprintRadius(kind);
+    // Lateral place: by the kerb (0.35-0.7 m in), cabinets and bins also at the back.
+    double lateral = inner + sign * (r + rng.Uniform(0.25, 0.5));
+    if ((kind == ClutterKind::kCabinet || kind == ClutterKind::kBin) && sidewalk &&
+        rng.Bernoulli(0.5)) {
+      lateral = outer - sign * (r + 0.1);
+    }
+    if (!sidewalk) lateral = inner + sign * rng.Uniform(0.5, 1.0);
+    const int count =
+        kind == ClutterKind::kBollard && rng.Bernoulli(0.4) ? rng.UniformInt(3, 6) : 1;
+    for (int k = 0; k < count; ++k) {
+      const double along = a + 1.6 * k;
+      if (!Free(lateral, along, r)) continue;
+      Take(lateral, along, r);
+      const Eigen::Vector3d base = At(lateral, along, height);
+      const float yaw = kind == ClutterKind::kSignPost ? yaw_to_traffic : yaw_to_road;
+      AddClutter(scene_, kind, base.cast<float>(), yaw, rng);
+    }
+  }
+}
+
 void StreetBuilder::Build() {
   kind_ = static_cast<StreetKind>(
       rng_.Categorical({options_.city_weight, options_.residential_weight, options_.road_weight}));
@@ -544,6 +593,13 @@ void StreetBuilder::Build() {
   Pedestrians();
   Roadside(0);
   Roadside(1);
+  {
+    // Street furniture from a generator of its own (one draw here), so that it does not shift
+    // what the other builders draw.
+    Rng furniture(rng_.Next());
+    StreetFurniture(0, furniture);
+    StreetFurniture(1, furniture);
+  }
 
   // Light: sun elevation 15 to 65 degrees, any azimuth; overcast days get a weaker, bluer sun.
   Lighting& light = scene_.light;
