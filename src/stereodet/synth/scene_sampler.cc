@@ -38,9 +38,15 @@ Dims SampleDims(const std::string& type, Rng& rng) {
   if (type == "Tram")
     return {rng.Uniform(15.0, 28.0), rng.Uniform(2.5, 2.65), rng.Uniform(3.3, 3.6)};
   if (type == "Misc") return {rng.Uniform(2.5, 4.0), rng.Uniform(1.5, 2.0), rng.Uniform(1.2, 2.2)};
-  if (type == "Pedestrian") return {0.0, 0.0, rng.ClampedNormal(1.74, 0.1, 1.45, 2.0)};
-  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.07, 1.1, 1.4)};
-  return {0.0, 0.0, rng.ClampedNormal(1.72, 0.08, 1.5, 1.95)};  // Cyclist
+  // People around KITTI's class means (h 1.76 m for pedestrians, 1.74 m for cyclists, the means
+  // 3D detectors use as size anchors), with a wider spread and a few children.
+  if (type == "Pedestrian") {
+    const bool child = rng.Bernoulli(0.05);
+    const double h = child ? rng.Uniform(1.0, 1.45) : rng.ClampedNormal(1.76, 0.11, 1.45, 2.05);
+    return {0.0, 0.0, h};
+  }
+  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.08, 1.05, 1.45)};
+  return {0.0, 0.0, rng.ClampedNormal(1.74, 0.09, 1.45, 2.0)};  // Cyclist
 }
 
 // The box AddObject builds an object of size `d` into, at `location` turned by `rotation_y`.

@@ -468,7 +468,28 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     }
     case Pattern::kCloth: {
       const float folds = FilteredFbm(u, v, 4.0f, 0.6f, 6, fp);
-      return m.albedo * (1.0f + m.contrast * folds);
+      Eigen::Vector3f cloth = m.albedo;
+      switch (m.variant) {
+        case 1:  // stripes across the garment
+          cloth += LineCoverage(v, m.scale_m, 0.0f, 0.45f * m.scale_m, fp) * (m.albedo2 - cloth);
+          break;
+        case 2: {  // checks: two crossing sets of bands, darker where they cross
+          const float a = LineCoverage(u, m.scale_m, 0.0f, 0.4f * m.scale_m, fp);
+          const float b = LineCoverage(v, m.scale_m, 0.0f, 0.4f * m.scale_m, fp);
+          cloth += std::max(a, b) * (m.albedo2 - cloth);
+          cloth *= 1.0f - 0.3f * a * b;
+          break;
+        }
+        case 3: {  // denim: a diagonal twill of 3 mm, faded in patches
+          const float twill = LineCoverage(u + v, 0.006f, 0.0f, 0.003f, fp);
+          const float fade = Clamp01(0.5f + FilteredFbm(u + 3.0f, v + 8.0f, 2.5f, 0.6f, 4, fp));
+          cloth *= 1.0f + 0.25f * twill + 0.5f * fade;
+          break;
+        }
+        default:
+          break;
+      }
+      return cloth * (1.0f + m.contrast * folds);
     }
   }
   return m.albedo;
