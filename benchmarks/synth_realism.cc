@@ -385,6 +385,73 @@ int Run(const Args& args) {
   for (int b = 0; b < 9; ++b) std::printf(" %.1f%% |", 100.0 * distance[b] / labelled);
   std::printf("\n");
 
+  // Per-class statistics of issue 16: count per frame, occlusion and truncation mixes, distance
+  // and 2D box height histograms, the 3D height's mean and spread.
+  {
+    const std::array<double, 7> height_edges = {0, 25, 40, 60, 100, 150, 1e9};  // pixels
+    std::printf("\n### Per class (%d frames)\n\n", args.frames);
+    std::printf(
+        "| class | per frame | occluded 0 / 1 / 2 / 3 | truncated 0 / <=0.15 / <=0.5 / >0.5 | "
+        "3D height mean (sd), m |\n|---|---:|---|---|---:|\n");
+    std::map<std::string, std::vector<int64_t>> distance_by_class, height_by_class;
+    for (const char* name : {"Car", "Pedestrian", "Cyclist"}) {
+      const std::string c = name;
+      std::array<int64_t, 4> occ{}, trunc{};
+      std::vector<int64_t> dist(9, 0), box_h(6, 0);
+      double sum = 0.0, sum2 = 0.0;
+      int64_t total = 0;
+      for (const auto& frame : labels) {
+        for (const Object& o : frame) {
+          if (o.type != c) continue;
+          ++total;
+          ++occ[std::clamp(o.occluded, 0, 3)];
+          ++trunc[o.truncated <= 0.0 ? 0 : o.truncated <= 0.15 ? 1 : o.truncated <= 0.5 ? 2 : 3];
+          const double d = std::hypot(o.box3d.location.x(), o.box3d.location.z());
+          ++dist[std::min<int>(8, static_cast<int>(d / 10.0))];
+          const double hp = o.box.bottom - o.box.top;
+          for (int b = 0; b < 6; ++b) {
+            if (hp < height_edges[b + 1]) {
+              ++box_h[b];
+              break;
+            }
+          }
+          sum += o.box3d.h;
+          sum2 += o.box3d.h * o.box3d.h;
+        }
+      }
+      const double t = std::max<int64_t>(1, total);
+      const double mean = sum / t, sd = std::sqrt(std::max(0.0, sum2 / t - mean * mean));
+      std::printf(
+          "| %s | %.2f | %.0f / %.0f / %.0f / %.0f %% | %.0f / %.0f / %.0f / %.0f %% | %.2f (%.2f) "
+          "|\n",
+          c.c_str(), total / n, 100 * occ[0] / t, 100 * occ[1] / t, 100 * occ[2] / t,
+          100 * occ[3] / t, 100 * trunc[0] / t, 100 * trunc[1] / t, 100 * trunc[2] / t,
+          100 * trunc[3] / t, mean, sd);
+      distance_by_class[c] = dist;
+      height_by_class[c] = box_h;
+      for (int64_t& x : distance_by_class[c]) x = static_cast<int64_t>(std::lround(1000 * x / t));
+      for (int64_t& x : height_by_class[c]) x = static_cast<int64_t>(std::lround(1000 * x / t));
+    }
+    std::printf("\n| distance (m), share per class |");
+    for (int b = 0; b < 9; ++b) std::printf(b < 8 ? " %d-%d |" : " %d+ |", 10 * b, 10 * b + 10);
+    std::printf("\n|---|");
+    for (int b = 0; b < 9; ++b) std::printf("---:|");
+    std::printf("\n");
+    for (const auto& [c, d] : distance_by_class) {
+      std::printf("| %s |", c.c_str());
+      for (int64_t x : d) std::printf(" %.1f%% |", x / 10.0);
+      std::printf("\n");
+    }
+    std::printf(
+        "\n| 2D box height (px), share per class | < 25 | 25-40 | 40-60 | 60-100 | 100-150 | "
+        ">= 150 |\n|---|---:|---:|---:|---:|---:|---:|\n");
+    for (const auto& [c, h] : height_by_class) {
+      std::printf("| %s |", c.c_str());
+      for (int64_t x : h) std::printf(" %.1f%% |", x / 10.0);
+      std::printf("\n");
+    }
+  }
+
   if (args.stereo_frames > 0) {
     std::printf("\n## Stereo (%d frames, 1242x375, exact ground truth, non-occluded pixels)\n\n",
                 args.stereo_frames);
