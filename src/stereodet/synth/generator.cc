@@ -35,8 +35,9 @@ enum Stream : uint64_t {
 // by another version is refused rather than mixed. 1: the first street model; 2: issue 16's
 // textures (asphalt, paving, kerbs, facades, fences), car details, sun glints, per-frame white
 // balance and sensor noise; 3: issue 16's curved car hulls (saloon, hatchback, estate) and the
-// street mirrored in paint and glass.
-constexpr int kSettingsVersion = 3;
+// street mirrored in paint and glass; 4: issue 16's dusty paint, lamps, plates and glass with
+// the interior's headrests, and the roadside clutter (synth/clutter.h).
+constexpr int kSettingsVersion = 4;
 
 // The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b
 // (this run)", for the refusal message.
