@@ -55,6 +55,11 @@ struct Profile {
     c[1] += lin * du;
     c[0] += lin * u0 + con;
   }
+  // The largest |P'(u)| (P' is monotonic: it is largest at one of the straight grades).
+  double MaxSlope() const {
+    const double base = -0.5 * k * CurveSlope(-centre, half) + slope;
+    return std::max(std::abs(base - k * half), std::abs(base + k * half));
+  }
   // Ray parameters where u0 + t du crosses a break of the curve.
   int Breaks(double u0, double du, double out[2]) const {
     if (k == 0.0 || du == 0.0) return 0;
@@ -144,6 +149,15 @@ float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, floa
   const double l0 = od.dot(right), dl = dd.dot(right);
   const double a0 = od.dot(forward_xz), da = dd.dot(forward_xz);
   const Profile along = AlongProfile(*this), lateral = LateralProfile(*this);
+  // Cheap rejection: |Height| <= s_a |a| + s_l |l| (P(0) = 0), so F(t) = base - y(t) - Height(t)
+  // >= c0 + c1 t with the constants below; a ray with F's bound positive at both ends of (t_min,
+  // t_max) stays above the ground. Most rays above the horizon end here.
+  {
+    const double sa = along.MaxSlope(), sl = lateral.MaxSlope();
+    const double c0 = base_y_m - o.y() - sa * std::abs(a0) - sl * std::abs(l0);
+    const double c1 = -d.y() - sa * std::abs(da) - sl * std::abs(dl);
+    if (c0 > 0.0 && (c1 >= 0.0 || (std::isfinite(t_max) && c0 + c1 * t_max > 0.0))) return kNoHit;
+  }
   // Pieces of the ray between the curves' breaks.
   std::array<double, 6> ts;
   int n = 0;

@@ -46,11 +46,18 @@ bool Scene::Occluded(const Ray& ray, float t_min, float t_max, int* hint) const 
 }
 
 float Scene::GroundHit(const Ray& ray, float t_min, float t_max) const {
-  if (ground.Flat() && ray.direction.y() <= 0.0f) return kNoHit;
+  const float horizontal_per_t = std::hypot(ray.direction.x(), ray.direction.z());
+  if (ground.Flat()) {
+    if (ray.direction.y() <= 0.0f) return kNoHit;
+  } else {
+    // Hits beyond max_ground_distance_m are none: a ray that has not met the ground by then need
+    // not be followed (a bound that lets the shaped ground reject most rays above the horizon at
+    // once).
+    t_max = std::min(t_max, max_ground_distance_m / std::max(1e-12f, horizontal_per_t));
+  }
   const float t = ground.Intersect(ray, ground_y_m, t_min, t_max);
   if (t == kNoHit) return kNoHit;
-  const float horizontal = t * std::hypot(ray.direction.x(), ray.direction.z());
-  return horizontal < max_ground_distance_m ? t : kNoHit;
+  return t * horizontal_per_t < max_ground_distance_m ? t : kNoHit;
 }
 
 SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
