@@ -37,19 +37,19 @@ struct Profile {
   double Derivative(double u) const {
     return 0.5 * k * (CurveSlope(u - centre, half) - CurveSlope(-centre, half)) + slope;
   }
-  // P(u0 + t du) as c2 t^2 + c1 t + c0 on the piece that holds u(t_mid).
-  void Polynomial(double u0, double du, double t_mid, double c[3]) const {
-    const double s_mid = u0 + t_mid * du - centre;
+  // P(u0 + t du) as c2 t^2 + c1 t + c0 on the piece `state` (-1: before the curve, 0: on it, 1:
+  // after it), added to c.
+  void Polynomial(double u0, double du, int state, double c[3]) const {
     const double lin = -0.5 * k * CurveSlope(-centre, half) + slope;  // coefficient of u
     const double con = -0.5 * k * Curve(-centre, half);
     const double s0 = u0 - centre;  // s(t) = s0 + t du
-    if (std::abs(s_mid) <= half) {
+    if (state == 0) {
       c[2] += 0.5 * k * du * du;
-      c[1] += 0.5 * k * 2.0 * s0 * du;
+      c[1] += k * s0 * du;
       c[0] += 0.5 * k * s0 * s0;
     } else {
-      const double sign = s_mid > 0 ? 1.0 : -1.0;
-      c[1] += 0.5 * k * 2.0 * half * sign * du;
+      const double sign = state;
+      c[1] += k * half * sign * du;
       c[0] += 0.5 * k * (2.0 * half * sign * s0 - half * half);
     }
     c[1] += lin * du;
@@ -59,13 +59,6 @@ struct Profile {
   double MaxSlope() const {
     const double base = -0.5 * k * CurveSlope(-centre, half) + slope;
     return std::max(std::abs(base - k * half), std::abs(base + k * half));
-  }
-  // Ray parameters where u0 + t du crosses a break of the curve.
-  int Breaks(double u0, double du, double out[2]) const {
-    if (k == 0.0 || du == 0.0) return 0;
-    out[0] = (centre - half - u0) / du;
-    out[1] = (centre + half - u0) / du;
-    return 2;
   }
 };
 
@@ -136,6 +129,20 @@ Eigen::Vector3f GroundProfile::Normal(double x, double z) const {
   return -Eigen::Vector3d(g.x(), 1.0, g.y()).normalized().cast<float>();
 }
 
+double GroundProfile::HeightAndNormal(double x, double z, Eigen::Vector3f* normal) const {
+  if (Flat()) {
+    *normal = Eigen::Vector3f(0.0f, -1.0f, 0.0f);
+    return 0.0;
+  }
+  const Eigen::Vector2d la = Frame(x, z);
+  const Profile along = AlongProfile(*this), lateral = LateralProfile(*this);
+  const double dl = lateral.Derivative(la.x()), da = along.Derivative(la.y());
+  const double gx = dl * forward_xz.y() + da * forward_xz.x();
+  const double gz = -dl * forward_xz.x() + da * forward_xz.y();
+  *normal = -Eigen::Vector3d(gx, 1.0, gz).normalized().cast<float>();
+  return along.Value(la.y()) + lateral.Value(la.x());
+}
+
 float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, float t_max) const {
   if (Flat()) {
     if (ray.direction.y() <= 0.0f) return kNoHit;
@@ -143,11 +150,11 @@ float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, floa
     return t > t_min && t < t_max ? t : kNoHit;
   }
   const Eigen::Vector3d o = ray.origin.cast<double>(), d = ray.direction.cast<double>();
-  const Eigen::Vector2d right(forward_xz.y(), -forward_xz.x());
-  const Eigen::Vector2d od(o.x() - origin_xz.x(), o.z() - origin_xz.y());
-  const Eigen::Vector2d dd(d.x(), d.z());
-  const double l0 = od.dot(right), dl = dd.dot(right);
-  const double a0 = od.dot(forward_xz), da = dd.dot(forward_xz);
+  const double rx = forward_xz.y(), rz = -forward_xz.x();  // right
+  const double ox = o.x() - origin_xz.x(), oz = o.z() - origin_xz.y();
+  const double l0 = ox * rx + oz * rz, dl = d.x() * rx + d.z() * rz;
+  const double a0 = ox * forward_xz.x() + oz * forward_xz.y();
+  const double da = d.x() * forward_xz.x() + d.z() * forward_xz.y();
   const Profile along = AlongProfile(*this), lateral = LateralProfile(*this);
   // Cheap rejection: |Height| <= s_a |a| + s_l |l| (P(0) = 0), so F(t) = base - y(t) - Height(t)
   // >= c0 + c1 t with the constants below; a ray with F's bound positive at both ends of (t_min,
@@ -158,50 +165,56 @@ float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, floa
     const double c1 = -d.y() - sa * std::abs(da) - sl * std::abs(dl);
     if (c0 > 0.0 && (c1 >= 0.0 || (std::isfinite(t_max) && c0 + c1 * t_max > 0.0))) return kNoHit;
   }
-  // Pieces of the ray between the curves' breaks.
-  std::array<double, 6> ts;
-  int n = 0;
-  ts[n++] = t_min;
-  double b[2];
-  for (int i = 0, m = along.Breaks(a0, da, b); i < m; ++i) {
-    if (b[i] > t_min && b[i] < t_max) ts[n++] = b[i];
-  }
-  for (int i = 0, m = lateral.Breaks(l0, dl, b); i < m; ++i) {
-    if (b[i] > t_min && b[i] < t_max) ts[n++] = b[i];
-  }
-  for (int i = 2; i < n; ++i) {  // insertion sort of the (at most four) breaks
-    for (int j = i; j > 1 && ts[j] < ts[j - 1]; --j) std::swap(ts[j], ts[j - 1]);
-  }
-  // Far pieces of a ray with an infinite t_max: a finite end for the midpoint test.
-  const double t_end = std::isfinite(t_max) ? t_max : std::max(1e6, 2.0 * ts[n - 1] + 1.0);
-  for (int piece = 0; piece < n; ++piece) {
-    const double lo = ts[piece], hi = piece + 1 < n ? ts[piece + 1] : t_end;
-    if (hi <= lo) continue;
-    const double mid = 0.5 * (lo + hi);
-    // F(t) = base - y(t) - Height(t): positive above the ground.
+  // Walk the pieces of the ray (where each profile is on its curve, state 0, or on the straight
+  // grade before (-1) or after (+1) it) from t_min. Along a ray each state changes monotonically,
+  // so a root whose states are the piece's lies in the piece; only when a piece holds no root is
+  // its end (a division) computed.
+  const auto state = [](double s, double half) { return s < -half ? -1 : (s > half ? 1 : 0); };
+  int state_a = along.k != 0.0 ? state(a0 + t_min * da - along.centre, along.half) : 0;
+  int state_l = lateral.k != 0.0 ? state(l0 + t_min * dl - lateral.centre, lateral.half) : 0;
+  double lo = t_min;
+  for (int piece = 0; piece < 5; ++piece) {
+    // F(t) = base - y(t) - Height(t) = q2 t^2 + q1 t + q0 on this piece: positive above the ground.
     double c[3] = {0.0, 0.0, 0.0};
-    along.Polynomial(a0, da, mid, c);
-    lateral.Polynomial(l0, dl, mid, c);
+    along.Polynomial(a0, da, state_a, c);
+    lateral.Polynomial(l0, dl, state_l, c);
     const double q2 = -c[2], q1 = -d.y() - c[1], q0 = base_y_m - o.y() - c[0];
-    // Smallest root in (lo, hi].
-    double roots[2];
-    int count = 0;
-    if (std::abs(q2) < 1e-15) {
-      if (q1 != 0.0) roots[count++] = -q0 / q1;
+    double root = kNoHit;  // the smallest root above lo
+    if (q2 == 0.0) {
+      if (q1 != 0.0) {
+        const double t = -q0 / q1;
+        if (t > lo) root = t;
+      }
     } else {
       const double disc = q1 * q1 - 4.0 * q2 * q0;
       if (disc >= 0.0) {
         const double sq = std::sqrt(disc);
-        const double qq = -0.5 * (q1 + (q1 >= 0 ? sq : -sq));  // stable form
+        const double qq = -0.5 * (q1 + (q1 >= 0 ? sq : -sq));  // the stable form
         const double r1 = qq / q2, r2 = qq != 0.0 ? q0 / qq : r1;
-        roots[count++] = std::min(r1, r2);
-        roots[count++] = std::max(r1, r2);
+        const double first = std::min(r1, r2), second = std::max(r1, r2);
+        root = first > lo ? first : (second > lo ? second : kNoHit);
       }
     }
-    for (int i = 0; i < count; ++i) {
-      const double t = roots[i];
-      if (t > lo && t <= hi && t > t_min && t < t_max) return static_cast<float>(t);
+    if (root != kNoHit &&
+        (along.k == 0.0 || state(a0 + root * da - along.centre, along.half) == state_a) &&
+        (lateral.k == 0.0 || state(l0 + root * dl - lateral.centre, lateral.half) == state_l)) {
+      return root < t_max ? static_cast<float>(root) : kNoHit;  // the first crossing
     }
+    // The piece's end: the next break of either profile.
+    const auto next_break = [lo](const Profile& p, double u0, double du, int st) {
+      if (p.k == 0.0 || du == 0.0) return static_cast<double>(kNoHit);
+      if ((du > 0 && st == 1) || (du < 0 && st == -1)) return static_cast<double>(kNoHit);
+      // Moving up s: from before the curve to its start, from the curve to its end; down: back.
+      const double target = du > 0 ? (st == -1 ? -p.half : p.half) : (st == 1 ? p.half : -p.half);
+      return std::max(lo, (p.centre + target - u0) / du);
+    };
+    const double ta = next_break(along, a0, da, state_a);
+    const double tl = next_break(lateral, l0, dl, state_l);
+    const double hi = std::min(ta, tl);
+    if (hi >= t_max) return kNoHit;
+    if (ta == hi) state_a += da > 0 ? 1 : -1;
+    if (tl == hi) state_l += dl > 0 ? 1 : -1;
+    lo = hi;
   }
   return kNoHit;
 }

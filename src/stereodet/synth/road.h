@@ -73,6 +73,8 @@ struct GroundProfile {
   Eigen::Vector2d Gradient(double x, double z) const;
   // Unit normal pointing up (rect y < 0) at rect (x, z).
   Eigen::Vector3f Normal(double x, double z) const;
+  // Height and Normal at once (one evaluation of the frame and the profiles).
+  double HeightAndNormal(double x, double z, Eigen::Vector3f* normal) const;
   // Smallest t in (t_min, t_max) where `ray` meets the ground y = base_y - Height(x, z), or kNoHit.
   // The ray must start above the ground.
   float Intersect(const Ray& ray, float base_y_m, float t_min, float t_max) const;

@@ -74,8 +74,8 @@ SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
     hit.object = p.object;
   } else {
     hit.kind = SurfaceHit::Kind::kGround;
-    hit.point.y() = GroundY(hit.point.x(), hit.point.z());
-    hit.normal = ground.Normal(hit.point.x(), hit.point.z());
+    hit.point.y() = static_cast<float>(
+        ground_y_m - ground.HeightAndNormal(hit.point.x(), hit.point.z(), &hit.normal));
     const Eigen::Vector2f rc = road.ToRoad(hit.point.x(), hit.point.z());
     bool on_road = rc.x() >= road.left_edge_m && rc.x() <= road.right_edge_m;
     if (!on_road && !road.side_streets.empty()) {
