@@ -1,7 +1,7 @@
 // synth_realism: the evidence in docs/synth.md that synthetic frames are realistic enough.
 //
 //   synth_realism [--frames 200] [--stereo-frames 20] [--seed 1] [--threads 0] [--images DIR]
-//                 [--picture-frame 0] [--speed-frames 0]
+//                 [--picture-frame 0] [--speed-frames 0] [--speed-rounds 1] [--road-shapes 1]
 //
 // Generates frames in memory and prints, as Markdown tables:
 //  - label statistics (objects per frame, class mix, difficulty mix, occlusion and truncation mix,
@@ -11,7 +11,10 @@
 //    and over the ground-truth pixels inside the 2D boxes of Car, Pedestrian and Cyclist labels
 //    (all, near < 20 m, far >= 20 m): issue 16's targets;
 //  - with --speed-frames N, the generation speed: N whole frames (1242 x 375 or the size given,
-//    both cameras, disparity, labels, LiDAR; nothing written) on --threads threads, frames/s;
+//    both cameras, disparity, labels, LiDAR; nothing written) on --threads threads, frames/s,
+//    and the same frames with straight, flat roads (SceneOptions::road_shapes = false), in
+//    --speed-rounds alternating rounds, with the ratio of the two (paired in one process);
+//  --road-shapes 0 makes all frames with straight, flat roads;
 // and, with --images, writes the pictures of docs/synth.md (a sample pair, the ground-truth and
 // SGBM disparity, BM's disparity (synth_bm.png), a bird's-eye view of the LiDAR scan with the
 // label boxes).
@@ -21,6 +24,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <map>
 #include <mutex>
 #include <opencv2/calib3d.hpp>
@@ -44,6 +48,8 @@ struct Args {
   int threads = 0;
   int picture_frame = 0;  // the frame drawn for the pictures (must be a stereo frame)
   int speed_frames = 0;   // frames timed for the generation speed (0: not measured)
+  int speed_rounds = 1;   // alternating rounds of shaped and flat roads
+  bool road_shapes = true;
   std::string images;
 };
 
@@ -239,6 +245,7 @@ cv::Mat BirdsEye(const SynthFrame& f) {
 
 int Run(const Args& args) {
   SynthOptions options;
+  options.scene.road_shapes = args.road_shapes;
   std::mutex mutex;
   std::vector<std::vector<Object>> labels(args.frames);
   StereoScore bm_total, sgbm_total;
@@ -503,25 +510,41 @@ int Run(const Args& args) {
   }
 
   if (args.speed_frames > 0) {
-    SynthOptions o = options;
-    o.lidar = true;
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<size_t> points(args.speed_frames);
-    ParallelFor(
-        static_cast<size_t>(args.speed_frames),
-        [&](size_t i) {
-          // Frames after the statistics' ones: the timing does not reuse any cache of theirs.
-          points[i] = GenerateFrame(o, args.seed, args.frames + static_cast<int>(i)).scan.size();
-        },
-        args.threads);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::printf(
-        "\n## Generation speed\n\n%d frames at %dx%d with LiDAR on %s threads: %.2f s, %.2f "
-        "frames/s\n",
-        args.speed_frames, o.width, o.height,
-        args.threads > 0 ? std::to_string(args.threads).c_str() : "all", seconds,
-        args.speed_frames / seconds);
+    const auto timed = [&](bool road_shapes) {
+      SynthOptions o = options;
+      o.lidar = true;
+      o.scene.road_shapes = road_shapes;
+      const auto start = std::chrono::steady_clock::now();
+      const std::clock_t cpu_start = std::clock();
+      std::vector<size_t> points(args.speed_frames);
+      ParallelFor(
+          static_cast<size_t>(args.speed_frames),
+          [&](size_t i) {
+            // Frames after the statistics' ones: the timing does not reuse any cache of theirs.
+            points[i] = GenerateFrame(o, args.seed, args.frames + static_cast<int>(i)).scan.size();
+          },
+          args.threads);
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      // CPU time of the process: on a shared machine it is steadier than the wall clock.
+      const double cpu_per_frame =
+          static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC / args.speed_frames;
+      std::printf(
+          "\n## Generation speed\n\n%d frames at %dx%d with LiDAR on %s threads (%s roads): %.2f "
+          "s, %.2f frames/s; %.3f CPU s a frame\n",
+          args.speed_frames, o.width, o.height,
+          args.threads > 0 ? std::to_string(args.threads).c_str() : "all",
+          road_shapes ? "shaped" : "straight, flat", seconds, args.speed_frames / seconds,
+          cpu_per_frame);
+      return cpu_per_frame;
+    };
+    for (int round = 0; round < args.speed_rounds; ++round) {
+      const double shaped = timed(args.road_shapes);
+      if (!args.road_shapes) continue;
+      const double flat = timed(false);
+      std::printf("\nround %d: CPU time a frame, shaped / straight-flat: %.3f\n", round,
+                  shaped / flat);
+    }
   }
   return 0;
 }
@@ -546,13 +569,18 @@ int main(int argc, char** argv) {
       args.picture_frame = static_cast<int>(*number);
     } else if (number && key == "--speed-frames") {
       args.speed_frames = static_cast<int>(*number);
+    } else if (number && key == "--speed-rounds") {
+      args.speed_rounds = static_cast<int>(*number);
+    } else if (number && key == "--road-shapes") {
+      args.road_shapes = *number != 0;
     } else if (number && key == "--threads") {
       args.threads = static_cast<int>(*number);
     } else {
       std::fprintf(
           stderr,
           "usage: synth_realism [--frames N] [--stereo-frames K] [--seed S] [--threads T]\n"
-          "                     [--images DIR] [--picture-frame I] [--speed-frames N]\n");
+          "                     [--images DIR] [--picture-frame I] [--speed-frames N]\n"
+          "                     [--speed-rounds R] [--road-shapes 0|1]\n");
       return 2;
     }
   }

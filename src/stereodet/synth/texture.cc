@@ -179,6 +179,7 @@ Eigen::Vector2f SurfaceCoordinates(const Scene& scene, const SurfaceHit& hit) {
 
 bool OnRoadMarking(const Road& road, float x, float z) {
   const Eigen::Vector2f rc = road.ToRoad(x, z);
+  if (road.SideStreetAt(rc.y()) != nullptr) return false;
   for (const Road::Marking& m : road.markings) {
     if (std::abs(rc.x() - m.lateral_m) <= 0.5f * m.width_m) {
       if (!m.dashed || Fract(rc.y() / 9.0f) < 1.0f / 3.0f) return true;
@@ -233,7 +234,10 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
         // worn: tyres rub the paint off in blotches.
         const Eigen::Vector2f rc = scene.road.ToRoad(hit.point.x(), hit.point.z());
         float paint = 0.0f;
+        // Lane lines stop at side streets.
+        const bool junction = scene.road.SideStreetAt(rc.y()) != nullptr;
         for (const Road::Marking& mk : scene.road.markings) {
+          if (junction) break;
           float cover = LineCoverage(rc.x(), 1000.0f, mk.lateral_m, mk.width_m, fp);
           if (cover > 0.0f && mk.dashed) cover *= LineCoverage(rc.y(), 9.0f, 1.5f, 3.0f, fp);
           paint = std::max(paint, cover);
