@@ -293,6 +293,8 @@ void AddDetectMergeCommand(CLI::App* detect) {
                    r.tool.c_str(), r.frames, r.seconds, args->options.out_dir.c_str());
     }
   });
+}
+
 struct TrainRpnArgs {
   TrainRpnOptions options;
   std::string input = RpnInputName(RpnConfig().input);
