@@ -8,6 +8,7 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/report/bootstrap_report.h"
 #include "stereodet/report/evaluation_internal.h"
 #include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
@@ -58,6 +59,7 @@ void EvaluationOptions::Check() const {
   }
   STEREODET_CHECK(!records || !out.empty()) << "records need an output folder (out)";
   STEREODET_CHECK(!report || !out.empty()) << "report needs an output folder (out)";
+  if (bootstrap) bootstrap->Check();
 }
 
 EvaluationResult RunEvaluation(const EvaluationOptions& options) {
@@ -90,6 +92,12 @@ EvaluationResult EvaluateAndWrite(
   for (EvalRun& run : result.runs) {
     run.result = Evaluate(result.input.frames, run.options);
     result.seconds += run.result.seconds;
+    if (options.bootstrap) {
+      BootstrapOptions bootstrap = *options.bootstrap;
+      bootstrap.num_threads = options.input.num_threads;
+      run.bootstrap = Bootstrap(result.input.frames, run.options, bootstrap);
+      result.bootstrap_seconds += run.bootstrap->seconds;
+    }
   }
   if (!out) return result;
 
@@ -191,6 +199,7 @@ void EvaluationCompareOptions::Check() const {
       << "compare: no second detection folder (det_b)";
   eval.Check();
   STEREODET_CHECK(!report || !out.empty()) << "compare: report needs an output folder (out)";
+  if (bootstrap) bootstrap->Check();
 }
 
 EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
@@ -223,6 +232,17 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
       WriteCsvAndReport(options.out, "compare.csv", result.csv, options.report);
   result.csv_path = written.csv_path;
   result.report_index = written.report_index;
+  if (options.bootstrap) {
+    BootstrapOptions bootstrap = *options.bootstrap;
+    bootstrap.num_threads = options.input.num_threads;
+    result.bootstrap =
+        PairedBootstrap(result.input_a.frames, result.input_b.frames, options.eval, bootstrap);
+    result.bootstrap_csv = FormatPairedBootstrapCsv(*result.bootstrap);
+    if (!options.out.empty()) {
+      result.bootstrap_csv_path = options.out / "bootstrap.csv";
+      WriteFileAtomically(result.bootstrap_csv_path, result.bootstrap_csv);
+    }
+  }
   return result;
 }
 

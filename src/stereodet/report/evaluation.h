@@ -13,9 +13,11 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/evaluator.h"
@@ -46,6 +48,9 @@ struct EvaluationOptions {
   // written, as `stereodet report OUT` would). Requires out.
   bool report = false;
   bool report_png = true;  // the report's PNG figures too (where the build has librsvg)
+  // Bootstrap intervals over frames for every run (Bootstrap; EvalRun::bootstrap), in
+  // results.json and the table. Unset: none. Its num_threads is replaced by input.num_threads.
+  std::optional<BootstrapOptions> bootstrap;
   // Provenance recorded in results.json (EvalRunInfo).
   std::string tool_version;
   std::string command_line;
@@ -61,8 +66,9 @@ struct EvaluationResult {
   // The runs' options as evaluated (keep_records set with records) and their results, in the order
   // of EvaluationOptions::runs.
   std::vector<EvalRun> runs;
-  EvalRunInfo info;    // what results.json records about the input and the run
-  double seconds = 0;  // the runs' Evaluate() time, summed
+  EvalRunInfo info;              // what results.json records about the input and the run
+  double seconds = 0;            // the runs' Evaluate() time, summed
+  double bootstrap_seconds = 0;  // the runs' Bootstrap() time, summed (0 without bootstrap)
   // With out: every file written, as paths under out (the report's, then the records files).
   std::vector<std::filesystem::path> files;
   // With records: per run, the records file's name under out and its rows.
@@ -183,6 +189,10 @@ struct EvaluationCompareOptions {
   std::filesystem::path out;
   // Also write OUT/report/ (WriteReport on OUT: the compare figures, SVG and PNG). Requires out.
   bool report = false;
+  // A paired bootstrap of A and B over the same resampled frames (PairedBootstrap): the interval
+  // of each metric's A - B, in OUT/bootstrap.csv (FormatPairedBootstrapCsv). Unset: none. Its
+  // num_threads is replaced by input.num_threads.
+  std::optional<BootstrapOptions> bootstrap;
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -194,6 +204,10 @@ struct EvaluationCompareResult {
   std::string csv;                     // FormatCompareCsv(rows)
   std::filesystem::path csv_path;      // OUT/compare.csv; empty without out
   std::filesystem::path report_index;  // with report: OUT/report/index.html
+  // With bootstrap: the paired intervals, their CSV and OUT/bootstrap.csv (empty without out).
+  std::optional<PairedBootstrapResult> bootstrap;
+  std::string bootstrap_csv;
+  std::filesystem::path bootstrap_csv_path;
 };
 
 // Reads A then B, evaluates both, then reads the calibration and compares.

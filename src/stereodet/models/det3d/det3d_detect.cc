@@ -63,7 +63,8 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
         frames.size(),
         [&](size_t i) {
           frames[i] = LoadDet3dFrame(dataset, options.points_dir, config.input, ids[begin + i],
-                                     config.classes, options.filter, /*with_labels=*/false);
+                                     config.classes, config.grid, options.filter,
+                                     /*with_labels=*/false);
           samples[i] = MakeDet3dSample(frames[i], config, model.anchors(), false);
         },
         options.threads);
