@@ -280,8 +280,8 @@ void AddDetectMergeCommand(CLI::App* detect) {
   MergeDetectionsOptions& m = args->options;
   CLI::App* cmd = detect->add_subcommand(
       "merge",
-      "combine the folders of `detect ssd|det3d --shard K/N --out DIR` (all N) into the detection "
-      "folder of one run, byte for byte (docs/scale.md)");
+      "combine the folders of `detect ssd|det3d|rpn --shard K/N --out DIR` (all N) into the "
+      "detection folder of one run, byte for byte (docs/scale.md)");
   cmd->add_option("shards", m.shards, "the shard folders, in any order")->required();
   cmd->add_option("--out", m.out_dir, "the detection folder (one run: replaced whole)")->required();
   cmd->add_flag("--quiet", args->quiet, "no summary output");
@@ -417,6 +417,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetectRpn(*dargs); });
 }
