@@ -505,7 +505,9 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
         default:
           break;
       }
-      return cloth * (1.0f + m.contrast * folds);
+      // Folds, and the weave and seams of the fabric at a few centimetres.
+      const float weave = FilteredFbm(u + 23.0f, v + 7.0f, 16.0f, 0.7f, 4, fp);
+      return cloth * (1.0f + m.contrast * (folds + 0.7f * weave));
     }
   }
   return m.albedo;
