@@ -11,7 +11,8 @@
 # Every training resumes (--resume): rerunning after an interruption continues where it stopped.
 # Usage: scripts/train-rpn-models.sh BUILD_DIR [DATA_DIR] [MODELS_DIR]
 #   RPN_EPOCHS=8         epochs
-#   RPN_THREADS=2        LibTorch threads (fixed: the weights are bit-identical for a fixed count)
+#   RPN_THREADS=1        LibTorch threads (fixed: the weights are bit-identical for a fixed count;
+#                        more threads than free cores is much slower: OpenMP spins at barriers)
 #   RPN_MAX_FRAMES=0     only the first N training frames (0 = all)
 #   RPN_IMAGE_WIDTH=32   image (and geometry) branch width; RPN_CONTROL_WIDTH=39 the control's
 #   RPN_SYNTH_FRAMES=4000, RPN_SYNTH_ARGS=""   the data set (tiny runs: fewer, smaller frames)
@@ -22,7 +23,7 @@ build_dir=${1:-build}
 data=${2:-data/synth}
 models=${3:-models}
 epochs=${RPN_EPOCHS:-8}
-threads=${RPN_THREADS:-2}
+threads=${RPN_THREADS:-1}
 max_frames=${RPN_MAX_FRAMES:-0}
 image_width=${RPN_IMAGE_WIDTH:-32}
 control_width=${RPN_CONTROL_WIDTH:-39}

@@ -14,6 +14,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/kitti/plane_io.h"
 #include "stereodet/synth/random.h"
+#include "stereodet/synth/road.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
@@ -35,8 +36,12 @@ enum Stream : uint64_t {
 // by another version is refused rather than mixed. 1: the first street model; 2: issue 16's
 // textures (asphalt, paving, kerbs, facades, fences), car details, sun glints, per-frame white
 // balance and sensor noise; 3: issue 16's curved car hulls (saloon, hatchback, estate) and the
-// street mirrored in paint and glass.
-constexpr int kSettingsVersion = 3;
+// street mirrored in paint and glass; 4: issue 16's dusty paint, lamps, plates and glass with
+// the interior's headrests, the roadside clutter (synth/clutter.h), people with limbs and
+// garments, the road shapes (bends, crests and sags, crossfall, the car's pitch and roll, side
+// streets; synth/road.h), and planes/ holding the least-squares plane of the true ground where the
+// stereo ground fit samples it.
+constexpr int kSettingsVersion = 4;
 
 // The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b
 // (this run)", for the refusal message.
@@ -103,7 +108,13 @@ std::string SynthOptions::Fingerprint() const {
     << " streets=" << scene.city_weight << "," << scene.residential_weight << ","
     << scene.road_weight << " along=" << scene.min_along_m << "," << scene.max_along_m
     << " camera_height=" << scene.camera_height_m << "," << scene.camera_height_jitter_m
-    << " road_yaw_sd=" << scene.road_yaw_sd_deg << " shadows=" << render.shadows
+    << " road_yaw_sd=" << scene.road_yaw_sd_deg << " road_shapes=" << scene.road_shapes
+    << " bends=" << scene.bend_fraction << "," << scene.min_bend_radius_m << ","
+    << scene.max_bend_radius_m << " vertical=" << scene.vertical_curve_fraction << ","
+    << scene.max_grade_change << "," << scene.min_vertical_radius_m << ","
+    << scene.max_vertical_radius_m << " crown=" << scene.crown_fraction << ","
+    << scene.max_crossfall << " pitch_roll_sd=" << scene.pitch_sd_deg << "," << scene.roll_sd_deg
+    << " side_streets=" << scene.side_street_fraction << " shadows=" << render.shadows
     << " blur=" << render.optics_blur_sigma_px << " vignetting=" << render.vignetting
     << " noise=" << render.noise_sigma << " azimuth_step=" << lidar_options.azimuth_step_deg
     << " range=" << lidar_options.min_range_m << "," << lidar_options.max_range_m
@@ -166,8 +177,9 @@ SynthFrame GenerateFrame(const SynthOptions& options, uint64_t seed, int index, 
   out.image_right = right_render.image;
   out.depth_left = left_render.depth;
   out.object_id = left_render.object_id;
-  // The scene's ground is the plane y = ground_y_m: -y + ground_y_m = 0.
-  out.ground_plane = Eigen::Vector4d(0.0, -1.0, 0.0, out.scene.ground_y_m);
+  // The least-squares plane of the true ground where the stereo ground fit looks (on a flat
+  // ground its plane, -y + ground_y_m = 0).
+  out.ground_plane = TrueGroundPlane(out.scene, out.calib, options.width, options.height);
   return out;
 }
 

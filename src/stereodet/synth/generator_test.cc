@@ -59,7 +59,9 @@ TEST(GeneratorTest, LabelsAreKittiLike) {
       EXPECT_LE(o.box.right, options.width - 1.0);
       EXPECT_LT(o.box.left, o.box.right);
       EXPECT_GT(o.box3d.h, 0.0);
-      EXPECT_NEAR(o.box3d.location.y(), f.scene.ground_y_m, 0.2);  // on the road or sidewalk
+      const Eigen::Vector3d& x = o.box3d.location;  // on the road or sidewalk
+      EXPECT_NEAR(x.y(), f.scene.GroundY(static_cast<float>(x.x()), static_cast<float>(x.z())),
+                  0.2);
       EXPECT_NEAR(o.alpha, AlphaFromRotationY(o.box3d.rotation_y, o.box3d.location), 0.006);
     }
   }
@@ -108,9 +110,11 @@ TEST(GeneratorTest, DatasetRoundTripsThroughTheKittiModule) {
   EXPECT_THROW(GenerateDataset(options), std::invalid_argument);
 }
 
-// The planes file holds the true ground: the scan's ground returns lie on it (within the range
-// noise), nothing lies below it, and the labelled objects stand on it (road) or on a kerb above
-// it. A missing planes file makes its frame be redone.
+// The planes file holds the least-squares plane of the true ground (TrueGroundPlane), which is
+// tilted by the car's pitch and roll; the scan's ground returns lie on the true ground (within the
+// range noise), nothing lies below it, and the labelled objects stand on it (road) or on a kerb
+// above it. A missing planes file makes its frame be redone. Without road shapes the plane is
+// the flat ground's.
 TEST(GeneratorTest, PlanesFileHoldsTheGroundTheScanAndLabelsStandOn) {
   const TestTempDir dir;
   DatasetOptions options;
@@ -124,24 +128,32 @@ TEST(GeneratorTest, PlanesFileHoldsTheGroundTheScanAndLabelsStandOn) {
   const FramePaths paths = KittiDataset(dir.path()).Paths("000000");
   const Eigen::Vector4d plane = ReadGroundPlane(paths.planes);
   const SynthFrame frame = GenerateFrame(options.synth, 8, 0);
-  EXPECT_EQ(plane.head<3>(), Eigen::Vector3d(0.0, -1.0, 0.0));
-  EXPECT_NEAR(plane[3], frame.scene.ground_y_m, 1e-6);  // seven digits
+  const Eigen::Vector4d truth =
+      TrueGroundPlane(frame.scene, frame.calib, options.synth.width, options.synth.height);
+  EXPECT_NEAR((plane - truth).norm(), 0.0, 1e-6);  // seven digits
+  EXPECT_GT(plane.head<3>().dot(Eigen::Vector3d(0.0, -1.0, 0.0)), std::cos(2.0 * M_PI / 180.0));
   EXPECT_GT(std::abs(plane[3] - 1.65), 1e-4) << "this frame's camera height is jittered";
   const Eigen::Affine3d rect_from_velo = frame.calib.RectFromVelo();
-  int on_plane = 0;
+  const auto above_ground = [&](const Eigen::Vector3d& x) {
+    return frame.scene.GroundY(static_cast<float>(x.x()), static_cast<float>(x.z())) - x.y();
+  };
+  int on_ground = 0;
   for (const VeloPoint& p : frame.scan) {
-    const Eigen::Vector3d x = rect_from_velo * Eigen::Vector3d(p.x, p.y, p.z);
-    const double height = plane.head<3>().dot(x) + plane[3];  // above the ground (normal up)
+    const double height = above_ground(rect_from_velo * Eigen::Vector3d(p.x, p.y, p.z));
     EXPECT_GT(height, -0.1) << "a return below the ground";
-    on_plane += std::abs(height) < 0.06;
+    on_ground += std::abs(height) < 0.06;
   }
-  EXPECT_GT(on_plane, static_cast<int>(frame.scan.size()) / 5);
+  EXPECT_GT(on_ground, static_cast<int>(frame.scan.size()) / 5);
   for (const Object& o : frame.labels) {
     if (o.type == "DontCare") continue;
-    const double height = plane.head<3>().dot(o.box3d.location) + plane[3];
+    const double height = above_ground(o.box3d.location);
     EXPECT_GE(height, -0.006);  // two-decimal labels
     EXPECT_LE(height, 0.2);     // a kerb at most
   }
+  SynthOptions flat = options.synth;
+  flat.scene.road_shapes = false;
+  const SynthFrame flat_frame = GenerateFrame(flat, 8, 0);
+  EXPECT_EQ(flat_frame.ground_plane, Eigen::Vector4d(0.0, -1.0, 0.0, flat_frame.scene.ground_y_m));
   fs::remove(paths.planes);
   const DatasetSummaryLine again = GenerateDataset(options);
   EXPECT_EQ(again.generated, 1);

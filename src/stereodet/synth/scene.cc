@@ -5,12 +5,23 @@
 namespace stereodet {
 
 Eigen::Vector2f Road::ToRoad(float x, float z) const {
-  const Eigen::Vector2f d(x - origin_xz.x(), z - origin_xz.y());
-  return {d.dot(RightXz()), d.dot(forward_xz)};
+  if (curvature_per_m == 0.0f) {
+    const Eigen::Vector2f d(x - origin_xz.x(), z - origin_xz.y());
+    return {d.dot(RightXz()), d.dot(forward_xz)};
+  }
+  return ArcToRoad(origin_xz, forward_xz, curvature_per_m, x, z);
 }
 
 Eigen::Vector2f Road::FromRoad(float lateral_m, float along_m) const {
-  return origin_xz + lateral_m * RightXz() + along_m * forward_xz;
+  if (curvature_per_m == 0.0f) return origin_xz + lateral_m * RightXz() + along_m * forward_xz;
+  return ArcFromRoad(origin_xz, forward_xz, curvature_per_m, lateral_m, along_m);
+}
+
+const SideStreet* Road::SideStreetAt(float along_m) const {
+  for (const SideStreet& s : side_streets) {
+    if (s.Covers(along_m)) return &s;
+  }
+  return nullptr;
 }
 
 float Road::ForwardYaw() const {
@@ -35,11 +46,18 @@ bool Scene::Occluded(const Ray& ray, float t_min, float t_max, int* hint) const 
 }
 
 float Scene::GroundHit(const Ray& ray, float t_min, float t_max) const {
-  if (ray.direction.y() <= 0.0f) return kNoHit;
-  const float t = (ground_y_m - ray.origin.y()) / ray.direction.y();
-  if (t <= t_min || t >= t_max) return kNoHit;
-  const float horizontal = t * std::hypot(ray.direction.x(), ray.direction.z());
-  return horizontal < max_ground_distance_m ? t : kNoHit;
+  const float horizontal_per_t = std::hypot(ray.direction.x(), ray.direction.z());
+  if (ground.Flat()) {
+    if (ray.direction.y() <= 0.0f) return kNoHit;
+  } else {
+    // Hits beyond max_ground_distance_m are none: a ray that has not met the ground by then need
+    // not be followed (a bound that lets the shaped ground reject most rays above the horizon at
+    // once).
+    t_max = std::min(t_max, max_ground_distance_m / std::max(1e-12f, horizontal_per_t));
+  }
+  const float t = ground.Intersect(ray, ground_y_m, t_min, t_max);
+  if (t == kNoHit) return kNoHit;
+  return t * horizontal_per_t < max_ground_distance_m ? t : kNoHit;
 }
 
 SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
@@ -56,11 +74,15 @@ SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
     hit.object = p.object;
   } else {
     hit.kind = SurfaceHit::Kind::kGround;
-    hit.point.y() = ground_y_m;
-    hit.normal = Eigen::Vector3f(0.0f, -1.0f, 0.0f);
-    const float lateral = road.ToRoad(hit.point.x(), hit.point.z()).x();
-    hit.material = (lateral >= road.left_edge_m && lateral <= road.right_edge_m) ? road_material
-                                                                                 : offroad_material;
+    hit.point.y() = static_cast<float>(
+        ground_y_m - ground.HeightAndNormal(hit.point.x(), hit.point.z(), &hit.normal));
+    const Eigen::Vector2f rc = road.ToRoad(hit.point.x(), hit.point.z());
+    bool on_road = rc.x() >= road.left_edge_m && rc.x() <= road.right_edge_m;
+    if (!on_road && !road.side_streets.empty()) {
+      const SideStreet* side = road.SideStreetAt(rc.y());
+      on_road = side != nullptr && side->OnSide(rc.x() < road.left_edge_m ? 0 : 1);
+    }
+    hit.material = on_road ? road_material : offroad_material;
   }
   if (hit.normal.dot(ray.direction) > 0.0f) hit.normal = -hit.normal;
   return hit;

@@ -14,6 +14,7 @@
 
 #include "stereodet/geometry/box.h"
 #include "stereodet/synth/bvh.h"
+#include "stereodet/synth/road.h"
 #include "stereodet/synth/shapes.h"
 
 namespace stereodet {
@@ -43,6 +44,10 @@ struct Material {
   float scale_m = 1.0f;            // pattern cell size (window pitch, stone, brick, slat), metres
   float specular = 0.0f;           // fraction of sky light mirrored (paint, glass)
   float lidar_reflectance = 0.3f;  // LiDAR intensity at normal incidence, [0, 1]
+  // A pattern's variant. kCloth: 0 plain weave with folds, 1 stripes of albedo2 across the
+  // garment (period scale_m), 2 checks of albedo2 (cell scale_m), 3 denim (a fine diagonal twill,
+  // faded in patches).
+  uint8_t variant = 0;
 };
 
 // A labelled object (KITTI class) made of consecutive primitives.
@@ -54,27 +59,34 @@ struct SceneObject {
   int num_primitives = 0;
 };
 
-// The road painted on the ground plane, described in road coordinates: `lateral` (metres to the
-// right of the ego lane's centre line) and `along` (metres forward).
+// The road painted on the ground, described in road coordinates: `lateral` (metres to the right of
+// the ego lane's centre line) and `along` (metres forward, along that line). The line is a
+// circular arc (road.h's ArcToRoad; straight for curvature 0).
 struct Road {
   Eigen::Vector2f origin_xz = Eigen::Vector2f::Zero();       // rect (x, z) of road coordinate 0
-  Eigen::Vector2f forward_xz = Eigen::Vector2f(0.0f, 1.0f);  // unit, rect (x, z)
-  float left_edge_m = -5.0f;  // lateral position of the asphalt's left edge (negative)
-  float right_edge_m = 5.0f;  // ... and right edge
+  Eigen::Vector2f forward_xz = Eigen::Vector2f(0.0f, 1.0f);  // unit, rect (x, z), at along 0
+  float curvature_per_m = 0.0f;  // 1 / radius of the bend, > 0 to the right; 0: straight
+  float left_edge_m = -5.0f;     // lateral position of the asphalt's left edge (negative)
+  float right_edge_m = 5.0f;     // ... and right edge
   struct Marking {
     float lateral_m = 0.0f;
     float width_m = 0.12f;
     bool dashed = false;  // 3 m dash, 6 m gap (German urban roads)
   };
   std::vector<Marking> markings;
+  std::vector<SideStreet> side_streets;  // asphalt across the road's edges; no markings in them
 
   Eigen::Vector2f RightXz() const { return {forward_xz.y(), -forward_xz.x()}; }
   // Road coordinates (lateral, along) of a rect (x, z) point.
   Eigen::Vector2f ToRoad(float x, float z) const;
   // Rect (x, z) of road coordinates.
   Eigen::Vector2f FromRoad(float lateral_m, float along_m) const;
-  // Heading of the road as a KITTI rotation_y (objects driving forward along the road).
+  // Heading of the road at along 0 as a KITTI rotation_y (objects driving forward along the road).
   float ForwardYaw() const;
+  // ... and at `along_m` (on a bend the heading turns by curvature x along).
+  float ForwardYawAt(float along_m) const { return ForwardYaw() + curvature_per_m * along_m; }
+  // The side street that covers `along_m`, or nullptr.
+  const SideStreet* SideStreetAt(float along_m) const;
 };
 
 struct Lighting {
@@ -108,7 +120,8 @@ struct SurfaceHit {
 };
 
 struct Scene {
-  float ground_y_m = 1.65f;  // rect y of the (flat) ground plane; the camera is this high
+  float ground_y_m = 1.65f;  // rect y of the ground under the camera; the camera is this high
+  GroundProfile ground;      // the ground's shape: y = ground_y_m - ground.Height(x, z)
   int road_material = 0;     // ground between the road edges
   int offroad_material = 0;  // ground beyond them (under sidewalks, lawns, verges)
   float max_ground_distance_m = 1500.0f;  // farther ground is treated as horizon
@@ -122,7 +135,12 @@ struct Scene {
   void Finalize();
   const Bvh& bvh() const { return bvh_; }
 
-  // Closest hit along `ray` with t in (t_min, t_max): ground plane or primitive.
+  // Rect y of the ground at rect (x, z).
+  float GroundY(float x, float z) const {
+    return ground.Flat() ? ground_y_m : static_cast<float>(ground_y_m - ground.Height(x, z));
+  }
+
+  // Closest hit along `ray` with t in (t_min, t_max): ground or primitive.
   // `hint` (optional) names a primitive likely to be hit, e.g. the one the neighbouring pixel's ray
   // hit: testing it first tightens t_max before the BVH search. The result does not depend on it.
   SurfaceHit Trace(const Ray& ray, float t_min = 1e-4f, float t_max = kNoHit, int hint = -1) const;
@@ -132,7 +150,7 @@ struct Scene {
   bool Occluded(const Ray& ray, float t_min, float t_max, int* hint = nullptr) const;
 
   // The parts of Trace, for callers with their own search structure (the cameras' screen bins):
-  // the ground plane's ray parameter in (t_min, t_max), or kNoHit ...
+  // the ground's ray parameter in (t_min, t_max), or kNoHit ...
   float GroundHit(const Ray& ray, float t_min, float t_max) const;
   // ... and the full hit record for a hit at `t` on `primitive` (-1: the ground; with t = kNoHit:
   // no hit).

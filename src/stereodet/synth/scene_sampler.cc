@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "stereodet/synth/clutter.h"
 #include "stereodet/synth/materials.h"
 #include "stereodet/synth/objects.h"
 #include "stereodet/synth/random.h"
@@ -37,9 +38,15 @@ Dims SampleDims(const std::string& type, Rng& rng) {
   if (type == "Tram")
     return {rng.Uniform(15.0, 28.0), rng.Uniform(2.5, 2.65), rng.Uniform(3.3, 3.6)};
   if (type == "Misc") return {rng.Uniform(2.5, 4.0), rng.Uniform(1.5, 2.0), rng.Uniform(1.2, 2.2)};
-  if (type == "Pedestrian") return {0.0, 0.0, rng.ClampedNormal(1.74, 0.1, 1.45, 2.0)};
-  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.07, 1.1, 1.4)};
-  return {0.0, 0.0, rng.ClampedNormal(1.72, 0.08, 1.5, 1.95)};  // Cyclist
+  // People around KITTI's class means (h 1.76 m for pedestrians, 1.74 m for cyclists, the means
+  // 3D detectors use as size anchors), with a wider spread and a few children.
+  if (type == "Pedestrian") {
+    const bool child = rng.Bernoulli(0.05);
+    const double h = child ? rng.Uniform(1.0, 1.45) : rng.ClampedNormal(1.76, 0.11, 1.45, 2.05);
+    return {0.0, 0.0, h};
+  }
+  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.08, 1.05, 1.45)};
+  return {0.0, 0.0, rng.ClampedNormal(1.74, 0.09, 1.45, 2.0)};  // Cyclist
 }
 
 // The box AddObject builds an object of size `d` into, at `location` turned by `rotation_y`.
@@ -57,33 +64,84 @@ struct Footprint {
 
 class StreetBuilder {
  public:
-  StreetBuilder(Scene& scene, const SceneOptions& options, Rng& rng)
-      : scene_(scene), options_(options), rng_(rng) {}
+  // `shape_rng` draws the road's shape, so that the streets and traffic drawn from `rng` are those
+  // of a straight, flat road but for what the shape excludes (junctions).
+  StreetBuilder(Scene& scene, const SceneOptions& options, Rng& rng, Rng& shape_rng)
+      : scene_(scene), options_(options), rng_(rng), shape_rng_(shape_rng) {}
 
   void Build();
 
  private:
-  // World position of road coordinates on a surface `height_m` above the road.
+  // World position of road coordinates on a surface `height_m` above the ground.
   Eigen::Vector3d At(double lateral, double along, double height_m = 0.0) const {
     const Eigen::Vector2f xz =
         scene_.road.FromRoad(static_cast<float>(lateral), static_cast<float>(along));
-    return {Round2(xz.x()), Round2(scene_.ground_y_m - height_m), Round2(xz.y())};
+    return {Round2(xz.x()), Round2(scene_.GroundY(xz.x(), xz.y()) - height_m), Round2(xz.y())};
   }
-  double Yaw(double relative) const { return Round2(WrapYaw(scene_.road.ForwardYaw() + relative)); }
+  // A heading relative to the road's at `along`, as a rotation_y.
+  double Yaw(double relative, double along) const {
+    return Round2(WrapYaw(Heading(along) + relative));
+  }
+  double Heading(double along) const { return scene_.road.ForwardYawAt(static_cast<float>(along)); }
+  // Whether `along` lies within `margin` of a side street opening on `side` (0 left, 1 right).
+  bool InJunction(double along, int side, double margin) const {
+    for (const SideStreet& j : scene_.road.side_streets) {
+      if (j.OnSide(side) && std::abs(along - j.along_m) <= j.half_width_m + margin) return true;
+    }
+    return false;
+  }
+  // [a0, a1] less the side streets on `side` (widened by `margin`); all of it for side -1.
+  std::vector<std::pair<double, double>> OpenIntervals(double a0, double a1, int side,
+                                                       double margin) const {
+    std::vector<std::pair<double, double>> out{{a0, a1}};
+    if (side < 0) return out;
+    for (const SideStreet& j : scene_.road.side_streets) {
+      if (!j.OnSide(side)) continue;
+      const double c0 = j.along_m - j.half_width_m - margin,
+                   c1 = j.along_m + j.half_width_m + margin;
+      std::vector<std::pair<double, double>> next;
+      for (const auto& [b0, b1] : out) {
+        if (c1 <= b0 || c0 >= b1) {
+          next.push_back({b0, b1});
+          continue;
+        }
+        if (c0 - b0 > 0.5) next.push_back({b0, c0});
+        if (b1 - c1 > 0.5) next.push_back({c1, b1});
+      }
+      out.swap(next);
+    }
+    return out;
+  }
   static double WrapYaw(double a) {
     while (a >= M_PI) a -= 2.0 * M_PI;
     while (a < -M_PI) a += 2.0 * M_PI;
     return a;
   }
-  // Background box aligned with the road: along [a0, a1], lateral [s0, s1], heights [h0, h1].
+  // Background box aligned with the road: along [a0, a1], lateral [s0, s1], heights [h0, h1]
+  // above the ground; with `side` >= 0 not across that side's side streets (widened by `margin`).
   // Long boxes (sidewalks, walls) are cut into pieces of at most kPieceM along the road: a BVH
   // over 200 m long boxes would make every ray visit them. The texture runs on across the cuts.
-  void RoadBox(double a0, double a1, double s0, double s1, double h0, double h1, int material) {
+  void RoadBox(double a0, double a1, double s0, double s1, double h0, double h1, int material,
+               int side = -1, double margin = 0.0) {
+    const float u_offset = static_cast<float>(rng_.Uniform(0, 100));
+    const float v_offset = static_cast<float>(rng_.Uniform(0, 3));
+    for (const auto& [b0, b1] : OpenIntervals(a0, a1, side, margin)) {
+      RoadBoxPieces(b0, b1, s0, s1, h0, h1, material, u_offset + static_cast<float>(b0 - a0),
+                    v_offset);
+    }
+  }
+  void RoadBoxPieces(double a0, double a1, double s0, double s1, double h0, double h1, int material,
+                     float u_offset, float v_offset) {
     constexpr double kPieceM = 12.0;
     const int pieces = std::max(1, static_cast<int>(std::ceil((a1 - a0) / kPieceM)));
     const double step = (a1 - a0) / pieces;
-    const float u_offset = static_cast<float>(rng_.Uniform(0, 100));
-    const float v_offset = static_cast<float>(rng_.Uniform(0, 3));
+    if (scene_.road.curvature_per_m != 0.0f || !scene_.ground.Flat()) {
+      for (int i = 0; i < pieces; ++i) {
+        ShapedPiece(a0 + i * step, a0 + (i + 1) * step, s0, s1, h0, h1, material,
+                    u_offset + static_cast<float>((i + 0.5) * step), v_offset);
+      }
+      return;
+    }
     for (int i = 0; i < pieces; ++i) {
       const double b0 = a0 + i * step, b1 = b0 + step;
       const Eigen::Vector2f c = scene_.road.FromRoad(static_cast<float>(0.5 * (s0 + s1)),
@@ -97,6 +155,39 @@ class StreetBuilder {
           Eigen::Vector2f(u_offset + static_cast<float>(0.5 * (b0 + b1) - a0), v_offset);
       scene_.primitives.push_back(p);
     }
+  }
+  // One piece of a RoadBox on a bending or shaped road: a box along the chord of its centre line,
+  // tilted to the ground (the chord's slope along the road, the ground's normal across it), a
+  // little longer than the chord where the road bends so that neighbours close up at the outer
+  // edge, reaching 0.5 m into the ground when it stands on it (h0 = 0).
+  void ShapedPiece(double b0, double b1, double s0, double s1, double h0, double h1, int material,
+                   float u_centre, float v_offset) {
+    const double sc = 0.5 * (s0 + s1), half_width = 0.5 * (s1 - s0);
+    const auto surface = [&](double along) {
+      const Eigen::Vector2f xz =
+          scene_.road.FromRoad(static_cast<float>(sc), static_cast<float>(along));
+      return Eigen::Vector3d(xz.x(), scene_.GroundY(xz.x(), xz.y()), xz.y());
+    };
+    const Eigen::Vector3d p0 = surface(b0), p1 = surface(b1), mid = 0.5 * (p0 + p1);
+    const Eigen::Vector3d ex = (p1 - p0).normalized();
+    const Eigen::Vector3d up = scene_.ground.Normal(mid.x(), mid.z()).cast<double>();
+    const Eigen::Vector3d ez = ex.cross(-up).normalized();
+    const Eigen::Vector3d ey = ez.cross(ex);
+    Eigen::Matrix3f rotation;
+    rotation.col(0) = ex.cast<float>(), rotation.col(1) = ey.cast<float>(),
+    rotation.col(2) = ez.cast<float>();
+    const double bottom = h0 == 0.0 ? -0.5 : h0;
+    const double half_length =
+        0.5 * (p1 - p0).norm() +
+        0.5 * std::abs(scene_.road.curvature_per_m) * (b1 - b0) * half_width + 0.01;
+    const Eigen::Vector3d centre = mid - 0.5 * (bottom + h1) * ey;
+    Primitive p = MakeBox(
+        centre.cast<float>(),
+        Eigen::Vector3f(static_cast<float>(half_length), static_cast<float>(0.5 * (h1 - bottom)),
+                        static_cast<float>(half_width)),
+        rotation, material);
+    p.texture_offset = Eigen::Vector2f(u_centre, v_offset);
+    scene_.primitives.push_back(p);
   }
   bool Free(double lateral, double along, double radius) const {
     for (const Footprint& f : taken_) {
@@ -119,8 +210,13 @@ class StreetBuilder {
   // Places a vehicle centred at (lateral, along) heading along the road (or against it).
   double PlaceVehicle(const std::string& type, double lateral, double along, bool oncoming,
                       double yaw_sd) {
+    return PlaceVehicleTurned(type, lateral, along, oncoming ? M_PI : 0.0, yaw_sd);
+  }
+  // ... heading `relative_yaw` from the road's heading there.
+  double PlaceVehicleTurned(const std::string& type, double lateral, double along,
+                            double relative_yaw, double yaw_sd) {
     const Dims d = SampleDims(type, rng_);
-    const double yaw = Yaw((oncoming ? M_PI : 0.0) + rng_.Normal(0.0, yaw_sd));
+    const double yaw = Yaw(relative_yaw + rng_.Normal(0.0, yaw_sd), along);
     Take(lateral, along, 0.5 * d.l);
     AddObject(scene_, type, LabelBox(d, At(lateral, along), yaw), rng_);
     return d.l;
@@ -135,16 +231,20 @@ class StreetBuilder {
 
   void Materials();
   void Lanes();
+  void RoadShape();
+  void JunctionTraffic();
   void Traffic();
   void Trams();
   void Parking(double lateral, double width, int side);
   void Sidewalk(int side);
   void Roadside(int side);
   void Pedestrians();
+  void StreetFurniture(int side, Rng& rng);
 
   Scene& scene_;
   const SceneOptions& options_;
   Rng& rng_;
+  Rng& shape_rng_;
   StreetKind kind_ = StreetKind::kCity;
   std::vector<Footprint> taken_;
   double ego_lateral_ = 0.0;
@@ -251,6 +351,91 @@ void StreetBuilder::Lanes() {
   scene_.road.right_edge_m = static_cast<float>(carriage_right_ + parking_width_[1]);
 }
 
+void StreetBuilder::RoadShape() {
+  if (!options_.road_shapes) return;
+  Rng& rng = shape_rng_;
+  const auto log_uniform = [&](double lo, double hi) {
+    return std::exp(rng.Uniform(std::log(lo), std::log(hi)));
+  };
+  // Draws in a fixed order, each used or not.
+  const bool bend = rng.Bernoulli(options_.bend_fraction);
+  const double bend_radius = log_uniform(options_.min_bend_radius_m, options_.max_bend_radius_m);
+  const double bend_sign = rng.Bernoulli(0.5) ? 1.0 : -1.0;
+  const bool vertical = rng.Bernoulli(options_.vertical_curve_fraction);
+  const double grade_change = rng.Uniform(0.02, std::max(0.02, options_.max_grade_change));
+  const double vertical_radius =
+      log_uniform(options_.min_vertical_radius_m, options_.max_vertical_radius_m);
+  const double vertical_sign = rng.Bernoulli(0.5) ? 1.0 : -1.0;
+  const double vertical_centre = rng.Uniform(0.0, 80.0);
+  const bool crowned = rng.Bernoulli(options_.crown_fraction);
+  const double crossfall = rng.Uniform(0.01, std::max(0.01, options_.max_crossfall));
+  const double pitch = rng.Normal(0.0, options_.pitch_sd_deg * M_PI / 180.0);
+  const double roll = rng.Normal(0.0, options_.roll_sd_deg * M_PI / 180.0);
+  const bool junction = rng.Bernoulli(options_.side_street_fraction);
+  const double junction_along = rng.Uniform(12.0, 70.0);
+  const double junction_half_width = rng.Uniform(3.0, 5.0);
+  const int junction_sides = rng.Categorical({0.3, 0.3, 0.4});
+
+  Road& road = scene_.road;
+  if (bend) road.curvature_per_m = static_cast<float>(bend_sign / bend_radius);
+  GroundProfile& g = scene_.ground;
+  // The profile's frame: the camera's point on the ground, the road's heading there.
+  g.origin_xz = Eigen::Vector2d::Zero();
+  g.forward_xz = road.forward_xz.cast<double>();
+  g.pitch = std::tan(pitch);
+  g.roll = std::tan(roll);
+  if (vertical) {
+    g.vertical_curvature_per_m = vertical_sign / vertical_radius;
+    g.vertical_half_length_m = 0.5 * grade_change * vertical_radius;
+    g.vertical_centre_m = vertical_centre;
+  }
+  if (crowned) {
+    // The crown: the line between the two directions (the middle of a one-way carriageway), in
+    // the profile's frame, whose lateral 0 is the camera's (road lateral ego_lateral_).
+    double crown = 0.5 * (carriage_left_ + carriage_right_);
+    for (size_t i = 1; i < lanes_.size(); ++i) {
+      if (lanes_[i - 1].oncoming != lanes_[i].oncoming)
+        crown = lanes_[i].centre - 0.5 * lane_width_;
+    }
+    const double half = std::max(1.5, std::max(crown - carriage_left_, carriage_right_ - crown));
+    g.crown_lateral_m = crown - ego_lateral_;
+    g.crown_half_width_m = half;
+    g.crown_curvature_per_m = -crossfall / half;
+  }
+  if (junction) {
+    SideStreet j;
+    j.along_m = static_cast<float>(Round2(junction_along));
+    j.half_width_m = static_cast<float>(Round2(junction_half_width));
+    j.left = junction_sides != 1;
+    j.right = junction_sides != 0;
+    road.side_streets.push_back(j);
+  }
+}
+
+void StreetBuilder::JunctionTraffic() {
+  // Vehicles in the side streets, waiting to turn into the road or leaving it; they drive on the
+  // right of the side street.
+  for (const SideStreet& j : scene_.road.side_streets) {
+    for (int side = 0; side < 2; ++side) {
+      if (!j.OnSide(side)) continue;
+      const double sign = side == 0 ? -1.0 : 1.0;
+      for (int k = 0; k < 2; ++k) {
+        if (!rng_.Bernoulli(0.45 * options_.object_density)) continue;
+        const bool towards_road = rng_.Bernoulli(0.6);
+        // Heading to the road's right (+pi/2) means driving on the side street's near (-along)
+        // half.
+        const bool heading_right = (side == 1) != towards_road;
+        const double along = j.along_m + (heading_right ? -0.5 : 0.5) * j.half_width_m;
+        const double edge = side == 0 ? scene_.road.left_edge_m : scene_.road.right_edge_m;
+        const double lateral = edge + sign * (rng_.Uniform(3.0, 6.0) + 7.0 * k);
+        const std::string type = VehicleType(false);
+        if (!Free(lateral, along, 2.5)) continue;
+        PlaceVehicleTurned(type, lateral, along, heading_right ? 0.5 * M_PI : -0.5 * M_PI, 0.05);
+      }
+    }
+  }
+}
+
 void StreetBuilder::Traffic() {
   const double density = options_.object_density;
   for (const Lane& lane : lanes_) {
@@ -280,7 +465,7 @@ void StreetBuilder::Traffic() {
     const double along = rng_.Uniform(4.0, 50.0);
     if (!Free(lateral, along, 1.0)) continue;
     PlacePerson("Cyclist", lateral, along, 0.0,
-                scene_.road.ForwardYaw() + (right ? 0.0 : M_PI) + rng_.Normal(0.0, 0.08));
+                Heading(along) + (right ? 0.0 : M_PI) + rng_.Normal(0.0, 0.08));
   }
 }
 
@@ -307,7 +492,7 @@ void StreetBuilder::Parking(double lateral, double width, int side) {
       const double l_guess = type == "Truck" ? 9.0 : 5.0;
       const double centre_along = along + 0.5 * l_guess;
       const double lat = lateral + (side == 0 ? 1 : -1) * rng_.Uniform(0.0, 0.25);
-      if (Free(lat, centre_along, 2.2)) {
+      if (Free(lat, centre_along, 2.2) && !InJunction(centre_along, side, 0.5 * l_guess + 0.5)) {
         const double l = PlaceVehicle(type, lat, centre_along, rng_.Bernoulli(0.25), 0.03);
         along += std::max(0.0, l - slot);
       }
@@ -327,10 +512,10 @@ void StreetBuilder::Sidewalk(int side) {
   if (width < 0.5) return;
   const double s0 = std::min(inner, outer), s1 = std::max(inner, outer);
   const double a0 = options_.min_along_m - 20.0, a1 = options_.max_along_m + 100.0;
-  RoadBox(a0, a1, s0, s1, 0.0, curb_height_, sidewalk_material_);
+  RoadBox(a0, a1, s0, s1, 0.0, curb_height_, sidewalk_material_, side);
   // The kerb stone: a thin lighter strip at the road side.
   const double k0 = side == 0 ? inner - 0.15 : inner, k1 = side == 0 ? inner : inner + 0.15;
-  RoadBox(a0, a1, k0, k1, 0.0, curb_height_ + 0.005, curb_material_);
+  RoadBox(a0, a1, k0, k1, 0.0, curb_height_ + 0.005, curb_material_, side);
 }
 
 void StreetBuilder::Roadside(int side) {
@@ -345,7 +530,7 @@ void StreetBuilder::Roadside(int side) {
     for (double a = a0 + rng_.Uniform(0.0, spacing); a < a1;
          a += spacing * rng_.Uniform(0.8, 1.3)) {
       const double s = sidewalk_inner_[side] + sign * rng_.Uniform(0.6, 1.2);
-      if (!Free(s, a, 1.0)) continue;
+      if (!Free(s, a, 1.0) || InJunction(a, side, 1.5)) continue;
       Take(s, a, 0.5);
       const double trunk_h = rng_.Uniform(2.0, 3.5), crown = rng_.Uniform(1.5, 3.2);
       const Eigen::Vector3d base = At(s, a, curb_height_);
@@ -366,7 +551,7 @@ void StreetBuilder::Roadside(int side) {
     const double spacing = rng_.Uniform(20.0, 40.0);
     for (double a = a0 + rng_.Uniform(0.0, spacing); a < a1; a += spacing) {
       const double s = sidewalk_inner_[side] + sign * 0.4;
-      if (!Free(s, a, 0.3)) continue;
+      if (!Free(s, a, 0.3) || InJunction(a, side, 0.5)) continue;
       const double h = rng_.Uniform(4.0, 8.0);
       const Eigen::Vector3d base = At(s, a, curb_height_);
       scene_.primitives.push_back(
@@ -375,7 +560,7 @@ void StreetBuilder::Roadside(int side) {
       if (rng_.Bernoulli(0.5)) {  // a sign
         Primitive sign_box = MakeBox(
             Eigen::Vector3f(base.x(), base.y() - 2.4f, base.z()),
-            Eigen::Vector3f(0.03f, 0.3f, 0.3f), RotationY(scene_.road.ForwardYaw()),
+            Eigen::Vector3f(0.03f, 0.3f, 0.3f), RotationY(static_cast<float>(Heading(a))),
             scene_.AddMaterial(MakeMaterial(Pattern::kPlain, CarColour(rng_), 0.05f, 0.9f)));
         scene_.primitives.push_back(sign_box);
       }
@@ -391,7 +576,7 @@ void StreetBuilder::Roadside(int side) {
       if (rng_.Bernoulli(0.1)) {  // a gap: a yard behind a 30 cm wall
         const double s0 = line + sign * 0.3, s1 = line + sign * 0.6;
         RoadBox(a, a + w, std::min(s0, s1), std::max(s0, s1), 0.0, rng_.Uniform(1.0, 2.5),
-                wall_material_);
+                wall_material_, side, 1.5);
       } else {
         Material facade = MakeMaterial(
             Pattern::kFacade,
@@ -405,7 +590,8 @@ void StreetBuilder::Roadside(int side) {
         facade.scale_m = static_cast<float>(rng_.Uniform(2.4, 4.2));
         const double s_front = line + sign * setback;
         RoadBox(a, a + w, std::min(s_front, s_front + sign * depth),
-                std::max(s_front, s_front + sign * depth), 0.0, h, scene_.AddMaterial(facade));
+                std::max(s_front, s_front + sign * depth), 0.0, h, scene_.AddMaterial(facade), side,
+                1.5);
       }
       a += w + (rng_.Bernoulli(0.15) ? rng_.Uniform(2.0, 8.0) : 0.0);
     } else if (kind_ == StreetKind::kResidential) {
@@ -416,11 +602,12 @@ void StreetBuilder::Roadside(int side) {
       const double fs0 = std::min(s_front, s_front + sign * (front == 2 ? 0.8 : 0.12));
       const double fs1 = std::max(s_front, s_front + sign * (front == 2 ? 0.8 : 0.12));
       if (front == 0)
-        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(0.9, 1.6), fence_material_);
+        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(0.9, 1.6), fence_material_, side, 1.5);
       if (front == 1)
-        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(0.6, 1.8), wall_material_);
+        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(0.6, 1.8), wall_material_, side, 1.5);
       if (front == 2)
-        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(1.0, 2.2), foliage_material_);
+        RoadBox(a, a + w - 0.5, fs0, fs1, 0.0, rng_.Uniform(1.0, 2.2), foliage_material_, side,
+                1.5);
       if (rng_.Bernoulli(0.85)) {
         Material facade = MakeMaterial(
             Pattern::kFacade,
@@ -437,7 +624,7 @@ void StreetBuilder::Roadside(int side) {
         const double s_house = line + sign * setback;
         RoadBox(a + 1.5, a + 1.5 + hw, std::min(s_house, s_house + sign * depth),
                 std::max(s_house, s_house + sign * depth), 0.0, rng_.Uniform(5.5, 10.0),
-                scene_.AddMaterial(facade));
+                scene_.AddMaterial(facade), side, 1.5);
       }
       a += w;
     } else {
@@ -448,17 +635,17 @@ void StreetBuilder::Roadside(int side) {
         const double d = rng_.Uniform(1.0, 6.0);
         RoadBox(a, a + w, std::min(s_front, s_front + sign * d),
                 std::max(s_front, s_front + sign * d), 0.0, rng_.Uniform(1.5, 7.0),
-                foliage_material_);
+                foliage_material_, side, 1.5);
       } else if (kind == 1) {  // guard rail
         const double s = sidewalk_inner_[side] + sign * 0.5;
         RoadBox(a, a + w, std::min(s, s + sign * 0.08), std::max(s, s + sign * 0.08), 0.45, 0.75,
-                metal_material_);
+                metal_material_, side, 1.5);
       } else if (kind == 2) {  // a noise wall or fence
         // Named draws: the order in which function arguments are evaluated is unspecified.
         const double height = rng_.Uniform(1.5, 3.5);
         const int material = rng_.Bernoulli(0.5) ? wall_material_ : fence_material_;
         RoadBox(a, a + w, std::min(s_front, s_front + sign * 0.2),
-                std::max(s_front, s_front + sign * 0.2), 0.0, height, material);
+                std::max(s_front, s_front + sign * 0.2), 0.0, height, material, side, 1.5);
       }
       a += w;
     }
@@ -483,12 +670,12 @@ void StreetBuilder::Pedestrians() {
     if (crossing || width < 0.8) {
       lateral = rng_.Uniform(scene_.road.left_edge_m + 1.0, scene_.road.right_edge_m - 1.0);
       height = 0.0;
-      heading = scene_.road.ForwardYaw() + (rng_.Bernoulli(0.5) ? 0.5 : -0.5) * M_PI;
+      heading = Heading(along) + (rng_.Bernoulli(0.5) ? 0.5 : -0.5) * M_PI;
       if (!crossing) continue;
     } else {
       lateral = sidewalk_inner_[side] + sign * rng_.Uniform(0.5, std::max(0.6, width - 0.4));
       height = curb_height_;
-      heading = scene_.road.ForwardYaw() + (rng_.Bernoulli(0.5) ? 0.0 : M_PI);
+      heading = Heading(along) + (rng_.Bernoulli(0.5) ? 0.0 : M_PI);
     }
     const int size = rng_.Categorical({0.6, 0.3, 0.1}) + 1;
     for (int k = 0; k < size; ++k) {
@@ -506,13 +693,60 @@ void StreetBuilder::Pedestrians() {
     const double lateral = sidewalk_outer_[side] - sign * 0.6;
     if (Free(lateral, along, 1.5)) {
       // Facing the road.
-      const double heading = scene_.road.ForwardYaw() + sign * 0.5 * M_PI;
+      const double heading = Heading(along) + sign * 0.5 * M_PI;
       const int n = rng_.UniformInt(1, 2);
       for (int k = 0; k < n; ++k) {
         PlacePerson("Person_sitting", lateral, along + 0.7 * k, curb_height_, heading);
       }
       RoadBox(along - 0.7, along + 0.7 * n, lateral - 0.35, lateral + 0.35, 0.35, 0.45,
               bark_material_);
+    }
+  }
+}
+
+// Sign posts, street lamps, bins, bollards (sometimes in a row) and utility cabinets on the
+// sidewalk of `side` (synth/clutter.h): near the kerb, cabinets also at the back of the sidewalk;
+// on country roads only sign posts and bollards on the verge. Kept clear of the objects and
+// trees already placed (Free), so they occlude what stands behind them without intersecting it.
+void StreetBuilder::StreetFurniture(int side, Rng& rng) {
+  const double sign = side == 0 ? -1.0 : 1.0;
+  const double inner = sidewalk_inner_[side], outer = sidewalk_outer_[side];
+  const double width = std::abs(outer - inner);
+  const bool sidewalk = width >= 1.0;
+  const double spacing = kind_ == StreetKind::kCity          ? 11.0
+                         : kind_ == StreetKind::kResidential ? 22.0
+                                                             : 45.0;
+  // Towards the road from this side (the front of cabinets, lamp arms) and towards the camera
+  // (sign faces: against the road's forward direction).
+  const Eigen::Vector2f to_road = static_cast<float>(-sign) * scene_.road.RightXz();
+  const float yaw_to_road = std::atan2(-to_road.y(), to_road.x());
+  const float yaw_to_traffic = static_cast<float>(WrapYaw(scene_.road.ForwardYaw() + M_PI));
+  const double height = sidewalk ? curb_height_ : 0.0;
+  for (double a = options_.min_along_m + rng.Uniform(0.0, spacing); a < options_.max_along_m;
+       a += spacing * rng.Uniform(0.5, 1.5)) {
+    ClutterKind kind;
+    if (kind_ == StreetKind::kRoad || !sidewalk) {
+      kind = rng.Bernoulli(0.6) ? ClutterKind::kSignPost : ClutterKind::kBollard;
+    } else {
+      kind = kAllClutterKinds[rng.Categorical({0.28, 0.14, 0.2, 0.2, 0.18})];
+    }
+    const double r = ClutterFootprintRadius(kind);
+    // Lateral place: by the kerb (0.35-0.7 m in), cabinets and bins also at the back.
+    double lateral = inner + sign * (r + rng.Uniform(0.25, 0.5));
+    if ((kind == ClutterKind::kCabinet || kind == ClutterKind::kBin) && sidewalk &&
+        rng.Bernoulli(0.5)) {
+      lateral = outer - sign * (r + 0.1);
+    }
+    if (!sidewalk) lateral = inner + sign * rng.Uniform(0.5, 1.0);
+    const int count =
+        kind == ClutterKind::kBollard && rng.Bernoulli(0.4) ? rng.UniformInt(3, 6) : 1;
+    for (int k = 0; k < count; ++k) {
+      const double along = a + 1.6 * k;
+      if (!Free(lateral, along, r)) continue;
+      Take(lateral, along, r);
+      const Eigen::Vector3d base = At(lateral, along, height);
+      const float yaw = kind == ClutterKind::kSignPost ? yaw_to_traffic : yaw_to_road;
+      AddClutter(scene_, kind, base.cast<float>(), yaw, rng);
     }
   }
 }
@@ -532,6 +766,7 @@ void StreetBuilder::Build() {
 
   Materials();
   Lanes();
+  RoadShape();
   Sidewalk(0);
   Sidewalk(1);
   Trams();
@@ -541,9 +776,17 @@ void StreetBuilder::Build() {
     Parking(centre, width, side);
   }
   Traffic();
+  JunctionTraffic();
   Pedestrians();
   Roadside(0);
   Roadside(1);
+  {
+    // Street furniture from a generator of its own (one draw here), so that it does not shift
+    // what the other builders draw.
+    Rng furniture(rng_.Next());
+    StreetFurniture(0, furniture);
+    StreetFurniture(1, furniture);
+  }
 
   // Light: sun elevation 15 to 65 degrees, any azimuth; overcast days get a weaker, bluer sun.
   Lighting& light = scene_.light;
@@ -586,13 +829,31 @@ void SceneOptions::Check() const {
       << "camera_height_m must be in (0.5, 5), got " << camera_height_m;
   STEREODET_CHECK(camera_height_jitter_m >= 0.0 && road_yaw_sd_deg >= 0.0)
       << "jitters must be non-negative";
+  const auto fraction = [](double f) { return f >= 0.0 && f <= 1.0; };
+  STEREODET_CHECK(fraction(bend_fraction) && fraction(vertical_curve_fraction) &&
+                  fraction(crown_fraction) && fraction(side_street_fraction))
+      << "road shape fractions must be in [0, 1]";
+  STEREODET_CHECK(min_bend_radius_m >= 50.0 && max_bend_radius_m >= min_bend_radius_m)
+      << "bend radii must satisfy 50 <= min <= max, got " << min_bend_radius_m << ", "
+      << max_bend_radius_m;
+  STEREODET_CHECK(min_vertical_radius_m >= 100.0 && max_vertical_radius_m >= min_vertical_radius_m)
+      << "vertical curve radii must satisfy 100 <= min <= max, got " << min_vertical_radius_m
+      << ", " << max_vertical_radius_m;
+  STEREODET_CHECK(max_grade_change >= 0.02 && max_grade_change <= 0.2)
+      << "max_grade_change must be in [0.02, 0.2], got " << max_grade_change;
+  STEREODET_CHECK(max_crossfall >= 0.01 && max_crossfall <= 0.1)
+      << "max_crossfall must be in [0.01, 0.1], got " << max_crossfall;
+  STEREODET_CHECK(pitch_sd_deg >= 0.0 && pitch_sd_deg <= 5.0 && roll_sd_deg >= 0.0 &&
+                  roll_sd_deg <= 5.0)
+      << "pitch_sd_deg and roll_sd_deg must be in [0, 5]";
 }
 
 Scene SampleScene(const SceneOptions& options, uint64_t seed) {
   options.Check();
   Scene scene;
   Rng rng(seed);
-  StreetBuilder(scene, options, rng).Build();
+  Rng shape_rng(HashOf({seed, 0x726f6164u}));  // "road"
+  StreetBuilder(scene, options, rng, shape_rng).Build();
   return scene;
 }
 
