@@ -310,6 +310,7 @@ struct DetectRpnArgs {
 void RunTrainRpn(TrainRpnArgs& a) {
   TrainRpnOptions& options = a.options;
   options.model.input = *ParseRpnInput(a.input);  // CLI::IsMember checked it
+  options.model.anchors.stride_px = options.model.feature_stride;
   FinishStereoFlags(a.stereo, options.data.stereo);
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
@@ -369,6 +370,13 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
       ->capture_default_str();
   ts->add_option("--geometry-width", t.model.geometry_width,
                  "base channels of the geometry branch (rgbd)")
+      ->capture_default_str();
+  ts->add_option("--feature-stride", t.model.feature_stride,
+                 "stride of the RPN's and RoIAlign's features: 16, or 8 for small objects")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  ts->add_option("--warmup", t.warmup_steps, "steps of the linear learning-rate warm-up")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   ts->add_option("--init-from", t.init_from,
                  "rgb model folder whose image branch, RPN and box head initialise this model "
