@@ -27,14 +27,6 @@ namespace {
 constexpr char kLogHeader[] =
     "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
 
-// A new training run's id: 16 hex digits that no other run draws (the random device, the clock).
-std::string NewTrainingRunId() {
-  std::random_device device;
-  const uint64_t random = (static_cast<uint64_t>(device()) << 32) ^ device();
-  const auto now = std::chrono::system_clock::now().time_since_epoch().count();
-  return HashHex(Fnv1a64(std::to_string(now), random));
-}
-
 }  // namespace
 
 void TrainSsdOptions::Check() const {
