@@ -457,6 +457,11 @@ void AddModelsCommand(CLI::App& app) {
                  "stop after N epochs in this run (0 = all); continue later with --resume")
       ->capture_default_str();
   targs->stereo_flags = AddStereoFlags(ts, t.data.stereo, targs->stereo);
+  CLI::Option* train_stereo_dir = ts->add_option(
+      "--stereo", t.data.stereo_dir,
+      "RGB-H: read the heights from this `stereodet stereo` folder (its stereo.json's settings) "
+      "instead of matching");
+  for (CLI::Option* flag : targs->stereo_flags) train_stereo_dir->excludes(flag);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrain(*targs); });
 
@@ -493,6 +498,11 @@ void AddModelsCommand(CLI::App& app) {
                "(default: the next batch is prepared while the network runs; same detections)");
   AddShardOption(ds, &d.shard);
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
+  CLI::Option* detect_stereo_dir = ds->add_option(
+      "--stereo", d.stereo_dir,
+      "RGB-H: read the heights from this `stereodet stereo` folder instead of matching; refused "
+      "when its stereo.json's settings differ from the model's");
+  for (CLI::Option* flag : dargs->stereo_flags) detect_stereo_dir->excludes(flag);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });
 
