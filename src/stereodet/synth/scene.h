@@ -75,6 +75,8 @@ struct Road {
   Eigen::Vector2f RightXz() const { return {forward_xz.y(), -forward_xz.x()}; }
   // Road coordinates (lateral, along) of a rect (x, z) point.
   Eigen::Vector2f ToRoad(float x, float z) const;
+  // The lateral road coordinate alone (cheaper on a bend: no arc length).
+  float LateralOf(float x, float z) const;
   // Rect (x, z) of road coordinates.
   Eigen::Vector2f FromRoad(float lateral_m, float along_m) const;
   // Heading of the road at along 0 as a KITTI rotation_y (objects driving forward along the road).
