@@ -42,6 +42,21 @@ struct Profile {
                (Curve(u - centre, half) - Curve(-centre, half) - CurveSlope(-centre, half) * u) +
            slope * u;
   }
+  // Value and Derivative at once.
+  double ValueAndDerivative(double u, double* derivative) const {
+    if (k == 0.0) {
+      *derivative = slope;
+      return slope * u;
+    }
+    const double s = u - centre;
+    if (s >= -half && s <= half) {
+      *derivative = k * s + lin;
+      return 0.5 * k * s * s + lin * u + con;
+    }
+    const double sign = s > 0 ? 1.0 : -1.0;
+    *derivative = k * half * sign + lin;
+    return 0.5 * k * (2.0 * half * sign * s - half * half) + lin * u + con;
+  }
   double Derivative(double u) const {
     return 0.5 * k * (CurveSlope(u - centre, half) - CurveSlope(-centre, half)) + slope;
   }
@@ -154,11 +169,15 @@ double GroundProfile::HeightAndNormal(double x, double z, Eigen::Vector3f* norma
   }
   const Eigen::Vector2d la = Frame(x, z);
   const Profile along = AlongProfile(*this), lateral = LateralProfile(*this);
-  const double dl = lateral.Derivative(la.x()), da = along.Derivative(la.y());
+  double dl, da;
+  const double height =
+      along.ValueAndDerivative(la.y(), &da) + lateral.ValueAndDerivative(la.x(), &dl);
   const double gx = dl * forward_xz.y() + da * forward_xz.x();
   const double gz = -dl * forward_xz.x() + da * forward_xz.y();
-  *normal = -Eigen::Vector3d(gx, 1.0, gz).normalized().cast<float>();
-  return along.Value(la.y()) + lateral.Value(la.x());
+  const double inv = 1.0 / std::sqrt(gx * gx + 1.0 + gz * gz);
+  *normal = Eigen::Vector3f(static_cast<float>(-gx * inv), static_cast<float>(-inv),
+                            static_cast<float>(-gz * inv));
+  return height;
 }
 
 float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, float t_max) const {
