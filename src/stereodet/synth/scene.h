@@ -1,5 +1,6 @@
-// A synthetic street scene: an analytic ground plane with a road on it, primitives (boxes,
-// cylinders, ellipsoids) grouped into labelled objects and background clutter, materials and light.
+// A synthetic street scene: an analytic ground (a plane, or cresting and crowned: road.h) with a
+// road on it, primitives (boxes, cylinders, ellipsoids) grouped into labelled objects and
+// background clutter, materials and light.
 //
 // The scene lives in KITTI's rectified camera frame (x right, y down, z forward, metres; the
 // origin is the centre of camera 0). The left camera, the right camera and the LiDAR all cast rays
