@@ -1,16 +1,25 @@
-// models: SSD inference and training throughput, rgb vs rgbh-learned at the same resolution.
+// models: SSD inference and training throughput, rgb vs rgbh-learned at the same resolution; the
+// 3D detector's (det3d) training step, detection and sample building at its grid / width options;
+// the two-stage detector (models/rpn/) at its default size, rgb vs rgbd (and the widened rgb
+// control).
 //   build/benchmarks/models_benchmark --benchmark_counters_tabular=true
-// Counters: images_per_s. Threads: STEREODET_BENCH_THREADS (default 2, the target machine's cores).
-// The input encoding (EncodeNetworkInput, from a decoded BGR image and a height-code image) is
-// measured separately from the network.
+// Counters: images_per_s, frames_per_s. Threads: STEREODET_BENCH_THREADS (default 2, the target
+// machine's cores). The input encoding (EncodeNetworkInput, from a decoded BGR image and a
+// height-code image) is measured separately from the network.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <opencv2/core.hpp>
+#include <random>
 #include <vector>
 
 #include "stereodet/models/box_coder.h"
+#include "stereodet/models/det3d/det3d_model.h"
+#include "stereodet/models/det3d/gt_database.h"
 #include "stereodet/models/input_encoding.h"
+#include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/models/ssd.h"
 
 namespace stereodet {
@@ -102,6 +111,70 @@ void BM_SsdTrainStep(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations() * n), benchmark::Counter::kIsRate);
 }
 
+// --- the two-stage detector at its defaults (640 x 192, trunks of width 32). Args: input (0 rgb, 1
+// rgbd), image width, batch.
+RpnConfig Rpn(const benchmark::State& state) {
+  RpnConfig config;
+  config.input = state.range(0) == 1 ? RpnInput::kRgbd : RpnInput::kRgb;
+  config.image_width = static_cast<int>(state.range(1));
+  return config;
+}
+
+std::vector<PlanarImage> RpnInputs(const RpnConfig& config, int n) {
+  cv::RNG rng(3);
+  std::vector<PlanarImage> inputs;
+  for (int i = 0; i < n; ++i) {
+    cv::Mat bgr(config.input_height, config.input_width, CV_8UC3);
+    cv::Mat depth(config.input_height, config.input_width, CV_16UC1);
+    cv::Mat height(config.input_height, config.input_width, CV_16UC1);
+    rng.fill(bgr, cv::RNG::UNIFORM, 0, 256);
+    rng.fill(depth, cv::RNG::UNIFORM, 0, 65536);
+    rng.fill(height, cv::RNG::UNIFORM, 0, 512);
+    inputs.push_back(EncodeRpnInput(bgr, depth, height, config.input));
+  }
+  return inputs;
+}
+
+void RpnCounters(benchmark::State& state, const RpnModel& model, int n) {
+  state.SetLabel(RpnInputName(model.config().input));
+  state.counters["images_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * n), benchmark::Counter::kIsRate);
+  state.counters["params"] = static_cast<double>(model.ParameterCount());
+  state.counters["image_params"] = static_cast<double>(model.ImageBranchParameterCount());
+  state.counters["geometry_params"] = static_cast<double>(model.GeometryBranchParameterCount());
+}
+
+// Detection: trunks, RPN, 600 -> 100 proposals (NMS), RoIAlign, head, per-class NMS.
+void BM_RpnDetect(benchmark::State& state) {
+  SetTorchThreads(BenchThreads());
+  const RpnModel model(Rpn(state), 1);
+  const int n = static_cast<int>(state.range(2));
+  const auto inputs = RpnInputs(model.config(), n);
+  for (auto _ : state) benchmark::DoNotOptimize(model.Detect(inputs));
+  RpnCounters(state, model, n);
+}
+
+// One optimizer step: forward, anchor and RoI sampling (1000 -> 300 proposals), losses, backward,
+// AdamW. Three objects per frame, as on KITTI.
+void BM_RpnTrainStep(benchmark::State& state) {
+  SetTorchThreads(BenchThreads());
+  RpnModel model(Rpn(state), 1);
+  RpnTrainer trainer(model);
+  const int n = static_cast<int>(state.range(2));
+  const double w = model.config().input_width, h = model.config().input_height;
+  RpnBatch batch;
+  batch.inputs = RpnInputs(model.config(), n);
+  batch.objects.assign(n, {{{0.1 * w, 0.4 * h, 0.2 * w, 0.6 * h}, 1},
+                           {{0.5 * w, 0.45 * h, 0.53 * w, 0.6 * h}, 2},
+                           {{0.7 * w, 0.3 * h, 0.95 * w, 0.8 * h}, 1}});
+  uint64_t step = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(trainer.Step(batch, 1e-4, ++step));
+  RpnCounters(state, model, n);
+}
+
+constexpr int kRpnRgb = 0;
+constexpr int kRpnRgbd = 1;
+
 constexpr int kRgb = static_cast<int>(InputEncoding::kRgb);
 constexpr int kLearned = static_cast<int>(InputEncoding::kRgbhLearned);
 
@@ -125,6 +198,143 @@ BENCHMARK(BM_SsdTrainStep)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(5.0);
+// 39: the widened rgb control, within 1% of the rgbd model's parameter count (docs/models.md).
+BENCHMARK(BM_RpnDetect)
+    ->Args({kRpnRgb, 32, 4})
+    ->Args({kRpnRgbd, 32, 4})
+    ->Args({kRpnRgb, 39, 4})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(3.0);
+BENCHMARK(BM_RpnTrainStep)
+    ->Args({kRpnRgb, 32, 4})
+    ->Args({kRpnRgbd, 32, 4})
+    ->Args({kRpnRgb, 39, 4})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(5.0);
+
+// --- det3d ---------------------------------------------------------------------------------------
+
+// A street-like frame in the velodyne frame: `ground_points` on a plane 1.73 m down over the
+// default grid's 48 x 48 m (denser near the sensor, as a scan is) and six cars of 400 points each.
+Det3dFrame Det3dBenchFrame(int ground_points) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Det3dFrame frame;
+  for (int i = 0; i < 6; ++i) {
+    frame.boxes.push_back({.x = 6.0 + 6.5 * i,
+                           .y = (i % 2 ? 3.5 : -3.0) + u(rng),
+                           .z = -0.95,
+                           .l = 3.9,
+                           .w = 1.6,
+                           .h = 1.56,
+                           .yaw = 0.3 * i,
+                           .label = 0});
+  }
+  for (int i = 0; i < ground_points; ++i) {
+    const double range = 2.0 + 46.0 * u(rng) * u(rng), angle = (u(rng) - 0.5) * 1.4;
+    frame.points.push_back({static_cast<float>(range * std::cos(angle)),
+                            static_cast<float>(range * std::sin(angle)), -1.73f, 0.2f});
+  }
+  for (const LidarBox& b : frame.boxes) {
+    for (int n = 0; n < 400; ++n) {
+      const double along = (u(rng) - 0.5) * b.l, across = (u(rng) - 0.5) * b.w;
+      frame.points.push_back(
+          {static_cast<float>(b.x + std::cos(b.yaw) * along - std::sin(b.yaw) * across),
+           static_cast<float>(b.y + std::sin(b.yaw) * along + std::cos(b.yaw) * across),
+           static_cast<float>(b.z + (u(rng) - 0.5) * b.h), 0.7f});
+    }
+  }
+  return frame;
+}
+
+// Args: base channels (--width), pillar size in cm (--pillar), ground points.
+Det3dConfig Det3dBenchConfig(const benchmark::State& state) {
+  Det3dConfig config;
+  config.base_channels = static_cast<int>(state.range(0));
+  config.grid.pillar_m = state.range(1) / 100.0;
+  return config;
+}
+
+void Det3dLabel(benchmark::State& state, const Det3dConfig& config, const Det3dModel& model) {
+  char label[64];
+  std::snprintf(label, sizeof(label), "w%d p%.2f %dx%d", config.base_channels, config.grid.pillar_m,
+                config.grid.Rows(), config.grid.Cols());
+  state.SetLabel(label);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["params"] = static_cast<double>(model.ParameterCount());
+}
+
+// One optimizer step at batch 1 (forward with the auxiliary network, losses, backward, AdamW), on
+// a prepared sample: what `train det3d` does per frame besides building the sample.
+void BM_Det3dTrainStep(benchmark::State& state) {
+  SetTorchThreads(BenchThreads());
+  const Det3dConfig config = Det3dBenchConfig(state);
+  Det3dModel model(config, 1);
+  Det3dTrainer trainer(model);
+  const std::vector<Det3dSample> batch = {MakeDet3dSample(
+      Det3dBenchFrame(static_cast<int>(state.range(2))), config, model.anchors(), true)};
+  for (auto _ : state) benchmark::DoNotOptimize(trainer.Step(batch, 1e-3));
+  Det3dLabel(state, config, model);
+}
+
+// Detection of one frame from its sample (network, decoding, rotated NMS).
+void BM_Det3dDetect(benchmark::State& state) {
+  SetTorchThreads(BenchThreads());
+  const Det3dConfig config = Det3dBenchConfig(state);
+  const Det3dModel model(config, 1);
+  const std::vector<Det3dSample> samples = {MakeDet3dSample(
+      Det3dBenchFrame(static_cast<int>(state.range(2))), config, model.anchors(), false)};
+  for (auto _ : state) benchmark::DoNotOptimize(model.Detect(samples));
+  Det3dLabel(state, config, model);
+}
+
+// The training sample of a frame (GT sampling from a 40-object database, augmentation, pillars,
+// anchor and auxiliary targets), single-threaded: the data side of a training step.
+void BM_Det3dSample(benchmark::State& state) {
+  const Det3dConfig config = Det3dBenchConfig(state);
+  const Det3dModel model(config, 1);
+  const Det3dFrame frame = Det3dBenchFrame(static_cast<int>(state.range(2)));
+  std::vector<Det3dFrame> others;
+  for (int k = 0; k < 7; ++k) {
+    Det3dFrame other = frame;
+    for (LidarBox& b : other.boxes) b.y += 2.0 * (k + 1);
+    for (VeloPoint& p : other.points) p.y += 2.0f * (k + 1);
+    others.push_back(std::move(other));
+  }
+  const GtDatabase database = BuildGtDatabase(others, 1, PointSource::kLidar, {});
+  uint64_t seed = 0;
+  for (auto _ : state) {
+    const Det3dFrame augmented =
+        AugmentFrame(SampleGtObjects(frame, database, {}, ++seed).frame, {}, seed);
+    benchmark::DoNotOptimize(MakeDet3dSample(augmented, config, model.anchors(), true));
+  }
+  Det3dLabel(state, config, model);
+}
+
+BENCHMARK(BM_Det3dTrainStep)
+    ->Args({32, 40, 20000})
+    ->Args({32, 40, 160000})
+    ->Args({16, 40, 20000})
+    ->Args({16, 50, 20000})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(3.0);
+BENCHMARK(BM_Det3dDetect)
+    ->Args({32, 40, 20000})
+    ->Args({32, 40, 160000})
+    ->Args({16, 40, 20000})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
+BENCHMARK(BM_Det3dSample)
+    ->Args({32, 40, 20000})
+    ->Args({32, 40, 160000})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 
 }  // namespace
 }  // namespace stereodet

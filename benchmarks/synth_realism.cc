@@ -106,6 +106,78 @@ StereoScore ScoreInBoxes(const cv::Mat& estimate, const cv::Mat& gt,
   return Score(estimate, masked_gt);
 }
 
+// What the ground-truth pixels inside Car boxes show, for the breakdown of BM's density there.
+enum CarSurface {
+  kBackground,
+  kPaintSide,
+  kPaintEnd,
+  kPaintTop,
+  kGlass,
+  kWheel,
+  kOtherPart,
+  kNumCarSurfaces
+};
+const std::array<const char*, kNumCarSurfaces> kCarSurfaceNames = {
+    "background (not a car)",  "paint, sides", "paint, front and rear",
+    "paint, bonnet/roof/boot", "glass",        "wheels",
+    "other car parts"};
+
+// The surface of each ground-truth pixel inside a Car box: the left camera's ray re-traced
+// through the pixel (depth buffer), its primitive's material and face.
+std::array<StereoScore, kNumCarSurfaces> ScoreCarSurfaces(const cv::Mat& estimate,
+                                                          const SynthFrame& f, int min_u) {
+  std::array<StereoScore, kNumCarSurfaces> out{};
+  cv::Mat mask(f.disparity.size(), CV_8U, cv::Scalar(0));
+  for (const Object& o : f.labels) {
+    if (o.type != "Car") continue;
+    const int u0 = std::max(0, static_cast<int>(std::floor(o.box.left)));
+    const int v0 = std::max(0, static_cast<int>(std::floor(o.box.top)));
+    const int u1 = std::min(mask.cols - 1, static_cast<int>(std::ceil(o.box.right)));
+    const int v1 = std::min(mask.rows - 1, static_cast<int>(std::ceil(o.box.bottom)));
+    if (u1 < u0 || v1 < v0) continue;
+    mask(cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1)).setTo(255);
+  }
+  if (min_u > 0) mask.colRange(0, std::min(min_u, mask.cols)).setTo(0);
+  const Eigen::Vector3f centre = f.calib.CameraCentreInRect(2).cast<float>();
+  for (int v = 0; v < mask.rows; ++v) {
+    for (int u = 0; u < mask.cols; ++u) {
+      const float g = f.disparity.at<float>(v, u);
+      if (mask.at<uchar>(v, u) == 0 || g <= 0.0f) continue;
+      const int id = f.object_id.at<int>(v, u);
+      int surface = kBackground;
+      if (id >= 0 && f.scene.objects[id].type == "Car") {
+        const Eigen::Vector3f point =
+            f.calib.UnprojectImageToRect({u, v}, f.depth_left.at<float>(v, u), 2).cast<float>();
+        const SurfaceHit hit = f.scene.Trace(Ray(centre, point - centre), 0.5f, 1.5f);
+        surface = kOtherPart;
+        if (hit.kind == SurfaceHit::Kind::kPrimitive) {
+          const Primitive& p = f.scene.primitives[hit.primitive];
+          const Pattern pattern = f.scene.materials[hit.material].pattern;
+          const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
+          int axis = 0;
+          n.cwiseAbs().maxCoeff(&axis);
+          if (pattern == Pattern::kCarPaint) {
+            surface = axis == 1 ? kPaintTop : axis == 0 ? kPaintEnd : kPaintSide;
+          } else if (pattern == Pattern::kGlass) {
+            surface = kGlass;
+          } else if (pattern == Pattern::kWheel) {
+            surface = kWheel;
+          }
+        }
+      }
+      StereoScore& s = out[surface];
+      ++s.gt;
+      const float e = estimate.at<float>(v, u);
+      if (e <= 0.0f) continue;
+      ++s.estimated;
+      const float err = std::abs(e - g);
+      if (err > 3.0f && err > 0.05f * g) ++s.bad;
+      if (err > 2.0f) ++s.bad2;
+    }
+  }
+  return out;
+}
+
 void Add(StereoScore& total, const StereoScore& s) {
   total.gt += s.gt, total.estimated += s.estimated, total.bad += s.bad, total.bad2 += s.bad2;
 }
@@ -179,6 +251,7 @@ int Run(const Args& args) {
   StereoScore bm_total, sgbm_total;
   // BM inside the boxes of kBoxClasses: [class][all, near, far].
   std::array<std::array<StereoScore, 4>, kBoxClasses.size()> bm_boxes{};
+  std::array<std::array<StereoScore, kNumCarSurfaces>, 2> bm_car_surfaces{};
   ParallelFor(
       static_cast<size_t>(args.frames),
       [&](size_t i) {
@@ -216,7 +289,13 @@ int Run(const Args& args) {
           }
           boxes[c][3] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], -1, 128);
         }
+        const auto surfaces = ScoreCarSurfaces(bm_d, f, 0);
+        const auto surfaces_right = ScoreCarSurfaces(bm_d, f, 128);
         std::lock_guard<std::mutex> lock(mutex);
+        for (int k = 0; k < kNumCarSurfaces; ++k) {
+          Add(bm_car_surfaces[0][k], surfaces[k]);
+          Add(bm_car_surfaces[1][k], surfaces_right[k]);
+        }
         Add(bm_total, b);
         Add(sgbm_total, s);
         for (size_t c = 0; c < kBoxClasses.size(); ++c) {
@@ -313,6 +392,73 @@ int Run(const Args& args) {
   for (int b = 0; b < 9; ++b) std::printf(" %.1f%% |", 100.0 * distance[b] / labelled);
   std::printf("\n");
 
+  // Per-class statistics of issue 16: count per frame, occlusion and truncation mixes, distance
+  // and 2D box height histograms, the 3D height's mean and spread.
+  {
+    const std::array<double, 7> height_edges = {0, 25, 40, 60, 100, 150, 1e9};  // pixels
+    std::printf("\n### Per class (%d frames)\n\n", args.frames);
+    std::printf(
+        "| class | per frame | occluded 0 / 1 / 2 / 3 | truncated 0 / <=0.15 / <=0.5 / >0.5 | "
+        "3D height mean (sd), m |\n|---|---:|---|---|---:|\n");
+    std::map<std::string, std::vector<int64_t>> distance_by_class, height_by_class;
+    for (const char* name : {"Car", "Pedestrian", "Cyclist"}) {
+      const std::string c = name;
+      std::array<int64_t, 4> occ{}, trunc{};
+      std::vector<int64_t> dist(9, 0), box_h(6, 0);
+      double sum = 0.0, sum2 = 0.0;
+      int64_t total = 0;
+      for (const auto& frame : labels) {
+        for (const Object& o : frame) {
+          if (o.type != c) continue;
+          ++total;
+          ++occ[std::clamp(o.occluded, 0, 3)];
+          ++trunc[o.truncated <= 0.0 ? 0 : o.truncated <= 0.15 ? 1 : o.truncated <= 0.5 ? 2 : 3];
+          const double d = std::hypot(o.box3d.location.x(), o.box3d.location.z());
+          ++dist[std::min<int>(8, static_cast<int>(d / 10.0))];
+          const double hp = o.box.bottom - o.box.top;
+          for (int b = 0; b < 6; ++b) {
+            if (hp < height_edges[b + 1]) {
+              ++box_h[b];
+              break;
+            }
+          }
+          sum += o.box3d.h;
+          sum2 += o.box3d.h * o.box3d.h;
+        }
+      }
+      const double t = std::max<int64_t>(1, total);
+      const double mean = sum / t, sd = std::sqrt(std::max(0.0, sum2 / t - mean * mean));
+      std::printf(
+          "| %s | %.2f | %.0f / %.0f / %.0f / %.0f %% | %.0f / %.0f / %.0f / %.0f %% | %.2f (%.2f) "
+          "|\n",
+          c.c_str(), total / n, 100 * occ[0] / t, 100 * occ[1] / t, 100 * occ[2] / t,
+          100 * occ[3] / t, 100 * trunc[0] / t, 100 * trunc[1] / t, 100 * trunc[2] / t,
+          100 * trunc[3] / t, mean, sd);
+      distance_by_class[c] = dist;
+      height_by_class[c] = box_h;
+      for (int64_t& x : distance_by_class[c]) x = static_cast<int64_t>(std::lround(1000 * x / t));
+      for (int64_t& x : height_by_class[c]) x = static_cast<int64_t>(std::lround(1000 * x / t));
+    }
+    std::printf("\n| distance (m), share per class |");
+    for (int b = 0; b < 9; ++b) std::printf(b < 8 ? " %d-%d |" : " %d+ |", 10 * b, 10 * b + 10);
+    std::printf("\n|---|");
+    for (int b = 0; b < 9; ++b) std::printf("---:|");
+    std::printf("\n");
+    for (const auto& [c, d] : distance_by_class) {
+      std::printf("| %s |", c.c_str());
+      for (int64_t x : d) std::printf(" %.1f%% |", x / 10.0);
+      std::printf("\n");
+    }
+    std::printf(
+        "\n| 2D box height (px), share per class | < 25 | 25-40 | 40-60 | 60-100 | 100-150 | "
+        ">= 150 |\n|---|---:|---:|---:|---:|---:|---:|\n");
+    for (const auto& [c, h] : height_by_class) {
+      std::printf("| %s |", c.c_str());
+      for (int64_t x : h) std::printf(" %.1f%% |", x / 10.0);
+      std::printf("\n");
+    }
+  }
+
   if (args.stereo_frames > 0) {
     std::printf("\n## Stereo (%d frames, 1242x375, exact ground truth, non-occluded pixels)\n\n",
                 args.stereo_frames);
@@ -345,6 +491,21 @@ int Run(const Args& args) {
       std::printf(" %lld | %.1f%% | %.1f%% |\n", static_cast<long long>(bm_boxes[c][0].gt),
                   100.0 - 100.0 * right.gt / std::max<int64_t>(1, bm_boxes[c][0].gt),
                   100.0 * right.estimated / std::max<int64_t>(1, right.gt));
+    }
+    int64_t car_gt = 0;
+    for (const StereoScore& s : bm_car_surfaces[0]) car_gt += s.gt;
+    std::printf(
+        "\nStereoBM inside Car boxes by surface (the left ray re-traced through each pixel):\n\n"
+        "| surface | share of the GT pixels | density | D1 of estimated | density right of "
+        "column 128 |\n|---|---:|---:|---:|---:|\n");
+    for (int k = 0; k < kNumCarSurfaces; ++k) {
+      const StereoScore& s = bm_car_surfaces[0][k];
+      const StereoScore& r = bm_car_surfaces[1][k];
+      std::printf("| %s | %.1f%% | %.1f%% | %.1f%% | %.1f%% |\n", kCarSurfaceNames[k],
+                  100.0 * s.gt / std::max<int64_t>(1, car_gt),
+                  100.0 * s.estimated / std::max<int64_t>(1, s.gt),
+                  100.0 * s.bad / std::max<int64_t>(1, s.estimated),
+                  100.0 * r.estimated / std::max<int64_t>(1, r.gt));
     }
   }
 

@@ -17,6 +17,8 @@ packages=(
   libboost-dev            # eval: boost::geometry (header-only), the KITTI devkit's BEV/3D overlaps
   opencv-doc              # stereo tests: Middlebury "Aloe" pair with ground truth
   libtorch-dev            # models: LibTorch detectors (CPU)
+  libopenblas0-openmp     # models: BLAS for LibTorch (alternatives switch it in for the reference
+                          # BLAS): a det3d training step 2.5x less CPU (docs/BENCHMARKS.md)
   nlohmann-json3-dev      # report: results.json
   librsvg2-dev            # report: PNG figures, rasterized from their SVG (librsvg + cairo)
   fonts-dejavu-core       # report: the figures' font, in PNG and in the browser test

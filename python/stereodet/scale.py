@@ -4,6 +4,8 @@
         synth  --out DIR --frames N [--seed S] [-- more `stereodet synth` flags]
         stereo --data DIR --out DIR [--split val] [-- more `stereodet stereo` flags]
         eval   --gt DIR --det DIR --out DIR [--split val] [-- more `stereodet eval` flags]
+        detect --model DIR --data DIR --out DIR [--split val] [--family ssd|det3d|rpn]
+               [-- more `stereodet detect FAMILY` flags]
 
 The work is cut into tasks of about --task-frames frames: task K of N runs the command line's
 engine-agnostic contract, `stereodet CMD ... --shard K/N`, as a subprocess on a Dask worker (one
@@ -19,6 +21,11 @@ by the scheduler (same bytes: every shard's output is a function of its frames a
 - eval: shard K of N writes OUT/shards/K-of-N/ (a results folder with the shard's frame bytes);
   when every shard is there, `stereodet eval merge` writes OUT/merged/, exactly the results
   folder of one `stereodet eval` run.
+- detect: shard K of N writes OUT/shards/K-of-N/ (a detection folder of its frames, committed
+  whole, with detect_shard.json); when every shard is there, `stereodet detect merge` writes
+  OUT/merged/, byte for byte the detection folder of one `stereodet detect` run (run.json but
+  its command line). Done marker OUT/.scale/detect-K-of-N.done, which holds the task's command
+  line: a task whose command line changed (another model, other flags) runs again.
 
 Without --scheduler a LocalCluster of --workers processes is started and closed; with it the
 driver joins a running scheduler (`dask scheduler` and `dask worker --nthreads 1` on each node,
@@ -51,6 +58,9 @@ class Task:
     done: str  # the file whose presence means the task's outputs are complete
     # True: run_task writes `done` after the command succeeds; False: the command writes it.
     write_done: bool = True
+    # With write_done: the task is done only when `done` holds this task's command line (a marker
+    # of another command line, e.g. another model into the same folder, does not count).
+    same_argv: bool = False
     env: dict = field(default_factory=dict)
 
 
@@ -87,10 +97,27 @@ def _with_parent_death_signal(argv: List[str]) -> List[str]:
     return [setpriv, "--pdeathsig", "KILL", *argv] if setpriv else list(argv)
 
 
+def _marker_text(task: Task) -> str:
+    return " ".join(task.argv) + "\n"
+
+
+def task_is_done(task: Task) -> bool:
+    """Whether the task's done marker is there (and, with same_argv, holds its command line)."""
+    if not os.path.exists(task.done):
+        return False
+    if not task.same_argv:
+        return True
+    try:
+        return Path(task.done).read_text() == _marker_text(task)
+    except OSError:
+        return False
+
+
 def run_task(task: Task) -> dict:
     """Runs one task on this machine (what a Dask worker calls); returns what it did. Skips the
-    task when its done marker exists. Raises RuntimeError with the command's stderr on failure."""
-    if os.path.exists(task.done):
+    task when it is done (task_is_done). Raises RuntimeError with the command's stderr on
+    failure."""
+    if task_is_done(task):
         return {"index": task.index, "skipped": True, "seconds": 0.0}
     start = time.monotonic()
     env = dict(os.environ)
@@ -105,7 +132,7 @@ def run_task(task: Task) -> dict:
     Path(task.done).parent.mkdir(parents=True, exist_ok=True)
     tmp = f"{task.done}.tmp-{os.getpid()}"
     with open(tmp, "w") as f:
-        f.write(" ".join(task.argv) + "\n")
+        f.write(_marker_text(task))
     os.replace(tmp, task.done)
     return {"index": task.index, "skipped": False, "seconds": time.monotonic() - start}
 
@@ -197,6 +224,59 @@ def eval_merge(bin_dir: Path, out: Path, n: int, extra: Sequence[str]) -> str:
     return result.stdout
 
 
+def int_flag(extra: Sequence[str], name: str) -> int:
+    """The value of `name N` (or `name=N`) among the command's flags, the last one given; 0 when
+    absent."""
+    value = 0
+    for i, a in enumerate(extra):
+        if a == name and i + 1 < len(extra):
+            value = int(extra[i + 1])
+        elif a.startswith(name + "="):
+            value = int(a.split("=", 1)[1])
+    return value
+
+
+def count_detect_frames(data: Path, split: str, extra: Sequence[str] = ()) -> int:
+    """The frames `stereodet detect ... --data DATA --split S [--max-frames M]` would run on."""
+    frames = len(_read_ids(data, split))
+    limit = int_flag(extra, "--max-frames")
+    return min(frames, limit) if limit > 0 else frames
+
+
+def detect_shard_dir(out: Path, k: int, n: int) -> Path:
+    return out / "shards" / f"{k}-of-{n}"
+
+
+def detect_tasks(bin_dir: Path, model: Path, data: Path, out: Path, split: str, task_frames: int,
+                 extra: Sequence[str], family: str = "ssd") -> List[Task]:
+    """Task K of N runs `stereodet-models detect FAMILY ... --shard K/N --out
+    OUT/shards/K-of-N`. A detection shard is a range of whole batches (docs/scale.md), so with
+    --batch-size B among the flags there are at most ceil(frames / B) tasks (more would be
+    empty); choose --task-frames a multiple of B for tasks of equal size."""
+    if family not in ("ssd", "det3d", "rpn"):
+        raise ValueError(f"--family must be ssd, det3d or rpn, got {family!r}")
+    frames = count_detect_frames(data, split, extra)
+    n = num_tasks(frames, task_frames)
+    batch = int_flag(extra, "--batch-size")
+    if batch > 0:
+        n = max(1, min(n, math.ceil(frames / batch)))
+    return [Task(k, n, [str(bin_dir / "stereodet-models"), "detect", family, "--model",
+                        str(model), "--data", str(data), "--split", split, "--shard", f"{k}/{n}",
+                        "--out", str(detect_shard_dir(out, k, n)), "--quiet", *extra],
+                 str(out / ".scale" / f"detect-{k}-of-{n}.done"), same_argv=True)
+            for k in range(n)]
+
+
+def detect_merge(bin_dir: Path, out: Path, n: int) -> str:
+    """`stereodet detect merge` of the N shards into OUT/merged; returns its printout."""
+    argv = [str(bin_dir / "stereodet-models"), "detect", "merge",
+            *[str(detect_shard_dir(out, k, n)) for k in range(n)], "--out", str(out / "merged")]
+    result = subprocess.run(argv, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"detect merge failed (exit {result.returncode}):\n{result.stderr}")
+    return result.stderr
+
+
 def run_tasks(client, tasks: Sequence[Task], progress: Callable[[str], None] = print,
               retries: int = 3) -> List[dict]:
     """Submits every task to the Dask client and waits; reports each finished task through
@@ -259,7 +339,14 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--det", required=True, type=Path)
     e.add_argument("--out", required=True, type=Path)
     e.add_argument("--split")
-    for parser in (s, st, e):
+    d = sub.add_parser("detect", help="sharded `stereodet detect ssd|det3d|rpn`, then `detect merge`")
+    d.add_argument("--model", required=True, type=Path)
+    d.add_argument("--data", required=True, type=Path)
+    d.add_argument("--out", required=True, type=Path)
+    d.add_argument("--split", default="val", help="split name or file; default val")
+    d.add_argument("--family", default="ssd", choices=["ssd", "det3d", "rpn"],
+                   help="the detector family; default ssd")
+    for parser in (s, st, e, d):
         parser.add_argument("extra", nargs=argparse.REMAINDER,
                             help="after --: more flags of the stereodet command")
     return p
@@ -275,6 +362,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     elif args.command == "stereo":
         tasks = stereo_tasks(bin_dir, args.data.resolve(), args.out.resolve(), args.split,
                              args.task_frames, extra)
+    elif args.command == "detect":
+        split = str(Path(args.split).resolve()) if Path(args.split).is_file() else args.split
+        tasks = detect_tasks(bin_dir, args.model.resolve(), args.data.resolve(),
+                             args.out.resolve(), split, args.task_frames, extra, args.family)
     else:
         tasks = eval_tasks(bin_dir, args.gt.resolve(), args.det.resolve(), args.out.resolve(),
                            args.split, args.task_frames, extra)
@@ -294,6 +385,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             cluster.close()
     if args.command == "eval":
         out = eval_merge(bin_dir, args.out.resolve(), tasks[0].count, extra)
+        if not args.quiet:
+            print(out, end="")
+    elif args.command == "detect":
+        out = detect_merge(bin_dir, args.out.resolve(), tasks[0].count)
         if not args.quiet:
             print(out, end="")
     return 0

@@ -146,3 +146,40 @@ def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_pat
     a, b = (json.loads(one["run.json"]), json.loads(sharded["run.json"]))
     a.pop("command_line"), b.pop("command_line")
     assert a == b and len(a["frames"]) == 4
+
+
+def test_sharded_detect_merged_is_one_process_folder_and_resumes(client, bin_dir, tmp_path):
+    models = bin_dir / "stereodet-models"
+    if not models.exists():
+        pytest.skip("stereodet-models is not built (STEREODET_BUILD_MODELS=OFF)")
+    model = Path(__file__).resolve().parents[2] / "models" / "ssd-rgb"
+    data = tmp_path / "data"
+    one_process_synth(bin_dir, data, 5, 11, SYNTH_FLAGS + ["--no-lidar"])
+    split = tmp_path / "all.txt"
+    split.write_text("".join(f"{i:06d}\n" for i in range(5)))
+    # Every box (score threshold 0): up to 100 a frame, compared to the last digit.
+    flags = ["--threads", "1", "--score-threshold", "0", "--batch-size", "3"]
+    subprocess.run([str(models), "detect", "ssd", "--model", str(model), "--data", str(data),
+                    "--split", str(split), "--out", str(tmp_path / "one"), "--quiet", *flags],
+                   check=True)
+    tasks = scale.detect_tasks(bin_dir, model, data, tmp_path / "sharded", str(split), 2, flags)
+    # 5 frames in tasks of 2 would be 3 tasks, but there are 2 batches of 3 (frames 0-2, 3-4),
+    # and a shard is whole batches: 2 tasks.
+    assert [t.count for t in tasks] == [2, 2]
+    assert [r["skipped"] for r in scale.run_tasks(client, tasks, lambda line: None)] == [False] * 2
+    scale.detect_merge(bin_dir, tmp_path / "sharded", len(tasks))
+    one, merged = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded" / "merged")
+    assert one.keys() == merged.keys() and len(one) == 6  # five frames and run.json
+    assert sum(len(v) for v in one.values()) > 5000  # not vacuous: many boxes
+    assert [k for k in one if k != "run.json" and one[k] != merged[k]] == []
+    a, b = json.loads(one["run.json"]), json.loads(merged["run.json"])
+    a.pop("command_line"), b.pop("command_line")
+    assert a == b and len(a["frames"]) == 5
+    # Resume: every task is skipped; a task of another command line (other flags) is not done.
+    assert [r["skipped"] for r in scale.run_tasks(client, tasks, lambda line: None)] == [True] * 2
+    other = scale.detect_tasks(bin_dir, model, data, tmp_path / "sharded", str(split), 1,
+                               flags + ["--max-frames", "4"])
+    assert [t.count for t in other] == [2, 2]  # 4 frames: 2 batches
+    changed = scale.detect_tasks(bin_dir, model, data, tmp_path / "sharded", str(split), 2,
+                                 ["--threads", "1"])
+    assert [scale.task_is_done(t) for t in changed] == [False] * 3

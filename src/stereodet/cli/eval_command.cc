@@ -2,13 +2,16 @@
 //   stereodet eval --gt DIR --det DIR [--split FILE] [--classes ..] [--metrics 2d,bev,3d]
 //                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable]
 //                  [--overlaps strict,loose] [--score-transform none|sigmoid] [--lenient]
-//                  [--out DIR [--records] [--report]]
+//                  [--out DIR [--records] [--report]] [--bootstrap N [--bootstrap-seed S]
+//                  [--bootstrap-confidence C]]
 //   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5
 //                  [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
-//                  [--disparity-error-px 1]
+//                  [--disparity-error-px 1] [--bootstrap N ...] [--out DIR]
 //   stereodet eval --shard K/N --gt DIR --det DIR --out SHARD_DIR ...   (docs/scale.md)
 //   stereodet eval merge SHARD_DIR... --out DIR ...  (the shards' evaluation flags)
+//   stereodet eval sweep|compare --shards SHARD_DIR... [--shards-b SHARD_DIR...] ...  (the frames
+//   from eval shards instead of --gt/--det)
 // Each is one library call (report/evaluation.h: RunEvaluation, RunEvaluationSweep,
 // RunEvaluationCompare); this file binds the flags to their options and prints the results.
 #include <fmt/format.h>
@@ -18,12 +21,15 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/report/bootstrap_report.h"
 #include "stereodet/report/eval_report.h"
 #include "stereodet/report/evaluation.h"
 #include "stereodet/util/check.h"
@@ -75,7 +81,46 @@ struct EvalArgs {
   std::string out;
   bool records = false;
   bool report = false;
+  // --bootstrap N, --bootstrap-seed, --bootstrap-confidence (eval, compare, merge); used when
+  // --bootstrap was given (bootstrap_given, set by the command's callback).
+  BootstrapOptions bootstrap;
+  bool bootstrap_given = false;
+  bool bootstrap_settings_given = false;  // --bootstrap-seed or --bootstrap-confidence
 };
+
+// The bootstrap flags (docs/metrics.md, "Bootstrap intervals").
+void AddBootstrapOptions(CLI::App* cmd, EvalArgs* a, const char* what) {
+  cmd->add_option("--bootstrap", a->bootstrap.num_resamples,
+                  fmt::format("N resamples of the frames (e.g. 1000): {}", what));
+  cmd->add_option("--bootstrap-seed", a->bootstrap.seed, "the resamples' seed")
+      ->capture_default_str();
+  cmd->add_option("--bootstrap-confidence", a->bootstrap.confidence,
+                  "the intervals' confidence level, in (0, 1)")
+      ->capture_default_str();
+}
+
+// Records in `a` which bootstrap flags `cmd` got (called from the command's callback).
+void NoteBootstrapFlags(const CLI::App* cmd, EvalArgs* a) {
+  a->bootstrap_given = cmd->count("--bootstrap") > 0;
+  a->bootstrap_settings_given =
+      cmd->count("--bootstrap-seed") > 0 || cmd->count("--bootstrap-confidence") > 0;
+}
+
+// The bootstrap options of the flags: unset without --bootstrap.
+std::optional<BootstrapOptions> MakeBootstrapOptions(const EvalArgs& a) {
+  if (!a.bootstrap_given) {
+    STEREODET_CHECK(!a.bootstrap_settings_given)
+        << "--bootstrap-seed and --bootstrap-confidence need --bootstrap N";
+    return std::nullopt;
+  }
+  STEREODET_CHECK(a.bootstrap.num_resamples >= 1 &&
+                  a.bootstrap.num_resamples <= kMaxBootstrapResamples)
+      << "--bootstrap: resamples must be in [1, " << kMaxBootstrapResamples << "], got "
+      << a.bootstrap.num_resamples;
+  STEREODET_CHECK(a.bootstrap.confidence > 0 && a.bootstrap.confidence < 1)
+      << "--bootstrap-confidence: must be in (0, 1), got " << a.bootstrap.confidence;
+  return a.bootstrap;
+}
 
 // The common options of eval, eval sweep and eval compare.
 // --gt and --det are checked when the command runs (not CLI11-required, so that `eval sweep ...`
@@ -243,6 +288,7 @@ void RunEval(const EvalArgs& a) {
   options.out = a.out;
   options.records = a.records;
   options.report = a.report;
+  options.bootstrap = MakeBootstrapOptions(a);
   options.tool_version = StereodetVersion();
   options.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluation(options);
@@ -255,6 +301,7 @@ void RunEval(const EvalArgs& a) {
                OpenPcdetPrintout(result.input.frames, result.runs.front().options));
   }
   fmt::print("evaluated in {:.3f} s\n", result.seconds);
+  if (options.bootstrap) fmt::print("bootstrap in {:.3f} s\n", result.bootstrap_seconds);
   if (a.out.empty()) return;
   for (const EvaluationResult::RecordsFile& records : result.records) {
     fmt::print("per-detection records: {} rows in {}\n", records.rows, records.name);
@@ -286,6 +333,7 @@ void RunMerge(const EvalArgs& given, const std::vector<std::string>& shards) {
   e.out = a.out;
   e.records = a.records;
   e.report = a.report;
+  e.bootstrap = MakeBootstrapOptions(a);
   e.tool_version = StereodetVersion();
   e.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluationMerge(options);
@@ -300,7 +348,19 @@ void RunMerge(const EvalArgs& given, const std::vector<std::string>& shards) {
   if (a.report) fmt::print("report: open {}\n", result.report_index.string());
 }
 
-void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOptions options) {
+// With --shards the frames come from the shards: --gt/--det are not given (MakeOptions asks for
+// them otherwise).
+EvalArgs WithShards(const EvalArgs& given, bool shards) {
+  if (!shards) return given;
+  STEREODET_CHECK(given.input.gt.empty() && given.input.det.empty())
+      << "--shards: the frames come from the shards; leave out --gt and --det";
+  EvalArgs a = given;
+  a.input.gt = a.input.det = "-";
+  return a;
+}
+
+void RunSweep(const EvalArgs& given, const std::string& bound, EvaluationSweepOptions options) {
+  const EvalArgs a = WithShards(given, !options.shards.empty());
   options.eval = MakeSingleOptions(a);  // its filter: the fixed conditions of --where
   const auto parsed = ParseFilterBound(bound);
   STEREODET_CHECK(parsed.has_value()) << "--filter: unknown '" << bound << "' (e.g. min-area)";
@@ -318,21 +378,34 @@ void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOption
   if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
-void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
+void RunCompare(const EvalArgs& given, EvaluationCompareOptions options) {
+  const EvalArgs a = WithShards(given, !options.shards.empty());
+  STEREODET_CHECK(options.shards_b.empty() || options.det_b.empty())
+      << "--shards-b: B's frames come from the shards; leave out --det-b";
   options.eval = MakeSingleOptions(a);
   options.input = MakeInputOptions(a);
   options.out = a.out;
+  options.bootstrap = MakeBootstrapOptions(a);
   const EvaluationCompareResult result = RunEvaluationCompare(options);
   PrintNotices(result.input_a);
   PrintNotices(result.input_b);
   fmt::print(
       "A = {}\nB = {}\nstereo model: dz = z^2 / (b f) * dd, b = {:.4f} m, f = {:.2f} px, dd = {} "
       "px{}\n",
-      a.input.det.string(), options.det_b.string(), result.compare.baseline_m,
-      result.compare.focal_px, result.compare.disparity_error_px,
+      options.shards.empty() ? a.input.det.string()
+                             : fmt::format("{} shards ({}, ...)", options.shards.size(),
+                                           options.shards.front().string()),
+      options.shards_b.empty() ? options.det_b.string()
+                               : fmt::format("{} shards ({}, ...)", options.shards_b.size(),
+                                             options.shards_b.front().string()),
+      result.compare.baseline_m, result.compare.focal_px, result.compare.disparity_error_px,
       options.calib.empty() ? " (KITTI-like calibration)" : "");
   fmt::print("{}", FormatCompareTable(result.rows));
   if (!a.out.empty()) fmt::print("\nwrote {}\n", result.csv_path.string());
+  if (result.bootstrap) {
+    fmt::print("\n{}", FormatPairedBootstrapTable(*result.bootstrap));
+    if (!a.out.empty()) fmt::print("wrote {}\n", result.bootstrap_csv_path.string());
+  }
   if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
@@ -352,6 +425,9 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--report", args->report,
                  "also write OUT/report/: index.html and figures/ as SVG and PNG, as `stereodet "
                  "report OUT` does (docs/report.md)");
+  AddBootstrapOptions(eval, args.get(),
+                      "percentile intervals of every AP and Brier score in results.json and "
+                      "the table");
   AddShardOption(eval, &args->input.shard)
       ->description(
           "only shard K/N (K = 0..N-1) of the frames, a contiguous range of the frame list; with "
@@ -373,6 +449,9 @@ void AddEvalCommand(CLI::App& app) {
   sweep->add_option("--step", sweep_options->step)->capture_default_str();
   sweep->add_option("--where", sweep_common->filter, "fixed extra filter, e.g. max-distance=40");
   sweep->add_option("--out", sweep_common->out, "write sweep.csv here (default: stdout)");
+  sweep->add_option("--shards", sweep_options->shards,
+                    "read the frames from these `eval --shard K/N` folders (all N) instead of "
+                    "--gt/--det: the sweep of one run (docs/scale.md)");
   sweep->add_flag("--report", sweep_options->report,
                   "also write OUT/report/: the sweep's figures and index.html (docs/report.md)");
   sweep->callback([sweep_common, sweep_options, sweep_bound] {
@@ -385,17 +464,26 @@ void AddEvalCommand(CLI::App& app) {
                                            "3D localization error of two detection sets "
                                            "(e.g. stereo vs LiDAR) beside the stereo model");
   AddCommonOptions(compare, compare_common.get(), true);
-  compare->add_option("--det-b", compare_options->det_b, "the second detection folder")->required();
+  compare->add_option("--det-b", compare_options->det_b, "the second detection folder");
+  compare->add_option("--shards", compare_options->shards,
+                      "read A's frames from these `eval --shard K/N` folders (all N) instead of "
+                      "--gt/--det (docs/scale.md)");
+  compare->add_option("--shards-b", compare_options->shards_b,
+                      "read B's frames from these `eval --shard K/N` folders, instead of --det-b");
   compare->add_option("--calib", compare_options->calib,
                       "a KITTI calib file for b and f (default KITTI-like)");
   compare->add_option("--disparity-error-px", compare_options->disparity_error_px)
       ->capture_default_str();
   compare->add_option("--out", compare_common->out, "write compare.csv here");
+  AddBootstrapOptions(compare, compare_common.get(),
+                      "paired intervals of A - B, printed and in OUT/bootstrap.csv");
   compare->add_flag("--report", compare_options->report,
                     "also write OUT/report/: the comparison's figures and index.html "
                     "(docs/report.md)");
-  compare->callback(
-      [compare_common, compare_options] { RunCompare(*compare_common, *compare_options); });
+  compare->callback([compare, compare_common, compare_options] {
+    NoteBootstrapFlags(compare, compare_common.get());
+    RunCompare(*compare_common, *compare_options);
+  });
 
   auto merge_common = std::make_shared<EvalArgs>();
   auto merge_shards = std::make_shared<std::vector<std::string>>();
@@ -408,13 +496,18 @@ void AddEvalCommand(CLI::App& app) {
   merge->add_option("--out", merge_common->out, "the merged results folder")->required();
   merge->add_flag("--records", merge_common->records, "also write OUT/matches.csv");
   merge->add_flag("--report", merge_common->report, "also write OUT/report/");
-  merge->callback([merge_common, merge_shards] { RunMerge(*merge_common, *merge_shards); });
+  AddBootstrapOptions(merge, merge_common.get(), "as for eval, on the merged frames");
+  merge->callback([merge, merge_common, merge_shards] {
+    NoteBootstrapFlags(merge, merge_common.get());
+    RunMerge(*merge_common, *merge_shards);
+  });
 
   eval->callback([eval, sweep, compare, merge, args] {
     if (eval->got_subcommand(sweep) || eval->got_subcommand(compare) ||
         eval->got_subcommand(merge)) {
       return;
     }
+    NoteBootstrapFlags(eval, args.get());
     RunEval(*args);
   });
 }

@@ -1,15 +1,20 @@
-// `stereodet train ssd|det3d` and `stereodet detect ssd|det3d`: the single-shot image detector
-// (issue 6) and the single-stage 3D point detector (issue 14).
+// `stereodet train ssd|det3d|rpn` and `stereodet detect ssd|det3d|rpn`: the single-shot image
+// detector (issue 6), the single-stage 3D point detector (issue 14) and the late-fusion two-branch
+// detector with a region proposal network (issue 15).
 //   stereodet train ssd --data DIR --split train --input rgb|rgbh-fixed|rgbh-learned --out
 //   MODEL_DIR
 //                       [--epochs N] [--resume | --force] [--seed S] [--threads N]
 //                       [--width W --height H]
 //   stereodet detect ssd --model MODEL_DIR --data DIR --split val --out DIR [--blur-sigma S]
 //                        [stereo flags: cli/stereo_flags.h; default: the model.json's settings]
-// Each is one library call (TrainSsd, DetectSsd); the flags bind to their options' fields.
+//                        [--shard K/N: OUT is shard K's folder (models/detect_shard.h)]
+//   stereodet detect merge SHARD_DIR... --out DIR   (the N shard folders into one run's folder)
+// Each is one library call (TrainSsd, DetectSsd, MergeDetections); the flags bind to their
+// options' fields.
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -17,7 +22,10 @@
 #include "stereodet/cli/stereo_flags.h"
 #include "stereodet/models/det3d/det3d_detect.h"
 #include "stereodet/models/det3d/det3d_train.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/rpn/rpn_detect.h"
+#include "stereodet/models/rpn/rpn_train.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/models/ssd_train.h"
@@ -42,6 +50,7 @@ struct TrainArgs {
   TrainSsdOptions options;
   std::string input = InputEncodingName(SsdConfig().encoding);
   StereoFlagText stereo;  // the stereo flags, bound to options.data.stereo
+  std::vector<CLI::Option*> stereo_flags;
   bool quiet = false;
 };
 
@@ -83,7 +92,19 @@ void RunTrain(TrainArgs& a) {
   STEREODET_CHECK(encoding.has_value())
       << "unknown input encoding '" << a.input << "' (expected rgb, rgbh-fixed or rgbh-learned)";
   options.model.encoding = *encoding;
-  FinishStereoFlags(a.stereo, options.data.stereo);
+  const std::filesystem::path saved = options.out_dir / "model.json";
+  if (AnyGiven(a.stereo_flags) && !UsesHeight(options.model.encoding)) {
+    std::fprintf(stderr, "warning: an rgb model uses no stereo: %s ignored\n",
+                 GivenFlagNames(a.stereo_flags).c_str());
+  }
+  if (options.resume && std::filesystem::exists(saved)) {
+    // Partial stereo flags change only what they name of the settings the model was trained with.
+    const std::optional<StereoOptions> recorded = ModelStereoSettings(options.out_dir);
+    options.data.stereo = ApplyGivenStereoFlags(a.stereo_flags, recorded.value_or(StereoOptions()),
+                                                options.data.stereo, a.stereo);
+  } else {
+    FinishStereoFlags(a.stereo, options.data.stereo);
+  }
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
@@ -103,8 +124,14 @@ void RunTrain(TrainArgs& a) {
 void RunDetect(DetectArgs& a) {
   DetectSsdOptions& options = a.options;
   if (AnyGiven(a.stereo_flags)) {
-    FinishStereoFlags(a.stereo_text, a.stereo);
-    options.stereo = a.stereo;
+    const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
+    if (!recorded) {
+      std::fprintf(stderr, "warning: %s is an rgb model, which uses no stereo: %s ignored\n",
+                   options.model_dir.c_str(), GivenFlagNames(a.stereo_flags).c_str());
+    } else {
+      // Partial stereo flags change only what they name of the model's settings.
+      options.stereo = ApplyGivenStereoFlags(a.stereo_flags, *recorded, a.stereo, a.stereo_text);
+    }
     const std::string mismatch = StereoMismatch(options);
     if (!mismatch.empty()) {
       std::fprintf(stderr,
@@ -142,11 +169,15 @@ void RunTrainDet3d(TrainDet3dArgs& a) {
   const TrainDet3dSummary s = TrainDet3d(options);
   if (!a.quiet) {
     std::fprintf(stderr,
-                 "trained det3d on %s: %d frames (%d objects), epochs %d/%d (%d this run), final "
+                 "trained det3d on %s: %d frames (%d objects, %lld in the GT database with %lld "
+                 "points), epochs "
+                 "%d/%d (%d this run), final "
                  "loss %.4f, %.2f frames/s, %.3f s/step, %.0f s; %lld parameters (%lld in the "
                  "auxiliary network, training only)\nmodel: %s\n",
-                 a.input.c_str(), s.frames, s.objects, s.epochs_done, options.epochs, s.epochs_run,
-                 s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
+                 a.input.c_str(), s.frames, s.objects,
+                 static_cast<long long>(s.gt_database_objects),
+                 static_cast<long long>(s.gt_database_points), s.epochs_done, options.epochs,
+                 s.epochs_run, s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
                  static_cast<long long>(s.parameters),
                  static_cast<long long>(s.auxiliary_parameters), options.out_dir.c_str());
   }
@@ -188,6 +219,14 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
                  "stereo: drop points farther than this, m (0 = keep all)")
       ->capture_default_str();
   ts->add_flag("!--no-augment", t.augment.enabled, "no augmentation (flip, noise)");
+  ts->add_flag("!--no-gt-sampling", t.gt_sampling.enabled,
+               "no GT-database cut-and-paste (objects of other training frames)");
+  ts->add_option("--gt-per-class", t.gt_sampling.max_per_class,
+                 "GT sampling: objects drawn per class and frame, pasted unless they collide")
+      ->capture_default_str();
+  ts->add_option("--gt-min-points", t.gt_database.min_points,
+                 "GT database: leave out objects with fewer points")
+      ->capture_default_str();
   ts->add_flag("!--no-auxiliary", t.loss.auxiliary, "do not train the auxiliary network");
   ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
       ->capture_default_str();
@@ -226,8 +265,169 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetectDet3d(*dargs); });
+}
+
+struct DetectMergeArgs {
+  MergeDetectionsOptions options;
+  bool quiet = false;
+};
+
+void AddDetectMergeCommand(CLI::App* detect) {
+  auto args = std::make_shared<DetectMergeArgs>();
+  MergeDetectionsOptions& m = args->options;
+  CLI::App* cmd = detect->add_subcommand(
+      "merge",
+      "combine the folders of `detect ssd|det3d|rpn --shard K/N --out DIR` (all N) into the "
+      "detection folder of one run, byte for byte (docs/scale.md)");
+  cmd->add_option("shards", m.shards, "the shard folders, in any order")->required();
+  cmd->add_option("--out", m.out_dir, "the detection folder (one run: replaced whole)")->required();
+  cmd->add_flag("--quiet", args->quiet, "no summary output");
+  cmd->callback([args] {
+    args->options.command_line = ProcessCommandLine();
+    const MergeDetectionsResult r = MergeDetections(args->options);
+    if (!args->quiet) {
+      std::fprintf(stderr, "merged %d shards of %s, %d frames, in %.2f s; wrote %s\n", r.shards,
+                   r.tool.c_str(), r.frames, r.seconds, args->options.out_dir.c_str());
+    }
+  });
+}
+
+struct TrainRpnArgs {
+  TrainRpnOptions options;
+  std::string input = RpnInputName(RpnConfig().input);
+  StereoFlagText stereo;  // the stereo flags, bound to options.data.stereo (rgbd)
+  bool quiet = false;
+};
+
+struct DetectRpnArgs {
+  DetectRpnOptions options;
+  bool quiet = false;
+};
+
+void RunTrainRpn(TrainRpnArgs& a) {
+  TrainRpnOptions& options = a.options;
+  options.model.input = *ParseRpnInput(a.input);  // CLI::IsMember checked it
+  options.model.anchors.stride_px = options.model.feature_stride;
+  FinishStereoFlags(a.stereo, options.data.stereo);
+  options.data.threads = options.threads;
+  if (a.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
+  const TrainRpnSummary s = TrainRpn(options);
+  if (!a.quiet) {
+    std::fprintf(
+        stderr,
+        "trained rpn on %s: %d frames (%d objects), epochs %d/%d (%d this run), final "
+        "loss %.4f, %.2f images/s, %.3f s/step, %.0f s (labels/stereo %.0f s); %lld "
+        "parameters (image branch %lld, geometry branch %lld)%s\nmodel: %s\n",
+        a.input.c_str(), s.frames, s.objects, s.epochs_done, options.epochs, s.epochs_run,
+        s.final_loss, s.images_per_second, s.seconds_per_step, s.seconds, s.stereo_seconds,
+        static_cast<long long>(s.parameters), static_cast<long long>(s.image_branch_parameters),
+        static_cast<long long>(s.geometry_branch_parameters),
+        s.init_tensors > 0
+            ? fmt::format("; {} tensors from {}", s.init_tensors, options.init_from.string())
+                  .c_str()
+            : "",
+        options.out_dir.c_str());
+  }
+}
+
+void RunDetectRpn(DetectRpnArgs& a) {
+  DetectRpnOptions& options = a.options;
+  if (a.quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
+  const DetectRpnSummary s = DetectRpn(options);
+  if (!a.quiet) {
+    std::fprintf(stderr, "detected %lld objects in %d frames, %.1f images/s; wrote %s\n%s",
+                 static_cast<long long>(s.detections), s.frames, s.images_per_second,
+                 options.out_dir.c_str(), s.stage_times.c_str());
+  }
+}
+
+void AddRpnCommands(CLI::App* train, CLI::App* detect) {
+  auto targs = std::make_shared<TrainRpnArgs>();
+  TrainRpnOptions& t = targs->options;
+  CLI::App* ts = train->add_subcommand(
+      "rpn",
+      "two-stage detector (ResNet-style trunks, region proposal network, RoIAlign box head) on "
+      "rgb, or rgbd with a late-fused depth and height branch");
+  ts->add_option("--data", t.data_root, "dataset root (training/, ImageSets/)")->required();
+  ts->add_option("--split", t.split, "split name in ImageSets/ or a split file")
+      ->capture_default_str();
+  ts->add_option("--input", targs->input, "rgb (image branch) or rgbd (+ geometry branch)")
+      ->check(CLI::IsMember({"rgb", "rgbd"}))
+      ->capture_default_str();
+  AddTrainingFlags(ts, t);
+  ts->add_option("--width", t.model.input_width, "network input width, px (multiple of 16)")
+      ->capture_default_str();
+  ts->add_option("--height", t.model.input_height, "network input height, px (multiple of 16)")
+      ->capture_default_str();
+  ts->add_option("--image-width", t.model.image_width,
+                 "base channels of the image branch (stages x1, x2, x4); widen an rgb model to "
+                 "the rgbd model's parameter count as a control")
+      ->capture_default_str();
+  ts->add_option("--geometry-width", t.model.geometry_width,
+                 "base channels of the geometry branch (rgbd)")
+      ->capture_default_str();
+  ts->add_option("--feature-stride", t.model.feature_stride,
+                 "stride of the RPN's and RoIAlign's features: 16, or 8 for small objects")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  ts->add_option("--warmup", t.warmup_steps, "steps of the linear learning-rate warm-up")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  ts->add_option("--init-from", t.init_from,
+                 "rgb model folder whose image branch, RPN and box head initialise this model "
+                 "(\"mirroring\"; rgbd: the fusion starts as image features only)");
+  ts->add_flag("--init-geometry", t.init_geometry,
+               "with --init-from: mirror the image branch into the geometry branch too");
+  ts->add_flag("!--no-augment", t.data.augment, "no augmentation (flip, colour jitter)");
+  ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
+      ->capture_default_str();
+  ts->add_option("--stop-after", t.max_epochs_this_run,
+                 "stop after N epochs in this run (0 = all); continue later with --resume")
+      ->capture_default_str();
+  AddStereoFlags(ts, t.data.stereo, targs->stereo);
+  ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
+  ts->callback([targs] { RunTrainRpn(*targs); });
+
+  auto dargs = std::make_shared<DetectRpnArgs>();
+  DetectRpnOptions& d = dargs->options;
+  CLI::App* ds = detect->add_subcommand("rpn", "run a model from `stereodet train rpn`");
+  ds->add_option("--model", d.model_dir, "model folder")->required();
+  ds->add_option("--data", d.data_root, "dataset root")->required();
+  ds->add_option("--subset", d.subset, "training or testing")
+      ->check(CLI::IsMember({"training", "testing"}))
+      ->capture_default_str();
+  ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
+      ->capture_default_str();
+  ds->add_option("--out", d.out_dir,
+                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
+      ->required();
+  ds->add_option("--blur-sigma", d.blur_sigma_px,
+                 "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  ds->add_option("--score-threshold", d.detect.decode.score_threshold,
+                 "drop detections scoring below")
+      ->capture_default_str();
+  ds->add_option("--proposals", d.detect.proposals.post_nms_top_n, "proposals per image after NMS")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
+  ds->add_option("--device", d.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
+  ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
+      ->capture_default_str();
+  AddShardOption(ds, &d.shard);
+  ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
+  ds->callback([dargs] { RunDetectRpn(*dargs); });
 }
 
 }  // namespace
@@ -256,7 +456,7 @@ void AddModelsCommand(CLI::App& app) {
   ts->add_option("--stop-after", t.max_epochs_this_run,
                  "stop after N epochs in this run (0 = all); continue later with --resume")
       ->capture_default_str();
-  AddStereoFlags(ts, t.data.stereo, targs->stereo);
+  targs->stereo_flags = AddStereoFlags(ts, t.data.stereo, targs->stereo);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrain(*targs); });
 
@@ -288,11 +488,17 @@ void AddModelsCommand(CLI::App& app) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  ds->add_flag("!--no-pipeline", d.pipeline,
+               "prepare each batch (reading, stereo) only after the network's previous one "
+               "(default: the next batch is prepared while the network runs; same detections)");
+  AddShardOption(ds, &d.shard);
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });
 
   AddDet3dCommands(train, detect);
+  AddDetectMergeCommand(detect);
+  AddRpnCommands(train, detect);
 }
 
 }  // namespace stereodet::cli

@@ -125,6 +125,31 @@ void FinishStereoFlags(const StereoFlagText& text, StereoOptions& options) {
   options.Check();
 }
 
+StereoOptions ApplyGivenStereoFlags(const std::vector<CLI::Option*>& flags,
+                                    const StereoOptions& base, StereoOptions& options,
+                                    StereoFlagText& text) {
+  options = base;
+  text = StereoFlagText();
+  text.method = DisparityMethodName(base.disparity.method);
+  text.mode = SgbmModeName(base.disparity.sgbm.mode);
+  // Each given flag's callback stores its parsed value again, now over `base`.
+  for (CLI::Option* flag : flags) {
+    if (flag->count() > 0) flag->run_callback();
+  }
+  FinishStereoFlags(text, options);
+  return options;
+}
+
+std::string GivenFlagNames(const std::vector<CLI::Option*>& flags) {
+  std::string names;
+  for (const CLI::Option* flag : flags) {
+    if (flag->count() == 0) continue;
+    if (!names.empty()) names += ", ";
+    names += flag->get_name();
+  }
+  return names;
+}
+
 bool AnyGiven(const std::vector<CLI::Option*>& flags) {
   for (const CLI::Option* flag : flags) {
     if (flag->count() > 0) return true;

@@ -30,6 +30,18 @@ std::vector<CLI::Option*> AddStereoFlags(CLI::App* cmd, StereoOptions& options,
 // The named choices into `options` (throws std::invalid_argument naming the flag), then Check().
 void FinishStereoFlags(const StereoFlagText& text, StereoOptions& options);
 
+// The settings of `base` with only the flags given on the command line applied over them, so that
+// partial flags change what they name and nothing else (`detect ssd` and `train ssd --resume` start
+// from model.json's settings, `--stereo DIR` from stereo.json's). Requires: the command line has
+// been parsed; `flags`, `options` and `text` are AddStereoFlags' (`options` and `text` are
+// overwritten). Throws as FinishStereoFlags.
+StereoOptions ApplyGivenStereoFlags(const std::vector<CLI::Option*>& flags,
+                                    const StereoOptions& base, StereoOptions& options,
+                                    StereoFlagText& text);
+
+// The names of the flags given, comma-separated ("--uniqueness-ratio, --wls").
+std::string GivenFlagNames(const std::vector<CLI::Option*>& flags);
+
 // True when any of `flags` was given on the command line.
 bool AnyGiven(const std::vector<CLI::Option*>& flags);
 

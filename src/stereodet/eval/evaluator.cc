@@ -45,6 +45,8 @@ void ForEachFrame(size_t num_frames, int num_threads, const Fn& fn) {
 // With --compat openpcdet, OpenPCDet's rules and overlaps instead (openpcdet_compat.h).
 // `reuse`: the ClassFrames of the previous class or overlap kind, whose memory is reused.
 // `after(i, frame)` is called on each prepared frame in the same pass (KittiPasses::CollectFrame).
+// `reuse_selection`: `reuse` holds these frames' ClassFrames of `spec` for another overlap kind
+// (PrepareClassFrame keeps their labels and detections; not with --compat openpcdet).
 struct NoFrameWork {
   void operator()(size_t, const ClassFrame&) const {}
 };
@@ -53,15 +55,18 @@ std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const C
                                    OverlapKind kind, Matcher matcher, int num_threads,
                                    EvalCompat compat = EvalCompat::kDevkit,
                                    std::vector<ClassFrame> reuse = {},
-                                   const AfterFrame& after = AfterFrame{}) {
+                                   const AfterFrame& after = AfterFrame{},
+                                   bool reuse_selection = false) {
   const OverlapArithmetic arithmetic =
       matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
   std::vector<ClassFrame> out = std::move(reuse);
+  reuse_selection = reuse_selection && out.size() == frames.size();
   out.resize(frames.size());
   ForEachFrame(frames.size(), num_threads, [&](size_t i) {
     out[i] = compat == EvalCompat::kOpenPcdet
                  ? PrepareClassFrameOpenPcdet(frames[i], spec, kind, std::move(out[i]))
-                 : PrepareClassFrame(frames[i], spec, kind, arithmetic, std::move(out[i]));
+                 : PrepareClassFrame(frames[i], spec, kind, arithmetic, std::move(out[i]),
+                                     reuse_selection);
     after(i, out[i]);
   });
   return out;
@@ -294,7 +299,7 @@ std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& fram
   std::vector<MatchRecord>* out = &rows;
   auto pair_overlap = [&](int i, int j) {
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
-      if (cf.edge_det[e] == j) return cf.edge_overlap[e];
+      if (cf.edge_det[e] == j) return KittiRecordedOverlap(kind, frame, cf, i, e);
     }
     return KittiOverlap(kind, frame.detections[cf.det_object[j]], frame.labels[cf.label_object[i]]);
   };
@@ -432,8 +437,11 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   std::vector<EvalFrame> struck;
   if (!options.filter.empty()) struck = StrikeFailing(frames, options.filter.conditions, threads);
 
-  // Kept from cell to cell so that their memory is reused.
+  // Kept from cell to cell so that their memory is reused; and from one overlap kind of a class to
+  // the next, their labels and detections (the class whose ClassFrames they hold).
   std::vector<ClassFrame> cfs, struck_cfs;
+  const ClassSpec* cfs_class = nullptr;
+  const ClassSpec* struck_cfs_class = nullptr;
   std::vector<std::vector<FrameAssociation>> assocs;  // by difficulty, then frame
   const std::vector<Difficulty>& difficulties = options.difficulties;
   const size_t n_d = difficulties.size();
@@ -470,15 +478,20 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       static_assert(kFrameBlock == KittiPasses::kBlock);
       KittiPasses kitti_passes(kitti ? frames.size() : 0, difficulties, compat);
       if (kitti) {
-        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs),
-                         [&](size_t i, const ClassFrame& cf) { kitti_passes.CollectFrame(i, cf); });
+        cfs = PrepareAll(
+            frames, spec, kind, options.matcher, threads, compat, std::move(cfs),
+            [&](size_t i, const ClassFrame& cf) { kitti_passes.CollectFrame(i, cf); },
+            cfs_class == &spec);
         kitti_passes.ChooseThresholds();
       } else {
-        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs));
+        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs),
+                         NoFrameWork{}, cfs_class == &spec);
       }
+      cfs_class = &spec;
       if (!options.filter.empty()) {
-        struck_cfs =
-            PrepareAll(struck, spec, kind, options.matcher, threads, compat, std::move(struck_cfs));
+        struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads, compat,
+                                std::move(struck_cfs), NoFrameWork{}, struck_cfs_class == &spec);
+        struck_cfs_class = &spec;
       }
 
       // The operating point's associations (and the KITTI matcher's pass 2).

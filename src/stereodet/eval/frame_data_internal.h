@@ -62,12 +62,25 @@ struct ClassFrame {
   std::vector<double> det_score;
   std::vector<double> det_alpha;
   std::vector<uint8_t> det_dontcare;  // overlaps a DontCare region by > the threshold (criterion 0)
+  // The devkit's ignored_det of each detection for each difficulty, det_state[j * kNumDifficulties
+  // + d]: 1 if lower than d's minimum height (std::trunc(det_height) < min), else 0 for the
+  // evaluated class and -1 for another. Derived from det_height and det_is_class by
+  // ClassFrameBuilder (once per frame, class and overlap kind, instead of once per KITTI pass and
+  // difficulty); a ClassFrame put together by hand may leave it empty, and the KITTI matcher then
+  // derives it itself.
+  std::vector<int8_t> det_state;
   // Overlaps >= min_overlap, by label (CSR): label i's edges are [edge_begin[i], edge_begin[i+1]),
   // in ascending detection order.
   std::vector<int32_t> edge_begin;
   std::vector<int32_t> edge_det;
   std::vector<double> edge_overlap;
   double min_overlap = 0.5;
+  // Made by PrepareClassFrame with OverlapArithmetic::kDevkit (see KittiRecordedOverlap).
+  bool devkit_overlaps = false;
+  // PrepareClassFrame's memory for the next overlap kind of the same frame and class: the footprint
+  // intersection of label i and detection j, pair_footprint[i * num_dets() + j], once a BEV or 3D
+  // ClassFrame of this selection was made (empty otherwise).
+  std::vector<double> pair_footprint;
 
   int num_labels() const { return static_cast<int>(label_object.size()); }
   int num_dets() const { return static_cast<int>(det_object.size()); }
@@ -115,11 +128,25 @@ class ClassFrameBuilder {
 // KittiOverlap does, e.g. two detections shifted by the same distance either side of a label. All
 // of this is rare; every other overlap is KittiOverlap's. `reuse` lends its memory to the result
 // (its contents are discarded): an evaluation prepares every frame once per class and overlap kind,
-// and reusing the previous ClassFrame's lists saves allocating them afresh each time. Requires:
-// every detection has a score.
+// and reusing the previous ClassFrame's lists saves allocating them afresh each time. With
+// `reuse_selection`, `reuse` must be a result of PrepareClassFrame for this very frame and `spec`
+// (any overlap kind, any arithmetic): its labels and detections are kept instead of being selected
+// again, and BEV and 3D share each pair's footprint intersection (ClassFrame::pair_footprint); the
+// result is the same, bit for bit. Requires: every detection has a score.
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit,
-                             ClassFrame reuse = {});
+                             ClassFrame reuse = {}, bool reuse_selection = false);
+
+// The overlap of label `label_index`'s edge `edge` (an index into cf.edge_det) that records
+// (matches.csv) report: cf.edge_overlap[edge], except in a ClassFrame of PrepareClassFrame with
+// OverlapArithmetic::kDevkit, BEV or 3D, where it is the devkit's own value wherever the devkit may
+// be asked: near the threshold, between close candidates of the label, and for EVERY parallel,
+// non-identical pair. PrepareClassFrame itself keeps KittiOverlap's value for parallel footprints
+// whose edge lines are all apart: there the two stay within 3e-6 of each other, far from the
+// threshold and from the label's other candidates, so every decision is the same (the set of
+// edges included), but the value differs in the last digits, and records print the devkit's.
+double KittiRecordedOverlap(OverlapKind kind, const EvalFrame& frame, const ClassFrame& cf,
+                            int label_index, int edge);
 
 }  // namespace stereodet
 

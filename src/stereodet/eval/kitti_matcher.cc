@@ -15,18 +15,37 @@ namespace {
 // The devkit's NO_DETECTION: in pass 1 a detection is chosen only if its score is above it.
 constexpr double kNoDetection = -10000000;
 
-// The devkit's ignored_det: 1 if lower than the difficulty's minimum height (any class; the devkit
-// truncates the height to an int, which for an integer minimum compares the same), else 0 for the
-// class, -1 for other classes.
-void DetStates(const ClassFrame& f, Difficulty difficulty, std::vector<int8_t>* states) {
-  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+// The devkit's ignored_det of each detection for `difficulty` (ClassFrame::det_state), read with a
+// stride, so that the states ClassFrameBuilder derived are used in place.
+class DetStateView {
+ public:
+  DetStateView(const int8_t* first, int stride) : first_(first), stride_(stride) {}
+  int8_t operator[](int j) const { return first_[static_cast<ptrdiff_t>(j) * stride_]; }
+
+ private:
+  const int8_t* first_;
+  int stride_;
+};
+
+// ClassFrame::det_state for `difficulty`: the frame's own, or, for a ClassFrame put together
+// without it, derived into `scratch`: 1 if lower than the difficulty's minimum height (any class;
+// the devkit truncates the height to an int, which for an integer minimum compares the same), else
+// 0 for the class, -1 for other classes.
+inline DetStateView DetStates(const ClassFrame& f, Difficulty difficulty,
+                              std::vector<int8_t>* scratch) {
   const int n = f.num_dets();
-  states->resize(n);
-  int8_t* out = states->data();
+  const int d = static_cast<int>(difficulty);
+  if (f.det_state.size() == static_cast<size_t>(n) * kNumDifficulties) {
+    return DetStateView(f.det_state.data() + d, kNumDifficulties);
+  }
+  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+  scratch->resize(n);
+  int8_t* out = scratch->data();
   const double* height = f.det_height.data();
   const uint8_t* is_class = f.det_is_class.data();
   for (int j = 0; j < n; ++j)
     out[j] = std::trunc(height[j]) < min_height ? 1 : (is_class[j] ? 0 : -1);
+  return DetStateView(out, 1);
 }
 
 // Memory reused by one thread from call to call: the functions below run once per frame, class,
@@ -43,6 +62,43 @@ ThreadScratch& Scratch() {
   return scratch;
 }
 
+// A ClassFrame's lists as plain pointers, read by the passes below. They write byte-sized lists
+// (assigned, interacting, outcomes), which may alias anything; kept in a local view, the frame's
+// sizes and list addresses stay in registers instead of being read again after each such write.
+struct FrameView {
+  explicit FrameView(const ClassFrame& f, Difficulty difficulty)
+      : num_labels(f.num_labels()),
+        num_dets(f.num_dets()),
+        difficulty_bit(static_cast<uint8_t>(1u << static_cast<int>(difficulty))),
+        tau(f.min_overlap),
+        label_neighbour(f.label_neighbour.data()),
+        label_difficulty(f.label_difficulty.data()),
+        label_alpha(f.label_alpha.data()),
+        det_score(f.det_score.data()),
+        det_alpha(f.det_alpha.data()),
+        det_dontcare(f.det_dontcare.data()),
+        edge_begin(f.edge_begin.data()),
+        edge_det(f.edge_det.data()),
+        edge_overlap(f.edge_overlap.data()),
+        num_edges(static_cast<int>(f.edge_det.size())) {}
+
+  // ClassFrame::LabelValid
+  bool LabelValid(int i) const {
+    return !label_neighbour[i] && (label_difficulty[i] & difficulty_bit) != 0;
+  }
+
+  int num_labels, num_dets;
+  uint8_t difficulty_bit;
+  double tau;
+  const uint8_t *label_neighbour, *label_difficulty;
+  const double* label_alpha;
+  const double *det_score, *det_alpha;
+  const uint8_t* det_dontcare;
+  const int32_t *edge_begin, *edge_det;
+  const double* edge_overlap;
+  int num_edges;
+};
+
 struct Pass2Result {
   int64_t tp = 0, fn = 0;
   double similarity = 0.0;
@@ -52,26 +108,28 @@ struct Pass2Result {
 // the unassigned detection (score >= threshold) with overlap > tau of largest overlap; a valid
 // detection replaces an earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records
 // pairs.
-Pass2Result RunPass2(const ClassFrame& f, Difficulty difficulty, const std::vector<int8_t>& states,
-                     double threshold, std::vector<uint8_t>* assigned, FrameAssociation* assoc) {
+Pass2Result RunPass2(const FrameView& f, DetStateView states, double threshold,
+                     std::vector<uint8_t>* assigned_list, FrameAssociation* assoc) {
   Pass2Result r;
-  const double tau = f.min_overlap;
-  assigned->assign(f.num_dets(), 0);
-  for (int i = 0; i < f.num_labels(); ++i) {
-    const bool label_valid = f.LabelValid(i, difficulty);
+  const double tau = f.tau;
+  assigned_list->assign(f.num_dets, 0);
+  uint8_t* const assigned = assigned_list->data();
+  for (int i = 0; i < f.num_labels; ++i) {
+    const bool label_valid = f.LabelValid(i);
     int best = -1;
     double max_overlap = 0.0;
     bool assigned_ignored = false;
-    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
+    for (int e = f.edge_begin[i], end = f.edge_begin[i + 1]; e < end; ++e) {
       const int j = f.edge_det[e];
-      if (states[j] == -1 || (*assigned)[j] || f.det_score[j] < threshold) continue;
+      const int8_t state = states[j];
+      if (state == -1 || assigned[j] || f.det_score[j] < threshold) continue;
       const double overlap = f.edge_overlap[e];
       if (!(overlap > tau)) continue;
-      if (states[j] == 0 && (overlap > max_overlap || assigned_ignored)) {
+      if (state == 0 && (overlap > max_overlap || assigned_ignored)) {
         max_overlap = overlap;
         best = j;
         assigned_ignored = false;
-      } else if (best < 0 && states[j] == 1) {
+      } else if (best < 0 && state == 1) {
         best = j;
         assigned_ignored = true;
       }
@@ -82,11 +140,11 @@ Pass2Result RunPass2(const ClassFrame& f, Difficulty difficulty, const std::vect
         if (assoc) assoc->label_outcome[i] = Outcome::kFn;
       }
     } else if (!label_valid || states[best] == 1) {
-      (*assigned)[best] = 1;
+      assigned[best] = 1;
     } else {
       ++r.tp;
       r.similarity += (1.0 + std::cos(f.label_alpha[i] - f.det_alpha[best])) / 2.0;
-      (*assigned)[best] = 1;
+      assigned[best] = 1;
       if (assoc) {
         assoc->label_outcome[i] = Outcome::kTp;
         assoc->label_det[i] = best;
@@ -115,24 +173,24 @@ std::vector<double> KittiThresholds(std::vector<double> v, double n_groundtruth)
   return t;
 }
 
-KittiTpScores KittiCollectTpScores(const ClassFrame& f, Difficulty difficulty,
+KittiTpScores KittiCollectTpScores(const ClassFrame& frame, Difficulty difficulty,
                                    std::vector<double> append_to) {
   KittiTpScores out;
   out.scores = std::move(append_to);
   std::vector<double>* tp_scores = &out.scores;
   ThreadScratch& scratch = Scratch();
-  std::vector<int8_t>& states = scratch.states;
-  DetStates(f, difficulty, &states);
-  std::vector<uint8_t>& assigned = scratch.assigned;
-  assigned.assign(f.num_dets(), 0);
-  const double tau = f.min_overlap;
+  const DetStateView states = DetStates(frame, difficulty, &scratch.states);
+  const FrameView f(frame, difficulty);
+  scratch.assigned.assign(f.num_dets, 0);
+  uint8_t* const assigned = scratch.assigned.data();
+  const double tau = f.tau;
   int n_gt = 0;
-  for (int i = 0; i < f.num_labels(); ++i) {
-    const bool label_valid = f.LabelValid(i, difficulty);
+  for (int i = 0; i < f.num_labels; ++i) {
+    const bool label_valid = f.LabelValid(i);
     n_gt += label_valid ? 1 : 0;
     int best = -1;
     double best_score = kNoDetection;
-    for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
+    for (int e = f.edge_begin[i], end = f.edge_begin[i + 1]; e < end; ++e) {
       const int j = f.edge_det[e];
       if (states[j] == -1 || assigned[j]) continue;
       if (f.edge_overlap[e] > tau && f.det_score[j] > best_score) {
@@ -199,24 +257,24 @@ class PassTwoCounts {
   std::vector<double> similarity_;
 };
 
-void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
+void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
                     const std::vector<double>& thresholds, PassTwoCounts* counts) {
   const size_t n_t = thresholds.size();
+  const FrameView f(frame, difficulty);
   int64_t n_valid = 0;
-  for (int i = 0; i < f.num_labels(); ++i) n_valid += f.LabelValid(i, difficulty) ? 1 : 0;
-  if (f.num_dets() == 0) {  // many frames hold nothing of a class: every valid label is a FN
+  for (int i = 0; i < f.num_labels; ++i) n_valid += f.LabelValid(i) ? 1 : 0;
+  if (f.num_dets == 0) {  // many frames hold nothing of a class: every valid label is a FN
     if (n_t > 0) counts->AddRun(0, n_t, 0, 0, n_valid, 0.0);
     return;
   }
   ThreadScratch& scratch = Scratch();
-  std::vector<int8_t>& states = scratch.states;
-  DetStates(f, difficulty, &states);
-  const double tau = f.min_overlap;
+  const DetStateView states = DetStates(frame, difficulty, &scratch.states);
+  const double tau = f.tau;
   // Detections that can be chosen by some label; only their presence above the threshold changes
   // the greedy's outcome. The others are FPs (valid, not in DontCare) or nothing.
-  std::vector<uint8_t>& interacting = scratch.interacting;
-  interacting.assign(f.num_dets(), 0);
-  for (size_t e = 0; e < f.edge_det.size(); ++e) {
+  scratch.interacting.assign(f.num_dets, 0);
+  uint8_t* const interacting = scratch.interacting.data();
+  for (int e = 0; e < f.num_edges; ++e) {
     const int j = f.edge_det[e];
     if (states[j] != -1 && f.edge_overlap[e] > tau) interacting[j] = 1;
   }
@@ -224,7 +282,7 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
   std::vector<double>& free_fp_scores = scratch.free_fp_scores;
   interacting_scores.clear();
   free_fp_scores.clear();
-  for (int j = 0; j < f.num_dets(); ++j) {
+  for (int j = 0; j < f.num_dets; ++j) {
     if (interacting[j])
       interacting_scores.push_back(f.det_score[j]);
     else if (states[j] == 0 && !f.det_dontcare[j])
@@ -233,7 +291,6 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
   std::sort(interacting_scores.begin(), interacting_scores.end(), std::greater<double>());
   std::sort(free_fp_scores.begin(), free_fp_scores.end(), std::greater<double>());
 
-  std::vector<uint8_t>& assigned = scratch.assigned;
   // The counts change only where a detection enters (its score >= the threshold), so the
   // thresholds go by runs over which nothing enters: the greedy runs once per run, and every
   // threshold of the run gets the same counts.
@@ -250,11 +307,12 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
       if (k_inter == 0) {
         cached.fn = n_valid;
       } else {
-        const Pass2Result r = RunPass2(f, difficulty, states, threshold, &assigned, nullptr);
+        const Pass2Result r = RunPass2(f, states, threshold, &scratch.assigned, nullptr);
+        const uint8_t* const assigned = scratch.assigned.data();
         cached.tp = r.tp;
         cached.fn = r.fn;
         cached.similarity = r.similarity;
-        for (int j = 0; j < f.num_dets(); ++j) {
+        for (int j = 0; j < f.num_dets; ++j) {
           if (interacting[j] && states[j] == 0 && !assigned[j] && f.det_score[j] >= threshold &&
               !f.det_dontcare[j]) {
             ++cached.fp;
@@ -262,15 +320,19 @@ void AddFrameCounts(const ClassFrame& f, Difficulty difficulty,
         }
       }
     }
-    // The run ends at the first threshold at which the next detection of either list enters.
+    // The run ends at the first threshold after t at which the next detection of either list
+    // enters (score >= threshold). The thresholds descend (and hold no NaN: they are TP scores), so
+    // the thresholds a score does not reach are a prefix: a binary search finds the end.
     size_t end = n_t;
-    if (k_inter < n_inter || k_free < n_free) {
-      end = t + 1;
-      while (end < n_t && !(k_inter < n_inter && interacting_scores[k_inter] >= thresholds[end]) &&
-             !(k_free < n_free && free_fp_scores[k_free] >= thresholds[end])) {
-        ++end;
-      }
-    }
+    auto first_entered = [&](double score) {
+      return static_cast<size_t>(
+          std::partition_point(thresholds.begin() + static_cast<ptrdiff_t>(t) + 1,
+                               thresholds.begin() + static_cast<ptrdiff_t>(n_t),
+                               [score](double threshold) { return !(score >= threshold); }) -
+          thresholds.begin());
+    };
+    if (k_inter < n_inter) end = std::min(end, first_entered(interacting_scores[k_inter]));
+    if (k_free < n_free) end = std::min(end, first_entered(free_fp_scores[k_free]));
     counts->AddRun(t, end, cached.tp, cached.fp + static_cast<int64_t>(k_free), cached.fn,
                    cached.similarity);
     t = end;
@@ -289,27 +351,28 @@ std::vector<KittiCounts> KittiAddFrameCounts(const ClassFrame& f, Difficulty dif
   return counts;
 }
 
-FrameAssociation KittiAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
+FrameAssociation KittiAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
                                 FrameAssociation reuse) {
   ThreadScratch& scratch = Scratch();
-  std::vector<int8_t>& states = scratch.states;
-  DetStates(f, difficulty, &states);
+  const DetStateView states = DetStates(frame, difficulty, &scratch.states);
+  const FrameView f(frame, difficulty);
   FrameAssociation a = std::move(reuse);
-  a.label_outcome.assign(f.num_labels(), Outcome::kIgnored);
-  a.label_det.assign(f.num_labels(), -1);
-  a.det_outcome.assign(f.num_dets(), Outcome::kNone);
-  a.det_label.assign(f.num_dets(), -1);
-  std::vector<uint8_t>& assigned = scratch.assigned;
-  RunPass2(f, difficulty, states, threshold, &assigned, &a);
-  for (int j = 0; j < f.num_dets(); ++j) {
-    if (a.det_outcome[j] == Outcome::kTp) continue;
+  a.label_outcome.assign(f.num_labels, Outcome::kIgnored);
+  a.label_det.assign(f.num_labels, -1);
+  a.det_outcome.assign(f.num_dets, Outcome::kNone);
+  a.det_label.assign(f.num_dets, -1);
+  RunPass2(f, states, threshold, &scratch.assigned, &a);
+  const uint8_t* const assigned = scratch.assigned.data();
+  Outcome* const det_outcome = a.det_outcome.data();
+  for (int j = 0; j < f.num_dets; ++j) {
+    if (det_outcome[j] == Outcome::kTp) continue;
     if (states[j] == -1 || f.det_score[j] < threshold) continue;  // kNone
     if (states[j] == 1 || assigned[j]) {
-      a.det_outcome[j] = Outcome::kIgnored;
+      det_outcome[j] = Outcome::kIgnored;
     } else if (f.det_dontcare[j]) {
-      a.det_outcome[j] = Outcome::kDontCare;
+      det_outcome[j] = Outcome::kDontCare;
     } else {
-      a.det_outcome[j] = Outcome::kFp;
+      det_outcome[j] = Outcome::kFp;
     }
   }
   return a;

@@ -414,5 +414,42 @@ TEST(KittiMatcherTest, PassesOverAllDifficultiesInAnyBlockOrderEqualOneAtATime) 
   }
 }
 
+// ClassFrameBuilder derives each detection's state per difficulty (ClassFrame::det_state); a
+// ClassFrame put together without it (as by hand, or curve_events' components) is evaluated the
+// same, the KITTI matcher deriving the states itself: every pass, bit for bit.
+TEST(KittiMatcherTest, FramesWithoutDerivedStatesGiveTheSameResults) {
+  RandomFramesOptions ro;
+  ro.num_frames = 120;
+  ro.seed = 5;
+  ro.crowded = true;
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::k3D}) {
+    std::vector<ClassFrame> with, without;
+    for (const EvalFrame& f : frames) {
+      with.push_back(PrepareClassFrame(f, KittiClassSpec("Pedestrian"), kind));
+      ASSERT_EQ(with.back().det_state.size(), with.back().det_object.size() * kNumDifficulties);
+      without.push_back(with.back());
+      without.back().det_state.clear();
+    }
+    for (const Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+      SCOPED_TRACE(std::string(OverlapKindName(kind)) + " " + DifficultyName(d));
+      const KittiClassResult a = EvaluateKittiClass(with, d, 1);
+      const KittiClassResult b = EvaluateKittiClass(without, d, 1);
+      ASSERT_FALSE(a.thresholds.empty());
+      EXPECT_EQ(a.thresholds, b.thresholds);
+      EXPECT_EQ(a.precision, b.precision);
+      EXPECT_EQ(a.aos, b.aos);
+      for (size_t i = 0; i < with.size(); ++i) {
+        const FrameAssociation x = KittiAssociate(with[i], d, 0.5);
+        const FrameAssociation y = KittiAssociate(without[i], d, 0.5);
+        EXPECT_EQ(x.label_outcome, y.label_outcome);
+        EXPECT_EQ(x.label_det, y.label_det);
+        EXPECT_EQ(x.det_outcome, y.det_outcome);
+        EXPECT_EQ(x.det_label, y.det_label);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace stereodet

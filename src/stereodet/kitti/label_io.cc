@@ -66,29 +66,35 @@ std::string TypeProblem(std::string_view type) {
 // doubles), which is what std::from_chars returns, at a fraction of its cost. Reads
 // [+-]digits[.digits] with at most 15 digits in all from *p on, and moves *p past it; returns false
 // for anything else, which then takes ReadFiniteDouble (and its error messages).
-bool ScanShortDecimal(const char** p_inout, const char* end, double* value) {
+// Inlined into the line parser: it reads 13 to 14 numbers a line, 600k for a KITTI-val-sized set.
+[[gnu::always_inline]] inline bool ScanShortDecimal(const char** p_inout, const char* end,
+                                                    double* value) {
   constexpr int kMaxDigits = 15;
   static constexpr double kPow10[kMaxDigits + 1] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
                                                     1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
   const char* p = *p_inout;
   bool negative = false;
   if (p < end && (*p == '-' || *p == '+')) negative = *p++ == '-';
+  // The digits are counted once scanned: a longer run (which wraps the unsigned mantissa) is
+  // refused below, before the mantissa is used.
   uint64_t mantissa = 0;
-  int digits = 0;  // in all, integer part and decimals
-  for (; p < end && *p >= '0' && *p <= '9'; ++p) {
-    if (++digits > kMaxDigits) return false;
-    mantissa = mantissa * 10 + static_cast<uint64_t>(*p - '0');
+  const char* const integer_begin = p;
+  for (unsigned digit; p < end && (digit = static_cast<unsigned>(*p - '0')) < 10; ++p) {
+    mantissa = mantissa * 10 + digit;
   }
-  if (digits == 0) return false;
-  int decimals = 0;
+  const ptrdiff_t integer_digits = p - integer_begin;
+  if (integer_digits == 0) return false;
+  ptrdiff_t decimals = 0;
   if (p < end && *p == '.') {
     ++p;
-    for (; p < end && *p >= '0' && *p <= '9'; ++p, ++decimals) {
-      if (++digits > kMaxDigits) return false;
-      mantissa = mantissa * 10 + static_cast<uint64_t>(*p - '0');
+    const char* const decimals_begin = p;
+    for (unsigned digit; p < end && (digit = static_cast<unsigned>(*p - '0')) < 10; ++p) {
+      mantissa = mantissa * 10 + digit;
     }
+    decimals = p - decimals_begin;
     if (decimals == 0) return false;
   }
+  if (integer_digits + decimals > kMaxDigits) return false;
   const double magnitude = static_cast<double>(mantissa) / kPow10[decimals];
   *value = negative ? -magnitude : magnitude;
   *p_inout = p;

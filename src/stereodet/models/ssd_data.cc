@@ -64,6 +64,8 @@ cv::Mat ResizeHeightCodes(const cv::Mat& code, cv::Size size) {
   return resized;
 }
 
+}  // namespace
+
 // Brightness, contrast and saturation on an 8-bit BGR image.
 void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -81,8 +83,6 @@ void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& 
   f = grey3 + (f - grey3) * saturation;
   f.convertTo(bgr, CV_8UC3);  // saturates to [0, 255]
 }
-
-}  // namespace
 
 PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
                                 const SsdConfig& config) {

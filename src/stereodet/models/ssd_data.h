@@ -23,6 +23,7 @@
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -53,6 +54,10 @@ struct AugmentOptions {
   double min_visible_fraction = 0.5;
   void Check() const;  // throws std::invalid_argument
 };
+
+// The photometric jitter of AugmentOptions (brightness, contrast, saturation) on an 8-bit BGR
+// image in place, drawing three numbers from `rng`. Also used by the two-stage detector (rpn/).
+void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& rng);
 
 struct SsdDataOptions {
   // Label types that become ignore regions; other types not among the model's classes are

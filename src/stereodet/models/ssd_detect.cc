@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <future>
 #include <opencv2/imgcodecs.hpp>
 
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_data.h"
 #include "stereodet/stereo/degradation.h"
@@ -33,16 +36,23 @@ void DetectSsdOptions::Check() const {
   STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
   STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+  shard.Check();
   STEREODET_CHECK(ParseComputeDevice(device).has_value())
       << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
+std::optional<StereoOptions> ModelStereoSettings(const std::filesystem::path& model_dir) {
+  const std::filesystem::path config_path = model_dir / "model.json";
+  const std::string text = ReadFile(config_path);
+  if (!UsesHeight(SsdConfigFromJson(text, config_path.string()).encoding)) return std::nullopt;
+  return ReadStereoRecord(text, config_path.string());
+}
+
 std::string StereoMismatch(const DetectSsdOptions& options) {
   if (!options.stereo) return "";
-  const std::filesystem::path config_path = options.model_dir / "model.json";
-  const std::string text = ReadFile(config_path);
-  if (!UsesHeight(SsdConfigFromJson(text, config_path.string()).encoding)) return "";
-  return DifferingStereoSettings(ReadStereoRecord(text, config_path.string()), *options.stereo);
+  const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
+  if (!recorded) return "";
+  return DifferingStereoSettings(*recorded, *options.stereo);
 }
 
 std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
@@ -71,6 +81,32 @@ std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
   return objects;
 }
 
+void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
+                         const std::function<void(int)>& consume) {
+  if (!overlap) {
+    for (int k = 0; k < num_batches; ++k) {
+      prepare(k);
+      consume(k);
+    }
+    return;
+  }
+  if (num_batches <= 0) return;
+  prepare(0);
+  for (int k = 0; k < num_batches; ++k) {
+    // A thread per batch: the batches are large (the network's batch of frames), so starting one
+    // costs nothing next to them, and std::async's future rethrows the preparation's exception.
+    std::future<void> next;
+    if (k + 1 < num_batches) next = std::async(std::launch::async, prepare, k + 1);
+    try {
+      consume(k);
+    } catch (...) {
+      if (next.valid()) next.wait();  // the preparation uses the caller's state: let it finish
+      throw;
+    }
+    if (next.valid()) next.get();
+  }
+}
+
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   options.Check();
   const Timer timer;
@@ -86,10 +122,12 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   const bool height = UsesHeight(config.encoding);
 
   const KittiDataset dataset(options.data_root, options.subset);
-  std::vector<std::string> ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
-    ids.resize(options.max_frames);
+  std::vector<std::string> all_ids = dataset.ReadSplit(options.split);
+  if (options.max_frames > 0 && static_cast<int>(all_ids.size()) > options.max_frames) {
+    all_ids.resize(options.max_frames);
   }
+  // A shard is a choice of frames and a record beside them, nothing in the loop below.
+  const std::vector<std::string> ids = ShardFrames(all_ids, options.shard, options.batch_size);
   RequiredFiles required;
   required.image_left = true;
   required.image_right = required.calib = height;
@@ -106,21 +144,32 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   DetectSsdSummary summary;
   StageTimes times;
   ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), options.progress);
-  for (size_t begin = 0; begin < ids.size(); begin += options.batch_size) {
-    const size_t end = std::min(ids.size(), begin + options.batch_size);
-    const size_t n = end - begin;
-    std::vector<PlanarImage> inputs(n);
-    std::vector<cv::Size> sizes(n);
+  // One batch of frames read, matched and encoded for the network; two slots, so that batch k + 1
+  // can be prepared while the network runs on batch k.
+  struct PreparedBatch {
+    size_t begin = 0;
+    std::vector<PlanarImage> inputs;
+    std::vector<cv::Size> sizes;
+  };
+  PreparedBatch slots[2];
+  const size_t batch_size = static_cast<size_t>(options.batch_size);
+  const int num_batches = static_cast<int>((ids.size() + batch_size - 1) / batch_size);
+  auto prepare = [&](int k) {
+    PreparedBatch& batch = slots[k % 2];
+    batch.begin = static_cast<size_t>(k) * batch_size;
+    const size_t n = std::min(ids.size(), batch.begin + batch_size) - batch.begin;
+    batch.inputs.assign(n, PlanarImage{});
+    batch.sizes.assign(n, cv::Size());
     ParallelFor(
         n,
         [&](size_t i) {
-          const FramePaths paths = dataset.Paths(ids[begin + i]);
+          const FramePaths paths = dataset.Paths(ids[batch.begin + i]);
           cv::Mat left;
           {
             ScopedStage stage(times, "read");
             left = ReadColourImage(paths.image_left);
           }
-          sizes[i] = left.size();
+          batch.sizes[i] = left.size();
           cv::Mat network_image = left, height_code;
           if (height) {
             cv::Mat right;
@@ -144,25 +193,30 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
             network_image = GaussianBlurImage(left, options.blur_sigma_px);
           }
           ScopedStage stage(times, "encode");
-          inputs[i] = PrepareNetworkInput(network_image, height_code, config);
+          batch.inputs[i] = PrepareNetworkInput(network_image, height_code, config);
         },
         options.threads);
+  };
+  auto consume = [&](int k) {
+    PreparedBatch& batch = slots[k % 2];
     std::vector<std::vector<ScoredBox>> boxes;
     {
       ScopedStage stage(times, "network");
-      boxes = model.Detect(inputs, options.decode);
+      boxes = model.Detect(batch.inputs, options.decode);
     }
     ScopedStage stage(times, "write");
-    for (size_t i = 0; i < n; ++i) {
-      const double sx = static_cast<double>(sizes[i].width) / config.InputWidth();
-      const double sy = static_cast<double>(sizes[i].height) / config.InputHeight();
+    for (size_t i = 0; i < batch.inputs.size(); ++i) {
+      const cv::Size size = batch.sizes[i];
+      const double sx = static_cast<double>(size.width) / config.InputWidth();
+      const double sy = static_cast<double>(size.height) / config.InputHeight();
       const std::vector<Object> objects =
-          ToKittiDetections(boxes[i], config.classes, sx, sy, sizes[i].width, sizes[i].height);
-      WriteObjects(out.path() / (ids[begin + i] + ".txt"), objects);
+          ToKittiDetections(boxes[i], config.classes, sx, sy, size.width, size.height);
+      WriteObjects(out.path() / (ids[batch.begin + i] + ".txt"), objects);
       summary.detections += static_cast<int64_t>(objects.size());
     }
-    progress.Add(static_cast<int64_t>(n));
-  }
+    progress.Add(static_cast<int64_t>(batch.inputs.size()));
+  };
+  RunTwoStagePipeline(num_batches, options.pipeline, prepare, consume);
   progress.Finish();
 
   RunManifest manifest;
@@ -175,14 +229,21 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
                      {"split", options.split}};
   manifest.settings_json = fmt::format(
       R"({{"model_weights_fnv1a64": "{}", "encoding": "{}", "blur_sigma_px": {}, )"
-      R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}}})",
+      R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}{}}})",
       HashFileHex(options.model_dir / "model.pt"), InputEncodingName(config.encoding),
       options.blur_sigma_px, options.decode.score_threshold, options.decode.nms.iou_threshold,
-      options.decode.nms.max_detections, options.max_frames);
+      options.decode.nms.max_detections, options.max_frames,
+      // The stereo settings the heights were made with (RGB-H only): the model's, or the flags'.
+      height ? ", \"stereo\": " + StereoSettingsJson(stereo) : std::string());
   for (const std::string& id : ids) {
     manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
   }
   WriteRunManifest(out.path(), manifest);
+  if (!options.shard.Whole()) {
+    WriteDetectShardRecord(out.path(),
+                           {manifest.tool, options.shard, options.batch_size,
+                            static_cast<int64_t>(all_ids.size()), FrameListHash(all_ids)});
+  }
   out.Commit();
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();

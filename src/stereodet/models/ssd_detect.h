@@ -3,12 +3,15 @@
 // --det OUT` and KITTI's devkit read, and OUT/run.json (util/run_manifest.h): the model (path and
 // the hash of its model.pt), the data, the settings and every frame written with its file's hash.
 // OUT holds one run: it is written as a StagedFolder (a hidden sibling, swapped in at the end), so
-// no detection file of an earlier run survives beside the new ones.
+// no detection file of an earlier run survives beside the new ones. With a shard K/N, OUT is the
+// shard's folder (detect_shard.h): its frames' files, its run.json and detect_shard.json, which
+// `detect merge` (MergeDetections) turns into the folder of one run.
 #ifndef STEREODET_MODELS_SSD_DETECT_H_
 #define STEREODET_MODELS_SSD_DETECT_H_
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +20,7 @@
 #include "stereodet/models/box_coder.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/util/progress.h"
+#include "stereodet/util/shard.h"
 
 namespace stereodet {
 
@@ -30,10 +34,17 @@ struct DetectSsdOptions {
   // the sharp pair, as in the paper's degradation study. 0 = off.
   double blur_sigma_px = 0.0;
   int batch_size = 8;
-  int threads = 0;             // LibTorch and the per-frame preparation (0 = all cores)
-  int max_frames = 0;          // only the first N frames of the split (0 = all)
+  int threads = 0;     // LibTorch and the per-frame preparation (0 = all cores)
+  int max_frames = 0;  // only the first N frames of the split (0 = all)
+  // Only shard K/N of those frames (after max_frames), in whole batches (detect_shard.h); 1/1 =
+  // all. A shard's folder also holds detect_shard.json; its detection files are those of one run
+  // of the same batch_size (DetectSsdShardTest).
+  Shard shard;
   std::string device = "cpu";  // cpu | cuda (device.h)
   DecodeOptions decode;        // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
+  // Prepare the next batch (reading, stereo, encoding) on a second thread while the network runs
+  // on this one (RunTwoStagePipeline). The detections are the same either way.
+  bool pipeline = true;
   // Stereo pipeline for RGB-H models. Unset: the settings model.json records (what the model was
   // trained with; the defaults for a model.json written before they were recorded). Set: these,
   // even where they differ (StereoMismatch tells which; `detect ssd` warns).
@@ -51,6 +62,11 @@ struct DetectSsdSummary {
   std::string stage_times;       // StageTimes::Format(): read, stereo, encode, network, write
 };
 
+// The stereo settings the model in `model_dir` was trained with (model.json's "stereo", the
+// defaults for a model.json written before they were recorded); nullopt for an rgb model, which
+// uses none. Throws std::runtime_error / ParseError naming model.json.
+std::optional<StereoOptions> ModelStereoSettings(const std::filesystem::path& model_dir);
+
 // The stereo settings `options.stereo` changes from those the RGB-H model in `options.model_dir`
 // was trained with (model.json), as DifferingStereoSettings words them
 // ("disparity.uniqueness_ratio: 15 (requested: 5)"); empty when unset, equal, or the model is rgb.
@@ -62,6 +78,13 @@ std::string StereoMismatch(const DetectSsdOptions& options);
 // without run.json (not an earlier detection folder); an earlier run's folder is replaced whole
 // at the end. An interrupted call leaves the previous folder as it was.
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options);
+
+// Runs prepare(k) and then consume(k) for k = 0 .. num_batches - 1, consume in order of k on the
+// calling thread. With `overlap`, prepare(k + 1) runs on a second thread while consume(k) runs (one
+// batch ahead at most), so prepare(k) and consume(k - 1) must not share state (two slots, k % 2).
+// An exception of either is rethrown here, after the other has finished; no later batch starts.
+void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
+                         const std::function<void(int)>& consume);
 
 // Network-input boxes -> KITTI detections in the original image: scaled by (scale_x, scale_y),
 // clipped to [0, image_width] x [0, image_height], rounded to 0.01 px, empty boxes dropped, score

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <sstream>
 #include <string>
@@ -151,6 +152,11 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
 
   const int64_t steps_per_epoch = (data.size() + options.batch_size - 1) / options.batch_size;
   const int64_t total_steps = steps_per_epoch * options.epochs;
+  if (const std::string warning =
+          WarmupWarning(options.warmup_steps, steps_per_epoch, options.epochs);
+      !warning.empty() && options.progress.stream != nullptr) {
+    std::fputs(warning.c_str(), options.progress.stream);
+  }
   double train_seconds = 0;
   int64_t images_trained = 0;
   const int end_epoch = options.max_epochs_this_run > 0

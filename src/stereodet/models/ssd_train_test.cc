@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -13,8 +15,10 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
+#include "stereodet/models/train_common.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_paths.h"
@@ -203,6 +207,69 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
         EXPECT_TRUE(o.score.has_value());
       }
     }
+    // run.json records the stereo settings the heights were made with.
+    EXPECT_NE(ReadFile(detect.out_dir / "run.json").find("\"num_disparities\": 32"),
+              std::string::npos);
+    // The pipelined frame loop (the default) writes exactly what the sequential one writes, for
+    // one and for several frames a batch.
+    for (int batch_size : {1, 3}) {
+      DetectSsdOptions sequential = detect;
+      sequential.pipeline = false;
+      sequential.batch_size = batch_size;
+      sequential.out_dir = TempDir("e2e_det_sequential");
+      DetectSsdOptions pipelined = sequential;
+      pipelined.pipeline = true;
+      pipelined.out_dir = TempDir("e2e_det_pipelined");
+      DetectSsd(sequential);
+      DetectSsd(pipelined);
+      for (int i = 0; i < 4; ++i) {
+        const std::string file = FrameId(i) + ".txt";
+        const std::string text = ReadFile(pipelined.out_dir / file);
+        EXPECT_FALSE(text.empty()) << file;
+        EXPECT_TRUE(text == ReadFile(sequential.out_dir / file))
+            << file << ", batch " << batch_size;
+        // (LibTorch's kernels round differently for another batch size: compare like with like.)
+        if (batch_size == detect.batch_size) {
+          EXPECT_TRUE(text == ReadFile(detect.out_dir / file)) << file;
+        }
+      }
+    }
+  }
+}
+
+TEST(SsdDetectTest, TwoStagePipelineConsumesInOrderAndRethrows) {
+  for (bool overlap : {false, true}) {
+    for (int n : {0, 1, 2, 7}) {
+      std::vector<int> slot(2, -1), consumed;
+      RunTwoStagePipeline(
+          n, overlap, [&](int k) { slot[k % 2] = k * 10; },
+          [&](int k) {
+            EXPECT_EQ(slot[k % 2], k * 10);  // its own preparation, not the next one's
+            consumed.push_back(k);
+          });
+      std::vector<int> expected(n);
+      std::iota(expected.begin(), expected.end(), 0);
+      EXPECT_EQ(consumed, expected) << "overlap " << overlap << ", " << n << " batches";
+    }
+    // A failing preparation stops the loop: nothing after it is consumed.
+    std::vector<int> consumed;
+    EXPECT_THROW(RunTwoStagePipeline(
+                     5, overlap,
+                     [](int k) {
+                       if (k == 2) throw std::runtime_error("frame 2 unreadable");
+                     },
+                     [&](int k) { consumed.push_back(k); }),
+                 std::runtime_error);
+    EXPECT_EQ(consumed, (std::vector<int>{0, 1}));
+    // So does a failing consumer, after the preparation in flight has finished.
+    int prepared = 0;
+    EXPECT_THROW(RunTwoStagePipeline(
+                     5, overlap, [&](int) { ++prepared; },
+                     [](int k) {
+                       if (k == 1) throw std::invalid_argument("bad batch");
+                     }),
+                 std::invalid_argument);
+    EXPECT_EQ(prepared, overlap ? 3 : 2);
   }
 }
 
@@ -234,6 +301,50 @@ TEST(SsdDetectTest, RefusesAnOutputInsideTheInputsOrAForeignFolder) {
     EXPECT_NE(std::string(e.what()).find("holds no run.json"), std::string::npos) << e.what();
   }
   EXPECT_EQ(ReadFile(detect.out_dir / "notes.txt"), "mine");
+}
+
+TEST(SsdTrainTest, WarmupWarningOnlyWhenTheWarmupOutlastsTheTraining) {
+  EXPECT_EQ(WarmupWarning(100, 6, 2),
+            "warning: this training has 12 steps (2 epochs of 6), fewer than the learning-rate "
+            "warm-up's 100; it never reaches the peak rate (more --epochs, more frames or a "
+            "smaller --batch-size)\n");
+  EXPECT_NE(WarmupWarning(13, 6, 2), "");
+  EXPECT_NE(WarmupWarning(2, 1, 1).find("(1 epoch of 1)"), std::string::npos);
+  EXPECT_EQ(WarmupWarning(12, 6, 2), "");
+  EXPECT_EQ(WarmupWarning(0, 1, 1), "");
+}
+
+// Reads what a training wrote to its progress stream.
+std::string TrainAndCaptureProgress(TrainSsdOptions options) {
+  std::FILE* stream = std::tmpfile();
+  options.progress.stream = stream;
+  options.progress.mode = ProgressOptions::Mode::kPlain;
+  TrainSsd(options);
+  std::fflush(stream);
+  std::rewind(stream);
+  std::string text;
+  char buffer[4096];
+  while (size_t n = std::fread(buffer, 1, sizeof buffer, stream)) text.append(buffer, n);
+  std::fclose(stream);
+  return text;
+}
+
+TEST(SsdTrainTest, TrainingShorterThanTheWarmupWarnsOnce) {
+  const fs::path root = WriteTinyDataset("warmup_data", 2);
+  TrainSsdOptions options = TinyTraining(root, TempDir("warmup_model"));
+  options.model.encoding = InputEncoding::kRgb;
+  options.epochs = 1;  // 1 step of 2 frames
+  options.warmup_steps = 5;
+  std::string text = TrainAndCaptureProgress(options);
+  size_t at = text.find(
+      "warning: this training has 1 steps (1 epoch of 1), fewer than the "
+      "learning-rate warm-up's 5");
+  EXPECT_NE(at, std::string::npos) << text;
+  EXPECT_EQ(text.find("warning:", at + 1), std::string::npos) << text;  // once
+  options.force = true;
+  options.warmup_steps = 1;
+  text = TrainAndCaptureProgress(options);
+  EXPECT_EQ(text.find("warning:"), std::string::npos) << text;
 }
 
 TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
@@ -312,6 +423,49 @@ TEST(SsdTrainTest, ResumeRefusesACheckpointOfAnotherFolder) {
   EXPECT_EQ(TrainSsd(b).epochs_done, 2);
   EXPECT_EQ(ReadWeightsRecord(ReadFile(b.out_dir / "model.json"), "b").training_run, run_b);
   EXPECT_NE(ReadWeightsRecord(ReadFile(a.out_dir / "model.json"), "a").training_run, run_b);
+}
+
+// Shards of a real model's detection, merged, are the folder of one run byte for byte (run.json
+// but its command line). 5 frames in batches of 3 in 2 shards: shard 0 is frames 0-2 (the one
+// run's first batch), not 0-1 as frame shards would be (then frame 0's scores differed from the
+// one run's in the sixth decimal: LibTorch's floats depend on the batch size).
+TEST(DetectSsdShardTest, MergedShardsAreOneRunByteForByte) {
+  const fs::path root = WriteTinyDataset("shard_data", 5);
+  TrainSsdOptions training = TinyTraining(root, TempDir("shard_model"));
+  training.epochs = 1;
+  TrainSsd(training);
+  DetectSsdOptions detect;
+  detect.model_dir = training.out_dir;
+  detect.data_root = root;
+  detect.threads = 1;
+  detect.batch_size = 3;
+  detect.decode.score_threshold = 0.0;  // every box: many scores, compared to the last digit
+  detect.progress.stream = nullptr;
+  detect.out_dir = TempDir("shard_one");
+  detect.command_line = "the command line";
+  EXPECT_EQ(DetectSsd(detect).frames, 5);
+  MergeDetectionsOptions merge;
+  for (int k : {1, 0}) {
+    DetectSsdOptions shard = detect;
+    shard.shard = {k, 2};
+    shard.out_dir = TempDir("shard_" + std::to_string(k));
+    EXPECT_EQ(DetectSsd(shard).frames, k == 0 ? 3 : 2);
+    EXPECT_TRUE(fs::exists(shard.out_dir / kDetectShardFile));
+    merge.shards.push_back(shard.out_dir);
+  }
+  merge.out_dir = TempDir("shard_merged");
+  merge.command_line = detect.command_line;
+  EXPECT_EQ(MergeDetections(merge).frames, 5);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(detect.out_dir)) {
+    const fs::path merged = merge.out_dir / e.path().filename();
+    ASSERT_TRUE(fs::exists(merged)) << merged;
+    EXPECT_EQ(ReadFile(merged), ReadFile(e.path())) << merged;
+    ++files;
+  }
+  EXPECT_EQ(files, 6);  // five frames and run.json
+  EXPECT_GT(fs::file_size(detect.out_dir / (FrameId(4) + ".txt")), 100u);  // not vacuous
+  EXPECT_FALSE(fs::exists(merge.out_dir / kDetectShardFile));
 }
 
 TEST(SsdDetectTest, ToKittiDetectionsScalesClipsAndMarks3DUnknown) {

@@ -1,5 +1,7 @@
 #include "stereodet/models/train_common.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -18,6 +20,16 @@ double WarmupCosineLearningRate(double peak, int warmup_steps, double final_frac
       total_steps > 1 ? std::clamp(static_cast<double>(step) / (total_steps - 1), 0.0, 1.0) : 1.0;
   const double cosine = 0.5 * (1.0 + std::cos(M_PI * progress));
   return peak * warmup * (final_fraction + (1.0 - final_fraction) * cosine);
+}
+
+std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs) {
+  const int64_t total_steps = steps_per_epoch * epochs;
+  if (total_steps >= warmup_steps) return "";
+  return fmt::format(
+      "warning: this training has {} steps ({} epoch{} of {}), fewer than the learning-rate "
+      "warm-up's {}; it never reaches the peak rate (more --epochs, more frames or a smaller "
+      "--batch-size)\n",
+      total_steps, epochs, epochs == 1 ? "" : "s", steps_per_epoch, warmup_steps);
 }
 
 bool PrepareModelFolder(const std::filesystem::path& out_dir, bool resume, bool force) {

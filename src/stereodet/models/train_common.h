@@ -16,6 +16,13 @@ namespace stereodet {
 double WarmupCosineLearningRate(double peak, int warmup_steps, double final_fraction, int64_t step,
                                 int64_t total_steps);
 
+// The one-line warning (newline included) for a training of `total_steps` steps that ends before
+// its learning-rate warm-up of `warmup_steps` does, so the peak rate is never reached: "warning:
+// this training has 12 steps (2 epochs of 6), fewer than the learning-rate warm-up's 100; it never
+// reaches the peak rate (more --epochs, more frames or a smaller --batch-size)". Empty when
+// total_steps >= warmup_steps.
+std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs);
+
 // The files a model folder holds for a training (model.pt, model.json, checkpoint.pt,
 // train_log.csv, run.json).
 inline constexpr char kCheckpointFile[] = "checkpoint.pt";

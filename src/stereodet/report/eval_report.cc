@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "stereodet/report/bootstrap_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/strings.h"
@@ -278,10 +279,15 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
   json results = json::array();
   for (const EvalRun& run : runs) {
     const std::string tag = DescribeOverlaps(run.options.classes);
-    for (const ClassResult& r : run.result.results) {
-      results.push_back(ClassResultJson(r, tag, RunSuffix(runs, run)));
+    for (size_t c = 0; c < run.result.results.size(); ++c) {
+      results.push_back(ClassResultJson(run.result.results[c], tag, RunSuffix(runs, run)));
+      if (run.bootstrap && c < run.bootstrap->cells.size()) {
+        results.back()["bootstrap"] =
+            BootstrapCellJson(run.bootstrap->cells[c], run.options.matcher);
+      }
     }
   }
+  if (first.bootstrap) j["bootstrap"] = BootstrapSummaryJson(*first.bootstrap);
   j["results"] = results;
   return j;
 }
@@ -607,6 +613,7 @@ std::string FormatEvalTable(const std::vector<EvalRun>& runs) {
   for (size_t k = 0; k < runs.size(); ++k) {
     if (k > 0) out << "\n";
     FormatRun(runs[k].result, runs[k].options, out);
+    if (runs[k].bootstrap) out << FormatBootstrapTable(*runs[k].bootstrap);
   }
   for (const std::string& note : EvalNotes(runs)) out << note << "\n";
   return out.str();

@@ -7,9 +7,11 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/evaluator.h"
 
@@ -35,6 +37,9 @@ struct EvalRunInfo {
 struct EvalRun {
   EvalOptions options;
   EvalResult result;
+  // With `eval --bootstrap N`: the intervals of the same frames and options (Bootstrap), in
+  // results.json (top-level "bootstrap", and each cell's) and after the run's table.
+  std::optional<BootstrapResult> bootstrap = std::nullopt;
 };
 
 // Notes for the reader, one line each: scores that are not probabilities (Brier and ECE left out)

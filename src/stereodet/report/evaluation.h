@@ -13,9 +13,11 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/evaluator.h"
@@ -46,6 +48,9 @@ struct EvaluationOptions {
   // written, as `stereodet report OUT` would). Requires out.
   bool report = false;
   bool report_png = true;  // the report's PNG figures too (where the build has librsvg)
+  // Bootstrap intervals over frames for every run (Bootstrap; EvalRun::bootstrap), in
+  // results.json and the table. Unset: none. Its num_threads is replaced by input.num_threads.
+  std::optional<BootstrapOptions> bootstrap;
   // Provenance recorded in results.json (EvalRunInfo).
   std::string tool_version;
   std::string command_line;
@@ -61,8 +66,9 @@ struct EvaluationResult {
   // The runs' options as evaluated (keep_records set with records) and their results, in the order
   // of EvaluationOptions::runs.
   std::vector<EvalRun> runs;
-  EvalRunInfo info;    // what results.json records about the input and the run
-  double seconds = 0;  // the runs' Evaluate() time, summed
+  EvalRunInfo info;              // what results.json records about the input and the run
+  double seconds = 0;            // the runs' Evaluate() time, summed
+  double bootstrap_seconds = 0;  // the runs' Bootstrap() time, summed (0 without bootstrap)
   // With out: every file written, as paths under out (the report's, then the records files).
   std::vector<std::filesystem::path> files;
   // With records: per run, the records file's name under out and its rows.
@@ -122,6 +128,15 @@ struct EvalShardInfo {
 // folder (no eval_shard.json), ParseError for a malformed one.
 EvalShardInfo ReadEvalShard(const std::filesystem::path& dir);
 
+// The frames of the folders of `eval --shard K/N` (all N of one input, in any order), as
+// LoadEvalFrames reads the whole list: the shards' label and detection bytes in shard order,
+// parsed as LoadEvalFrames parses them (on num_threads threads). With `shards_input`, the input
+// the shards read (gt, det, split, lenient) goes there. Throws std::invalid_argument for a shard
+// missing, given twice, of another N or another input, std::runtime_error for a folder that is
+// not a shard and for bad frame files. What `eval merge`, and `eval sweep|compare --shards`, read.
+EvalInput LoadEvalShards(const std::vector<std::filesystem::path>& shards, int num_threads,
+                         EvalInputOptions* shards_input = nullptr);
+
 // Checks the shards (all of 0..N-1 once, one input), claims `out`, reads the shards' frames,
 // evaluates and writes as RunEvaluation does; refuses before the commit, naming the shard, when
 // its options differ. Throws std::invalid_argument for a bad set of shards or options,
@@ -132,6 +147,9 @@ EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options);
 // one filter bound (FilterSweep).
 struct EvaluationSweepOptions {
   EvalInputOptions input;
+  // Non-empty: the frames are those of these `eval --shard` folders (LoadEvalShards; input.gt and
+  // det are not read, input.num_threads is used), which gives the rows of the sweep of one run.
+  std::vector<std::filesystem::path> shards;
   // One run; its filter's conditions are the fixed ones the swept bound is added to.
   EvalOptions eval;
   FilterBound bound = FilterBound::kMinArea;  // the swept bound
@@ -159,7 +177,10 @@ EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options);
 struct EvaluationCompareOptions {
   EvalInputOptions input;       // input.det holds the detections A
   std::filesystem::path det_b;  // the detections B, read like A (same labels, split, leniency)
-  EvalOptions eval;             // both are evaluated with these
+  // Both non-empty: A's and B's frames are those of these `eval --shard` folders (LoadEvalShards;
+  // input.gt, det and det_b are not read), shards of the same labels, split and leniency.
+  std::vector<std::filesystem::path> shards, shards_b;
+  EvalOptions eval;  // both are evaluated with these
   // A KITTI calib file whose baseline and focal length the model uses. Empty: KittiLikeCalibration.
   std::filesystem::path calib;
   // The model's disparity error (the baseline and focal length are set from `calib`).
@@ -168,6 +189,10 @@ struct EvaluationCompareOptions {
   std::filesystem::path out;
   // Also write OUT/report/ (WriteReport on OUT: the compare figures, SVG and PNG). Requires out.
   bool report = false;
+  // A paired bootstrap of A and B over the same resampled frames (PairedBootstrap): the interval
+  // of each metric's A - B, in OUT/bootstrap.csv (FormatPairedBootstrapCsv). Unset: none. Its
+  // num_threads is replaced by input.num_threads.
+  std::optional<BootstrapOptions> bootstrap;
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -179,6 +204,10 @@ struct EvaluationCompareResult {
   std::string csv;                     // FormatCompareCsv(rows)
   std::filesystem::path csv_path;      // OUT/compare.csv; empty without out
   std::filesystem::path report_index;  // with report: OUT/report/index.html
+  // With bootstrap: the paired intervals, their CSV and OUT/bootstrap.csv (empty without out).
+  std::optional<PairedBootstrapResult> bootstrap;
+  std::string bootstrap_csv;
+  std::filesystem::path bootstrap_csv_path;
 };
 
 // Reads A then B, evaluates both, then reads the calibration and compares.

@@ -235,5 +235,79 @@ TEST(RunEvaluationCompareTest, GivesTheKnownDepthErrorsPerBin) {
   EXPECT_THROW(RunEvaluationCompare(no_b), std::invalid_argument);
 }
 
+// --bootstrap: results.json carries the settings and each cell's intervals, whose estimates are the
+// cell's own numbers; the table has the block; the same seed gives the same file.
+TEST(RunEvaluationTest, BootstrapIntervalsInResultsJsonAndTheTable) {
+  TestTempDir dir;
+  EvaluationOptions options = SmallCar2d();
+  options.out = dir / "eval";
+  BootstrapOptions bootstrap;
+  bootstrap.num_resamples = 60;
+  bootstrap.seed = 5;
+  options.bootstrap = bootstrap;
+  const EvaluationResult result = RunEvaluation(options);
+  ASSERT_EQ(result.runs.size(), 1u);
+  ASSERT_TRUE(result.runs[0].bootstrap.has_value());
+  EXPECT_EQ(result.runs[0].bootstrap->num_resamples, 60);
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  EXPECT_EQ(j["bootstrap"]["resamples"], 60);
+  EXPECT_EQ(j["bootstrap"]["seed"], 5);
+  EXPECT_EQ(j["bootstrap"]["confidence"], 0.95);
+  int checked = 0;
+  for (const nlohmann::json& cell : j["results"]) {
+    ASSERT_TRUE(cell.contains("bootstrap")) << cell.dump();
+    const nlohmann::json& ap = cell["bootstrap"]["ap_r40"];
+    EXPECT_EQ(ap["estimate"], cell["ap_r40"]);
+    EXPECT_LE(ap["lower"].get<double>(), ap["upper"].get<double>());
+    EXPECT_EQ(ap["resamples_defined"], 60);
+    EXPECT_FALSE(cell["bootstrap"].contains("ap_voc"));  // the KITTI matcher has none
+    EXPECT_TRUE(cell["bootstrap"].contains("brier_labels"));
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
+  const std::string table = FormatEvalTable(result.runs);
+  EXPECT_THAT(table, HasSubstr("bootstrap: 60 resamples of the 12 frames (seed 5), 95% "
+                               "percentile intervals\n"));
+  EXPECT_THAT(table, ::testing::ContainsRegex("Car +2d +Moderate +[|] 15.77 [[][0-9.]+, [0-9.]+[]] "
+                                              "+22.00 [[]"));
+  // Without --bootstrap: no key, no block.
+  options.bootstrap.reset();
+  const EvaluationResult plain = RunEvaluation(options);
+  EXPECT_FALSE(nlohmann::json::parse(ReadFile(options.out / "results.json")).contains("bootstrap"));
+  EXPECT_THAT(FormatEvalTable(plain.runs), ::testing::Not(HasSubstr("bootstrap:")));
+  options.bootstrap = bootstrap;
+  options.bootstrap->confidence = 1.5;
+  EXPECT_THROW(RunEvaluation(options), std::invalid_argument);
+}
+
+// eval compare --bootstrap: the paired intervals in OUT/bootstrap.csv; A vs A is exactly zero.
+TEST(RunEvaluationCompareTest, PairedBootstrapCsv) {
+  TestTempDir dir;
+  EvaluationCompareOptions options;
+  options.input.gt = kData / "eval_small";
+  options.input.det = kData / "eval_small/det";
+  options.det_b = kData / "eval_small/det";
+  options.eval.classes = {KittiClassSpec("Car")};
+  options.eval.metrics = {OverlapKind::k2D};
+  options.out = dir / "compare";
+  BootstrapOptions bootstrap;
+  bootstrap.num_resamples = 40;
+  options.bootstrap = bootstrap;
+  const EvaluationCompareResult result = RunEvaluationCompare(options);
+  ASSERT_TRUE(result.bootstrap.has_value());
+  EXPECT_EQ(result.bootstrap_csv_path, options.out / "bootstrap.csv");
+  const std::string csv = ReadFile(result.bootstrap_csv_path);
+  EXPECT_EQ(csv, result.bootstrap_csv);
+  // Header + 3 difficulties x 5 metrics (no ap_voc with the KITTI matcher).
+  EXPECT_EQ(CountLines(csv), 1 + 3 * 5);
+  EXPECT_THAT(csv, HasSubstr("Car,2d,Moderate,ap_r40,15.77"));
+  // A - B and its interval are 0, defined in every resample.
+  EXPECT_THAT(csv, ::testing::ContainsRegex("Car,2d,Moderate,ap_r40,[0-9.,]*,0,0,0,40,40,0.95,1"));
+  for (const BootstrapCell& cell : result.bootstrap->difference.cells) {
+    EXPECT_EQ(cell.Get(BootstrapMetric::kApR40).lower, 0.0);
+    EXPECT_EQ(cell.Get(BootstrapMetric::kApR40).upper, 0.0);
+  }
+}
+
 }  // namespace
 }  // namespace stereodet

@@ -36,9 +36,11 @@ enum Stream : uint64_t {
 // by another version is refused rather than mixed. 1: the first street model; 2: issue 16's
 // textures (asphalt, paving, kerbs, facades, fences), car details, sun glints, per-frame white
 // balance and sensor noise; 3: issue 16's curved car hulls (saloon, hatchback, estate) and the
-// street mirrored in paint and glass; 4: issue 16's road shapes (bends, crests and sags, crossfall,
-// the car's pitch and roll, side streets; synth/road.h), and planes/ holding the least-squares
-// plane of the true ground where the stereo ground fit samples it.
+// street mirrored in paint and glass; 4: issue 16's dusty paint, lamps, plates and glass with
+// the interior's headrests, the roadside clutter (synth/clutter.h), people with limbs and
+// garments, the road shapes (bends, crests and sags, crossfall, the car's pitch and roll, side
+// streets; synth/road.h), and planes/ holding the least-squares plane of the true ground where the
+// stereo ground fit samples it.
 constexpr int kSettingsVersion = 4;
 
 // The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b

@@ -64,4 +64,24 @@ Eigen::Vector3f ClothColour(Rng& rng) {
   }
 }
 
+Material ClothMaterial(Rng& rng, bool lower) {
+  const double pick = rng.Uniform(0.0, 1.0);
+  const double contrast = rng.Uniform(0.2, 0.35);
+  Material m = MakeMaterial(Pattern::kCloth, ClothColour(rng), static_cast<float>(contrast));
+  if (lower && pick < 0.3) {
+    m.variant = 3;
+    m.albedo = Vary(rng, Rgb(0.06, 0.09, 0.2), 0.4);
+    m.lidar_reflectance = 0.08f + 0.5f * Luma(m.albedo);
+  } else if (pick > 0.9) {
+    m.variant = 2;
+  } else if (pick > 0.75) {
+    m.variant = 1;
+  }
+  if (m.variant == 1 || m.variant == 2) {
+    m.albedo2 = ClothColour(rng);
+    m.scale_m = static_cast<float>(rng.Uniform(0.03, 0.12));
+  }
+  return m;
+}
+
 }  // namespace stereodet

@@ -33,6 +33,12 @@ Eigen::Vector3f CarColour(Rng& rng);
 // A clothing colour: mostly dark, navy, grey-brown or red, sometimes any muted colour.
 Eigen::Vector3f ClothColour(Rng& rng);
 
+// A garment: a kCloth material (scene.h's variants) of ClothColour with fold contrast 0.2-0.35:
+// plain (75 %), striped (15 %) or checked (10 %), the stripes and checks of a second
+// ClothColour with a period of 3-12 cm; of the `lower` garments (trousers, skirts) 30 % are denim
+// instead of plain.
+Material ClothMaterial(Rng& rng, bool lower);
+
 }  // namespace stereodet
 
 #endif  // STEREODET_SYNTH_MATERIALS_H_

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+
+#include "stereodet/synth/texture.h"
 
 namespace stereodet {
 namespace {
@@ -69,6 +72,66 @@ TEST(MaterialsTest, PaletteColoursAreValidAndVaried) {
   EXPECT_GT(dark_cars, 120);
   EXPECT_LT(dark_cars, 250);
   EXPECT_GT(Luma(car_sum / 1000.0f), 0.15f);
+}
+
+}  // namespace
+}  // namespace stereodet
+
+namespace stereodet {
+namespace {
+
+TEST(MaterialsTest, ClothMaterialDrawsEveryVariantAndDenimOnlyBelow) {
+  Rng rng(5);
+  std::array<int, 4> upper{}, lower{};
+  for (int i = 0; i < 2000; ++i) {
+    const Material u = ClothMaterial(rng, false), l = ClothMaterial(rng, true);
+    ASSERT_EQ(u.pattern, Pattern::kCloth);
+    ASSERT_LT(u.variant, 4);
+    ASSERT_LT(l.variant, 4);
+    ++upper[u.variant];
+    ++lower[l.variant];
+    if (u.variant == 1 || u.variant == 2) {
+      EXPECT_GE(u.scale_m, 0.03f);
+      EXPECT_LE(u.scale_m, 0.12f);
+    }
+    EXPECT_GE(u.contrast, 0.2f);
+    EXPECT_LE(u.contrast, 0.35f);
+  }
+  EXPECT_EQ(upper[3], 0);  // no denim jackets
+  for (int v = 0; v < 3; ++v) EXPECT_GT(upper[v], 100) << v;
+  for (int v = 0; v < 4; ++v) EXPECT_GT(lower[v], 100) << v;
+  // Shares as documented: plain 75 % (45 % below, where denim takes 30 %), stripes 15 %,
+  // checks 10 %.
+  EXPECT_NEAR(upper[0] / 2000.0, 0.75, 0.04);
+  EXPECT_NEAR(lower[3] / 2000.0, 0.3, 0.04);
+  EXPECT_NEAR(upper[1] / 2000.0, 0.15, 0.03);
+  EXPECT_NEAR(upper[2] / 2000.0, 0.1, 0.03);
+}
+
+// A striped garment (period 0.1 m, stripes 4.5 cm wide centred on multiples of the period) shows
+// albedo2 on a stripe's centre line and albedo between stripes, on a box face 10 m ahead.
+TEST(MaterialsTest, StripedClothHasStripesOfItsSecondColour) {
+  Scene scene;
+  Material cloth = MakeMaterial(Pattern::kCloth, Rgb(0.1, 0.1, 0.1), 0.0f);
+  cloth.variant = 1;
+  cloth.albedo2 = Rgb(0.6, 0.5, 0.4);
+  cloth.scale_m = 0.1f;
+  const int m = scene.AddMaterial(cloth);
+  // A box 1 m high from y = 1.0 (bottom) up to y = 0.0, its face towards the camera at z = 10.
+  scene.primitives.push_back(MakeBox(Eigen::Vector3f(0.0f, 0.5f, 10.5f),
+                                     Eigen::Vector3f(1.0f, 0.5f, 0.5f), Eigen::Matrix3f::Identity(),
+                                     m));
+  scene.ground_y_m = 100.0f;
+  scene.Finalize();
+  const auto albedo_at = [&](float height) {
+    const Ray ray(Eigen::Vector3f::Zero(), Eigen::Vector3f(0.02f, (1.0f - height) / 10.0f, 1.0f));
+    const SurfaceHit hit = scene.Trace(ray);
+    EXPECT_EQ(hit.kind, SurfaceHit::Kind::kPrimitive);
+    return SurfaceAlbedo(scene, hit, 1e-3f);
+  };
+  EXPECT_TRUE(albedo_at(0.3f).isApprox(cloth.albedo2, 1e-3f)) << albedo_at(0.3f).transpose();
+  EXPECT_TRUE(albedo_at(0.35f).isApprox(cloth.albedo, 1e-3f)) << albedo_at(0.35f).transpose();
+  EXPECT_TRUE(albedo_at(0.7f).isApprox(cloth.albedo2, 1e-3f));
 }
 
 }  // namespace

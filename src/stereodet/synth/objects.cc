@@ -78,7 +78,7 @@ VehicleMaterials AddVehicleMaterials(Scene& scene, Rng& rng, const Eigen::Vector
   paint.specular = 0.12f;
   paint.scale_m = 0.0f;  // no wheel arches unless the builder sets the axle position
   Material glass = MakeMaterial(Pattern::kGlass, Rgb(0.05, 0.055, 0.06), 0.8f, 0.05f);
-  glass.specular = 0.3f;
+  glass.specular = 0.22f;
   glass.albedo2 = colour;  // pillars and frames
   Material tyre = MakeMaterial(Pattern::kWheel, Rgb(0.055, 0.055, 0.055), 0.45f, 0.04f);
   // Rims: silver alloy mostly, some black or dark grey.
@@ -199,23 +199,48 @@ void BuildTruck(Parts& p, float l, float w, float h, const VehicleMaterials& m,
   }
 }
 
-void BuildPedestrian(Parts& p, float h, int top, int bottom, int skin, Rng& rng) {
+// Details of a person that are not clothes: shoes, hair, bags.
+struct PersonMaterials {
+  int top, bottom, skin, shoes, hair, bag;
+};
+
+// A walking or standing person: legs (a stride of up to a third of a metre, none when
+// standing), arms (swinging against the legs, or hanging), torso, head with hair, shoes; some
+// carry a backpack or a bag in one hand. The head's top is at h (the hair stays inside it).
+void BuildPedestrian(Parts& p, float h, const PersonMaterials& m, Rng& rng) {
   const float s = h / 1.75f;
-  const float stride = static_cast<float>(rng.Uniform(0.0, 0.33)) * s;
+  const bool standing = rng.Bernoulli(0.2);
+  const float stride = standing ? 0.0f : static_cast<float>(rng.Uniform(0.05, 0.33)) * s;
   const float swing = 0.6f * stride;
   const float lean = static_cast<float>(rng.Uniform(0.0, 0.05));
   const float hip = 0.5f * h, neck = 0.83f * h;
+  const int carry = rng.Categorical({0.7, 0.18, 0.12});  // nothing, a backpack, a bag
   for (float side : {-1.0f, 1.0f}) {
-    p.Segment({0.0f, hip, 0.09f * s * side}, {side * stride, 0.03f, 0.1f * s * side}, 0.065f * s,
-              0.07f * s, bottom);
-    p.Segment({lean, neck - 0.03f * s, 0.21f * s * side},
-              {-side * swing, 0.44f * h, 0.24f * s * side}, 0.045f * s, 0.045f * s, top);
+    const Eigen::Vector3f foot(side * stride, 0.09f, 0.1f * s * side);
+    p.Segment({0.0f, hip, 0.09f * s * side}, foot, 0.065f * s, 0.07f * s, m.bottom);
+    p.Box(foot.x() - 0.05f * s, foot.x() + 0.17f * s, 0.0f, 0.09f, foot.z() - 0.05f * s,
+          foot.z() + 0.05f * s, m.shoes);
+    const Eigen::Vector3f hand(-side * swing, 0.44f * h, 0.24f * s * side);
+    p.Segment({lean, neck - 0.03f * s, 0.21f * s * side}, hand, 0.045f * s, 0.045f * s, m.top);
+    if (carry == 2 && side > 0.0f) {  // a bag hanging from the right hand
+      p.Box(hand.x() - 0.17f * s, hand.x() + 0.17f * s, hand.y() - 0.3f * s, hand.y() - 0.02f,
+            hand.z() - 0.05f * s, hand.z() + 0.05f * s, m.bag);
+    }
   }
-  p.Segment({0.0f, hip - 0.05f * s, 0.0f}, {lean, neck, 0.0f}, 0.11f * s, 0.18f * s, top);
-  p.Ellipsoid({lean + 0.01f, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.1f, 0.115f, 0.09f) * s, skin);
+  p.Segment({0.0f, hip - 0.05f * s, 0.0f}, {lean, neck, 0.0f}, 0.11f * s, 0.18f * s, m.top);
+  if (carry == 1) {  // a backpack on the back (local -x)
+    p.Box(lean * 0.5f - 0.3f * s, lean * 0.5f - 0.1f * s, 0.6f * h, 0.8f * h, -0.15f * s, 0.15f * s,
+          m.bag);
+  }
+  const Eigen::Vector3f head(lean + 0.01f, h - 0.115f * s, 0.0f);
+  const Eigen::Vector3f head_r = Eigen::Vector3f(0.1f, 0.115f, 0.09f) * s;
+  p.Ellipsoid(head, head_r, m.skin);
+  // Hair: a cap over the back and top of the head, as high as the head.
+  p.Ellipsoid(head + Eigen::Vector3f(-0.015f * s, 0.0f, 0.0f),
+              Eigen::Vector3f(0.95f * head_r.x(), head_r.y(), 1.04f * head_r.z()), m.hair);
 }
 
-void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin) {
+void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin, int hair) {
   const float s = h / 1.27f;
   const float seat = 0.46f * s;
   for (float side : {-1.0f, 1.0f}) {
@@ -229,9 +254,12 @@ void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin) {
   p.Segment({-0.1f * s, seat - 0.05f * s, 0.0f}, {-0.12f * s, 1.02f * s, 0.0f}, 0.11f * s,
             0.18f * s, top);
   p.Ellipsoid({-0.11f * s, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.1f, 0.115f, 0.09f) * s, skin);
+  p.Ellipsoid({-0.125f * s, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.095f, 0.115f, 0.094f) * s,
+              hair);
 }
 
-void BuildCyclist(Parts& p, float h, int top, int bottom, int skin, int frame, int tyre, Rng& rng) {
+void BuildCyclist(Parts& p, float h, int top, int bottom, int skin, int frame, int tyre, int helmet,
+                  Rng& rng) {
   const float s = h / 1.72f;
   const float r = 0.34f;
   for (float x : {-0.53f, 0.53f}) p.Wheel(x * s, 0.0f, r, 0.045f, tyre);
@@ -255,6 +283,8 @@ void BuildCyclist(Parts& p, float h, int top, int bottom, int skin, int frame, i
   }
   p.Segment(hip, shoulder, 0.11f * s, 0.18f * s, top);
   p.Ellipsoid({0.3f * s, h - 0.11f * s, 0.0f}, Eigen::Vector3f(0.11f, 0.11f, 0.09f) * s, skin);
+  // A helmet (or hair) over the top and back of the head, no higher than the head.
+  p.Ellipsoid({0.29f * s, h - 0.11f * s, 0.0f}, Eigen::Vector3f(0.1f, 0.11f, 0.097f) * s, helmet);
 }
 
 // Extent of parts in their local frame.
@@ -328,19 +358,32 @@ int AddObject(Scene& scene, const std::string& type, const Box3D& box, Rng& rng)
         parts.Wheel(-0.1f * lf, z, 0.3f, 0.18f, m.tyre);
     }
   } else {
-    const int top = scene.AddMaterial(MakeMaterial(Pattern::kCloth, ClothColour(rng), 0.25f));
-    const int bottom = scene.AddMaterial(MakeMaterial(Pattern::kCloth, ClothColour(rng), 0.25f));
+    const int top = scene.AddMaterial(ClothMaterial(rng, false));
+    const int bottom = scene.AddMaterial(ClothMaterial(rng, true));
     const int skin =
         scene.AddMaterial(MakeMaterial(Pattern::kPlain, Vary(rng, Rgb(0.55, 0.4, 0.3), 0.3), 0.1f));
+    // Hair: black, brown, blond or grey.
+    const Eigen::Vector3f hair_colour = std::vector<Eigen::Vector3f>{
+        Rgb(0.02, 0.018, 0.015), Rgb(0.08, 0.05, 0.03), Rgb(0.35, 0.27, 0.15),
+        Rgb(0.35, 0.35, 0.35)}[rng.Categorical({0.3, 0.4, 0.15, 0.15})];
+    const int hair = scene.AddMaterial(MakeMaterial(Pattern::kCloth, hair_colour, 0.3f));
     if (type == "Pedestrian") {
-      BuildPedestrian(parts, hf, top, bottom, skin, rng);
+      PersonMaterials m{top, bottom, skin, 0, hair, 0};
+      m.shoes = scene.AddMaterial(
+          MakeMaterial(Pattern::kPlain, Vary(rng, Rgb(0.05, 0.045, 0.04), 0.5), 0.2f));
+      m.bag = scene.AddMaterial(ClothMaterial(rng, false));
+      BuildPedestrian(parts, hf, m, rng);
     } else if (type == "Person_sitting") {
-      BuildPersonSitting(parts, hf, top, bottom, skin);
+      BuildPersonSitting(parts, hf, top, bottom, skin, hair);
     } else if (type == "Cyclist") {
       const int frame = scene.AddMaterial(MakeMaterial(Pattern::kPlain, CarColour(rng), 0.1f));
       const int tyre =
           scene.AddMaterial(MakeMaterial(Pattern::kPlain, Rgb(0.03, 0.03, 0.03), 0.1f, 0.04f));
-      BuildCyclist(parts, hf, top, bottom, skin, frame, tyre, rng);
+      const int helmet =
+          rng.Bernoulli(0.6)
+              ? scene.AddMaterial(MakeMaterial(Pattern::kPlain, CarColour(rng), 0.1f))
+              : hair;
+      BuildCyclist(parts, hf, top, bottom, skin, frame, tyre, helmet, rng);
     } else {
       STEREODET_THROW_ARG() << "unknown synthetic object type '" << type << "'";
     }

@@ -252,3 +252,32 @@ TEST(ObjectsTest, UnknownTypeThrows) {
 
 }  // namespace
 }  // namespace stereodet
+
+namespace stereodet {
+namespace {
+
+// A pedestrian stands on its shoes (the parts that reach the ground are two boxes of one
+// material), and its hair stays inside the head's height, so the label is as tall as the box
+// asks, for walking and standing poses, with and without bags.
+TEST(ObjectsTest, PedestrianStandsOnShoesAndHairKeepsItsHeight) {
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    Scene scene = testing::GroundOnlyScene();
+    const double h = 1.62;
+    const SceneObject& person = scene.objects[AddSimpleObject(
+        scene, "Pedestrian", testing::MakeBox3D(h, 0.0, 0.0, 1.0, 1.65, 9.0, 0.0), seed)];
+    // Two legs, two shoes, two arms, torso, head, hair; a bag or a backpack adds one.
+    EXPECT_GE(person.num_primitives, 9) << seed;
+    EXPECT_LE(person.num_primitives, 10) << seed;
+    EXPECT_NEAR(person.box.h, h, kRoundTol) << seed;
+    std::vector<int> on_ground;
+    for (int i = person.first_primitive; i < person.first_primitive + person.num_primitives; ++i) {
+      if (scene.primitives[i].Bounds().max.y() > 1.65f - 1e-3f) on_ground.push_back(i);
+    }
+    ASSERT_EQ(on_ground.size(), 2u) << seed;
+    EXPECT_EQ(scene.primitives[on_ground[0]].kind, ShapeKind::kBox);
+    EXPECT_EQ(scene.primitives[on_ground[0]].material, scene.primitives[on_ground[1]].material);
+  }
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -45,6 +45,10 @@ struct Material {
   float scale_m = 1.0f;            // pattern cell size (window pitch, stone, brick, slat), metres
   float specular = 0.0f;           // fraction of sky light mirrored (paint, glass)
   float lidar_reflectance = 0.3f;  // LiDAR intensity at normal incidence, [0, 1]
+  // A pattern's variant. kCloth: 0 plain weave with folds, 1 stripes of albedo2 across the
+  // garment (period scale_m), 2 checks of albedo2 (cell scale_m), 3 denim (a fine diagonal twill,
+  // faded in patches).
+  uint8_t variant = 0;
 };
 
 // A labelled object (KITTI class) made of consecutive primitives.

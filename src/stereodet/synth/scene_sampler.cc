@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "stereodet/synth/clutter.h"
 #include "stereodet/synth/materials.h"
 #include "stereodet/synth/objects.h"
 #include "stereodet/synth/random.h"
@@ -37,9 +38,15 @@ Dims SampleDims(const std::string& type, Rng& rng) {
   if (type == "Tram")
     return {rng.Uniform(15.0, 28.0), rng.Uniform(2.5, 2.65), rng.Uniform(3.3, 3.6)};
   if (type == "Misc") return {rng.Uniform(2.5, 4.0), rng.Uniform(1.5, 2.0), rng.Uniform(1.2, 2.2)};
-  if (type == "Pedestrian") return {0.0, 0.0, rng.ClampedNormal(1.74, 0.1, 1.45, 2.0)};
-  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.07, 1.1, 1.4)};
-  return {0.0, 0.0, rng.ClampedNormal(1.72, 0.08, 1.5, 1.95)};  // Cyclist
+  // People around KITTI's class means (h 1.76 m for pedestrians, 1.74 m for cyclists, the means
+  // 3D detectors use as size anchors), with a wider spread and a few children.
+  if (type == "Pedestrian") {
+    const bool child = rng.Bernoulli(0.05);
+    const double h = child ? rng.Uniform(1.0, 1.45) : rng.ClampedNormal(1.76, 0.11, 1.45, 2.05);
+    return {0.0, 0.0, h};
+  }
+  if (type == "Person_sitting") return {0.0, 0.0, rng.ClampedNormal(1.27, 0.08, 1.05, 1.45)};
+  return {0.0, 0.0, rng.ClampedNormal(1.74, 0.09, 1.45, 2.0)};  // Cyclist
 }
 
 // The box AddObject builds an object of size `d` into, at `location` turned by `rotation_y`.
@@ -232,6 +239,7 @@ class StreetBuilder {
   void Sidewalk(int side);
   void Roadside(int side);
   void Pedestrians();
+  void StreetFurniture(int side, Rng& rng);
 
   Scene& scene_;
   const SceneOptions& options_;
@@ -696,6 +704,58 @@ void StreetBuilder::Pedestrians() {
   }
 }
 
+// Sign posts, street lamps, bins, bollards (sometimes in a row) and utility cabinets on the
+// sidewalk of `side` (synth/clutter.h): near the kerb, cabinets also at the back of the sidewalk;
+// on country roads only sign posts and bollards on the verge. Kept clear of the objects and
+// trees already placed (Free), so they occlude what stands behind them without intersecting it.
+void StreetBuilder::StreetFurniture(int side, Rng& rng) {
+  const double sign = side == 0 ? -1.0 : 1.0;
+  const double inner = sidewalk_inner_[side], outer = sidewalk_outer_[side];
+  const double width = std::abs(outer - inner);
+  const bool sidewalk = width >= 1.0;
+  const double spacing = kind_ == StreetKind::kCity          ? 11.0
+                         : kind_ == StreetKind::kResidential ? 22.0
+                                                             : 45.0;
+  // Towards the road from this side (the front of cabinets, lamp arms) and towards the camera
+  // (sign faces: against the road's forward direction).
+  const Eigen::Vector2f to_road = static_cast<float>(-sign) * scene_.road.RightXz();
+  const float yaw_to_road = std::atan2(-to_road.y(), to_road.x());
+  const double height = sidewalk ? curb_height_ : 0.0;
+  for (double a = options_.min_along_m + rng.Uniform(0.0, spacing); a < options_.max_along_m;
+       a += spacing * rng.Uniform(0.5, 1.5)) {
+    ClutterKind kind;
+    if (kind_ == StreetKind::kRoad || !sidewalk) {
+      kind = rng.Bernoulli(0.6) ? ClutterKind::kSignPost : ClutterKind::kBollard;
+    } else {
+      kind = kAllClutterKinds[rng.Categorical({0.28, 0.14, 0.2, 0.2, 0.18})];
+    }
+    const double r = ClutterFootprintRadius(kind);
+    // Lateral place: by the kerb (0.35-0.7 m in), cabinets and bins also at the back.
+    double lateral = inner + sign * (r + rng.Uniform(0.25, 0.5));
+    if ((kind == ClutterKind::kCabinet || kind == ClutterKind::kBin) && sidewalk &&
+        rng.Bernoulli(0.5)) {
+      lateral = outer - sign * (r + 0.1);
+    }
+    if (!sidewalk) lateral = inner + sign * rng.Uniform(0.5, 1.0);
+    const int count =
+        kind == ClutterKind::kBollard && rng.Bernoulli(0.4) ? rng.UniformInt(3, 6) : 1;
+    for (int k = 0; k < count; ++k) {
+      const double along = a + 1.6 * k;
+      if (!Free(lateral, along, r) || InJunction(along, side, r + 0.5)) continue;
+      Take(lateral, along, r);
+      const Eigen::Vector3d base = At(lateral, along, height);
+      // On a bend the road's heading turns with `along` (the same angles on a straight road).
+      const float yaw_to_traffic = static_cast<float>(WrapYaw(Heading(along) + M_PI));
+      const float yaw_to_road_here =
+          scene_.road.curvature_per_m == 0.0f
+              ? yaw_to_road
+              : static_cast<float>(WrapYaw(Heading(along) + (side == 0 ? 0.5 : -0.5) * M_PI));
+      const float yaw = kind == ClutterKind::kSignPost ? yaw_to_traffic : yaw_to_road_here;
+      AddClutter(scene_, kind, base.cast<float>(), yaw, rng);
+    }
+  }
+}
+
 void StreetBuilder::Build() {
   kind_ = static_cast<StreetKind>(
       rng_.Categorical({options_.city_weight, options_.residential_weight, options_.road_weight}));
@@ -725,6 +785,13 @@ void StreetBuilder::Build() {
   Pedestrians();
   Roadside(0);
   Roadside(1);
+  {
+    // Street furniture from a generator of its own (one draw here), so that it does not shift
+    // what the other builders draw.
+    Rng furniture(rng_.Next());
+    StreetFurniture(0, furniture);
+    StreetFurniture(1, furniture);
+  }
 
   // Light: sun elevation 15 to 65 degrees, any azimuth; overcast days get a weaker, bluer sun.
   Lighting& light = scene_.light;

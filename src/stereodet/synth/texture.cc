@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 
+#include "stereodet/synth/materials.h"
 #include "stereodet/synth/random.h"
 
 namespace stereodet {
@@ -63,6 +64,19 @@ float CellTone(float i, float j, uint64_t salt) {
   return 2.0f * HashToUnitFloat(HashOf({salt, static_cast<uint64_t>(static_cast<int64_t>(i)),
                                         static_cast<uint64_t>(static_cast<int64_t>(j))})) -
          1.0f;
+}
+
+// The colour of road dust on cars (linear RGB).
+const Eigen::Vector3f kDust(0.3f, 0.28f, 0.25f);
+const Eigen::Vector3f kGrime(0.1f, 0.095f, 0.085f);
+
+// How much dust covers a car's surface point (u, v) (metres), at most `strength`: patches a metre
+// across made of specks of 2-8 cm, as a film of road dust dries. Filtered to the footprint: far
+// away the specks blend into their mean.
+float DustFilm(float u, float v, float fp, float strength) {
+  const float patches = Clamp01(0.55f + 0.9f * FilteredFbm(u + 27.0f, v + 3.0f, 1.2f, 0.5f, 3, fp));
+  const float specks = Clamp01(0.5f + 1.2f * FilteredFbm(u + 3.0f, v + 57.0f, 8.0f, 0.8f, 5, fp));
+  return strength * patches * specks;
 }
 
 struct FaceInfo {
@@ -316,13 +330,23 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       Eigen::Vector3f paint =
           m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp) + 0.14f * dirt);
       paint += 0.35f * spots * (Eigen::Vector3f(0.2f, 0.18f, 0.15f) - paint);
+      // A film of road dust in patches, in fine specks (2-8 cm; a car is rarely clean), and the
+      // metallic flake of the paint: what a block matcher can hold on to on a smooth panel.
+      paint *= 1.0f + 0.1f * FilteredFbm(u + 61.0f, v + 5.0f, 60.0f, 0.7f, 3, fp);
+      // Light dust shows on dark paint, dark grime on light paint; on the lamps, the plate and
+      // the grille too.
+      const float film = DustFilm(u, v, fp, 0.45f);
+      const Eigen::Vector3f& film_colour = Luma(m.albedo) > 0.25f ? kGrime : kDust;
+      const auto dusty = [&](const Eigen::Vector3f& c) -> Eigen::Vector3f {
+        return c + film * (film_colour - c);
+      };
       const Eigen::Vector3f grime(0.08f, 0.075f, 0.065f);
       if (f.axis == 1) {
         // Bonnet and boot seams across the top.
         const float seam =
             std::max(LineCoverage(f.local.x(), 1000.0f, f.half.x() - 1.05f, 0.012f, fp),
                      LineCoverage(f.local.x(), 1000.0f, -f.half.x() + 0.75f, 0.012f, fp));
-        return paint + seam * (Eigen::Vector3f(0.03f, 0.03f, 0.03f) - paint);
+        return dusty(paint + seam * (Eigen::Vector3f(0.03f, 0.03f, 0.03f) - paint));
       }
       const float grimy = Clamp01(1.0f - v / 0.45f) * Clamp01(0.55f + 0.5f * dirt);
       paint += 0.5f * grimy * (grime - paint);
@@ -339,17 +363,28 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
         const bool lamp_row = v > 0.32f && v < 0.5f;
         if (lamp_row && z > edge - 0.32f) {
           const float rim = LineCoverage(z, 1000.0f, edge - 0.3f, 0.02f, fp);
-          const Eigen::Vector3f lamp = f.sign > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f)
-                                                     : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
-          return lamp * (1.0f - 0.6f * rim) * (1.0f + 0.15f * dirt);
+          const Eigen::Vector3f lamp = f.sign > 0.0f ? Eigen::Vector3f(0.6f, 0.6f, 0.58f)
+                                                     : Eigen::Vector3f(0.4f, 0.03f, 0.03f);
+          // Reflector facets behind the lens: a pattern that is not periodic.
+          const float facets = FilteredFbm(z * 2.0f + 9.0f, v * 2.0f, 10.0f, 0.7f, 4, fp);
+          return dusty(lamp * (1.0f - 0.6f * rim) * (1.0f + 0.15f * dirt + 0.35f * facets));
         }
         if (z < 0.26f && v > 0.18f && v < 0.29f) {
-          const float text = LineCoverage(f.local.z(), 0.07f, 0.0f, 0.025f, fp);
-          return Eigen::Vector3f(0.8f, 0.8f, 0.78f) * (1.0f - 0.8f * text);
+          // Characters of their own widths, 4.7 cm apart, in a band 7.5 cm high.
+          const float glyph = std::floor(f.local.z() / 0.047f);
+          const float stroke = 0.008f + 0.006f * (CellTone(glyph, 0.0f, 61) + 1.0f);
+          const float text =
+              CellTone(glyph, 1.0f, 67) > -0.7f
+                  ? LineCoverage(f.local.z(), 0.047f,
+                                 0.0235f * (1.0f + 0.3f * CellTone(glyph, 2.0f, 71)), stroke, fp) *
+                        IntervalCoverage(v, 0.197f, 0.273f, fp)
+                  : 0.0f;
+          return dusty(Eigen::Vector3f(0.62f, 0.62f, 0.6f) * (1.0f - 0.85f * text));
         }
         if (f.sign > 0.0f && z < edge - 0.38f && v > 0.31f && v < 0.47f) {
           const float slat = LineCoverage(v, 0.04f, 0.0f, 0.015f, fp);
-          return Eigen::Vector3f(0.03f, 0.03f, 0.035f) + slat * Eigen::Vector3f(0.2f, 0.2f, 0.2f);
+          return dusty(Eigen::Vector3f(0.03f, 0.03f, 0.035f) +
+                       slat * Eigen::Vector3f(0.2f, 0.2f, 0.2f));
         }
       } else {
         // Sides: a rubbing strip, door seams and handles, dark wheel arches; on a rounded body
@@ -358,8 +393,8 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
         if (v > 0.32f && v < 0.5f && f.span_hi.x() < f.half.x() &&
             (x > f.span_hi.x() - 0.12f || x < f.span_lo.x() + 0.12f)) {
           const Eigen::Vector3f lamp =
-              x > 0.0f ? Eigen::Vector3f(0.85f, 0.85f, 0.8f) : Eigen::Vector3f(0.45f, 0.03f, 0.03f);
-          return lamp * (1.0f + 0.15f * dirt);
+              x > 0.0f ? Eigen::Vector3f(0.6f, 0.6f, 0.58f) : Eigen::Vector3f(0.4f, 0.03f, 0.03f);
+          return dusty(lamp * (1.0f + 0.15f * dirt));
         }
         const float strip = LineCoverage(v, 1000.0f, 0.3f, 0.05f, fp);
         const float seam = LineCoverage(x, 1.05f, 0.1f, 0.012f, fp) * (v > 0.16f);
@@ -374,12 +409,27 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
           paint += arch * (Eigen::Vector3f(0.02f, 0.02f, 0.02f) - paint);
         }
       }
-      return paint;
+      return dusty(paint);
     }
     case Pattern::kGlass: {
       // Through the glass: seats, headrests and the far side, as mid-frequency dark noise.
       Eigen::Vector3f glass =
           m.albedo * std::max(0.2f, 1.0f + m.contrast * FilteredFbm(u, v, 3.0f, 0.6f, 6, fp));
+      // Seats, headrests and the dashboard as lighter shapes behind the tint, and dust on the
+      // glass.
+      glass *= 1.0f + 1.5f * Clamp01(FilteredFbm(u + 17.0f, v + 9.0f, 6.0f, 0.75f, 5, fp)) +
+               0.5f * FilteredFbm(u + 5.0f, v + 31.0f, 12.0f, 0.7f, 4, fp);
+      // Headrests: rounded lighter shapes every 0.55 m across the lower part of the pane.
+      {
+        const float cell = std::floor(u / 0.55f);
+        const float du = (Fract(u / 0.55f) - 0.5f) * 0.55f / 0.13f;
+        const float dv = (v - 0.18f - 0.04f * CellTone(cell, 0.0f, 53)) / 0.11f;
+        const float r2 = du * du + dv * dv;
+        const float rest = IntervalCoverage(std::sqrt(r2), -1.0f, 1.0f, fp / 0.12f);
+        glass += rest * (1.0f + 0.3f * CellTone(cell, 1.0f, 59)) *
+                 (Eigen::Vector3f(0.12f, 0.115f, 0.11f) - glass);
+      }
+      glass += DustFilm(u + 40.0f, v, fp, 0.25f) * (kDust - glass);
       float frame = 0.0f;
       if (f.axis == 2) {
         // Sides: A, B and C pillars and the frame at the sill, in the body colour.
@@ -403,11 +453,27 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       // 62% of the radius, tyre sidewall outside; the tread elsewhere.
       const Primitive& p = scene.primitives[hit.primitive];
       const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
-      const Eigen::Vector3f tyre =
-          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 5, fp));
-      if (std::abs(n.y()) <= 0.5f) return tyre;
+      Eigen::Vector3f tyre = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 5, fp));
       const float radius = p.half_extent.x();
-      const float rho = std::hypot(f.local.x(), f.local.z());
+      if (std::abs(n.y()) <= 0.5f) {
+        // The tread: blocks between transverse grooves every 3 cm of arc and two circumferential
+        // grooves; grey with road dust on the blocks.
+        const float width = 2.0f * p.half_extent.y();
+        const float groove = std::max({LineCoverage(u, 0.03f, 0.0f, 0.008f, fp),
+                                       LineCoverage(v, 1000.0f, 0.33f * width, 0.012f, fp),
+                                       LineCoverage(v, 1000.0f, 0.67f * width, 0.012f, fp)});
+        return tyre * (1.6f - 1.1f * groove);
+      }
+      // The sidewall: a ring of lettering at 80-90 % of the radius.
+      const float rho_wall = std::hypot(f.local.x(), f.local.z());
+      if (rho_wall > 0.8f * radius && rho_wall < 0.9f * radius) {
+        const float arc = std::atan2(f.local.z(), f.local.x()) * rho_wall;
+        const float glyph = std::floor(arc / 0.025f);
+        if (CellTone(glyph, 0.0f, 73) > -0.2f) {
+          tyre *= 1.0f + 1.2f * LineCoverage(arc, 0.025f, 0.0125f, 0.006f, fp);
+        }
+      }
+      const float rho = rho_wall;
       const float rim_cover = IntervalCoverage(rho, -1.0f, 0.62f * radius, fp);
       if (rim_cover <= 0.0f) return tyre;
       // Five spokes; their contrast fades once the spoke period at this radius nears the footprint.
@@ -422,7 +488,30 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
     }
     case Pattern::kCloth: {
       const float folds = FilteredFbm(u, v, 4.0f, 0.6f, 6, fp);
-      return m.albedo * (1.0f + m.contrast * folds);
+      Eigen::Vector3f cloth = m.albedo;
+      switch (m.variant) {
+        case 1:  // stripes across the garment
+          cloth += LineCoverage(v, m.scale_m, 0.0f, 0.45f * m.scale_m, fp) * (m.albedo2 - cloth);
+          break;
+        case 2: {  // checks: two crossing sets of bands, darker where they cross
+          const float a = LineCoverage(u, m.scale_m, 0.0f, 0.4f * m.scale_m, fp);
+          const float b = LineCoverage(v, m.scale_m, 0.0f, 0.4f * m.scale_m, fp);
+          cloth += std::max(a, b) * (m.albedo2 - cloth);
+          cloth *= 1.0f - 0.3f * a * b;
+          break;
+        }
+        case 3: {  // denim: a diagonal twill of 3 mm, faded in patches
+          const float twill = LineCoverage(u + v, 0.006f, 0.0f, 0.003f, fp);
+          const float fade = Clamp01(0.5f + FilteredFbm(u + 3.0f, v + 8.0f, 2.5f, 0.6f, 4, fp));
+          cloth *= 1.0f + 0.25f * twill + 0.5f * fade;
+          break;
+        }
+        default:
+          break;
+      }
+      // Folds, and the weave and seams of the fabric at a few centimetres.
+      const float weave = FilteredFbm(u + 23.0f, v + 7.0f, 16.0f, 0.7f, 4, fp);
+      return cloth * (1.0f + m.contrast * (folds + 0.7f * weave));
     }
   }
   return m.albedo;

@@ -38,8 +38,10 @@ std::filesystem::path PointsPath(const KittiDataset& dataset,
 Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
                           const std::filesystem::path& stereo_points_dir, PointSource source,
                           const std::string& id, const std::vector<std::string>& classes,
-                          const PointFilterOptions& filter, bool with_labels) {
+                          const BevGridOptions& grid, const PointFilterOptions& filter,
+                          bool with_labels) {
   filter.Check();
+  grid.Check();
   const FramePaths paths = dataset.Paths(id);
   Det3dFrame frame;
   frame.id = id;
@@ -54,6 +56,7 @@ Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
         !std::isfinite(p.reflectance)) {
       continue;
     }
+    if (filter.crop_to_grid && !grid.Contains(p.x, p.y, p.z)) continue;
     if (source == PointSource::kStereo) {
       if (filter.stereo_max_distance_m > 0 && std::hypot(p.x, p.y) > filter.stereo_max_distance_m) {
         continue;
@@ -69,6 +72,9 @@ Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
     }
     frame.points.push_back(p);
   }
+  // A training holds every frame: give back what the filters freed (a LiDAR scan keeps ~15% of
+  // its points after the camera-view cut; the reserve above was for all of them).
+  frame.points.shrink_to_fit();
   if (with_labels) {
     for (const Object& o : ReadObjects(paths.label).objects) {
       const auto it = std::find(classes.begin(), classes.end(), o.type);

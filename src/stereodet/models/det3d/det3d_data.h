@@ -12,6 +12,7 @@
 
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/models/det3d/det3d_boxes.h"
+#include "stereodet/models/det3d/det3d_targets.h"
 
 namespace stereodet {
 
@@ -26,6 +27,11 @@ struct PointFilterOptions {
   // Stereo: drop points farther than this from the sensor (horizontal distance in the velodyne
   // frame, m); stereo depth error grows with z^2. 0 = keep all.
   double stereo_max_distance_m = 50.0;
+  // Both inputs: drop, at load time, the points outside the model's BEV grid (x, y and z ranges):
+  // Pillarize would drop them anyway, and a stereo cloud is large (a training holds every frame
+  // in memory). Detection is unchanged by it; a training's global rotation can no longer bring
+  // points from beyond the grid's edges into its corners (as the camera-view cut already does).
+  bool crop_to_grid = true;
   void Check() const;
 };
 
@@ -45,12 +51,14 @@ std::filesystem::path PointsPath(const KittiDataset& dataset,
                                  const std::string& id);
 
 // Reads a frame: calibration, image size (image_2 header), points filtered by `filter` (non-finite
-// points always dropped; stereo truncated by distance; LiDAR cut to the camera's view), and, with
-// `with_labels`, the boxes of `classes` (others, DontCare included, ignored).
+// points always dropped; stereo truncated by distance; LiDAR cut to the camera's view; both cut to
+// `grid` with crop_to_grid), and, with `with_labels`, the boxes of `classes` (others, DontCare
+// included, ignored).
 Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
                           const std::filesystem::path& stereo_points_dir, PointSource source,
                           const std::string& id, const std::vector<std::string>& classes,
-                          const PointFilterOptions& filter, bool with_labels);
+                          const BevGridOptions& grid, const PointFilterOptions& filter,
+                          bool with_labels);
 
 // Training augmentation, each step seeded so that a frame's augmentation depends only on (seed,
 // epoch, frame).

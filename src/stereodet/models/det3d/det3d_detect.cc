@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -22,6 +23,7 @@ void DetectDet3dOptions::Check() const {
   STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
   STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+  shard.Check();
   STEREODET_CHECK(ParseComputeDevice(device).has_value())
       << "unknown device '" << device << "' (expected cpu or cuda)";
 }
@@ -45,10 +47,12 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
       << " is a stereo model: --points must name the `stereodet stereo --encode points` folder";
 
   const KittiDataset dataset(options.data_root, options.subset);
-  std::vector<std::string> ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
-    ids.resize(options.max_frames);
+  std::vector<std::string> all_ids = dataset.ReadSplit(options.split);
+  if (options.max_frames > 0 && static_cast<int>(all_ids.size()) > options.max_frames) {
+    all_ids.resize(options.max_frames);
   }
+  const std::vector<std::string> ids =
+      ShardFrames(all_ids, options.shard, options.batch_size);  // detect_shard.h
   DetectDet3dSummary summary;
   ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), options.progress);
   for (size_t begin = 0; begin < ids.size(); begin += options.batch_size) {
@@ -59,7 +63,8 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
         frames.size(),
         [&](size_t i) {
           frames[i] = LoadDet3dFrame(dataset, options.points_dir, config.input, ids[begin + i],
-                                     config.classes, options.filter, /*with_labels=*/false);
+                                     config.classes, config.grid, options.filter,
+                                     /*with_labels=*/false);
           samples[i] = MakeDet3dSample(frames[i], config, model.anchors(), false);
         },
         options.threads);
@@ -102,6 +107,11 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
     manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
   }
   WriteRunManifest(out.path(), manifest);
+  if (!options.shard.Whole()) {
+    WriteDetectShardRecord(out.path(),
+                           {manifest.tool, options.shard, options.batch_size,
+                            static_cast<int64_t>(all_ids.size()), FrameListHash(all_ids)});
+  }
   out.Commit();
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();

@@ -247,8 +247,8 @@ TORCH_MODULE(Det3dNet);
 
 // The batch as tensors on the device.
 struct BatchTensors {
-  torch::Tensor point_features;  // [N, 9]
-  torch::Tensor point_slot;      // [N] int64: pillar * M + slot, -1 for dropped points
+  torch::Tensor point_features;  // [N, 9] of the points kept (a pillar's first M)
+  torch::Tensor point_slot;      // [N] int64: pillar * M + slot
   torch::Tensor pillar_cell;     // [P] int64: b * rows * cols + cell
   int64_t num_pillars = 0;
 };
@@ -267,9 +267,14 @@ BatchTensors ToBatchTensors(const std::vector<Det3dSample>& samples, const Det3d
           pillar.try_emplace(p.cell[i], static_cast<int64_t>(pillar_cell.size()), 0);
       if (inserted) pillar_cell.push_back(static_cast<int64_t>(b) * cells + p.cell[i]);
       const int s = it->second.second++;
-      slot.push_back(s < m ? it->second.first * m + s : -1);
+      // Points beyond a pillar's first M never reach the max: leave them out here, so that the
+      // pillar feature net (and its batch norm's statistics) runs on the points it uses only; a
+      // stereo cloud keeps about 30% of its points this way.
+      if (s >= m) continue;
+      slot.push_back(it->second.first * m + s);
+      features.insert(features.end(), p.features.begin() + i * kPillarFeatures,
+                      p.features.begin() + (i + 1) * kPillarFeatures);
     }
-    features.insert(features.end(), p.features.begin(), p.features.end());
   }
   BatchTensors t;
   t.num_pillars = static_cast<int64_t>(pillar_cell.size());

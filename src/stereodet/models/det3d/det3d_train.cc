@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "stereodet/models/det3d/gt_database.h"
 #include "stereodet/models/ssd_data.h"
 #include "stereodet/models/train_common.h"
 #include "stereodet/util/atomic_file.h"
@@ -27,6 +28,8 @@ void TrainDet3dOptions::Check() const {
   model.Check();
   filter.Check();
   augment.Check();
+  gt_database.Check();
+  gt_sampling.Check();
   loss.Check();
   STEREODET_CHECK(!data_root.empty()) << "--data is required";
   STEREODET_CHECK(!out_dir.empty()) << "--out is required";
@@ -103,13 +106,23 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
         ids.size(),
         [&](size_t i) {
           frames[i] = LoadDet3dFrame(dataset, options.points_dir, config.input, ids[i],
-                                     config.classes, options.filter, /*with_labels=*/true);
+                                     config.classes, config.grid, options.filter,
+                                     /*with_labels=*/true);
         },
         options.threads);
     progress.Add(static_cast<int64_t>(ids.size()));
   }
   summary.frames = static_cast<int>(frames.size());
   for (const Det3dFrame& f : frames) summary.objects += static_cast<int>(f.boxes.size());
+  // GT-database sampling: the objects of these very frames, so of the model's input only.
+  const bool gt_sampling = options.augment.enabled && options.gt_sampling.enabled;
+  GtDatabase gt_database;
+  if (gt_sampling) {
+    gt_database = BuildGtDatabase(frames, static_cast<int>(config.classes.size()), config.input,
+                                  options.gt_database);
+  }
+  summary.gt_database_objects = gt_database.ObjectCount();
+  summary.gt_database_points = gt_database.PointCount();
 
   RunManifest manifest;
   manifest.tool = "train det3d";
@@ -123,12 +136,16 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
         R"({{"input": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
         R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
         R"("max_frames": {}, "frames": {}, "base_channels": {}, "pillar_m": {}, "device": "{}", )"
-        R"("augment": {}, "auxiliary": {}, "stereo_max_distance_m": {}, "camera_fov_only": {}}})",
+        R"("augment": {}, "auxiliary": {}, "stereo_max_distance_m": {}, "camera_fov_only": {}, )"
+        R"("crop_to_grid": {}, "gt_sampling": {}, "gt_per_class": {}, "gt_min_points": {}, )"
+        R"("gt_box_margin_m": {}, "gt_database_objects": {}}})",
         PointSourceName(config.input), options.epochs, epochs_done, options.batch_size,
         options.learning_rate, options.warmup_steps, options.final_lr_fraction, options.seed,
         options.max_frames, ids.size(), config.base_channels, config.grid.pillar_m, options.device,
         options.augment.enabled, options.loss.auxiliary, options.filter.stereo_max_distance_m,
-        options.filter.camera_fov_only);
+        options.filter.camera_fov_only, options.filter.crop_to_grid, gt_sampling,
+        options.gt_sampling.max_per_class, options.gt_database.min_points,
+        options.gt_database.box_margin_m, gt_database.ObjectCount());
     WriteRunManifest(options.out_dir, manifest);
   };
   write_manifest(start_epoch);
@@ -138,6 +155,11 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   const int n = static_cast<int>(frames.size());
   const int64_t steps_per_epoch = (n + options.batch_size - 1) / options.batch_size;
   const int64_t total_steps = steps_per_epoch * options.epochs;
+  if (const std::string warning =
+          WarmupWarning(options.warmup_steps, steps_per_epoch, options.epochs);
+      !warning.empty() && options.progress.stream != nullptr) {
+    std::fputs(warning.c_str(), options.progress.stream);
+  }
   const int end_epoch = options.max_epochs_this_run > 0
                             ? std::min(options.epochs, start_epoch + options.max_epochs_this_run)
                             : options.epochs;
@@ -159,8 +181,15 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
           batch.size(),
           [&](size_t k) {
             const int index = order[begin + k];
-            const Det3dFrame augmented = AugmentFrame(frames[index], options.augment,
-                                                      SampleSeed(options.seed, epoch, index));
+            // GT sampling draws from ~seed: a stream apart from AugmentFrame's, both fixed by
+            // (seed, epoch, frame), so a resumed training samples the same objects.
+            const uint64_t seed = SampleSeed(options.seed, epoch, index);
+            const Det3dFrame augmented =
+                gt_sampling ? AugmentFrame(SampleGtObjects(frames[index], gt_database,
+                                                           options.gt_sampling, ~seed)
+                                               .frame,
+                                           options.augment, seed)
+                            : AugmentFrame(frames[index], options.augment, seed);
             batch[k] =
                 MakeDet3dSample(augmented, config, model.anchors(), true, options.max_aux_points);
           },

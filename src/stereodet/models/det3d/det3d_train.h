@@ -12,6 +12,7 @@
 #include <string>
 
 #include "stereodet/models/det3d/det3d_model.h"
+#include "stereodet/models/det3d/gt_database.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
@@ -39,6 +40,10 @@ struct TrainDet3dOptions {
   std::string device = "cpu";   // cpu | cuda
   PointFilterOptions filter;
   Det3dAugmentOptions augment;
+  // GT-database cut-and-paste (gt_database.h), before `augment`'s per-object and global steps;
+  // only with augment.enabled. The database is built from the loaded training frames.
+  GtDatabaseOptions gt_database;
+  GtSamplingOptions gt_sampling;
   Det3dLossOptions loss;
   ProgressOptions progress;
   void Check() const;  // throws std::invalid_argument
@@ -46,7 +51,9 @@ struct TrainDet3dOptions {
 
 struct TrainDet3dSummary {
   int frames = 0;
-  int objects = 0;  // ground-truth boxes of the model's classes over the frames
+  int objects = 0;                  // ground-truth boxes of the model's classes over the frames
+  int64_t gt_database_objects = 0;  // objects in the GT database (0 without GT sampling)
+  int64_t gt_database_points = 0;   // their points (16 bytes each in memory)
   int epochs_done = 0;
   int epochs_run = 0;
   double final_loss = 0;

@@ -16,6 +16,7 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/det3d/det3d_detect.h"
+#include "stereodet/models/det3d/gt_database.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_paths.h"
@@ -80,7 +81,10 @@ fs::path WriteTinyDataset(const std::string& name, int frames) {
       }
     }
     WriteVelodyne(root / "training/velodyne" / (id + ".bin"), points);
-    WriteVelodyne(root / "stereo/velodyne" / (id + ".bin"), points);
+    // The "stereo" copy: the same points, reflectance 1 - r, so a test can tell them apart.
+    std::vector<VeloPoint> stereo = points;
+    for (VeloPoint& p : stereo) p.reflectance = 1.0f - p.reflectance;
+    WriteVelodyne(root / "stereo/velodyne" / (id + ".bin"), stereo);
   }
   WriteSplit(root / "ImageSets/train.txt", ids);
   WriteSplit(root / "ImageSets/val.txt", ids);
@@ -119,6 +123,7 @@ TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   const TrainDet3dSummary s = TrainDet3d(options);
   EXPECT_EQ(s.frames, 4);
   EXPECT_EQ(s.objects, 6);
+  EXPECT_EQ(s.gt_database_objects, 0);  // no augmentation: no GT sampling either
   EXPECT_EQ(s.epochs_done, 40);
   EXPECT_GT(s.auxiliary_parameters, 0);
   EXPECT_LT(s.auxiliary_parameters, s.parameters);
@@ -188,8 +193,8 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
   // the best 100 boxes and their scores, bit for bit) and the same losses in the log.
   const Det3dModel a = Det3dModel::Load(out), b = Det3dModel::Load(straight);
   const KittiDataset dataset(root);
-  const Det3dFrame frame =
-      LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(1), {"Car"}, {}, false);
+  const Det3dFrame frame = LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(1), {"Car"},
+                                          a.config().grid, {}, false);
   const std::vector<Det3dSample> samples = {MakeDet3dSample(frame, a.config(), a.anchors(), false)};
   Det3dDecodeOptions all;
   all.score_threshold = 0.0f;
@@ -199,6 +204,16 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
   for (size_t i = 0; i < 100; ++i) {
     EXPECT_EQ(da[0][i].box, db[0][i].box) << i;
     EXPECT_EQ(da[0][i].score, db[0][i].score) << i;
+  }
+  // GT sampling took part: each frame of this data set gets objects of the other pasted.
+  std::vector<Det3dFrame> labelled;
+  for (int i = 0; i < 2; ++i) {
+    labelled.push_back(LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(i), {"Car"},
+                                      a.config().grid, {}, true));
+  }
+  const GtDatabase database = BuildGtDatabase(labelled, 1, PointSource::kLidar, {});
+  for (const Det3dFrame& f : labelled) {
+    EXPECT_GT(SampleGtObjects(f, database, {}, 1).pasted_per_class[0], 0) << f.id;
   }
   auto losses = [](const std::string& log) {  // the lines without the two timing columns
     std::string kept;
@@ -224,7 +239,78 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
   stereo.epochs = 1;
   EXPECT_THROW(TrainDet3d(stereo), std::invalid_argument);  // no --points
   stereo.points_dir = root / "stereo";
-  EXPECT_EQ(TrainDet3d(stereo).objects, 3);
+  stereo.augment.enabled = true;
+  const TrainDet3dSummary ss = TrainDet3d(stereo);
+  EXPECT_EQ(ss.objects, 3);
+  EXPECT_EQ(ss.gt_database_objects, 3);
+  stereo.force = true;
+  stereo.gt_sampling.enabled = false;
+  EXPECT_EQ(TrainDet3d(stereo).gt_database_objects, 0);
+}
+
+TEST(Det3dTrainTest, GtDatabaseHoldsTheModelsOwnPointsOnly) {
+  const fs::path root = WriteTinyDataset("det3d_gtdb_data", 4);
+  const KittiDataset dataset(root);
+  const Det3dConfig config = TinyConfig();
+  std::vector<Det3dFrame> lidar, stereo;
+  for (int i = 0; i < 4; ++i) {
+    lidar.push_back(LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(i), {"Car"},
+                                   config.grid, {}, true));
+    stereo.push_back(LoadDet3dFrame(dataset, root / "stereo", PointSource::kStereo, FrameId(i),
+                                    {"Car"}, config.grid, {}, true));
+  }
+  const GtDatabase lidar_db = BuildGtDatabase(lidar, 1, PointSource::kLidar, {});
+  const GtDatabase stereo_db = BuildGtDatabase(stereo, 1, PointSource::kStereo, {});
+  EXPECT_EQ(lidar_db.ObjectCount(), 6);
+  EXPECT_EQ(stereo_db.ObjectCount(), 6);
+  EXPECT_GE(lidar_db.PointCount(), 6 * 300);
+  for (const GtObject& o : lidar_db.objects_by_class[0]) {
+    for (const VeloPoint& p : o.points) EXPECT_TRUE(p.reflectance == 0.8f || p.reflectance == 0.1f);
+  }
+  for (const GtObject& o : stereo_db.objects_by_class[0]) {
+    for (const VeloPoint& p : o.points) {
+      EXPECT_TRUE(p.reflectance == 1.0f - 0.8f || p.reflectance == 1.0f - 0.1f);
+    }
+  }
+  // Pasting a stereo object into a stereo frame adds stereo points only.
+  const GtSamplingResult r = SampleGtObjects(stereo[0], stereo_db, {}, 3);
+  EXPECT_GT(r.pasted_per_class[0], 0);
+  for (const VeloPoint& p : r.frame.points) {
+    EXPECT_TRUE(p.reflectance == 1.0f - 0.8f || p.reflectance == 1.0f - 0.1f);
+  }
+}
+
+TEST(Det3dTrainTest, LoadDropsPointsOutsideTheGridAndPillarsDoNotChange) {
+  const fs::path root = WriteTinyDataset("det3d_crop_data", 2);
+  const KittiDataset dataset(root);
+  BevGridOptions grid;  // 12.8 x 12.8 m: cuts the tiny scans (x 2..25 m, y -10..10 m)
+  grid.max_x_m = 12.8;
+  grid.min_y_m = -6.4;
+  grid.max_y_m = 6.4;
+  PointFilterOptions keep_all;
+  keep_all.crop_to_grid = false;
+  for (PointSource source : {PointSource::kLidar, PointSource::kStereo}) {
+    for (int i = 0; i < 2; ++i) {
+      const Det3dFrame all = LoadDet3dFrame(dataset, root / "stereo", source, FrameId(i), {"Car"},
+                                            grid, keep_all, true);
+      const Det3dFrame cropped =
+          LoadDet3dFrame(dataset, root / "stereo", source, FrameId(i), {"Car"}, grid, {}, true);
+      size_t inside = 0;
+      for (const VeloPoint& p : all.points) inside += grid.Contains(p.x, p.y, p.z);
+      EXPECT_EQ(cropped.points.size(), inside);
+      EXPECT_LT(inside, all.points.size());  // the grid cuts the scan
+      EXPECT_GT(inside, 100u);
+      for (const VeloPoint& p : cropped.points) EXPECT_TRUE(grid.Contains(p.x, p.y, p.z));
+      // The memory is given back too, not only the points dropped (libstdc++ honours
+      // shrink_to_fit).
+      EXPECT_EQ(cropped.points.capacity(), cropped.points.size());
+      EXPECT_EQ(cropped.boxes, all.boxes);
+      const Pillars a = Pillarize(all.points, grid), b = Pillarize(cropped.points, grid);
+      EXPECT_EQ(a.cell, b.cell);
+      EXPECT_EQ(a.features, b.features);
+      EXPECT_EQ(a.num_pillars, b.num_pillars);
+    }
+  }
 }
 
 }  // namespace

@@ -1,0 +1,546 @@
+#include "stereodet/eval/bootstrap.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <utility>
+
+#include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/curves.h"
+#include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/openpcdet_compat_internal.h"
+#include "stereodet/eval/optimal_matcher_internal.h"
+#include "stereodet/eval/score_metrics_internal.h"
+#include "stereodet/eval/voc_matcher_internal.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/parallel.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using Values = std::array<double, kNumBootstrapMetrics>;
+
+Values AllNaN() {
+  Values v;
+  v.fill(kNaN);
+  return v;
+}
+
+uint64_t SplitMix64(uint64_t* state) {
+  uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// A change of one frame's counts when the threshold drops to `score`: the KITTI matcher's pass 2
+// counts, or an exact matcher's curve event (without the similarity: AOS is not resampled).
+struct Step {
+  double score = 0.0;
+  int32_t frame = 0;
+  int32_t tp = 0, fp = 0, fn = 0;
+};
+
+// A frame's Brier terms in Evaluate's order (ScoreMetricsAccumulator::Add), flattened by frame:
+// frame f's terms are [begin[f], begin[f + 1]).
+struct Terms {
+  std::vector<int32_t> begin = {0};
+  std::vector<double> values;
+  void EndFrame() { begin.push_back(static_cast<int32_t>(values.size())); }
+};
+
+// What the resamples of one class x overlap kind x difficulty need, per frame.
+struct CellData {
+  size_t class_kind = 0;              // index into Prepared::evaluable
+  std::vector<int32_t> valid_labels;  // per frame (the devkit's n_gt share)
+  std::vector<double> tp_scores;      // KITTI pass 1, descending
+  std::vector<int32_t> tp_frames;     // the frame of each
+  std::vector<Step> steps;            // descending score, then frame
+  Terms label_terms, det_terms, all_terms;
+};
+
+struct Prepared {
+  Matcher matcher = Matcher::kKitti;
+  EvalCompat compat = EvalCompat::kDevkit;
+  bool always_evaluated = false;                // openpcdet compat or !require_detections
+  bool needs_probabilities = true;              // score_transform kNone: scores must be in [0, 1]
+  std::vector<uint8_t> outside_unit;            // per frame: a score < 0 or > 1 (any class)
+  std::vector<std::vector<uint8_t>> evaluable;  // per class x kind, per frame
+  std::vector<BootstrapCell> headers;           // the cells, intervals empty
+  std::vector<CellData> cells;
+};
+
+// Frame f's per-frame statistics for one cell (see CellData), from its ClassFrame.
+struct FrameCell {
+  int32_t valid_labels = 0;
+  std::vector<double> tp_scores;
+  std::vector<Step> steps;
+  std::vector<double> label_terms, det_terms, all_terms;
+};
+
+FrameCell FrameStatistics(int32_t f, const ClassFrame& cf, Difficulty difficulty,
+                          const EvalOptions& eval) {
+  FrameCell out;
+  for (int i = 0; i < cf.num_labels(); ++i) out.valid_labels += cf.LabelValid(i, difficulty);
+  if (eval.matcher == Matcher::kKitti) {
+    out.tp_scores = KittiCollectTpScores(cf, difficulty).scores;
+    // Pass 2's counts change only where a detection of the frame enters: at its distinct scores.
+    std::vector<double> scores = cf.det_score;
+    std::sort(scores.begin(), scores.end(), std::greater<double>());
+    scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
+    if (!scores.empty()) {
+      const std::vector<KittiCounts> counts = KittiAddFrameCounts(cf, difficulty, scores);
+      KittiCounts previous;
+      previous.fn = out.valid_labels;
+      for (size_t k = 0; k < scores.size(); ++k) {
+        const KittiCounts& c = counts[k];
+        if (c.tp != previous.tp || c.fp != previous.fp || c.fn != previous.fn) {
+          out.steps.push_back(Step{scores[k], f, static_cast<int32_t>(c.tp - previous.tp),
+                                   static_cast<int32_t>(c.fp - previous.fp),
+                                   static_cast<int32_t>(c.fn - previous.fn)});
+        }
+        previous = c;
+      }
+    }
+  } else {
+    // Every event is kept, zero ones too: BuildCurve makes a point at each of their scores.
+    const std::vector<CurveEvent> events = eval.matcher == Matcher::kOptimal
+                                               ? OptimalFrameEvents(cf, difficulty)
+                                               : VocFrameEvents(cf, difficulty);
+    for (const CurveEvent& e : events) out.steps.push_back(Step{e.score, f, e.tp, e.fp, e.fn});
+  }
+  // The Brier terms at the operating point, as ScoreMetricsAccumulator::Add sums them.
+  const FrameAssociation a = Associate(eval.matcher, cf, difficulty, eval.score_threshold);
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    double term = 0.0;
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const double s = ApplyScoreTransform(eval.score_transform, cf.det_score[a.label_det[i]]);
+      term = (1 - s) * (1 - s);
+    } else if (cf.LabelValid(i, difficulty)) {
+      term = 1.0;
+    } else {
+      continue;
+    }
+    out.label_terms.push_back(term);
+    out.all_terms.push_back(term);
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    const Outcome o = a.det_outcome[j];
+    if (o != Outcome::kTp && o != Outcome::kFp) continue;
+    const double s = ApplyScoreTransform(eval.score_transform, cf.det_score[j]);
+    const double y = o == Outcome::kTp ? 1.0 : 0.0;
+    out.det_terms.push_back((s - y) * (s - y));
+    if (o == Outcome::kFp) out.all_terms.push_back(s * s);
+  }
+  return out;
+}
+
+void Append(const std::vector<double>& values, Terms* terms) {
+  terms->values.insert(terms->values.end(), values.begin(), values.end());
+  terms->EndFrame();
+}
+
+// Per-frame statistics of every cell, in Evaluate's cell order.
+Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) {
+  Prepared p;
+  p.matcher = eval.matcher;
+  p.compat = eval.compat;
+  p.always_evaluated = eval.compat == EvalCompat::kOpenPcdet || !eval.require_detections;
+  p.needs_probabilities = eval.score_transform == ScoreTransform::kNone;
+  const size_t n = frames.size();
+  const int threads = eval.num_threads;
+  p.outside_unit.assign(n, 0);
+  for (size_t f = 0; f < n; ++f) {
+    for (const Object& d : frames[f].detections) {
+      const double score = d.score.value_or(0.0);
+      if (score < 0 || score > 1) p.outside_unit[f] = 1;
+    }
+  }
+  const OverlapArithmetic arithmetic =
+      eval.matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
+  std::vector<ClassFrame> cfs(n);
+  for (const ClassSpec& spec : eval.classes) {
+    for (const OverlapKind kind : eval.metrics) {
+      // Whether each frame alone has a detection the devkit would evaluate the class for.
+      std::vector<uint8_t> evaluable(n, 0);
+      if (!p.always_evaluated) {
+        ParallelFor(
+            n,
+            [&](size_t f) {
+              EvalFrame detections_only;
+              for (const Object& d : frames[f].detections) {
+                if (EqualsIgnoreCase(d.type, spec.name)) detections_only.detections.push_back(d);
+              }
+              evaluable[f] = HasEvaluableDetection({detections_only}, spec, kind) ? 1 : 0;
+            },
+            threads);
+      }
+      const bool evaluated =
+          p.always_evaluated || std::find(evaluable.begin(), evaluable.end(), 1) != evaluable.end();
+      const size_t class_kind = p.evaluable.size();
+      p.evaluable.push_back(std::move(evaluable));
+      if (evaluated) {
+        ParallelFor(
+            n,
+            [&](size_t f) {
+              cfs[f] =
+                  eval.compat == EvalCompat::kOpenPcdet
+                      ? PrepareClassFrameOpenPcdet(frames[f], spec, kind, std::move(cfs[f]))
+                      : PrepareClassFrame(frames[f], spec, kind, arithmetic, std::move(cfs[f]));
+            },
+            threads);
+      }
+      for (const Difficulty difficulty : eval.difficulties) {
+        BootstrapCell header;
+        header.class_name = spec.name;
+        header.metric = kind;
+        header.difficulty = difficulty;
+        header.evaluated = evaluated;
+        p.headers.push_back(header);
+        CellData cell;
+        cell.class_kind = class_kind;
+        if (evaluated) {
+          std::vector<FrameCell> per_frame(n);
+          ParallelFor(
+              n,
+              [&](size_t f) {
+                per_frame[f] = FrameStatistics(static_cast<int32_t>(f), cfs[f], difficulty, eval);
+              },
+              threads);
+          cell.valid_labels.resize(n);
+          std::vector<std::pair<double, int32_t>> tp;
+          for (size_t f = 0; f < n; ++f) {
+            FrameCell& fc = per_frame[f];
+            cell.valid_labels[f] = fc.valid_labels;
+            for (const double s : fc.tp_scores) tp.emplace_back(s, static_cast<int32_t>(f));
+            cell.steps.insert(cell.steps.end(), fc.steps.begin(), fc.steps.end());
+            Append(fc.label_terms, &cell.label_terms);
+            Append(fc.det_terms, &cell.det_terms);
+            Append(fc.all_terms, &cell.all_terms);
+          }
+          std::stable_sort(tp.begin(), tp.end(),
+                           [](const auto& a, const auto& b) { return a.first > b.first; });
+          for (const auto& [score, f] : tp) {
+            cell.tp_scores.push_back(score);
+            cell.tp_frames.push_back(f);
+          }
+          std::stable_sort(cell.steps.begin(), cell.steps.end(),
+                           [](const Step& a, const Step& b) { return a.score > b.score; });
+        }
+        p.cells.push_back(std::move(cell));
+      }
+    }
+  }
+  return p;
+}
+
+// The mean of the terms of the resample's frames, each frame's terms once per draw, summed in the
+// order Evaluate sums them on the frame list with frame f repeated w[f] times.
+double WeightedMean(const Terms& terms, const std::vector<int32_t>& w) {
+  double sum = 0.0;
+  int64_t count = 0;
+  for (size_t f = 0; f < w.size(); ++f) {
+    const int32_t b = terms.begin[f], e = terms.begin[f + 1];
+    if (b == e) continue;
+    for (int32_t k = 0; k < w[f]; ++k) {
+      for (int32_t t = b; t < e; ++t) sum += terms.values[t];
+    }
+    count += static_cast<int64_t>(w[f]) * (e - b);
+  }
+  return count > 0 ? sum / static_cast<double>(count) : kNaN;
+}
+
+// AP_R40 and AP_R11 of the KITTI matcher on the resample (KittiPasses' arithmetic).
+void KittiAp(const Prepared& p, const CellData& cell, const std::vector<int32_t>& w, Values* v) {
+  int64_t n_gt = 0;
+  for (size_t f = 0; f < w.size(); ++f) n_gt += static_cast<int64_t>(w[f]) * cell.valid_labels[f];
+  std::vector<double> scores;
+  scores.reserve(cell.tp_scores.size());
+  for (size_t k = 0; k < cell.tp_scores.size(); ++k) {
+    scores.insert(scores.end(), w[cell.tp_frames[k]], cell.tp_scores[k]);
+  }
+  std::vector<double> thresholds = KittiThresholds(std::move(scores), static_cast<double>(n_gt));
+  if (thresholds.size() > kKittiSamplePoints) thresholds.resize(kKittiSamplePoints);
+  std::array<double, kKittiSamplePoints> precision{};
+  int64_t tp = 0, fp = 0;
+  size_t k = 0;
+  for (size_t t = 0; t < thresholds.size(); ++t) {
+    for (; k < cell.steps.size() && cell.steps[k].score >= thresholds[t]; ++k) {
+      const Step& s = cell.steps[k];
+      tp += static_cast<int64_t>(w[s.frame]) * s.tp;
+      fp += static_cast<int64_t>(w[s.frame]) * s.fp;
+    }
+    precision[t] = static_cast<double>(tp) / static_cast<double>(tp + fp);
+  }
+  if (p.compat == EvalCompat::kOpenPcdet) {
+    precision = OpenPcdetEnvelope(precision);
+  } else {
+    for (size_t t = 0; t < thresholds.size(); ++t) {
+      precision[t] = *std::max_element(precision.begin() + t, precision.end());
+    }
+  }
+  (*v)[static_cast<int>(BootstrapMetric::kApR40)] = KittiApR40(precision);
+  (*v)[static_cast<int>(BootstrapMetric::kApR11)] = KittiApR11(precision);
+}
+
+// AP_R40, AP_R11 and every-point AP of the exact curve (BuildCurve on the resample's events).
+void ExactAp(const CellData& cell, const std::vector<int32_t>& w, Values* v) {
+  CurvePoint current;
+  for (size_t f = 0; f < w.size(); ++f)
+    current.fn += static_cast<int64_t>(w[f]) * cell.valid_labels[f];
+  std::vector<CurvePoint> curve;
+  for (size_t i = 0; i < cell.steps.size();) {
+    const double score = cell.steps[i].score;
+    bool present = false;
+    for (; i < cell.steps.size() && cell.steps[i].score == score; ++i) {
+      const Step& s = cell.steps[i];
+      const int64_t m = w[s.frame];
+      if (m == 0) continue;
+      present = true;
+      current.tp += m * s.tp;
+      current.fp += m * s.fp;
+      current.fn += m * s.fn;
+    }
+    if (!present) continue;
+    current.threshold = score;
+    current = FinishPoint(current);
+    curve.push_back(current);
+  }
+  (*v)[static_cast<int>(BootstrapMetric::kApR40)] = InterpolatedApR40(curve);
+  (*v)[static_cast<int>(BootstrapMetric::kApR11)] = InterpolatedApR11(curve);
+  (*v)[static_cast<int>(BootstrapMetric::kApVoc)] = EveryPointAp(curve);
+}
+
+// Every cell's metrics on the resample with frame counts `w`.
+std::vector<Values> CellValues(const Prepared& p, const std::vector<int32_t>& w) {
+  const size_t n = w.size();
+  std::vector<uint8_t> evaluated(p.evaluable.size(), 1);
+  if (!p.always_evaluated) {
+    for (size_t c = 0; c < p.evaluable.size(); ++c) {
+      evaluated[c] = 0;
+      for (size_t f = 0; f < n && !evaluated[c]; ++f) evaluated[c] = w[f] > 0 && p.evaluable[c][f];
+    }
+  }
+  bool probabilities = true;
+  if (p.needs_probabilities) {
+    for (size_t f = 0; f < n && probabilities; ++f)
+      probabilities = !(w[f] > 0 && p.outside_unit[f]);
+  }
+  std::vector<Values> out(p.cells.size(), AllNaN());
+  for (size_t c = 0; c < p.cells.size(); ++c) {
+    const CellData& cell = p.cells[c];
+    if (!p.headers[c].evaluated || !evaluated[cell.class_kind]) continue;
+    Values& v = out[c];
+    if (p.matcher == Matcher::kKitti) {
+      KittiAp(p, cell, w, &v);
+    } else {
+      ExactAp(cell, w, &v);
+    }
+    if (probabilities) {
+      v[static_cast<int>(BootstrapMetric::kBrierLabels)] = WeightedMean(cell.label_terms, w);
+      v[static_cast<int>(BootstrapMetric::kBrierDetections)] = WeightedMean(cell.det_terms, w);
+      v[static_cast<int>(BootstrapMetric::kBrierAll)] = WeightedMean(cell.all_terms, w);
+    }
+  }
+  return out;
+}
+
+// The percentile interval of the numbers among `samples`.
+void FillInterval(const std::vector<double>& samples, double confidence, bool keep,
+                  BootstrapInterval* interval) {
+  std::vector<double> defined;
+  defined.reserve(samples.size());
+  for (const double s : samples) {
+    if (!std::isnan(s)) defined.push_back(s);
+  }
+  interval->num_defined = static_cast<int64_t>(defined.size());
+  std::sort(defined.begin(), defined.end());
+  interval->lower = Quantile(defined, (1 - confidence) / 2);
+  interval->upper = Quantile(defined, (1 + confidence) / 2);
+  if (keep) interval->samples = samples;
+}
+
+// The result of the estimates and the resamples' values (per_resample[r][cell][metric]).
+BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
+                           const std::vector<Values>& estimate,
+                           const std::vector<std::vector<Values>>& per_resample) {
+  BootstrapResult result;
+  result.num_resamples = options.num_resamples;
+  result.seed = options.seed;
+  result.confidence = options.confidence;
+  result.matcher = p.matcher;
+  result.cells = p.headers;
+  std::vector<double> samples(per_resample.size());
+  for (size_t c = 0; c < result.cells.size(); ++c) {
+    for (int m = 0; m < kNumBootstrapMetrics; ++m) {
+      BootstrapInterval& interval = result.cells[c].intervals[m];
+      interval.estimate = estimate[c][m];
+      for (size_t r = 0; r < per_resample.size(); ++r) samples[r] = per_resample[r][c][m];
+      FillInterval(samples, options.confidence, options.keep_samples, &interval);
+    }
+  }
+  return result;
+}
+
+std::vector<Values> Difference(const std::vector<Values>& a, const std::vector<Values>& b) {
+  std::vector<Values> d(a.size());
+  for (size_t c = 0; c < a.size(); ++c) {
+    for (int m = 0; m < kNumBootstrapMetrics; ++m) d[c][m] = a[c][m] - b[c][m];  // NaN stays
+  }
+  return d;
+}
+
+}  // namespace
+
+void BootstrapOptions::Check() const {
+  STEREODET_CHECK(num_resamples >= 1 && num_resamples <= kMaxBootstrapResamples)
+      << "bootstrap: resamples must be in [1, " << kMaxBootstrapResamples << "], got "
+      << num_resamples;
+  STEREODET_CHECK(confidence > 0 && confidence < 1)
+      << "bootstrap: confidence must be in (0, 1), got " << confidence;
+}
+
+const char* BootstrapMetricName(BootstrapMetric metric) {
+  switch (metric) {
+    case BootstrapMetric::kApR40:
+      return "ap_r40";
+    case BootstrapMetric::kApR11:
+      return "ap_r11";
+    case BootstrapMetric::kApVoc:
+      return "ap_voc";
+    case BootstrapMetric::kBrierLabels:
+      return "brier_labels";
+    case BootstrapMetric::kBrierDetections:
+      return "brier_detections";
+    case BootstrapMetric::kBrierAll:
+      return "brier_all";
+  }
+  return "?";
+}
+
+std::optional<BootstrapMetric> ParseBootstrapMetric(std::string_view text) {
+  for (int m = 0; m < kNumBootstrapMetrics; ++m) {
+    const auto metric = static_cast<BootstrapMetric>(m);
+    if (text == BootstrapMetricName(metric)) return metric;
+  }
+  return std::nullopt;
+}
+
+std::vector<BootstrapMetric> BootstrapMetrics(Matcher matcher) {
+  std::vector<BootstrapMetric> out;
+  for (int m = 0; m < kNumBootstrapMetrics; ++m) {
+    const auto metric = static_cast<BootstrapMetric>(m);
+    if (metric == BootstrapMetric::kApVoc && matcher == Matcher::kKitti) continue;
+    out.push_back(metric);
+  }
+  return out;
+}
+
+const BootstrapCell* BootstrapResult::Find(const std::string& class_name, OverlapKind metric,
+                                           Difficulty difficulty) const {
+  for (const BootstrapCell& c : cells) {
+    if (EqualsIgnoreCase(c.class_name, class_name) && c.metric == metric &&
+        c.difficulty == difficulty) {
+      return &c;
+    }
+  }
+  return nullptr;
+}
+
+std::vector<int32_t> BootstrapFrameCounts(int64_t num_frames, uint64_t seed, int64_t resample) {
+  STEREODET_CHECK(num_frames >= 0 && num_frames <= std::numeric_limits<int32_t>::max())
+      << "bootstrap: bad frame count " << num_frames;
+  std::vector<int32_t> counts(num_frames, 0);
+  if (num_frames == 0) return counts;
+  // The stream's state: the seed and the resample index, each mixed, so that neighbouring seeds
+  // and resamples give unrelated streams.
+  uint64_t mix = seed;
+  uint64_t state = SplitMix64(&mix);
+  mix = static_cast<uint64_t>(resample) ^ 0x5851F42D4C957F2Dull;
+  state ^= SplitMix64(&mix);
+  // Unbiased: draws at or above the largest multiple of n that fits are drawn again.
+  const uint64_t n = static_cast<uint64_t>(num_frames);
+  const uint64_t limit =
+      std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
+  for (int64_t i = 0; i < num_frames; ++i) {
+    uint64_t x;
+    do {
+      x = SplitMix64(&state);
+    } while (x >= limit);
+    ++counts[static_cast<size_t>(x % n)];
+  }
+  return counts;
+}
+
+BootstrapResult Bootstrap(const std::vector<EvalFrame>& frames, const EvalOptions& eval,
+                          const BootstrapOptions& bootstrap) {
+  eval.Check();
+  bootstrap.Check();
+  const Timer timer;
+  const Prepared p = Prepare(frames, eval);
+  const int64_t n = static_cast<int64_t>(frames.size());
+  const std::vector<Values> estimate = CellValues(p, std::vector<int32_t>(n, 1));
+  std::vector<std::vector<Values>> per_resample(bootstrap.num_resamples);
+  ParallelFor(
+      per_resample.size(),
+      [&](size_t r) {
+        per_resample[r] =
+            CellValues(p, BootstrapFrameCounts(n, bootstrap.seed, static_cast<int64_t>(r)));
+      },
+      bootstrap.num_threads);
+  BootstrapResult result = MakeResult(p, bootstrap, estimate, per_resample);
+  result.num_frames = n;
+  result.seconds = timer.ElapsedSeconds();
+  return result;
+}
+
+PairedBootstrapResult PairedBootstrap(const std::vector<EvalFrame>& a,
+                                      const std::vector<EvalFrame>& b, const EvalOptions& eval,
+                                      const BootstrapOptions& bootstrap) {
+  eval.Check();
+  bootstrap.Check();
+  STEREODET_CHECK(a.size() == b.size())
+      << "paired bootstrap: A has " << a.size() << " frames, B " << b.size();
+  for (size_t f = 0; f < a.size(); ++f) {
+    STEREODET_CHECK(a[f].id == b[f].id) << "paired bootstrap: frame " << f << " is '" << a[f].id
+                                        << "' in A but '" << b[f].id << "' in B";
+  }
+  const Timer timer;
+  const Prepared pa = Prepare(a, eval);
+  const Prepared pb = Prepare(b, eval);
+  const int64_t n = static_cast<int64_t>(a.size());
+  const std::vector<int32_t> ones(n, 1);
+  const std::vector<Values> estimate_a = CellValues(pa, ones), estimate_b = CellValues(pb, ones);
+  const size_t num = bootstrap.num_resamples;
+  std::vector<std::vector<Values>> values_a(num), values_b(num), values_d(num);
+  ParallelFor(
+      num,
+      [&](size_t r) {
+        const std::vector<int32_t> w =
+            BootstrapFrameCounts(n, bootstrap.seed, static_cast<int64_t>(r));
+        values_a[r] = CellValues(pa, w);
+        values_b[r] = CellValues(pb, w);
+        values_d[r] = Difference(values_a[r], values_b[r]);
+      },
+      bootstrap.num_threads);
+  PairedBootstrapResult result;
+  result.a = MakeResult(pa, bootstrap, estimate_a, values_a);
+  result.b = MakeResult(pb, bootstrap, estimate_b, values_b);
+  result.difference = MakeResult(pa, bootstrap, Difference(estimate_a, estimate_b), values_d);
+  for (size_t c = 0; c < result.difference.cells.size(); ++c) {
+    result.difference.cells[c].evaluated = pa.headers[c].evaluated && pb.headers[c].evaluated;
+  }
+  const double seconds = timer.ElapsedSeconds();
+  for (BootstrapResult* r : {&result.a, &result.b, &result.difference}) {
+    r->num_frames = n;
+    r->seconds = seconds;
+  }
+  return result;
+}
+
+}  // namespace stereodet

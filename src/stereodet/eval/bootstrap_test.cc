@@ -1,0 +1,377 @@
+#include "stereodet/eval/bootstrap.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/random_frames.h"
+#include "stereodet/eval/test_objects.h"
+
+namespace stereodet {
+namespace {
+
+// Bit for bit, NaN equal to NaN.
+bool Same(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// The resampled frame list, materialised: frame f repeated counts[f] times, in frame order.
+std::vector<EvalFrame> Materialise(const std::vector<EvalFrame>& frames,
+                                   const std::vector<int32_t>& counts) {
+  std::vector<EvalFrame> out;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    for (int32_t k = 0; k < counts[f]; ++k) out.push_back(frames[f]);
+  }
+  return out;
+}
+
+// The metric as Evaluate reports it for a cell (NaN where the cell is not evaluated).
+double Reported(const ClassResult& r, BootstrapMetric m) {
+  if (!r.evaluated) return std::nan("");
+  switch (m) {
+    case BootstrapMetric::kApR40:
+      return r.ap_r40;
+    case BootstrapMetric::kApR11:
+      return r.ap_r11;
+    case BootstrapMetric::kApVoc:
+      return r.ap_voc;
+    case BootstrapMetric::kBrierLabels:
+      return r.brier.over_labels;
+    case BootstrapMetric::kBrierDetections:
+      return r.brier.over_detections;
+    case BootstrapMetric::kBrierAll:
+      return r.brier.over_all;
+  }
+  return 0;
+}
+
+std::vector<EvalFrame> SmallFrames(uint64_t seed, int num_frames = 24) {
+  RandomFramesOptions o;
+  o.num_frames = num_frames;
+  o.score_decimals = 2;  // ties between frames, as KITTI files have them
+  o.seed = seed;
+  return RandomFrames(o);
+}
+
+// Every resample's values against Evaluate on the materialised frame list: bit-identical AP and
+// Brier, in every cell, and the estimates against Evaluate on the frames as given.
+void ExpectExact(const std::vector<EvalFrame>& frames, const EvalOptions& eval, int resamples) {
+  BootstrapOptions b;
+  b.num_resamples = resamples;
+  b.seed = 7;
+  b.keep_samples = true;
+  b.num_threads = 2;
+  const BootstrapResult boot = Bootstrap(frames, eval, b);
+  const EvalResult whole = Evaluate(frames, eval);
+  ASSERT_EQ(boot.cells.size(), whole.results.size());
+  int compared = 0;
+  for (size_t c = 0; c < boot.cells.size(); ++c) {
+    for (const BootstrapMetric m : BootstrapMetrics(eval.matcher)) {
+      EXPECT_TRUE(Same(boot.cells[c].Get(m).estimate, Reported(whole.results[c], m)))
+          << "estimate, cell " << c << " " << BootstrapMetricName(m) << ": "
+          << boot.cells[c].Get(m).estimate << " vs " << Reported(whole.results[c], m);
+    }
+  }
+  for (int r = 0; r < resamples; ++r) {
+    const std::vector<int32_t> counts =
+        BootstrapFrameCounts(static_cast<int64_t>(frames.size()), b.seed, r);
+    const EvalResult brute = Evaluate(Materialise(frames, counts), eval);
+    ASSERT_EQ(brute.results.size(), boot.cells.size());
+    for (size_t c = 0; c < boot.cells.size(); ++c) {
+      const ClassResult& expected = brute.results[c];
+      for (const BootstrapMetric m : BootstrapMetrics(eval.matcher)) {
+        const double got = boot.cells[c].Get(m).samples[r];
+        EXPECT_TRUE(Same(got, Reported(expected, m)))
+            << "resample " << r << ", " << expected.class_name << " "
+            << OverlapKindName(expected.metric) << " " << DifficultyName(expected.difficulty) << " "
+            << BootstrapMetricName(m) << ": " << got << " vs " << Reported(expected, m);
+        compared += std::isnan(got) ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_GT(compared, resamples * 10);  // most cells have numbers
+}
+
+TEST(BootstrapTest, MatchesEvaluateOnEveryResampleKitti) {
+  EvalOptions eval;
+  eval.num_threads = 2;
+  ExpectExact(SmallFrames(3), eval, 12);
+}
+
+TEST(BootstrapTest, MatchesEvaluateOnEveryResampleOptimal) {
+  EvalOptions eval;
+  eval.matcher = Matcher::kOptimal;
+  eval.num_threads = 2;
+  ExpectExact(SmallFrames(4), eval, 12);
+}
+
+TEST(BootstrapTest, MatchesEvaluateOnEveryResampleVocAndOperatingPoint) {
+  EvalOptions eval;
+  eval.matcher = Matcher::kVoc;
+  eval.score_threshold = 0.3;
+  eval.metrics = {OverlapKind::k2D, OverlapKind::k3D};
+  eval.num_threads = 2;
+  ExpectExact(SmallFrames(5), eval, 8);
+}
+
+TEST(BootstrapTest, MatchesEvaluateOnEveryResampleOpenPcdet) {
+  EvalOptions eval;
+  eval.compat = EvalCompat::kOpenPcdet;
+  eval.score_threshold = 0.4;
+  eval.metrics = {OverlapKind::k2D, OverlapKind::kBev};
+  eval.num_threads = 2;
+  ExpectExact(SmallFrames(6, 16), eval, 6);
+}
+
+TEST(BootstrapTest, MatchesEvaluateWithLogitScoresAndCrowdedScenes) {
+  RandomFramesOptions o;
+  o.num_frames = 16;
+  o.crowded = true;
+  o.seed = 9;
+  std::vector<EvalFrame> frames = RandomFrames(o);
+  for (EvalFrame& f : frames) {
+    for (Object& d : f.detections) d.score = *d.score * 6 - 3;  // logits, outside [0, 1]
+  }
+  EvalOptions eval;
+  eval.num_threads = 2;
+  eval.score_transform = ScoreTransform::kSigmoid;
+  ExpectExact(frames, eval, 6);
+  // Without the transform the scores are not probabilities: Brier is NaN in every resample.
+  eval.score_transform = ScoreTransform::kNone;
+  BootstrapOptions b;
+  b.num_resamples = 5;
+  const BootstrapResult boot = Bootstrap(frames, eval, b);
+  for (const BootstrapCell& c : boot.cells) {
+    EXPECT_EQ(c.Get(BootstrapMetric::kBrierLabels).num_defined, 0);
+    EXPECT_TRUE(std::isnan(c.Get(BootstrapMetric::kBrierLabels).lower));
+  }
+}
+
+// Frames with one perfectly detected car and frames with one missed car: a resample with k hit
+// frames of n has Brier over labels (n - k) / n (the TP's score is 1) and recall k / n.
+TEST(BootstrapTest, HandComputedBrierInterval) {
+  using testing_objects::Car;
+  std::vector<EvalFrame> frames(4);
+  for (int f = 0; f < 4; ++f) {
+    frames[f].id = std::to_string(f);
+    frames[f].labels = {Car({100, 100, 200, 200})};
+    if (f < 2) frames[f].detections = {Car({100, 100, 200, 200}, 1.0)};
+  }
+  EvalOptions eval;
+  eval.metrics = {OverlapKind::k2D};
+  eval.difficulties = {Difficulty::kModerate};
+  eval.classes = {KittiClassSpec("Car")};
+  BootstrapOptions b;
+  b.num_resamples = 200;
+  b.keep_samples = true;
+  const BootstrapResult boot = Bootstrap(frames, eval, b);
+  ASSERT_EQ(boot.cells.size(), 1u);
+  const BootstrapInterval& brier = boot.cells[0].Get(BootstrapMetric::kBrierLabels);
+  EXPECT_DOUBLE_EQ(brier.estimate, 0.5);
+  int with_hits = 0;
+  for (int r = 0; r < b.num_resamples; ++r) {
+    const std::vector<int32_t> w = BootstrapFrameCounts(4, b.seed, r);
+    const int hits = w[0] + w[1];
+    if (hits == 0) {
+      // No detection at all: the devkit does not evaluate the class, nor does Evaluate.
+      EXPECT_TRUE(std::isnan(brier.samples[r])) << r;
+      EXPECT_TRUE(std::isnan(boot.cells[0].Get(BootstrapMetric::kApR40).samples[r])) << r;
+    } else {
+      EXPECT_DOUBLE_EQ(brier.samples[r], (4 - hits) / 4.0) << r;
+      ++with_hits;
+    }
+  }
+  EXPECT_EQ(brier.num_defined, with_hits);
+  EXPECT_GT(with_hits, 180);  // (1/2)^4 of the resamples have no hit
+  EXPECT_GE(brier.lower, 0.0);
+  EXPECT_LT(brier.lower, 0.5);
+  EXPECT_GT(brier.upper, 0.5);
+  EXPECT_LE(brier.upper, 1.0);
+}
+
+TEST(BootstrapTest, OneFrameGivesADegenerateInterval) {
+  std::vector<EvalFrame> frames = SmallFrames(11, 1);
+  EvalOptions eval;
+  eval.require_detections = false;
+  BootstrapOptions b;
+  b.num_resamples = 20;
+  const BootstrapResult boot = Bootstrap(frames, eval, b);
+  for (const BootstrapCell& c : boot.cells) {
+    for (const BootstrapMetric m : BootstrapMetrics(eval.matcher)) {
+      const BootstrapInterval& i = c.Get(m);
+      if (std::isnan(i.estimate)) continue;
+      EXPECT_EQ(i.lower, i.estimate);
+      EXPECT_EQ(i.upper, i.estimate);
+    }
+  }
+}
+
+TEST(BootstrapTest, NoFramesGiveWhatEvaluateGives) {
+  EvalOptions eval;
+  eval.require_detections = false;
+  BootstrapOptions b;
+  b.num_resamples = 3;
+  const BootstrapResult boot = Bootstrap({}, eval, b);
+  const EvalResult whole = Evaluate({}, eval);
+  ASSERT_EQ(boot.cells.size(), whole.results.size());
+  for (size_t c = 0; c < boot.cells.size(); ++c) {
+    EXPECT_TRUE(Same(boot.cells[c].Get(BootstrapMetric::kApR40).estimate, whole.results[c].ap_r40));
+    EXPECT_TRUE(std::isnan(boot.cells[c].Get(BootstrapMetric::kBrierLabels).estimate));
+  }
+}
+
+TEST(BootstrapTest, FrameCountsAreSeededUniformAndSumToN) {
+  EXPECT_EQ(BootstrapFrameCounts(50, 3, 8), BootstrapFrameCounts(50, 3, 8));
+  EXPECT_NE(BootstrapFrameCounts(50, 3, 8), BootstrapFrameCounts(50, 4, 8));
+  EXPECT_NE(BootstrapFrameCounts(50, 3, 8), BootstrapFrameCounts(50, 3, 9));
+  EXPECT_TRUE(BootstrapFrameCounts(0, 1, 0).empty());
+  std::vector<double> mean(10, 0.0);
+  constexpr int kResamples = 4000;
+  for (int r = 0; r < kResamples; ++r) {
+    const std::vector<int32_t> w = BootstrapFrameCounts(10, 1, r);
+    int sum = 0;
+    for (int f = 0; f < 10; ++f) {
+      sum += w[f];
+      mean[f] += w[f] / static_cast<double>(kResamples);
+    }
+    ASSERT_EQ(sum, 10);
+  }
+  // Each count is Binomial(10, 0.1): mean 1, standard error of the mean sqrt(0.9 / 4000) = 0.015.
+  for (int f = 0; f < 10; ++f) EXPECT_NEAR(mean[f], 1.0, 0.08) << f;
+}
+
+TEST(BootstrapTest, DeterministicWithTheSeedAndThreadCountIndependent) {
+  const std::vector<EvalFrame> frames = SmallFrames(12, 30);
+  EvalOptions eval;
+  BootstrapOptions b;
+  b.num_resamples = 40;
+  b.keep_samples = true;
+  b.num_threads = 1;
+  const BootstrapResult one = Bootstrap(frames, eval, b);
+  b.num_threads = 2;
+  const BootstrapResult two = Bootstrap(frames, eval, b);
+  const BootstrapResult again = Bootstrap(frames, eval, b);
+  b.seed = 2;
+  const BootstrapResult other = Bootstrap(frames, eval, b);
+  ASSERT_EQ(one.cells.size(), two.cells.size());
+  bool any_differs = false;
+  for (size_t c = 0; c < one.cells.size(); ++c) {
+    for (int m = 0; m < kNumBootstrapMetrics; ++m) {
+      const BootstrapInterval &x = one.cells[c].intervals[m], &y = two.cells[c].intervals[m],
+                              &z = again.cells[c].intervals[m], &o = other.cells[c].intervals[m];
+      ASSERT_EQ(x.samples.size(), 40u);
+      for (size_t r = 0; r < x.samples.size(); ++r) {
+        EXPECT_TRUE(Same(x.samples[r], y.samples[r]));
+        EXPECT_TRUE(Same(y.samples[r], z.samples[r]));
+      }
+      EXPECT_TRUE(Same(x.lower, y.lower));
+      EXPECT_TRUE(Same(x.upper, y.upper));
+      EXPECT_EQ(x.num_defined, y.num_defined);
+      for (size_t r = 0; r < x.samples.size(); ++r)
+        any_differs |= !Same(x.samples[r], o.samples[r]);
+    }
+  }
+  EXPECT_TRUE(any_differs);  // another seed, other resamples
+}
+
+TEST(BootstrapTest, PairedAVersusAIsExactlyZero) {
+  const std::vector<EvalFrame> frames = SmallFrames(13, 30);
+  EvalOptions eval;
+  eval.matcher = Matcher::kOptimal;
+  BootstrapOptions b;
+  b.num_resamples = 50;
+  const PairedBootstrapResult paired = PairedBootstrap(frames, frames, eval, b);
+  int checked = 0;
+  for (const BootstrapCell& c : paired.difference.cells) {
+    for (const BootstrapMetric m : BootstrapMetrics(eval.matcher)) {
+      const BootstrapInterval& d = c.Get(m);
+      if (d.num_defined == 0) continue;
+      EXPECT_EQ(d.estimate, 0.0);
+      EXPECT_EQ(d.lower, 0.0);
+      EXPECT_EQ(d.upper, 0.0);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 20);
+}
+
+TEST(BootstrapTest, PairedUsesTheSameResamplesForBoth) {
+  const std::vector<EvalFrame> a = SmallFrames(14, 30);
+  std::vector<EvalFrame> b = a;
+  // B: every detection's score halved and a third of the detections dropped.
+  for (EvalFrame& f : b) {
+    std::vector<Object> kept;
+    for (size_t j = 0; j < f.detections.size(); ++j) {
+      if (j % 3 == 2) continue;
+      kept.push_back(f.detections[j]);
+      kept.back().score = *kept.back().score / 2;
+    }
+    f.detections = kept;
+  }
+  EvalOptions eval;
+  BootstrapOptions options;
+  options.num_resamples = 30;
+  options.keep_samples = true;
+  const PairedBootstrapResult paired = PairedBootstrap(a, b, eval, options);
+  const BootstrapResult alone_a = Bootstrap(a, eval, options);
+  const BootstrapResult alone_b = Bootstrap(b, eval, options);
+  bool nonzero = false;
+  for (size_t c = 0; c < paired.difference.cells.size(); ++c) {
+    for (int m = 0; m < kNumBootstrapMetrics; ++m) {
+      const BootstrapInterval& d = paired.difference.cells[c].intervals[m];
+      const BootstrapInterval& x = alone_a.cells[c].intervals[m];
+      const BootstrapInterval& y = alone_b.cells[c].intervals[m];
+      EXPECT_TRUE(Same(paired.a.cells[c].intervals[m].lower, x.lower));
+      EXPECT_TRUE(Same(paired.b.cells[c].intervals[m].upper, y.upper));
+      EXPECT_TRUE(Same(d.estimate, x.estimate - y.estimate));
+      for (size_t r = 0; r < d.samples.size(); ++r) {
+        EXPECT_TRUE(Same(d.samples[r], x.samples[r] - y.samples[r]));
+        nonzero |= d.samples[r] != 0 && !std::isnan(d.samples[r]);
+      }
+      if (d.num_defined > 0) {
+        EXPECT_LE(d.lower, d.upper);
+      }
+    }
+  }
+  EXPECT_TRUE(nonzero);
+}
+
+TEST(BootstrapTest, PairedRefusesOtherFrames) {
+  const std::vector<EvalFrame> a = SmallFrames(15, 5);
+  std::vector<EvalFrame> b = a;
+  b[3].id = "other";
+  BootstrapOptions options;
+  options.num_resamples = 2;
+  EXPECT_THROW(PairedBootstrap(a, b, EvalOptions(), options), std::invalid_argument);
+  b.pop_back();
+  EXPECT_THROW(PairedBootstrap(a, b, EvalOptions(), options), std::invalid_argument);
+}
+
+TEST(BootstrapTest, OptionsCheckAndNames) {
+  BootstrapOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.num_resamples = 0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o.num_resamples = kMaxBootstrapResamples + 1;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o.num_resamples = 10;
+  o.confidence = 1.0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o.confidence = 0.0;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  for (int m = 0; m < kNumBootstrapMetrics; ++m) {
+    const auto metric = static_cast<BootstrapMetric>(m);
+    EXPECT_EQ(ParseBootstrapMetric(BootstrapMetricName(metric)), metric);
+  }
+  EXPECT_FALSE(ParseBootstrapMetric("ap").has_value());
+  EXPECT_EQ(BootstrapMetrics(Matcher::kKitti).size(), 5u);
+  EXPECT_EQ(BootstrapMetrics(Matcher::kOptimal).size(), 6u);
+}
+
+}  // namespace
+}  // namespace stereodet

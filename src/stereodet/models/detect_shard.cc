@@ -1,0 +1,229 @@
+#include "stereodet/models/detect_shard.h"
+
+#include <algorithm>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <utility>
+
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/run_manifest.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr int kDetectShardFormat = 1;
+
+struct ShardFolder {
+  fs::path dir;
+  DetectShardRecord record;
+  RunManifest manifest;
+};
+
+// The shards' run.json must agree in everything but the command line and the frames.
+void CheckSameRun(const ShardFolder& a, const ShardFolder& b) {
+  const auto differs = [&](const char* what, const std::string& x, const std::string& y) {
+    STEREODET_CHECK(x == y) << "detect merge: " << b.dir.string() << "/run.json has another "
+                            << what << " than " << a.dir.string() << "/run.json (" << y << " vs "
+                            << x << "); the shards are not of one run";
+  };
+  differs("tool", a.manifest.tool, b.manifest.tool);
+  differs("version", a.manifest.version, b.manifest.version);
+  differs("settings", a.manifest.settings_json, b.manifest.settings_json);
+  const auto inputs = [](const RunManifest& m) {
+    std::string text;
+    for (const auto& [name, path] : m.inputs) text += name + "=" + path + " ";
+    return text;
+  };
+  differs("inputs", inputs(a.manifest), inputs(b.manifest));
+}
+
+}  // namespace
+
+std::string FrameListHash(const std::vector<std::string>& ids) {
+  uint64_t hash = kFnv1a64Offset;
+  for (const std::string& id : ids) {
+    hash = Fnv1a64(id, hash);
+    hash = Fnv1a64("\n", hash);
+  }
+  return HashHex(hash);
+}
+
+namespace {
+
+// [begin, end) of the shard's frames in a list of n.
+std::pair<size_t, size_t> ShardRange(size_t n, const Shard& shard, int batch_size) {
+  shard.Check();
+  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+  const size_t batch = static_cast<size_t>(batch_size);
+  const size_t batches = (n + batch - 1) / batch;
+  return {std::min(n, shard.Begin(batches) * batch), std::min(n, shard.End(batches) * batch)};
+}
+
+}  // namespace
+
+std::vector<std::string> ShardFrames(const std::vector<std::string>& ids, const Shard& shard,
+                                     int batch_size) {
+  const auto [begin, end] = ShardRange(ids.size(), shard, batch_size);
+  return {ids.begin() + static_cast<std::ptrdiff_t>(begin),
+          ids.begin() + static_cast<std::ptrdiff_t>(end)};
+}
+
+void WriteDetectShardRecord(const fs::path& dir, const DetectShardRecord& record) {
+  json j;
+  j["format"] = kDetectShardFormat;
+  j["tool"] = record.tool;
+  j["shard"] = ShardName(record.shard);
+  j["batch_size"] = record.batch_size;
+  j["list_frames"] = record.list_frames;
+  j["list_fnv1a64"] = record.list_hash;
+  WriteFileAtomically(dir / kDetectShardFile, j.dump(2) + "\n");
+}
+
+DetectShardRecord ReadDetectShardRecord(const fs::path& dir) {
+  const fs::path path = dir / kDetectShardFile;
+  STEREODET_CHECK_IO(fs::is_regular_file(path))
+      << dir.string() << " holds no " << kDetectShardFile
+      << ": not a folder of `detect ssd|det3d --shard K/N`";
+  const std::string file = path.string();
+  json j;
+  try {
+    j = json::parse(ReadFile(path));
+  } catch (const json::parse_error& e) {
+    throw ParseError(file, 0, "json", e.what());
+  }
+  DetectShardRecord record;
+  std::string field = "format";
+  try {
+    if (j.at(field).get<int>() != kDetectShardFormat) {
+      throw ParseError(file, 0, field,
+                       "format " + j.at(field).dump() + ", this version reads " +
+                           std::to_string(kDetectShardFormat));
+    }
+    field = "tool";
+    record.tool = j.at(field).get<std::string>();
+    field = "shard";
+    const std::optional<Shard> shard = ParseShard(j.at(field).get<std::string>());
+    if (!shard) throw ParseError(file, 0, field, "not K/N: " + j.at(field).dump());
+    record.shard = *shard;
+    field = "batch_size";
+    record.batch_size = j.at(field).get<int>();
+    if (record.batch_size < 1) throw ParseError(file, 0, field, "must be >= 1");
+    field = "list_frames";
+    record.list_frames = j.at(field).get<int64_t>();
+    if (record.list_frames < 0) throw ParseError(file, 0, field, "negative");
+    field = "list_fnv1a64";
+    record.list_hash = j.at(field).get<std::string>();
+  } catch (const json::exception& e) {
+    throw ParseError(file, 0, field, e.what());
+  }
+  return record;
+}
+
+void MergeDetectionsOptions::Check() const {
+  STEREODET_CHECK(!shards.empty()) << "detect merge: no shard folder given";
+  STEREODET_CHECK(!out_dir.empty()) << "detect merge: --out is required";
+}
+
+MergeDetectionsResult MergeDetections(const MergeDetectionsOptions& options) {
+  options.Check();
+  const Timer timer;
+  std::vector<ShardFolder> shards;
+  for (const fs::path& dir : options.shards) {
+    ShardFolder s{dir, ReadDetectShardRecord(dir), {}};
+    std::optional<RunManifest> manifest = ReadRunManifest(dir);
+    STEREODET_CHECK_IO(manifest.has_value())
+        << dir.string() << " holds no run.json: not a committed detection shard folder";
+    s.manifest = std::move(*manifest);
+    shards.push_back(std::move(s));
+  }
+  std::stable_sort(shards.begin(), shards.end(), [](const ShardFolder& a, const ShardFolder& b) {
+    return a.record.shard.index < b.record.shard.index;
+  });
+  const ShardFolder& first = shards.front();
+  const int n = first.record.shard.count;
+  for (size_t k = 0; k < shards.size(); ++k) {
+    const ShardFolder& s = shards[k];
+    STEREODET_CHECK(s.record.shard.count == n)
+        << "detect merge: " << s.dir.string() << " is shard " << ShardName(s.record.shard)
+        << ", but " << first.dir.string() << " is one of " << n;
+    STEREODET_CHECK(s.record.shard.index >= static_cast<int>(k))
+        << "detect merge: shard " << ShardName(s.record.shard) << " is given twice (at "
+        << shards[k - 1].dir.string() << " and " << s.dir.string() << ")";
+    STEREODET_CHECK(s.record.shard.index == static_cast<int>(k))
+        << "detect merge: shard " << k << "/" << n << " is missing (the next given is "
+        << ShardName(s.record.shard) << ", at " << s.dir.string() << ")";
+    STEREODET_CHECK(s.record.batch_size == first.record.batch_size)
+        << "detect merge: " << s.dir.string() << " ran batches of " << s.record.batch_size
+        << " frames, " << first.dir.string() << " of " << first.record.batch_size
+        << "; the shards are not of one run";
+    STEREODET_CHECK(s.record.tool == first.record.tool &&
+                    s.record.list_frames == first.record.list_frames &&
+                    s.record.list_hash == first.record.list_hash)
+        << "detect merge: " << s.dir.string() << " is a shard of another frame list ("
+        << s.record.list_frames << " frames, hash " << s.record.list_hash << ") than "
+        << first.dir.string() << " (" << first.record.list_frames << " frames, hash "
+        << first.record.list_hash << ")";
+    STEREODET_CHECK(s.manifest.tool == s.record.tool)
+        << "detect merge: " << s.dir.string() << "/run.json is of '" << s.manifest.tool << "', its "
+        << kDetectShardFile << " of '" << s.record.tool << "'";
+    CheckSameRun(first, s);
+    const auto [begin, end] =
+        ShardRange(static_cast<size_t>(s.record.list_frames), s.record.shard, s.record.batch_size);
+    const size_t expected = end - begin;
+    STEREODET_CHECK_IO(s.manifest.frames.size() == expected)
+        << s.dir.string() << "/run.json lists " << s.manifest.frames.size() << " frames; shard "
+        << ShardName(s.record.shard) << " of " << s.record.list_frames << " has " << expected;
+  }
+  STEREODET_CHECK(static_cast<int>(shards.size()) == n)
+      << "detect merge: " << shards.size() << " shard folders for " << n << " shards; shard "
+      << shards.size() << "/" << n << " is missing";
+
+  RunManifest merged = first.manifest;
+  merged.command_line = options.command_line;
+  merged.frames.clear();
+  std::vector<const fs::path*> frame_dirs;
+  for (const ShardFolder& s : shards) {
+    for (const auto& frame : s.manifest.frames) {
+      merged.frames.push_back(frame);
+      frame_dirs.push_back(&s.dir);
+    }
+  }
+  std::vector<std::string> ids;
+  ids.reserve(merged.frames.size());
+  for (const auto& frame : merged.frames) ids.push_back(frame.first);
+  STEREODET_CHECK_IO(FrameListHash(ids) == first.record.list_hash)
+      << "detect merge: the shards' frames (" << ids.size() << ", in shard order) are not the "
+      << "list their " << kDetectShardFile << " records (hash " << first.record.list_hash << ")";
+
+  std::vector<std::pair<std::string, fs::path>> inputs;
+  for (const ShardFolder& s : shards) inputs.emplace_back("shard", s.dir);
+  CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
+  StagedFolder out(options.out_dir, kRunManifestFile);
+  for (size_t i = 0; i < merged.frames.size(); ++i) {
+    const auto& [id, hash] = merged.frames[i];
+    const fs::path source = *frame_dirs[i] / (id + ".txt");
+    const std::string bytes = ReadFile(source);
+    STEREODET_CHECK_IO(HashHex(Fnv1a64(bytes)) == hash)
+        << "detect merge: " << source.string() << " is not the file its run.json records (hash "
+        << HashHex(Fnv1a64(bytes)) << ", recorded " << hash << "); it changed since its shard ran";
+    WriteFileAtomically(out.path() / (id + ".txt"), bytes);
+  }
+  WriteRunManifest(out.path(), merged);
+  out.Commit();
+
+  MergeDetectionsResult result;
+  result.tool = merged.tool;
+  result.shards = n;
+  result.frames = static_cast<int>(merged.frames.size());
+  result.seconds = timer.ElapsedSeconds();
+  return result;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,85 @@
+// Shards of a detection run, `detect ssd|det3d|rpn --shard K/N`, and `detect merge`
+// (docs/scale.md).
+//
+// A detection shard is a contiguous range of whole batches of the run's frame list: with B =
+// ceil(n / batch_size) batches, shard K/N holds batches [floor(K B / N), floor((K + 1) B / N))
+// (util/shard.h over batches), so every batch a shard runs is a batch of one run, the same frames
+// in the same positions. Why: the network's floats depend in their last bits on the batch a frame
+// is in (LibTorch picks other kernels for other batch sizes; measured on the CPU: a score's sixth
+// decimal), so shards of single frames would not give one run's bytes. Shards differ in size by
+// at most one batch.
+//
+// Shard K/N of a detection run writes its own folder, a StagedFolder like one run's (committed
+// whole, so a shard folder is either all there or not there): the detection files of its frames,
+// a run.json whose frames are its own and whose tool, version, inputs and settings are those of
+// the whole run, and detect_shard.json, which names the shard, the batch size and the whole frame
+// list (its length and hash). MergeDetections checks that its folders are the N shards of one run
+// and writes the folder of that run: the same ID.txt files, byte for byte, and a run.json that
+// differs from one run's (of the same batch size) only in its command line (the merge's). A
+// one-run folder holds no detect_shard.json.
+#ifndef STEREODET_MODELS_DETECT_SHARD_H_
+#define STEREODET_MODELS_DETECT_SHARD_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "stereodet/util/shard.h"
+
+namespace stereodet {
+
+// The shard record's file name in a shard folder.
+inline constexpr char kDetectShardFile[] = "detect_shard.json";
+
+struct DetectShardRecord {
+  std::string tool;         // the run.json tool: "detect ssd" or "detect det3d"
+  Shard shard;              // K/N
+  int batch_size = 1;       // frames per forward pass (the shard's range is in whole batches)
+  int64_t list_frames = 0;  // frames of the whole list (after --max-frames), all shards together
+  std::string list_hash;    // FrameListHash of the whole list
+};
+
+// FNV-1a 64 (16 hex digits) of the ids, each followed by '\n', in their order.
+std::string FrameListHash(const std::vector<std::string>& ids);
+
+// The shard's frames: its contiguous range of whole batches of `ids` (above; all of `ids` for 1/1,
+// and for batch_size 1 the range util/shard.h gives). Throws std::invalid_argument for a shard
+// that fails Check() or batch_size < 1.
+std::vector<std::string> ShardFrames(const std::vector<std::string>& ids, const Shard& shard,
+                                     int batch_size);
+
+// Writes DIR/detect_shard.json atomically: {"format": 1, "tool", "shard": "K/N", "batch_size",
+// "list_frames", "list_fnv1a64"}.
+void WriteDetectShardRecord(const std::filesystem::path& dir, const DetectShardRecord& record);
+// Reads it back. Throws std::runtime_error naming the folder when the file is missing ("not a
+// folder of `detect --shard`"), ParseError naming the file and field when it is not a record.
+DetectShardRecord ReadDetectShardRecord(const std::filesystem::path& dir);
+
+struct MergeDetectionsOptions {
+  std::vector<std::filesystem::path> shards;  // the N shard folders, in any order
+  std::filesystem::path out_dir;              // receives the folder of one run (replaced whole)
+  std::string command_line;                   // for OUT/run.json (empty from a library call)
+  void Check() const;                         // throws std::invalid_argument
+};
+
+struct MergeDetectionsResult {
+  std::string tool;  // the shards' run.json tool
+  int shards = 0;
+  int frames = 0;
+  double seconds = 0;
+};
+
+// Before anything is written it throws std::invalid_argument, naming the folder, for a shard
+// given twice, a missing shard (by K/N), a shard of another count, batch size or frame list, one
+// whose run.json differs from shard 0's in tool, version, inputs or settings, or an out_dir that
+// overlaps a shard folder; std::runtime_error for a shard folder that is not one (no
+// detect_shard.json, no run.json), an out_dir that is a folder of something else, and a detection
+// file whose bytes are not those its run.json records (changed since its shard ran). Then it
+// writes OUT as a StagedFolder (an earlier detection folder there is replaced whole): every
+// frame's file, copied, and run.json with the frames of all shards in list order.
+MergeDetectionsResult MergeDetections(const MergeDetectionsOptions& options);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_DETECT_SHARD_H_

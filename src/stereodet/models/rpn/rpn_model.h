@@ -1,0 +1,188 @@
+// The late-fusion two-branch detector with a region proposal network (issue 15): ResNet-style
+// trunks (residual blocks, batch norm) to stride 16; an image branch on R, G, B and, for RGB-D
+// models, a geometry branch of its own on depth, height and validity (from block matching: the
+// "point cloud in the image plane"); fused late, after the last stage, by concatenation and a 1x1
+// convolution. The RGB model is the image branch alone. On the (fused) stride-16 features: a
+// region proposal network (3x3 conv, objectness and box deltas per anchor), proposal NMS, RoIAlign
+// (built on grid_sample), and a box head (two fully connected layers, softmax over background +
+// classes, per-class box refinement). LibTorch is an implementation detail: nothing here exposes
+// a torch type.
+//
+// A model folder holds model.json (RpnConfig, the WeightsRecord of model.pt, for RGB-D the stereo
+// settings), model.pt, run.json, checkpoint.pt (training state for --resume) and train_log.csv.
+#ifndef STEREODET_MODELS_RPN_RPN_MODEL_H_
+#define STEREODET_MODELS_RPN_RPN_MODEL_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "stereodet/models/box_coder.h"
+#include "stereodet/models/device.h"
+#include "stereodet/models/rpn/rpn_boxes.h"
+#include "stereodet/models/ssd.h"
+#include "stereodet/stereo/rgbh.h"
+#include "stereodet/stereo/stereo_encoder.h"
+
+namespace stereodet {
+
+enum class RpnInput {
+  kRgb,   // the image branch alone
+  kRgbd,  // image branch + geometry branch (depth, height, validity), fused late
+};
+const char* RpnInputName(RpnInput input);  // "rgb", "rgbd"
+std::optional<RpnInput> ParseRpnInput(std::string_view text);
+// Channels of the network input: 3 (R, G, B) or 6 (R, G, B, depth, height, valid).
+int RpnInputChannels(RpnInput input);
+
+struct RpnConfig {
+  RpnInput input = RpnInput::kRgb;
+  std::vector<std::string> classes = {"Car", "Pedestrian", "Cyclist"};
+  // Network input size, px; multiples of 16 (the trunks' stride).
+  int input_width = 640;
+  int input_height = 192;
+  // Base channels of each trunk (stages of base, 2 base, 4 base channels at strides 4, 8, 16;
+  // ResNet-18 has 64): half width. A wider image branch (--image-width) is the control that gives
+  // the RGB model the RGB-D model's parameter count.
+  int image_width = 32;
+  int geometry_width = 32;   // RGB-D only
+  int blocks_per_stage = 2;  // residual blocks per stage (ResNet-18: 2)
+  int head_channels = 256;   // the box head's fully connected layers
+  int pooled_size = 7;       // RoIAlign output, cells per side
+  int sampling_ratio = 2;    // RoIAlign samples per cell per side
+  // Stride of the features the RPN and RoIAlign use: 16, or 8 (the third stage keeps the second's
+  // resolution: finer cells for KITTI's small objects, at 4x the third stage's and the RPN's cost).
+  int feature_stride = 16;
+  AnchorOptions anchors;  // stride_px must equal feature_stride
+  void Check() const;     // throws std::invalid_argument
+  int NumClasses() const { return static_cast<int>(classes.size()); }  // without background
+  int FeatureWidth() const { return input_width / feature_stride; }
+  int FeatureHeight() const { return input_height / feature_stride; }
+  // Channels of the features the RPN and the head see: 4 * image_width (the fusion reduces the
+  // concatenated branches to that).
+  int FeatureChannels() const { return 4 * image_width; }
+};
+
+// model.json's text (with `weights` when its fnv1a64 is set, and `stereo` when given), and back.
+// Parse errors throw ParseError naming `source` and the field.
+std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weights = {},
+                            const std::optional<StereoOptions>& stereo = std::nullopt);
+RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source);
+// The stereo settings model.json records (ssd.h's ReadStereoRecord, plus the depth code's range
+// and bits); absent ones read as StereoOptions' defaults. Throws ParseError naming `source`.
+StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source);
+
+// The network input of one frame at the network's size. `bgr` is CV_8UC3 of the network size;
+// `depth_code` and `height_code` CV_16UC1 of the same size (0 = no stereo), ignored for rgb.
+// Channels, each in [0, 1]: R / 255, G / 255, B / 255, then for rgbd depth_code / max code,
+// height_code / 511 and valid (1 where depth_code > 0, else 0: "no stereo" stays distinguishable
+// from "near" and from "at ground level").
+PlanarImage EncodeRpnInput(const cv::Mat& bgr, const cv::Mat& depth_code,
+                           const cv::Mat& height_code, RpnInput input,
+                           const DepthQuantization& depth = {});
+
+struct RpnDetectOptions {
+  ProposalOptions proposals{.pre_nms_top_n = 600, .nms_iou = 0.7, .post_nms_top_n = 100};
+  RpnDecodeOptions decode;
+  void Check() const;
+};
+
+// One training batch: the encoded inputs and each image's objects (network px; label >= 1 or
+// kIgnoreLabel).
+struct RpnBatch {
+  std::vector<PlanarImage> inputs;
+  std::vector<std::vector<TargetBox>> objects;
+};
+
+// Not thread-safe: one thread at a time (LibTorch parallelises inside).
+class RpnModel {
+ public:
+  // A new network, weights drawn from `seed`, on `device`.
+  RpnModel(const RpnConfig& config, uint64_t seed, ComputeDevice device = ComputeDevice::kCpu);
+  ~RpnModel();
+  RpnModel(RpnModel&&) noexcept;
+  RpnModel& operator=(RpnModel&&) noexcept;
+
+  // Reads model.json and model.pt; throws std::runtime_error naming the file (and both when the
+  // weights' hash or parameter count differ from model.json's record).
+  static RpnModel Load(const std::filesystem::path& model_dir,
+                       ComputeDevice device = ComputeDevice::kCpu);
+  // Writes model.pt, then model.json (with the weights' hash, and the stereo settings for rgbd).
+  void Save(const std::filesystem::path& model_dir) const;
+
+  const RpnConfig& config() const;
+  const StereoOptions& stereo() const;  // the depth/height settings (rgbd)
+  void set_stereo(const StereoOptions& stereo);
+  const std::vector<Box2D>& anchors() const;  // GenerateRpnAnchors of the feature map
+
+  // Inference (evaluation-mode batch norm, no gradients): per input, boxes in network px, labels
+  // >= 1, scores (softmax probabilities) in [0, 1], best first.
+  std::vector<std::vector<ScoredBox>> Detect(const std::vector<PlanarImage>& inputs,
+                                             const RpnDetectOptions& options = {}) const;
+  // The proposals alone (label 0, score = objectness probability), per input.
+  std::vector<std::vector<ScoredBox>> Propose(const std::vector<PlanarImage>& inputs,
+                                              const ProposalOptions& options) const;
+
+  int64_t ParameterCount() const;
+  int64_t ImageBranchParameterCount() const;
+  int64_t GeometryBranchParameterCount() const;  // 0 for rgb
+
+  // "Mirroring": copies the image branch, the RPN and the box head (and, with `geometry_too`, the
+  // image branch into the geometry branch as well) from an RGB model of the same image width,
+  // anchors, classes and head into this one. For an rgbd model the fusion keeps its own weights.
+  // Returns the number of tensors copied. Throws std::invalid_argument when the shapes differ.
+  int InitFrom(const RpnModel& rgb, bool geometry_too = false);
+
+ private:
+  friend class RpnTrainer;
+  struct Impl;
+  explicit RpnModel(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+struct RpnTrainerOptions {
+  AnchorSamplingOptions anchors;
+  ProposalOptions proposals;  // training: 1000 before NMS, 300 after
+  RoiSamplingOptions rois;
+  double weight_decay = 1e-4;  // AdamW
+  void Check() const;
+};
+
+// The loss terms of one step (each a mean over its samples) and the sample counts over the batch.
+struct RpnLossParts {
+  double total = 0;
+  double objectness = 0;  // RPN binary cross-entropy over the sampled anchors
+  double rpn_box = 0;     // RPN smooth L1 over positive anchors / sampled anchors
+  double head_class = 0;  // head cross-entropy over the sampled RoIs
+  double head_box = 0;    // head smooth L1 (its class's deltas) over foreground / sampled RoIs
+  int positive_anchors = 0;
+  int foreground_rois = 0;
+};
+
+class RpnTrainer {
+ public:
+  RpnTrainer(RpnModel& model, const RpnTrainerOptions& options = {});
+  ~RpnTrainer();
+  // One optimizer step at `learning_rate`. The anchor and RoI sampling draw from `step_seed`
+  // (and torch::manual_seed(step_seed) is set), so a step is a function of the weights, the
+  // optimizer state, the batch and the seed. Returns the loss before the step.
+  RpnLossParts Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed);
+  // Weights, optimizer state, epochs_done and the config, atomically.
+  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;
+  // Returns epochs_done; throws std::runtime_error naming the file when it is missing or was
+  // written for another model (config or parameter count).
+  int LoadCheckpoint(const std::filesystem::path& path);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_RPN_RPN_MODEL_H_

@@ -1,0 +1,249 @@
+// End to end on tiny KITTI-format frames written by the test: the two-stage detector overfits a
+// few frames and finds their boxes, training is deterministic and resumes bit-identically, RGB-D
+// trains from stereo and mirrors an RGB model, detect writes KITTI files.
+#include "stereodet/models/rpn/rpn_train.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <sstream>
+
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/geometry/iou.h"
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
+#include "stereodet/models/rpn/rpn_detect.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/test_paths.h"
+
+namespace stereodet {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Frames of 256 x 128 px: dark noise, one bright textured "car" per frame at its own place and
+// size (shifted by 8 px in the right image so stereo finds it), labelled Car.
+fs::path WriteTinyDataset(const std::string& name, int frames) {
+  const fs::path root = TempDir(name);
+  // cv::randu would draw from OpenCV's process-wide generator: the frames would depend on the
+  // tests run before. A generator of our own keeps them fixed.
+  cv::RNG rng(5);
+  std::vector<std::string> ids;
+  for (const char* folder : {"image_2", "image_3", "label_2", "calib"}) {
+    fs::create_directories(root / "training" / folder);
+  }
+  for (int i = 0; i < frames; ++i) {
+    const std::string id = FrameId(i);
+    ids.push_back(id);
+    cv::Mat left(128, 256, CV_8UC3), right;
+    rng.fill(left, cv::RNG::UNIFORM, 0, 60);
+    const cv::Rect car(30 + 50 * i, 40 + 6 * i, 72 - 8 * i, 44 - 4 * i);
+    cv::Mat patch(car.size(), CV_8UC3);
+    rng.fill(patch, cv::RNG::UNIFORM, 170, 255);
+    right = left.clone();
+    patch.copyTo(left(car));
+    patch.copyTo(right(car - cv::Point(8, 0)));
+    cv::imwrite((root / "training/image_2" / (id + ".png")).string(), left);
+    cv::imwrite((root / "training/image_3" / (id + ".png")).string(), right);
+    WriteCalibration(root / "training/calib" / (id + ".txt"), KittiLikeCalibration());
+    Object label;
+    label.type = "Car";
+    label.box = {double(car.x), double(car.y), double(car.br().x), double(car.br().y)};
+    label.box3d.h = 1.5;
+    label.box3d.w = 1.6;
+    label.box3d.l = 3.9;
+    label.box3d.location = {0, 1.6, 10};
+    WriteObjects(root / "training/label_2" / (id + ".txt"), {label});
+  }
+  WriteSplit(root / "ImageSets/train.txt", ids);
+  WriteSplit(root / "ImageSets/val.txt", ids);
+  return root;
+}
+
+TrainRpnOptions TinyTraining(const fs::path& root, const fs::path& out) {
+  TrainRpnOptions o;
+  o.data_root = root;
+  o.out_dir = out;
+  o.model.input_width = 128;
+  o.model.input_height = 64;
+  o.model.image_width = 8;
+  o.model.geometry_width = 8;
+  o.model.blocks_per_stage = 1;
+  o.model.head_channels = 64;
+  o.model.pooled_size = 4;
+  o.model.anchors.sizes_px = {16, 32};
+  o.batch_size = 3;
+  o.learning_rate = 3e-3;
+  o.warmup_steps = 5;
+  o.threads = 1;  // one thread: OpenMP barriers spin badly on a loaded 2-core machine
+  o.data.augment = false;
+  o.data.stereo.disparity.num_disparities = 32;
+  o.data.stereo.ground.enabled = false;
+  o.trainer.anchors.samples_per_image = 64;
+  o.trainer.rois.samples_per_image = 32;
+  o.trainer.proposals.pre_nms_top_n = 200;
+  o.trainer.proposals.post_nms_top_n = 50;
+  o.progress.stream = nullptr;
+  return o;
+}
+
+std::string WithoutTimes(const std::string& log) {  // the CSV without its two timing columns
+  std::string kept;
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    kept += line.substr(0, line.rfind(',', line.rfind(',') - 1)) + "\n";
+  }
+  return kept;
+}
+
+TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
+  const fs::path root = WriteTinyDataset("rpn_data", 3);
+  const fs::path out = TempDir("rpn_model");
+  TrainRpnOptions options = TinyTraining(root, out);
+  options.epochs = 150;
+  options.learning_rate = 5e-3;
+  options.trainer.rois.samples_per_image = 16;
+  options.trainer.rois.foreground_fraction = 0.5;
+  const TrainRpnSummary s = TrainRpn(options);
+  EXPECT_EQ(s.frames, 3);
+  EXPECT_EQ(s.objects, 3);
+  EXPECT_EQ(s.epochs_done, 150);
+  EXPECT_GT(s.parameters, s.image_branch_parameters);
+  EXPECT_EQ(s.geometry_branch_parameters, 0);
+
+  DetectRpnOptions d;
+  d.model_dir = out;
+  d.data_root = root;
+  d.out_dir = root / "detections";
+  d.threads = 1;
+  d.progress.stream = nullptr;
+  const DetectRpnSummary ds = DetectRpn(d);
+  EXPECT_EQ(ds.frames, 3);
+  EXPECT_TRUE(fs::exists(d.out_dir / "run.json"));
+  int found = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::string id = FrameId(i);
+    const Object label = ReadObjects(root / "training/label_2" / (id + ".txt")).objects.at(0);
+    const std::vector<Object> dets =
+        ReadObjects(d.out_dir / (id + ".txt"), {.kind = ObjectFileKind::kDetection}).objects;
+    double best = 0;
+    for (const Object& det : dets) {
+      ASSERT_TRUE(det.score.has_value());
+      EXPECT_GE(*det.score, 0.0);
+      EXPECT_LE(*det.score, 1.0);
+      if (*det.score < 0.5) continue;
+      EXPECT_EQ(det.type, "Car") << "a confident detection of another class";
+      best = std::max(best, Iou2D(det.box, label.box));
+    }
+    EXPECT_GT(best, 0.6) << "frame " << id << ": no confident detection of its car\n"
+                         << ReadFile(out / "train_log.csv");
+    found += best > 0.6;
+  }
+  EXPECT_EQ(found, 3);  // recall 1 on the training frames
+}
+
+TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
+  const fs::path root = WriteTinyDataset("rpn_resume_data", 2);
+  const fs::path out = TempDir("rpn_resume");
+  TrainRpnOptions options = TinyTraining(root, out);
+  options.data.augment = true;  // seeded per (seed, epoch, frame): resumes exactly
+  options.batch_size = 1;
+  options.epochs = 3;
+  options.max_epochs_this_run = 1;
+  EXPECT_EQ(TrainRpn(options).epochs_done, 1);
+  options.max_epochs_this_run = 0;
+  EXPECT_THROW(TrainRpn(options), std::invalid_argument);  // a model there, no --resume
+  options.resume = true;
+  EXPECT_EQ(TrainRpn(options).epochs_run, 2);
+
+  std::vector<fs::path> straight;
+  for (const char* name : {"rpn_straight_a", "rpn_straight_b"}) {
+    straight.push_back(TempDir(name));
+    TrainRpnOptions direct = TinyTraining(root, straight.back());
+    direct.data.augment = true;
+    direct.batch_size = 1;
+    direct.epochs = 3;
+    TrainRpn(direct);
+  }
+  // Two uninterrupted runs and the resumed one: the same losses at every epoch ...
+  const std::string log = WithoutTimes(ReadFile(out / "train_log.csv"));
+  EXPECT_EQ(log, WithoutTimes(ReadFile(straight[0] / "train_log.csv")));
+  EXPECT_EQ(log, WithoutTimes(ReadFile(straight[1] / "train_log.csv")));
+  // ... and the same weights (compared by what they compute, bit for bit: LibTorch's archive
+  // bytes differ run to run).
+  const RpnModel a = RpnModel::Load(out), b = RpnModel::Load(straight[0]);
+  const RpnTrainingData data(KittiDataset(root), {FrameId(1)}, a.config(),
+                             TinyTraining(root, out).data);
+  const RpnSample sample = data.Sample(0, 1);
+  RpnDetectOptions all;
+  all.decode.score_threshold = 0.0f;
+  const auto pa = a.Propose({sample.input}, all.proposals),
+             pb = b.Propose({sample.input}, all.proposals);
+  ASSERT_FALSE(pa[0].empty());
+  ASSERT_EQ(pa[0].size(), pb[0].size());
+  for (size_t i = 0; i < pa[0].size(); ++i) {
+    EXPECT_EQ(pa[0][i].box, pb[0][i].box) << i;
+    EXPECT_EQ(pa[0][i].score, pb[0][i].score) << i;
+  }
+  const auto da = a.Detect({sample.input}, all), db = b.Detect({sample.input}, all);
+  ASSERT_EQ(da[0].size(), db[0].size());
+  for (size_t i = 0; i < da[0].size(); ++i) {
+    EXPECT_EQ(da[0][i], db[0][i]) << i;
+  }
+}
+
+TEST(RpnTrainTest, RgbdTrainsFromStereoMirrorsAnRgbModelAndDetects) {
+  const fs::path root = WriteTinyDataset("rpn_rgbd_data", 2);
+  const fs::path rgb_out = TempDir("rpn_rgb_for_init");
+  TrainRpnOptions rgb = TinyTraining(root, rgb_out);
+  rgb.epochs = 1;
+  TrainRpn(rgb);
+
+  const fs::path out = TempDir("rpn_rgbd");
+  TrainRpnOptions options = TinyTraining(root, out);
+  options.model.input = RpnInput::kRgbd;
+  options.epochs = 1;
+  options.init_from = rgb_out;
+  options.init_geometry = true;
+  const TrainRpnSummary s = TrainRpn(options);
+  EXPECT_EQ(s.frames, 2);
+  EXPECT_GT(s.init_tensors, 0);
+  EXPECT_EQ(s.geometry_branch_parameters, s.image_branch_parameters);
+  EXPECT_GT(s.parameters, s.image_branch_parameters + s.geometry_branch_parameters);
+  // The stereo settings are recorded for detection.
+  EXPECT_NE(ReadFile(out / "model.json").find("\"num_disparities\": 32"), std::string::npos);
+  // --init-from an rgbd model is refused.
+  TrainRpnOptions again = options;
+  again.out_dir = TempDir("rpn_rgbd_from_rgbd");
+  again.init_from = out;
+  EXPECT_THROW(TrainRpn(again), std::invalid_argument);
+
+  DetectRpnOptions d;
+  d.model_dir = out;
+  d.data_root = root;
+  d.out_dir = root / "detections";
+  d.threads = 1;
+  d.blur_sigma_px = 2.0;
+  d.progress.stream = nullptr;
+  const DetectRpnSummary ds = DetectRpn(d);
+  EXPECT_EQ(ds.frames, 2);
+  EXPECT_TRUE(fs::exists(d.out_dir / (FrameId(1) + ".txt")));
+  EXPECT_NE(ReadFile(d.out_dir / "run.json").find("\"blur_sigma_px\": 2"), std::string::npos);
+  // Detecting into the model folder is refused.
+  d.out_dir = out / "det";
+  EXPECT_THROW(DetectRpn(d), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet

@@ -1,0 +1,162 @@
+#include "stereodet/report/bootstrap_report.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "stereodet/report/eval_report.h"
+
+namespace stereodet {
+
+namespace {
+
+using nlohmann::json;
+
+// The metrics shown in the text tables: the APs and the Brier score over labels.
+std::vector<BootstrapMetric> TableMetrics(Matcher matcher) {
+  std::vector<BootstrapMetric> out = {BootstrapMetric::kApR40, BootstrapMetric::kApR11};
+  if (matcher != Matcher::kKitti) out.push_back(BootstrapMetric::kApVoc);
+  out.push_back(BootstrapMetric::kBrierLabels);
+  return out;
+}
+
+int Decimals(BootstrapMetric m) {
+  return m == BootstrapMetric::kApR40 || m == BootstrapMetric::kApR11 ||
+                 m == BootstrapMetric::kApVoc
+             ? 2
+             : 4;
+}
+
+std::string Title(BootstrapMetric m) {
+  switch (m) {
+    case BootstrapMetric::kApR40:
+      return "AP_R40";
+    case BootstrapMetric::kApR11:
+      return "AP_R11";
+    case BootstrapMetric::kApVoc:
+      return "AP_VOC";
+    case BootstrapMetric::kBrierLabels:
+      return "Brier_L";
+    case BootstrapMetric::kBrierDetections:
+      return "Brier_D";
+    case BootstrapMetric::kBrierAll:
+      return "Brier_A";
+  }
+  return "?";
+}
+
+std::string WithInterval(const BootstrapInterval& i, int decimals) {
+  return fmt::format("{} [{}, {}]", FormatNumber(i.estimate, decimals),
+                     FormatNumber(i.lower, decimals), FormatNumber(i.upper, decimals));
+}
+
+std::string Csv(double v) { return std::isnan(v) ? std::string() : fmt::format("{}", v); }
+
+std::string PercentText(double confidence) { return fmt::format("{:g}%", confidence * 100); }
+
+// `text` without the blanks at the end of its lines (the last column's padding).
+std::string WithoutTrailingBlanks(const std::string& text) {
+  std::istringstream in(text);
+  std::string out, line;
+  while (std::getline(in, line)) {
+    line.erase(line.find_last_not_of(' ') + 1);
+    out += line + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+json BootstrapSummaryJson(const BootstrapResult& result) {
+  return json{{"resamples", result.num_resamples},
+              {"seed", result.seed},
+              {"confidence", result.confidence},
+              {"method", "percentile"},
+              {"resampled", "frames"},
+              {"seconds", result.seconds}};
+}
+
+json BootstrapCellJson(const BootstrapCell& cell, Matcher matcher) {
+  json j = json::object();
+  for (const BootstrapMetric m : BootstrapMetrics(matcher)) {
+    const BootstrapInterval& i = cell.Get(m);
+    j[BootstrapMetricName(m)] = {{"estimate", i.estimate},
+                                 {"lower", i.lower},
+                                 {"upper", i.upper},
+                                 {"resamples_defined", i.num_defined}};
+  }
+  return j;
+}
+
+std::string FormatBootstrapTable(const BootstrapResult& result) {
+  std::ostringstream out;
+  out << fmt::format(
+      "bootstrap: {} resamples of the {} frames (seed {}), {} percentile intervals\n",
+      result.num_resamples, result.num_frames, result.seed, PercentText(result.confidence));
+  const std::vector<BootstrapMetric> metrics = TableMetrics(result.matcher);
+  out << fmt::format("{:<12} {:<4} {:<8} |", "class", "kind", "diff.");
+  for (const BootstrapMetric m : metrics) out << fmt::format(" {:<26}", Title(m));
+  out << "\n";
+  for (const BootstrapCell& cell : result.cells) {
+    if (!cell.evaluated) continue;
+    out << fmt::format("{:<12} {:<4} {:<8} |", cell.class_name, OverlapKindName(cell.metric),
+                       DifficultyName(cell.difficulty));
+    for (const BootstrapMetric m : metrics) {
+      out << fmt::format(" {:<26}", WithInterval(cell.Get(m), Decimals(m)));
+    }
+    out << "\n";
+  }
+  return WithoutTrailingBlanks(out.str());
+}
+
+std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result) {
+  std::ostringstream out;
+  out << "class,metric,difficulty,measure,a,a_lower,a_upper,b,b_lower,b_upper,a_minus_b,"
+         "a_minus_b_lower,a_minus_b_upper,resamples,resamples_defined,confidence,seed\n";
+  const BootstrapResult& d = result.difference;
+  for (size_t c = 0; c < d.cells.size(); ++c) {
+    const BootstrapCell& cell = d.cells[c];
+    for (const BootstrapMetric m : BootstrapMetrics(d.matcher)) {
+      const BootstrapInterval& a = result.a.cells[c].Get(m);
+      const BootstrapInterval& b = result.b.cells[c].Get(m);
+      const BootstrapInterval& x = cell.Get(m);
+      out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", cell.class_name,
+                         OverlapKindName(cell.metric), DifficultyName(cell.difficulty),
+                         BootstrapMetricName(m), Csv(a.estimate), Csv(a.lower), Csv(a.upper),
+                         Csv(b.estimate), Csv(b.lower), Csv(b.upper), Csv(x.estimate), Csv(x.lower),
+                         Csv(x.upper), d.num_resamples, x.num_defined, d.confidence, d.seed);
+    }
+  }
+  return out.str();
+}
+
+std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result) {
+  const BootstrapResult& d = result.difference;
+  std::ostringstream out;
+  out << fmt::format(
+      "paired bootstrap A - B: {} resamples of the {} frames (seed {}), {} percentile "
+      "intervals\n",
+      d.num_resamples, d.num_frames, d.seed, PercentText(d.confidence));
+  const std::vector<BootstrapMetric> metrics = {BootstrapMetric::kApR40,
+                                                BootstrapMetric::kBrierLabels};
+  out << fmt::format("{:<12} {:<4} {:<8} |", "class", "kind", "diff.");
+  for (const BootstrapMetric m : metrics) out << fmt::format(" {:<32}", Title(m) + " A - B");
+  out << "\n";
+  for (const BootstrapCell& cell : d.cells) {
+    if (!cell.evaluated) continue;
+    out << fmt::format("{:<12} {:<4} {:<8} |", cell.class_name, OverlapKindName(cell.metric),
+                       DifficultyName(cell.difficulty));
+    for (const BootstrapMetric m : metrics) {
+      const BootstrapInterval& i = cell.Get(m);
+      const bool excludes_zero = i.num_defined > 0 && (i.lower > 0 || i.upper < 0);
+      out << fmt::format(" {:<32}", WithInterval(i, Decimals(m)) + (excludes_zero ? " *" : ""));
+    }
+    out << "\n";
+  }
+  out << "* the interval excludes 0\n";
+  return WithoutTrailingBlanks(out.str());
+}
+
+}  // namespace stereodet
