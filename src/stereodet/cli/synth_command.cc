@@ -32,6 +32,9 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_flag(
       "--no-lidar", [options](int64_t) { options->synth.lidar = false; },
       "write empty velodyne scans (faster)");
+  cmd->add_flag(
+      "--flat-roads", [options](int64_t) { options->synth.scene.road_shapes = false; },
+      "straight, flat roads without side streets (the road model before settings version 4)");
   AddShardOption(cmd, &options->shard);
   cmd->add_flag("--quiet", *quiet, "no progress output");
   cmd->callback([options, quiet] {

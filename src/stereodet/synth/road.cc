@@ -28,11 +28,34 @@ double CurveSlope(double s, double half) {
 // One profile P(u) = (k / 2) [q(u - centre) - q(-centre) - q'(-centre) u] + slope u: 0 and `slope`
 // at u = 0.
 struct Profile {
+  Profile(double k, double centre, double half, double slope)
+      : k(k),
+        centre(centre),
+        half(half),
+        slope(slope),
+        lin(-0.5 * k * CurveSlope(-centre, half) + slope),
+        con(-0.5 * k * Curve(-centre, half)) {}
   double k, centre, half, slope;
+  double lin, con;  // P(u) = (k / 2) q(u - centre) + lin u + con
   double Value(double u) const {
     return 0.5 * k *
                (Curve(u - centre, half) - Curve(-centre, half) - CurveSlope(-centre, half) * u) +
            slope * u;
+  }
+  // Value and Derivative at once.
+  double ValueAndDerivative(double u, double* derivative) const {
+    if (k == 0.0) {
+      *derivative = slope;
+      return slope * u;
+    }
+    const double s = u - centre;
+    if (s >= -half && s <= half) {
+      *derivative = k * s + lin;
+      return 0.5 * k * s * s + lin * u + con;
+    }
+    const double sign = s > 0 ? 1.0 : -1.0;
+    *derivative = k * half * sign + lin;
+    return 0.5 * k * (2.0 * half * sign * s - half * half) + lin * u + con;
   }
   double Derivative(double u) const {
     return 0.5 * k * (CurveSlope(u - centre, half) - CurveSlope(-centre, half)) + slope;
@@ -40,8 +63,6 @@ struct Profile {
   // P(u0 + t du) as c2 t^2 + c1 t + c0 on the piece `state` (-1: before the curve, 0: on it, 1:
   // after it), added to c.
   void Polynomial(double u0, double du, int state, double c[3]) const {
-    const double lin = -0.5 * k * CurveSlope(-centre, half) + slope;  // coefficient of u
-    const double con = -0.5 * k * Curve(-centre, half);
     const double s0 = u0 - centre;  // s(t) = s0 + t du
     if (state == 0) {
       c[2] += 0.5 * k * du * du;
@@ -55,10 +76,12 @@ struct Profile {
     c[1] += lin * du;
     c[0] += lin * u0 + con;
   }
-  // The largest |P'(u)| (P' is monotonic: it is largest at one of the straight grades).
-  double MaxSlope() const {
-    const double base = -0.5 * k * CurveSlope(-centre, half) + slope;
-    return std::max(std::abs(base - k * half), std::abs(base + k * half));
+  // A piecewise-linear upper bound U(u) >= P(u): m_plus u for u > 0, m_minus u for u < 0. A
+  // convex P (k > 0) lies below the straight grades' slopes (P(0) = 0, P' increasing), a concave
+  // one below its tangent at 0. U is convex either way.
+  double UpperBound(double u) const {
+    if (k <= 0.0) return slope * u;
+    return u > 0 ? (lin + k * half) * u : (lin - k * half) * u;
   }
 };
 
@@ -80,9 +103,19 @@ Eigen::Vector2f ArcToRoad(const Eigen::Vector2f& origin_xz, const Eigen::Vector2
   // In double: the radius is large and the lateral offset its small difference from the distance.
   const double k = curvature_per_m, s = k > 0 ? 1.0 : -1.0, radius = 1.0 / std::abs(k);
   const double dr = d.dot(right) - s * radius, df = d.dot(forward_xz);
-  const double m = std::hypot(dr, df);
+  const double m = std::sqrt(dr * dr + df * df);
   const double theta = std::atan2(s * df, -s * dr);
   return {static_cast<float>(s * (radius - m)), static_cast<float>(s * theta * radius)};
+}
+
+float ArcLateral(const Eigen::Vector2f& origin_xz, const Eigen::Vector2f& forward_xz,
+                 float curvature_per_m, float x, float z) {
+  const Eigen::Vector2f right(forward_xz.y(), -forward_xz.x());
+  const Eigen::Vector2f d(x - origin_xz.x(), z - origin_xz.y());
+  if (std::abs(curvature_per_m) < kStraight) return d.dot(right);
+  const double k = curvature_per_m, s = k > 0 ? 1.0 : -1.0, radius = 1.0 / std::abs(k);
+  const double dr = d.dot(right) - s * radius, df = d.dot(forward_xz);
+  return static_cast<float>(s * (radius - std::sqrt(dr * dr + df * df)));
 }
 
 Eigen::Vector2f ArcFromRoad(const Eigen::Vector2f& origin_xz, const Eigen::Vector2f& forward_xz,
@@ -136,11 +169,15 @@ double GroundProfile::HeightAndNormal(double x, double z, Eigen::Vector3f* norma
   }
   const Eigen::Vector2d la = Frame(x, z);
   const Profile along = AlongProfile(*this), lateral = LateralProfile(*this);
-  const double dl = lateral.Derivative(la.x()), da = along.Derivative(la.y());
+  double dl, da;
+  const double height =
+      along.ValueAndDerivative(la.y(), &da) + lateral.ValueAndDerivative(la.x(), &dl);
   const double gx = dl * forward_xz.y() + da * forward_xz.x();
   const double gz = -dl * forward_xz.x() + da * forward_xz.y();
-  *normal = -Eigen::Vector3d(gx, 1.0, gz).normalized().cast<float>();
-  return along.Value(la.y()) + lateral.Value(la.x());
+  const double inv = 1.0 / std::sqrt(gx * gx + 1.0 + gz * gz);
+  *normal = Eigen::Vector3f(static_cast<float>(-gx * inv), static_cast<float>(-inv),
+                            static_cast<float>(-gz * inv));
+  return height;
 }
 
 float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, float t_max) const {
@@ -156,14 +193,15 @@ float GroundProfile::Intersect(const Ray& ray, float base_y_m, float t_min, floa
   const double a0 = ox * forward_xz.x() + oz * forward_xz.y();
   const double da = d.x() * forward_xz.x() + d.z() * forward_xz.y();
   const Profile along = AlongProfile(*this), lateral = LateralProfile(*this);
-  // Cheap rejection: |Height| <= s_a |a| + s_l |l| (P(0) = 0), so F(t) = base - y(t) - Height(t)
-  // >= c0 + c1 t with the constants below; a ray with F's bound positive at both ends of (t_min,
-  // t_max) stays above the ground. Most rays above the horizon end here.
-  {
-    const double sa = along.MaxSlope(), sl = lateral.MaxSlope();
-    const double c0 = base_y_m - o.y() - sa * std::abs(a0) - sl * std::abs(l0);
-    const double c1 = -d.y() - sa * std::abs(da) - sl * std::abs(dl);
-    if (c0 > 0.0 && (c1 >= 0.0 || (std::isfinite(t_max) && c0 + c1 * t_max > 0.0))) return kNoHit;
+  // Cheap rejection: F(t) = base - y(t) - Height(t) >= B(t) = base - y(t) - U_a(a(t)) -
+  // U_l(l(t)) with the profiles' upper bounds, and B is concave in t: a ray with B > 0 at both ends
+  // of (t_min, t_max) stays above the ground. Most rays above the horizon end here.
+  if (std::isfinite(t_max)) {
+    const auto bound = [&](double t) {
+      return base_y_m - o.y() - t * d.y() - along.UpperBound(a0 + t * da) -
+             lateral.UpperBound(l0 + t * dl);
+    };
+    if (bound(t_min) > 0.0 && bound(t_max) > 0.0) return kNoHit;
   }
   // Walk the pieces of the ray (where each profile is on its curve, state 0, or on the straight
   // grade before (-1) or after (+1) it) from t_min. Along a ray each state changes monotonically,

@@ -38,6 +38,8 @@ struct SideStreet {
 // `along` the arc length. Exact both ways for |lateral| below the radius.
 Eigen::Vector2f ArcToRoad(const Eigen::Vector2f& origin_xz, const Eigen::Vector2f& forward_xz,
                           float curvature_per_m, float x, float z);
+float ArcLateral(const Eigen::Vector2f& origin_xz, const Eigen::Vector2f& forward_xz,
+                 float curvature_per_m, float x, float z);  // ArcToRoad's lateral alone
 Eigen::Vector2f ArcFromRoad(const Eigen::Vector2f& origin_xz, const Eigen::Vector2f& forward_xz,
                             float curvature_per_m, float lateral_m, float along_m);
 

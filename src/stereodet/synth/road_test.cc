@@ -64,7 +64,7 @@ TEST(GroundProfileTest, GradientAndNormalMatchFiniteDifferencesAndAreContinuous)
     EXPECT_NEAR(n.dot(Eigen::Vector3d(1.0, -fd.x(), 0.0)), 0.0, 1e-6);
     EXPECT_NEAR(n.dot(Eigen::Vector3d(0.0, -fd.y(), 1.0)), 0.0, 1e-6);
     Eigen::Vector3f n2;
-    EXPECT_EQ(g.HeightAndNormal(x, z, &n2), g.Height(x, z));
+    EXPECT_NEAR(g.HeightAndNormal(x, z, &n2), g.Height(x, z), 1e-12);
     EXPECT_NEAR((n2 - g.Normal(x, z)).norm(), 0.0f, 1e-7f);
   }
   // C1 at the curve's ends (a = 10 and 110 along the profile's heading).

@@ -12,6 +12,13 @@ Eigen::Vector2f Road::ToRoad(float x, float z) const {
   return ArcToRoad(origin_xz, forward_xz, curvature_per_m, x, z);
 }
 
+float Road::LateralOf(float x, float z) const {
+  if (curvature_per_m == 0.0f) {
+    return (x - origin_xz.x()) * forward_xz.y() - (z - origin_xz.y()) * forward_xz.x();
+  }
+  return ArcLateral(origin_xz, forward_xz, curvature_per_m, x, z);
+}
+
 Eigen::Vector2f Road::FromRoad(float lateral_m, float along_m) const {
   if (curvature_per_m == 0.0f) return origin_xz + lateral_m * RightXz() + along_m * forward_xz;
   return ArcFromRoad(origin_xz, forward_xz, curvature_per_m, lateral_m, along_m);
@@ -46,18 +53,20 @@ bool Scene::Occluded(const Ray& ray, float t_min, float t_max, int* hint) const 
 }
 
 float Scene::GroundHit(const Ray& ray, float t_min, float t_max) const {
-  const float horizontal_per_t = std::hypot(ray.direction.x(), ray.direction.z());
-  if (ground.Flat()) {
-    if (ray.direction.y() <= 0.0f) return kNoHit;
-  } else {
+  if (!ground.Flat()) {
     // Hits beyond max_ground_distance_m are none: a ray that has not met the ground by then need
     // not be followed (a bound that lets the shaped ground reject most rays above the horizon at
     // once).
-    t_max = std::min(t_max, max_ground_distance_m / std::max(1e-12f, horizontal_per_t));
+    const float horizontal_sq =
+        ray.direction.x() * ray.direction.x() + ray.direction.z() * ray.direction.z();
+    t_max = std::min(t_max, max_ground_distance_m / std::sqrt(std::max(1e-24f, horizontal_sq)));
+  } else if (ray.direction.y() <= 0.0f) {
+    return kNoHit;
   }
   const float t = ground.Intersect(ray, ground_y_m, t_min, t_max);
   if (t == kNoHit) return kNoHit;
-  return t * horizontal_per_t < max_ground_distance_m ? t : kNoHit;
+  const float horizontal = t * std::hypot(ray.direction.x(), ray.direction.z());
+  return horizontal < max_ground_distance_m ? t : kNoHit;
 }
 
 SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
@@ -76,11 +85,11 @@ SurfaceHit Scene::MakeHit(const Ray& ray, float t, int primitive) const {
     hit.kind = SurfaceHit::Kind::kGround;
     hit.point.y() = static_cast<float>(
         ground_y_m - ground.HeightAndNormal(hit.point.x(), hit.point.z(), &hit.normal));
-    const Eigen::Vector2f rc = road.ToRoad(hit.point.x(), hit.point.z());
-    bool on_road = rc.x() >= road.left_edge_m && rc.x() <= road.right_edge_m;
+    const float lateral = road.LateralOf(hit.point.x(), hit.point.z());
+    bool on_road = lateral >= road.left_edge_m && lateral <= road.right_edge_m;
     if (!on_road && !road.side_streets.empty()) {
-      const SideStreet* side = road.SideStreetAt(rc.y());
-      on_road = side != nullptr && side->OnSide(rc.x() < road.left_edge_m ? 0 : 1);
+      const SideStreet* side = road.SideStreetAt(road.ToRoad(hit.point.x(), hit.point.z()).y());
+      on_road = side != nullptr && side->OnSide(lateral < road.left_edge_m ? 0 : 1);
     }
     hit.material = on_road ? road_material : offroad_material;
   }

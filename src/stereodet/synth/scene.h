@@ -1,5 +1,6 @@
-// A synthetic street scene: an analytic ground plane with a road on it, primitives (boxes,
-// cylinders, ellipsoids) grouped into labelled objects and background clutter, materials and light.
+// A synthetic street scene: an analytic ground (a plane, or cresting and crowned: road.h) with a
+// road on it, primitives (boxes, cylinders, ellipsoids) grouped into labelled objects and
+// background clutter, materials and light.
 //
 // The scene lives in KITTI's rectified camera frame (x right, y down, z forward, metres; the
 // origin is the centre of camera 0). The left camera, the right camera and the LiDAR all cast rays
@@ -79,6 +80,8 @@ struct Road {
   Eigen::Vector2f RightXz() const { return {forward_xz.y(), -forward_xz.x()}; }
   // Road coordinates (lateral, along) of a rect (x, z) point.
   Eigen::Vector2f ToRoad(float x, float z) const;
+  // The lateral road coordinate alone (cheaper on a bend: no arc length).
+  float LateralOf(float x, float z) const;
   // Rect (x, z) of road coordinates.
   Eigen::Vector2f FromRoad(float lateral_m, float along_m) const;
   // Heading of the road at along 0 as a KITTI rotation_y (objects driving forward along the road).

@@ -720,7 +720,6 @@ void StreetBuilder::StreetFurniture(int side, Rng& rng) {
   // (sign faces: against the road's forward direction).
   const Eigen::Vector2f to_road = static_cast<float>(-sign) * scene_.road.RightXz();
   const float yaw_to_road = std::atan2(-to_road.y(), to_road.x());
-  const float yaw_to_traffic = static_cast<float>(WrapYaw(scene_.road.ForwardYaw() + M_PI));
   const double height = sidewalk ? curb_height_ : 0.0;
   for (double a = options_.min_along_m + rng.Uniform(0.0, spacing); a < options_.max_along_m;
        a += spacing * rng.Uniform(0.5, 1.5)) {
@@ -742,10 +741,16 @@ void StreetBuilder::StreetFurniture(int side, Rng& rng) {
         kind == ClutterKind::kBollard && rng.Bernoulli(0.4) ? rng.UniformInt(3, 6) : 1;
     for (int k = 0; k < count; ++k) {
       const double along = a + 1.6 * k;
-      if (!Free(lateral, along, r)) continue;
+      if (!Free(lateral, along, r) || InJunction(along, side, r + 0.5)) continue;
       Take(lateral, along, r);
       const Eigen::Vector3d base = At(lateral, along, height);
-      const float yaw = kind == ClutterKind::kSignPost ? yaw_to_traffic : yaw_to_road;
+      // On a bend the road's heading turns with `along` (the same angles on a straight road).
+      const float yaw_to_traffic = static_cast<float>(WrapYaw(Heading(along) + M_PI));
+      const float yaw_to_road_here =
+          scene_.road.curvature_per_m == 0.0f
+              ? yaw_to_road
+              : static_cast<float>(WrapYaw(Heading(along) + (side == 0 ? 0.5 : -0.5) * M_PI));
+      const float yaw = kind == ClutterKind::kSignPost ? yaw_to_traffic : yaw_to_road_here;
       AddClutter(scene_, kind, base.cast<float>(), yaw, rng);
     }
   }
