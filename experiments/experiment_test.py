@@ -1,0 +1,194 @@
+#!/usr/bin/env python3
+"""ctest experiment.miniature: scripts/experiment.py end to end on experiments/miniature.json (the
+committed SSDs on 4 synthetic frames, 2 of them val; the RPN and 3D checkpoints absent), then:
+
+- every number of the generated table1.md equals the one in its results.json / bootstrap.csv
+  (read here independently of the generator), the paper's column equals paper_figures.csv, and the
+  absent models are 'missing' rows;
+- a second run runs nothing and changes nothing; a step whose marker is gone runs again, alone;
+- --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
+- a config error names the file and the field.
+
+Usage: experiment_test.py REPO_ROOT BIN_DIR WORK_DIR
+"""
+
+import csv
+import json
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+
+repo, bin_dir, work = (pathlib.Path(a).resolve() for a in sys.argv[1:4])
+script = repo / "scripts" / "experiment.py"
+config_path = repo / "experiments" / "miniature.json"
+out = work / "out"
+failures = []
+
+
+def check(condition, message):
+    if not condition:
+        failures.append(message)
+        print(f"FAIL: {message}")
+
+
+def run(*extra, expect=0):
+    p = subprocess.run([sys.executable, str(script), "--config", str(config_path), "--out",
+                        str(out), "--bin", str(bin_dir), *extra], capture_output=True, text=True)
+    if p.returncode != expect:
+        print(p.stdout, p.stderr)
+        raise SystemExit(f"experiment.py exited {p.returncode}, expected {expect}")
+    return p
+
+
+def cells(results_json, cls):
+    with open(results_json) as f:
+        for r in json.load(f)["results"]:
+            if r["class"] == cls and r["difficulty"] == "Moderate" and r["metric"] == "2d":
+                return r
+    return None
+
+
+def with_interval(cell, key, value, scale):
+    b = cell["bootstrap"][key]
+    text = f"{value * scale:.3f}" if value is not None else "n/a"
+    if b["lower"] is not None and b["upper"] is not None:
+        text += f" [{b['lower'] * scale:.3f}, {b['upper'] * scale:.3f}]"
+    return text
+
+
+def parse_tables(text):
+    """{(class, 'table'|'pairs'): [row cells]} from the generated Markdown."""
+    tables, cls, kind = {}, None, None
+    for line in text.splitlines():
+        m = re.match(r"### Table 1, (\w+)", line)
+        if m:
+            cls, kind = m.group(1), "table"
+        elif line.startswith("Paired differences"):
+            kind = "pairs"
+        elif line.startswith("| ") and cls and not line.startswith("| model |") \
+                and not line.startswith("| A - B |"):
+            tables.setdefault((cls, kind), []).append([c.strip() for c in line.strip("|").split("|")])
+    return tables
+
+
+shutil.rmtree(work, ignore_errors=True)
+work.mkdir(parents=True)
+config = json.loads(config_path.read_text())
+first = run()
+m = re.search(r"experiment: (\d+) steps run, (\d+) skipped, ([0-9.]+) s", first.stdout)
+check(m is not None, "first run prints its summary")
+steps = int(m.group(1)) if m else 0
+# synth + 2 models x 2 blurs x (detect + 2 evals) + 1 pair x 2 blurs x 2 matchers = 1 + 12 + 4
+check(steps == 17 and m.group(2) == "0", f"first run: 17 steps, none skipped (got {m.groups()})")
+table_text = (out / "table1.md").read_text()
+tables = parse_tables(table_text)
+
+paper = {}
+with open(repo / "experiments" / "paper_figures.csv") as f:
+    for r in csv.DictReader(line for line in f if not line.startswith("#")):
+        paper[(r["model"], r["blur_sigma_px"], r["class"], r["measure"])] = float(r["value"])
+
+checked = 0
+for cls in config["classes"]:
+    rows = {(r[0], r[1]): r for r in tables.get((cls, "table"), [])}
+    for model in config["models"]:
+        blurs = ["0"] if model["family"] == "det3d" else ["0", "5"]
+        for blur in blurs:
+            row = rows.get((model["name"], blur))
+            check(row is not None, f"{cls}: a row for {model['name']} blur {blur}")
+            if row is None:
+                continue
+            for col, measure in ((8, "ap"), (9, "brier_labels")):
+                want = paper.get((model["name"], blur, cls, measure))
+                check(row[col] == (f"{want:.3f}" if want is not None else "n/a"),
+                      f"{cls} {model['name']} blur {blur}: paper {measure} {row[col]!r}")
+            if not (repo / model["model"] / "model.pt").exists():
+                check(row[3].startswith("missing: no checkpoint"),
+                      f"{cls} {model['name']}: a missing row, got {row[3]!r}")
+                continue
+            run_dir = out / "runs" / model["name"] / f"blur{blur}"
+            k = cells(run_dir / "eval-kitti" / "results.json", cls)
+            o = cells(run_dir / "eval-optimal" / "results.json", cls)
+            want = [str(k["num_valid_labels"]), with_interval(k, "ap_r40", k["ap_r40"], 0.01),
+                    with_interval(k, "ap_r11", k["ap_r11"], 0.01),
+                    with_interval(o, "ap_r40", o["ap_r40"], 0.01),
+                    with_interval(o, "brier_labels", o["brier"]["over_labels"], 1.0)]
+            check(row[3:8] == want, f"{cls} {model['name']} blur {blur}: {row[3:8]} != {want}")
+            checked += 1
+    pairs = {(r[0], r[1], r[2]): r for r in tables.get((cls, "pairs"), [])}
+    for blur in ("0", "5"):
+        for matcher in ("kitti", "optimal"):
+            row = pairs.get(("ssd-rgb - ssd-rgbh-fixed", blur, matcher))
+            check(row is not None, f"{cls}: a paired row, blur {blur}, {matcher}")
+            if row is None:
+                continue
+            path = out / "compare" / "ssd-rgb-vs-ssd-rgbh-fixed" / f"blur{blur}" / matcher
+            with open(path / "bootstrap.csv") as f:
+                got = {r["measure"]: r for r in csv.DictReader(f)
+                       if r["class"] == cls and r["metric"] == "2d" and r["difficulty"] == "Moderate"}
+            for col, measure, scale in ((3, "ap_r40", 0.01), (4, "brier_labels", 1.0)):
+                r = got[measure]
+                if r["a_minus_b"] == "":
+                    check(row[col] == "n/a", f"{cls} pair {measure}: n/a, got {row[col]!r}")
+                    continue
+                d, lo, hi = (float(r[c]) * scale for c in
+                             ("a_minus_b", "a_minus_b_lower", "a_minus_b_upper"))
+                want = f"{d:+.3f} [{lo:+.3f}, {hi:+.3f}]" + (" *" if lo > 0 or hi < 0 else "")
+                check(row[col] == want, f"{cls} pair blur {blur} {matcher} {measure}: "
+                      f"{row[col]!r} != {want!r}")
+                # The paired difference of the estimates is the difference of the two tables'.
+                a = cells(out / "runs" / "ssd-rgb" / f"blur{blur}" / f"eval-{matcher}" /
+                          "results.json", cls)
+                b = cells(out / "runs" / "ssd-rgbh-fixed" / f"blur{blur}" / f"eval-{matcher}" /
+                          "results.json", cls)
+                va = a["ap_r40"] if measure == "ap_r40" else a["brier"]["over_labels"]
+                vb = b["ap_r40"] if measure == "ap_r40" else b["brier"]["over_labels"]
+                check(abs(float(r["a_minus_b"]) - (va - vb)) < 1e-9,
+                      f"{cls} pair {measure}: bootstrap.csv's A - B is the results' difference")
+            checked += 1
+    missing_pair = pairs.get(("rpn-rgb - rpn-rgbd", "", ""))
+    check(missing_pair is not None and missing_pair[3] == "missing: rpn-rgb, rpn-rgbd",
+          f"{cls}: the RPN pair is a missing row")
+check(checked == 3 * 4 + 3 * 4, f"checked 24 rows against their files (got {checked})")
+
+# Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
+stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
+second = run()
+check(f"0 steps run, {steps} skipped" in second.stdout, "second run skips every step")
+check((out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
+      == stamp, "second run leaves results.json alone")
+check((out / "table1.md").read_text() == table_text, "second run writes the same table")
+(out / "steps" / "eval-ssd-rgb-blur5-optimal.json").unlink()
+third = run()
+check(f"1 steps run, {steps - 1} skipped" in third.stdout, "a lost marker reruns its step alone")
+check((out / "table1.md").read_text() == table_text, "the rerun step gives the same table")
+
+# --table-only runs nothing; --update-docs replaces the marked section only.
+doc = work / "RESULTS.md"
+original = (repo / "docs" / "RESULTS.md").read_text()
+doc.write_text(original)
+run("--table-only", "--update-docs", str(doc))
+new = doc.read_text()
+begin = "<!-- BEGIN experiment table1: generated by scripts/experiment.py, do not edit -->"
+end = "<!-- END experiment table1 -->"
+check(new.split(begin)[0] == original.split(begin)[0] and
+      new.split(end)[1] == original.split(end)[1], "--update-docs keeps the rest of the file")
+check(table_text in new.split(begin)[1].split(end)[0], "--update-docs puts the table between")
+
+# A config error names the file and the field.
+bad = json.loads(config_path.read_text())
+bad["models"][1]["family"] = "yolo"
+bad_path = work / "bad.json"
+bad_path.write_text(json.dumps(bad))
+p = subprocess.run([sys.executable, str(script), "--config", str(bad_path), "--out", str(out),
+                    "--bin", str(bin_dir)], capture_output=True, text=True)
+check(p.returncode == 1 and f"{bad_path}: models[1].family: one of ssd, rpn, det3d, got 'yolo'"
+      in p.stderr, f"config error names the field: {p.stderr.strip()!r}")
+
+if failures:
+    raise SystemExit(f"experiment.miniature: {len(failures)} failure(s)")
+shutil.rmtree(work, ignore_errors=True)
+print(f"experiment.miniature: {steps} steps in {m.group(3)} s, {checked} rows match their files, "
+      "resumable, docs section replaced")
