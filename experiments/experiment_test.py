@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""ctest experiment.miniature: scripts/experiment.py end to end on experiments/miniature.json (the
-committed SSDs on 4 synthetic frames, 2 of them val; the RPN and 3D checkpoints absent), then:
+"""ctest experiment.miniature: scripts/experiment.py end to end on experiments/miniature.json (4
+synthetic frames with LiDAR, 2 of them val: the committed SSDs, RPN and 3D models trained for one
+step, a model without a checkpoint), then:
 
 - every number of the generated table1.md equals the one in its results.json / bootstrap.csv
   (read here independently of the generator), the paper's column equals paper_figures.csv, and the
-  absent models are 'missing' rows;
-- a second run runs nothing and changes nothing; a step whose marker is gone runs again, alone;
+  absent model's rows and pair are 'missing' rows;
+- a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
+  exactly the steps downstream of it (its evaluations and compares);
 - --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
 - a config error names the file and the field.
 
@@ -42,10 +44,13 @@ def run(*extra, expect=0):
     return p
 
 
-def cells(results_json, cls):
+METRIC = {"ssd": "2d", "rpn": "2d", "det3d": "3d"}
+
+
+def cells(results_json, cls, metric="2d"):
     with open(results_json) as f:
         for r in json.load(f)["results"]:
-            if r["class"] == cls and r["difficulty"] == "Moderate" and r["metric"] == "2d":
+            if r["class"] == cls and r["difficulty"] == "Moderate" and r["metric"] == metric:
                 return r
     return None
 
@@ -80,8 +85,10 @@ first = run()
 m = re.search(r"experiment: (\d+) steps run, (\d+) skipped, ([0-9.]+) s", first.stdout)
 check(m is not None, "first run prints its summary")
 steps = int(m.group(1)) if m else 0
-# synth + 2 models x 2 blurs x (detect + 2 evals) + 1 pair x 2 blurs x 2 matchers = 1 + 12 + 4
-check(steps == 17 and m.group(2) == "0", f"first run: 17 steps, none skipped (got {m.groups()})")
+# synth, stereo points (val, train), 4 trainings, detect: 4 image models x 2 blurs + 2 3D models,
+# 2 evals each, compares: 2 image pairs x 2 blurs x 2 matchers + the 3D pair x 2 matchers
+# = 1 + 2 + 4 + 10 + 20 + 10
+check(steps == 47 and m.group(2) == "0", f"first run: 47 steps, none skipped (got {m.groups()})")
 table_text = (out / "table1.md").read_text()
 tables = parse_tables(table_text)
 
@@ -104,13 +111,20 @@ for cls in config["classes"]:
                 want = paper.get((model["name"], blur, cls, measure))
                 check(row[col] == (f"{want:.3f}" if want is not None else "n/a"),
                       f"{cls} {model['name']} blur {blur}: paper {measure} {row[col]!r}")
-            if not (repo / model["model"] / "model.pt").exists():
+            if "train" not in model and not (repo / model["model"] / "model.pt").exists():
                 check(row[3].startswith("missing: no checkpoint"),
                       f"{cls} {model['name']}: a missing row, got {row[3]!r}")
                 continue
             run_dir = out / "runs" / model["name"] / f"blur{blur}"
-            k = cells(run_dir / "eval-kitti" / "results.json", cls)
-            o = cells(run_dir / "eval-optimal" / "results.json", cls)
+            metric = METRIC[model["family"]]
+            check(row[2] == metric, f"{cls} {model['name']}: overlap {row[2]!r}")
+            k = cells(run_dir / "eval-kitti" / "results.json", cls, metric)
+            o = cells(run_dir / "eval-optimal" / "results.json", cls, metric)
+            if not k.get("evaluated", True):
+                check(row[3] == "not evaluated (no detection of the class)",
+                      f"{cls} {model['name']}: a not-evaluated row, got {row[3]!r}")
+                checked += 1
+                continue
             want = [str(k["num_valid_labels"]), with_interval(k, "ap_r40", k["ap_r40"], 0.01),
                     with_interval(k, "ap_r11", k["ap_r11"], 0.01),
                     with_interval(o, "ap_r40", o["ap_r40"], 0.01),
@@ -118,19 +132,23 @@ for cls in config["classes"]:
             check(row[3:8] == want, f"{cls} {model['name']} blur {blur}: {row[3:8]} != {want}")
             checked += 1
     pairs = {(r[0], r[1], r[2]): r for r in tables.get((cls, "pairs"), [])}
-    for blur in ("0", "5"):
-        for matcher in ("kitti", "optimal"):
-            row = pairs.get(("ssd-rgb - ssd-rgbh-fixed", blur, matcher))
-            check(row is not None, f"{cls}: a paired row, blur {blur}, {matcher}")
+    by_name = {m["name"]: m for m in config["models"]}
+    for a_name, b_name in [p for p in config["pairs"] if "ssd-absent" not in p]:
+        family = by_name[a_name]["family"]
+        metric = METRIC[family]
+        for blur, matcher in [(b, mt) for b in (["0"] if family == "det3d" else ["0", "5"])
+                              for mt in ("kitti", "optimal")]:
+            row = pairs.get((f"{a_name} - {b_name}", blur, matcher))
+            check(row is not None, f"{cls}: a paired row {a_name} - {b_name}, blur {blur}, {matcher}")
             if row is None:
                 continue
-            path = out / "compare" / "ssd-rgb-vs-ssd-rgbh-fixed" / f"blur{blur}" / matcher
+            path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{blur}" / matcher
             with open(path / "bootstrap.csv") as f:
-                got = {r["measure"]: r for r in csv.DictReader(f)
-                       if r["class"] == cls and r["metric"] == "2d" and r["difficulty"] == "Moderate"}
+                got = {r["measure"]: r for r in csv.DictReader(f) if r["class"] == cls
+                       and r["metric"] == metric and r["difficulty"] == "Moderate"}
             for col, measure, scale in ((3, "ap_r40", 0.01), (4, "brier_labels", 1.0)):
-                r = got[measure]
-                if r["a_minus_b"] == "":
+                r = got.get(measure)
+                if r is None or r["a_minus_b"] == "":
                     check(row[col] == "n/a", f"{cls} pair {measure}: n/a, got {row[col]!r}")
                     continue
                 d, lo, hi = (float(r[c]) * scale for c in
@@ -139,19 +157,20 @@ for cls in config["classes"]:
                 check(row[col] == want, f"{cls} pair blur {blur} {matcher} {measure}: "
                       f"{row[col]!r} != {want!r}")
                 # The paired difference of the estimates is the difference of the two tables'.
-                a = cells(out / "runs" / "ssd-rgb" / f"blur{blur}" / f"eval-{matcher}" /
-                          "results.json", cls)
-                b = cells(out / "runs" / "ssd-rgbh-fixed" / f"blur{blur}" / f"eval-{matcher}" /
-                          "results.json", cls)
+                a = cells(out / "runs" / a_name / f"blur{blur}" / f"eval-{matcher}" /
+                          "results.json", cls, metric)
+                b = cells(out / "runs" / b_name / f"blur{blur}" / f"eval-{matcher}" /
+                          "results.json", cls, metric)
                 va = a["ap_r40"] if measure == "ap_r40" else a["brier"]["over_labels"]
                 vb = b["ap_r40"] if measure == "ap_r40" else b["brier"]["over_labels"]
                 check(abs(float(r["a_minus_b"]) - (va - vb)) < 1e-9,
                       f"{cls} pair {measure}: bootstrap.csv's A - B is the results' difference")
             checked += 1
-    missing_pair = pairs.get(("rpn-rgb - rpn-rgbd", "", ""))
-    check(missing_pair is not None and missing_pair[3] == "missing: rpn-rgb, rpn-rgbd",
-          f"{cls}: the RPN pair is a missing row")
-check(checked == 3 * 4 + 3 * 4, f"checked 24 rows against their files (got {checked})")
+    missing_pair = pairs.get(("ssd-rgb - ssd-absent", "", ""))
+    check(missing_pair is not None and missing_pair[3] == "missing: ssd-absent",
+          f"{cls}: the pair with the absent model is a missing row")
+# Per class: 10 model rows (4 image models x 2 blurs + 2 3D models) and 10 paired rows.
+check(checked == 3 * (10 + 10), f"checked 60 rows against their files (got {checked})")
 
 # Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
 stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
@@ -160,9 +179,13 @@ check(f"0 steps run, {steps} skipped" in second.stdout, "second run skips every 
 check((out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
       == stamp, "second run leaves results.json alone")
 check((out / "table1.md").read_text() == table_text, "second run writes the same table")
-(out / "steps" / "eval-ssd-rgb-blur5-optimal.json").unlink()
+(out / "steps" / "detect-ssd-rgbh-fixed-blur5.json").unlink()
 third = run()
-check(f"1 steps run, {steps - 1} skipped" in third.stdout, "a lost marker reruns its step alone")
+rerun = sorted(re.findall(r"^==> ([\w.-]+):", third.stdout, re.M))
+check(rerun == ["compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti",
+                "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal", "detect-ssd-rgbh-fixed-blur5",
+                "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal"],
+      f"a lost detection marker reruns it and what depends on it, only: {rerun}")
 check((out / "table1.md").read_text() == table_text, "the rerun step gives the same table")
 
 # --table-only runs nothing; --update-docs replaces the marked section only.

@@ -4,12 +4,15 @@ compares -> the generated table (docs/experiment.md).
 
 Usage: scripts/experiment.py [--config experiments/table1.json] [--out results/experiment]
                              [--bin build/bin] [--update-docs docs/RESULTS.md] [--table-only]
+                             [--train]
 
 Every step is one `stereodet` command. A step is skipped when its output folder exists and its
 marker OUT/steps/STEP.json holds the same command line (the marker is written only after the
 command succeeded, so an interrupted step runs again); a changed config reruns what it changes.
 A model whose folder has no model.pt (or a family this build lacks) is a "missing" row, not an
-error. Relative paths in the config are taken from the repository root.
+error. With --train (or "train": true in the config) every model with a "train" block is
+trained into OUT/models/NAME first and used from there. Relative paths in the config are taken
+from the repository root.
 """
 
 import argparse
@@ -68,6 +71,10 @@ def load_config(path):
         else:
             raise ConfigError(f"{w}.source: 'synth' or 'kitti', got {source!r}")
     _need(config, "split", str, where)
+    if not isinstance(config.setdefault("train_split", "train"), str):
+        raise ConfigError(f"{where}: train_split: a split name, got {config['train_split']!r}")
+    if not isinstance(config.setdefault("train", False), bool):
+        raise ConfigError(f"{where}: train: true or false, got {config['train']!r}")
     config.setdefault("threads", 0)
     boot = _need(config, "bootstrap", dict, where)
     if _need(boot, "resamples", int, f"{where}: bootstrap") < 0:
@@ -96,6 +103,15 @@ def load_config(path):
         if _need(m, "data", str, w) not in datasets:
             raise ConfigError(f"{w}.data: {m['data']!r} is not in datasets")
         m.setdefault("stereo_points", False)
+        flags = m.setdefault("detect_flags", [])
+        if not isinstance(flags, list) or not all(isinstance(x, str) for x in flags):
+            raise ConfigError(f"{w}.detect_flags: a list of strings, got {flags!r}")
+        if "train" in m:
+            t = _need(m, "train", dict, w)
+            _need(t, "input", str, f"{w}.train")
+            flags = t.setdefault("flags", [])
+            if not isinstance(flags, list) or not all(isinstance(x, str) for x in flags):
+                raise ConfigError(f"{w}.train.flags: a list of strings, got {flags!r}")
     by_name = {m["name"]: m for m in config["models"]}
     for i, pair in enumerate(config.get("pairs", [])):
         w = f"{where}: pairs[{i}]"
@@ -128,17 +144,28 @@ class Pipeline:
             [str(self.bin), "detect", "--help"], stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL).returncode == 0
 
-    def step(self, name, output, command):
-        """Runs `command` unless OUT/steps/NAME.json says this very command made `output`; its
-        standard output goes to OUT/logs/NAME.log."""
+    def token(self, name):
+        """The run token of step `name`'s marker (None if it has none)."""
+        marker = self.out / "steps" / f"{name}.json"
+        if not marker.exists():
+            return None
+        with open(marker) as f:
+            return json.load(f).get("token")
+
+    def step(self, name, output, command, deps=()):
+        """Runs `command` unless OUT/steps/NAME.json says this very command made `output` from
+        the current runs of the steps `deps` (a step that ran again reruns what depends on it);
+        its standard output goes to OUT/logs/NAME.log."""
         marker = self.out / "steps" / f"{name}.json"
         command = [str(c) for c in command]
+        dep_tokens = {d: self.token(d) for d in deps}
         if marker.exists() and output.exists():
             with open(marker) as f:
-                if json.load(f).get("command") == command[1:]:
-                    self.steps_skipped += 1
-                    print(f"--- {name}: complete, skipped", flush=True)
-                    return
+                done = json.load(f)
+            if done.get("command") == command[1:] and done.get("deps") == dep_tokens:
+                self.steps_skipped += 1
+                print(f"--- {name}: complete, skipped", flush=True)
+                return
         if self.table_only:
             raise RuntimeError(f"--table-only: step {name} has not run ({output} missing)")
         print(f"==> {name}: {' '.join(command)}", flush=True)
@@ -150,7 +177,8 @@ class Pipeline:
         marker.parent.mkdir(parents=True, exist_ok=True)
         tmp = marker.with_suffix(".tmp")
         with open(tmp, "w") as f:
-            json.dump({"command": command[1:], "seconds": round(time.monotonic() - start, 3)}, f)
+            json.dump({"command": command[1:], "deps": dep_tokens, "token": f"{time.time_ns()}",
+                       "seconds": round(time.monotonic() - start, 3)}, f)
         os.replace(tmp, marker)
         self.steps_run += 1
 
@@ -161,6 +189,28 @@ class Pipeline:
 
     def points_dir(self, name):
         return self.out / "stereo_points" / name
+
+    def stereo_splits(self, name):
+        """The splits whose stereo points data set `name` needs (none without a stereo model)."""
+        stereo = [m for m in self.config["models"] if m["stereo_points"]
+                  and m["data"] == name and m["name"] not in self.missing]
+        if not stereo:
+            return []
+        splits = [self.config["split"]]
+        if any(self.trains(m) for m in stereo):
+            splits.append(self.config["train_split"])
+        return splits
+
+    def data_deps(self, model):
+        """The steps that made a model's inputs: its data set, its stereo points, its training."""
+        name = model["data"]
+        deps = [f"data-{name}"] if self.config["datasets"][name]["source"] == "synth" else []
+        if model["stereo_points"]:
+            deps += [f"stereo-{name}-{split}" for split in self.stereo_splits(name)]
+        return deps
+
+    def detect_step(self, model, sigma):
+        return f"detect-{model['name']}-{blur_tag(sigma)}"
 
     def run_data(self):
         used = {m["data"] for m in self.config["models"] if m["name"] not in self.missing}
@@ -176,21 +226,37 @@ class Pipeline:
                 self.step(f"data-{name}", root / "ImageSets", cmd)
             elif not (root / "training").is_dir() and not self.table_only:
                 raise RuntimeError(f"datasets.{name}.root: {root} has no training/ folder")
-            if any(m["stereo_points"] and m["data"] == name and m["name"] not in self.missing
-                   for m in self.config["models"]):
-                self.step(f"stereo-{name}", self.points_dir(name),
-                          [self.bin, "stereo", "--data", root, "--split", self.config["split"],
-                           "--encode", "points", "--out", self.points_dir(name), "--threads",
-                           self.config["threads"], "--quiet"])
+            for split in self.stereo_splits(name):
+                self.step(f"stereo-{name}-{split}", self.points_dir(name),
+                          [self.bin, "stereo", "--data", root, "--split", split, "--encode",
+                           "points", "--out", self.points_dir(name), "--threads",
+                           self.config["threads"], "--quiet"],
+                          deps=[f"data-{name}"] if d["source"] == "synth" else [])
 
     # -- models --------------------------------------------------------------------------------
+    def trains(self, model):
+        return self.config["train"] and "train" in model
+
+    def model_dir(self, model):
+        return self.out / "models" / model["name"] if self.trains(model) else repo_path(
+            model["model"])
+
     def find_missing(self):
         for m in self.config["models"]:
-            path = repo_path(m["model"])
-            if not (path / "model.pt").is_file():
-                self.missing[m["name"]] = f"no checkpoint ({m['model']}/model.pt)"
-            elif not self.has_models and not self.table_only:
+            if not self.has_models and not self.table_only:
                 self.missing[m["name"]] = "this build has no LibTorch detectors"
+            elif not self.trains(m) and not (self.model_dir(m) / "model.pt").is_file():
+                self.missing[m["name"]] = f"no checkpoint ({m['model']}/model.pt)"
+
+    def run_train(self, model):
+        cmd = [self.bin, "train", model["family"], "--data", self.dataset_root(model["data"]),
+               "--split", self.config["train_split"], "--input", model["train"]["input"],
+               "--out", self.model_dir(model), "--threads", self.config["threads"], "--resume",
+               "--quiet"]
+        if model["stereo_points"]:
+            cmd += ["--points", self.points_dir(model["data"])]
+        self.step(f"train-{model['name']}", self.model_dir(model) / "model.pt",
+                  cmd + model["train"]["flags"], deps=self.data_deps(model))
 
     def blurs(self, model):
         # The 3D detector has no network image to blur: sharp only.
@@ -203,14 +269,17 @@ class Pipeline:
         data = self.dataset_root(model["data"])
         for sigma in self.blurs(model):
             det = self.run_dir(model, sigma) / "detections"
-            cmd = [self.bin, "detect", model["family"], "--model", repo_path(model["model"]),
+            cmd = [self.bin, "detect", model["family"], "--model", self.model_dir(model),
                    "--data", data, "--split", self.config["split"], "--out", det, "--threads",
                    self.config["threads"], "--quiet"]
             if model["family"] != "det3d":
                 cmd += ["--blur-sigma", sigma]
             elif model["stereo_points"]:
                 cmd += ["--points", self.points_dir(model["data"])]
-            self.step(f"detect-{model['name']}-{blur_tag(sigma)}", det / "run.json", cmd)
+            deps = self.data_deps(model) + ([f"train-{model['name']}"] if self.trains(model)
+                                            else [])
+            self.step(self.detect_step(model, sigma), det / "run.json", cmd + model["detect_flags"],
+                      deps=deps)
 
     def run_eval(self, model):
         data = self.dataset_root(model["data"])
@@ -225,7 +294,7 @@ class Pipeline:
                 if boot["resamples"] > 0:
                     cmd += ["--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"]]
                 self.step(f"eval-{model['name']}-{blur_tag(sigma)}-{matcher}",
-                          ev / "results.json", cmd)
+                          ev / "results.json", cmd, deps=[self.detect_step(model, sigma)])
 
     def compare_dir(self, a, b, sigma, matcher):
         return self.out / "compare" / f"{a['name']}-vs-{b['name']}" / blur_tag(sigma) / matcher
@@ -246,12 +315,16 @@ class Pipeline:
                        "--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"],
                        "--out", cmp]
                 self.step(f"compare-{a['name']}-vs-{b['name']}-{blur_tag(sigma)}-{matcher}",
-                          cmp / "bootstrap.csv", cmd)
+                          cmp / "bootstrap.csv", cmd,
+                          deps=[self.detect_step(a, sigma), self.detect_step(b, sigma)])
 
     def run(self):
         self.find_missing()
         self.run_data()
         present = [m for m in self.config["models"] if m["name"] not in self.missing]
+        for m in present:
+            if self.trains(m):
+                self.run_train(m)
         for m in present:
             self.run_detection(m)
         for m in present:
@@ -280,7 +353,7 @@ def load_cells(results_json, metric, difficulty):
         results = json.load(f)["results"]
     return {r["class"]: r for r in results
             if r["metric"] == metric and r["difficulty"] == difficulty
-            and r.get("overlaps", "strict") == "strict"}
+            and r.get("overlaps", "strict") == "strict" and r.get("evaluated", True)}
 
 
 def fmt(value, scale=1.0):
@@ -429,6 +502,8 @@ def main(argv):
                         help="folder of the stereodet executables")
     parser.add_argument("--update-docs", metavar="MD",
                         help="replace the generated section of this file (docs/RESULTS.md)")
+    parser.add_argument("--train", action="store_true",
+                        help="train the models with a 'train' block into OUT/models/ first")
     parser.add_argument("--table-only", action="store_true",
                         help="run nothing; build the table from the outputs already there")
     args = parser.parse_args(argv)
@@ -437,6 +512,7 @@ def main(argv):
     except (ConfigError, OSError) as e:
         print(f"experiment: error: {e}", file=sys.stderr)
         return 1
+    config["train"] = config["train"] or args.train
     try:
         config["_path"] = os.path.relpath(args.config, REPO)
     except ValueError:
