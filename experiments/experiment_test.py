@@ -6,6 +6,8 @@ step, a model without a checkpoint), then:
 - every number of the generated table1.md equals the one in its results.json / bootstrap.csv
   (read here independently of the generator), the paper's column equals paper_figures.csv, and the
   absent model's rows and pair are 'missing' rows;
+- each claim of miniature_claims.csv gets the verdict its bootstrap.csv interval gives (one of
+  each: confirmed, refuted, inconclusive, not measured for a missing model and for a non-pair);
 - a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
   exactly the steps downstream of it (its evaluations and compares);
 - --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
@@ -72,6 +74,8 @@ def parse_tables(text):
             cls, kind = m.group(1), "table"
         elif line.startswith("Paired differences"):
             kind = "pairs"
+        elif line.startswith("### Verdicts"):
+            cls, kind = "all", "verdicts"
         elif line.startswith("| ") and cls and not line.startswith("| model |") \
                 and not line.startswith("| A - B |"):
             tables.setdefault((cls, kind), []).append([c.strip() for c in line.strip("|").split("|")])
@@ -172,6 +176,35 @@ for cls in config["classes"]:
 # Per class: 10 model rows (4 image models x 2 blurs + 2 3D models) and 10 paired rows.
 check(checked == 3 * (10 + 10), f"checked 60 rows against their files (got {checked})")
 
+# Verdicts, recomputed from the compares' bootstrap.csv.
+verdicts = {r[0]: r for r in tables.get(("all", "verdicts"), [])}
+with open(repo / "experiments" / "miniature_claims.csv") as f:
+    claims = list(csv.DictReader(line for line in f if not line.startswith("#")))
+seen = set()
+for c in claims:
+    row = verdicts.get(c["claim"])
+    check(row is not None, f"a verdict row for {c['claim']!r}")
+    if row is None:
+        continue
+    if [c["a"], c["b"]] not in config["pairs"]:
+        want = "not measured (the pair is not in this config)"
+    elif c["b"] == "ssd-absent":
+        want = "not measured (missing: ssd-absent)"
+    else:
+        path = out / "compare" / f"{c['a']}-vs-{c['b']}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
+        with open(path / "bootstrap.csv") as f:
+            r = next(r for r in csv.DictReader(f) if r["class"] == c["class"] and r["metric"] == "2d"
+                     and r["difficulty"] == "Moderate" and r["measure"] == c["measure"])
+        lo, hi = float(r["a_minus_b_lower"]), float(r["a_minus_b_upper"])
+        if lo <= 0 <= hi:
+            want = "inconclusive"
+        else:
+            want = "confirmed" if (lo > 0) == (c["expect"] == ">0") else "refuted"
+    check(row[3] == want, f"verdict of {c['id']}: {row[3]!r} != {want!r}")
+    seen.add(row[3].split(" (")[0])
+check(seen == {"confirmed", "refuted", "inconclusive", "not measured"},
+      f"the miniature's claims cover every verdict: {sorted(seen)}")
+
 # Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
 stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
 second = run()
@@ -214,4 +247,4 @@ if failures:
     raise SystemExit(f"experiment.miniature: {len(failures)} failure(s)")
 shutil.rmtree(work, ignore_errors=True)
 print(f"experiment.miniature: {steps} steps in {m.group(3)} s, {checked} rows match their files, "
-      "resumable, docs section replaced")
+      f"{len(claims)} verdicts, resumable, docs section replaced")

@@ -122,6 +122,7 @@ def load_config(path):
                               "bootstrap needs the same frames")
     config.setdefault("pairs", [])
     config.setdefault("paper_figures", "")
+    config.setdefault("claims", "")
     return config
 
 
@@ -185,7 +186,9 @@ class Pipeline:
     # -- data ----------------------------------------------------------------------------------
     def dataset_root(self, name):
         d = self.config["datasets"][name]
-        return repo_path(d["root"]) if d["source"] == "kitti" else self.out / "data" / name
+        # A synth set with a root is generated there (synth resumes, and refuses other settings),
+        # so that `make models`' data/synth serves both; without one, under OUT/data/.
+        return repo_path(d["root"]) if "root" in d else self.out / "data" / name
 
     def points_dir(self, name):
         return self.out / "stereo_points" / name
@@ -449,6 +452,60 @@ def pair_rows(pipeline, cls):
     return rows
 
 
+def read_claims(path):
+    if not path:
+        return []
+    with open(repo_path(path)) as f:
+        claims = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    for i, c in enumerate(claims):
+        if c["expect"] not in ("<0", ">0") or c["measure"] not in ("ap_r40", "brier_labels"):
+            raise RuntimeError(f"{path}: claim {i + 1} ({c['id']}): expect '<0' or '>0', measure "
+                               f"ap_r40 or brier_labels, got {c['expect']!r}, {c['measure']!r}")
+    return claims
+
+
+def verdict_rows(pipeline):
+    """One row per claim: the interval of A - B that decides it and the verdict."""
+    config = pipeline.config
+    by_name = {m["name"]: m for m in config["models"]}
+    pairs = {tuple(p) for p in config["pairs"]}
+    rows = []
+    for c in read_claims(config["claims"]):
+        a, b, sigma = c["a"], c["b"], float(c["blur_sigma_px"])
+        head = [c["claim"], f"{a} - {b}, blur {sigma:g}, {c['class']}, {c['matcher']}, "
+                f"{c['measure']} {c['expect']}"]
+        missing = [n for n in (a, b) if n in pipeline.missing]
+        if (a, b) not in pairs or a not in by_name or b not in by_name:
+            rows.append(head + ["", "not measured (the pair is not in this config)", ""])
+            continue
+        if missing:
+            rows.append(head + ["", f"not measured (missing: {', '.join(missing)})", ""])
+            continue
+        if config["bootstrap"]["resamples"] == 0 or sigma not in pipeline.blurs(by_name[a]) or \
+                c["matcher"] not in config["matchers"]:
+            rows.append(head + ["", "not measured (no such compare in this config)", ""])
+            continue
+        path = pipeline.compare_dir(by_name[a], by_name[b], sigma, c["matcher"]) / "bootstrap.csv"
+        cell = read_bootstrap_csv(path, c["class"], TABLE_METRIC[by_name[a]["family"]],
+                                  config["difficulty"]).get(c["measure"])
+        scale = 0.01 if c["measure"] == "ap_r40" else 1.0
+        if cell is None or "" in (cell["a_minus_b"], cell["a_minus_b_lower"],
+                                  cell["a_minus_b_upper"]):
+            rows.append(head + ["n/a", "inconclusive (undefined on these frames)",
+                                "detections of the class in both models"])
+            continue
+        lo, hi = float(cell["a_minus_b_lower"]) * scale, float(cell["a_minus_b_upper"]) * scale
+        interval = fmt_difference(cell, scale)
+        if (lo > 0 and c["expect"] == ">0") or (hi < 0 and c["expect"] == "<0"):
+            verdict, change = "confirmed", "an interval reaching 0 (other data, other training seeds)"
+        elif lo > 0 or hi < 0:
+            verdict, change = "refuted", "an interval reaching 0 (other data, other training seeds)"
+        else:
+            verdict, change = "inconclusive", "a narrower interval (more frames) off 0"
+        rows.append(head + [interval, verdict, change])
+    return rows
+
+
 def markdown(header, rows, align):
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join(align) + "|"]
     lines += ["| " + " | ".join(r) + " |" for r in rows]
@@ -476,6 +533,15 @@ def write_table(pipeline):
         if prows:
             parts.append(f"Paired differences, {cls} (`*`: the interval excludes 0):\n\n"
                          + markdown(pair_header, prows, ["---", "---:", "---", "---:", "---:"]))
+    vrows = verdict_rows(pipeline)
+    if vrows:
+        parts.append("### Verdicts on the paper's claims\n\nEach claim is decided by the paired "
+                     "95% interval of A - B (experiments/claims.csv): confirmed when it lies on the "
+                     "claimed side of 0, refuted when on the other, inconclusive when it holds 0. "
+                     "One training per model: training variance is not in the intervals.\n\n"
+                     + markdown(["claim", "decided by", "A - B [95%]", "verdict",
+                                 "what would change it"], vrows,
+                                ["---", "---", "---:", "---", "---"]))
     text = "\n\n".join(parts) + "\n"
     tmp = pipeline.out / "table1.md.tmp"
     tmp.write_text(text)
