@@ -579,10 +579,9 @@ def main(argv):
         print(f"experiment: error: {e}", file=sys.stderr)
         return 1
     config["train"] = config["train"] or args.train
-    try:
-        config["_path"] = os.path.relpath(args.config, REPO)
-    except ValueError:
-        config["_path"] = args.config
+    config_path = pathlib.Path(args.config).resolve()
+    config["_path"] = str(config_path.relative_to(REPO) if config_path.is_relative_to(REPO)
+                          else config_path)
     out = pathlib.Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     pipeline = Pipeline(config, out, pathlib.Path(args.bin).resolve(), args.table_only)
