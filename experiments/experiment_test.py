@@ -74,6 +74,8 @@ def parse_tables(text):
             cls, kind = m.group(1), "table"
         elif line.startswith("Paired differences"):
             kind = "pairs"
+        elif line.startswith("Brier scores by their terms"):
+            kind = "brier"
         elif line.startswith("### Verdicts"):
             cls, kind = "all", "verdicts"
         elif line.startswith("| ") and cls and not line.startswith("| model |") \
@@ -134,6 +136,14 @@ for cls in config["classes"]:
                     with_interval(o, "ap_r40", o["ap_r40"], 0.01),
                     with_interval(o, "brier_labels", o["brier"]["over_labels"], 1.0)]
             check(row[3:8] == want, f"{cls} {model['name']} blur {blur}: {row[3:8]} != {want}")
+            brier = {(r[0], r[1]): r for r in tables.get((cls, "brier"), [])}.get(
+                (model["name"], blur))
+            b = o["brier"]
+            want = [with_interval(o, "brier_labels", b["over_labels"], 1.0),
+                    with_interval(o, "brier_detections", b["over_detections"], 1.0),
+                    with_interval(o, "brier_all", b["over_all"], 1.0)]
+            check(brier is not None and brier[2:5] == want,
+                  f"{cls} {model['name']} blur {blur}: Brier terms {brier} != {want}")
             checked += 1
     pairs = {(r[0], r[1], r[2]): r for r in tables.get((cls, "pairs"), [])}
     by_name = {m["name"]: m for m in config["models"]}

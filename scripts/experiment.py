@@ -407,6 +407,27 @@ def table_rows(pipeline, cls, figures):
     return rows
 
 
+def brier_rows(pipeline, cls):
+    """Brier over labels, detections and all (optimal matcher) per present model and blur: the
+    paper's point that the choice of terms can flip a comparison."""
+    config = pipeline.config
+    rows = []
+    for model in config["models"]:
+        if model["name"] in pipeline.missing:
+            continue
+        for sigma in pipeline.blurs(model):
+            o = load_cells(pipeline.run_dir(model, sigma) / "eval-optimal" / "results.json",
+                           TABLE_METRIC[model["family"]], config["difficulty"]).get(cls)
+            if o is None:
+                continue
+            b = o["brier"]
+            rows.append([model["name"], f"{sigma:g}",
+                         fmt_interval(o, "brier_labels", b["over_labels"]),
+                         fmt_interval(o, "brier_detections", b["over_detections"]),
+                         fmt_interval(o, "brier_all", b["over_all"])])
+    return rows
+
+
 def read_bootstrap_csv(path, cls, metric, difficulty):
     out = {}
     with open(path) as f:
@@ -529,6 +550,11 @@ def write_table(pipeline):
     for cls in config["classes"]:
         parts.append(f"### Table 1, {cls}\n\n" + markdown(header, table_rows(pipeline, cls, figures),
                                                            align))
+        brows = brier_rows(pipeline, cls)
+        if brows:
+            parts.append(f"Brier scores by their terms, {cls} (optimal matcher; lower is better):\n\n"
+                         + markdown(["model", "blur sigma (px)", "over labels", "over detections",
+                                     "over all"], brows, ["---", "---:", "---:", "---:", "---:"]))
         prows = pair_rows(pipeline, cls)
         if prows:
             parts.append(f"Paired differences, {cls} (`*`: the interval excludes 0):\n\n"
