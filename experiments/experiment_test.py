@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """ctest experiment.miniature: scripts/experiment.py end to end on experiments/miniature.json (4
-synthetic frames with LiDAR, 2 of them val: the committed SSDs, RPN and 3D models trained for one
-step, a model without a checkpoint), then:
+synthetic frames with LiDAR, 2 of them val: the committed SSDs, RPN models trained for one step
+with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
 
 - every number of the generated table1.md equals the one in its results.json / bootstrap.csv
   (read here independently of the generator), the paper's column equals paper_figures.csv, and the
   absent model's rows and pair are 'missing' rows;
+- the training-variance rows are the mean and standard deviation over the seeds' results.json;
 - each claim of miniature_claims.csv gets the verdict its bootstrap.csv interval gives (one of
   each: confirmed, refuted, inconclusive, not measured for a missing model and for a non-pair);
 - a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
@@ -76,10 +77,12 @@ def parse_tables(text):
             kind = "pairs"
         elif line.startswith("Brier scores by their terms"):
             kind = "brier"
+        elif line.startswith("Training variance"):
+            kind = "variance"
         elif line.startswith("### Verdicts"):
             cls, kind = "all", "verdicts"
         elif line.startswith("| ") and cls and not line.startswith("| model |") \
-                and not line.startswith("| A - B |"):
+                and not line.startswith("| A - B |") and not line.startswith("| claim |"):
             tables.setdefault((cls, kind), []).append([c.strip() for c in line.strip("|").split("|")])
     return tables
 
@@ -87,14 +90,22 @@ def parse_tables(text):
 shutil.rmtree(work, ignore_errors=True)
 work.mkdir(parents=True)
 config = json.loads(config_path.read_text())
+# The models and pairs as the pipeline expands them: one per training seed (NAME-seedS).
+models, groups = [], {}
+for model in config["models"]:
+    seeds = model.get("seeds", [])
+    groups[model["name"]] = [f"{model['name']}-seed{x}" for x in seeds] or [model["name"]]
+    models += [dict(model, name=n, group=model["name"]) for n in groups[model["name"]]]
+config["models"] = models
+config["pairs"] = [[x, y] for a, b in config["pairs"] for x, y in zip(groups[a], groups[b])]
 first = run()
 m = re.search(r"experiment: (\d+) steps run, (\d+) skipped, ([0-9.]+) s", first.stdout)
 check(m is not None, "first run prints its summary")
 steps = int(m.group(1)) if m else 0
-# synth, stereo points (val, train), 4 trainings, detect: 4 image models x 2 blurs + 2 3D models,
-# 2 evals each, compares: 2 image pairs x 2 blurs x 2 matchers + the 3D pair x 2 matchers
-# = 1 + 2 + 4 + 10 + 20 + 10
-check(steps == 47 and m.group(2) == "0", f"first run: 47 steps, none skipped (got {m.groups()})")
+# synth, stereo points (val, train), 6 trainings (2 x 2 RPN seeds, 2 3D), detect: 6 image models
+# x 2 blurs + 2 3D models, 2 evals each, compares: 3 image pairs (the SSDs, 2 RPN seed pairs) x 2
+# blurs x 2 matchers + the 3D pair x 2 matchers = 1 + 2 + 6 + 14 + 28 + 14
+check(steps == 65 and m.group(2) == "0", f"first run: 65 steps, none skipped (got {m.groups()})")
 table_text = (out / "table1.md").read_text()
 tables = parse_tables(table_text)
 
@@ -114,7 +125,7 @@ for cls in config["classes"]:
             if row is None:
                 continue
             for col, measure in ((8, "ap"), (9, "brier_labels")):
-                want = paper.get((model["name"], blur, cls, measure))
+                want = paper.get((model["group"], blur, cls, measure))
                 check(row[col] == (f"{want:.3f}" if want is not None else "n/a"),
                       f"{cls} {model['name']} blur {blur}: paper {measure} {row[col]!r}")
             if "train" not in model and not (repo / model["model"] / "model.pt").exists():
@@ -183,25 +194,52 @@ for cls in config["classes"]:
     missing_pair = pairs.get(("ssd-rgb - ssd-absent", "", ""))
     check(missing_pair is not None and missing_pair[3] == "missing: ssd-absent",
           f"{cls}: the pair with the absent model is a missing row")
-# Per class: 10 model rows (4 image models x 2 blurs + 2 3D models) and 10 paired rows.
-check(checked == 3 * (10 + 10), f"checked 60 rows against their files (got {checked})")
+    # Training variance over the RPN seeds.
+    variance = {(r[0], r[1]): r for r in tables.get((cls, "variance"), [])}
+    for group in ("rpn-rgb", "rpn-rgbd"):
+        for blur in ("0", "5"):
+            row = variance.get((group, blur))
+            ap, brier = [], []
+            for name in groups[group]:
+                run_dir = out / "runs" / name / f"blur{blur}"
+                ap.append(cells(run_dir / "eval-kitti" / "results.json", cls)["ap_r40"] / 100)
+                brier.append(cells(run_dir / "eval-optimal" / "results.json",
+                                   cls)["brier"]["over_labels"])
+
+            def mean_sd(v):  # undefined values (no labels: no Brier over labels) left out
+                v = [x for x in v if x is not None]
+                if not v:
+                    return "n/a"
+                mean = sum(v) / len(v)
+                if len(v) == 1:
+                    return f"{mean:.3f}"
+                return f"{mean:.3f} ± {(sum((x - mean) ** 2 for x in v) / (len(v) - 1)) ** 0.5:.3f}"
+            want = [group, blur, "2 of 2", mean_sd(ap), mean_sd(brier)]
+            check(row == want, f"{cls} training variance {group} blur {blur}: {row} != {want}")
+            checked += 1
+# Per class: 14 model rows (6 image models x 2 blurs + 2 3D models), 14 paired rows, 4 variance.
+check(checked == 3 * (14 + 14 + 4), f"checked 96 rows against their files (got {checked})")
 
 # Verdicts, recomputed from the compares' bootstrap.csv.
-verdicts = {r[0]: r for r in tables.get(("all", "verdicts"), [])}
 with open(repo / "experiments" / "miniature_claims.csv") as f:
-    claims = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    claims = {c["claim"]: c for c in csv.DictReader(line for line in f if not line.startswith("#"))}
+vrows = tables.get(("all", "verdicts"), [])
+# One row per claim, the RPN claim once per seed pair.
+check(sorted(r[0] for r in vrows) == sorted(list(claims) + ["RPN RGB-D has the higher AP_R40 (Car)"]),
+      f"a verdict row per claim and seed pair: {[r[0] for r in vrows]}")
 seen = set()
-for c in claims:
-    row = verdicts.get(c["claim"])
-    check(row is not None, f"a verdict row for {c['claim']!r}")
-    if row is None:
-        continue
-    if [c["a"], c["b"]] not in config["pairs"]:
+for row in vrows:
+    c = claims[row[0]]
+    pair_text, blur, cls, matcher, measure = (x.strip() for x in row[1].split(","))
+    a_name, b_name = pair_text.split(" - ")
+    check((a_name == c["a"] or a_name in groups[c["a"]]) and blur == f"blur {c['blur_sigma_px']}",
+          f"verdict row {row[1]!r} is of claim {c['id']}")
+    if [a_name, b_name] not in config["pairs"]:
         want = "not measured (the pair is not in this config)"
-    elif c["b"] == "ssd-absent":
+    elif b_name == "ssd-absent":
         want = "not measured (missing: ssd-absent)"
     else:
-        path = out / "compare" / f"{c['a']}-vs-{c['b']}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
+        path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
         with open(path / "bootstrap.csv") as f:
             r = next(r for r in csv.DictReader(f) if r["class"] == c["class"] and r["metric"] == "2d"
                      and r["difficulty"] == "Moderate" and r["measure"] == c["measure"])
@@ -210,7 +248,7 @@ for c in claims:
             want = "inconclusive"
         else:
             want = "confirmed" if (lo > 0) == (c["expect"] == ">0") else "refuted"
-    check(row[3] == want, f"verdict of {c['id']}: {row[3]!r} != {want!r}")
+    check(row[3] == want, f"verdict of {c['id']} ({row[1]}): {row[3]!r} != {want!r}")
     seen.add(row[3].split(" (")[0])
 check(seen == {"confirmed", "refuted", "inconclusive", "not measured"},
       f"the miniature's claims cover every verdict: {sorted(seen)}")
@@ -257,4 +295,4 @@ if failures:
     raise SystemExit(f"experiment.miniature: {len(failures)} failure(s)")
 shutil.rmtree(work, ignore_errors=True)
 print(f"experiment.miniature: {steps} steps in {m.group(3)} s, {checked} rows match their files, "
-      f"{len(claims)} verdicts, resumable, docs section replaced")
+      f"{len(vrows)} verdicts, resumable, docs section replaced")

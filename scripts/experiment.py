@@ -47,8 +47,10 @@ def _need(obj, key, kind, where):
     return value
 
 
-def load_config(path):
-    """Reads and checks the config; errors name the file and the field."""
+def load_config(path, train=False):
+    """Reads and checks the config (`train`: as --train); errors name the file and the field. A
+    model with "seeds" becomes one model per seed when training (NAME-seedS, "group" NAME), and a
+    pair of such groups one pair per seed."""
     try:
         with open(path) as f:
             config = json.load(f)
@@ -75,6 +77,7 @@ def load_config(path):
         raise ConfigError(f"{where}: train_split: a split name, got {config['train_split']!r}")
     if not isinstance(config.setdefault("train", False), bool):
         raise ConfigError(f"{where}: train: true or false, got {config['train']!r}")
+    config["train"] = config["train"] or train
     config.setdefault("threads", 0)
     boot = _need(config, "bootstrap", dict, where)
     if _need(boot, "resamples", int, f"{where}: bootstrap") < 0:
@@ -112,15 +115,44 @@ def load_config(path):
             flags = t.setdefault("flags", [])
             if not isinstance(flags, list) or not all(isinstance(x, str) for x in flags):
                 raise ConfigError(f"{w}.train.flags: a list of strings, got {flags!r}")
+        seeds = m.get("seeds", [])
+        if not isinstance(seeds, list) or not all(isinstance(x, int) and not isinstance(x, bool)
+                                                  for x in seeds) or len(set(seeds)) != len(seeds):
+            raise ConfigError(f"{w}.seeds: a list of distinct integers, got {seeds!r}")
+        if seeds and "train" not in m:
+            raise ConfigError(f"{w}.seeds: only for a model with a train block")
+    groups = {}  # model name -> the names it stands for (one per seed when training with seeds)
+    expanded = []
+    for m in config["models"]:
+        m["group"] = m["name"]
+        if config["train"] and m.get("seeds"):
+            groups[m["name"]] = []
+            for seed in m["seeds"]:
+                e = dict(m, name=f"{m['name']}-seed{seed}", seed=seed,
+                         train=dict(m["train"], flags=m["train"]["flags"] + ["--seed", str(seed)]))
+                groups[m["name"]].append(e["name"])
+                expanded.append(e)
+        else:
+            groups[m["name"]] = [m["name"]]
+            expanded.append(m)
+    config["models"] = expanded
+    config["groups"] = groups
     by_name = {m["name"]: m for m in config["models"]}
+    pairs = []
     for i, pair in enumerate(config.get("pairs", [])):
         w = f"{where}: pairs[{i}]"
-        if not (isinstance(pair, list) and len(pair) == 2 and all(p in by_name for p in pair)):
+        if not (isinstance(pair, list) and len(pair) == 2 and all(p in groups for p in pair)):
             raise ConfigError(f"{w}: two model names from models, got {pair!r}")
+        a, b = groups[pair[0]], groups[pair[1]]
+        if len(a) != len(b):
+            raise ConfigError(f"{w}: {pair[0]} and {pair[1]} have different numbers of seeds")
+        pairs += [[x, y] for x, y in zip(a, b)]
+    config["pairs"] = pairs
+    for i, pair in enumerate(pairs):
+        w = f"{where}: pairs ({pair[0]}, {pair[1]})"
         if by_name[pair[0]]["data"] != by_name[pair[1]]["data"]:
             raise ConfigError(f"{w}: {pair[0]} and {pair[1]} use different datasets; a paired "
                               "bootstrap needs the same frames")
-    config.setdefault("pairs", [])
     config.setdefault("paper_figures", "")
     config.setdefault("claims", "")
     return config
@@ -381,8 +413,8 @@ def table_rows(pipeline, cls, figures):
         sigmas = pipeline.blurs(model) if model["name"] not in pipeline.missing else (
             config["blur_sigmas_px"] if model["family"] != "det3d" else [0])
         for sigma in sigmas:
-            paper_ap = figures.get((model["name"], float(sigma), cls, "ap"))
-            paper_brier = figures.get((model["name"], float(sigma), cls, "brier_labels"))
+            paper_ap = figures.get((model["group"], float(sigma), cls, "ap"))
+            paper_brier = figures.get((model["group"], float(sigma), cls, "brier_labels"))
             paper = [fmt(paper_ap), fmt(paper_brier)]
             head = [model["name"], f"{sigma:g}", TABLE_METRIC[model["family"]]]
             if model["name"] in pipeline.missing:
@@ -426,6 +458,44 @@ def brier_rows(pipeline, cls):
                          fmt_interval(o, "brier_detections", b["over_detections"]),
                          fmt_interval(o, "brier_all", b["over_all"])])
     return rows
+
+
+def seed_rows(pipeline, cls):
+    """Training variance: per model trained with several seeds, the mean and the sample standard
+    deviation over its seeds of AP_R40 (KITTI) and Brier over labels (optimal)."""
+    config = pipeline.config
+    by_name = {m["name"]: m for m in config["models"]}
+    rows = []
+    for group, names in config["groups"].items():
+        present = [by_name[n] for n in names if n not in pipeline.missing]
+        if len(names) < 2 or len(present) < 2:
+            continue
+        for sigma in pipeline.blurs(present[0]):
+            ap, brier = [], []
+            for m in present:
+                run = pipeline.run_dir(m, sigma)
+                metric = TABLE_METRIC[m["family"]]
+                k = load_cells(run / "eval-kitti" / "results.json", metric,
+                               config["difficulty"]).get(cls)
+                o = load_cells(run / "eval-optimal" / "results.json", metric,
+                               config["difficulty"]).get(cls)
+                if k is not None and o is not None:
+                    ap.append(k["ap_r40"] / 100)
+                    brier.append(o["brier"]["over_labels"])
+            rows.append([group, f"{sigma:g}", f"{len(ap)} of {len(present)}",
+                         mean_sd(ap), mean_sd([x for x in brier if x is not None])])
+    return rows
+
+
+def mean_sd(values):
+    values = [v for v in values if v is not None and not math.isnan(v)]
+    if not values:
+        return "n/a"
+    mean = sum(values) / len(values)
+    if len(values) < 2:
+        return f"{mean:.3f}"
+    sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (len(values) - 1))
+    return f"{mean:.3f} ± {sd:.3f}"
 
 
 def read_bootstrap_csv(path, cls, metric, difficulty):
@@ -491,7 +561,15 @@ def verdict_rows(pipeline):
     by_name = {m["name"]: m for m in config["models"]}
     pairs = {tuple(p) for p in config["pairs"]}
     rows = []
+    groups = config["groups"]
+    claims = []
     for c in read_claims(config["claims"]):
+        ga, gb = groups.get(c["a"], [c["a"]]), groups.get(c["b"], [c["b"]])
+        if len(ga) == len(gb):
+            claims += [dict(c, a=a, b=b) for a, b in zip(ga, gb)]
+        else:
+            claims.append(c)
+    for c in claims:
         a, b, sigma = c["a"], c["b"], float(c["blur_sigma_px"])
         head = [c["claim"], f"{a} - {b}, blur {sigma:g}, {c['class']}, {c['matcher']}, "
                 f"{c['measure']} {c['expect']}"]
@@ -555,6 +633,13 @@ def write_table(pipeline):
             parts.append(f"Brier scores by their terms, {cls} (optimal matcher; lower is better):\n\n"
                          + markdown(["model", "blur sigma (px)", "over labels", "over detections",
                                      "over all"], brows, ["---", "---:", "---:", "---:", "---:"]))
+        srows = seed_rows(pipeline, cls)
+        if srows:
+            parts.append(f"Training variance, {cls} (mean ± sample standard deviation over the "
+                         "training seeds):\n\n"
+                         + markdown(["model", "blur sigma (px)", "seeds evaluated", "AP_R40 KITTI",
+                                     "Brier over labels (optimal)"], srows,
+                                    ["---", "---:", "---:", "---:", "---:"]))
         prows = pair_rows(pipeline, cls)
         if prows:
             parts.append(f"Paired differences, {cls} (`*`: the interval excludes 0):\n\n"
@@ -600,11 +685,10 @@ def main(argv):
                         help="run nothing; build the table from the outputs already there")
     args = parser.parse_args(argv)
     try:
-        config = load_config(args.config)
+        config = load_config(args.config, train=args.train)
     except (ConfigError, OSError) as e:
         print(f"experiment: error: {e}", file=sys.stderr)
         return 1
-    config["train"] = config["train"] or args.train
     config_path = pathlib.Path(args.config).resolve()
     config["_path"] = str(config_path.relative_to(REPO) if config_path.is_relative_to(REPO)
                           else config_path)
