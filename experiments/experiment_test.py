@@ -11,6 +11,7 @@ with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
   each: confirmed, refuted, inconclusive, not measured for a missing model and for a non-pair);
 - a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
   exactly the steps downstream of it (its evaluations and compares);
+- a checkpoint replaced under the same path reruns its detections and their evaluations;
 - --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
 - a config error names the file and the field.
 
@@ -19,6 +20,7 @@ Usage: experiment_test.py REPO_ROOT BIN_DIR WORK_DIR
 
 import csv
 import json
+import os
 import pathlib
 import re
 import shutil
@@ -268,6 +270,29 @@ check(rerun == ["compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti",
                 "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal"],
       f"a lost detection marker reruns it and what depends on it, only: {rerun}")
 check((out / "table1.md").read_text() == table_text, "the rerun step gives the same table")
+
+# A checkpoint replaced under the same path reruns its detections (and what depends on them).
+ckpt_cfg = json.loads(config_path.read_text())
+ckpt = work / "ssd-copy"
+shutil.copytree(repo / "models" / "ssd-rgb", ckpt)
+ckpt_cfg["models"] = [dict(ckpt_cfg["models"][0], model=str(ckpt))]
+ckpt_cfg["pairs"], ckpt_cfg["claims"], ckpt_cfg["blur_sigmas_px"] = [], "", [0]
+ckpt_path = work / "checkpoint.json"
+ckpt_path.write_text(json.dumps(ckpt_cfg))
+
+
+def run_ckpt():
+    p = subprocess.run([sys.executable, str(script), "--config", str(ckpt_path), "--out",
+                        str(work / "ckpt-out"), "--bin", str(bin_dir)], capture_output=True, text=True)
+    check(p.returncode == 0, f"checkpoint run: {p.stderr.strip()}")
+    return sorted(re.findall(r"^==> ([\w.-]+):", p.stdout, re.M))
+
+
+run_ckpt()
+check(run_ckpt() == [], "the checkpoint run skips everything the second time")
+os.utime(ckpt / "model.pt", ns=(0, 12345))
+check(run_ckpt() == ["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal"],
+      "a replaced checkpoint reruns its detection and evaluations")
 
 # --table-only runs nothing; --update-docs replaces the marked section only.
 doc = work / "RESULTS.md"

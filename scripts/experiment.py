@@ -185,13 +185,18 @@ class Pipeline:
         with open(marker) as f:
             return json.load(f).get("token")
 
-    def step(self, name, output, command, deps=()):
+    def step(self, name, output, command, deps=(), inputs=()):
         """Runs `command` unless OUT/steps/NAME.json says this very command made `output` from
-        the current runs of the steps `deps` (a step that ran again reruns what depends on it);
-        its standard output goes to OUT/logs/NAME.log."""
+        the current runs of the steps `deps` (a step that ran again reruns what depends on it)
+        and the files `inputs` as they are now (size and modification time: a checkpoint
+        replaced under the same path reruns its detections); its standard output goes to
+        OUT/logs/NAME.log."""
         marker = self.out / "steps" / f"{name}.json"
         command = [str(c) for c in command]
         dep_tokens = {d: self.token(d) for d in deps}
+        for path in inputs:
+            st = pathlib.Path(path).stat()
+            dep_tokens[str(path)] = f"{st.st_size}:{st.st_mtime_ns}"
         if marker.exists() and output.exists():
             with open(marker) as f:
                 done = json.load(f)
@@ -313,8 +318,9 @@ class Pipeline:
                 cmd += ["--points", self.points_dir(model["data"])]
             deps = self.data_deps(model) + ([f"train-{model['name']}"] if self.trains(model)
                                             else [])
+            inputs = [] if self.trains(model) else [self.model_dir(model) / "model.pt"]
             self.step(self.detect_step(model, sigma), det / "run.json", cmd + model["detect_flags"],
-                      deps=deps)
+                      deps=deps, inputs=inputs)
 
     def run_eval(self, model):
         data = self.dataset_root(model["data"])
