@@ -6,7 +6,7 @@ CTEST_FLAGS ?=
 DEMO_DIR ?= $(BUILD_DIR)/demo
 SYNTH_DIR ?= data/synth
 
-.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models ssd-results det3d-models experiment
+.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results det3d-models experiment
 
 all: build
 
@@ -35,6 +35,12 @@ demo: deps
 models: deps
 	$(MAKE) build
 	./scripts/train-ssd-models.sh $(BUILD_DIR) $(SYNTH_DIR) models
+
+# The two-stage detectors models/rpn-{rgb,rgbd} (rgbd mirrored from rgb), seed 1, on the same
+# synthetic set (RPN_CONTROL=1 adds the widened-rgb control; docs/models.md for the time it takes).
+rpn-models: deps
+	$(MAKE) build
+	./scripts/train-rpn-models.sh $(BUILD_DIR) $(SYNTH_DIR) models
 
 # The 3D detectors models/det3d-{lidar,stereo}, reproduced from seed 1: a 2500-frame synthetic set
 # with LiDAR in $(DET3D_DIR) (2000 train, 500 val), its stereo point clouds, two 12-epoch trainings

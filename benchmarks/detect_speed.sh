@@ -1,26 +1,34 @@
 #!/bin/sh
 # detect ssd end to end: RGB vs RGB-H frames/s in one run, interleaved (docs/BENCHMARKS.md,
-# "detect ssd: RGB-H vs RGB"). Each round runs every (model, loop) pair once, in turn, so a change
-# of the machine's load hits all of them alike; the ratio per round is RGB-H / RGB.
-#   benchmarks/detect_speed.sh BUILD_DIR DATA_DIR [ROUNDS] [THREADS] [SPLIT]
-# DATA_DIR: a `stereodet synth` folder (1242 x 375 frames); the models are the committed ones.
+# "detect ssd: RGB-H vs RGB"). Each round runs every variant once, in turn, so a change of the
+# machine's load hits all of them alike; the ratios are per round, against RGB with the same loop.
+#   benchmarks/detect_speed.sh BUILD_DIR DATA_DIR [ROUNDS] [THREADS] [MAX_FRAMES] [STEREO_DIR]
+# DATA_DIR: a `stereodet synth` folder (1242 x 375 frames), its val split; the models are the
+# committed ones. STEREO_DIR (optional): `stereodet stereo --data DATA_DIR --split val` with the
+# default settings, for the RGB-H run that reads its heights (--stereo) instead of matching.
 set -eu
-build=${1:?build dir}; data=${2:?data dir}; rounds=${3:-3}; threads=${4:-2}; split=${5:-val}
+build=${1:?build dir}; data=${2:?data dir}; rounds=${3:-3}; threads=${4:-2}; frames=${5:-0}
+stereo=${6:-}
 bin="$build/bin/stereodet"
 repo=$(cd "$(dirname "$0")/.." && pwd)
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-run() {  # model loop -> frames/s
-  flag=""; [ "$2" = sequential ] && flag="--no-pipeline"
-  "$bin" detect ssd --model "$repo/models/ssd-$1" --data "$data" --split "$split" \
-      --out "$tmp/det-$1-$2" --threads "$threads" $flag 2>&1 |
+run() {  # model variant [flags] -> frames/s
+  model=$1; variant=$2; shift 2
+  "$bin" detect ssd --model "$repo/models/ssd-$model" --data "$data" --split val \
+      --out "$tmp/det-$model-$variant" --threads "$threads" --max-frames "$frames" "$@" 2>&1 |
     sed -n 's/.* \([0-9.]*\) images\/s.*/\1/p'
 }
-echo "round model loop frames_per_s"
+ratio() { echo "$1 / $2" | bc -l | cut -c1-5; }
+echo "round variant frames_per_s ratio_to_rgb"
 for r in $(seq 1 "$rounds"); do
-  for loop in pipelined sequential; do
-    rgb=$(run rgb $loop); rgbh=$(run rgbh-learned $loop)
-    echo "$r rgb $loop $rgb"
-    echo "$r rgbh-learned $loop $rgbh"
-    echo "$r ratio $loop $(echo "$rgbh / $rgb" | bc -l | cut -c1-5)"
-  done
+  rgb=$(run rgb pipelined); rgbh=$(run rgbh-learned pipelined)
+  rgb_seq=$(run rgb sequential --no-pipeline); rgbh_seq=$(run rgbh-learned sequential --no-pipeline)
+  echo "$r rgb-pipelined $rgb 1"
+  echo "$r rgbh-learned-pipelined $rgbh $(ratio "$rgbh" "$rgb")"
+  echo "$r rgb-sequential $rgb_seq 1"
+  echo "$r rgbh-learned-sequential $rgbh_seq $(ratio "$rgbh_seq" "$rgb_seq")"
+  if [ -n "$stereo" ]; then
+    rgbh_dir=$(run rgbh-learned stereo-dir --stereo "$stereo")
+    echo "$r rgbh-learned-stereo-dir-pipelined $rgbh_dir $(ratio "$rgbh_dir" "$rgb")"
+  fi
 done

@@ -21,6 +21,7 @@ stereodet-vision and write_eval_set.
 """
 
 import argparse
+import os
 import shutil
 import subprocess
 import sys
@@ -57,6 +58,7 @@ def main() -> int:
     from distributed import Client, LocalCluster
 
     bin_dir = scale.find_bin_dir(str(args.build / "bin"))
+    load_before = os.getloadavg()[0]
     work = fresh(args.work)
     work.mkdir(parents=True)
     data, evalset = work / "data", work / "evalset"
@@ -118,7 +120,8 @@ def main() -> int:
         return f"| {name} | {s:.2f} | {frames / s:.1f} | {best[base] / s:.2f}x |"
 
     print(f"stereo: {sf} frames 621 x 188 (BM, RGB-H); eval: {ef} frames (kitti matcher); "
-          f"best of {args.repeats}")
+          f"best of {args.repeats}; {os.cpu_count()} cores, load average {load_before:.1f} at "
+          f"the start, {os.getloadavg()[0]:.1f} at the end")
     print("| run | seconds | frames/s | vs one process, 1 thread |")
     print("|---|---|---|---|")
     for what, frames in (("stereo", sf), ("eval", ef)):

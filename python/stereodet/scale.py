@@ -4,8 +4,8 @@
         synth  --out DIR --frames N [--seed S] [-- more `stereodet synth` flags]
         stereo --data DIR --out DIR [--split val] [-- more `stereodet stereo` flags]
         eval   --gt DIR --det DIR --out DIR [--split val] [-- more `stereodet eval` flags]
-        detect --model DIR --data DIR --out DIR [--split val] [--family ssd|det3d]
-               [-- more `stereodet detect ssd|det3d` flags]
+        detect --model DIR --data DIR --out DIR [--split val] [--family ssd|det3d|rpn]
+               [-- more `stereodet detect FAMILY` flags]
 
 The work is cut into tasks of about --task-frames frames: task K of N runs the command line's
 engine-agnostic contract, `stereodet CMD ... --shard K/N`, as a subprocess on a Dask worker (one
@@ -253,8 +253,8 @@ def detect_tasks(bin_dir: Path, model: Path, data: Path, out: Path, split: str, 
     OUT/shards/K-of-N`. A detection shard is a range of whole batches (docs/scale.md), so with
     --batch-size B among the flags there are at most ceil(frames / B) tasks (more would be
     empty); choose --task-frames a multiple of B for tasks of equal size."""
-    if family not in ("ssd", "det3d"):
-        raise ValueError(f"--family must be ssd or det3d, got {family!r}")
+    if family not in ("ssd", "det3d", "rpn"):
+        raise ValueError(f"--family must be ssd, det3d or rpn, got {family!r}")
     frames = count_detect_frames(data, split, extra)
     n = num_tasks(frames, task_frames)
     batch = int_flag(extra, "--batch-size")
@@ -339,12 +339,12 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--det", required=True, type=Path)
     e.add_argument("--out", required=True, type=Path)
     e.add_argument("--split")
-    d = sub.add_parser("detect", help="sharded `stereodet detect ssd|det3d`, then `detect merge`")
+    d = sub.add_parser("detect", help="sharded `stereodet detect ssd|det3d|rpn`, then `detect merge`")
     d.add_argument("--model", required=True, type=Path)
     d.add_argument("--data", required=True, type=Path)
     d.add_argument("--out", required=True, type=Path)
     d.add_argument("--split", default="val", help="split name or file; default val")
-    d.add_argument("--family", default="ssd", choices=["ssd", "det3d"],
+    d.add_argument("--family", default="ssd", choices=["ssd", "det3d", "rpn"],
                    help="the detector family; default ssd")
     for parser in (s, st, e, d):
         parser.add_argument("extra", nargs=argparse.REMAINDER,

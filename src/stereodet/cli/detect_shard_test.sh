@@ -1,5 +1,5 @@
 #!/bin/sh
-# cli.detect.shard_merge: `detect ssd|det3d --shard` twice (out of order) and `detect merge` give
+# cli.detect.shard_merge: `detect ssd|det3d|rpn --shard` twice (out of order) and `detect merge` give
 # the detection folder of one run: every ID.txt byte for byte, run.json but its command line; a
 # merge with a shard missing is refused naming it.
 # Usage: detect_shard_test.sh STEREODET PROV_DIR WORK_DIR
@@ -17,12 +17,13 @@ same_run() {  # one run's folder $1 against the merge $2
   grep -v '"command_line"' "$2/run.json" > "$work/b.json"
   cmp "$work/a.json" "$work/b.json"
 }
-for family in ssd det3d; do
+for family in ssd det3d rpn; do
   model=$prov/model
   [ "$family" = det3d ] && model=$prov/det3d_model
+  [ "$family" = rpn ] && model=$prov/rpn_model
   detect() {
     "$bin" detect "$family" --model "$model" --data "$prov/data" --split "$work/all.txt" \
-      --threads 1 --score-threshold 0 --quiet "$@"
+      --threads 1 --batch-size 1 --score-threshold 0 --quiet "$@"
   }
   detect --out "$work/$family-one"
   detect --shard 1/2 --out "$work/$family-s1"

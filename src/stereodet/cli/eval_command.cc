@@ -10,6 +10,8 @@
 //                  [--disparity-error-px 1] [--bootstrap N ...] [--out DIR]
 //   stereodet eval --shard K/N --gt DIR --det DIR --out SHARD_DIR ...   (docs/scale.md)
 //   stereodet eval merge SHARD_DIR... --out DIR ...  (the shards' evaluation flags)
+//   stereodet eval sweep|compare --shards SHARD_DIR... [--shards-b SHARD_DIR...] ...  (the frames
+//   from eval shards instead of --gt/--det)
 // Each is one library call (report/evaluation.h: RunEvaluation, RunEvaluationSweep,
 // RunEvaluationCompare); this file binds the flags to their options and prints the results.
 #include <fmt/format.h>
@@ -346,7 +348,19 @@ void RunMerge(const EvalArgs& given, const std::vector<std::string>& shards) {
   if (a.report) fmt::print("report: open {}\n", result.report_index.string());
 }
 
-void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOptions options) {
+// With --shards the frames come from the shards: --gt/--det are not given (MakeOptions asks for
+// them otherwise).
+EvalArgs WithShards(const EvalArgs& given, bool shards) {
+  if (!shards) return given;
+  STEREODET_CHECK(given.input.gt.empty() && given.input.det.empty())
+      << "--shards: the frames come from the shards; leave out --gt and --det";
+  EvalArgs a = given;
+  a.input.gt = a.input.det = "-";
+  return a;
+}
+
+void RunSweep(const EvalArgs& given, const std::string& bound, EvaluationSweepOptions options) {
+  const EvalArgs a = WithShards(given, !options.shards.empty());
   options.eval = MakeSingleOptions(a);  // its filter: the fixed conditions of --where
   const auto parsed = ParseFilterBound(bound);
   STEREODET_CHECK(parsed.has_value()) << "--filter: unknown '" << bound << "' (e.g. min-area)";
@@ -364,7 +378,10 @@ void RunSweep(const EvalArgs& a, const std::string& bound, EvaluationSweepOption
   if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
 
-void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
+void RunCompare(const EvalArgs& given, EvaluationCompareOptions options) {
+  const EvalArgs a = WithShards(given, !options.shards.empty());
+  STEREODET_CHECK(options.shards_b.empty() || options.det_b.empty())
+      << "--shards-b: B's frames come from the shards; leave out --det-b";
   options.eval = MakeSingleOptions(a);
   options.input = MakeInputOptions(a);
   options.out = a.out;
@@ -375,8 +392,13 @@ void RunCompare(const EvalArgs& a, EvaluationCompareOptions options) {
   fmt::print(
       "A = {}\nB = {}\nstereo model: dz = z^2 / (b f) * dd, b = {:.4f} m, f = {:.2f} px, dd = {} "
       "px{}\n",
-      a.input.det.string(), options.det_b.string(), result.compare.baseline_m,
-      result.compare.focal_px, result.compare.disparity_error_px,
+      options.shards.empty() ? a.input.det.string()
+                             : fmt::format("{} shards ({}, ...)", options.shards.size(),
+                                           options.shards.front().string()),
+      options.shards_b.empty() ? options.det_b.string()
+                               : fmt::format("{} shards ({}, ...)", options.shards_b.size(),
+                                             options.shards_b.front().string()),
+      result.compare.baseline_m, result.compare.focal_px, result.compare.disparity_error_px,
       options.calib.empty() ? " (KITTI-like calibration)" : "");
   fmt::print("{}", FormatCompareTable(result.rows));
   if (!a.out.empty()) fmt::print("\nwrote {}\n", result.csv_path.string());
@@ -427,6 +449,9 @@ void AddEvalCommand(CLI::App& app) {
   sweep->add_option("--step", sweep_options->step)->capture_default_str();
   sweep->add_option("--where", sweep_common->filter, "fixed extra filter, e.g. max-distance=40");
   sweep->add_option("--out", sweep_common->out, "write sweep.csv here (default: stdout)");
+  sweep->add_option("--shards", sweep_options->shards,
+                    "read the frames from these `eval --shard K/N` folders (all N) instead of "
+                    "--gt/--det: the sweep of one run (docs/scale.md)");
   sweep->add_flag("--report", sweep_options->report,
                   "also write OUT/report/: the sweep's figures and index.html (docs/report.md)");
   sweep->callback([sweep_common, sweep_options, sweep_bound] {
@@ -439,7 +464,12 @@ void AddEvalCommand(CLI::App& app) {
                                            "3D localization error of two detection sets "
                                            "(e.g. stereo vs LiDAR) beside the stereo model");
   AddCommonOptions(compare, compare_common.get(), true);
-  compare->add_option("--det-b", compare_options->det_b, "the second detection folder")->required();
+  compare->add_option("--det-b", compare_options->det_b, "the second detection folder");
+  compare->add_option("--shards", compare_options->shards,
+                      "read A's frames from these `eval --shard K/N` folders (all N) instead of "
+                      "--gt/--det (docs/scale.md)");
+  compare->add_option("--shards-b", compare_options->shards_b,
+                      "read B's frames from these `eval --shard K/N` folders, instead of --det-b");
   compare->add_option("--calib", compare_options->calib,
                       "a KITTI calib file for b and f (default KITTI-like)");
   compare->add_option("--disparity-error-px", compare_options->disparity_error_px)

@@ -280,8 +280,8 @@ void AddDetectMergeCommand(CLI::App* detect) {
   MergeDetectionsOptions& m = args->options;
   CLI::App* cmd = detect->add_subcommand(
       "merge",
-      "combine the folders of `detect ssd|det3d --shard K/N --out DIR` (all N) into the detection "
-      "folder of one run, byte for byte (docs/scale.md)");
+      "combine the folders of `detect ssd|det3d|rpn --shard K/N --out DIR` (all N) into the "
+      "detection folder of one run, byte for byte (docs/scale.md)");
   cmd->add_option("shards", m.shards, "the shard folders, in any order")->required();
   cmd->add_option("--out", m.out_dir, "the detection folder (one run: replaced whole)")->required();
   cmd->add_flag("--quiet", args->quiet, "no summary output");
@@ -310,6 +310,7 @@ struct DetectRpnArgs {
 void RunTrainRpn(TrainRpnArgs& a) {
   TrainRpnOptions& options = a.options;
   options.model.input = *ParseRpnInput(a.input);  // CLI::IsMember checked it
+  options.model.anchors.stride_px = options.model.feature_stride;
   FinishStereoFlags(a.stereo, options.data.stereo);
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
@@ -370,6 +371,13 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   ts->add_option("--geometry-width", t.model.geometry_width,
                  "base channels of the geometry branch (rgbd)")
       ->capture_default_str();
+  ts->add_option("--feature-stride", t.model.feature_stride,
+                 "stride of the RPN's and RoIAlign's features: 16, or 8 for small objects")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  ts->add_option("--warmup", t.warmup_steps, "steps of the linear learning-rate warm-up")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   ts->add_option("--init-from", t.init_from,
                  "rgb model folder whose image branch, RPN and box head initialise this model "
                  "(\"mirroring\"; rgbd: the fusion starts as image features only)");
@@ -417,6 +425,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetectRpn(*dargs); });
 }
@@ -448,6 +457,11 @@ void AddModelsCommand(CLI::App& app) {
                  "stop after N epochs in this run (0 = all); continue later with --resume")
       ->capture_default_str();
   targs->stereo_flags = AddStereoFlags(ts, t.data.stereo, targs->stereo);
+  CLI::Option* train_stereo_dir = ts->add_option(
+      "--stereo", t.data.stereo_dir,
+      "RGB-H: read the heights from this `stereodet stereo` folder (its stereo.json's settings) "
+      "instead of matching");
+  for (CLI::Option* flag : targs->stereo_flags) train_stereo_dir->excludes(flag);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrain(*targs); });
 
@@ -484,6 +498,11 @@ void AddModelsCommand(CLI::App& app) {
                "(default: the next batch is prepared while the network runs; same detections)");
   AddShardOption(ds, &d.shard);
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
+  CLI::Option* detect_stereo_dir = ds->add_option(
+      "--stereo", d.stereo_dir,
+      "RGB-H: read the heights from this `stereodet stereo` folder instead of matching; refused "
+      "when its stereo.json's settings differ from the model's");
+  for (CLI::Option* flag : dargs->stereo_flags) detect_stereo_dir->excludes(flag);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetect(*dargs); });
 

@@ -119,6 +119,27 @@ TEST(EvalInputTest, KittiRootAndDevkitDataFolderAreFound) {
   EXPECT_TRUE(in.Notices().empty());
 }
 
+// The folders are listed with readdir(): a symbolic link counts as what it points to (a frame file,
+// or nothing for a folder or a dangling link), a folder named like a frame file is no frame, and
+// a trailing separator in the folder names the files as without one.
+TEST(EvalInputTest, LinksCountAsWhatTheyPointTo) {
+  Folders f;
+  Write(f.dir / "elsewhere" / "label.txt", kLabel);
+  fs::create_symlink(f.dir / "elsewhere" / "label.txt", f.gt / "000003.txt");
+  fs::create_directory_symlink(f.dir / "elsewhere", f.gt / "000004.txt");
+  fs::create_symlink(f.dir / "nowhere.txt", f.gt / "000005.txt");
+  fs::create_directories(f.gt / "000006.txt");
+  fs::create_symlink(f.dir / "elsewhere" / "label.txt", f.gt / "link.txt");
+  EvalInputOptions o = f.Options();
+  o.gt = f.gt.string() + "/";
+  const EvalInput in = LoadEvalFrames(o);
+  ASSERT_EQ(in.frames.size(), 4u);
+  EXPECT_EQ(in.frames[3].id, "000003");
+  EXPECT_EQ(in.frames[3].labels.size(), 1u);
+  EXPECT_THAT(in.ignored_files, ElementsAre((f.gt / "link.txt").string()));
+  EXPECT_THAT(in.frames_without_detections, ElementsAre("000002", "000003"));
+}
+
 TEST(EvalInputTest, StrayFilesAreIgnoredWithOneNotice) {
   Folders f;
   Write(f.det / "009999.txt", kDetection);  // a frame outside the split

@@ -63,10 +63,11 @@ std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const C
   reuse_selection = reuse_selection && out.size() == frames.size();
   out.resize(frames.size());
   ForEachFrame(frames.size(), num_threads, [&](size_t i) {
-    out[i] = compat == EvalCompat::kOpenPcdet
-                 ? PrepareClassFrameOpenPcdet(frames[i], spec, kind, std::move(out[i]))
-                 : PrepareClassFrame(frames[i], spec, kind, arithmetic, std::move(out[i]),
-                                     reuse_selection);
+    if (compat == EvalCompat::kOpenPcdet) {
+      out[i] = PrepareClassFrameOpenPcdet(frames[i], spec, kind, std::move(out[i]));
+    } else {
+      PrepareClassFrameInPlace(frames[i], spec, kind, arithmetic, reuse_selection, &out[i]);
+    }
     after(i, out[i]);
   });
   return out;

@@ -270,11 +270,15 @@ double KittiDontCareOverlapAtThreshold(OverlapKind kind, const Object& detection
       .value_or(overlap);
 }
 
-ClassFrameBuilder::ClassFrameBuilder(ClassFrame reuse) : cf_(std::move(reuse)) { cf_.Clear(); }
+ClassFrameBuilder::ClassFrameBuilder(ClassFrame reuse) : own_(std::move(reuse)), cf_(&own_) {
+  cf_->Clear();
+}
+
+ClassFrameBuilder::ClassFrameBuilder(ClassFrame* target) : cf_(target) { cf_->Clear(); }
 
 void ClassFrameBuilder::AddLabels(const EvalFrame& frame, const ClassSpec& spec,
                                   bool exact_dontcare_name) {
-  ClassFrame* cf = &cf_;
+  ClassFrame* cf = cf_;
   std::vector<const Object*>& dontcares = dontcares_;
   // At most every label: one allocation per list the first time, none when `cf` is reused.
   const size_t most = cf->label_object.size() + frame.labels.size();
@@ -312,7 +316,7 @@ void ClassFrameBuilder::AddLabels(const EvalFrame& frame, const ClassSpec& spec,
 
 void ClassFrameBuilder::AddDetections(const EvalFrame& frame, const ClassSpec& spec,
                                       const std::function<bool(const Object&)>& in_dontcare) {
-  ClassFrame* cf = &cf_;
+  ClassFrame* cf = cf_;
   const size_t most = cf->det_object.size() + frame.detections.size();
   cf->det_object.reserve(most);
   cf->det_is_class.reserve(most);
@@ -366,6 +370,13 @@ void ClassFrame::Clear() {
 
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic, ClassFrame reuse, bool reuse_selection) {
+  PrepareClassFrameInPlace(frame, spec, kind, arithmetic, reuse_selection, &reuse);
+  return reuse;
+}
+
+void PrepareClassFrameInPlace(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
+                              OverlapArithmetic arithmetic, bool reuse_selection,
+                              ClassFrame* result) {
   const double tau = spec.min_overlap[static_cast<int>(kind)];
   const bool devkit = arithmetic == OverlapArithmetic::kDevkit;
   auto in_dontcare = [&](const Object& det, const std::vector<const Object*>& dontcares) {
@@ -377,11 +388,10 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
     return false;
   };
 
-  ClassFrame cf;
+  ClassFrame& cf = *result;
   if (reuse_selection) {
-    // The labels and detections of `reuse` are this frame's for this class: only what depends on
-    // the overlap kind is made anew (the DontCare flags here, the edges below).
-    cf = std::move(reuse);
+    // The labels and detections of `cf` are this frame's for this class: only what depends on the
+    // overlap kind is made anew (the DontCare flags here, the edges below).
     std::vector<const Object*> dontcares;
     for (const Object& label : frame.labels) {
       if (IsDontCare(label)) dontcares.push_back(&label);
@@ -394,7 +404,7 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
     cf.edge_det.clear();
     cf.edge_overlap.clear();
   } else {
-    ClassFrameBuilder builder(std::move(reuse));
+    ClassFrameBuilder builder(&cf);
     builder.AddLabels(frame, spec, false);
     const std::vector<const Object*>* dontcares = &builder.dontcares();
     // One pointer captured: std::function keeps it without allocating.
@@ -403,7 +413,6 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
     };
     builder.AddDetections(frame, spec,
                           [test = &dontcare_test](const Object& det) { return (*test)(det); });
-    cf = builder.Take();
   }
   cf.min_overlap = tau;
   cf.devkit_overlaps = devkit;
@@ -442,7 +451,6 @@ ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, Over
     }
     cf.edge_begin.push_back(static_cast<int32_t>(cf.edge_det.size()));
   }
-  return cf;
 }
 
 double KittiRecordedOverlap(OverlapKind kind, const EvalFrame& frame, const ClassFrame& cf,

@@ -98,6 +98,11 @@ class ClassFrameBuilder {
  public:
   // `reuse` lends its memory (its contents are discarded).
   explicit ClassFrameBuilder(ClassFrame reuse = {});
+  // Builds in `*target` (its contents are discarded), which must outlive the builder; Take() then
+  // moves it out, and without Take() the result stays there.
+  explicit ClassFrameBuilder(ClassFrame* target);
+  ClassFrameBuilder(const ClassFrameBuilder&) = delete;
+  ClassFrameBuilder& operator=(const ClassFrameBuilder&) = delete;
 
   // The labels of `spec`'s class and of its neighbour classes (file order; neighbours always
   // ignored; difficulty bits by the official devkit's cleanData: ignored if occluded > max,
@@ -111,12 +116,13 @@ class ClassFrameBuilder {
   void AddDetections(const EvalFrame& frame, const ClassSpec& spec,
                      const std::function<bool(const Object&)>& in_dontcare);
 
-  const ClassFrame& frame() const { return cf_; }
+  const ClassFrame& frame() const { return *cf_; }
   const std::vector<const Object*>& dontcares() const { return dontcares_; }  // into frame.labels
-  ClassFrame Take() { return std::move(cf_); }
+  ClassFrame Take() { return std::move(*cf_); }
 
  private:
-  ClassFrame cf_;
+  ClassFrame own_;
+  ClassFrame* cf_;  // &own_ or the target
   std::vector<const Object*> dontcares_;
 };
 
@@ -136,6 +142,9 @@ class ClassFrameBuilder {
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit,
                              ClassFrame reuse = {}, bool reuse_selection = false);
+// The same in place: `*cf` is the `reuse` above and becomes the result (no ClassFrame moved).
+void PrepareClassFrameInPlace(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
+                              OverlapArithmetic arithmetic, bool reuse_selection, ClassFrame* cf);
 
 // The overlap of label `label_index`'s edge `edge` (an index into cf.edge_det) that records
 // (matches.csv) report: cf.edge_overlap[edge], except in a ClassFrame of PrepareClassFrame with

@@ -332,9 +332,17 @@ ObjectFile ParseObjects(std::string_view text, const std::string& source,
   // A UTF-8 byte-order mark (Windows editors write one) is no part of the first line's type.
   text = StripUtf8Bom(text);
   ObjectFile file;
-  // One object per line at most: counting the newlines (a vectorized scan) reserves about the
-  // right size, where a guess from the byte count left a third of every frame's objects unused.
-  file.objects.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
+  // One object per line at most: counting the newlines reserves about the right size, where a
+  // guess from the byte count left a third of every frame's objects unused. Counted by memchr (a
+  // vectorized scan; std::count went byte by byte, 2 instructions a byte).
+  size_t lines = 1;
+  for (const char *p = text.data(), *const end = p + text.size();
+       p < end && (p = static_cast<const char*>(
+                       std::memchr(p, '\n', static_cast<size_t>(end - p)))) != nullptr;
+       ++p) {
+    ++lines;
+  }
+  file.objects.reserve(lines);
   LineError error;
   int line_number = 0;
   size_t pos = 0;

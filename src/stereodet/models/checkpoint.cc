@@ -1,3 +1,5 @@
+#include <nlohmann/json.hpp>
+
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -6,14 +8,30 @@
 
 namespace stereodet::internal {
 
+std::string FirstConfigDifference(const std::string& recorded_text, const std::string& model_text) {
+  const nlohmann::json recorded = nlohmann::json::parse(recorded_text, nullptr, false);
+  const nlohmann::json model = nlohmann::json::parse(model_text);
+  if (!recorded.is_object()) return "its recorded config is not a JSON object";
+  for (const auto& [key, value] : model.items()) {
+    const auto it = recorded.find(key);
+    const std::string here = it == recorded.end() ? "nothing" : it->dump();
+    if (here != value.dump()) return key + ": " + here + " here, " + value.dump() + " in the model";
+  }
+  return "";
+}
+
 void SaveTrainingCheckpoint(const std::filesystem::path& path, const torch::nn::Module& module,
-                            const torch::optim::Optimizer& optimizer, int epochs_done) {
+                            const torch::optim::Optimizer& optimizer, int epochs_done,
+                            const CheckpointRecord& record) {
   torch::serialize::OutputArchive root, model, optim;
   module.save(model);
   optimizer.save(optim);
   root.write("model", model);
   root.write("optimizer", optim);
   root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
+  root.write("config", c10::IValue(record.config_json));
+  root.write("parameters", torch::tensor(record.parameters));
+  root.write("training_run", c10::IValue(record.training_run));
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   AtomicPath out(path);
   root.save_to(out.temp_path().string());
@@ -21,12 +39,38 @@ void SaveTrainingCheckpoint(const std::filesystem::path& path, const torch::nn::
 }
 
 int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module& module,
-                           torch::optim::Optimizer& optimizer, const torch::Device& device) {
+                           torch::optim::Optimizer& optimizer, const torch::Device& device,
+                           const CheckpointRecord& expected) {
   STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
       << "missing checkpoint " << path.string();
   try {
     torch::serialize::InputArchive root, model, optim;
     root.load_from(path.string(), device);
+    // Its own record first: LibTorch's shape errors would name neither the file nor the setting.
+    c10::IValue recorded_config, recorded_run;
+    if (root.try_read("config", recorded_config)) {
+      const std::string mismatch =
+          FirstConfigDifference(recorded_config.toStringRef(), expected.config_json);
+      STEREODET_CHECK_IO(mismatch.empty())
+          << path.string() << " was written for another model: " << mismatch
+          << "; it is not this model folder's checkpoint (copy a model folder whole, or train "
+             "anew with --force)";
+      torch::Tensor parameters;
+      root.read("parameters", parameters);
+      STEREODET_CHECK_IO(parameters.item<int64_t>() == expected.parameters)
+          << path.string() << " holds " << parameters.item<int64_t>() << " parameters, the model "
+          << expected.parameters;
+    }
+    if (!expected.training_run.empty()) {
+      const std::string found =
+          root.try_read("training_run", recorded_run) ? recorded_run.toStringRef() : "";
+      STEREODET_CHECK_IO(found == expected.training_run)
+          << path.string() << " is from another training run ("
+          << (found.empty() ? "none recorded" : found) << ") than the folder's model.json ("
+          << expected.training_run
+          << "): a checkpoint copied from another model folder? Copy a model folder whole, or "
+             "train anew with --force";
+    }
     root.read("model", model);
     root.read("optimizer", optim);
     torch::Tensor epochs;

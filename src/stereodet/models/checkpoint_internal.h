@@ -11,13 +11,31 @@
 
 namespace stereodet::internal {
 
+// What ties a checkpoint to its model folder (the SSD's and det3d's): the model's config as
+// model.json writes it (every tensor's shape follows from it), its parameter count and the id of
+// the training run that wrote it, which model.json's "weights" object records too.
+struct CheckpointRecord {
+  std::string config_json;
+  int64_t parameters = 0;
+  std::string training_run;  // 16 hex digits (NewTrainingRunId); empty = not recorded
+};
+
+// The first top-level key whose value differs between two config JSON texts, worded
+// "encoding: \"rgbh-fixed\" here, \"rgb\" in the model"; "" when none does.
+std::string FirstConfigDifference(const std::string& recorded_text, const std::string& model_text);
+
 void SaveTrainingCheckpoint(const std::filesystem::path& path, const torch::nn::Module& module,
-                            const torch::optim::Optimizer& optimizer, int epochs_done);
-// Restores what SaveTrainingCheckpoint wrote onto `device`; returns epochs_done. Throws
-// std::runtime_error naming the file when it is missing or does not fit the module.
+                            const torch::optim::Optimizer& optimizer, int epochs_done,
+                            const CheckpointRecord& record);
+// Restores what SaveTrainingCheckpoint wrote onto `device`; returns epochs_done. Before loading
+// any tensor it checks the checkpoint's record against `expected`: its config and parameter count
+// (a checkpoint written before they were recorded is not checked), and, when
+// expected.training_run is not empty, its training run. Throws std::runtime_error naming the file
+// and the difference ("... was written for another model: encoding: ...", "... is from another
+// training run (A) than the folder's model.json (B)"), or when it is missing or does not fit.
 int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module& module,
-                           torch::optim::Optimizer& optimizer,
-                           const torch::Device& device = torch::kCPU);
+                           torch::optim::Optimizer& optimizer, const torch::Device& device,
+                           const CheckpointRecord& expected);
 
 // Saves `module` to a LibTorch archive at `path` atomically; returns the FNV-1a 64 hash (16 hex
 // digits) of the file written.

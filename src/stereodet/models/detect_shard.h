@@ -1,4 +1,5 @@
-// Shards of a detection run, `detect ssd|det3d --shard K/N`, and `detect merge` (docs/scale.md).
+// Shards of a detection run, `detect ssd|det3d|rpn --shard K/N`, and `detect merge`
+// (docs/scale.md).
 //
 // A detection shard is a contiguous range of whole batches of the run's frame list: with B =
 // ceil(n / batch_size) batches, shard K/N holds batches [floor(K B / N), floor((K + 1) B / N))

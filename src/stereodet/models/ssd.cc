@@ -38,20 +38,6 @@ int GetInt(const nlohmann::json& j, const std::string& field, const std::string&
                                     : static_cast<int>(value.get<int64_t>());
 }
 
-// "encoding: \"rgbh-fixed\" here, \"rgb\" in the model" for the first top-level key whose value
-// differs between two config JSON texts, or "" when none does.
-std::string FirstDifference(const std::string& recorded_text, const std::string& model_text) {
-  const nlohmann::json recorded = nlohmann::json::parse(recorded_text, nullptr, false);
-  const nlohmann::json model = nlohmann::json::parse(model_text);
-  if (!recorded.is_object()) return "its recorded config is not a JSON object";
-  for (const auto& [key, value] : model.items()) {
-    const auto it = recorded.find(key);
-    const std::string here = it == recorded.end() ? "nothing" : it->dump();
-    if (here != value.dump()) return key + ": " + here + " here, " + value.dump() + " in the model";
-  }
-  return "";
-}
-
 }  // namespace
 
 // --- SsdConfig
@@ -428,65 +414,18 @@ LossParts SsdTrainer::Evaluate(const TrainBatch& batch) const {
 
 void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
                                 const std::string& training_run) const {
-  torch::serialize::OutputArchive root, model, optimizer;
-  impl_->model.net->save(model);
-  impl_->optimizer.save(optimizer);
-  root.write("model", model);
-  root.write("optimizer", optimizer);
-  root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
-  root.write("config", c10::IValue(SsdConfigToJson(impl_->model.config)));
-  root.write("parameters", torch::tensor(CountParameters(*impl_->model.net)));
-  root.write("training_run", c10::IValue(training_run));
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  AtomicPath out(path);
-  root.save_to(out.temp_path().string());
-  out.Commit();
+  internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done,
+                                   {.config_json = SsdConfigToJson(impl_->model.config),
+                                    .parameters = CountParameters(*impl_->model.net),
+                                    .training_run = training_run});
 }
 
 int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run) {
-  STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
-      << "missing checkpoint " << path.string();
-  try {
-    torch::serialize::InputArchive root, model, optimizer;
-    root.load_from(path.string(), impl_->model.device);
-    // Its own record first: LibTorch's shape errors would name neither the file nor the setting.
-    c10::IValue recorded_config, recorded_run;
-    if (root.try_read("config", recorded_config)) {
-      const std::string mismatch =
-          FirstDifference(recorded_config.toStringRef(), SsdConfigToJson(impl_->model.config));
-      STEREODET_CHECK_IO(mismatch.empty())
-          << path.string() << " was written for another model: " << mismatch
-          << "; it is not this model folder's checkpoint (copy a model folder whole, or train "
-             "anew with --force)";
-      torch::Tensor parameters;
-      root.read("parameters", parameters);
-      const int64_t expected = CountParameters(*impl_->model.net);
-      STEREODET_CHECK_IO(parameters.item<int64_t>() == expected)
-          << path.string() << " holds " << parameters.item<int64_t>() << " parameters, the model "
-          << expected;
-    }
-    if (!training_run.empty()) {
-      const std::string found =
-          root.try_read("training_run", recorded_run) ? recorded_run.toStringRef() : "";
-      STEREODET_CHECK_IO(found == training_run)
-          << path.string() << " is from another training run ("
-          << (found.empty() ? "none recorded" : found) << ") than the folder's model.json ("
-          << training_run
-          << "): a checkpoint copied from another model folder? Copy a model folder whole, or "
-             "train anew with --force";
-    }
-    root.read("model", model);
-    root.read("optimizer", optimizer);
-    torch::Tensor epochs;
-    root.read("epochs_done", epochs);
-    impl_->model.net->load(model);
-    impl_->optimizer.load(optimizer);
-    return static_cast<int>(epochs.item<int64_t>());
-  } catch (const c10::Error& e) {
-    STEREODET_THROW_IO() << "cannot load checkpoint " << path.string() << ": "
-                         << e.what_without_backtrace();
-  }
-  return 0;
+  return internal::LoadTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer,
+                                          impl_->model.device,
+                                          {.config_json = SsdConfigToJson(impl_->model.config),
+                                           .parameters = CountParameters(*impl_->model.net),
+                                           .training_run = training_run});
 }
 
 }  // namespace stereodet

@@ -9,6 +9,7 @@
 
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
@@ -111,7 +112,17 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
   const bool height = UsesHeight(config.encoding);
   RequiredFiles required;
   required.image_left = required.label = true;
-  required.image_right = required.calib = height;
+  const bool from_folder = height && !options.stereo_dir.empty();
+  required.image_right = required.calib = height && !from_folder;
+  std::optional<StereoFolderRecord> folder;
+  if (from_folder) {
+    folder = ReadStereoFolder(options.stereo_dir);
+    CheckStereoFolderData(*folder, dataset);
+    const std::string differ = DifferingStereoSettings(options.stereo, folder->stereo);
+    STEREODET_CHECK(differ.empty())
+        << "--stereo " << options.stereo_dir.string()
+        << ": its stereo.json differs from the training's settings: " << differ;
+  }
   const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
   if (!missing.empty()) {
     std::string list;
@@ -132,7 +143,10 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
         frame.image_path = paths.image_left;
         frame.targets =
             TargetsFromLabels(ReadObjects(paths.label).objects, config.classes, options);
-        if (height) {
+        if (from_folder) {
+          frame.height_code =
+              ResizeHeightCodes(ReadStereoFolderHeight(*folder, ids[i]), network_size);
+        } else if (height) {
           // One encoder per frame: StereoEncoder is not thread-safe and cheap to make.
           StereoEncoder encoder(options.stereo);
           const StereoGeometry geometry =

@@ -72,6 +72,10 @@ struct SsdDataOptions {
   // Stereo pipeline for the height codes (disparity, ground plane, 9-bit quantization). Blur is
   // applied at evaluation only (ssd_detect.h), never here.
   StereoOptions stereo;
+  // Read the height codes from this `stereodet stereo` folder (stereo/dataset_encoder.h,
+  // ReadStereoFolderHeight) instead of matching; empty = match. Its stereo.json's settings must be
+  // `stereo` (TrainSsd makes them so), and its run.json's data the dataset's.
+  std::filesystem::path stereo_dir;
   // Threads for the one-off stereo pass over the split (0 = all cores).
   int threads = 0;
   void Check() const;

@@ -14,6 +14,7 @@
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_data.h"
+#include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/degradation.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
@@ -113,7 +114,8 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir,
                                   {{"--data", options.data_root / options.subset},
                                    {"--data", options.data_root / "ImageSets"},
-                                   {"--model", options.model_dir}});
+                                   {"--model", options.model_dir},
+                                   {"--stereo", options.stereo_dir}});
   // Refuse a folder of something else before the work, not after it.
   StagedFolder out(options.out_dir, kRunManifestFile);
   SetTorchThreads(options.threads);
@@ -130,7 +132,8 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   const std::vector<std::string> ids = ShardFrames(all_ids, options.shard, options.batch_size);
   RequiredFiles required;
   required.image_left = true;
-  required.image_right = required.calib = height;
+  const bool from_folder = height && !options.stereo_dir.empty();
+  required.image_right = required.calib = height && !from_folder;
   const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
   if (!missing.empty()) {
     STEREODET_THROW_IO() << missing.size() << " required files are missing under "
@@ -140,6 +143,19 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   StereoOptions stereo = options.stereo.value_or(model.stereo());
   stereo.blur.sigma_px = options.blur_sigma_px;
   stereo.blur.mode = BlurMode::kNetworkImage;
+  std::optional<StereoFolderRecord> folder;
+  if (from_folder) {
+    folder = ReadStereoFolder(options.stereo_dir);
+    CheckStereoFolderData(*folder, dataset);
+    std::string differ = DifferingStereoSettings(stereo, folder->stereo);
+    for (size_t at; (at = differ.find("(requested: ")) != std::string::npos;) {
+      differ.replace(at, 12, "(stereo.json: ");
+    }
+    STEREODET_CHECK(differ.empty())
+        << "--stereo " << options.stereo_dir.string() << ": its stereo.json records other stereo "
+        << "settings than " << (options.stereo ? "the stereo flags" : "the model's model.json")
+        << ": " << differ << "; use a stereo folder made with the model's settings, or no --stereo";
+  }
 
   DetectSsdSummary summary;
   StageTimes times;
@@ -171,7 +187,20 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
           }
           batch.sizes[i] = left.size();
           cv::Mat network_image = left, height_code;
-          if (height) {
+          if (from_folder) {
+            {
+              ScopedStage stage(times, "read");
+              height_code = ReadStereoFolderHeight(*folder, ids[batch.begin + i]);
+            }
+            STEREODET_CHECK_IO(height_code.size() == left.size())
+                << "--stereo " << options.stereo_dir.string() << ": the height image of frame "
+                << ids[batch.begin + i] << " is " << height_code.cols << "x" << height_code.rows
+                << " px, its left image " << left.cols << "x" << left.rows;
+            if (options.blur_sigma_px > 0.0) {
+              ScopedStage stage(times, "blur");
+              network_image = GaussianBlurImage(left, options.blur_sigma_px);
+            }
+          } else if (height) {
             cv::Mat right;
             {
               ScopedStage stage(times, "read");
@@ -227,6 +256,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
                      {"data", options.data_root.string()},
                      {"subset", options.subset},
                      {"split", options.split}};
+  if (from_folder) manifest.inputs.emplace_back("stereo", options.stereo_dir.string());
   manifest.settings_json = fmt::format(
       R"({{"model_weights_fnv1a64": "{}", "encoding": "{}", "blur_sigma_px": {}, )"
       R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}{}}})",

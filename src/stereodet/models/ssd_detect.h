@@ -49,6 +49,10 @@ struct DetectSsdOptions {
   // trained with; the defaults for a model.json written before they were recorded). Set: these,
   // even where they differ (StereoMismatch tells which; `detect ssd` warns).
   std::optional<StereoOptions> stereo;
+  // RGB-H: read the height codes from this `stereodet stereo` folder (`--stereo DIR`) instead of
+  // matching. Refused (std::invalid_argument naming the setting) when its stereo.json's settings
+  // differ from those above (the model's, or `stereo`), and when its run.json records other data.
+  std::filesystem::path stereo_dir;
   ProgressOptions progress;
   std::string command_line;  // for OUT/run.json (empty from a library call)
   void Check() const;        // throws std::invalid_argument

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "stereodet/models/train_common.h"
+#include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -25,14 +26,6 @@ namespace {
 
 constexpr char kLogHeader[] =
     "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
-
-// A new training run's id: 16 hex digits that no other run draws (the random device, the clock).
-std::string NewTrainingRunId() {
-  std::random_device device;
-  const uint64_t random = (static_cast<uint64_t>(device()) << 32) ^ device();
-  const auto now = std::chrono::system_clock::now().time_since_epoch().count();
-  return HashHex(Fnv1a64(std::to_string(now), random));
-}
 
 }  // namespace
 
@@ -64,17 +57,23 @@ double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64
                                   options.final_lr_fraction, step, total_steps);
 }
 
-TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
-  options.Check();
+TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
+  given.Check();
+  // With --stereo DIR the heights are the folder's, and so are the settings model.json records.
+  TrainSsdOptions options = given;
+  if (!options.data.stereo_dir.empty() && UsesHeight(options.model.encoding)) {
+    options.data.stereo = ReadStereoFolder(options.data.stereo_dir).stereo;
+  }
   const ComputeDevice device = ResolveComputeDevice(options.device);
   const Timer total_timer;
   SetTorchThreads(options.threads);
   TrainSsdSummary summary;
 
   namespace fs = std::filesystem;
-  CheckOutputDoesNotOverlapInputs(
-      "--out", options.out_dir,
-      {{"--data", options.data_root / "training"}, {"--data", options.data_root / "ImageSets"}});
+  CheckOutputDoesNotOverlapInputs("--out", options.out_dir,
+                                  {{"--data", options.data_root / "training"},
+                                   {"--data", options.data_root / "ImageSets"},
+                                   {"--stereo", options.data.stereo_dir}});
   const OutputLock lock(options.out_dir);  // two trainings into one folder would interleave
   // With --resume the model folder's settings win; asking for different ones is a mistake.
   SsdConfig config = options.model;
@@ -135,6 +134,9 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options) {
   manifest.version = StereodetVersion();
   manifest.command_line = options.command_line;
   manifest.inputs = {{"data", options.data_root.string()}, {"split", options.split}};
+  if (!options.data.stereo_dir.empty()) {
+    manifest.inputs.emplace_back("stereo", options.data.stereo_dir.string());
+  }
   auto write_manifest = [&](int epochs_done) {
     manifest.settings_json = fmt::format(
         R"({{"encoding": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"

@@ -19,6 +19,7 @@
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/models/train_common.h"
+#include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_paths.h"
@@ -234,6 +235,112 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
         }
       }
     }
+  }
+}
+
+// --stereo DIR: the heights of a `stereodet stereo` folder made with the model's settings give the
+// same detections and the same training as matching; a folder of other settings is refused.
+TEST(SsdTrainTest, StereoFolderHeightsGiveWhatMatchingGives) {
+  const fs::path root = WriteTinyDataset("stdir_data", 4);
+  const KittiDataset dataset(root, "training");
+  const std::vector<std::string> ids = dataset.ReadSplit("val");
+  auto encode = [&](const std::string& name, const StereoOptions& stereo) {
+    const fs::path dir = TempDir(name);
+    fs::remove_all(dir);
+    EncodeDatasetOptions encode_options;
+    encode_options.stereo = stereo;
+    encode_options.num_threads = 1;
+    encode_options.progress.stream = nullptr;
+    EncodeDataset(dataset, ids, dir, encode_options);
+    return dir;
+  };
+  const fs::path stereo_dir = encode("stdir_stereo", TinyStereo());
+  StereoOptions other = TinyStereo();
+  other.disparity.num_disparities = 48;
+  const fs::path other_dir = encode("stdir_stereo48", other);
+
+  // Training: one epoch from the folder's heights ends with the weights of one from matching.
+  TrainSsdOptions matched = TinyTraining(root, TempDir("stdir_model"));
+  matched.epochs = 1;
+  TrainSsd(matched);
+  TrainSsdOptions read = TinyTraining(root, TempDir("stdir_model_read"));
+  read.epochs = 1;
+  read.data.stereo = StereoOptions();  // ignored: the folder's settings are used
+  read.data.stereo_dir = stereo_dir;
+  TrainSsd(read);
+  const SsdModel a = SsdModel::Load(matched.out_dir), b = SsdModel::Load(read.out_dir);
+  EXPECT_EQ(b.stereo().disparity.num_disparities, 32);  // model.json records the folder's
+  PlanarImage input{4, 40, 128, std::vector<float>(4 * 40 * 128, 0.5f)};
+  EXPECT_EQ(a.Forward({input}).probabilities, b.Forward({input}).probabilities);
+  // Resuming a model with another folder's settings is refused, naming the setting.
+  TrainSsdOptions resume = read;
+  resume.epochs = 2;
+  resume.resume = true;
+  resume.data.stereo_dir = other_dir;
+  try {
+    TrainSsd(resume);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("disparity.num_disparities: 32 (requested: 48)"),
+              std::string::npos)
+        << e.what();
+  }
+
+  // Detection, sharp and blurred.
+  for (double sigma : {0.0, 2.0}) {
+    DetectSsdOptions detect;
+    detect.model_dir = matched.out_dir;
+    detect.data_root = root;
+    detect.blur_sigma_px = sigma;
+    detect.threads = 1;
+    detect.batch_size = 2;
+    detect.progress.stream = nullptr;
+    detect.out_dir = TempDir("stdir_det_matched");
+    DetectSsd(detect);
+    DetectSsdOptions from_folder = detect;
+    from_folder.stereo_dir = stereo_dir;
+    from_folder.out_dir = TempDir("stdir_det_read");
+    DetectSsd(from_folder);
+    for (const std::string& id : ids) {
+      const std::string text = ReadFile(from_folder.out_dir / (id + ".txt"));
+      EXPECT_FALSE(text.empty()) << id;
+      EXPECT_TRUE(text == ReadFile(detect.out_dir / (id + ".txt"))) << id << ", sigma " << sigma;
+    }
+    EXPECT_NE(ReadFile(from_folder.out_dir / "run.json").find("stdir_stereo"), std::string::npos);
+  }
+  DetectSsdOptions detect;
+  detect.model_dir = matched.out_dir;
+  detect.data_root = root;
+  detect.progress.stream = nullptr;
+  detect.out_dir = TempDir("stdir_det_refused");
+  detect.stereo_dir = other_dir;
+  try {
+    DetectSsd(detect);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("its stereo.json records other stereo settings than the "
+                                         "model's model.json: disparity.num_disparities: 32 "
+                                         "(stereo.json: 48)"),
+              std::string::npos)
+        << e.what();
+  }
+  detect.stereo_dir = root;  // no stereo.json
+  try {
+    DetectSsd(detect);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("is not a `stereodet stereo` folder"), std::string::npos)
+        << e.what();
+  }
+  // A frame the folder has not finished is named.
+  detect.stereo_dir = stereo_dir;
+  fs::remove(stereo_dir / "ground" / (ids[1] + ".txt"));
+  try {
+    DetectSsd(detect);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("has no finished frame " + ids[1]), std::string::npos)
+        << e.what();
   }
 }
 

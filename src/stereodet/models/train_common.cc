@@ -3,11 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <random>
 #include <sstream>
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/strings.h"
 
@@ -20,6 +23,13 @@ double WarmupCosineLearningRate(double peak, int warmup_steps, double final_frac
       total_steps > 1 ? std::clamp(static_cast<double>(step) / (total_steps - 1), 0.0, 1.0) : 1.0;
   const double cosine = 0.5 * (1.0 + std::cos(M_PI * progress));
   return peak * warmup * (final_fraction + (1.0 - final_fraction) * cosine);
+}
+
+std::string NewTrainingRunId() {
+  std::random_device device;
+  const uint64_t random = (static_cast<uint64_t>(device()) << 32) ^ device();
+  const auto now = std::chrono::system_clock::now().time_since_epoch().count();
+  return HashHex(Fnv1a64(std::to_string(now), random));
 }
 
 std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs) {

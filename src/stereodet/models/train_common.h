@@ -23,6 +23,10 @@ double WarmupCosineLearningRate(double peak, int warmup_steps, double final_frac
 // total_steps >= warmup_steps.
 std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs);
 
+// A new training run's id: 16 hex digits that no other run draws (the random device, the clock).
+// model.json's "weights" and checkpoint.pt record it, so --resume refuses a foreign checkpoint.
+std::string NewTrainingRunId();
+
 // The files a model folder holds for a training (model.pt, model.json, checkpoint.pt,
 // train_log.csv, run.json).
 inline constexpr char kCheckpointFile[] = "checkpoint.pt";

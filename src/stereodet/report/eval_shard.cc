@@ -181,10 +181,11 @@ void EvaluationMergeOptions::Check() const {
   e.Check();
 }
 
-EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options) {
-  options.Check();
+EvalInput LoadEvalShards(const std::vector<fs::path>& dirs, int num_threads,
+                         EvalInputOptions* shards_input) {
+  STEREODET_CHECK(!dirs.empty()) << "no eval shard folder given";
   std::vector<std::pair<EvalShardInfo, fs::path>> shards;
-  for (const fs::path& dir : options.shards) shards.emplace_back(ReadEvalShard(dir), dir);
+  for (const fs::path& dir : dirs) shards.emplace_back(ReadEvalShard(dir), dir);
   std::sort(shards.begin(), shards.end(),
             [](const auto& a, const auto& b) { return a.first.shard.index < b.first.shard.index; });
   const int n = shards.front().first.shard.count;
@@ -192,33 +193,21 @@ EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options) {
   for (size_t k = 0; k < shards.size(); ++k) {
     const auto& [info, dir] = shards[k];
     STEREODET_CHECK(info.shard.count == n)
-        << "eval merge: " << dir.string() << " is shard " << ShardName(info.shard) << ", but "
+        << "eval shards: " << dir.string() << " is shard " << ShardName(info.shard) << ", but "
         << shards.front().second.string() << " is one of " << n;
     STEREODET_CHECK(info.shard.index == static_cast<int>(k))
-        << "eval merge: shard " << k << "/" << n << " is "
+        << "eval shards: shard " << k << "/" << n << " is "
         << (info.shard.index < static_cast<int>(k) ? "given twice" : "missing") << " (at "
         << dir.string() << ")";
     STEREODET_CHECK(info.input.gt == first.gt && info.input.det == first.det &&
                     info.input.split == first.split && info.input.lenient == first.lenient)
-        << "eval merge: " << dir.string() << " evaluated other input (--gt " << info.input.gt
+        << "eval shards: " << dir.string() << " evaluated other input (--gt " << info.input.gt
         << " --det " << info.input.det << " --split '" << info.input.split << "') than "
         << shards.front().second.string();
   }
   STEREODET_CHECK(static_cast<int>(shards.size()) == n)
-      << "eval merge: " << shards.size() << " shard folders for " << n << " shards; shard "
+      << "eval shards: " << shards.size() << " shard folders for " << n << " shards; shard "
       << shards.size() << "/" << n << " is missing";
-
-  EvaluationOptions evaluation = options.evaluation;
-  const int threads = evaluation.input.num_threads;
-  evaluation.input = first;
-  evaluation.input.shard = Shard{};
-  evaluation.input.num_threads = threads;
-  evaluation.Check();
-  std::vector<std::pair<std::string, fs::path>> inputs;
-  for (const auto& s : shards) inputs.emplace_back("shard", s.second);
-  if (!evaluation.out.empty()) CheckOutputDoesNotOverlapInputs("--out", evaluation.out, inputs);
-  std::optional<StagedFolder> out;
-  if (!evaluation.out.empty()) out.emplace(evaluation.out, "results.json");
 
   std::vector<EvalFrameSource> sources;
   std::vector<std::string> det_not_from_run;
@@ -234,18 +223,37 @@ EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options) {
   std::set<std::string> ids;
   for (const EvalFrameSource& s : sources) {
     STEREODET_CHECK_IO(ids.insert(s.id).second)
-        << "eval merge: frame " << s.id << " is in more than one shard";
+        << "eval shards: frame " << s.id << " is in more than one shard";
   }
-  EvalInput input = EvalInputFromSources(std::move(sources), first.lenient, threads);
+  EvalInput input = EvalInputFromSources(std::move(sources), first.lenient, num_threads);
   const json j0 = ShardJson(shards.front().second);
   input.ignored_files = j0.at("ignored_files").get<std::vector<std::string>>();
   input.det_run = j0.at("det_run").get<std::string>();
   input.det_not_from_run = std::move(det_not_from_run);
+  if (shards_input != nullptr) *shards_input = first;
+  return input;
+}
+
+EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options) {
+  options.Check();
+  EvaluationOptions evaluation = options.evaluation;
+  const int threads = evaluation.input.num_threads;
+  EvalInputOptions first;
+  EvalInput input = LoadEvalShards(options.shards, threads, &first);
+  evaluation.input = first;
+  evaluation.input.shard = Shard{};
+  evaluation.input.num_threads = threads;
+  evaluation.Check();
+  std::vector<std::pair<std::string, fs::path>> inputs;
+  for (const fs::path& dir : options.shards) inputs.emplace_back("shard", dir);
+  if (!evaluation.out.empty()) CheckOutputDoesNotOverlapInputs("--out", evaluation.out, inputs);
+  std::optional<StagedFolder> out;
+  if (!evaluation.out.empty()) out.emplace(evaluation.out, "results.json");
 
   return EvaluateAndWrite(
       evaluation, out, std::move(input), [&](const fs::path& staging, const EvaluationResult&) {
         const json merged = ComparedOptions(staging);
-        for (const auto& [info, dir] : shards) {
+        for (const fs::path& dir : options.shards) {
           const json shard = ComparedOptions(dir);
           STEREODET_CHECK(shard == merged)
               << "eval merge: " << dir.string()

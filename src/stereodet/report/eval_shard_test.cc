@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -168,6 +169,73 @@ TEST(EvalShardTest, RefusesMissingDuplicateOrMismatchedShards) {
   merge.shards = {data.gt};
   EXPECT_THAT([&] { RunEvaluationMerge(merge); },
               ::testing::ThrowsMessage<std::runtime_error>(HasSubstr("not an evaluation shard")));
+}
+
+// `eval sweep|compare --shards`: the frames of eval shards give the rows of one run's sweep and
+// comparison, byte for byte in their CSV.
+TEST(EvalShardTest, SweepAndCompareOfShardsAreThoseOfOneRun) {
+  const RandomFolders data(23, 11);
+  // Detections B: A's, 0.5 m farther and with other scores.
+  const fs::path det_b = data.dir.path() / "det_b";
+  for (const fs::directory_entry& e : fs::directory_iterator(data.det)) {
+    ObjectParseOptions parse;
+    parse.kind = ObjectFileKind::kDetection;
+    std::vector<Object> objects = ReadObjects(e.path(), parse).objects;
+    for (Object& o : objects) {
+      if (o.Has3D()) o.box3d.location.z() += 0.5;
+      if (o.score) o.score = std::round(*o.score * 70.0) / 100.0;
+    }
+    WriteObjects(det_b / e.path().filename(), objects);
+  }
+  const TestTempDir out("shard-sweep");
+  std::vector<fs::path> shards_a, shards_b;
+  for (int k = 2; k >= 0; --k) {
+    for (const auto& [det, name] : {std::pair{data.det, "a"}, std::pair{det_b, "b"}}) {
+      EvaluationOptions part = Options(data, Matcher::kKitti, FilterMode::kStable,
+                                       out.path() / (name + std::to_string(k)));
+      part.input.det = det;
+      part.input.shard = Shard{k, 3};
+      part.records = false;
+      RunEvaluation(part);
+      (det == data.det ? shards_a : shards_b).push_back(part.out);
+    }
+  }
+  EvalOptions run;
+  run.filter.conditions = ParseFilterConditions("max-distance=45");
+  EvaluationSweepOptions sweep;
+  sweep.input.gt = data.gt;
+  sweep.input.det = data.det;
+  sweep.eval = run;
+  sweep.from = 0;
+  sweep.to = 1000;
+  sweep.step = 250;
+  const EvaluationSweepResult whole = RunEvaluationSweep(sweep);
+  sweep.input = EvalInputOptions{};
+  sweep.shards = shards_a;
+  const EvaluationSweepResult sharded = RunEvaluationSweep(sweep);
+  EXPECT_GT(whole.rows.size(), 5u);  // 5 bounds per class and difficulty
+  EXPECT_EQ(sharded.csv, whole.csv);
+  EXPECT_EQ(sharded.input.input_hash, whole.input.input_hash);
+
+  EvaluationCompareOptions compare;
+  compare.input.gt = data.gt;
+  compare.input.det = data.det;
+  compare.det_b = det_b;
+  compare.eval.metrics = {OverlapKind::k2D};
+  const EvaluationCompareResult whole_compare = RunEvaluationCompare(compare);
+  ASSERT_FALSE(whole_compare.rows.empty());
+  compare.input = EvalInputOptions{};
+  compare.det_b.clear();
+  compare.shards = shards_a;
+  compare.shards_b = shards_b;
+  EXPECT_EQ(RunEvaluationCompare(compare).csv, whole_compare.csv);
+  // B's shards must be of A's labels, and come with A's.
+  compare.shards_b = {};
+  EXPECT_THROW(RunEvaluationCompare(compare), std::invalid_argument);
+  compare.shards_b = {shards_b.back()};  // shard 0/3 alone
+  EXPECT_THAT([&] { RunEvaluationCompare(compare); },
+              ::testing::ThrowsMessage<std::invalid_argument>(
+                  HasSubstr("eval shards: 1 shard folders for 3 shards")));
 }
 
 }  // namespace

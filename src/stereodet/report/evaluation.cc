@@ -134,8 +134,19 @@ EvaluationResult EvaluateAndWrite(
   return result;
 }
 
+namespace {
+
+// EvalInputOptions::Check, but without --gt/--det when the frames come from shards.
+void CheckInput(const EvalInputOptions& input, bool from_shards) {
+  EvalInputOptions checked = input;
+  if (from_shards) checked.gt = checked.det = "-";
+  checked.Check();
+}
+
+}  // namespace
+
 void EvaluationSweepOptions::Check() const {
-  input.Check();
+  CheckInput(input, !shards.empty());
   eval.Check();  // the sweep's range is FilterSweep's to check
   STEREODET_CHECK(!report || !out.empty()) << "sweep: report needs an output folder (out)";
 }
@@ -169,7 +180,8 @@ CsvOutput WriteCsvAndReport(const std::filesystem::path& out, const char* name,
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) {
   options.Check();
   EvaluationSweepResult result;
-  result.input = LoadEvalFrames(options.input);
+  result.input = options.shards.empty() ? LoadEvalFrames(options.input)
+                                        : LoadEvalShards(options.shards, options.input.num_threads);
   result.rows = FilterSweep(result.input.frames, options.eval, options.bound, options.from,
                             options.to, options.step);
   result.csv = FormatSweepCsv(result.rows, options.bound);
@@ -180,8 +192,11 @@ EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) 
 }
 
 void EvaluationCompareOptions::Check() const {
-  input.Check();
-  STEREODET_CHECK(!det_b.empty()) << "compare: no second detection folder (det_b)";
+  STEREODET_CHECK(shards.empty() == shards_b.empty())
+      << "compare: give the shards of both detection sets (shards and shards_b), or neither";
+  CheckInput(input, !shards.empty());
+  STEREODET_CHECK(!det_b.empty() || !shards_b.empty())
+      << "compare: no second detection folder (det_b)";
   eval.Check();
   STEREODET_CHECK(!report || !out.empty()) << "compare: report needs an output folder (out)";
   if (bootstrap) bootstrap->Check();
@@ -190,10 +205,20 @@ void EvaluationCompareOptions::Check() const {
 EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
   options.Check();
   EvaluationCompareResult result;
-  result.input_a = LoadEvalFrames(options.input);
-  EvalInputOptions input_b = options.input;
-  input_b.det = options.det_b;
-  result.input_b = LoadEvalFrames(input_b);
+  if (options.shards.empty()) {
+    result.input_a = LoadEvalFrames(options.input);
+    EvalInputOptions input_b = options.input;
+    input_b.det = options.det_b;
+    result.input_b = LoadEvalFrames(input_b);
+  } else {
+    EvalInputOptions a, b;
+    result.input_a = LoadEvalShards(options.shards, options.input.num_threads, &a);
+    result.input_b = LoadEvalShards(options.shards_b, options.input.num_threads, &b);
+    STEREODET_CHECK(a.gt == b.gt && a.split == b.split && a.lenient == b.lenient)
+        << "compare: the shards of A read other labels (--gt " << a.gt.string() << " --split '"
+        << a.split << "') than those of B (--gt " << b.gt.string() << " --split '" << b.split
+        << "')";
+  }
   result.result_a = Evaluate(result.input_a.frames, options.eval);
   result.result_b = Evaluate(result.input_b.frames, options.eval);
   const Calibration calib =

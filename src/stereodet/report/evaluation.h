@@ -128,6 +128,15 @@ struct EvalShardInfo {
 // folder (no eval_shard.json), ParseError for a malformed one.
 EvalShardInfo ReadEvalShard(const std::filesystem::path& dir);
 
+// The frames of the folders of `eval --shard K/N` (all N of one input, in any order), as
+// LoadEvalFrames reads the whole list: the shards' label and detection bytes in shard order,
+// parsed as LoadEvalFrames parses them (on num_threads threads). With `shards_input`, the input
+// the shards read (gt, det, split, lenient) goes there. Throws std::invalid_argument for a shard
+// missing, given twice, of another N or another input, std::runtime_error for a folder that is
+// not a shard and for bad frame files. What `eval merge`, and `eval sweep|compare --shards`, read.
+EvalInput LoadEvalShards(const std::vector<std::filesystem::path>& shards, int num_threads,
+                         EvalInputOptions* shards_input = nullptr);
+
 // Checks the shards (all of 0..N-1 once, one input), claims `out`, reads the shards' frames,
 // evaluates and writes as RunEvaluation does; refuses before the commit, naming the shard, when
 // its options differ. Throws std::invalid_argument for a bad set of shards or options,
@@ -138,6 +147,9 @@ EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options);
 // one filter bound (FilterSweep).
 struct EvaluationSweepOptions {
   EvalInputOptions input;
+  // Non-empty: the frames are those of these `eval --shard` folders (LoadEvalShards; input.gt and
+  // det are not read, input.num_threads is used), which gives the rows of the sweep of one run.
+  std::vector<std::filesystem::path> shards;
   // One run; its filter's conditions are the fixed ones the swept bound is added to.
   EvalOptions eval;
   FilterBound bound = FilterBound::kMinArea;  // the swept bound
@@ -165,7 +177,10 @@ EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options);
 struct EvaluationCompareOptions {
   EvalInputOptions input;       // input.det holds the detections A
   std::filesystem::path det_b;  // the detections B, read like A (same labels, split, leniency)
-  EvalOptions eval;             // both are evaluated with these
+  // Both non-empty: A's and B's frames are those of these `eval --shard` folders (LoadEvalShards;
+  // input.gt, det and det_b are not read), shards of the same labels, split and leniency.
+  std::vector<std::filesystem::path> shards, shards_b;
+  EvalOptions eval;  // both are evaluated with these
   // A KITTI calib file whose baseline and focal length the model uses. Empty: KittiLikeCalibration.
   std::filesystem::path calib;
   // The model's disparity error (the baseline and focal length are set from `calib`).

@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -15,6 +16,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/velodyne_io.h"
 #include "stereodet/stereo/image_io.h"
+#include "stereodet/stereo/rgbh.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -261,6 +263,72 @@ std::string DatasetManifest(const EncodeDatasetOptions& options) {
                  {"beams", o.points.beams}};
   j["blur"] = {{"sigma_px", o.blur.sigma_px}, {"mode", BlurModeName(o.blur.mode)}};
   return j.dump(2) + "\n";
+}
+
+StereoFolderRecord ReadStereoFolder(const fs::path& dir) {
+  StereoFolderRecord folder;
+  folder.dir = dir;
+  const fs::path settings_path = dir / "stereo.json";
+  STEREODET_CHECK_IO(fs::is_regular_file(settings_path))
+      << "--stereo " << dir.string() << " is not a `stereodet stereo` folder: it holds no "
+      << "stereo.json";
+  const std::string text = ReadFile(settings_path);
+  folder.stereo = StereoOptionsFromJson(text, settings_path.string());
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(settings_path.string(), 0, "", std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.contains("encode") || !j["encode"].is_string()) {
+    throw ParseError(settings_path.string(), 0, "encode", "expected a string");
+  }
+  folder.outputs = ParseDatasetOutputs(j["encode"].get<std::string>());
+  STEREODET_CHECK_IO(folder.outputs.rgbh || folder.outputs.rgbd)
+      << settings_path.string() << " records no height images (encode \""
+      << DatasetOutputsName(folder.outputs) << "\"); make them with `stereodet stereo --encode "
+      << "rgbh`";
+  if (j.contains("blur") && j["blur"].is_object()) {
+    const double sigma = j["blur"].value("sigma_px", 0.0);
+    const std::string mode = j["blur"].value("mode", std::string("image"));
+    STEREODET_CHECK_IO(sigma <= 0 || ParseBlurMode(mode) != BlurMode::kBothBeforeMatching)
+        << settings_path.string() << " records heights matched on blurred pairs (blur.mode \""
+        << mode << "\", blur.sigma_px " << sigma << "); a detector's heights come from the "
+        << "sharp pair";
+  }
+  if (fs::exists(dir / kRunManifestFile)) {
+    if (const std::optional<RunManifest> run = ReadRunManifest(dir)) {
+      for (const auto& [name, path] : run->inputs) {
+        if (name == "data") folder.data_dir = path;
+      }
+    }
+  }
+  return folder;
+}
+
+void CheckStereoFolderData(const StereoFolderRecord& folder, const KittiDataset& dataset) {
+  if (folder.data_dir.empty()) return;
+  const std::string data_dir = fs::weakly_canonical(fs::absolute(dataset.SubsetDir())).string();
+  STEREODET_CHECK_IO(folder.data_dir == data_dir)
+      << "--stereo " << folder.dir.string() << " holds heights computed from --data "
+      << folder.data_dir << " (its run.json), not " << data_dir;
+}
+
+cv::Mat ReadStereoFolderHeight(const StereoFolderRecord& folder, const std::string& id) {
+  const FrameOutputs paths = OutputPaths(folder.dir, id);
+  STEREODET_CHECK_IO(fs::exists(paths.ground))
+      << "--stereo " << folder.dir.string() << " has no finished frame " << id << " (no "
+      << paths.ground.string() << "); run `stereodet stereo` on this split first";
+  if (folder.outputs.rgbd && fs::exists(paths.height)) {
+    cv::Mat code = ReadImage(paths.height, cv::IMREAD_UNCHANGED, "height image");
+    STEREODET_CHECK_IO(code.type() == CV_16UC1)
+        << paths.height.string() << ": expected a 16-bit one-channel height image";
+    return code;
+  }
+  STEREODET_CHECK_IO(fs::exists(paths.rgbh))
+      << "--stereo " << folder.dir.string() << " has no height image of frame " << id << " ("
+      << paths.rgbh.string() << " is missing)";
+  return UnpackRgbh(ReadImage(paths.rgbh, cv::IMREAD_COLOR, "RGB-H image")).height_code;
 }
 
 std::string DisparityEvaluationJson(

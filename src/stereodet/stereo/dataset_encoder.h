@@ -149,6 +149,31 @@ std::string DatasetManifest(const EncodeDatasetOptions& options);
 // 3; F = 1 for a RANSAC fit, 0 for the nominal fallback).
 std::string GroundFitLine(const GroundPlaneFit& fit);
 
+// A `stereodet stereo` folder read back by the detectors (`train ssd` / `detect ssd --stereo DIR`),
+// which then read its height codes instead of running the matcher.
+struct StereoFolderRecord {
+  std::filesystem::path dir;
+  StereoOptions stereo;    // DIR/stereo.json's disparity, ground and height-code settings
+  DatasetOutputs outputs;  // its "encode"
+  std::string data_dir;    // the --data subset folder DIR/run.json records (empty without one)
+};
+
+// Reads DIR/stereo.json and DIR/run.json. Throws std::runtime_error naming the file when DIR holds
+// no stereo.json (it is not a `stereodet stereo` folder), when its outputs hold no height codes
+// (neither rgbh nor rgbd), or when its heights were matched on blurred pairs (blur.mode "both"
+// with sigma_px > 0: a detector's heights come from the sharp pair); ParseError for a bad file.
+StereoFolderRecord ReadStereoFolder(const std::filesystem::path& dir);
+
+// Throws std::runtime_error when `folder`'s run.json records another data folder than `dataset`'s
+// subset folder ("DIR holds heights computed from --data A (its run.json), not B").
+void CheckStereoFolderData(const StereoFolderRecord& folder, const KittiDataset& dataset);
+
+// Frame `id`'s 9-bit height codes (CV_16UC1 at the images' resolution, 0 = no stereo) as
+// EncodeDataset wrote them: DIR/height/ID.png when present (rgbd), else unpacked from
+// DIR/rgbh/ID.png (exact: PackRgbh keeps all 9 bits). Throws std::runtime_error naming the file
+// when the frame is not done (no DIR/ground/ID.txt, written last) or its image is missing or bad.
+cv::Mat ReadStereoFolderHeight(const StereoFolderRecord& folder, const std::string& id);
+
 // Encodes the frames `ids` of `dataset` into `out` (created), in parallel. Checks options first,
 // then that `ids` is not empty and that every frame has both images and a calibration, that `out`
 // does not overlap the dataset's subset folder or ImageSets/ (std::invalid_argument), then the

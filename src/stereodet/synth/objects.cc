@@ -240,7 +240,7 @@ void BuildPedestrian(Parts& p, float h, const PersonMaterials& m, Rng& rng) {
               Eigen::Vector3f(0.95f * head_r.x(), head_r.y(), 1.04f * head_r.z()), m.hair);
 }
 
-void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin) {
+void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin, int hair) {
   const float s = h / 1.27f;
   const float seat = 0.46f * s;
   for (float side : {-1.0f, 1.0f}) {
@@ -254,6 +254,8 @@ void BuildPersonSitting(Parts& p, float h, int top, int bottom, int skin) {
   p.Segment({-0.1f * s, seat - 0.05f * s, 0.0f}, {-0.12f * s, 1.02f * s, 0.0f}, 0.11f * s,
             0.18f * s, top);
   p.Ellipsoid({-0.11f * s, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.1f, 0.115f, 0.09f) * s, skin);
+  p.Ellipsoid({-0.125f * s, h - 0.115f * s, 0.0f}, Eigen::Vector3f(0.095f, 0.115f, 0.094f) * s,
+              hair);
 }
 
 void BuildCyclist(Parts& p, float h, int top, int bottom, int skin, int frame, int tyre, int helmet,
@@ -372,7 +374,7 @@ int AddObject(Scene& scene, const std::string& type, const Box3D& box, Rng& rng)
       m.bag = scene.AddMaterial(ClothMaterial(rng, false));
       BuildPedestrian(parts, hf, m, rng);
     } else if (type == "Person_sitting") {
-      BuildPersonSitting(parts, hf, top, bottom, skin);
+      BuildPersonSitting(parts, hf, top, bottom, skin, hair);
     } else if (type == "Cyclist") {
       const int frame = scene.AddMaterial(MakeMaterial(Pattern::kPlain, CarColour(rng), 0.1f));
       const int tyre =

@@ -453,11 +453,27 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       // 62% of the radius, tyre sidewall outside; the tread elsewhere.
       const Primitive& p = scene.primitives[hit.primitive];
       const Eigen::Vector3f n = p.world_from_local.transpose() * hit.normal;
-      const Eigen::Vector3f tyre =
-          m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 5, fp));
-      if (std::abs(n.y()) <= 0.5f) return tyre;
+      Eigen::Vector3f tyre = m.albedo * (1.0f + m.contrast * FilteredFbm(u, v, 8.0f, 0.6f, 5, fp));
       const float radius = p.half_extent.x();
-      const float rho = std::hypot(f.local.x(), f.local.z());
+      if (std::abs(n.y()) <= 0.5f) {
+        // The tread: blocks between transverse grooves every 3 cm of arc and two circumferential
+        // grooves; grey with road dust on the blocks.
+        const float width = 2.0f * p.half_extent.y();
+        const float groove = std::max({LineCoverage(u, 0.03f, 0.0f, 0.008f, fp),
+                                       LineCoverage(v, 1000.0f, 0.33f * width, 0.012f, fp),
+                                       LineCoverage(v, 1000.0f, 0.67f * width, 0.012f, fp)});
+        return tyre * (1.6f - 1.1f * groove);
+      }
+      // The sidewall: a ring of lettering at 80-90 % of the radius.
+      const float rho_wall = std::hypot(f.local.x(), f.local.z());
+      if (rho_wall > 0.8f * radius && rho_wall < 0.9f * radius) {
+        const float arc = std::atan2(f.local.z(), f.local.x()) * rho_wall;
+        const float glyph = std::floor(arc / 0.025f);
+        if (CellTone(glyph, 0.0f, 73) > -0.2f) {
+          tyre *= 1.0f + 1.2f * LineCoverage(arc, 0.025f, 0.0125f, 0.006f, fp);
+        }
+      }
+      const float rho = rho_wall;
       const float rim_cover = IntervalCoverage(rho, -1.0f, 0.62f * radius, fp);
       if (rim_cover <= 0.0f) return tyre;
       // Five spokes; their contrast fades once the spoke period at this radius nears the footprint.
@@ -493,7 +509,9 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
         default:
           break;
       }
-      return cloth * (1.0f + m.contrast * folds);
+      // Folds, and the weave and seams of the fabric at a few centimetres.
+      const float weave = FilteredFbm(u + 23.0f, v + 7.0f, 16.0f, 0.7f, 4, fp);
+      return cloth * (1.0f + m.contrast * (folds + 0.7f * weave));
     }
   }
   return m.albedo;

@@ -70,6 +70,7 @@ std::string Det3dConfigToJson(const Det3dConfig& config, const WeightsRecord& we
                     {"fnv1a64", weights.fnv1a64},
                     {"input_channels", weights.input_channels},
                     {"parameters", weights.parameters}};
+    if (!weights.training_run.empty()) j["weights"]["training_run"] = weights.training_run;
   }
   return j.dump(2) + "\n";
 }
@@ -496,13 +497,15 @@ Det3dModel Det3dModel::Load(const std::filesystem::path& model_dir, ComputeDevic
   return model;
 }
 
-void Det3dModel::Save(const std::filesystem::path& model_dir) const {
+void Det3dModel::Save(const std::filesystem::path& model_dir,
+                      const std::string& training_run) const {
   std::filesystem::create_directories(model_dir);
   const std::string hash = internal::SaveWeights(model_dir / kWeightsFile, *impl_->net);
   WriteFileAtomically(model_dir / kConfigFile,
                       Det3dConfigToJson(impl_->config, {.fnv1a64 = hash,
                                                         .input_channels = kPillarFeatures,
-                                                        .parameters = ParameterCount()}));
+                                                        .parameters = ParameterCount(),
+                                                        .training_run = training_run}));
 }
 
 const Det3dConfig& Det3dModel::config() const { return impl_->config; }
@@ -711,13 +714,31 @@ Det3dLossParts Det3dTrainer::Evaluate(const std::vector<Det3dSample>& batch) con
   return impl_->Loss(batch).second;
 }
 
-void Det3dTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const {
-  internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done);
+namespace {
+
+int64_t CountParameters(const torch::nn::Module& module) {
+  int64_t count = 0;
+  for (const auto& p : module.parameters()) count += p.numel();
+  return count;
 }
 
-int Det3dTrainer::LoadCheckpoint(const std::filesystem::path& path) {
+}  // namespace
+
+void Det3dTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
+                                  const std::string& training_run) const {
+  internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done,
+                                   {.config_json = Det3dConfigToJson(impl_->model.config),
+                                    .parameters = CountParameters(*impl_->model.net),
+                                    .training_run = training_run});
+}
+
+int Det3dTrainer::LoadCheckpoint(const std::filesystem::path& path,
+                                 const std::string& training_run) {
   return internal::LoadTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer,
-                                          impl_->model.torch_device);
+                                          impl_->model.torch_device,
+                                          {.config_json = Det3dConfigToJson(impl_->model.config),
+                                           .parameters = CountParameters(*impl_->model.net),
+                                           .training_run = training_run});
 }
 
 }  // namespace stereodet

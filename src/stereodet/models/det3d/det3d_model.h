@@ -82,7 +82,8 @@ class Det3dModel {
   // count), naming both files.
   static Det3dModel Load(const std::filesystem::path& model_dir,
                          ComputeDevice device = ComputeDevice::kCpu);
-  void Save(const std::filesystem::path& model_dir) const;
+  // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord).
+  void Save(const std::filesystem::path& model_dir, const std::string& training_run = {}) const;
 
   const Det3dConfig& config() const;
   const std::vector<LidarBox>& anchors() const;
@@ -119,8 +120,12 @@ class Det3dTrainer {
   ~Det3dTrainer();
   Det3dLossParts Step(const std::vector<Det3dSample>& batch, double learning_rate);
   Det3dLossParts Evaluate(const std::vector<Det3dSample>& batch) const;
-  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;
-  int LoadCheckpoint(const std::filesystem::path& path);
+  // The checkpoint records the config, the parameter count and `training_run`
+  // (checkpoint_internal.h); LoadCheckpoint refuses one of another model or, when `training_run`
+  // is not empty, of another training run, naming the difference, before loading anything.
+  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
+                      const std::string& training_run = {}) const;
+  int LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run = {});
 
  private:
   struct Impl;

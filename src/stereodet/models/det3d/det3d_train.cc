@@ -71,8 +71,11 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
   Det3dConfig config = options.model;
+  std::string recorded_run;  // ties model.json to checkpoint.pt (train_common.h)
   if (resuming) {
-    const Det3dConfig saved = Det3dConfigFromJson(ReadFile(config_path), config_path.string());
+    const std::string saved_text = ReadFile(config_path);
+    recorded_run = ReadWeightsRecord(saved_text, config_path.string()).training_run;
+    const Det3dConfig saved = Det3dConfigFromJson(saved_text, config_path.string());
     STEREODET_CHECK(saved.input == config.input)
         << "--resume: " << config_path.string() << " was trained with --input "
         << PointSourceName(saved.input) << ", not " << PointSourceName(config.input);
@@ -90,7 +93,8 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   Det3dTrainer trainer(model, options.loss, options.weight_decay);
   summary.parameters = model.ParameterCount();
   summary.auxiliary_parameters = model.AuxiliaryParameterCount();
-  const int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path) : 0;
+  const int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path, recorded_run) : 0;
+  const std::string training_run = recorded_run.empty() ? NewTrainingRunId() : recorded_run;
   STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << checkpoint_path.string();
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
@@ -221,8 +225,8 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
     train_seconds += epoch_seconds;
     frames_trained += done;
     steps_trained += steps;
-    model.Save(options.out_dir);
-    trainer.SaveCheckpoint(checkpoint_path, epoch + 1);
+    model.Save(options.out_dir, training_run);
+    trainer.SaveCheckpoint(checkpoint_path, epoch + 1, training_run);
     log += fmt::format(
         "{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6g},{:.3f},{:.1f}\n",
         epoch + 1, steps, done, sum.total / steps, sum.classification / steps, sum.box / steps,

@@ -313,5 +313,56 @@ TEST(Det3dTrainTest, LoadDropsPointsOutsideTheGridAndPillarsDoNotChange) {
   }
 }
 
+// The checkpoint is tied to its training run and its model, as the SSD's is: --resume refuses one
+// copied from another folder, naming the difference, and leaves the folder as it was.
+TEST(Det3dTrainTest, ResumeRefusesACheckpointOfAnotherRunOrModel) {
+  const fs::path root = WriteTinyDataset("det3d_tie_data", 2);
+  auto half_train = [&](const std::string& name, int base_channels) {
+    TrainDet3dOptions options = TinyTraining(root, TempDir(name));
+    options.model.base_channels = base_channels;
+    options.epochs = 2;
+    options.max_epochs_this_run = 1;
+    TrainDet3d(options);
+    options.max_epochs_this_run = 0;
+    options.resume = true;
+    return options;
+  };
+  const TrainDet3dOptions mine = half_train("det3d_tie_mine", 16);
+  const TrainDet3dOptions other_run = half_train("det3d_tie_other_run", 16);
+  const TrainDet3dOptions other_model = half_train("det3d_tie_other_model", 8);
+  EXPECT_NE(ReadFile(mine.out_dir / "model.json").find("\"training_run\": \""), std::string::npos);
+  const fs::path checkpoint = mine.out_dir / "checkpoint.pt";
+  const std::string own = ReadFile(checkpoint), config = ReadFile(mine.out_dir / "model.json");
+
+  fs::copy_file(other_run.out_dir / "checkpoint.pt", checkpoint,
+                fs::copy_options::overwrite_existing);
+  try {
+    TrainDet3d(mine);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("checkpoint.pt is from another training run ("),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(mine.out_dir / "model.json"), config);
+
+  fs::copy_file(other_model.out_dir / "checkpoint.pt", checkpoint,
+                fs::copy_options::overwrite_existing);
+  try {
+    TrainDet3d(mine);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("checkpoint.pt was written for another model: "
+                                         "base_channels: 8 here, 16 in the model"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(ReadFile(mine.out_dir / "model.json"), config);
+
+  // Its own checkpoint resumes.
+  WriteFileAtomically(checkpoint, own);
+  EXPECT_EQ(TrainDet3d(mine).epochs_done, 2);
+}
+
 }  // namespace
 }  // namespace stereodet

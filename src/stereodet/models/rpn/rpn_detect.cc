@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/rpn/rpn_data.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
@@ -30,6 +31,7 @@ void DetectRpnOptions::Check() const {
   STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
   STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+  shard.Check();
   STEREODET_CHECK(ParseComputeDevice(device).has_value())
       << "unknown device '" << device << "' (expected cpu or cuda)";
 }
@@ -49,10 +51,12 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
   const bool geometry = config.input == RpnInput::kRgbd;
 
   const KittiDataset dataset(options.data_root, options.subset);
-  std::vector<std::string> ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
-    ids.resize(options.max_frames);
+  std::vector<std::string> all_ids = dataset.ReadSplit(options.split);
+  if (options.max_frames > 0 && static_cast<int>(all_ids.size()) > options.max_frames) {
+    all_ids.resize(options.max_frames);
   }
+  // A shard: whole batches of the list (detect_shard.h), nothing in the loop below.
+  const std::vector<std::string> ids = ShardFrames(all_ids, options.shard, options.batch_size);
   RequiredFiles required;
   required.image_left = true;
   required.image_right = required.calib = geometry;
@@ -142,6 +146,11 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
     manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
   }
   WriteRunManifest(out.path(), manifest);
+  if (!options.shard.Whole()) {
+    WriteDetectShardRecord(out.path(),
+                           {manifest.tool, options.shard, options.batch_size,
+                            static_cast<int64_t>(all_ids.size()), FrameListHash(all_ids)});
+  }
   out.Commit();
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();

@@ -11,6 +11,7 @@
 
 #include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/util/progress.h"
+#include "stereodet/util/shard.h"
 
 namespace stereodet {
 
@@ -26,6 +27,9 @@ struct DetectRpnOptions {
   int batch_size = 4;
   int threads = 0;  // LibTorch and the per-frame preparation (0 = all cores)
   int max_frames = 0;
+  // Only shard K/N of those frames (after max_frames), in whole batches (detect_shard.h); 1/1 =
+  // all. A shard's folder also holds detect_shard.json, for `detect merge`.
+  Shard shard;
   std::string device = "cpu";
   RpnDetectOptions detect;  // 600 -> 100 proposals, score >= 0.01, class NMS 0.45, <= 100 boxes
   ProgressOptions progress;

@@ -73,8 +73,11 @@ void RpnConfig::Check() const {
       << "pooled_size must be in [1, 16], got " << pooled_size;
   STEREODET_CHECK(sampling_ratio >= 1 && sampling_ratio <= 8)
       << "sampling_ratio must be in [1, 8], got " << sampling_ratio;
-  STEREODET_CHECK(anchors.stride_px == kStride)
-      << "the trunks' features are at stride 16; anchor stride " << anchors.stride_px;
+  STEREODET_CHECK(feature_stride == 8 || feature_stride == 16)
+      << "feature_stride must be 8 or 16, got " << feature_stride;
+  STEREODET_CHECK(anchors.stride_px == feature_stride)
+      << "the anchors' stride (" << anchors.stride_px << ") must be the feature stride ("
+      << feature_stride << ")";
 }
 
 std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weights,
@@ -92,6 +95,7 @@ std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weight
   j["head_channels"] = config.head_channels;
   j["pooled_size"] = config.pooled_size;
   j["sampling_ratio"] = config.sampling_ratio;
+  j["feature_stride"] = config.feature_stride;
   j["anchor_sizes_px"] = config.anchors.sizes_px;
   j["anchor_ratios"] = config.anchors.ratios;
   if (!weights.fnv1a64.empty()) {
@@ -146,6 +150,9 @@ RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) 
       field = name;
       *target = GetInt(j, field, source);
     }
+    field = "feature_stride";  // absent: 16, the only stride before it was recorded
+    config.feature_stride = j.contains(field) ? GetInt(j, field, source) : 16;
+    config.anchors.stride_px = config.feature_stride;
     field = "anchor_sizes_px";
     config.anchors.sizes_px = j.at(field).get<std::vector<double>>();
     field = "anchor_ratios";
@@ -158,6 +165,22 @@ RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) 
   } catch (const std::invalid_argument& e) {
     throw ParseError(source, 0, field, e.what());
   }
+}
+
+StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source) {
+  StereoOptions stereo = ReadStereoRecord(text, source);
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_object() && j.contains("depth_code")) {
+    try {
+      stereo.depth.min_m = j["depth_code"].at("min_m").get<double>();
+      stereo.depth.max_m = j["depth_code"].at("max_m").get<double>();
+      stereo.depth.bits = j["depth_code"].at("bits").get<int>();
+      stereo.depth.Check();
+    } catch (const std::exception& e) {
+      throw ParseError(source, 0, "depth_code", e.what());
+    }
+  }
+  return stereo;
 }
 
 PlanarImage EncodeRpnInput(const cv::Mat& bgr, const cv::Mat& depth_code,
@@ -286,7 +309,7 @@ torch::Tensor ResidualBlockImpl::forward(const torch::Tensor& x) {
   return torch::relu(y + identity);
 }
 
-TrunkImpl::TrunkImpl(int in_channels, int base, int blocks) {
+TrunkImpl::TrunkImpl(int in_channels, int base, int blocks, int last_stride) {
   namespace nn = torch::nn;
   stem = register_module(
       "stem", nn::Conv2d(nn::Conv2dOptions(in_channels, base, 7).stride(2).padding(3).bias(false)));
@@ -296,7 +319,8 @@ TrunkImpl::TrunkImpl(int in_channels, int base, int blocks) {
   for (int stage = 0; stage < 3; ++stage) {
     const int out = base << stage;
     for (int b = 0; b < blocks; ++b) {
-      stages->push_back(ResidualBlock(channels, out, (stage > 0 && b == 0) ? 2 : 1));
+      const int stride = (stage == 1 || (stage == 2 && last_stride == 16)) && b == 0 ? 2 : 1;
+      stages->push_back(ResidualBlock(channels, out, stride));
       channels = out;
     }
   }
@@ -312,9 +336,10 @@ torch::Tensor TrunkImpl::forward(const torch::Tensor& x) {
 RpnNetImpl::RpnNetImpl(const RpnConfig& c) : config(c) {
   namespace nn = torch::nn;
   const int channels = c.FeatureChannels();
-  image = register_module("image", Trunk(3, c.image_width, c.blocks_per_stage));
+  image = register_module("image", Trunk(3, c.image_width, c.blocks_per_stage, c.feature_stride));
   if (c.input == RpnInput::kRgbd) {
-    geometry = register_module("geometry", Trunk(3, c.geometry_width, c.blocks_per_stage));
+    geometry = register_module("geometry",
+                               Trunk(3, c.geometry_width, c.blocks_per_stage, c.feature_stride));
     // Late fusion: the two branches' last stages, concatenated, reduced by a 1x1 convolution.
     fuse = register_module(
         "fuse", nn::Conv2d(nn::Conv2dOptions(channels + 4 * c.geometry_width, channels, 1)));
@@ -454,18 +479,7 @@ RpnModel RpnModel::Load(const std::filesystem::path& model_dir, ComputeDevice de
   const std::string text = ReadFile(config_path);
   const RpnConfig config = RpnConfigFromJson(text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
-  impl->stereo = ReadStereoRecord(text, config_path.string());
-  const nlohmann::json j = nlohmann::json::parse(text);
-  if (j.contains("depth_code")) {
-    try {
-      impl->stereo.depth.min_m = j["depth_code"].at("min_m").get<double>();
-      impl->stereo.depth.max_m = j["depth_code"].at("max_m").get<double>();
-      impl->stereo.depth.bits = j["depth_code"].at("bits").get<int>();
-      impl->stereo.depth.Check();
-    } catch (const std::exception& e) {
-      throw ParseError(config_path.string(), 0, "depth_code", e.what());
-    }
-  }
+  impl->stereo = ReadRpnStereoRecord(text, config_path.string());
   const std::filesystem::path weights_path = model_dir / kWeightsFile;
   const WeightsRecord record = ReadWeightsRecord(text, config_path.string());
   internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
@@ -526,7 +540,7 @@ std::vector<std::vector<ScoredBox>> RpnModel::Detect(const std::vector<PlanarIma
   for (size_t b = 0; b < proposals.size(); ++b) rois[b] = BoxesOf(proposals[b]);
   std::vector<std::vector<ScoredBox>> detections(inputs.size());
   const torch::Tensor pooled =
-      internal::RoiAlign(features, rois, 1.0 / kStride, c.pooled_size, c.sampling_ratio);
+      internal::RoiAlign(features, rois, 1.0 / c.feature_stride, c.pooled_size, c.sampling_ratio);
   if (pooled.size(0) == 0) return detections;
   const auto [logits, box] = impl_->net->Head(pooled);
   const torch::Tensor probabilities =
@@ -553,12 +567,14 @@ int RpnModel::InitFrom(const RpnModel& rgb, bool geometry_too) {
   const RpnConfig& src = rgb.config();
   const RpnConfig& dst = impl_->config;
   STEREODET_CHECK(src.input == RpnInput::kRgb) << "--init-from needs an rgb model";
-  STEREODET_CHECK(src.image_width == dst.image_width &&
-                  src.blocks_per_stage == dst.blocks_per_stage &&
-                  src.head_channels == dst.head_channels && src.pooled_size == dst.pooled_size &&
-                  src.classes == dst.classes && src.anchors.sizes_px == dst.anchors.sizes_px &&
-                  src.anchors.ratios == dst.anchors.ratios)
-      << "--init-from: the rgb model's image width, blocks, head, classes or anchors differ from "
+  STEREODET_CHECK(
+      src.image_width == dst.image_width && src.blocks_per_stage == dst.blocks_per_stage &&
+      src.head_channels == dst.head_channels && src.pooled_size == dst.pooled_size &&
+      src.feature_stride == dst.feature_stride && src.classes == dst.classes &&
+      src.anchors.sizes_px == dst.anchors.sizes_px && src.anchors.ratios == dst.anchors.ratios)
+      << "--init-from: the rgb model's image width, blocks, head, feature stride, classes or "
+         "anchors "
+         "differ from "
          "this model's";
   STEREODET_CHECK(!geometry_too || dst.input != RpnInput::kRgbd ||
                   dst.geometry_width == dst.image_width)
@@ -690,7 +706,7 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
   const int64_t r = static_cast<int64_t>(roi_labels.size());
   if (r > 0) {
     const torch::Tensor pooled =
-        internal::RoiAlign(features, rois, 1.0 / kStride, c.pooled_size, c.sampling_ratio);
+        internal::RoiAlign(features, rois, 1.0 / c.feature_stride, c.pooled_size, c.sampling_ratio);
     const auto [logits, box] = m.net->Head(pooled);
     const torch::Tensor roi_labels_t =
         torch::from_blob(roi_labels.data(), {r}, torch::kInt64).clone().to(device);

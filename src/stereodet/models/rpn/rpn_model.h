@@ -55,11 +55,14 @@ struct RpnConfig {
   int head_channels = 256;   // the box head's fully connected layers
   int pooled_size = 7;       // RoIAlign output, cells per side
   int sampling_ratio = 2;    // RoIAlign samples per cell per side
-  AnchorOptions anchors;     // stride 16
-  void Check() const;        // throws std::invalid_argument
+  // Stride of the features the RPN and RoIAlign use: 16, or 8 (the third stage keeps the second's
+  // resolution: finer cells for KITTI's small objects, at 4x the third stage's and the RPN's cost).
+  int feature_stride = 16;
+  AnchorOptions anchors;  // stride_px must equal feature_stride
+  void Check() const;     // throws std::invalid_argument
   int NumClasses() const { return static_cast<int>(classes.size()); }  // without background
-  int FeatureWidth() const { return input_width / 16; }
-  int FeatureHeight() const { return input_height / 16; }
+  int FeatureWidth() const { return input_width / feature_stride; }
+  int FeatureHeight() const { return input_height / feature_stride; }
   // Channels of the features the RPN and the head see: 4 * image_width (the fusion reduces the
   // concatenated branches to that).
   int FeatureChannels() const { return 4 * image_width; }
@@ -70,6 +73,9 @@ struct RpnConfig {
 std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weights = {},
                             const std::optional<StereoOptions>& stereo = std::nullopt);
 RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source);
+// The stereo settings model.json records (ssd.h's ReadStereoRecord, plus the depth code's range
+// and bits); absent ones read as StereoOptions' defaults. Throws ParseError naming `source`.
+StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source);
 
 // The network input of one frame at the network's size. `bgr` is CV_8UC3 of the network size;
 // `depth_code` and `height_code` CV_16UC1 of the same size (0 = no stereo), ignored for rgb.

@@ -36,9 +36,10 @@ struct ResidualBlockImpl : torch::nn::Module {
 TORCH_MODULE(ResidualBlock);
 
 // ResNet-style trunk to stride 16: 7x7 stride-2 stem + BN + ReLU, 3x3 stride-2 max pool, then
-// stages of `blocks` residual blocks at base, 2 base and 4 base channels (strides 4, 8, 16).
+// stages of `blocks` residual blocks at base, 2 base and 4 base channels (strides 4, 8, 16; with
+// last_stride 8 the third stage keeps stride 8).
 struct TrunkImpl : torch::nn::Module {
-  TrunkImpl(int in_channels, int base, int blocks);
+  TrunkImpl(int in_channels, int base, int blocks, int last_stride = 16);
   torch::Tensor forward(const torch::Tensor& x);
   torch::nn::Conv2d stem{nullptr};
   torch::nn::BatchNorm2d stem_bn{nullptr};
@@ -48,7 +49,7 @@ TORCH_MODULE(Trunk);
 
 struct RpnNetImpl : torch::nn::Module {
   explicit RpnNetImpl(const RpnConfig& config);
-  // [B, 3 or 6, H, W] -> the (fused) stride-16 features [B, FeatureChannels, H / 16, W / 16].
+  // [B, 3 or 6, H, W] -> the (fused) features [B, FeatureChannels, H / stride, W / stride].
   torch::Tensor Features(const torch::Tensor& x);
   // Objectness logits [B, N] and deltas [B, N, 4], N anchors in GenerateRpnAnchors' order.
   std::pair<torch::Tensor, torch::Tensor> Rpn(const torch::Tensor& features);

@@ -191,6 +191,26 @@ TEST(RpnNetTest, OutputLayoutAndBranchParameterCounts) {
   EXPECT_EQ(count(*rgbd->fuse), (16 + 16) * 16 + 16);
 }
 
+TEST(RpnNetTest, FeatureStride8KeepsTheSecondStagesResolution) {
+  RpnConfig config = TinyConfig(RpnInput::kRgbd);
+  config.feature_stride = 8;
+  config.anchors.stride_px = 8;
+  RpnNet net(config), coarse(TinyConfig(RpnInput::kRgbd));
+  net->eval();
+  const torch::Tensor features = net->Features(torch::rand({1, 6, 32, 64}));
+  EXPECT_EQ(features.sizes(), (torch::IntArrayRef{1, 16, 4, 8}));
+  EXPECT_EQ(net->Rpn(features).first.size(1), 4 * 8 * 6);
+  int64_t a = 0, b = 0;  // the same weights' shapes: only a stride changes
+  for (const auto& p : net->parameters()) a += p.numel();
+  for (const auto& p : coarse->parameters()) b += p.numel();
+  EXPECT_EQ(a, b);
+  const RpnModel model(config, 1);
+  EXPECT_EQ(model.anchors().size(), 4u * 8u * 6u);
+  EXPECT_NEAR(model.anchors()[6].left + model.anchors()[6].right, 2 * 12.0, 1e-9);  // cell 1: x 12
+  config.anchors.stride_px = 16;
+  EXPECT_THROW(config.Check(), std::invalid_argument);
+}
+
 TEST(RpnNetTest, MirroredRgbdModelStartsAsTheRgbModel) {
   // Train-free: a random RGB model, mirrored into an RGB-D model, detects the same boxes whatever
   // the geometry channels hold (the fusion starts as [identity | 0]).

@@ -69,12 +69,18 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
   RpnConfig config = options.model;
+  RpnDataOptions data_options = options.data;
   if (resuming) {
-    const RpnConfig saved = RpnConfigFromJson(ReadFile(config_path), config_path.string());
+    const std::string text = ReadFile(config_path);
+    const RpnConfig saved = RpnConfigFromJson(text, config_path.string());
     STEREODET_CHECK(saved.input == config.input)
         << "--resume: " << config_path.string() << " was trained with --input "
         << RpnInputName(saved.input) << ", not " << RpnInputName(config.input);
     config = saved;
+    // The geometry the model was trained on so far, whatever the flags say now.
+    if (config.input == RpnInput::kRgbd) {
+      data_options.stereo = ReadRpnStereoRecord(text, config_path.string());
+    }
   }
 
   const KittiDataset dataset(options.data_root, "training");
@@ -85,7 +91,7 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
 
   RpnModel model(config, options.seed, device);
-  model.set_stereo(options.data.stereo);
+  model.set_stereo(data_options.stereo);
   if (!resuming && !options.init_from.empty()) {
     const RpnModel rgb = RpnModel::Load(options.init_from, device);
     summary.init_tensors = model.InitFrom(rgb, options.init_geometry);
@@ -103,7 +109,7 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   }
 
   const Timer stereo_timer;
-  const RpnTrainingData data(dataset, ids, config, options.data, options.progress);
+  const RpnTrainingData data(dataset, ids, config, data_options, options.progress);
   summary.stereo_seconds = stereo_timer.ElapsedSeconds();
   summary.frames = data.size();
   summary.objects = data.NumObjects();
