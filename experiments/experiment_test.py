@@ -255,6 +255,13 @@ for row in vrows:
 check(seen == {"confirmed", "refuted", "inconclusive", "not measured"},
       f"the miniature's claims cover every verdict: {sorted(seen)}")
 
+# rpn-rgbd is initialised from rpn-rgb of its seed ({models}, {seed}): its training depends on it.
+for seed in (1, 2):
+    marker = json.loads((out / "steps" / f"train-rpn-rgbd-seed{seed}.json").read_text())
+    check(f"train-rpn-rgb-seed{seed}" in marker["deps"] and
+          str(out / "models" / f"rpn-rgb-seed{seed}") in marker["command"],
+          f"train-rpn-rgbd-seed{seed}: --init-from its rgb model, a dependency: {marker}")
+
 # Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
 stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
 second = run()

@@ -128,8 +128,9 @@ def load_config(path, train=False):
         if config["train"] and m.get("seeds"):
             groups[m["name"]] = []
             for seed in m["seeds"]:
+                flags = [f.replace("{seed}", str(seed)) for f in m["train"]["flags"]]
                 e = dict(m, name=f"{m['name']}-seed{seed}", seed=seed,
-                         train=dict(m["train"], flags=m["train"]["flags"] + ["--seed", str(seed)]))
+                         train=dict(m["train"], flags=flags + ["--seed", str(seed)]))
                 groups[m["name"]].append(e["name"])
                 expanded.append(e)
         else:
@@ -288,6 +289,16 @@ class Pipeline:
             elif not self.trains(m) and not (self.model_dir(m) / "model.pt").is_file():
                 self.missing[m["name"]] = f"no checkpoint ({m['model']}/model.pt)"
 
+    def train_flags(self, model):
+        """The train block's flags, "{models}" standing for OUT/models (--init-from a model
+        trained before it), and the training steps those flags name."""
+        flags, deps = [], []
+        for f in model["train"]["flags"]:
+            if "{models}/" in f:
+                deps.append("train-" + f.split("{models}/", 1)[1].split("/")[0])
+            flags.append(f.replace("{models}", str(self.out / "models")))
+        return flags, deps
+
     def run_train(self, model):
         cmd = [self.bin, "train", model["family"], "--data", self.dataset_root(model["data"]),
                "--split", self.config["train_split"], "--input", model["train"]["input"],
@@ -295,8 +306,9 @@ class Pipeline:
                "--quiet"]
         if model["stereo_points"]:
             cmd += ["--points", self.points_dir(model["data"])]
-        self.step(f"train-{model['name']}", self.model_dir(model) / "model.pt",
-                  cmd + model["train"]["flags"], deps=self.data_deps(model))
+        flags, deps = self.train_flags(model)
+        self.step(f"train-{model['name']}", self.model_dir(model) / "model.pt", cmd + flags,
+                  deps=self.data_deps(model) + deps)
 
     def blurs(self, model):
         # The 3D detector has no network image to blur: sharp only.
