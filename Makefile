@@ -6,7 +6,7 @@ CTEST_FLAGS ?=
 DEMO_DIR ?= $(BUILD_DIR)/demo
 SYNTH_DIR ?= data/synth
 
-.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results det3d-models
+.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results det3d-models experiment
 
 all: build
 
@@ -54,6 +54,18 @@ det3d-models: deps
 ssd-results: deps
 	$(MAKE) build
 	./scripts/ssd-results.sh $(BUILD_DIR) $(SYNTH_DIR) models results/ssd
+
+# The paper's Table 1 (docs/experiment.md): data, stereo points, detection with every model of
+# $(EXPERIMENT_CONFIG) (absent checkpoints are "missing" rows), sharp and blurred, both matchers,
+# bootstrap, paired compares; writes $(EXPERIMENT_DIR)/table1.md and docs/RESULTS.md's generated
+# section. Resumes where it stopped. EXPERIMENT_FLAGS=--train retrains (3 seeds for the SSDs).
+EXPERIMENT_CONFIG ?= experiments/table1.json
+EXPERIMENT_DIR ?= results/experiment
+EXPERIMENT_FLAGS ?=
+experiment: deps
+	$(MAKE) build
+	/usr/bin/python3 scripts/experiment.py --config $(EXPERIMENT_CONFIG) --out $(EXPERIMENT_DIR) \
+	  --bin $(BUILD_DIR)/bin --update-docs docs/RESULTS.md $(EXPERIMENT_FLAGS)
 
 bench: deps
 	$(MAKE) build

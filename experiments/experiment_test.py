@@ -1,0 +1,330 @@
+#!/usr/bin/env python3
+"""ctest experiment.miniature: scripts/experiment.py end to end on experiments/miniature.json (4
+synthetic frames with LiDAR, 2 of them val: the committed SSDs, RPN models trained for one step
+with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
+
+- every number of the generated table1.md equals the one in its results.json / bootstrap.csv
+  (read here independently of the generator), the paper's column equals paper_figures.csv, and the
+  absent model's rows and pair are 'missing' rows;
+- the training-variance rows are the mean and standard deviation over the seeds' results.json;
+- each claim of miniature_claims.csv gets the verdict its bootstrap.csv interval gives (one of
+  each: confirmed, refuted, inconclusive, not measured for a missing model and for a non-pair);
+- a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
+  exactly the steps downstream of it (its evaluations and compares);
+- a checkpoint replaced under the same path reruns its detections and their evaluations;
+- --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
+- a config error names the file and the field.
+
+Usage: experiment_test.py REPO_ROOT BIN_DIR WORK_DIR
+"""
+
+import csv
+import json
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+
+repo, bin_dir, work = (pathlib.Path(a).resolve() for a in sys.argv[1:4])
+script = repo / "scripts" / "experiment.py"
+config_path = repo / "experiments" / "miniature.json"
+out = work / "out"
+failures = []
+
+
+def check(condition, message):
+    if not condition:
+        failures.append(message)
+        print(f"FAIL: {message}")
+
+
+def run(*extra, expect=0):
+    p = subprocess.run([sys.executable, str(script), "--config", str(config_path), "--out",
+                        str(out), "--bin", str(bin_dir), *extra], capture_output=True, text=True)
+    if p.returncode != expect:
+        print(p.stdout, p.stderr)
+        raise SystemExit(f"experiment.py exited {p.returncode}, expected {expect}")
+    return p
+
+
+METRIC = {"ssd": "2d", "rpn": "2d", "det3d": "3d"}
+
+
+def cells(results_json, cls, metric="2d"):
+    with open(results_json) as f:
+        for r in json.load(f)["results"]:
+            if r["class"] == cls and r["difficulty"] == "Moderate" and r["metric"] == metric:
+                return r
+    return None
+
+
+def with_interval(cell, key, value, scale):
+    b = cell["bootstrap"][key]
+    text = f"{value * scale:.3f}" if value is not None else "n/a"
+    if b["lower"] is not None and b["upper"] is not None:
+        text += f" [{b['lower'] * scale:.3f}, {b['upper'] * scale:.3f}]"
+    return text
+
+
+def parse_tables(text):
+    """{(class, 'table'|'pairs'): [row cells]} from the generated Markdown."""
+    tables, cls, kind = {}, None, None
+    for line in text.splitlines():
+        m = re.match(r"### Table 1, (\w+)", line)
+        if m:
+            cls, kind = m.group(1), "table"
+        elif line.startswith("Paired differences"):
+            kind = "pairs"
+        elif line.startswith("Brier scores by their terms"):
+            kind = "brier"
+        elif line.startswith("Training variance"):
+            kind = "variance"
+        elif line.startswith("### Verdicts"):
+            cls, kind = "all", "verdicts"
+        elif line.startswith("| ") and cls and not line.startswith("| model |") \
+                and not line.startswith("| A - B |") and not line.startswith("| claim |"):
+            tables.setdefault((cls, kind), []).append([c.strip() for c in line.strip("|").split("|")])
+    return tables
+
+
+shutil.rmtree(work, ignore_errors=True)
+work.mkdir(parents=True)
+config = json.loads(config_path.read_text())
+# The models and pairs as the pipeline expands them: one per training seed (NAME-seedS).
+models, groups = [], {}
+for model in config["models"]:
+    seeds = model.get("seeds", [])
+    groups[model["name"]] = [f"{model['name']}-seed{x}" for x in seeds] or [model["name"]]
+    models += [dict(model, name=n, group=model["name"]) for n in groups[model["name"]]]
+config["models"] = models
+config["pairs"] = [[x, y] for a, b in config["pairs"] for x, y in zip(groups[a], groups[b])]
+first = run()
+m = re.search(r"experiment: (\d+) steps run, (\d+) skipped, ([0-9.]+) s", first.stdout)
+check(m is not None, "first run prints its summary")
+steps = int(m.group(1)) if m else 0
+# synth, stereo points (val, train), 6 trainings (2 x 2 RPN seeds, 2 3D), detect: 6 image models
+# x 2 blurs + 2 3D models, 2 evals each, compares: 3 image pairs (the SSDs, 2 RPN seed pairs) x 2
+# blurs x 2 matchers + the 3D pair x 2 matchers = 1 + 2 + 6 + 14 + 28 + 14
+check(steps == 65 and m.group(2) == "0", f"first run: 65 steps, none skipped (got {m.groups()})")
+table_text = (out / "table1.md").read_text()
+tables = parse_tables(table_text)
+
+paper = {}
+with open(repo / "experiments" / "paper_figures.csv") as f:
+    for r in csv.DictReader(line for line in f if not line.startswith("#")):
+        paper[(r["model"], r["blur_sigma_px"], r["class"], r["measure"])] = float(r["value"])
+
+checked = 0
+for cls in config["classes"]:
+    rows = {(r[0], r[1]): r for r in tables.get((cls, "table"), [])}
+    for model in config["models"]:
+        blurs = ["0"] if model["family"] == "det3d" else ["0", "5"]
+        for blur in blurs:
+            row = rows.get((model["name"], blur))
+            check(row is not None, f"{cls}: a row for {model['name']} blur {blur}")
+            if row is None:
+                continue
+            for col, measure in ((8, "ap"), (9, "brier_labels")):
+                want = paper.get((model["group"], blur, cls, measure))
+                check(row[col] == (f"{want:.3f}" if want is not None else "n/a"),
+                      f"{cls} {model['name']} blur {blur}: paper {measure} {row[col]!r}")
+            if "train" not in model and not (repo / model["model"] / "model.pt").exists():
+                check(row[3].startswith("missing: no checkpoint"),
+                      f"{cls} {model['name']}: a missing row, got {row[3]!r}")
+                continue
+            run_dir = out / "runs" / model["name"] / f"blur{blur}"
+            metric = METRIC[model["family"]]
+            check(row[2] == metric, f"{cls} {model['name']}: overlap {row[2]!r}")
+            k = cells(run_dir / "eval-kitti" / "results.json", cls, metric)
+            o = cells(run_dir / "eval-optimal" / "results.json", cls, metric)
+            if not k.get("evaluated", True):
+                check(row[3] == "not evaluated (no detection of the class)",
+                      f"{cls} {model['name']}: a not-evaluated row, got {row[3]!r}")
+                checked += 1
+                continue
+            want = [str(k["num_valid_labels"]), with_interval(k, "ap_r40", k["ap_r40"], 0.01),
+                    with_interval(k, "ap_r11", k["ap_r11"], 0.01),
+                    with_interval(o, "ap_r40", o["ap_r40"], 0.01),
+                    with_interval(o, "brier_labels", o["brier"]["over_labels"], 1.0)]
+            check(row[3:8] == want, f"{cls} {model['name']} blur {blur}: {row[3:8]} != {want}")
+            brier = {(r[0], r[1]): r for r in tables.get((cls, "brier"), [])}.get(
+                (model["name"], blur))
+            b = o["brier"]
+            want = [with_interval(o, "brier_labels", b["over_labels"], 1.0),
+                    with_interval(o, "brier_detections", b["over_detections"], 1.0),
+                    with_interval(o, "brier_all", b["over_all"], 1.0)]
+            check(brier is not None and brier[2:5] == want,
+                  f"{cls} {model['name']} blur {blur}: Brier terms {brier} != {want}")
+            checked += 1
+    pairs = {(r[0], r[1], r[2]): r for r in tables.get((cls, "pairs"), [])}
+    by_name = {m["name"]: m for m in config["models"]}
+    for a_name, b_name in [p for p in config["pairs"] if "ssd-absent" not in p]:
+        family = by_name[a_name]["family"]
+        metric = METRIC[family]
+        for blur, matcher in [(b, mt) for b in (["0"] if family == "det3d" else ["0", "5"])
+                              for mt in ("kitti", "optimal")]:
+            row = pairs.get((f"{a_name} - {b_name}", blur, matcher))
+            check(row is not None, f"{cls}: a paired row {a_name} - {b_name}, blur {blur}, {matcher}")
+            if row is None:
+                continue
+            path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{blur}" / matcher
+            with open(path / "bootstrap.csv") as f:
+                got = {r["measure"]: r for r in csv.DictReader(f) if r["class"] == cls
+                       and r["metric"] == metric and r["difficulty"] == "Moderate"}
+            for col, measure, scale in ((3, "ap_r40", 0.01), (4, "brier_labels", 1.0)):
+                r = got.get(measure)
+                if r is None or r["a_minus_b"] == "":
+                    check(row[col] == "n/a", f"{cls} pair {measure}: n/a, got {row[col]!r}")
+                    continue
+                d, lo, hi = (float(r[c]) * scale for c in
+                             ("a_minus_b", "a_minus_b_lower", "a_minus_b_upper"))
+                want = f"{d:+.3f} [{lo:+.3f}, {hi:+.3f}]" + (" *" if lo > 0 or hi < 0 else "")
+                check(row[col] == want, f"{cls} pair blur {blur} {matcher} {measure}: "
+                      f"{row[col]!r} != {want!r}")
+                # The paired difference of the estimates is the difference of the two tables'.
+                a = cells(out / "runs" / a_name / f"blur{blur}" / f"eval-{matcher}" /
+                          "results.json", cls, metric)
+                b = cells(out / "runs" / b_name / f"blur{blur}" / f"eval-{matcher}" /
+                          "results.json", cls, metric)
+                va = a["ap_r40"] if measure == "ap_r40" else a["brier"]["over_labels"]
+                vb = b["ap_r40"] if measure == "ap_r40" else b["brier"]["over_labels"]
+                check(abs(float(r["a_minus_b"]) - (va - vb)) < 1e-9,
+                      f"{cls} pair {measure}: bootstrap.csv's A - B is the results' difference")
+            checked += 1
+    missing_pair = pairs.get(("ssd-rgb - ssd-absent", "", ""))
+    check(missing_pair is not None and missing_pair[3] == "missing: ssd-absent",
+          f"{cls}: the pair with the absent model is a missing row")
+    # Training variance over the RPN seeds.
+    variance = {(r[0], r[1]): r for r in tables.get((cls, "variance"), [])}
+    for group in ("rpn-rgb", "rpn-rgbd"):
+        for blur in ("0", "5"):
+            row = variance.get((group, blur))
+            ap, brier = [], []
+            for name in groups[group]:
+                run_dir = out / "runs" / name / f"blur{blur}"
+                ap.append(cells(run_dir / "eval-kitti" / "results.json", cls)["ap_r40"] / 100)
+                brier.append(cells(run_dir / "eval-optimal" / "results.json",
+                                   cls)["brier"]["over_labels"])
+
+            def mean_sd(v):  # undefined values (no labels: no Brier over labels) left out
+                v = [x for x in v if x is not None]
+                if not v:
+                    return "n/a"
+                mean = sum(v) / len(v)
+                if len(v) == 1:
+                    return f"{mean:.3f}"
+                return f"{mean:.3f} ± {(sum((x - mean) ** 2 for x in v) / (len(v) - 1)) ** 0.5:.3f}"
+            want = [group, blur, "2 of 2", mean_sd(ap), mean_sd(brier)]
+            check(row == want, f"{cls} training variance {group} blur {blur}: {row} != {want}")
+            checked += 1
+# Per class: 14 model rows (6 image models x 2 blurs + 2 3D models), 14 paired rows, 4 variance.
+check(checked == 3 * (14 + 14 + 4), f"checked 96 rows against their files (got {checked})")
+
+# Verdicts, recomputed from the compares' bootstrap.csv.
+with open(repo / "experiments" / "miniature_claims.csv") as f:
+    claims = {c["claim"]: c for c in csv.DictReader(line for line in f if not line.startswith("#"))}
+vrows = tables.get(("all", "verdicts"), [])
+# One row per claim, the RPN claim once per seed pair.
+check(sorted(r[0] for r in vrows) == sorted(list(claims) + ["RPN RGB-D has the higher AP_R40 (Car)"]),
+      f"a verdict row per claim and seed pair: {[r[0] for r in vrows]}")
+seen = set()
+for row in vrows:
+    c = claims[row[0]]
+    pair_text, blur, cls, matcher, measure = (x.strip() for x in row[1].split(","))
+    a_name, b_name = pair_text.split(" - ")
+    check((a_name == c["a"] or a_name in groups[c["a"]]) and blur == f"blur {c['blur_sigma_px']}",
+          f"verdict row {row[1]!r} is of claim {c['id']}")
+    if [a_name, b_name] not in config["pairs"]:
+        want = "not measured (the pair is not in this config)"
+    elif b_name == "ssd-absent":
+        want = "not measured (missing: ssd-absent)"
+    else:
+        path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
+        with open(path / "bootstrap.csv") as f:
+            r = next(r for r in csv.DictReader(f) if r["class"] == c["class"] and r["metric"] == "2d"
+                     and r["difficulty"] == "Moderate" and r["measure"] == c["measure"])
+        lo, hi = float(r["a_minus_b_lower"]), float(r["a_minus_b_upper"])
+        if lo <= 0 <= hi:
+            want = "inconclusive"
+        else:
+            want = "confirmed" if (lo > 0) == (c["expect"] == ">0") else "refuted"
+    check(row[3] == want, f"verdict of {c['id']} ({row[1]}): {row[3]!r} != {want!r}")
+    seen.add(row[3].split(" (")[0])
+check(seen == {"confirmed", "refuted", "inconclusive", "not measured"},
+      f"the miniature's claims cover every verdict: {sorted(seen)}")
+
+# rpn-rgbd is initialised from rpn-rgb of its seed ({models}, {seed}): its training depends on it.
+for seed in (1, 2):
+    marker = json.loads((out / "steps" / f"train-rpn-rgbd-seed{seed}.json").read_text())
+    check(f"train-rpn-rgb-seed{seed}" in marker["deps"] and
+          str(out / "models" / f"rpn-rgb-seed{seed}") in marker["command"],
+          f"train-rpn-rgbd-seed{seed}: --init-from its rgb model, a dependency: {marker}")
+
+# Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
+stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
+second = run()
+check(f"0 steps run, {steps} skipped" in second.stdout, "second run skips every step")
+check((out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
+      == stamp, "second run leaves results.json alone")
+check((out / "table1.md").read_text() == table_text, "second run writes the same table")
+(out / "steps" / "detect-ssd-rgbh-fixed-blur5.json").unlink()
+third = run()
+rerun = sorted(re.findall(r"^==> ([\w.-]+):", third.stdout, re.M))
+check(rerun == ["compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti",
+                "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal", "detect-ssd-rgbh-fixed-blur5",
+                "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal"],
+      f"a lost detection marker reruns it and what depends on it, only: {rerun}")
+check((out / "table1.md").read_text() == table_text, "the rerun step gives the same table")
+
+# A checkpoint replaced under the same path reruns its detections (and what depends on them).
+ckpt_cfg = json.loads(config_path.read_text())
+ckpt = work / "ssd-copy"
+shutil.copytree(repo / "models" / "ssd-rgb", ckpt)
+ckpt_cfg["models"] = [dict(ckpt_cfg["models"][0], model=str(ckpt))]
+ckpt_cfg["pairs"], ckpt_cfg["claims"], ckpt_cfg["blur_sigmas_px"] = [], "", [0]
+ckpt_path = work / "checkpoint.json"
+ckpt_path.write_text(json.dumps(ckpt_cfg))
+
+
+def run_ckpt():
+    p = subprocess.run([sys.executable, str(script), "--config", str(ckpt_path), "--out",
+                        str(work / "ckpt-out"), "--bin", str(bin_dir)], capture_output=True, text=True)
+    check(p.returncode == 0, f"checkpoint run: {p.stderr.strip()}")
+    return sorted(re.findall(r"^==> ([\w.-]+):", p.stdout, re.M))
+
+
+run_ckpt()
+check(run_ckpt() == [], "the checkpoint run skips everything the second time")
+os.utime(ckpt / "model.pt", ns=(0, 12345))
+check(run_ckpt() == ["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal"],
+      "a replaced checkpoint reruns its detection and evaluations")
+
+# --table-only runs nothing; --update-docs replaces the marked section only.
+doc = work / "RESULTS.md"
+original = (repo / "docs" / "RESULTS.md").read_text()
+doc.write_text(original)
+run("--table-only", "--update-docs", str(doc))
+new = doc.read_text()
+begin = "<!-- BEGIN experiment table1: generated by scripts/experiment.py, do not edit -->"
+end = "<!-- END experiment table1 -->"
+check(new.split(begin)[0] == original.split(begin)[0] and
+      new.split(end)[1] == original.split(end)[1], "--update-docs keeps the rest of the file")
+check(table_text in new.split(begin)[1].split(end)[0], "--update-docs puts the table between")
+
+# A config error names the file and the field.
+bad = json.loads(config_path.read_text())
+bad["models"][1]["family"] = "yolo"
+bad_path = work / "bad.json"
+bad_path.write_text(json.dumps(bad))
+p = subprocess.run([sys.executable, str(script), "--config", str(bad_path), "--out", str(out),
+                    "--bin", str(bin_dir)], capture_output=True, text=True)
+check(p.returncode == 1 and f"{bad_path}: models[1].family: one of ssd, rpn, det3d, got 'yolo'"
+      in p.stderr, f"config error names the field: {p.stderr.strip()!r}")
+
+if failures:
+    raise SystemExit(f"experiment.miniature: {len(failures)} failure(s)")
+shutil.rmtree(work, ignore_errors=True)
+print(f"experiment.miniature: {steps} steps in {m.group(3)} s, {checked} rows match their files, "
+      f"{len(vrows)} verdicts, resumable, docs section replaced")
