@@ -86,6 +86,43 @@ void AddTrainingFlags(CLI::App* ts, TrainOptions& t) {
       ->capture_default_str();
 }
 
+// The flags every `detect` command shares, bound to the fields of the same names in each family's
+// options. Two groups, so that each command's own flags keep their place in its --help. This one:
+// the model, the frames and the output folder (and det3d's --points, after --data, when
+// `points_dir` is given).
+template <typename DetectOptions>
+void AddDetectInputFlags(CLI::App* ds, DetectOptions& d,
+                         std::filesystem::path* points_dir = nullptr) {
+  ds->add_option("--model", d.model_dir, "model folder")->required();
+  ds->add_option("--data", d.data_root, "dataset root")->required();
+  if (points_dir != nullptr) {
+    ds->add_option("--points", *points_dir,
+                   "stereo models: the folder `stereodet stereo --encode points` wrote");
+  }
+  ds->add_option("--subset", d.subset, "training or testing")
+      ->check(CLI::IsMember({"training", "testing"}))
+      ->capture_default_str();
+  ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
+      ->capture_default_str();
+  ds->add_option("--out", d.out_dir,
+                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
+      ->required();
+}
+
+// The other group: batch size, threads, device and frame limit.
+template <typename DetectOptions>
+void AddDetectRunFlags(CLI::App* ds, DetectOptions& d) {
+  ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
+  ds->add_option("--device", d.device, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->capture_default_str();
+  ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
+      ->capture_default_str();
+}
+
 void RunTrain(TrainArgs& a) {
   TrainSsdOptions& options = a.options;
   const auto encoding = ParseInputEncoding(a.input);
@@ -239,32 +276,13 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
   auto dargs = std::make_shared<DetectDet3dArgs>();
   DetectDet3dOptions& d = dargs->options;
   CLI::App* ds = detect->add_subcommand("det3d", "run a model from `stereodet train det3d`");
-  ds->add_option("--model", d.model_dir, "model folder")->required();
-  ds->add_option("--data", d.data_root, "dataset root")->required();
-  ds->add_option("--points", d.points_dir,
-                 "stereo models: the folder `stereodet stereo --encode points` wrote");
-  ds->add_option("--subset", d.subset, "training or testing")
-      ->check(CLI::IsMember({"training", "testing"}))
-      ->capture_default_str();
-  ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
-      ->capture_default_str();
-  ds->add_option("--out", d.out_dir,
-                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
-      ->required();
+  AddDetectInputFlags(ds, d, &d.points_dir);
   ds->add_option("--score-threshold", d.decode.score_threshold, "drop detections scoring below")
       ->capture_default_str();
   ds->add_option("--max-distance", d.filter.stereo_max_distance_m,
                  "stereo: drop points farther than this, m (0 = keep all)")
       ->capture_default_str();
-  ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
-  ds->add_option("--device", d.device, "cpu or cuda")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
-      ->capture_default_str();
-  ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
-      ->capture_default_str();
+  AddDetectRunFlags(ds, d);
   AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetectDet3d(*dargs); });
@@ -396,16 +414,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   auto dargs = std::make_shared<DetectRpnArgs>();
   DetectRpnOptions& d = dargs->options;
   CLI::App* ds = detect->add_subcommand("rpn", "run a model from `stereodet train rpn`");
-  ds->add_option("--model", d.model_dir, "model folder")->required();
-  ds->add_option("--data", d.data_root, "dataset root")->required();
-  ds->add_option("--subset", d.subset, "training or testing")
-      ->check(CLI::IsMember({"training", "testing"}))
-      ->capture_default_str();
-  ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
-      ->capture_default_str();
-  ds->add_option("--out", d.out_dir,
-                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
-      ->required();
+  AddDetectInputFlags(ds, d);
   ds->add_option("--blur-sigma", d.blur_sigma_px,
                  "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
       ->check(CLI::NonNegativeNumber)
@@ -416,15 +425,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   ds->add_option("--proposals", d.detect.proposals.post_nms_top_n, "proposals per image after NMS")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
-  ds->add_option("--device", d.device, "cpu or cuda")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
-      ->capture_default_str();
-  ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
-      ->capture_default_str();
+  AddDetectRunFlags(ds, d);
   AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
   ds->callback([dargs] { RunDetectRpn(*dargs); });
@@ -468,31 +469,14 @@ void AddModelsCommand(CLI::App& app) {
   auto dargs = std::make_shared<DetectArgs>();
   DetectSsdOptions& d = dargs->options;
   CLI::App* ds = detect->add_subcommand("ssd", "run a model from `stereodet train ssd`");
-  ds->add_option("--model", d.model_dir, "model folder")->required();
-  ds->add_option("--data", d.data_root, "dataset root")->required();
-  ds->add_option("--subset", d.subset, "training or testing")
-      ->check(CLI::IsMember({"training", "testing"}))
-      ->capture_default_str();
-  ds->add_option("--split", d.split, "split name in ImageSets/ or a split file")
-      ->capture_default_str();
-  ds->add_option("--out", d.out_dir,
-                 "folder for ID.txt detection files and run.json (one run: replaced whole)")
-      ->required();
+  AddDetectInputFlags(ds, d);
   ds->add_option("--blur-sigma", d.blur_sigma_px,
                  "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   ds->add_option("--score-threshold", d.decode.score_threshold, "drop detections scoring below")
       ->capture_default_str();
-  ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  ds->add_option("--threads", d.threads, "threads (0 = all cores)")->capture_default_str();
-  ds->add_option("--device", d.device, "cpu or cuda")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
-      ->capture_default_str();
-  ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
-      ->capture_default_str();
+  AddDetectRunFlags(ds, d);
   ds->add_flag("!--no-pipeline", d.pipeline,
                "prepare each batch (reading, stereo) only after the network's previous one "
                "(default: the next batch is prepared while the network runs; same detections)");

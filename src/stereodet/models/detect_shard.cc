@@ -126,6 +126,22 @@ DetectShardRecord ReadDetectShardRecord(const fs::path& dir) {
   return record;
 }
 
+void CommitDetectionFolder(StagedFolder& out, RunManifest manifest,
+                           const std::vector<std::string>& ids,
+                           const std::vector<std::string>& all_ids, const Shard& shard,
+                           int batch_size) {
+  for (const std::string& id : ids) {
+    manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
+  }
+  WriteRunManifest(out.path(), manifest);
+  if (!shard.Whole()) {
+    WriteDetectShardRecord(out.path(),
+                           {manifest.tool, shard, batch_size, static_cast<int64_t>(all_ids.size()),
+                            FrameListHash(all_ids)});
+  }
+  out.Commit();
+}
+
 void MergeDetectionsOptions::Check() const {
   STEREODET_CHECK(!shards.empty()) << "detect merge: no shard folder given";
   STEREODET_CHECK(!out_dir.empty()) << "detect merge: --out is required";

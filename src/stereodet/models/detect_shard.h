@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/run_manifest.h"
 #include "stereodet/util/shard.h"
 
 namespace stereodet {
@@ -33,7 +35,7 @@ namespace stereodet {
 inline constexpr char kDetectShardFile[] = "detect_shard.json";
 
 struct DetectShardRecord {
-  std::string tool;         // the run.json tool: "detect ssd" or "detect det3d"
+  std::string tool;         // the run.json tool: "detect ssd", "detect det3d" or "detect rpn"
   Shard shard;              // K/N
   int batch_size = 1;       // frames per forward pass (the shard's range is in whole batches)
   int64_t list_frames = 0;  // frames of the whole list (after --max-frames), all shards together
@@ -55,6 +57,15 @@ void WriteDetectShardRecord(const std::filesystem::path& dir, const DetectShardR
 // Reads it back. Throws std::runtime_error naming the folder when the file is missing ("not a
 // folder of `detect --shard`"), ParseError naming the file and field when it is not a record.
 DetectShardRecord ReadDetectShardRecord(const std::filesystem::path& dir);
+
+// Finishes the folder of a detection run or of one of its shards (`detect ssd|det3d|rpn`): adds
+// each of `ids` (the frames this run or shard detected) with the hash of out/ID.txt to
+// manifest.frames, writes run.json, the shard record when `shard` is not whole (its tool that of
+// `manifest`, its frame list `all_ids`, before ShardFrames) and commits `out`.
+void CommitDetectionFolder(StagedFolder& out, RunManifest manifest,
+                           const std::vector<std::string>& ids,
+                           const std::vector<std::string>& all_ids, const Shard& shard,
+                           int batch_size);
 
 struct MergeDetectionsOptions {
   std::vector<std::filesystem::path> shards;  // the N shard folders, in any order

@@ -7,6 +7,7 @@
 #include <functional>
 #include <future>
 #include <opencv2/imgcodecs.hpp>
+#include <utility>
 
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
@@ -265,16 +266,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
       options.decode.nms.max_detections, options.max_frames,
       // The stereo settings the heights were made with (RGB-H only): the model's, or the flags'.
       height ? ", \"stereo\": " + StereoSettingsJson(stereo) : std::string());
-  for (const std::string& id : ids) {
-    manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
-  }
-  WriteRunManifest(out.path(), manifest);
-  if (!options.shard.Whole()) {
-    WriteDetectShardRecord(out.path(),
-                           {manifest.tool, options.shard, options.batch_size,
-                            static_cast<int64_t>(all_ids.size()), FrameListHash(all_ids)});
-  }
-  out.Commit();
+  CommitDetectionFolder(out, std::move(manifest), ids, all_ids, options.shard, options.batch_size);
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();
   summary.images_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;

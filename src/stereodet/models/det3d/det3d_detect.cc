@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <utility>
+
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/util/atomic_file.h"
@@ -103,16 +105,7 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
       options.decode.score_threshold, options.decode.nms.iou_threshold,
       options.decode.nms.max_detections, options.max_frames, options.device,
       options.filter.stereo_max_distance_m, options.filter.camera_fov_only);
-  for (const std::string& id : ids) {
-    manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
-  }
-  WriteRunManifest(out.path(), manifest);
-  if (!options.shard.Whole()) {
-    WriteDetectShardRecord(out.path(),
-                           {manifest.tool, options.shard, options.batch_size,
-                            static_cast<int64_t>(all_ids.size()), FrameListHash(all_ids)});
-  }
-  out.Commit();
+  CommitDetectionFolder(out, std::move(manifest), ids, all_ids, options.shard, options.batch_size);
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();
   summary.frames_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;

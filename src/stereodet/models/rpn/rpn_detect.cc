@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <utility>
 
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
@@ -142,16 +143,7 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
       options.detect.decode.nms.iou_threshold, options.detect.decode.nms.max_detections,
       options.detect.proposals.pre_nms_top_n, options.detect.proposals.post_nms_top_n,
       options.max_frames, options.device);
-  for (const std::string& id : ids) {
-    manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
-  }
-  WriteRunManifest(out.path(), manifest);
-  if (!options.shard.Whole()) {
-    WriteDetectShardRecord(out.path(),
-                           {manifest.tool, options.shard, options.batch_size,
-                            static_cast<int64_t>(all_ids.size()), FrameListHash(all_ids)});
-  }
-  out.Commit();
+  CommitDetectionFolder(out, std::move(manifest), ids, all_ids, options.shard, options.batch_size);
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();
   summary.images_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
