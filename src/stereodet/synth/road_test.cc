@@ -199,6 +199,37 @@ TEST(RoadSceneTest, SampledScenesStandOnTheirGround) {
   }
 }
 
+// Traffic ahead in the ego lane keeps its rear at least 6 m ahead of the camera (version 5):
+// no vehicle's footprint covers a point of the 1.6 m wide corridor from the camera to 5.5 m ahead
+// (the ego car's bumper is about 2 m ahead of the camera). Version 4 put the vehicle's centre 6 m
+// ahead, so a truck's rear could reach the camera. The corridor is tested point by point in each
+// box's own frame: u along its length (cos ry, -sin ry), v across it.
+TEST(RoadSceneTest, TrafficAheadKeepsClearOfTheEgoCar) {
+  SceneOptions options;
+  int vehicles_near = 0;
+  for (uint64_t seed = 1; seed <= 400; ++seed) {
+    const Scene scene = SampleScene(options, seed);
+    for (const SceneObject& o : scene.objects) {
+      if (o.type == "Pedestrian" || o.type == "Cyclist" || o.type == "Person_sitting") continue;
+      const Box3D& b = o.box;
+      const double c = std::cos(b.rotation_y), s = std::sin(b.rotation_y);
+      if (std::abs(b.location.x()) < 2.0 && b.location.z() > 0.0 && b.location.z() < 15.0)
+        ++vehicles_near;
+      for (double x = -0.8; x <= 0.8; x += 0.4) {
+        for (double z = 0.0; z <= 5.5; z += 0.25) {
+          const double dx = x - b.location.x(), dz = z - b.location.z();
+          const double u = dx * c - dz * s, v = dx * s + dz * c;
+          EXPECT_FALSE(std::abs(u) <= 0.5 * b.l && std::abs(v) <= 0.5 * b.w)
+              << o.type << " (l " << b.l << " m, centre z " << b.location.z()
+              << " m) covers the ego corridor at x " << x << ", z " << z << ", seed " << seed;
+        }
+      }
+    }
+  }
+  // The property is not empty: vehicles do stand just ahead in the ego lane.
+  EXPECT_GE(vehicles_near, 20);
+}
+
 // The planes file's plane: the ground's own plane when that is one (flat, or tilted by pitch and
 // roll alone), and close to the ground's tangent under the camera on a curved one.
 TEST(RoadSceneTest, TrueGroundPlaneIsTheLeastSquaresPlaneOfTheGround) {

@@ -209,13 +209,16 @@ class StreetBuilder {
   }
   // Places a vehicle centred at (lateral, along) heading along the road (or against it).
   double PlaceVehicle(const std::string& type, double lateral, double along, bool oncoming,
-                      double yaw_sd) {
-    return PlaceVehicleTurned(type, lateral, along, oncoming ? M_PI : 0.0, yaw_sd);
+                      double yaw_sd, double min_rear_along = -1e9) {
+    return PlaceVehicleTurned(type, lateral, along, oncoming ? M_PI : 0.0, yaw_sd, min_rear_along);
   }
   // ... heading `relative_yaw` from the road's heading there.
   double PlaceVehicleTurned(const std::string& type, double lateral, double along,
-                            double relative_yaw, double yaw_sd) {
+                            double relative_yaw, double yaw_sd, double min_rear_along = -1e9) {
     const Dims d = SampleDims(type, rng_);
+    // `along` is the centre; a long vehicle placed just ahead would reach back past the ego car's
+    // bumper, so the caller may ask for its rear to stay ahead of a point.
+    along = std::max(along, min_rear_along + 0.5 * d.l);
     const double yaw = Yaw(relative_yaw + rng_.Normal(0.0, yaw_sd), along);
     Take(lateral, along, 0.5 * d.l);
     AddObject(scene_, type, LabelBox(d, At(lateral, along), yaw), rng_);
@@ -450,7 +453,12 @@ void StreetBuilder::Traffic() {
       const std::string type = VehicleType(false);
       const double lateral = lane.centre + rng_.Normal(0.0, 0.2);
       if (Free(lateral, along, 3.0)) {
-        const double l = PlaceVehicle(type, lateral, along, lane.oncoming, 0.03);
+        // In the ego lane the vehicle ahead keeps its rear at least kEgoGapM ahead of the
+        // camera (about 4 m from the ego car's bumper): version 4 placed its centre there, so a
+        // truck's rear could reach the camera.
+        constexpr double kEgoGapM = 6.0;
+        const double l = PlaceVehicle(type, lateral, along, lane.oncoming, 0.03,
+                                      ego_lane && along > -8.0 ? kEgoGapM : -1e9);
         along += l;
       }
       along += 4.0 + rng_.Uniform(0.0, 2.0 * mean_gap);
