@@ -6,7 +6,7 @@ CTEST_FLAGS ?=
 DEMO_DIR ?= $(BUILD_DIR)/demo
 SYNTH_DIR ?= data/synth
 
-.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results det3d-models experiment
+.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results det3d-models det3d-results experiment
 
 all: build
 
@@ -54,6 +54,13 @@ det3d-models: deps
 ssd-results: deps
 	$(MAKE) build
 	./scripts/ssd-results.sh $(BUILD_DIR) $(SYNTH_DIR) models results/ssd
+
+# docs/RESULTS.md's 3D detector section: models/det3d-{lidar,stereo} on the val split of
+# $(DET3D_DIR), 2D / BEV / 3D, strict and loose, both matchers, bootstrap, the LiDAR-vs-stereo
+# localization compare; writes results/det3d/table.md.
+det3d-results: deps
+	$(MAKE) build
+	./scripts/det3d-results.sh $(BUILD_DIR) $(DET3D_DIR) models results/det3d
 
 # The paper's Table 1 (docs/experiment.md): data, stereo points, detection with every model of
 # $(EXPERIMENT_CONFIG) (absent checkpoints are "missing" rows), sharp and blurred, both matchers,
