@@ -186,9 +186,13 @@ struct ExactCurveResult {
 // Curve and AP of the optimal or VOC matcher, exact at every score. AOS: VOC's pairs never change
 // as the threshold drops, so its events carry the similarity; the optimal association may re-pair
 // labels when a detection arrives, so its similarity is taken from the association at each score.
+// With `assocs` (optimal matcher only; one per frame, their memory reused), each frame's association
+// at `threshold` is written there too, from the overlap graph its curve events are computed on.
 ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames,
                             const std::vector<ClassFrame>& cfs, Difficulty difficulty,
-                            bool with_aos, int num_threads) {
+                            bool with_aos, int num_threads,
+                            std::vector<FrameAssociation>* assocs = nullptr,
+                            double threshold = 0.0) {
   constexpr size_t kBlock = 64;
   const size_t num_blocks = (cfs.size() + kBlock - 1) / kBlock;
   std::vector<std::vector<CurveEvent>> block_events(num_blocks);
@@ -198,7 +202,14 @@ ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frame
       [&](size_t b) {
         for (size_t i = b * kBlock; i < std::min(cfs.size(), (b + 1) * kBlock); ++i) {
           block_labels[b] += CountValidLabels(cfs[i], difficulty);
-          if (matcher == Matcher::kOptimal) {
+          if (matcher == Matcher::kOptimal && assocs != nullptr) {
+            (*assocs)[i] = OptimalFrameEventsAndAssociate(cfs[i], difficulty, threshold,
+                                                          &block_events[b], std::move((*assocs)[i]));
+            if (with_aos) {
+              block_events[b] = OptimalSimilarityEvents(frames[i], cfs[i], difficulty,
+                                                        std::move(block_events[b]));
+            }
+          } else if (matcher == Matcher::kOptimal) {
             block_events[b] = OptimalFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
             if (with_aos) {
               block_events[b] = OptimalSimilarityEvents(frames[i], cfs[i], difficulty,
@@ -495,8 +506,13 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         struck_cfs_class = &spec;
       }
 
-      // The operating point's associations (and the KITTI matcher's pass 2).
-      if (kitti) {
+      // The operating point's associations (and the KITTI matcher's pass 2). The optimal matcher's
+      // are made with its curve below, on the same overlap graphs.
+      const bool optimal = options.matcher == Matcher::kOptimal;
+      if (optimal) {
+        assocs.resize(n_d);
+        for (std::vector<FrameAssociation>& a : assocs) a.resize(cfs.size());
+      } else if (kitti) {
         assocs =
             AssociateAll(options.matcher, cfs, difficulties, t_op, threads, std::move(assocs),
                          [&](size_t i, const ClassFrame& cf) { kitti_passes.CountFrame(i, cf); });
@@ -514,7 +530,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         for (size_t d = 0; d < n_d; ++d) {
           ClassResult& r = cell[d];
           ExactCurveResult exact =
-              ExactCurve(options.matcher, frames, cfs, difficulties[d], with_aos, threads);
+              ExactCurve(options.matcher, frames, cfs, difficulties[d], with_aos, threads,
+                         optimal ? &assocs[d] : nullptr, t_op);
           r.num_valid_labels = exact.num_valid_labels;
           FilteredCurve& c = exact.curve;
           r.curve = std::move(c.curve);

@@ -109,14 +109,11 @@ int CountValidLabels(const ClassFrame& f, Difficulty difficulty) {
   return n;
 }
 
-std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty,
-                                           std::vector<CurveEvent> append_to) {
-  std::vector<CurveEvent> out = std::move(append_to);
-  std::vector<CurveEvent>* events = &out;
-  if (f.num_dets() == 0) return out;  // no events: the valid labels are all FN at every threshold
-  ThreadScratch& scratch = Scratch();
-  OptimalGraph& g = scratch.graph;
-  BuildGraph(f, difficulty, &g);
+namespace {
+
+// OptimalFrameEvents' events of `f`, whose graph `g` (scratch.graph) is built, appended to *events.
+void AppendFrameEvents(const ClassFrame& f, const OptimalGraph& g, ThreadScratch& scratch,
+                       std::vector<CurveEvent>* events) {
   // Usually nothing is excused (no valid detection on an ignored label or DontCare, no ignored
   // detection on a valid label); then the FP and FN matchings are the TP matching itself.
   bool any_excusable = false, any_label_excuse = false;
@@ -161,14 +158,11 @@ std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& f, Difficulty diffi
     }
     if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0) events->push_back(ev);
   }
-  return out;
 }
 
-FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
-                                  FrameAssociation reuse) {
-  ThreadScratch& scratch = Scratch();
-  OptimalGraph& g = scratch.graph;
-  BuildGraph(f, difficulty, &g);
+// OptimalAssociate of `f`, whose graph `g` (scratch.graph) is built.
+FrameAssociation AssociateOnGraph(const ClassFrame& f, const OptimalGraph& g, double threshold,
+                                  ThreadScratch& scratch, FrameAssociation reuse) {
   const int nl = f.num_labels();
   const int nd = f.num_dets();
   FrameAssociation a = std::move(reuse);
@@ -206,6 +200,34 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
       a.det_outcome[j] = Outcome::kFp;
   }
   return a;
+}
+
+}  // namespace
+
+std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& f, Difficulty difficulty,
+                                           std::vector<CurveEvent> append_to) {
+  std::vector<CurveEvent> out = std::move(append_to);
+  if (f.num_dets() == 0) return out;  // no events: the valid labels are all FN at every threshold
+  ThreadScratch& scratch = Scratch();
+  BuildGraph(f, difficulty, &scratch.graph);
+  AppendFrameEvents(f, scratch.graph, scratch, &out);
+  return out;
+}
+
+FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, double threshold,
+                                  FrameAssociation reuse) {
+  ThreadScratch& scratch = Scratch();
+  BuildGraph(f, difficulty, &scratch.graph);
+  return AssociateOnGraph(f, scratch.graph, threshold, scratch, std::move(reuse));
+}
+
+FrameAssociation OptimalFrameEventsAndAssociate(const ClassFrame& f, Difficulty difficulty,
+                                                double threshold, std::vector<CurveEvent>* events,
+                                                FrameAssociation reuse) {
+  ThreadScratch& scratch = Scratch();
+  BuildGraph(f, difficulty, &scratch.graph);
+  if (f.num_dets() > 0) AppendFrameEvents(f, scratch.graph, scratch, events);
+  return AssociateOnGraph(f, scratch.graph, threshold, scratch, std::move(reuse));
 }
 
 namespace {

@@ -46,6 +46,13 @@ std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& frame, Difficulty d
 FrameAssociation OptimalAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
                                   FrameAssociation reuse = {});
 
+// OptimalFrameEvents(frame, difficulty) appended to *events and OptimalAssociate(frame, difficulty,
+// threshold, reuse) returned, with the overlap graph built once for both (Evaluate needs both of
+// every frame and difficulty: the curve and the operating point).
+FrameAssociation OptimalFrameEventsAndAssociate(const ClassFrame& frame, Difficulty difficulty,
+                                                double threshold, std::vector<CurveEvent>* events,
+                                                FrameAssociation reuse = {});
+
 }  // namespace stereodet
 
 #endif  // STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_

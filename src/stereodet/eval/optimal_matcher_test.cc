@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <utility>
 
@@ -262,6 +263,41 @@ TEST(OptimalMatcherTest, EqualsBruteForceAtEveryThresholdOnThousandsOfFrames) {
   }
   EXPECT_GT(checked, 10000);
   EXPECT_GT(optimal_beats_greedy, 0);  // the random frames do contain greedy's mistakes
+}
+
+// The combined call Evaluate makes (one graph for the curve and the operating point) gives exactly
+// the events and the association of the two separate calls, also when the association's memory
+// comes from another frame and when the events are appended to earlier ones.
+TEST(OptimalMatcherTest, EventsAndAssociateTogetherEqualTheSeparateCalls) {
+  std::mt19937_64 rng(11);
+  ClassSpec spec = KittiClassSpec("Car");
+  spec.min_overlap = {0.4, 0.4, 0.4};
+  FrameAssociation reuse;
+  int with_tp = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    const ClassFrame cf = PrepareClassFrame(RandomSmallFrame(rng), spec, OverlapKind::k2D);
+    for (const Difficulty d : {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard}) {
+      const double t = trial % 3 == 0 ? -std::numeric_limits<double>::infinity() : 0.5;
+      std::vector<CurveEvent> separate(1), together(1);  // one earlier event, kept first
+      separate[0].score = together[0].score = 9.0;
+      separate = OptimalFrameEvents(cf, d, std::move(separate));
+      const FrameAssociation expected = OptimalAssociate(cf, d, t);
+      reuse = OptimalFrameEventsAndAssociate(cf, d, t, &together, std::move(reuse));
+      ASSERT_EQ(together.size(), separate.size()) << "trial " << trial;
+      for (size_t k = 0; k < separate.size(); ++k) {
+        ASSERT_EQ(together[k].score, separate[k].score) << "trial " << trial;
+        ASSERT_EQ(together[k].tp, separate[k].tp) << "trial " << trial;
+        ASSERT_EQ(together[k].fp, separate[k].fp) << "trial " << trial;
+        ASSERT_EQ(together[k].fn, separate[k].fn) << "trial " << trial;
+      }
+      ASSERT_EQ(reuse.label_outcome, expected.label_outcome) << "trial " << trial;
+      ASSERT_EQ(reuse.label_det, expected.label_det) << "trial " << trial;
+      ASSERT_EQ(reuse.det_outcome, expected.det_outcome) << "trial " << trial;
+      ASSERT_EQ(reuse.det_label, expected.det_label) << "trial " << trial;
+      with_tp += expected.CountDets(Outcome::kTp) > 0;
+    }
+  }
+  EXPECT_GT(with_tp, 1000);  // the frames do have pairs to get right
 }
 
 }  // namespace

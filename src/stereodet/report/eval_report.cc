@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <iterator>
 #include <optional>
 #include <sstream>
@@ -366,6 +368,29 @@ char* WriteCsv(char* out, double v) { return std::isnan(v) ? out : WriteFmtShort
 
 char* WriteInt(char* out, int64_t v) { return std::to_chars(out, out + 24, v).ptr; }
 
+// WriteCsv with the text of the last value written kept: a value with the same bits as the last
+// one is copied instead of formatted again. On an exact curve recall repeats on most points (a FP
+// moves only precision and FP per frame) and FP per frame on a quarter of them.
+class CachedCsv {
+ public:
+  char* Write(char* out, double v) {
+    const uint64_t bits = std::bit_cast<uint64_t>(v);
+    if (!valid_ || bits != bits_) {
+      length_ = static_cast<int>(WriteCsv(text_, v) - text_);
+      bits_ = bits;
+      valid_ = true;
+    }
+    std::memcpy(out, text_, kFmtShortestMaxChars);  // fixed size: a few moves (room: see below)
+    return out + length_;
+  }
+
+ private:
+  char text_[kFmtShortestMaxChars];
+  uint64_t bits_ = 0;
+  int length_ = 0;
+  bool valid_ = false;
+};
+
 // PrCsv's and RocCsv's text of `curve` appended to `pr` and `roc` (either may be null) in one pass:
 // an exact curve is tens of thousands of rows, and the ROC's five columns are the PR's, so each
 // number is formatted once, into the PR row, and copied from there.
@@ -380,8 +405,10 @@ void AppendCurveCsvs(const std::vector<CurvePoint>& curve, int64_t num_frames, b
     roc->reserve(roc->size() + 64 * (curve.size() + 1));
     roc->append("fp_per_frame,recall,threshold,tp,fp\n");
   }
-  // A row has 5 numbers of at most kFmtShortestMaxChars and 3 counts of at most 20 characters.
+  // A row has 5 numbers of at most kFmtShortestMaxChars and 3 counts of at most 20 characters
+  // (CachedCsv copies kFmtShortestMaxChars bytes whatever the length: the room is counted so).
   char row[8 * kFmtShortestMaxChars + 16];
+  CachedCsv recall_text, fp_per_frame_text;
   // The curve is in descending threshold order, so FP per frame ascends.
   for (const CurvePoint& p : curve) {
     char* it = WriteCsv(row, p.threshold);
@@ -397,10 +424,10 @@ void AppendCurveCsvs(const std::vector<CurvePoint>& curve, int64_t num_frames, b
     it = WriteCsv(it, p.precision);
     *it++ = ',';
     char* const recall = it;
-    it = WriteCsv(it, p.recall);
+    it = recall_text.Write(it, p.recall);
     *it++ = ',';
     char* const fp_per_frame = it;
-    it = WriteCsv(it, FpPerFrame(p, num_frames));
+    it = fp_per_frame_text.Write(it, FpPerFrame(p, num_frames));
     char* const fp_per_frame_end = it;
     if (with_aos) {
       *it++ = ',';
