@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/disparity_filter.hpp>
+#include <sstream>
 
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
@@ -159,9 +160,8 @@ DisparityOptions DisparityOptions::AtMatchScale() const {
   o.bm.prefilter_size = OddAtLeast(bm.prefilter_size * s, 5);
   o.sgbm.block_size = OddAtLeast(sgbm.block_size * s, 1);
   o.speckle_window_px = static_cast<int>(std::lround(speckle_window_px * s * s));
-  o.speckle_range_px = speckle_range_px > 0
-                           ? std::max(1, static_cast<int>(std::lround(speckle_range_px * s)))
-                           : 0;
+  o.speckle_range_px =
+      speckle_range_px > 0 ? std::max(1, static_cast<int>(std::lround(speckle_range_px * s))) : 0;
   o.wls.depth_discontinuity_radius =
       static_cast<int>(std::lround(wls.depth_discontinuity_radius * s));
   o.wls.lrc_threshold = static_cast<int>(std::lround(wls.lrc_threshold * s));
@@ -225,7 +225,7 @@ cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::
       << " vs " << right_grey.cols << "x" << right_grey.rows;
   const int min_side = std::min(left_grey.cols, left_grey.rows);
   const int block = matching_.method == DisparityMethod::kBlockMatching ? matching_.bm.block_size
-                                                                       : matching_.sgbm.block_size;
+                                                                        : matching_.sgbm.block_size;
   STEREODET_CHECK(block < min_side) << "block size " << block << " does not fit the "
                                     << left_grey.cols << "x" << left_grey.rows << " image";
   // A search range as wide as the image leaves no column to match: OpenCV then marks every pixel
@@ -257,21 +257,21 @@ void CheckImageFitsMatcher(const DisparityOptions& full_options, const cv::Size&
                            const std::filesystem::path& image) {
   const DisparityOptions options = full_options.AtMatchScale();
   const cv::Size size = full_options.MatchSize(full_size);
-  const std::string at_scale =
-      full_options.match_scale < 1.0
-          ? " (at --match-scale " + std::to_string(full_options.match_scale) + ": " +
-                std::to_string(size.width) + "x" + std::to_string(size.height) + " px)"
-          : std::string();
+  std::ostringstream at_scale;
+  if (full_options.match_scale < 1.0) {
+    at_scale << " (at --match-scale " << full_options.match_scale << ": " << size.width << "x"
+             << size.height << " px)";
+  }
   const int block = options.method == DisparityMethod::kBlockMatching ? options.bm.block_size
                                                                       : options.sgbm.block_size;
   STEREODET_CHECK_IO(block < std::min(size.width, size.height))
-      << image.string() << ": the " << size.width << "x" << size.height
-      << " px image" << at_scale << " is smaller than the matcher's " << block << "x" << block
+      << image.string() << ": the " << full_size.width << "x" << full_size.height << " px image"
+      << at_scale.str() << " is smaller than the matcher's " << block << "x" << block
       << " px block (--block-size); a stereo image must be larger than its block";
   STEREODET_CHECK_IO(options.min_disparity + options.num_disparities < size.width)
-      << image.string() << ": the image is " << size.width << " px wide" << at_scale
-      << ", no wider than the disparity search (min disparity " << options.min_disparity
-      << " + " << options.num_disparities
+      << image.string() << ": the image is " << full_size.width << " px wide" << at_scale.str()
+      << ", no wider than the disparity search (min disparity " << options.min_disparity << " + "
+      << options.num_disparities
       << " disparities), so no pixel could be matched; lower --num-disparities";
 }
 

@@ -107,7 +107,8 @@ struct DisparityOptions {
   // (the image's own size at 1).
   cv::Size MatchSize(cv::Size image) const;
   // The settings that mean at MatchSize() what these mean at full resolution (match_scale 1 in the
-  // result; *this unchanged at 1). With s = match_scale, odd(x) = the odd integer in [x - 1, x + 1):
+  // result; *this unchanged at 1). With s = match_scale, odd(x) = the odd integer in [x - 1, x +
+  // 1):
   //   num_disparities   16 ceil(num s / 16), at least 16 (the same nearest depth, rounded up)
   //   min_disparity     floor(min s)
   //   bm.block_size     max(5, odd(block s))     bm.prefilter_size  max(5, odd(size s))
@@ -156,8 +157,9 @@ class DisparityMatcher {
 
 // Throws std::runtime_error naming `image` when an image of `size` is too small for the matcher of
 // `options` (at its match scale: MatchSize(size) and AtMatchScale()): its block must be smaller
-// than the image's shorter side, and min_disparity + num_disparities less than its width (else OpenCV fails, or marks every pixel invalid). The
-// matcher checks the same, but knows no file; the readers of a stereo pair call this after reading.
+// than the image's shorter side, and min_disparity + num_disparities less than its width (else
+// OpenCV fails, or marks every pixel invalid). The matcher checks the same, but knows no file; the
+// readers of a stereo pair call this after reading.
 void CheckImageFitsMatcher(const DisparityOptions& options, const cv::Size& size,
                            const std::filesystem::path& image);
 

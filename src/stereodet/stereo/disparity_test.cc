@@ -77,14 +77,14 @@ TEST(DisparityOptionsTest, MatchScaleScalesTheSearchAndTheWindows) {
   EXPECT_EQ(options.MatchSize({1241, 376}), cv::Size(621, 188));
   const DisparityOptions half = options.AtMatchScale();
   EXPECT_EQ(half.match_scale, 1.0);
-  EXPECT_EQ(half.num_disparities, 64);      // 128 x 0.5
+  EXPECT_EQ(half.num_disparities, 64);  // 128 x 0.5
   EXPECT_EQ(half.min_disparity, 0);
-  EXPECT_EQ(half.bm.block_size, 5);         // odd(5.5) = 5
-  EXPECT_EQ(half.bm.prefilter_size, 5);     // odd(4.5) = 5
-  EXPECT_EQ(half.sgbm.block_size, 3);       // odd(2.5) = 3
-  EXPECT_EQ(half.speckle_window_px, 25);    // 100 x 0.5^2
-  EXPECT_EQ(half.speckle_range_px, 1);      // 2 x 0.5
-  EXPECT_EQ(half.uniqueness_ratio, 15);     // kept
+  EXPECT_EQ(half.bm.block_size, 5);       // odd(5.5) = 5
+  EXPECT_EQ(half.bm.prefilter_size, 5);   // odd(4.5) = 5
+  EXPECT_EQ(half.sgbm.block_size, 3);     // odd(2.5) = 3
+  EXPECT_EQ(half.speckle_window_px, 25);  // 100 x 0.5^2
+  EXPECT_EQ(half.speckle_range_px, 1);    // 2 x 0.5
+  EXPECT_EQ(half.uniqueness_ratio, 15);   // kept
   EXPECT_EQ(half.left_right_max_diff_px, 1);
   EXPECT_EQ(half.bm.texture_threshold, 10);
   EXPECT_EQ(half.wls.depth_discontinuity_radius, 2);
@@ -172,8 +172,9 @@ TEST(DisparityTest, HalfScaleMatchingRecoversAWallAtAKnownDepth) {
   // The fixed-point entry takes the images at the match size, and refuses the full size's width
   // only when the search does not fit (here it does: 16 < 621).
   const cv::Mat grey = ToGrey(scene.left_bgr);
-  EXPECT_EQ(matcher.ComputeFixedPoint(ResizeForMatching(grey, {621, 60}),
-                                      ResizeForMatching(ToGrey(scene.right_bgr), {621, 60}))
+  EXPECT_EQ(matcher
+                .ComputeFixedPoint(ResizeForMatching(grey, {621, 60}),
+                                   ResizeForMatching(ToGrey(scene.right_bgr), {621, 60}))
                 .size(),
             cv::Size(621, 60));
 }

@@ -24,7 +24,7 @@ namespace stereodet {
 
 // The numbers the per-pixel reprojection needs, taken once from a Calibration.
 struct StereoGeometry {
-  double focal_px = 0;          // f: P2(0,0) (= P2(1,1)); the horizontal focal length
+  double focal_px = 0;  // f: P2(0,0) (= P2(1,1)); the horizontal focal length
   // The vertical focal length, px; 0 = focal_px (square pixels, as KITTI's). Only a geometry
   // Scaled() by different factors across and down (an image resized to a rounded size) has its own.
   double focal_y_px = 0;

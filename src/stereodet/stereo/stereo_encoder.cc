@@ -190,9 +190,9 @@ StereoEncoder::StereoEncoder(const StereoOptions& options)
     : options_(options), match_ground_(options.ground), matcher_(options.disparity) {
   options_.Check();
   if (options_.disparity.match_scale < 1.0) {
-    match_ground_.sample_step_px = std::max(
-        1, static_cast<int>(std::lround(options_.ground.sample_step_px *
-                                        options_.disparity.match_scale)));
+    match_ground_.sample_step_px =
+        std::max(1, static_cast<int>(std::lround(options_.ground.sample_step_px *
+                                                 options_.disparity.match_scale)));
   }
 }
 

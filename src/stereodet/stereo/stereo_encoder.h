@@ -40,8 +40,8 @@ struct StereoOptions {
 // The settings that decide the disparity, the ground plane and the height codes, as one JSON object
 // (pretty, 2 spaces, trailing newline): {"disparity": {...}, "ground": {...}, "height_code":
 // {...}}, every field under its name in DisparityOptions (bm_*, sgbm_*, wls_* for the nested
-// ones; match_scale among them), GroundPlaneOptions and HeightQuantization. OUT/stereo.json holds these (with the other
-// outputs' settings) and model.json records them for RGB-H models.
+// ones; match_scale among them), GroundPlaneOptions and HeightQuantization. OUT/stereo.json holds
+// these (with the other outputs' settings) and model.json records them for RGB-H models.
 std::string StereoSettingsJson(const StereoOptions& options);
 
 // Reads those settings back into `defaults` (a copy is returned): a key that is absent keeps its
