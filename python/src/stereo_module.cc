@@ -317,6 +317,8 @@ void BindOptions(py::module_& m) {
       .Field("bm", &DisparityOptions::bm, "BlockMatchingOptions (or a dict of its fields)")
       .Field("sgbm", &DisparityOptions::sgbm, "SemiGlobalOptions (or a dict of its fields)")
       .Field("wls", &DisparityOptions::wls, "WlsFilterOptions (or a dict of its fields)")
+      .Field("match_scale", &DisparityOptions::match_scale,
+             "0.1..1: match at this fraction of the image's size (1 = full resolution)")
       .Finish();
   OptionsClass<GroundPlaneOptions>(m, "GroundPlaneOptions",
                                    "RANSAC ground fit (stereo/reprojection.h).")

@@ -37,6 +37,7 @@ class DisparityOptions(_Options):
     left_right_max_diff_px: int
     bm: BlockMatchingOptions
     sgbm: SemiGlobalOptions
+    match_scale: float
 
 class GroundPlaneOptions(_Options):
     roi_fraction: float

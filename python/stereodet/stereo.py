@@ -53,7 +53,8 @@ def disparity(left: np.ndarray, right: np.ndarray, **options: Any) -> np.ndarray
     uniqueness_ratio, speckle_window_px, speckle_range_px, left_right_max_diff_px, bm={...},
     sgbm={...} with mode="sgbm"|"hh"|"sgbm3way"|"hh4", colour=True for SGBM on the BGR images,
     p1/p2 for OpenCV's P1/P2 themselves, wls={"enabled": True, "lambda_": 8000, ...} for
-    ximgproc's WLS post-filter).
+    ximgproc's WLS post-filter, match_scale=0.5 to match at half the size: the result is brought
+    back to (H, W) nearest-neighbour, values in full-size px).
     Returns (H, W) float32 pixels (u_left - u_right, 1/16 px steps), -1 where there is no match.
     """
     return _stereo.disparity(left, right, DisparityOptions(**options))

@@ -37,6 +37,18 @@ def test_disparity_of_a_shifted_texture_is_the_shift():
     assert np.mean(abs(sgbm[sgbm > 0] - SHIFT) <= 0.25) > 0.95
 
 
+def test_match_scale_gives_the_full_size_disparity():
+    """match_scale=0.5 matches at half the size and returns the full size, in full-size px."""
+    left, right = textured_pair()
+    disparity = stereo.disparity(left, right, num_disparities=32, match_scale=0.5)
+    assert disparity.shape == left.shape[:2]
+    valid = disparity[:, 64:] > 0
+    assert valid.mean() > 0.5
+    assert np.median(disparity[:, 64:][valid]) == pytest.approx(SHIFT, abs=0.5)
+    with pytest.raises(ValueError, match="match_scale"):
+        stereo.disparity(left, right, match_scale=0.0)
+
+
 def test_every_opencv_matcher_setting_is_a_keyword():
     left, right = textured_pair()
     o = stereo.DisparityOptions(method="sgbm", num_disparities=32,

@@ -141,6 +141,12 @@ void RunTrain(TrainArgs& a) {
                                                 options.data.stereo, a.stereo);
   } else {
     FinishStereoFlags(a.stereo, options.data.stereo);
+    // A new RGB-H training matches at the network's scale unless --match-scale says otherwise.
+    bool scale_given = false;
+    for (const CLI::Option* flag : a.stereo_flags) {
+      if (flag->get_name() == "--match-scale" && flag->count() > 0) scale_given = true;
+    }
+    options.auto_match_scale = !scale_given;
   }
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;

@@ -32,6 +32,11 @@ std::vector<CLI::Option*> AddStereoFlags(CLI::App* cmd, StereoOptions& options,
                   d.bm.block_size, d.sgbm.block_size)));
   add(cmd->add_option("--min-disparity", d.min_disparity, "minDisparity: smallest disparity, px"))
       ->capture_default_str();
+  add(cmd->add_option("--match-scale", d.match_scale,
+                      "match at this fraction of the image's size, 0.1..1 (0.5 = half: the pair "
+                      "resized with INTER_AREA, disparities, block and speckle settings scaled to "
+                      "it; docs/stereo.md)"))
+      ->capture_default_str();
   add(cmd->add_option("--uniqueness-ratio", d.uniqueness_ratio,
                       "uniquenessRatio: the best cost beats the second by this percent"))
       ->capture_default_str();

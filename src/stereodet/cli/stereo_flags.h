@@ -1,7 +1,8 @@
 // The stereo matcher's flags, shared by `stereo`, `stereo frame`, `train ssd` and `detect ssd`:
 // every OpenCV StereoBM / StereoSGBM parameter under OpenCV's own name (kebab-cased:
 // minDisparity -> --min-disparity, disp12MaxDiff -> --disp12-max-diff, P1 -> --P1), SGBM on the
-// colour images, ximgproc's WLS post-filter, and the ground fit's switch. Each flag is bound to its
+// colour images, ximgproc's WLS post-filter, the ground fit's switch, and --match-scale (matching
+// at a fraction of the image's size, DisparityOptions::match_scale). Each flag is bound to its
 // field of StereoOptions (stereo_encoder.h), so `--help` shows the struct's default; the flags that
 // name a choice are parsed by FinishStereoFlags.
 #ifndef STEREODET_CLI_STEREO_FLAGS_H_

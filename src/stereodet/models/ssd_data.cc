@@ -60,6 +60,7 @@ std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
 namespace {
 
 cv::Mat ResizeHeightCodes(const cv::Mat& code, cv::Size size) {
+  if (code.size() == size) return code;  // matched at the network's size (match_scale)
   cv::Mat resized;
   cv::resize(code, resized, size, 0, 0, cv::INTER_NEAREST);
   return resized;
@@ -92,8 +93,8 @@ PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
   cv::resize(bgr, resized, size, 0, 0, cv::INTER_AREA);
   cv::Mat code;
   if (UsesHeight(config.encoding)) {
-    STEREODET_CHECK(height_code.type() == CV_16UC1 && height_code.size() == bgr.size())
-        << "height codes must be CV_16UC1 of the image's size";
+    STEREODET_CHECK(height_code.type() == CV_16UC1 && !height_code.empty())
+        << "height codes must be CV_16UC1 (of the image's or the match size)";
     code = ResizeHeightCodes(height_code, size);
   }
   return EncodeNetworkInput(resized, code, config.encoding);
@@ -153,6 +154,9 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
               StereoGeometry::FromCalibration(ReadCalibration(paths.calib));
           StereoOutputs outputs;
           outputs.rgbh = false;
+          // At match_scale < 1 the codes stay at the match size (the network's, at 0.5 for a
+          // network of half the image) and are resized from there at most.
+          outputs.full_resolution = false;
           const cv::Mat left = ReadColourImage(paths.image_left);
           const cv::Mat right = ReadColourImage(paths.image_right);
           CheckStereoPairSize(left, right, paths.image_left, paths.image_right);

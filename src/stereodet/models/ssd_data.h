@@ -88,7 +88,9 @@ std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
                                          const SsdDataOptions& options);
 
 // One frame's network input at the model's size, from a full-resolution BGR image and, for RGB-H
-// encodings, the full-resolution height codes (resized nearest-neighbour). The inference path.
+// encodings, the height codes: at the image's size, or at the stereo match size (match_scale < 1,
+// StereoOutputs::full_resolution false), resized nearest-neighbour to the network's size unless
+// they have it already. The inference path.
 PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
                                 const SsdConfig& config);
 

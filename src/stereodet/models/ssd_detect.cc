@@ -213,6 +213,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
             StereoEncoder encoder(stereo);
             StereoOutputs outputs;
             outputs.rgbh = false;
+            outputs.full_resolution = false;  // match-scale codes go to the network directly
             StereoEncoding encoding = encoder.Encode(
                 left, right, StereoGeometry::FromCalibration(ReadCalibration(paths.calib)),
                 outputs);

@@ -12,6 +12,7 @@
 
 #include "stereodet/models/train_common.h"
 #include "stereodet/stereo/dataset_encoder.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -50,6 +51,15 @@ void TrainSsdOptions::Check() const {
   STEREODET_CHECK(!(resume && force)) << "--resume and --force exclude each other";
   STEREODET_CHECK(ParseComputeDevice(device).has_value())
       << "unknown device '" << device << "' (expected cpu or cuda)";
+}
+
+double DefaultRgbhMatchScale(const SsdConfig& config, int image_width, int image_height) {
+  STEREODET_CHECK(image_width > 0 && image_height > 0)
+      << "image size must be positive, got " << image_width << "x" << image_height;
+  const double across = static_cast<double>(config.InputWidth()) / image_width;
+  const double down = static_cast<double>(config.InputHeight()) / image_height;
+  auto about_half = [](double ratio) { return ratio >= 0.45 && ratio <= 0.55; };
+  return about_half(across) && about_half(down) ? 0.5 : 1.0;
 }
 
 double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps) {
@@ -109,6 +119,17 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
     ids.resize(options.max_frames);
   }
   STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
+  if (options.auto_match_scale && !resuming && UsesHeight(config.encoding) &&
+      options.data.stereo_dir.empty()) {
+    // A missing first image is reported by SsdTrainingData with the other missing files.
+    const fs::path first_image = dataset.Paths(ids.front()).image_left;
+    if (fs::exists(first_image)) {
+      const cv::Mat image = ReadColourImage(first_image);
+      options.data.stereo.disparity.match_scale =
+          DefaultRgbhMatchScale(config, image.cols, image.rows);
+      options.data.stereo.Check();
+    }
+  }
 
   SsdModel model(config, options.seed, device);
   model.set_stereo(options.data.stereo);  // model.json records what the heights were made with

@@ -45,6 +45,11 @@ struct TrainSsdOptions {
   int loader_capacity = 3;     // batches prepared ahead
   std::string device = "cpu";  // cpu | cuda (device.h); bit-identical resume needs the same one
   SsdDataOptions data;
+  // A new RGB-H training that matches (no data.stereo_dir) uses DefaultRgbhMatchScale() as
+  // data.stereo.disparity.match_scale, whatever that holds; model.json records it. `train ssd`
+  // sets this unless --match-scale is given; off, data.stereo is used as it is. Not on --resume
+  // (model.json's settings win).
+  bool auto_match_scale = false;
   SsdTrainerOptions trainer;
   ProgressOptions progress;
   void Check() const;  // throws std::invalid_argument
@@ -61,6 +66,14 @@ struct TrainSsdSummary {
   int64_t parameters = 0;
   int64_t compression_parameters = 0;
 };
+
+// The match scale of a new RGB-H training with auto_match_scale, from the network's input size and
+// the first training frame's image size: 0.5 when the network input is about half the image in
+// both directions (each ratio in [0.45, 0.55]; KITTI's 1224..1242 x 370..376 px images against the
+// default 621 x 188 input), else 1. At 0.5 the stereo match size is about the network's, so the
+// height codes need no full-resolution pass and the matcher costs about 1/8 of full resolution
+// (docs/BENCHMARKS.md, issue 19).
+double DefaultRgbhMatchScale(const SsdConfig& config, int image_width, int image_height);
 
 // Learning rate at `step` of `total_steps` (0-based): warm-up, then cosine to the final fraction.
 double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64_t total_steps);

@@ -115,6 +115,54 @@ TEST(SsdTrainTest, ScheduleWarmsUpThenDecays) {
   EXPECT_GT(ScheduledLearningRate(options, 10, 100), ScheduledLearningRate(options, 50, 100));
 }
 
+// A new RGB-H training with auto_match_scale (`train ssd` without --match-scale) matches at 0.5
+// when the network sees about half the image, model.json records it, and `detect ssd` uses it;
+// models recorded without the key (the committed ones) read as 1.
+TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
+  const SsdConfig config;  // 621 x 188
+  EXPECT_EQ(DefaultRgbhMatchScale(config, 1242, 375), 0.5);
+  EXPECT_EQ(DefaultRgbhMatchScale(config, 1224, 370), 0.5);
+  EXPECT_EQ(DefaultRgbhMatchScale(config, 621, 188), 1.0);   // the network sees it whole
+  EXPECT_EQ(DefaultRgbhMatchScale(config, 1242, 188), 1.0);  // half across only
+  EXPECT_EQ(DefaultRgbhMatchScale(config, 2484, 750), 1.0);  // a quarter
+  EXPECT_THROW(DefaultRgbhMatchScale(config, 0, 375), std::invalid_argument);
+
+  const fs::path root = WriteTinyDataset("scale_data", 2);
+  TrainSsdOptions options = TinyTraining(root, TempDir("scale_model"));  // 256 x 80 -> 128 x 40
+  options.epochs = 1;
+  options.auto_match_scale = true;
+  TrainSsd(options);
+  const std::optional<StereoOptions> recorded = ModelStereoSettings(options.out_dir);
+  ASSERT_TRUE(recorded.has_value());
+  EXPECT_EQ(recorded->disparity.match_scale, 0.5);
+  EXPECT_EQ(recorded->disparity.num_disparities, 32);  // the full-resolution setting is recorded
+  DetectSsdOptions detect;
+  detect.model_dir = options.out_dir;
+  detect.data_root = root;
+  detect.out_dir = TempDir("scale_det");
+  detect.threads = 1;
+  detect.progress.stream = nullptr;
+  EXPECT_EQ(DetectSsd(detect).frames, 2);
+  EXPECT_NE(ReadFile(detect.out_dir / "run.json").find("\"match_scale\": 0.5"), std::string::npos);
+  // Asking for full resolution is a named mismatch.
+  detect.stereo = *recorded;
+  detect.stereo->disparity.match_scale = 1.0;
+  EXPECT_EQ(StereoMismatch(detect), "disparity.match_scale: 0.5 (requested: 1.0)");
+  // Without auto_match_scale the settings are used as given.
+  TrainSsdOptions as_given = TinyTraining(root, TempDir("scale_model_given"));
+  as_given.epochs = 1;
+  TrainSsd(as_given);
+  EXPECT_EQ(ModelStereoSettings(as_given.out_dir)->disparity.match_scale, 1.0);
+  // The committed RGB-H models were recorded without the key: they keep matching at full size.
+  for (const char* model : {"models/ssd-rgbh-fixed", "models/ssd-rgbh-learned"}) {
+    const fs::path dir = TestSourceDir() / model;
+    if (!fs::exists(dir / "model.json")) continue;
+    const std::optional<StereoOptions> committed = ModelStereoSettings(dir);
+    ASSERT_TRUE(committed.has_value()) << model;
+    EXPECT_EQ(committed->disparity.match_scale, 1.0) << model;
+  }
+}
+
 TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
   const fs::path root = WriteTinyDataset("e2e_data", 4);
   const fs::path out = TempDir("e2e_model");

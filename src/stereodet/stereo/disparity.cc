@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/disparity_filter.hpp>
+#include <sstream>
 
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
@@ -128,11 +129,49 @@ void DisparityOptions::Check() const {
   } else {
     sgbm.Check();
   }
+  STEREODET_CHECK(std::isfinite(match_scale) && match_scale >= 0.1 && match_scale <= 1.0)
+      << "match_scale must be in [0.1, 1] (1 = full resolution), got " << match_scale;
+  if (match_scale < 1.0) AtMatchScale().Check();
+}
+
+cv::Size DisparityOptions::MatchSize(cv::Size image) const {
+  if (match_scale >= 1.0) return image;
+  return {std::max(1, static_cast<int>(std::lround(image.width * match_scale))),
+          std::max(1, static_cast<int>(std::lround(image.height * match_scale)))};
+}
+
+namespace {
+
+// The odd integer in [x - 1, x + 1), at least `minimum`.
+int OddAtLeast(double x, int minimum) {
+  return std::max(minimum, 2 * static_cast<int>(std::floor(x / 2.0)) + 1);
+}
+
+}  // namespace
+
+DisparityOptions DisparityOptions::AtMatchScale() const {
+  DisparityOptions o = *this;
+  o.match_scale = 1.0;
+  if (match_scale >= 1.0) return o;
+  const double s = match_scale;
+  o.num_disparities = std::max(16, 16 * static_cast<int>(std::ceil(num_disparities * s / 16.0)));
+  o.min_disparity = static_cast<int>(std::floor(min_disparity * s));
+  o.bm.block_size = OddAtLeast(bm.block_size * s, 5);
+  o.bm.prefilter_size = OddAtLeast(bm.prefilter_size * s, 5);
+  o.sgbm.block_size = OddAtLeast(sgbm.block_size * s, 1);
+  o.speckle_window_px = static_cast<int>(std::lround(speckle_window_px * s * s));
+  o.speckle_range_px =
+      speckle_range_px > 0 ? std::max(1, static_cast<int>(std::lround(speckle_range_px * s))) : 0;
+  o.wls.depth_discontinuity_radius =
+      static_cast<int>(std::lround(wls.depth_discontinuity_radius * s));
+  o.wls.lrc_threshold = static_cast<int>(std::lround(wls.lrc_threshold * s));
+  return o;
 }
 
 DisparityMatcher::DisparityMatcher(const DisparityOptions& options) : options_(options) {
   options_.Check();
-  const DisparityOptions& o = options_;
+  matching_ = options_.AtMatchScale();
+  const DisparityOptions& o = matching_;
   if (o.method == DisparityMethod::kBlockMatching) {
     cv::Ptr<cv::StereoBM> bm = cv::StereoBM::create(o.num_disparities, o.bm.block_size);
     bm->setMinDisparity(o.min_disparity);
@@ -177,23 +216,23 @@ cv::Mat ToGrey(const cv::Mat& image) {
 
 cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::Mat& right_grey,
                                             const cv::Mat& guide) {
-  const int expected = options_.MatchesColour() ? CV_8UC3 : CV_8UC1;
+  const int expected = matching_.MatchesColour() ? CV_8UC3 : CV_8UC1;
   STEREODET_CHECK(left_grey.type() == expected && right_grey.type() == expected)
-      << "disparity needs 8-bit " << (options_.MatchesColour() ? "BGR" : "grey")
+      << "disparity needs 8-bit " << (matching_.MatchesColour() ? "BGR" : "grey")
       << " images, got types " << left_grey.type() << " and " << right_grey.type();
   STEREODET_CHECK(left_grey.size() == right_grey.size())
       << "left and right images differ in size: " << left_grey.cols << "x" << left_grey.rows
       << " vs " << right_grey.cols << "x" << right_grey.rows;
   const int min_side = std::min(left_grey.cols, left_grey.rows);
-  const int block = options_.method == DisparityMethod::kBlockMatching ? options_.bm.block_size
-                                                                       : options_.sgbm.block_size;
+  const int block = matching_.method == DisparityMethod::kBlockMatching ? matching_.bm.block_size
+                                                                        : matching_.sgbm.block_size;
   STEREODET_CHECK(block < min_side) << "block size " << block << " does not fit the "
                                     << left_grey.cols << "x" << left_grey.rows << " image";
   // A search range as wide as the image leaves no column to match: OpenCV then marks every pixel
   // invalid, and an empty point cloud would pass for a result.
-  STEREODET_CHECK(options_.min_disparity + options_.num_disparities < left_grey.cols)
-      << "min_disparity + num_disparities (" << options_.min_disparity << " + "
-      << options_.num_disparities << ") must be less than the image width " << left_grey.cols
+  STEREODET_CHECK(matching_.min_disparity + matching_.num_disparities < left_grey.cols)
+      << "min_disparity + num_disparities (" << matching_.min_disparity << " + "
+      << matching_.num_disparities << ") must be less than the image width " << left_grey.cols
       << " px";
   cv::Mat fixed_point;
   matcher_.dynamicCast<cv::StereoMatcher>()->compute(left_grey, right_grey, fixed_point);
@@ -209,29 +248,66 @@ cv::Mat DisparityMatcher::ComputeFixedPoint(const cv::Mat& left_grey, const cv::
   // The filter's output is CV_16S x16 like the matcher's; it may carry values beyond the search
   // range at borders, so clamp to it (the depth tables of the encoders are sized by it).
   const int16_t max_raw =
-      static_cast<int16_t>((options_.min_disparity + options_.num_disparities) * 16);
+      static_cast<int16_t>((matching_.min_disparity + matching_.num_disparities) * 16);
   cv::min(filtered, cv::Scalar(max_raw), filtered);
   return filtered;
 }
 
-void CheckImageFitsMatcher(const DisparityOptions& options, const cv::Size& size,
+void CheckImageFitsMatcher(const DisparityOptions& full_options, const cv::Size& full_size,
                            const std::filesystem::path& image) {
+  const DisparityOptions options = full_options.AtMatchScale();
+  const cv::Size size = full_options.MatchSize(full_size);
+  std::ostringstream at_scale;
+  if (full_options.match_scale < 1.0) {
+    at_scale << " (at --match-scale " << full_options.match_scale << ": " << size.width << "x"
+             << size.height << " px)";
+  }
   const int block = options.method == DisparityMethod::kBlockMatching ? options.bm.block_size
                                                                       : options.sgbm.block_size;
   STEREODET_CHECK_IO(block < std::min(size.width, size.height))
-      << image.string() << ": the " << size.width << "x" << size.height
-      << " px image is smaller than the matcher's " << block << "x" << block
+      << image.string() << ": the " << full_size.width << "x" << full_size.height << " px image"
+      << at_scale.str() << " is smaller than the matcher's " << block << "x" << block
       << " px block (--block-size); a stereo image must be larger than its block";
   STEREODET_CHECK_IO(options.min_disparity + options.num_disparities < size.width)
-      << image.string() << ": the image is " << size.width
-      << " px wide, no wider than the disparity search (min disparity " << options.min_disparity
-      << " + " << options.num_disparities
+      << image.string() << ": the image is " << full_size.width << " px wide" << at_scale.str()
+      << ", no wider than the disparity search (min disparity " << options.min_disparity << " + "
+      << options.num_disparities
       << " disparities), so no pixel could be matched; lower --num-disparities";
 }
 
 cv::Mat DisparityMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
-  if (options_.MatchesColour()) return DisparityFromFixedPoint(ComputeFixedPoint(left, right));
-  return DisparityFromFixedPoint(ComputeFixedPoint(ToGrey(left), ToGrey(right)));
+  STEREODET_CHECK(left.size() == right.size())
+      << "left and right images differ in size: " << left.cols << "x" << left.rows << " vs "
+      << right.cols << "x" << right.rows;
+  const cv::Size match_size = options_.MatchSize(left.size());
+  const cv::Mat l = options_.MatchesColour() ? left : ToGrey(left);
+  const cv::Mat r = options_.MatchesColour() ? right : ToGrey(right);
+  const cv::Mat disparity = DisparityFromFixedPoint(
+      ComputeFixedPoint(ResizeForMatching(l, match_size), ResizeForMatching(r, match_size)));
+  return UpsampleDisparity(disparity, left.size());
+}
+
+cv::Mat ResizeForMatching(const cv::Mat& image, cv::Size match_size) {
+  if (image.size() == match_size) return image;
+  cv::Mat resized;
+  cv::resize(image, resized, match_size, 0, 0, cv::INTER_AREA);
+  return resized;
+}
+
+cv::Mat UpsampleDisparity(const cv::Mat& disparity_px, cv::Size size) {
+  STEREODET_CHECK(disparity_px.type() == CV_32FC1 && !disparity_px.empty())
+      << "UpsampleDisparity needs a CV_32FC1 disparity, got type " << disparity_px.type();
+  if (disparity_px.size() == size) return disparity_px;
+  cv::Mat upsampled;
+  cv::resize(disparity_px, upsampled, size, 0, 0, cv::INTER_NEAREST_EXACT);
+  const float factor = static_cast<float>(size.width) / static_cast<float>(disparity_px.cols);
+  for (int v = 0; v < upsampled.rows; ++v) {
+    float* d = upsampled.ptr<float>(v);
+    for (int u = 0; u < upsampled.cols; ++u) {
+      if (IsValidDisparity(d[u])) d[u] *= factor;
+    }
+  }
+  return upsampled;
 }
 
 cv::Mat DisparityFromFixedPoint(const cv::Mat& fixed_point) {

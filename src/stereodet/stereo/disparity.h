@@ -95,7 +95,31 @@ struct DisparityOptions {
   BlockMatchingOptions bm;
   SemiGlobalOptions sgbm;
   WlsFilterOptions wls;
+  // Match at this fraction of the image's size, in [0.1, 1] (--match-scale; 1 = full resolution,
+  // what every setting above means; 0.5 = half). The pair is resized with INTER_AREA to
+  // MatchSize() and matched with AtMatchScale()'s settings, so the disparity comes out in pixels
+  // of the match-scale image (about match_scale x the full-resolution disparity). Matching costs
+  // roughly match_scale^3 of the full-resolution matcher (pixels x disparities): 1/8 at 0.5.
+  // Default 1, and 1 for a stereo.json / model.json recorded without this key.
+  double match_scale = 1.0;
   void Check() const;  // throws std::invalid_argument, also for a bad setting of the chosen method
+  // The size the matcher sees for an image of `image` px: (round(w s), round(h s)), s = match_scale
+  // (the image's own size at 1).
+  cv::Size MatchSize(cv::Size image) const;
+  // The settings that mean at MatchSize() what these mean at full resolution (match_scale 1 in the
+  // result; *this unchanged at 1). With s = match_scale, odd(x) = the odd integer in [x - 1, x +
+  // 1):
+  //   num_disparities   16 ceil(num s / 16), at least 16 (the same nearest depth, rounded up)
+  //   min_disparity     floor(min s)
+  //   bm.block_size     max(5, odd(block s))     bm.prefilter_size  max(5, odd(size s))
+  //   sgbm.block_size   odd(block s); SGBM's per-pixel P1/P2 rule follows it (--P1/--P2 kept)
+  //   speckle_window_px round(window s^2) (an area)
+  //   speckle_range_px  round(range s), at least 1 where it was (a disparity difference)
+  //   wls.depth_discontinuity_radius round(radius s); wls.lrc_threshold round(threshold s)
+  // and kept as they are: uniqueness_ratio, left_right_max_diff_px (1 px is the finest check at
+  // any scale), the pre-filter type and caps, texture_threshold, the SGBM mode and colour, WLS
+  // lambda and sigma_color.
+  DisparityOptions AtMatchScale() const;
   // True when the matcher reads the BGR images themselves (SGBM with colour), not grey ones.
   bool MatchesColour() const { return method == DisparityMethod::kSemiGlobal && sgbm.colour; }
 };
@@ -106,35 +130,50 @@ class DisparityMatcher {
  public:
   explicit DisparityMatcher(const DisparityOptions& options = {});
   const DisparityOptions& options() const { return options_; }
+  // The settings OpenCV's matcher runs with: options().AtMatchScale().
+  const DisparityOptions& matching_options() const { return matching_; }
 
   // Requires: rectified 8-bit images of equal size, grey (CV_8UC1) or BGR (CV_8UC3, converted to
   // grey unless options().MatchesColour()). Returns CV_32FC1 disparity in pixels of the left image,
-  // kInvalidDisparity where there is none.
+  // kInvalidDisparity where there is none. With match_scale < 1 the pair is matched at MatchSize()
+  // and the result brought back to the images' size by UpsampleDisparity.
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
 
   // The same, but returns OpenCV's raw CV_16SC1 output: disparity * 16, values <= 0 invalid (this
-  // is what the fused encoders read). Requires grey images, or BGR ones when MatchesColour(). With
-  // the WLS filter, `guide` (8-bit grey or BGR of the left's size; empty: the left image) guides
-  // it.
+  // is what the fused encoders read). Requires grey images, or BGR ones when MatchesColour(), as
+  // the matcher takes them: already resized to MatchSize() when match_scale < 1 (the output is in
+  // their pixels; ResizeForMatching). With the WLS filter, `guide` (8-bit grey or BGR of the left's
+  // size; empty: the left image) guides it.
   cv::Mat ComputeFixedPoint(const cv::Mat& left, const cv::Mat& right,
                             const cv::Mat& guide = cv::Mat());
 
  private:
   DisparityOptions options_;
+  DisparityOptions matching_;             // options_.AtMatchScale()
   cv::Ptr<cv::Algorithm> matcher_;        // cv::StereoBM or cv::StereoSGBM
   cv::Ptr<cv::Algorithm> right_matcher_;  // with WLS: ximgproc's right matcher
   cv::Ptr<cv::Algorithm> wls_filter_;     // with WLS: ximgproc::DisparityWLSFilter
 };
 
 // Throws std::runtime_error naming `image` when an image of `size` is too small for the matcher of
-// `options`: its block must be smaller than the image's shorter side, and min_disparity +
-// num_disparities less than its width (else OpenCV fails, or marks every pixel invalid). The
-// matcher checks the same, but knows no file; the readers of a stereo pair call this after reading.
+// `options` (at its match scale: MatchSize(size) and AtMatchScale()): its block must be smaller
+// than the image's shorter side, and min_disparity + num_disparities less than its width (else
+// OpenCV fails, or marks every pixel invalid). The matcher checks the same, but knows no file; the
+// readers of a stereo pair call this after reading.
 void CheckImageFitsMatcher(const DisparityOptions& options, const cv::Size& size,
                            const std::filesystem::path& image);
 
 // Converts OpenCV's CV_16SC1 (disparity * 16) to CV_32FC1 pixels with kInvalidDisparity for <= 0.
 cv::Mat DisparityFromFixedPoint(const cv::Mat& fixed_point);
+
+// An image resized to `match_size` for the matcher (INTER_AREA; shared when it has that size).
+cv::Mat ResizeForMatching(const cv::Mat& image, cv::Size match_size);
+
+// A CV_32FC1 disparity of a match-scale image brought to `size` (the full image's): each output
+// pixel takes the value of the match-scale pixel under its centre (INTER_NEAREST_EXACT), valid
+// values multiplied by size.width / disparity_px.cols (match-scale px -> image px), invalid ones
+// kept invalid. Shared when already of `size`.
+cv::Mat UpsampleDisparity(const cv::Mat& disparity_px, cv::Size size);
 
 // Converts an 8-bit BGR (or already grey) image to CV_8UC1 grey. Grey input is returned shared.
 cv::Mat ToGrey(const cv::Mat& image);

@@ -11,6 +11,7 @@
 
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/planar_scene.h"
+#include "stereodet/stereo/reprojection.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/fuzz_corpus.h"
 #include "stereodet/util/test_temp_dir.h"
@@ -63,6 +64,138 @@ TEST(DisparityOptionsTest, RejectsBadSettings) {
   options = {};
   options.min_disparity = -16;
   EXPECT_THROW(DisparityMatcher{options}, std::invalid_argument);
+}
+
+// The match-scale settings of DisparityOptions::AtMatchScale, by hand from its documented rules.
+TEST(DisparityOptionsTest, MatchScaleScalesTheSearchAndTheWindows) {
+  DisparityOptions options;
+  EXPECT_EQ(options.match_scale, 1.0);  // the documented default: full resolution
+  EXPECT_EQ(options.MatchSize({1242, 375}), cv::Size(1242, 375));
+  options.match_scale = 0.5;
+  EXPECT_NO_THROW(options.Check());
+  EXPECT_EQ(options.MatchSize({1242, 375}), cv::Size(621, 188));  // round(187.5) = 188
+  EXPECT_EQ(options.MatchSize({1241, 376}), cv::Size(621, 188));
+  const DisparityOptions half = options.AtMatchScale();
+  EXPECT_EQ(half.match_scale, 1.0);
+  EXPECT_EQ(half.num_disparities, 64);  // 128 x 0.5
+  EXPECT_EQ(half.min_disparity, 0);
+  EXPECT_EQ(half.bm.block_size, 5);       // odd(5.5) = 5
+  EXPECT_EQ(half.bm.prefilter_size, 5);   // odd(4.5) = 5
+  EXPECT_EQ(half.sgbm.block_size, 3);     // odd(2.5) = 3
+  EXPECT_EQ(half.speckle_window_px, 25);  // 100 x 0.5^2
+  EXPECT_EQ(half.speckle_range_px, 1);    // 2 x 0.5
+  EXPECT_EQ(half.uniqueness_ratio, 15);   // kept
+  EXPECT_EQ(half.left_right_max_diff_px, 1);
+  EXPECT_EQ(half.bm.texture_threshold, 10);
+  EXPECT_EQ(half.wls.depth_discontinuity_radius, 2);
+  EXPECT_EQ(half.wls.lrc_threshold, 12);
+  EXPECT_EQ(half.sgbm.P1(), 8 * 1 * 3 * 3);  // the per-pixel rule follows the smaller block
+  // Rounding: the search is rounded up to a multiple of 16; blocks stay odd and >= 5 for BM.
+  options.num_disparities = 112;  // 56 -> 64
+  options.min_disparity = 5;      // 2.5 -> 2
+  options.bm.block_size = 21;     // 10.5 -> 11
+  options.speckle_range_px = 1;   // 0.5 -> 1 (at least 1 where it was)
+  EXPECT_EQ(options.AtMatchScale().num_disparities, 64);
+  EXPECT_EQ(options.AtMatchScale().min_disparity, 2);
+  EXPECT_EQ(options.AtMatchScale().bm.block_size, 11);
+  EXPECT_EQ(options.AtMatchScale().speckle_range_px, 1);
+  options.match_scale = 0.1;  // the smallest: 112 x 0.1 = 11.2 -> 16, block 2.1 -> 5
+  EXPECT_EQ(options.AtMatchScale().num_disparities, 16);
+  EXPECT_EQ(options.AtMatchScale().bm.block_size, 5);
+  EXPECT_NO_THROW(options.Check());
+  // At 1 nothing changes.
+  DisparityOptions full;
+  full.num_disparities = 96;
+  full.bm.block_size = 15;
+  EXPECT_EQ(full.AtMatchScale().num_disparities, 96);
+  EXPECT_EQ(full.AtMatchScale().bm.block_size, 15);
+  EXPECT_EQ(full.AtMatchScale().speckle_window_px, 100);
+}
+
+TEST(DisparityOptionsTest, RejectsAMatchScaleOutsideItsRange) {
+  for (double scale : {0.0, -0.5, 0.05, 1.01, 2.0, std::nan(""), HUGE_VAL}) {
+    DisparityOptions options;
+    options.match_scale = scale;
+    EXPECT_THROW(options.Check(), std::invalid_argument) << scale;
+    EXPECT_THROW(DisparityMatcher{options}, std::invalid_argument) << scale;
+  }
+}
+
+// UpsampleDisparity by hand: each output pixel takes the value under its centre, times 2.
+TEST(DisparityTest, UpsampleDisparityScalesValuesAndKeepsInvalid) {
+  const cv::Mat small = (cv::Mat_<float>(2, 3) << 1.0f, kInvalidDisparity, 2.5f, 3.0f, 4.0f, 0.0f);
+  const cv::Mat full = UpsampleDisparity(small, {6, 4});
+  ASSERT_EQ(full.size(), cv::Size(6, 4));
+  for (int v = 0; v < 4; ++v) {
+    for (int u = 0; u < 6; ++u) {
+      const float expected = small.at<float>(v / 2, u / 2);
+      const float got = full.at<float>(v, u);
+      if (IsValidDisparity(expected)) {
+        EXPECT_FLOAT_EQ(got, 2.0f * expected) << v << "," << u;
+      } else {
+        EXPECT_FALSE(IsValidDisparity(got)) << v << "," << u;
+      }
+    }
+  }
+  EXPECT_EQ(UpsampleDisparity(small, small.size()).data, small.data);  // shared at its size
+  EXPECT_THROW(UpsampleDisparity(cv::Mat(2, 2, CV_16SC1), {4, 4}), std::invalid_argument);
+}
+
+// A wall at a known depth fills the view: matched at half the size, the disparity (in full-size
+// px) is the true one within 1 px (0.5 match-scale px) at 95% of the pixels; at full size it is
+// within 0.3 px at 98% (ShiftedTextureTest). Measured: the 5 x 5 block of half scale (from 11) has
+// a sub-pixel spread of about +-0.75 full-size px on this texture, the full-size 11 x 11 of
+// +-0.25 px.
+TEST(DisparityTest, HalfScaleMatchingRecoversAWallAtAKnownDepth) {
+  PlanarSceneOptions scene_options;
+  scene_options.width_px = 1242;
+  scene_options.height_px = 120;
+  scene_options.camera_height_m = 100;
+  scene_options.wall_depth_m = 20;
+  scene_options.texture_scale_m = 0.02;
+  const Calibration calib = KittiLikeCalibration();
+  const PlanarScene scene = RenderPlanarScene(calib, scene_options);
+  const StereoGeometry geometry = StereoGeometry::FromCalibration(calib);
+  const double expected = geometry.DisparityFromDepth(20.0);
+  // (f b / z ignores KITTI's 16 um z offset between the cameras: 0.003 px here.)
+  EXPECT_NEAR(scene.disparity_px.at<float>(60, 600), expected, 0.01);
+  DisparityOptions options;
+  options.num_disparities = 32;
+  options.match_scale = 0.5;
+  DisparityMatcher matcher(options);
+  EXPECT_EQ(matcher.matching_options().num_disparities, 16);
+  const cv::Mat disparity = matcher.Compute(scene.left_bgr, scene.right_bgr);
+  ASSERT_EQ(disparity.size(), scene.left_bgr.size());
+  const auto [accuracy, density] = AccuracyAndDensity(disparity, expected, 1.0, 64);
+  EXPECT_GT(density, 0.75);
+  EXPECT_GT(accuracy, 0.95) << "expected " << expected;
+  // The fixed-point entry takes the images at the match size, and refuses the full size's width
+  // only when the search does not fit (here it does: 16 < 621).
+  const cv::Mat grey = ToGrey(scene.left_bgr);
+  EXPECT_EQ(matcher
+                .ComputeFixedPoint(ResizeForMatching(grey, {621, 60}),
+                                   ResizeForMatching(ToGrey(scene.right_bgr), {621, 60}))
+                .size(),
+            cv::Size(621, 60));
+}
+
+// The size check applies to the match-scale image and says so.
+TEST(DisparityTest, ImageFitCheckUsesTheMatchSize) {
+  DisparityOptions options;
+  options.num_disparities = 64;
+  EXPECT_NO_THROW(CheckImageFitsMatcher(options, {100, 40}, "a.png"));
+  options.match_scale = 0.5;  // 50 x 20 px: 32 disparities fit, a 5 px block fits
+  EXPECT_NO_THROW(CheckImageFitsMatcher(options, {100, 40}, "a.png"));
+  options.match_scale = 0.25;  // 25 x 10 px: 16 disparities fit, a 5 px block fits
+  EXPECT_NO_THROW(CheckImageFitsMatcher(options, {100, 40}, "a.png"));
+  options.match_scale = 0.1;  // 10 x 4 px: the block does not
+  try {
+    CheckImageFitsMatcher(options, {100, 40}, "a.png");
+    ADD_FAILURE() << "no throw";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("a.png"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("--match-scale"));
+  }
 }
 
 TEST(DisparityOptionsTest, ParsesMethodNames) {

@@ -49,10 +49,21 @@ StereoGeometry StereoGeometry::FromCalibration(const Calibration& calib) {
   return geometry;
 }
 
+StereoGeometry StereoGeometry::Scaled(double scale_x, double scale_y) const {
+  STEREODET_CHECK(scale_x > 0 && scale_y > 0 && std::isfinite(scale_x) && std::isfinite(scale_y))
+      << "geometry scale must be > 0, got " << scale_x << ", " << scale_y;
+  StereoGeometry scaled = *this;
+  scaled.focal_px = focal_px * scale_x;
+  scaled.focal_y_px = FocalY() * scale_y;
+  scaled.cx_px = (cx_px + 0.5) * scale_x - 0.5;
+  scaled.cy_px = (cy_px + 0.5) * scale_y - 0.5;
+  return scaled;
+}
+
 Eigen::Vector3d StereoGeometry::PointInRect(double u_px, double v_px, double disparity_px) const {
   const double z = DepthFromDisparity(disparity_px);
   return camera2_in_rect +
-         z * Eigen::Vector3d((u_px - cx_px) / focal_px, (v_px - cy_px) / focal_px, 1.0);
+         z * Eigen::Vector3d((u_px - cx_px) / focal_px, (v_px - cy_px) / FocalY(), 1.0);
 }
 
 cv::Mat DepthFromDisparity(const cv::Mat& disparity_px, const StereoGeometry& geometry) {

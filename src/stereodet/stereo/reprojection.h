@@ -24,7 +24,10 @@ namespace stereodet {
 
 // The numbers the per-pixel reprojection needs, taken once from a Calibration.
 struct StereoGeometry {
-  double focal_px = 0;          // f: P2(0,0) (= P2(1,1))
+  double focal_px = 0;  // f: P2(0,0) (= P2(1,1)); the horizontal focal length
+  // The vertical focal length, px; 0 = focal_px (square pixels, as KITTI's). Only a geometry
+  // Scaled() by different factors across and down (an image resized to a rounded size) has its own.
+  double focal_y_px = 0;
   double baseline_m = 0;        // b: camera 3's centre minus camera 2's, along rect x
   double cx_px = 0, cy_px = 0;  // principal point of camera 2
   Eigen::Vector3d camera2_in_rect = Eigen::Vector3d::Zero();  // c_2
@@ -39,6 +42,13 @@ struct StereoGeometry {
     return focal_px * baseline_m / disparity_px;
   }
   double DisparityFromDepth(double depth_m) const { return focal_px * baseline_m / depth_m; }
+  double FocalY() const { return focal_y_px > 0 ? focal_y_px : focal_px; }
+  // The geometry of the images resized by (scale_x, scale_y) (new size / old size): focal lengths
+  // scaled (f_x by scale_x, f_y by scale_y), the principal point mapped as pixel centres are by
+  // OpenCV's resize (c' = (c + 0.5) scale - 0.5), the baseline and the frames unchanged. A
+  // disparity in the resized left image is then in resized pixels: z = f_x' b / d' is the same
+  // depth as z = f b / d at full size. Requires scales > 0.
+  StereoGeometry Scaled(double scale_x, double scale_y) const;
   // X = c_2 + z K^-1 [u, v, 1]: pixel (u, v) of the left image at disparity d, in the rect frame.
   Eigen::Vector3d PointInRect(double u_px, double v_px, double disparity_px) const;
 };

@@ -57,6 +57,31 @@ TEST(StereoGeometryTest, ProjectThenReprojectThroughDisparityRoundTrips) {
   }
 }
 
+// Scaled(): by hand on KITTI's numbers, and a pixel of the full image mapped to the resized one
+// (centres: u' = (u + 0.5) s - 0.5, disparity d' = d s_x) reprojects to the same point.
+TEST(StereoGeometryTest, ScaledGeometryReprojectsResizedPixelsToTheSamePoints) {
+  const StereoGeometry geometry = StereoGeometry::FromCalibration(KittiLikeCalibration());
+  const double sx = 621.0 / 1242.0, sy = 188.0 / 375.0;
+  const StereoGeometry scaled = geometry.Scaled(sx, sy);
+  EXPECT_DOUBLE_EQ(scaled.focal_px, geometry.focal_px * 0.5);
+  EXPECT_DOUBLE_EQ(scaled.FocalY(), geometry.focal_px * sy);
+  EXPECT_DOUBLE_EQ(scaled.cx_px, (geometry.cx_px + 0.5) * 0.5 - 0.5);
+  EXPECT_DOUBLE_EQ(scaled.cy_px, (geometry.cy_px + 0.5) * sy - 0.5);
+  EXPECT_EQ(scaled.baseline_m, geometry.baseline_m);
+  EXPECT_EQ(geometry.FocalY(), geometry.focal_px);  // square pixels unless scaled
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(0, 1242), v(0, 375), d(1, 128);
+  for (int i = 0; i < 200; ++i) {
+    const double uu = u(rng), vv = v(rng), dd = d(rng);
+    const Eigen::Vector3d full = geometry.PointInRect(uu, vv, dd);
+    const Eigen::Vector3d small =
+        scaled.PointInRect((uu + 0.5) * sx - 0.5, (vv + 0.5) * sy - 0.5, dd * sx);
+    EXPECT_LT((small - full).norm(), 1e-9 * full.norm()) << uu << "," << vv << "," << dd;
+  }
+  EXPECT_THROW(geometry.Scaled(0.0, 0.5), std::invalid_argument);
+  EXPECT_THROW(geometry.Scaled(0.5, std::nan("")), std::invalid_argument);
+}
+
 TEST(ReprojectionTest, FrontoParallelPlaneGivesItsDepthAndHeight) {
   const StereoGeometry geometry = StereoGeometry::FromCalibration(KittiLikeCalibration());
   const double depth_m = 12.5;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
 #include <type_traits>
@@ -51,7 +52,8 @@ nlohmann::json SettingsJson(const StereoOptions& o) {
                     {"wls_lambda", d.wls.lambda},
                     {"wls_sigma_color", d.wls.sigma_color},
                     {"wls_lrc_threshold", d.wls.lrc_threshold},
-                    {"wls_depth_discontinuity_radius", d.wls.depth_discontinuity_radius}};
+                    {"wls_depth_discontinuity_radius", d.wls.depth_discontinuity_radius},
+                    {"match_scale", d.match_scale}};
   const GroundPlaneOptions& g = o.ground;
   j["ground"] = {{"enabled", g.enabled},
                  {"nominal_camera_height_m", g.nominal_camera_height_m},
@@ -140,6 +142,7 @@ StereoOptions StereoOptionsFromJson(const std::string& text, const std::string& 
   Read(j, "disparity", "wls_sigma_color", source, d.wls.sigma_color);
   Read(j, "disparity", "wls_lrc_threshold", source, d.wls.lrc_threshold);
   Read(j, "disparity", "wls_depth_discontinuity_radius", source, d.wls.depth_discontinuity_radius);
+  Read(j, "disparity", "match_scale", source, d.match_scale);
   GroundPlaneOptions& g = o.ground;
   Read(j, "ground", "enabled", source, g.enabled);
   Read(j, "ground", "nominal_camera_height_m", source, g.nominal_camera_height_m);
@@ -184,8 +187,13 @@ std::string DifferingStereoSettings(const StereoOptions& recorded, const StereoO
 }
 
 StereoEncoder::StereoEncoder(const StereoOptions& options)
-    : options_(options), matcher_(options.disparity) {
+    : options_(options), match_ground_(options.ground), matcher_(options.disparity) {
   options_.Check();
+  if (options_.disparity.match_scale < 1.0) {
+    match_ground_.sample_step_px =
+        std::max(1, static_cast<int>(std::lround(options_.ground.sample_step_px *
+                                                 options_.disparity.match_scale)));
+  }
 }
 
 StereoEncoding StereoEncoder::Encode(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
@@ -210,25 +218,61 @@ StereoEncoding StereoEncoder::Encode(const cv::Mat& left_bgr, const cv::Mat& rig
     }
     stage("blur");
   }
-  const cv::Mat left_grey = ToGrey(match_left);
+  // At match_scale < 1 the grey pair (the colour pair for SGBM on colour, and the WLS guide) is
+  // resized to the match size; grey first, so the resize reads one channel.
+  const cv::Size full_size = left_bgr.size();
+  const cv::Size match_size = options_.disparity.MatchSize(full_size);
+  const bool scaled = match_size != full_size;
+  const cv::Mat left_grey = ResizeForMatching(ToGrey(match_left), match_size);
   const bool colour = options_.disparity.MatchesColour();
-  const cv::Mat right_grey = colour ? cv::Mat() : ToGrey(match_right);
+  const cv::Mat right_grey =
+      colour ? cv::Mat() : ResizeForMatching(ToGrey(match_right), match_size);
+  const cv::Mat guide = options_.disparity.wls.enabled || colour
+                            ? ResizeForMatching(match_left, match_size)
+                            : cv::Mat();
+  const cv::Mat colour_right = colour ? ResizeForMatching(match_right, match_size) : cv::Mat();
   stage("grey");
   // SGBM on colour reads the BGR pair as OpenCV takes it; the WLS filter is guided by the left
   // colour image either way.
-  const cv::Mat fixed_point = colour
-                                  ? matcher_.ComputeFixedPoint(match_left, match_right, match_left)
-                                  : matcher_.ComputeFixedPoint(left_grey, right_grey, match_left);
+  const cv::Mat fixed_point = colour ? matcher_.ComputeFixedPoint(guide, colour_right, guide)
+                                     : matcher_.ComputeFixedPoint(left_grey, right_grey, guide);
   stage("disparity");
-  return EncodeFromFixedPoint(fixed_point, network_image, left_grey, geometry, outputs, times);
+  if (!scaled) {
+    return EncodeFromFixedPoint(fixed_point, network_image, left_grey, geometry, outputs, times);
+  }
+  STEREODET_CHECK(outputs.full_resolution || !outputs.rgbh)
+      << "an RGB-H image needs the full-resolution outputs (match_scale "
+      << options_.disparity.match_scale << ")";
+  StereoOutputs at_match_scale = outputs;
+  at_match_scale.rgbh = false;  // packed below, at the network image's size
+  const StereoGeometry match_geometry =
+      geometry.Scaled(static_cast<double>(match_size.width) / full_size.width,
+                      static_cast<double>(match_size.height) / full_size.height);
+  StereoEncoding encoding = EncodeFromFixedPoint(fixed_point, network_image, left_grey,
+                                                 match_geometry, at_match_scale, times);
+  timer.Restart();
+  if (!outputs.full_resolution) return encoding;
+  encoding.disparity_px = UpsampleDisparity(encoding.disparity_px, full_size);
+  auto upsample_codes = [&](cv::Mat& codes) {
+    if (codes.empty()) return;
+    cv::Mat full;
+    cv::resize(codes, full, full_size, 0, 0, cv::INTER_NEAREST_EXACT);
+    codes = full;
+  };
+  upsample_codes(encoding.height_code);
+  upsample_codes(encoding.depth_code);
+  if (outputs.rgbh) encoding.rgbh = PackRgbh(network_image, encoding.height_code);
+  if (times != nullptr) times->Add("upsample", timer.ElapsedSeconds());
+  return encoding;
 }
 
 StereoEncoding StereoEncoder::EncodeFromFixedPoint(
     const cv::Mat& fixed_point, const cv::Mat& network_image, const cv::Mat& left_grey,
     const StereoGeometry& geometry, const StereoOutputs& outputs, StageTimes* times) {
   STEREODET_CHECK(fixed_point.type() == CV_16SC1) << "expected OpenCV's CV_16SC1 disparity";
-  STEREODET_CHECK(network_image.type() == CV_8UC3 && network_image.size() == fixed_point.size())
-      << "network image must be CV_8UC3 of the disparity's size";
+  STEREODET_CHECK(network_image.type() == CV_8UC3 &&
+                  (!outputs.rgbh || network_image.size() == fixed_point.size()))
+      << "network image must be CV_8UC3 (of the disparity's size for RGB-H)";
   STEREODET_CHECK(left_grey.type() == CV_8UC1 && left_grey.size() == fixed_point.size())
       << "left grey image must be CV_8UC1 of the disparity's size";
   Timer timer;
@@ -236,7 +280,7 @@ StereoEncoding StereoEncoder::EncodeFromFixedPoint(
   encoding.network_image = network_image;
   // The ground fit samples the fixed-point disparity directly, so that the float disparity can be
   // written in the same pass as everything else.
-  encoding.ground = FitGroundPlane(fixed_point, geometry, options_.ground);
+  encoding.ground = FitGroundPlane(fixed_point, geometry, match_ground_);
   if (times != nullptr) times->Add("ground", timer.ElapsedSeconds());
   timer.Restart();
 
@@ -247,8 +291,8 @@ StereoEncoding StereoEncoder::EncodeFromFixedPoint(
   const GroundPlane& plane = encoding.ground.plane;
 
   // Depth and depth code depend only on OpenCV's integer disparity (1/16 px steps): tabulate them.
-  const int lut_size =
-      (options_.disparity.min_disparity + options_.disparity.num_disparities) * 16 + 16;
+  const DisparityOptions& matching = matcher_.matching_options();  // the search at this grid
+  const int lut_size = (matching.min_disparity + matching.num_disparities) * 16 + 16;
   std::vector<float> depth_lut(lut_size);
   std::vector<uint16_t> depth_code_lut(lut_size);
   for (int raw = 1; raw < lut_size; ++raw) {
@@ -311,7 +355,7 @@ StereoEncoding StereoEncoder::EncodeFromFixedPoint(
         uint16_t* height_out = encoding.height_code.ptr<uint16_t>(v);
         uint16_t* depth_out = outputs.depth ? encoding.depth_code.ptr<uint16_t>(v) : nullptr;
         uint8_t* rgbh_out = outputs.rgbh ? encoding.rgbh.ptr<uint8_t>(v) : nullptr;
-        const double ray_v = (v - geometry.cy_px) / geometry.focal_px;
+        const double ray_v = (v - geometry.cy_px) / geometry.FocalY();
         const float height_v = static_cast<float>(n.y() * ray_v + n.z());
         const Eigen::Vector3d velo_v = rotation.col(1) * ray_v + rotation.col(2);
         const float velo_vx = static_cast<float>(velo_v.x());
