@@ -186,8 +186,9 @@ struct ExactCurveResult {
 // Curve and AP of the optimal or VOC matcher, exact at every score. AOS: VOC's pairs never change
 // as the threshold drops, so its events carry the similarity; the optimal association may re-pair
 // labels when a detection arrives, so its similarity is taken from the association at each score.
-// With `assocs` (optimal matcher only; one per frame, their memory reused), each frame's association
-// at `threshold` is written there too, from the overlap graph its curve events are computed on.
+// With `assocs` (optimal matcher only; one per frame, their memory reused), each frame's
+// association at `threshold` is written there too, from the overlap graph its curve events are
+// computed on.
 ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames,
                             const std::vector<ClassFrame>& cfs, Difficulty difficulty,
                             bool with_aos, int num_threads,
@@ -203,8 +204,8 @@ ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frame
         for (size_t i = b * kBlock; i < std::min(cfs.size(), (b + 1) * kBlock); ++i) {
           block_labels[b] += CountValidLabels(cfs[i], difficulty);
           if (matcher == Matcher::kOptimal && assocs != nullptr) {
-            (*assocs)[i] = OptimalFrameEventsAndAssociate(cfs[i], difficulty, threshold,
-                                                          &block_events[b], std::move((*assocs)[i]));
+            (*assocs)[i] = OptimalFrameEventsAndAssociate(
+                cfs[i], difficulty, threshold, &block_events[b], std::move((*assocs)[i]));
             if (with_aos) {
               block_events[b] = OptimalSimilarityEvents(frames[i], cfs[i], difficulty,
                                                         std::move(block_events[b]));
