@@ -153,13 +153,23 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
   as_given.epochs = 1;
   TrainSsd(as_given);
   EXPECT_EQ(ModelStereoSettings(as_given.out_dir)->disparity.match_scale, 1.0);
-  // The committed RGB-H models were recorded without the key: they keep matching at full size.
+  // The committed RGB-H models (trained with the half-size default) record 0.5; the same
+  // model.json without the key (as models trained before the option were written) reads as 1.
   for (const char* model : {"models/ssd-rgbh-fixed", "models/ssd-rgbh-learned"}) {
     const fs::path dir = TestSourceDir() / model;
     if (!fs::exists(dir / "model.json")) continue;
     const std::optional<StereoOptions> committed = ModelStereoSettings(dir);
     ASSERT_TRUE(committed.has_value()) << model;
-    EXPECT_EQ(committed->disparity.match_scale, 1.0) << model;
+    EXPECT_EQ(committed->disparity.match_scale, 0.5) << model;
+    const std::string json = ReadFile(dir / "model.json");
+    const std::string key = "\"match_scale\": 0.5,";
+    const size_t at = json.find(key);
+    ASSERT_NE(at, std::string::npos) << model;
+    const fs::path old_dir = TempDir("scale_old_model");
+    std::ofstream(old_dir / "model.json") << json.substr(0, at) << json.substr(at + key.size());
+    const std::optional<StereoOptions> old = ModelStereoSettings(old_dir);
+    ASSERT_TRUE(old.has_value()) << model;
+    EXPECT_EQ(old->disparity.match_scale, 1.0) << model;
   }
 }
 
