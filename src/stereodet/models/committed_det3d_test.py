@@ -5,11 +5,15 @@
 
 On 8 fresh synthetic frames (seed 1234, none of them training frames of the committed models:
 those are seed 1), `detect det3d` with models/det3d-lidar and models/det3d-stereo (on the frames'
-stereo point clouds), then `eval --metrics bev,3d --loose` on Car. Each model must find its cars:
-Moderate BEV AP_R40 at IoU 0.5 at least the floor below, far above what an untrained or a
-mis-loaded model reaches. The floors are about half the validation figures of docs/RESULTS.md, so
-the noise of 8 frames does not fail the test, but a broken checkpoint, a changed input encoding or
-a changed BEV grid does. The two models are not ranked against each other: 8 frames are too few.
+stereo point clouds), then `eval --metrics bev,3d --loose --matcher optimal` on Car. Each model
+must find its cars: Moderate BEV AP_R40 at IoU 0.5 at least the floor below, far above what an
+untrained or a mis-loaded model reaches. The floors are about 60 % of the validation figures of
+docs/RESULTS.md (optimal matcher: LiDAR 0.974, stereo 0.869), so the noise of 8 frames does not
+fail the test, but a broken checkpoint, a changed input encoding or a changed BEV grid does. The
+optimal matcher, because with the KITTI one 8 frames' ~30 cars would test the devkit's small-sample
+cap (AP_R40 <= (TP - 1) / 40, docs/metrics.md "Small samples"), not the model: measured
+2026-12-03, KITTI 67.5 / 61.8, optimal 95.0 / 91.2 (LiDAR / stereo, 29 cars). The two models are
+not ranked against each other: 8 frames are too few.
 """
 
 import json
@@ -18,7 +22,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-FLOORS_BEV_LOOSE = {"lidar": 50.0, "stereo": 20.0}  # percent, Car Moderate AP_R40 at IoU 0.5
+FLOORS_BEV_LOOSE = {"lidar": 60.0, "stereo": 50.0}  # percent, Car Moderate AP_R40 at IoU 0.5
 
 
 def run(argv):
@@ -44,7 +48,8 @@ def main():
         run([stereodet, "detect", "det3d", "--model", repo / "models" / f"det3d-{model}",
              "--data", data, "--split", "val", "--out", det, "--threads", 1, "--quiet"] + extra)
         run([stereodet, "eval", "--gt", data, "--det", det, "--split", "val", "--classes", "Car",
-             "--metrics", "bev,3d", "--loose", "--threads", 1, "--out", work / f"eval-{model}"])
+             "--metrics", "bev,3d", "--loose", "--matcher", "optimal", "--threads", 1,
+             "--out", work / f"eval-{model}"])
         results = json.loads((work / f"eval-{model}" / "results.json").read_text())["results"]
         cell = [r for r in results if r["metric"] == "bev" and r["difficulty"] == "Moderate"]
         if len(cell) != 1 or cell[0]["num_valid_labels"] == 0:
