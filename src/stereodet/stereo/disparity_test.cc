@@ -21,6 +21,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A textured wall 20 m ahead filling a 1242 x 120 view (the ground 100 m down): its disparity is
+// the non-integer f b / 20 everywhere.
+PlanarSceneOptions TexturedWallAt20m() {
+  PlanarSceneOptions options;
+  options.width_px = 1242;
+  options.height_px = 120;
+  options.camera_height_m = 100;
+  options.wall_depth_m = 20;
+  options.texture_scale_m = 0.02;
+  return options;
+}
+
 // A smooth random texture: noise blurred so that block matching has structure at several scales.
 cv::Mat Texture(int rows, int cols, unsigned seed) {
   cv::Mat noise(rows, cols, CV_8UC1);
@@ -147,12 +159,7 @@ TEST(DisparityTest, UpsampleDisparityScalesValuesAndKeepsInvalid) {
 // a sub-pixel spread of about +-0.75 full-size px on this texture, the full-size 11 x 11 of
 // +-0.25 px.
 TEST(DisparityTest, HalfScaleMatchingRecoversAWallAtAKnownDepth) {
-  PlanarSceneOptions scene_options;
-  scene_options.width_px = 1242;
-  scene_options.height_px = 120;
-  scene_options.camera_height_m = 100;
-  scene_options.wall_depth_m = 20;
-  scene_options.texture_scale_m = 0.02;
+  const PlanarSceneOptions scene_options = TexturedWallAt20m();
   const Calibration calib = KittiLikeCalibration();
   const PlanarScene scene = RenderPlanarScene(calib, scene_options);
   const StereoGeometry geometry = StereoGeometry::FromCalibration(calib);
@@ -363,12 +370,7 @@ TEST_P(ShiftedTextureTest, RecoversIntegerShift) {
 TEST_P(ShiftedTextureTest, SubPixelOnRenderedWall) {
   // A wall 20 m ahead fills the whole view (the ground is 100 m down): its disparity is the
   // non-integer f b / 20 everywhere, so the matcher's sub-pixel interpolation is exercised.
-  PlanarSceneOptions scene_options;
-  scene_options.width_px = 1242;
-  scene_options.height_px = 120;
-  scene_options.camera_height_m = 100;
-  scene_options.wall_depth_m = 20;
-  scene_options.texture_scale_m = 0.02;
+  const PlanarSceneOptions scene_options = TexturedWallAt20m();
   const PlanarScene scene = RenderPlanarScene(KittiLikeCalibration(), scene_options);
   const double expected = scene.disparity_px.at<float>(60, 600);
   DisparityOptions options;
