@@ -4,10 +4,14 @@
 #ifndef STEREODET_MODELS_TRAIN_COMMON_H_
 #define STEREODET_MODELS_TRAIN_COMMON_H_
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "stereodet/models/device.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 
@@ -22,6 +26,31 @@ double WarmupCosineLearningRate(double peak, int warmup_steps, double final_frac
 // reaches the peak rate (more --epochs, more frames or a smaller --batch-size)". Empty when
 // total_steps >= warmup_steps.
 std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs);
+
+// The checks every training's options share, on the fields of these names (TrainSsdOptions,
+// TrainDet3dOptions, TrainRpnOptions::Check call it before their own): --data and --out given,
+// epochs and batch size >= 1, a finite learning rate > 0, warm-up steps >= 0, the final rate's
+// fraction in [0, 1], threads, max frames and max epochs this run >= 0, a known device, not both
+// --resume and --force. Throws stereodet::Error naming the field.
+template <typename TrainOptions>
+void CheckTrainingSchedule(const TrainOptions& o) {
+  STEREODET_CHECK(!o.data_root.empty()) << "--data is required";
+  STEREODET_CHECK(!o.out_dir.empty()) << "--out is required";
+  STEREODET_CHECK(o.epochs >= 1) << "epochs must be >= 1, got " << o.epochs;
+  STEREODET_CHECK(o.batch_size >= 1) << "batch size must be >= 1, got " << o.batch_size;
+  STEREODET_CHECK(o.learning_rate > 0.0 && std::isfinite(o.learning_rate))
+      << "learning rate must be > 0, got " << o.learning_rate;
+  STEREODET_CHECK(o.warmup_steps >= 0) << "warmup_steps must be >= 0, got " << o.warmup_steps;
+  STEREODET_CHECK(o.final_lr_fraction >= 0.0 && o.final_lr_fraction <= 1.0)
+      << "final_lr_fraction must be in [0, 1], got " << o.final_lr_fraction;
+  STEREODET_CHECK(o.threads >= 0) << "threads must be >= 0, got " << o.threads;
+  STEREODET_CHECK(o.max_frames >= 0) << "max_frames must be >= 0, got " << o.max_frames;
+  STEREODET_CHECK(o.max_epochs_this_run >= 0)
+      << "max_epochs_this_run must be >= 0, got " << o.max_epochs_this_run;
+  STEREODET_CHECK(ParseComputeDevice(o.device).has_value())
+      << "unknown device '" << o.device << "' (expected cpu or cuda)";
+  STEREODET_CHECK(!(o.resume && o.force)) << "--resume and --force exclude each other";
+}
 
 // A new training run's id: 16 hex digits that no other run draws (the random device, the clock).
 // model.json's "weights" and checkpoint.pt record it, so --resume refuses a foreign checkpoint.

@@ -31,27 +31,12 @@ void TrainDet3dOptions::Check() const {
   gt_database.Check();
   gt_sampling.Check();
   loss.Check();
-  STEREODET_CHECK(!data_root.empty()) << "--data is required";
-  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
+  CheckTrainingSchedule(*this);
   STEREODET_CHECK(model.input != PointSource::kStereo || !points_dir.empty())
       << "--input stereo needs --points (the folder `stereodet stereo --encode points` wrote)";
-  STEREODET_CHECK(epochs >= 1) << "epochs must be >= 1, got " << epochs;
-  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
-  STEREODET_CHECK(learning_rate > 0.0 && std::isfinite(learning_rate))
-      << "learning rate must be > 0, got " << learning_rate;
-  STEREODET_CHECK(warmup_steps >= 0) << "warmup_steps must be >= 0, got " << warmup_steps;
-  STEREODET_CHECK(final_lr_fraction >= 0.0 && final_lr_fraction <= 1.0)
-      << "final_lr_fraction must be in [0, 1], got " << final_lr_fraction;
   STEREODET_CHECK(weight_decay >= 0.0 && std::isfinite(weight_decay))
       << "weight decay must be >= 0, got " << weight_decay;
-  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
-  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
-  STEREODET_CHECK(max_epochs_this_run >= 0)
-      << "max_epochs_this_run must be >= 0, got " << max_epochs_this_run;
   STEREODET_CHECK(max_aux_points >= 0) << "max_aux_points must be >= 0, got " << max_aux_points;
-  STEREODET_CHECK(ParseComputeDevice(device).has_value())
-      << "unknown device '" << device << "' (expected cpu or cuda)";
-  STEREODET_CHECK(!(resume && force)) << "--resume and --force exclude each other";
 }
 
 TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
