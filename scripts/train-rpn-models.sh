@@ -10,7 +10,7 @@
 #      parameter count (--image-width 39: 3.29 M vs 3.26 M parameters).
 # Every training resumes (--resume): rerunning after an interruption continues where it stopped.
 # Usage: scripts/train-rpn-models.sh BUILD_DIR [DATA_DIR] [MODELS_DIR]
-#   RPN_EPOCHS=8         epochs
+#   RPN_EPOCHS=6         epochs (the committed rpn-rgb: 6)
 #   RPN_THREADS=1        LibTorch threads (fixed: the weights are bit-identical for a fixed count;
 #                        more threads than free cores is much slower: OpenMP spins at barriers)
 #   RPN_MAX_FRAMES=0     only the first N training frames (0 = all)
@@ -22,7 +22,7 @@ set -euo pipefail
 build_dir=${1:-build}
 data=${2:-data/synth}
 models=${3:-models}
-epochs=${RPN_EPOCHS:-8}
+epochs=${RPN_EPOCHS:-6}
 threads=${RPN_THREADS:-1}
 max_frames=${RPN_MAX_FRAMES:-0}
 image_width=${RPN_IMAGE_WIDTH:-32}
