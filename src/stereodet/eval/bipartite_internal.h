@@ -9,6 +9,7 @@
 #ifndef STEREODET_EVAL_BIPARTITE_INTERNAL_H_
 #define STEREODET_EVAL_BIPARTITE_INTERNAL_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <numeric>
 #include <vector>
@@ -28,6 +29,24 @@ struct DetAdjacency {
 // label i = i and detection j = num_labels + j), with path halving. Union(a, b) links a's root
 // under b's, so for a given sequence of unions the roots, and hence the order in which callers meet
 // the components, are fixed. Reset keeps the memory (one instance per thread can be reused).
+// Sorts [first, last) as std::stable_sort(first, last, less) does, without its temporary buffer:
+// insertion sort for the short ranges a frame's detections make (a few to a few dozen; the
+// evaluators sort one per frame, class and difficulty, where stable_sort's allocation cost more
+// than the sorting), std::stable_sort beyond.
+template <typename It, typename Less>
+void StableSortSmall(It first, It last, Less less) {
+  if (last - first > 32) {
+    std::stable_sort(first, last, less);
+    return;
+  }
+  for (It i = first; i != last; ++i) {
+    auto value = std::move(*i);
+    It j = i;
+    for (; j != first && less(value, *(j - 1)); --j) *j = std::move(*(j - 1));
+    *j = std::move(value);
+  }
+}
+
 class DisjointSets {
  public:
   DisjointSets() = default;

@@ -101,24 +101,46 @@ FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& f
   return out;
 }
 
+// Memory reused by one thread from call to call: OptimalSimilarityEvents runs once per frame,
+// class and difficulty, mostly on small frames, where allocating its buffers afresh cost about as
+// much as the work (docs/BENCHMARKS.md, issue 10).
+struct ComponentScratch {
+  DisjointSets sets;
+  std::vector<int32_t> det_degree, comp_of_root, local;
+  std::vector<uint8_t> single;
+  std::vector<ClassFrame> comps;  // the first num_comps hold this call's components
+  int num_comps = 0;
+  std::vector<std::pair<int32_t, double>> dets;  // SingleLabelSimilarityEvents'
+};
+
+ComponentScratch& ComponentMemory() {
+  thread_local ComponentScratch scratch;
+  return scratch;
+}
+
 // The connected components of `cf`'s overlap graph that have an edge, each as a ClassFrame of its
-// own (object indices still into the frame's EvalFrame). The optimal association decomposes over
-// them, and detections without an edge pair with nothing, so the TP pairs of `cf` at any threshold
-// are the union of the components' TP pairs.
+// own (object indices still into the frame's EvalFrame), in scratch->comps[0, num_comps). The
+// optimal association decomposes over them, and detections without an edge pair with nothing, so
+// the TP pairs of `cf` at any threshold are the union of the components' TP pairs.
 //
-// A component of one label (the common case) is not copied: `on_label(i)` is called for it instead.
+// A component of one label (the common case) is not copied: `on_label(i)` is called for it instead
+// (before this returns; it may use scratch->dets).
 template <typename OnLabel>
-std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
+void EdgeComponents(const ClassFrame& cf, OnLabel on_label, ComponentScratch* scratch) {
   const int nl = cf.num_labels(), nd = cf.num_dets();
-  DisjointSets sets(nl + nd);
+  DisjointSets& sets = scratch->sets;
+  sets.Reset(nl + nd);
   for (int i = 0; i < nl; ++i) {
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e)
       sets.Union(i, nl + cf.edge_det[e]);
   }
   // Single-label components first: a label whose detections overlap no other label.
-  std::vector<int32_t> det_degree(nd, 0);
+  std::vector<int32_t>& det_degree = scratch->det_degree;
+  det_degree.assign(nd, 0);
   for (const int32_t j : cf.edge_det) ++det_degree[j];
-  std::vector<uint8_t> single(nl, 0);
+  std::vector<uint8_t>& single = scratch->single;
+  single.assign(nl, 0);
+  bool any_multi = false;
   for (int i = 0; i < nl; ++i) {
     if (cf.edge_begin[i + 1] == cf.edge_begin[i]) continue;
     bool alone = true;
@@ -127,16 +149,25 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
     if (alone) {
       single[i] = 1;
       on_label(i);
+    } else {
+      any_multi = true;
     }
   }
-  std::vector<int32_t> comp_of_root(nl + nd, -1), local(nl + nd, -1);
-  std::vector<ClassFrame> comps;
+  scratch->num_comps = 0;
+  if (!any_multi) return;  // every edge is in a one-label component
+  std::vector<int32_t>& comp_of_root = scratch->comp_of_root;
+  std::vector<int32_t>& local = scratch->local;
+  comp_of_root.assign(nl + nd, -1);
+  local.assign(nl + nd, -1);
+  std::vector<ClassFrame>& comps = scratch->comps;
   auto comp = [&](int x) -> ClassFrame& {
     const int r = sets.Find(x);
     if (comp_of_root[r] < 0) {
-      comp_of_root[r] = static_cast<int32_t>(comps.size());
-      comps.emplace_back();
-      comps.back().min_overlap = cf.min_overlap;
+      comp_of_root[r] = scratch->num_comps++;
+      if (static_cast<int>(comps.size()) < scratch->num_comps) comps.emplace_back();
+      ClassFrame& c = comps[comp_of_root[r]];
+      c.Clear();
+      c.min_overlap = cf.min_overlap;
     }
     return comps[comp_of_root[r]];
   };
@@ -160,7 +191,7 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
     c.det_alpha.push_back(cf.det_alpha[j]);
     c.det_dontcare.push_back(cf.det_dontcare[j]);
   }
-  for (ClassFrame& c : comps) c.edge_begin.push_back(0);
+  for (int k = 0; k < scratch->num_comps; ++k) comps[k].edge_begin.push_back(0);
   for (int i = 0; i < nl; ++i) {  // labels in order, so each component's CSR is built in order
     if (local[i] < 0) continue;
     ClassFrame& c = comps[comp_of_root[sets.Find(i)]];
@@ -170,7 +201,6 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
     }
     c.edge_begin.push_back(static_cast<int32_t>(c.edge_det.size()));
   }
-  return comps;
 }
 
 // The similarity events of a component made of one label and the detections overlapping only it.
@@ -179,16 +209,18 @@ std::vector<ClassFrame> EdgeComponents(const ClassFrame& cf, OnLabel on_label) {
 // same choice for a one-label component). So the partner changes only when a better detection
 // arrives.
 void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty difficulty,
+                                 std::vector<std::pair<int32_t, double>>* dets_memory,
                                  std::vector<CurveEvent>* events) {
   if (!cf.LabelValid(label, difficulty)) return;
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  std::vector<std::pair<int32_t, double>> dets;  // (detection, overlap), valid ones
+  std::vector<std::pair<int32_t, double>>& dets = *dets_memory;  // (detection, overlap), valid ones
+  dets.clear();
   for (int e = cf.edge_begin[label]; e < cf.edge_begin[label + 1]; ++e) {
     const int j = cf.edge_det[e];
     if (cf.det_is_class[j] && std::trunc(cf.det_height[j]) >= min_height)
       dets.emplace_back(j, cf.edge_overlap[e]);
   }
-  std::stable_sort(dets.begin(), dets.end(), [&](const auto& a, const auto& b) {
+  StableSortSmall(dets.begin(), dets.end(), [&](const auto& a, const auto& b) {
     return cf.det_score[a.first] > cf.det_score[b.first];
   });
   auto better = [&](const std::pair<int32_t, double>& a, const std::pair<int32_t, double>& b) {
@@ -230,10 +262,14 @@ std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const Cl
                                                 Difficulty difficulty,
                                                 std::vector<CurveEvent> append_to) {
   std::vector<CurveEvent> events = std::move(append_to);
-  auto on_label = [&](int label) { SingleLabelSimilarityEvents(cf, label, difficulty, &events); };
-  for (const ClassFrame& c : EdgeComponents(cf, on_label)) {
-    events = FrameEventsFromAssociations(Matcher::kOptimal, frame, c, difficulty, nullptr, true,
-                                         true, std::move(events))
+  ComponentScratch& scratch = ComponentMemory();
+  auto on_label = [&](int label) {
+    SingleLabelSimilarityEvents(cf, label, difficulty, &scratch.dets, &events);
+  };
+  EdgeComponents(cf, on_label, &scratch);
+  for (int k = 0; k < scratch.num_comps; ++k) {
+    events = FrameEventsFromAssociations(Matcher::kOptimal, frame, scratch.comps[k], difficulty,
+                                         nullptr, true, true, std::move(events))
                  .events;
   }
   return events;

@@ -91,8 +91,8 @@ void ByDescendingScore(const ClassFrame& f, const std::vector<int8_t>& role,
   for (int j = 0; j < f.num_dets(); ++j) {
     if (role[j] != kOut) order->push_back(j);
   }
-  std::stable_sort(order->begin(), order->end(),
-                   [&](int a, int b) { return f.det_score[a] > f.det_score[b]; });
+  StableSortSmall(order->begin(), order->end(),
+                  [&](int a, int b) { return f.det_score[a] > f.det_score[b]; });
 }
 
 // The maximum-weight association of each connected component of the overlap graph at the
@@ -114,6 +114,20 @@ namespace {
 // OptimalFrameEvents' events of `f`, whose graph `g` (scratch.graph) is built, appended to *events.
 void AppendFrameEvents(const ClassFrame& f, const OptimalGraph& g, ThreadScratch& scratch,
                        std::vector<CurveEvent>* events) {
+  ByDescendingScore(f, g.role, &scratch.order);
+  if (g.adj.labels.empty()) {
+    // No detection overlaps a valid label (a class absent from the frame, or all boxes apart):
+    // nothing is ever matched or excused by a match, so each valid detection that is not
+    // excusable is a FP, and the rest make no event; no matchings to keep.
+    for (const int j : scratch.order) {
+      if (g.role[j] != kValid || g.det_excusable[j]) continue;
+      CurveEvent ev;
+      ev.score = f.det_score[j];
+      ev.fp = 1;
+      events->push_back(ev);
+    }
+    return;
+  }
   // Usually nothing is excused (no valid detection on an ignored label or DontCare, no ignored
   // detection on a valid label); then the FP and FN matchings are the TP matching itself.
   bool any_excusable = false, any_label_excuse = false;
@@ -129,7 +143,6 @@ void AppendFrameEvents(const ClassFrame& f, const OptimalGraph& g, ThreadScratch
   if (any_label_excuse) (labels = &scratch.labels)->Reset(&g.adj);
   std::vector<uint8_t>& label_excused = scratch.label_excused;
   label_excused.assign(f.num_labels(), 0);
-  ByDescendingScore(f, g.role, &scratch.order);
   for (const int j : scratch.order) {
     CurveEvent ev;
     ev.score = f.det_score[j];
@@ -239,6 +252,41 @@ void MatchComponents(const ClassFrame& f, const OptimalGraph& g,
   FrameAssociation& a = *assoc;
   const int nl = f.num_labels();
   const int nd = f.num_dets();
+  auto degree = [&](int j) { return g.adj.begin[j + 1] - g.adj.begin[j]; };
+  // Usually no present valid detection overlaps two valid labels: then every component is one
+  // label and the detections overlapping it, and its maximum-weight association is the label's
+  // best edge, found in one pass in ascending detection order, without the union-find below.
+  // Within such a component K^2 and the label's excuse are the same for every edge, so the best is
+  // by (not excusable, overlap), the lowest detection index among equals: the general path's
+  // one-label choice.
+  bool stars = true;
+  for (int j = 0; j < nd && stars; ++j) {
+    stars = !(present[j] && g.role[j] == kValid && degree(j) > 1);
+  }
+  if (stars) {
+    std::vector<int32_t>& best = scratch.match;  // per label: its best detection, or -1
+    best.assign(nl, -1);
+    for (int j = 0; j < nd; ++j) {
+      if (!present[j] || g.role[j] != kValid || degree(j) == 0) continue;
+      const int k = g.adj.begin[j];
+      int32_t& b = best[g.adj.labels[k]];
+      if (b >= 0) {
+        const bool covers = !g.det_excusable[j], b_covers = !g.det_excusable[b];
+        if (covers != b_covers ? !covers : !(g.adj_overlap[k] > g.adj_overlap[g.adj.begin[b]]))
+          continue;
+      }
+      b = j;
+    }
+    for (int i = 0; i < nl; ++i) {
+      const int j = best[i];
+      if (j < 0) continue;
+      a.label_outcome[i] = Outcome::kTp;
+      a.label_det[i] = j;
+      a.det_outcome[j] = Outcome::kTp;
+      a.det_label[j] = i;
+    }
+    return;
+  }
   // Connected components of (valid labels) + (present valid detections), union-find.
   DisjointSets& sets = scratch.sets;
   sets.Reset(nl + nd);

@@ -124,6 +124,26 @@ TEST(OptimalMatcherTest, AmongMaximumMatchingsTakesLargestOverlap) {
   EXPECT_EQ(a.label_det[1], 0);
 }
 
+// One label and detections overlapping only it (the matcher's one-pass path): the largest
+// overlap wins, the lowest detection index among equal overlaps, and a detection inside DontCare
+// only when no other is there (it could be excused; matching another covers one more
+// unexcusable detection). The AOS curve (SingleLabelSimilarityEvents) relies on this choice.
+TEST(OptimalMatcherTest, OneLabelTakesItsBestDetectionLowestIndexAmongEquals) {
+  ClassFrame cf = HandFrame({{0.6, 0.8, 0.8, 0.9}, {0, 0, 0, 0}}, {0.9, 0.5, 0.7, 0.6}, 0.5);
+  EXPECT_EQ(OptimalAssociate(cf, Difficulty::kModerate, 0.0).label_det[0], 3);
+  EXPECT_EQ(OptimalAssociate(cf, Difficulty::kModerate, 0.65).label_det[0], 2);  // 3 below t
+  cf.det_score = {0.9, 0.8, 0.8, 0.1};
+  EXPECT_EQ(OptimalAssociate(cf, Difficulty::kModerate, 0.5).label_det[0], 1);  // 1 and 2 tie
+  cf.det_dontcare = {0, 0, 0, 1};
+  const FrameAssociation a = OptimalAssociate(cf, Difficulty::kModerate, 0.0);
+  EXPECT_EQ(a.label_det[0], 1);
+  EXPECT_EQ(a.det_outcome[3], Outcome::kDontCare);
+  EXPECT_EQ(a.label_det[1], -1);
+  EXPECT_EQ(a.label_outcome[1], Outcome::kFn);
+  cf.det_dontcare = {1, 1, 1, 1};
+  EXPECT_EQ(OptimalAssociate(cf, Difficulty::kModerate, 0.0).label_det[0], 3);
+}
+
 // ------------------------------------------------------------------------------------------------
 // Brute force: every association of a small frame.
 

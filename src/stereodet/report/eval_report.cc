@@ -397,12 +397,12 @@ class CachedCsv {
 void AppendCurveCsvs(const std::vector<CurvePoint>& curve, int64_t num_frames, bool with_aos,
                      std::string* pr, std::string* roc) {
   if (pr) {
-    pr->reserve(pr->size() + 96 * (curve.size() + 1));
+    pr->reserve(pr->size() + 128 * (curve.size() + 1));  // a row is about 110 bytes
     pr->append("threshold,tp,fp,fn,precision,recall,fp_per_frame");
     pr->append(with_aos ? ",orientation\n" : "\n");
   }
   if (roc) {
-    roc->reserve(roc->size() + 64 * (curve.size() + 1));
+    roc->reserve(roc->size() + 96 * (curve.size() + 1));  // about 75
     roc->append("fp_per_frame,recall,threshold,tp,fp\n");
   }
   // A row has 5 numbers of at most kFmtShortestMaxChars and 3 counts of at most 20 characters

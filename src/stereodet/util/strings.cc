@@ -108,9 +108,22 @@ char* WriteFmtShortest(char* it, double value) {
   char digits[48];
   char* end = digits + 24;
   char* first = end;
-  uint64_t sig = dec.significand;
+  uint64_t sig64 = dec.significand;  // < 2^54: at most 17 digits
+  // The low 8 digits of a long significand in 32-bit arithmetic (cheaper than 64-bit division),
+  // then the rest, which fits 32 bits.
+  if (sig64 >= 100000000) {
+    const uint64_t high = sig64 / 100000000;
+    uint32_t low = static_cast<uint32_t>(sig64 - high * 100000000);
+    for (int k = 0; k < 4; ++k) {
+      first -= 2;
+      std::memcpy(first, kPairs + 2 * (low % 100), 2);
+      low /= 100;
+    }
+    sig64 = high;
+  }
+  uint32_t sig = static_cast<uint32_t>(sig64);
   while (sig >= 100) {
-    const uint64_t pair = sig % 100;
+    const uint32_t pair = sig % 100;
     sig /= 100;
     first -= 2;
     std::memcpy(first, kPairs + 2 * pair, 2);
