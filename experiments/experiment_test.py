@@ -83,6 +83,8 @@ def parse_tables(text):
             kind = "variance"
         elif line.startswith("### Verdicts"):
             cls, kind = "all", "verdicts"
+        elif line.startswith("Filter sweep"):
+            cls, kind = "all", "sweep"
         elif line.startswith("| ") and cls and not line.startswith("| model |") \
                 and not line.startswith("| A - B |") and not line.startswith("| claim |"):
             tables.setdefault((cls, kind), []).append([c.strip() for c in line.strip("|").split("|")])
@@ -107,8 +109,9 @@ steps = int(m.group(1)) if m else 0
 # synth, stereo points (val only: the 3D models are the committed ones, not trained here), 4
 # trainings (2 x 2 RPN seeds), detect: 6 image models x 2 blurs + 2 3D models, 2 evals each,
 # compares: 3 image pairs (the SSDs, 2 RPN seed pairs) x 2 blurs x 2 matchers + the 3D pair x 2
-# matchers = 1 + 1 + 4 + 14 + 28 + 14
-check(steps == 62 and m.group(2) == "0", f"first run: 62 steps, none skipped (got {m.groups()})")
+# matchers, figures: the models' report, the blur report, the 3D pair's compare report and the
+# filter sweep = 1 + 1 + 4 + 14 + 28 + 14 + 4
+check(steps == 66 and m.group(2) == "0", f"first run: 66 steps, none skipped (got {m.groups()})")
 table_text = (out / "table1.md").read_text()
 tables = parse_tables(table_text)
 
@@ -263,6 +266,26 @@ for seed in (1, 2):
           str(out / "models" / f"rpn-rgb-seed{seed}") in marker["command"],
           f"train-rpn-rgbd-seed{seed}: --init-from its rgb model, a dependency: {marker}")
 
+# The figures: one report per group, and the sweep's shares recounted from its sweep.csv.
+for folder in ("models", "blur", "compare-det3d-lidar-vs-det3d-stereo", "sweep-ssd-rgb/report"):
+    check((out / "figures" / folder / "index.html").is_file(), f"figures/{folder}/index.html")
+# (`eval sweep --report` has no --no-png: only the `stereodet report` folders follow the setting.)
+check(not [p for p in (out / "figures").rglob("*.png") if "sweep-" not in str(p)],
+      "figures.png false: no PNGs from stereodet report")
+srows = {(r[0], r[1]): r for r in tables.get(("all", "sweep"), [])}
+with open(out / "figures" / "sweep-ssd-rgb" / "sweep.csv") as f:
+    sweep = list(csv.DictReader(f))
+for cls in config["classes"]:
+    values = [r for r in sweep if r["class"] == cls]
+    row = srows.get(("ssd-rgb", cls))
+    check(row is not None and row[3] == str(len(values)), f"sweep row for {cls}: {row}")
+    for k, measure in ((4, "precision"), (5, "recall")):
+        d = [float(r[f"stable_{measure}"]) - float(r[f"naive_{measure}"]) for r in values]
+        counts = f"{sum(x > 1e-12 for x in d)} / {sum(abs(x) <= 1e-12 for x in d)} / " \
+                 f"{sum(x < -1e-12 for x in d)}"
+        check(row is not None and row[k].startswith(counts),
+              f"sweep {cls} {measure}: {row[k] if row else None} vs {counts}")
+
 # Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
 stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
 second = run()
@@ -275,7 +298,8 @@ third = run()
 rerun = sorted(re.findall(r"^==> ([\w.-]+):", third.stdout, re.M))
 check(rerun == ["compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti",
                 "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal", "detect-ssd-rgbh-fixed-blur5",
-                "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal"],
+                "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal",
+                "report-blur"],
       f"a lost detection marker reruns it and what depends on it, only: {rerun}")
 check((out / "table1.md").read_text() == table_text, "the rerun step gives the same table")
 
@@ -299,8 +323,9 @@ def run_ckpt():
 run_ckpt()
 check(run_ckpt() == [], "the checkpoint run skips everything the second time")
 os.utime(ckpt / "model.pt", ns=(0, 12345))
-check(run_ckpt() == ["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal"],
-      "a replaced checkpoint reruns its detection and evaluations")
+check(run_ckpt() == ["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal",
+                    "report-models", "sweep-ssd-rgb"],
+      "a replaced checkpoint reruns its detection, evaluations and figures")
 
 # --table-only runs nothing; --update-docs replaces the marked section only.
 doc = work / "RESULTS.md"

@@ -156,6 +156,27 @@ def load_config(path, train=False):
                               "bootstrap needs the same frames")
     config.setdefault("paper_figures", "")
     config.setdefault("claims", "")
+    figures = config.setdefault("figures", {})
+    w = f"{where}: figures"
+    if not isinstance(figures, dict):
+        raise ConfigError(f"{w}: an object, got {figures!r}")
+    if not isinstance(figures.setdefault("png", True), bool):
+        raise ConfigError(f"{w}.png: true or false, got {figures['png']!r}")
+    sweep = figures.get("sweep")
+    if sweep is not None:
+        if not isinstance(sweep, dict):
+            raise ConfigError(f"{w}.sweep: an object, got {sweep!r}")
+        group = _need(sweep, "model", str, f"{w}.sweep")
+        if group not in groups:
+            raise ConfigError(f"{w}.sweep.model: {group!r} is not in models")
+        _need(sweep, "filter", str, f"{w}.sweep")
+        for key, default in (("from", 0), ("to", 200), ("step", 5)):
+            value = sweep.setdefault(key, default)
+            if not isinstance(value, (int, float)) or isinstance(value, bool):
+                raise ConfigError(f"{w}.sweep.{key}: a number, got {value!r}")
+        if not sweep["step"] > 0 or not sweep["to"] >= sweep["from"]:
+            raise ConfigError(f"{w}.sweep: step > 0 and to >= from, got {sweep}")
+        sweep["models"] = groups[group]  # the model, or its seeds' models
     return config
 
 
@@ -371,6 +392,69 @@ class Pipeline:
                           cmp / "bootstrap.csv", cmd,
                           deps=[self.detect_step(a, sigma), self.detect_step(b, sigma)])
 
+    # -- figures (docs/experiment.md, "Figures") ----------------------------------------------
+    def figures_dir(self, name):
+        return self.out / "figures" / name
+
+    def eval_step(self, model, sigma, matcher):
+        return f"eval-{model['name']}-{blur_tag(sigma)}-{matcher}"
+
+    def report(self, name, sources, labels, deps):
+        """`stereodet report` of `sources` (results, sweep or compare folders) overlaid."""
+        out = self.figures_dir(name)
+        cmd = [self.bin, "report", *sources, "--out", out]
+        if len(sources) > 1:
+            cmd += ["--labels", ",".join(labels)]
+        if not self.config["figures"]["png"]:
+            cmd.append("--no-png")
+        self.step(f"report-{name}", out / "index.html", cmd, deps=deps)
+
+    def run_figures(self, present):
+        """The paper's figures: ROC, PR and reliability of every model (sharp, optimal matcher),
+        calibration before and after blur, the 3D error against distance of each 3D pair with the
+        dz model, and the filter sweep naive vs stable."""
+        if not present:
+            return
+        # A model of the first family first: its cells are the report's (a 3D model's 2D cells
+        # are overlaid too).
+        self.report("models", [self.run_dir(m, 0) / "eval-optimal" for m in present],
+                    [m["name"] for m in present],
+                    [self.eval_step(m, 0, "optimal") for m in present])
+        blurred = [m for m in present if len(self.blurs(m)) > 1]
+        if blurred:
+            sources, labels, deps = [], [], []
+            for m in blurred:
+                for sigma in self.blurs(m):
+                    sources.append(self.run_dir(m, sigma) / "eval-optimal")
+                    labels.append(f"{m['name']} {blur_tag(sigma)}")
+                    deps.append(self.eval_step(m, sigma, "optimal"))
+            self.report("blur", sources, labels, deps)
+        by_name = {m["name"]: m for m in present}
+        if self.config["bootstrap"]["resamples"] > 0:
+            for a_name, b_name in self.config["pairs"]:
+                a, b = by_name.get(a_name), by_name.get(b_name)
+                if a is None or b is None or a["family"] != "det3d":
+                    continue  # 2D detections carry no 3D box: no error against distance
+                self.report(f"compare-{a_name}-vs-{b_name}",
+                            [self.compare_dir(a, b, 0, "optimal")], [],
+                            [f"compare-{a_name}-vs-{b_name}-blur0-optimal"])
+        sweep = self.config["figures"].get("sweep")
+        if sweep:
+            for name in sweep["models"]:
+                m = by_name.get(name)
+                if m is None:
+                    continue
+                out = self.figures_dir(f"sweep-{name}")
+                cmd = [self.bin, "eval", "sweep", "--gt", self.dataset_root(m["data"]),
+                       "--det", self.run_dir(m, 0) / "detections", "--split",
+                       self.config["split"], "--metrics", TABLE_METRIC[m["family"]],
+                       "--difficulties", self.config["difficulty"].lower(), "--matcher",
+                       "optimal", "--filter", sweep["filter"], "--from", sweep["from"], "--to",
+                       sweep["to"], "--step", sweep["step"], "--threads",
+                       self.config["threads"], "--out", out, "--report"]
+                self.step(f"sweep-{name}", out / "sweep.csv", cmd,
+                          deps=[self.detect_step(m, 0)])
+
     def run(self):
         self.find_missing()
         self.run_data()
@@ -386,6 +470,7 @@ class Pipeline:
         for a, b in self.config["pairs"]:
             if a not in self.missing and b not in self.missing:
                 self.run_compare(by_name[a], by_name[b])
+        self.run_figures(present)
 
 
 # -- the table ---------------------------------------------------------------------------------
@@ -623,6 +708,76 @@ def verdict_rows(pipeline):
     return rows
 
 
+def sweep_rows(pipeline):
+    """Per swept model and class: at how many of the swept filter values the stable (corrected)
+    filter's precision and recall are above, equal to and below the naive filter's."""
+    sweep = pipeline.config["figures"].get("sweep")
+    rows = []
+    if not sweep:
+        return rows
+    for name in sweep["models"]:
+        path = pipeline.figures_dir(f"sweep-{name}") / "sweep.csv"
+        if name in pipeline.missing or not path.exists():
+            continue
+        with open(path) as f:
+            by_class = {}
+            for r in csv.DictReader(f):
+                by_class.setdefault(r["class"], []).append(r)
+        for cls, values in by_class.items():
+            cells = [name, cls, f"{sweep['filter']} {sweep['from']:g}..{sweep['to']:g} "
+                     f"step {sweep['step']:g}", str(len(values))]
+            for measure in ("precision", "recall"):
+                above = equal = below = 0
+                for r in values:
+                    naive, stable = r[f"naive_{measure}"], r[f"stable_{measure}"]
+                    if naive == "" or stable == "":
+                        continue
+                    d = float(stable) - float(naive)
+                    above += d > 1e-12
+                    below += d < -1e-12
+                    equal += abs(d) <= 1e-12
+                n = above + equal + below
+                cells.append(f"{above} / {equal} / {below}"
+                             + (f" ({100 * above / n:.0f} % above)" if n else ""))
+            rows.append(cells)
+    return rows
+
+
+def figures_section(pipeline):
+    """Where the figures are (under OUT/figures/) and the filter sweep's shares."""
+    out = pipeline.out / "figures"
+    if not out.is_dir():
+        return ""
+    lines = ["### Figures", "",
+             "Under the experiment's output folder (`stereodet report`, docs/report.md; each "
+             "`index.html` opens offline):", ""]
+    described = {
+        "models": "every model, sharp, optimal matcher, overlaid: PR, ROC, reliability "
+                  "(calibration) and Brier terms per cell",
+        "blur": "the image models sharp and blurred, overlaid: calibration and ROC before and "
+                "after blur",
+    }
+    for d in sorted(p for p in out.iterdir() if (p / "index.html").exists()):
+        what = described.get(d.name)
+        if what is None and d.name.startswith("compare-"):
+            what = "3D centre and depth error against distance, both models, and the dz model"
+        lines.append(f"- `figures/{d.name}/index.html`: {what}")
+    for d in sorted(out.glob("sweep-*/report/index.html")):
+        lines.append(f"- `figures/{d.parent.parent.name}/report/index.html`: the filter sweep, "
+                     "naive vs stable filter (precision and recall against the filter value)")
+    srows = sweep_rows(pipeline)
+    if srows:
+        lines += ["", "Filter sweep, naive vs stable (the corrected filter; docs/metrics.md, "
+                  "filters): at how many swept values the stable filter's measure is above / "
+                  "equal to / below the naive one's (optimal matcher, "
+                  f"{pipeline.config['difficulty']}). The paper: the corrected metric is higher "
+                  "for about 90 % of area filters up to 200 px.", "",
+                  markdown(["model", "class", "filter", "values", "precision above / equal / "
+                            "below", "recall above / equal / below"], srows,
+                           ["---", "---", "---", "---:", "---:", "---:"])]
+    return "\n".join(lines)
+
+
 def markdown(header, rows, align):
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join(align) + "|"]
     lines += ["| " + " | ".join(r) + " |" for r in rows]
@@ -671,11 +826,47 @@ def write_table(pipeline):
                      + markdown(["claim", "decided by", "A - B [95%]", "verdict",
                                  "what would change it"], vrows,
                                 ["---", "---", "---:", "---", "---"]))
+    figures_text = figures_section(pipeline)
+    if figures_text:
+        parts.append(figures_text)
     text = "\n\n".join(parts) + "\n"
     tmp = pipeline.out / "table1.md.tmp"
     tmp.write_text(text)
     os.replace(tmp, pipeline.out / "table1.md")
     return text
+
+
+# The figures --update-docs copies beside the document (images/experiment/) and shows under the
+# table: (figures folder, glob under it, file name, caption).
+DOC_FIGURES = [
+    ("models", "figures/roc_car_2d_moderate.png", "roc_car.png",
+     "ROC, Car 2D Moderate, every model sharp (optimal matcher)"),
+    ("models", "figures/reliability_car_2d_moderate.png", "reliability_car.png",
+     "Calibration, Car 2D Moderate, every model sharp"),
+    ("blur", "figures/reliability_car_2d_moderate.png", "blur_reliability_car.png",
+     "Calibration before and after blur (sigma 5), Car 2D Moderate"),
+    ("compare-*", "figures/compare_car_3d_moderate.png", "compare_car_3d.png",
+     "Depth error against distance, LiDAR vs stereo points, with the dz model"),
+    ("sweep-*", "report/figures/sweep_car_2d_moderate.png", "sweep_car.png",
+     "Filter sweep, naive vs stable, Car 2D Moderate"),
+]
+
+
+def copy_doc_figures(pipeline, doc_path):
+    """Copies DOC_FIGURES' PNGs next to the document and returns the Markdown that shows them."""
+    images = pathlib.Path(doc_path).parent / "images" / "experiment"
+    lines = []
+    for folder, name, target, caption in DOC_FIGURES:
+        found = sorted((pipeline.out / "figures").glob(f"{folder}/{name}"))
+        if not found:
+            continue
+        images.mkdir(parents=True, exist_ok=True)
+        source = found[0]
+        tmp = images / (target + ".tmp")
+        tmp.write_bytes(source.read_bytes())
+        os.replace(tmp, images / target)
+        lines.append(f"![{caption}](images/experiment/{target})")
+    return ("\n\n".join(lines) + "\n") if lines else ""
 
 
 def update_docs(path, text):
@@ -718,7 +909,8 @@ def main(argv):
         pipeline.run()
         text = write_table(pipeline)
         if args.update_docs:
-            update_docs(args.update_docs, text)
+            images = copy_doc_figures(pipeline, args.update_docs)
+            update_docs(args.update_docs, text + ("\n" + images if images else ""))
     except (subprocess.CalledProcessError, RuntimeError, OSError, KeyError) as e:
         print(f"experiment: error: {e}", file=sys.stderr)
         return 1
