@@ -103,13 +103,11 @@ def test_merged_sharded_eval_is_the_single_process_eval(client, bin_dir, cli, da
     assert a == b
 
 
-def test_a_worker_killed_mid_run_changes_nothing(client, bin_dir, tmp_path):
-    frames = 8
-    one_process_synth(bin_dir, tmp_path / "one", frames, 5)
-    # One frame a task, LiDAR on: each task lasts long enough to be killed in the middle.
-    tasks = scale.synth_tasks(bin_dir, tmp_path / "sharded", frames, 5, 1, SYNTH_FLAGS)
-    futures = [client.submit(scale.run_task, t, key=f"kill-test-{t.index}", pure=False,
-                             retries=3) for t in tasks]
+def run_killing_one_worker(client, tasks, name):
+    """Runs `tasks` (retried), SIGKILLs a worker while it runs one of them, waits for all and
+    for the nanny to bring the worker back; asserts that every task finished."""
+    futures = [client.submit(scale.run_task, t, key=f"{name}-{t.index}", pure=False, retries=3)
+               for t in tasks]
     pids = client.run(os.getpid)  # worker address -> pid
     killed = None
     deadline = time.monotonic() + 30
@@ -121,15 +119,23 @@ def test_a_worker_killed_mid_run_changes_nothing(client, bin_dir, tmp_path):
                 break
         time.sleep(0.01)
     assert killed is not None, "no task was seen running"
-    distributed.wait(futures, timeout=120)
+    distributed.wait(futures, timeout=180)
     errors = [f"{f.key}: {f.exception()!r}" for f in futures if f.status != "finished"]
     assert errors == [], f"killed {killed}"
+    # The nanny brought the worker back: the cluster still has 2 workers for the next test.
+    client.wait_for_workers(2, timeout=60)
+
+
+def test_a_worker_killed_mid_run_changes_nothing(client, bin_dir, tmp_path):
+    frames = 8
+    one_process_synth(bin_dir, tmp_path / "one", frames, 5)
+    # One frame a task, LiDAR on: each task lasts long enough to be killed in the middle.
+    tasks = scale.synth_tasks(bin_dir, tmp_path / "sharded", frames, 5, 1, SYNTH_FLAGS)
+    run_killing_one_worker(client, tasks, "kill-test")
     one = folder_bytes(tmp_path / "one")
     sharded = folder_bytes(tmp_path / "sharded", skip_hidden=True)
     assert one.keys() == sharded.keys()
     assert [k for k in one if one[k] != sharded[k]] == []
-    # The nanny brought the worker back: the cluster still has 2 workers for the next test.
-    client.wait_for_workers(2, timeout=60)
 
 
 def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_path):
@@ -183,3 +189,28 @@ def test_sharded_detect_merged_is_one_process_folder_and_resumes(client, bin_dir
     changed = scale.detect_tasks(bin_dir, model, data, tmp_path / "sharded", str(split), 2,
                                  ["--threads", "1"])
     assert [scale.task_is_done(t) for t in changed] == [False] * 3
+
+
+def test_a_worker_killed_mid_detect_changes_nothing(client, bin_dir, tmp_path):
+    models = bin_dir / "stereodet-models"
+    if not models.exists():
+        pytest.skip("stereodet-models is not built (STEREODET_BUILD_MODELS=OFF)")
+    model = Path(__file__).resolve().parents[2] / "models" / "ssd-rgb"
+    data = tmp_path / "data"
+    one_process_synth(bin_dir, data, 4, 13, SYNTH_FLAGS + ["--no-lidar"])
+    split = tmp_path / "all.txt"
+    split.write_text("".join(f"{i:06d}\n" for i in range(4)))
+    flags = ["--threads", "1", "--score-threshold", "0", "--batch-size", "1"]
+    subprocess.run([str(models), "detect", "ssd", "--model", str(model), "--data", str(data),
+                    "--split", str(split), "--out", str(tmp_path / "one"), "--quiet", *flags],
+                   check=True)
+    # One frame a task: each loads LibTorch and the model (about a second), long enough to be
+    # killed in the middle; a killed task's shard folder is staged, so it leaves nothing that
+    # looks complete, and its rerun replaces it.
+    tasks = scale.detect_tasks(bin_dir, model, data, tmp_path / "sharded", str(split), 1, flags)
+    assert len(tasks) == 4
+    run_killing_one_worker(client, tasks, "kill-detect")
+    scale.detect_merge(bin_dir, tmp_path / "sharded", len(tasks))
+    one, merged = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded" / "merged")
+    assert one.keys() == merged.keys() and len(one) == 5  # four frames and run.json
+    assert [k for k in one if k != "run.json" and one[k] != merged[k]] == []
