@@ -6,7 +6,7 @@ CTEST_FLAGS ?=
 DEMO_DIR ?= $(BUILD_DIR)/demo
 SYNTH_DIR ?= data/synth
 
-.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results det3d-models det3d-results experiment
+.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results rpn-results det3d-models det3d-results experiment
 
 all: build
 
@@ -54,6 +54,13 @@ det3d-models: deps
 ssd-results: deps
 	$(MAKE) build
 	./scripts/ssd-results.sh $(BUILD_DIR) $(SYNTH_DIR) models results/ssd
+
+# docs/RESULTS.md's two-stage detector rows: models/rpn-{rgb,rgbd} (and the widened control
+# models/rpn-rgb-wide when it is there) the same way; writes results/rpn/table.md.
+rpn-results: deps
+	$(MAKE) build
+	RESULTS_FAMILY=rpn RESULTS_INPUTS="rgb rgbd$$(test -f models/rpn-rgb-wide/model.pt && echo ' rgb-wide')" \
+	  ./scripts/ssd-results.sh $(BUILD_DIR) $(SYNTH_DIR) models results/rpn
 
 # docs/RESULTS.md's 3D detector section: models/det3d-{lidar,stereo} on the val split of
 # $(DET3D_DIR), 2D / BEV / 3D, strict and loose, both matchers, bootstrap, the LiDAR-vs-stereo
