@@ -1,7 +1,13 @@
 // stereodet._core: KITTI I/O and evaluation (no OpenCV, no LibTorch). The pure-Python package
 // (python/stereodet/) is the documented interface; names here with a leading underscore are its
 // internals.
+#include <pybind11/stl.h>
+
+#include <string>
+#include <vector>
+
 #include "common.h"
+#include "stereodet/cli/commands.h"
 #include "stereodet/util/version.h"
 
 namespace stereodet::python {
@@ -27,6 +33,17 @@ PYBIND11_MODULE(_core, m) {
   BindKitti(m);
   BindEval(m);
 
+  m.def(
+      "_run_cli",
+      [](const std::vector<std::string>& args) {
+        ReleaseGil release;
+        return stereodet::cli::RunCommandInProcess(args, stereodet::cli::Program::kFrontEnd,
+                                                   stereodet::cli::FrontEndCommands());
+      },
+      py::arg("args"),
+      "`stereodet ARGS...` of a front-end command (info, eval, report, view) in this process, "
+      "with the GIL released; returns its exit code (its output goes to this process's stdout "
+      "and stderr). Used by stereodet.scale's in-process tasks.");
   m.def("_calls_in_progress", &CallsInProgress,
         "The number of threads now inside C++ work with the GIL released (for the tests).");
 }

@@ -62,6 +62,10 @@ class Task:
     # of another command line, e.g. another model into the same folder, does not count).
     same_argv: bool = False
     env: dict = field(default_factory=dict)
+    # True: the command runs inside the worker's process through the Python module
+    # (stereodet._core._run_cli, the GIL released), not as a subprocess: no process start per
+    # task; only for the front end's commands (eval). Its output goes to the worker's stdout.
+    in_process: bool = False
 
 
 def find_bin_dir(given: Optional[str] = None) -> Path:
@@ -120,13 +124,20 @@ def run_task(task: Task) -> dict:
     if task_is_done(task):
         return {"index": task.index, "skipped": True, "seconds": 0.0}
     start = time.monotonic()
-    env = dict(os.environ)
-    env.update(task.env)
-    result = subprocess.run(_with_parent_death_signal(task.argv), capture_output=True, text=True,
-                            env=env)
-    if result.returncode != 0:
-        raise RuntimeError(f"task {task.index}/{task.count} failed (exit {result.returncode}): "
-                           f"{' '.join(task.argv)}\n{result.stderr.strip()}")
+    if task.in_process:
+        from stereodet import _core  # noqa: PLC0415 (the worker imports it on its first task)
+        code = _core._run_cli(list(task.argv[1:]))
+        if code != 0:
+            raise RuntimeError(f"task {task.index}/{task.count} failed (exit {code}) in process: "
+                               f"{' '.join(task.argv)} (its error is on the worker's stderr)")
+    else:
+        env = dict(os.environ)
+        env.update(task.env)
+        result = subprocess.run(_with_parent_death_signal(task.argv), capture_output=True,
+                                text=True, env=env)
+        if result.returncode != 0:
+            raise RuntimeError(f"task {task.index}/{task.count} failed (exit {result.returncode}): "
+                               f"{' '.join(task.argv)}\n{result.stderr.strip()}")
     if not task.write_done:
         return {"index": task.index, "skipped": False, "seconds": time.monotonic() - start}
     Path(task.done).parent.mkdir(parents=True, exist_ok=True)
@@ -198,7 +209,7 @@ def eval_shard_dir(out: Path, k: int, n: int) -> Path:
 
 
 def eval_tasks(bin_dir: Path, gt: Path, det: Path, out: Path, split: Optional[str],
-               task_frames: int, extra: Sequence[str]) -> List[Task]:
+               task_frames: int, extra: Sequence[str], in_process: bool = False) -> List[Task]:
     n = num_tasks(count_eval_frames(gt, split), task_frames)
     split_args = ["--split", split] if split else []
     tasks = []
@@ -209,7 +220,7 @@ def eval_tasks(bin_dir: Path, gt: Path, det: Path, out: Path, split: Optional[st
         tasks.append(Task(k, n, [str(bin_dir / "stereodet"), "eval", "--gt", str(gt), "--det",
                                  str(det), *split_args, "--shard", f"{k}/{n}", "--out",
                                  str(shard), *extra], str(shard / "eval_shard.json"),
-                          write_done=False))
+                          write_done=False, in_process=in_process))
     return tasks
 
 
@@ -325,6 +336,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task-frames", type=int, default=200, help="frames per task; default 200")
     p.add_argument("--bin", help="folder of the stereodet executables (default: found)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--in-process", action="store_true",
+                   help="eval: run each task inside its worker through the Python module (the "
+                        "GIL released) instead of as a subprocess")
     sub = p.add_subparsers(dest="command", required=True)
     s = sub.add_parser("synth", help="sharded `stereodet synth`")
     s.add_argument("--out", required=True, type=Path)
@@ -368,7 +382,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                              args.out.resolve(), split, args.task_frames, extra, args.family)
     else:
         tasks = eval_tasks(bin_dir, args.gt.resolve(), args.det.resolve(), args.out.resolve(),
-                           args.split, args.task_frames, extra)
+                           args.split, args.task_frames, extra, in_process=args.in_process)
     progress = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
     client, cluster = make_client(args.workers, args.scheduler)
     try:

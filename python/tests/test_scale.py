@@ -81,15 +81,19 @@ def test_sharded_synth_is_one_process_byte_for_byte_and_resumes(client, bin_dir,
     assert [r["skipped"] for r in scale.run_tasks(client, tasks, lines.append)] == [True] * 3
 
 
-@pytest.mark.parametrize("matcher", ["kitti", "optimal"])
+# in_process: each task runs in its worker through stereodet._core._run_cli (GIL released), not
+# as a subprocess; the shards and the merge must be the same bytes either way.
+@pytest.mark.parametrize("matcher,in_process", [("kitti", False), ("optimal", False),
+                                                ("kitti", True), ("optimal", True)])
 def test_merged_sharded_eval_is_the_single_process_eval(client, bin_dir, cli, data, tmp_path,
-                                                        matcher):
+                                                        matcher, in_process):
     gt, det = data / "eval_small", data / "eval_small" / "det"
     flags = ["--matcher", matcher, "--filter", "min-area=300", "--overlaps", "strict,loose",
              "--records"]
     cli("eval", "--gt", gt, "--det", det, "--out", tmp_path / "one", *flags)
-    tasks = scale.eval_tasks(bin_dir, gt, det, tmp_path / "sharded", None, 5, flags)
-    assert len(tasks) == 3  # 12 frames in tasks of at most 5
+    tasks = scale.eval_tasks(bin_dir, gt, det, tmp_path / "sharded", None, 5, flags,
+                             in_process=in_process)
+    assert len(tasks) == 3 and all(t.in_process == in_process for t in tasks)
     scale.run_tasks(client, tasks, lambda line: None)
     scale.eval_merge(bin_dir, tmp_path / "sharded", len(tasks), flags)
     merged = tmp_path / "sharded" / "merged"
@@ -101,6 +105,19 @@ def test_merged_sharded_eval_is_the_single_process_eval(client, bin_dir, cli, da
         merged / "results.json")
     assert a["results"]  # not vacuous
     assert a == b
+    # A shard's provenance is its own command line, also in process (not the worker's).
+    shard = json.loads((scale.eval_shard_dir(tmp_path / "sharded", 0, 3) / "results.json")
+                       .read_text())
+    assert shard["command_line"].startswith(("stereodet eval --gt", str(bin_dir / "stereodet")))
+    assert "--shard 0/3" in shard["command_line"]
+    # The same resumes: every shard is there, so every task is skipped.
+    assert [r["skipped"] for r in scale.run_tasks(client, tasks, lambda line: None)] == [True] * 3
+
+
+def test_an_in_process_task_of_another_executable_is_refused():
+    from stereodet import _core
+    assert _core._run_cli(["synth", "--out", "/nonexistent/never-written"]) == 1
+    assert not os.path.exists("/nonexistent/never-written")
 
 
 def run_killing_one_worker(client, tasks, name):

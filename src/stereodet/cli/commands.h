@@ -20,6 +20,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "stereodet/util/shard.h"
 
@@ -83,11 +84,25 @@ inline CLI::Option* AddShardOption(CLI::App* cmd, Shard* shard) {
 }
 
 // The command line of this process (/proc/self/cmdline), arguments joined by spaces, those with
-// spaces or quotes in single quotes, for provenance records. Empty where /proc is not there.
+// spaces or quotes in single quotes, for provenance records. Empty where /proc is not there. Inside
+// RunCommandInProcess on this thread: that call's "stereodet ARGS...", quoted the same way.
 std::string ProcessCommandLine();
 
 int RunCli(int argc, char** argv, Program self,
            std::span<const std::pair<std::string_view, AddCommandFn>> own);
+
+// The commands the front end `stereodet` implements itself (info, eval, report, view), with their
+// Add*Command functions: its main()'s list, and the Python module's (frontend_commands.cc).
+std::span<const std::pair<std::string_view, AddCommandFn>> FrontEndCommands();
+
+// `stereodet ARGS...` (args without the program name: {"eval", "--gt", "DIR", ...}) run in this
+// process, for callers that are not a main() (the Python module's in-process tasks, docs/scale.md):
+// RunCli's parsing, messages and exit codes, but a command of another executable is refused (an
+// error line and exit 1) instead of replacing the calling process with execv(), and the command
+// line recorded in run manifests (ProcessCommandLine, on this thread) is "stereodet ARGS...", not
+// the caller's. One call at a time per thread; commands keep no state between calls.
+int RunCommandInProcess(const std::vector<std::string>& args, Program self,
+                        std::span<const std::pair<std::string_view, AddCommandFn>> own);
 
 }  // namespace stereodet::cli
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -149,11 +150,24 @@ int RunCli(int argc, char** argv, Program self,
   return 0;
 }
 
+namespace {
+
+// RunCommandInProcess's command line on this thread (the arguments, NUL-separated as
+// /proc/self/cmdline holds them), or nothing outside such a call.
+thread_local std::optional<std::string> in_process_command_line;
+
+}  // namespace
+
 std::string ProcessCommandLine() {
-  // /proc files report size 0, so read to the end rather than by size.
-  std::ifstream in("/proc/self/cmdline", std::ios::binary);
-  if (!in) return {};
-  const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string raw;
+  if (in_process_command_line) {
+    raw = *in_process_command_line;
+  } else {
+    // /proc files report size 0, so read to the end rather than by size.
+    std::ifstream in("/proc/self/cmdline", std::ios::binary);
+    if (!in) return {};
+    raw.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
   std::string out;
   for (std::string_view arg : Split(raw, '\0')) {
     if (arg.empty()) continue;
@@ -167,6 +181,37 @@ std::string ProcessCommandLine() {
     }
   }
   return out;
+}
+
+int RunCommandInProcess(const std::vector<std::string>& args, Program self,
+                        std::span<const std::pair<std::string_view, AddCommandFn>> own) {
+  // The command is the first argument without a leading '-', as RunCli finds it.
+  for (const std::string& arg : args) {
+    if (arg.empty() || arg[0] == '-') continue;
+    const Command* command = FindCommand(arg);
+    if (command != nullptr && command->program != self) {
+      std::fprintf(stderr,
+                   "stereodet: error: `%s` runs in %s, not in this process; run that executable "
+                   "(or the stereodet front end) instead\n",
+                   arg.c_str(), ProgramName(command->program));
+      return 1;
+    }
+    break;  // an unknown word: RunCli says so
+  }
+  std::vector<std::string> argv_text = {"stereodet"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::string joined;
+  for (const std::string& arg : argv_text) joined += arg + '\0';
+  std::vector<char*> argv;
+  for (std::string& arg : argv_text) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+  in_process_command_line = joined;
+  struct Reset {
+    ~Reset() { in_process_command_line.reset(); }
+  } reset;
+  const int code = RunCli(static_cast<int>(argv.size()) - 1, argv.data(), self, own);
+  std::fflush(nullptr);
+  return code;
 }
 
 }  // namespace stereodet::cli
