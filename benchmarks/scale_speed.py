@@ -12,7 +12,8 @@ that a change of load hits all of them):
   --threads 1 on 1 and on 2 workers (each task a subprocess; a fresh output folder every time).
 - eval: `stereodet eval` (kitti matcher) of --eval-frames random frames (write_eval_set): one
   process with --threads 1 and 2, then `stereodet.scale eval` in 4 tasks of --threads 1 on 1 and
-  2 workers, plus its `eval merge` (serial, timed apart).
+  2 workers, as subprocesses and in process (--in-process), plus its `eval merge` (serial, timed
+  apart).
 - overhead per task: on 1 worker, 12 stereo frames as 12 one-frame tasks against one 12-frame
   task: (T12 - T1) / 11.
 - T0: the start of each LocalCluster.
@@ -101,6 +102,9 @@ def main() -> int:
             etasks = scale.eval_tasks(bin_dir, gt, det, fresh(work / "edask"), None,
                                       (ef + 3) // 4, ["--threads", "1"])
             note(f"eval dask w{workers}", timed(lambda: scale.run_tasks(client, etasks, quiet)))
+            itasks = scale.eval_tasks(bin_dir, gt, det, fresh(work / "edask"), None,
+                                      (ef + 3) // 4, ["--threads", "1"], in_process=True)
+            note(f"eval inproc w{workers}", timed(lambda: scale.run_tasks(client, itasks, quiet)))
             note(f"eval merge w{workers}", timed(lambda: scale.eval_merge(
                 bin_dir, work / "edask", len(etasks), ["--threads", "1"])))
         client = clusters[1][1]
@@ -131,6 +135,9 @@ def main() -> int:
         for w in (1, 2):
             print(row(f"{what}: Dask, {w} worker(s), 4 tasks of --threads 1", frames,
                       f"{what} dask w{w}", base))
+            if what == "eval":
+                print(row(f"eval: Dask, {w} worker(s), 4 tasks in process (--in-process)", frames,
+                          f"eval inproc w{w}", base))
     for w in (1, 2):
         print(f"| eval merge after {w} worker(s) (serial) | {best[f'eval merge w{w}']:.2f} | "
               f"{ef / best[f'eval merge w{w}']:.0f} | |")
