@@ -171,20 +171,27 @@ def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_pat
     assert a == b and len(a["frames"]) == 4
 
 
-def test_sharded_detect_merged_is_one_process_folder_and_resumes(client, bin_dir, tmp_path):
+def one_process_detect(bin_dir, tmp_path, frames, seed, batch_size):
+    """A synthetic set of `frames` frames (tmp_path/data), its split file of every frame, and the
+    committed ssd-rgb's one-process detections of it (tmp_path/one), every box (score threshold 0:
+    up to 100 a frame, compared to the last digit). Returns (model, data, split, flags)."""
     models = bin_dir / "stereodet-models"
     if not models.exists():
         pytest.skip("stereodet-models is not built (STEREODET_BUILD_MODELS=OFF)")
     model = Path(__file__).resolve().parents[2] / "models" / "ssd-rgb"
     data = tmp_path / "data"
-    one_process_synth(bin_dir, data, 5, 11, SYNTH_FLAGS + ["--no-lidar"])
+    one_process_synth(bin_dir, data, frames, seed, SYNTH_FLAGS + ["--no-lidar"])
     split = tmp_path / "all.txt"
-    split.write_text("".join(f"{i:06d}\n" for i in range(5)))
-    # Every box (score threshold 0): up to 100 a frame, compared to the last digit.
-    flags = ["--threads", "1", "--score-threshold", "0", "--batch-size", "3"]
+    split.write_text("".join(f"{i:06d}\n" for i in range(frames)))
+    flags = ["--threads", "1", "--score-threshold", "0", "--batch-size", str(batch_size)]
     subprocess.run([str(models), "detect", "ssd", "--model", str(model), "--data", str(data),
                     "--split", str(split), "--out", str(tmp_path / "one"), "--quiet", *flags],
                    check=True)
+    return model, data, split, flags
+
+
+def test_sharded_detect_merged_is_one_process_folder_and_resumes(client, bin_dir, tmp_path):
+    model, data, split, flags = one_process_detect(bin_dir, tmp_path, 5, 11, 3)
     tasks = scale.detect_tasks(bin_dir, model, data, tmp_path / "sharded", str(split), 2, flags)
     # 5 frames in tasks of 2 would be 3 tasks, but there are 2 batches of 3 (frames 0-2, 3-4),
     # and a shard is whole batches: 2 tasks.
@@ -209,18 +216,7 @@ def test_sharded_detect_merged_is_one_process_folder_and_resumes(client, bin_dir
 
 
 def test_a_worker_killed_mid_detect_changes_nothing(client, bin_dir, tmp_path):
-    models = bin_dir / "stereodet-models"
-    if not models.exists():
-        pytest.skip("stereodet-models is not built (STEREODET_BUILD_MODELS=OFF)")
-    model = Path(__file__).resolve().parents[2] / "models" / "ssd-rgb"
-    data = tmp_path / "data"
-    one_process_synth(bin_dir, data, 4, 13, SYNTH_FLAGS + ["--no-lidar"])
-    split = tmp_path / "all.txt"
-    split.write_text("".join(f"{i:06d}\n" for i in range(4)))
-    flags = ["--threads", "1", "--score-threshold", "0", "--batch-size", "1"]
-    subprocess.run([str(models), "detect", "ssd", "--model", str(model), "--data", str(data),
-                    "--split", str(split), "--out", str(tmp_path / "one"), "--quiet", *flags],
-                   check=True)
+    model, data, split, flags = one_process_detect(bin_dir, tmp_path, 4, 13, 1)
     # One frame a task: each loads LibTorch and the model (about a second), long enough to be
     # killed in the middle; a killed task's shard folder is staged, so it leaves nothing that
     # looks complete, and its rerun replaces it.
