@@ -22,8 +22,10 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Okabe-Ito, all 8 (yellow last: the weakest on white), so that up to 8 overlaid folders (the
+// experiment's models, docs/experiment.md) each get a colour of their own.
 constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                    "#E69F00", "#56B4E9", "#000000"};
+                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
 
 double Num(const json& j) { return j.is_number() ? j.get<double>() : kNaN; }
 double Num(const json& j, const char* key) {
