@@ -105,10 +105,10 @@ void AddStandIn(CLI::App& app, const Command& command, const char* argv0) {
   });
 }
 
-}  // namespace
-
-int RunCli(int argc, char** argv, Program self,
-           std::span<const std::pair<std::string_view, AddCommandFn>> own) {
+// RunCli, and with !may_exec RunCommandInProcess: another executable's command is then refused
+// instead of execv()ed over the calling process.
+int RunCliIn(int argc, char** argv, Program self,
+             std::span<const std::pair<std::string_view, AddCommandFn>> own, bool may_exec) {
   CLI::App app{std::string("stereodet ") + StereodetVersion() +
                ": stereo features, detectors and safety-grade evaluation on KITTI-format data.\n"
                "Run `stereodet COMMAND --help` for the options of a command."};
@@ -126,7 +126,15 @@ int RunCli(int argc, char** argv, Program self,
       const Command* command = FindCommand(argv[i]);
       // CLI11 would say only "A subcommand is required", naming neither the word nor the commands.
       if (command == nullptr) throw std::invalid_argument(UnknownCommandMessage(argv[i]));
-      if (command->program != self) ExecOwner(*command, argv);
+      if (command->program != self) {
+        if (!may_exec) {
+          throw std::runtime_error("`" + std::string(command->name) + "` runs in " +
+                                   ProgramName(command->program) +
+                                   ", not in this process; run that executable (or the stereodet "
+                                   "front end) instead");
+        }
+        ExecOwner(*command, argv);
+      }
       break;
     }
     std::set<AddCommandFn> added;
@@ -148,6 +156,13 @@ int RunCli(int argc, char** argv, Program self,
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int RunCli(int argc, char** argv, Program self,
+           std::span<const std::pair<std::string_view, AddCommandFn>> own) {
+  return RunCliIn(argc, argv, self, own, /*may_exec=*/true);
 }
 
 namespace {
@@ -185,19 +200,6 @@ std::string ProcessCommandLine() {
 
 int RunCommandInProcess(const std::vector<std::string>& args, Program self,
                         std::span<const std::pair<std::string_view, AddCommandFn>> own) {
-  // The command is the first argument without a leading '-', as RunCli finds it.
-  for (const std::string& arg : args) {
-    if (arg.empty() || arg[0] == '-') continue;
-    const Command* command = FindCommand(arg);
-    if (command != nullptr && command->program != self) {
-      std::fprintf(stderr,
-                   "stereodet: error: `%s` runs in %s, not in this process; run that executable "
-                   "(or the stereodet front end) instead\n",
-                   arg.c_str(), ProgramName(command->program));
-      return 1;
-    }
-    break;  // an unknown word: RunCli says so
-  }
   std::vector<std::string> argv_text = {"stereodet"};
   argv_text.insert(argv_text.end(), args.begin(), args.end());
   std::string joined;
@@ -209,7 +211,8 @@ int RunCommandInProcess(const std::vector<std::string>& args, Program self,
   struct Reset {
     ~Reset() { in_process_command_line.reset(); }
   } reset;
-  const int code = RunCli(static_cast<int>(argv.size()) - 1, argv.data(), self, own);
+  const int code = RunCliIn(static_cast<int>(argv.size()) - 1, argv.data(), self, own,
+                            /*may_exec=*/false);
   std::fflush(nullptr);
   return code;
 }

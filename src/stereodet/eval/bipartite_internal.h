@@ -25,10 +25,6 @@ struct DetAdjacency {
   int num_dets() const { return static_cast<int>(begin.size()) - 1; }
 };
 
-// Disjoint sets over the vertices 0 .. n-1 (labels and detections of a frame as one range, e.g.
-// label i = i and detection j = num_labels + j), with path halving. Union(a, b) links a's root
-// under b's, so for a given sequence of unions the roots, and hence the order in which callers meet
-// the components, are fixed. Reset keeps the memory (one instance per thread can be reused).
 // Sorts [first, last) as std::stable_sort(first, last, less) does, without its temporary buffer:
 // insertion sort for the short ranges a frame's detections make (a few to a few dozen; the
 // evaluators sort one per frame, class and difficulty, where stable_sort's allocation cost more
@@ -47,6 +43,10 @@ void StableSortSmall(It first, It last, Less less) {
   }
 }
 
+// Disjoint sets over the vertices 0 .. n-1 (labels and detections of a frame as one range, e.g.
+// label i = i and detection j = num_labels + j), with path halving. Union(a, b) links a's root
+// under b's, so for a given sequence of unions the roots, and hence the order in which callers meet
+// the components, are fixed. Reset keeps the memory (one instance per thread can be reused).
 class DisjointSets {
  public:
   DisjointSets() = default;
