@@ -274,6 +274,12 @@ class Pipeline:
     def detect_step(self, model, sigma):
         return f"detect-{model['name']}-{blur_tag(sigma)}"
 
+    def eval_step(self, model, sigma, matcher):
+        return f"eval-{model['name']}-{blur_tag(sigma)}-{matcher}"
+
+    def compare_step(self, a, b, sigma, matcher):
+        return f"compare-{a['name']}-vs-{b['name']}-{blur_tag(sigma)}-{matcher}"
+
     def run_data(self):
         used = {m["data"] for m in self.config["models"] if m["name"] not in self.missing}
         for name in sorted(used):
@@ -367,7 +373,7 @@ class Pipeline:
                        "--matcher", matcher, "--threads", self.config["threads"], "--out", ev]
                 if boot["resamples"] > 0:
                     cmd += ["--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"]]
-                self.step(f"eval-{model['name']}-{blur_tag(sigma)}-{matcher}",
+                self.step(self.eval_step(model, sigma, matcher),
                           ev / "results.json", cmd, deps=[self.detect_step(model, sigma)])
 
     def compare_dir(self, a, b, sigma, matcher):
@@ -388,16 +394,13 @@ class Pipeline:
                        "--matcher", matcher, "--threads", self.config["threads"],
                        "--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"],
                        "--out", cmp]
-                self.step(f"compare-{a['name']}-vs-{b['name']}-{blur_tag(sigma)}-{matcher}",
+                self.step(self.compare_step(a, b, sigma, matcher),
                           cmp / "bootstrap.csv", cmd,
                           deps=[self.detect_step(a, sigma), self.detect_step(b, sigma)])
 
     # -- figures (docs/experiment.md, "Figures") ----------------------------------------------
     def figures_dir(self, name):
         return self.out / "figures" / name
-
-    def eval_step(self, model, sigma, matcher):
-        return f"eval-{model['name']}-{blur_tag(sigma)}-{matcher}"
 
     def report(self, name, sources, labels, deps):
         """`stereodet report` of `sources` (results, sweep or compare folders) overlaid."""
@@ -437,7 +440,7 @@ class Pipeline:
                     continue  # 2D detections carry no 3D box: no error against distance
                 self.report(f"compare-{a_name}-vs-{b_name}",
                             [self.compare_dir(a, b, 0, "optimal")], [],
-                            [f"compare-{a_name}-vs-{b_name}-blur0-optimal"])
+                            [self.compare_step(a, b, 0, "optimal")])
         sweep = self.config["figures"].get("sweep")
         if sweep:
             for name in sweep["models"]:
