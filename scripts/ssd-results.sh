@@ -17,8 +17,8 @@ models=${3:-models}
 family=${RESULTS_FAMILY:-ssd}
 out=${4:-results/$family}
 case "$family" in
-  ssd) default_inputs="rgb rgbh-fixed rgbh-learned" ;;
-  rpn) default_inputs="rgb rgbd" ;;
+  ssd) default_inputs="rgb rgbh-fixed rgbh-learned"; train_target="make models" ;;
+  rpn) default_inputs="rgb rgbd"; train_target="make rpn-models" ;;
   *) echo "ssd-results: RESULTS_FAMILY is ssd or rpn, got '$family'" >&2; exit 1 ;;
 esac
 inputs=${RESULTS_INPUTS:-${SSD_INPUTS:-$default_inputs}}
@@ -30,7 +30,7 @@ bin="$build_dir/bin/stereodet"
 for input in $inputs; do
   [[ -n "${SSD_TABLE_ONLY:-}" ]] && break
   [[ -f "$models/$family-$input/model.pt" ]] ||
-    { echo "ssd-results: $models/$family-$input/model.pt missing; run make models" >&2; exit 1; }
+    { echo "ssd-results: $models/$family-$input/model.pt missing; run $train_target" >&2; exit 1; }
   for blur in $blurs; do
     run="$out/$family-$input/blur$blur"
     echo "==> $family-$input, blur sigma $blur px ($run)"
