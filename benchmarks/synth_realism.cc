@@ -9,7 +9,9 @@
 //  - OpenCV StereoBM and StereoSGBM on the stereo frames against the exact ground truth: KITTI's D1
 //    (error > 3 px and > 5% of the true disparity) and density, over all pixels with ground truth
 //    and over the ground-truth pixels inside the 2D boxes of Car, Pedestrian and Cyclist labels
-//    (all, near < 20 m, far >= 20 m): issue 16's targets;
+//    (all, near < 20 m, far >= 20 m): issue 16's targets; BM inside Car boxes by the car's
+//    surface, and over the whole image by what the left ray hits (the ground on and beyond the
+//    carriageway, labelled objects, background by material) and by depth;
 //  - with --speed-frames N, the generation speed: N whole frames (1242 x 375 or the size given,
 //    both cameras, disparity, labels, LiDAR; nothing written) on --threads threads, frames/s,
 //    and the same frames with straight, flat roads (SceneOptions::road_shapes = false), in
@@ -182,6 +184,75 @@ void Add(StereoScore& total, const StereoScore& s) {
   total.gt += s.gt, total.estimated += s.estimated, total.bad += s.bad, total.bad2 += s.bad2;
 }
 
+// What every ground-truth pixel of the image shows, for the breakdown of BM's whole-image density:
+// the ground (on the carriageway or beyond it) or a primitive's material pattern, labelled objects
+// apart; and the depth bin of the pixel.
+enum ImageSurface {
+  kRoadGround,
+  kOffroadGround,
+  kLabelledObject,
+  kFacadeWall,  // facade, brick
+  kPavingSurface,
+  kVegetation,  // foliage, grass
+  kFenceSurface,
+  kOtherBackground,
+  kNumImageSurfaces
+};
+const std::array<const char*, kNumImageSurfaces> kImageSurfaceNames = {
+    "ground, carriageway", "ground, beyond it", "labelled objects", "facades and brick",
+    "paving (sidewalks)",  "vegetation",        "fences",           "other background"};
+constexpr std::array<double, 5> kDepthBinsM = {10.0, 20.0, 40.0, 80.0, 1e9};
+constexpr std::array<const char*, 5> kDepthBinNames = {"0-10", "10-20", "20-40", "40-80", "80+"};
+
+struct ImageSurfaceScores {
+  // [surface][depth bin]; column 0 to 127 apart: [0] all columns, [1] right of column 128.
+  std::array<std::array<std::array<StereoScore, kDepthBinsM.size()>, kNumImageSurfaces>, 2> s{};
+};
+
+ImageSurfaceScores ScoreImageSurfaces(const cv::Mat& estimate, const SynthFrame& f) {
+  ImageSurfaceScores out;
+  const Eigen::Vector3f centre = f.calib.CameraCentreInRect(2).cast<float>();
+  for (int v = 0; v < f.disparity.rows; ++v) {
+    for (int u = 0; u < f.disparity.cols; ++u) {
+      const float g = f.disparity.at<float>(v, u);
+      if (g <= 0.0f) continue;
+      const float depth = f.depth_left.at<float>(v, u);
+      const Eigen::Vector3f point = f.calib.UnprojectImageToRect({u, v}, depth, 2).cast<float>();
+      const SurfaceHit hit = f.scene.Trace(Ray(centre, point - centre), 0.5f, 1.5f);
+      int surface = kOtherBackground;
+      if (hit.kind == SurfaceHit::Kind::kGround) {
+        surface = hit.material == f.scene.road_material ? kRoadGround : kOffroadGround;
+      } else if (hit.kind == SurfaceHit::Kind::kPrimitive) {
+        const Pattern pattern = f.scene.materials[hit.material].pattern;
+        if (f.object_id.at<int>(v, u) >= 0) {
+          surface = kLabelledObject;
+        } else if (pattern == Pattern::kFacade || pattern == Pattern::kBrick) {
+          surface = kFacadeWall;
+        } else if (pattern == Pattern::kPaving) {
+          surface = kPavingSurface;
+        } else if (pattern == Pattern::kFoliage || pattern == Pattern::kGrass) {
+          surface = kVegetation;
+        } else if (pattern == Pattern::kFence) {
+          surface = kFenceSurface;
+        }
+      }
+      int bin = 0;
+      while (depth >= kDepthBinsM[bin]) ++bin;
+      for (int k = 0; k < (u >= 128 ? 2 : 1); ++k) {
+        StereoScore& s = out.s[k][surface][bin];
+        ++s.gt;
+        const float e = estimate.at<float>(v, u);
+        if (e <= 0.0f) continue;
+        ++s.estimated;
+        const float err = std::abs(e - g);
+        if (err > 3.0f && err > 0.05f * g) ++s.bad;
+        if (err > 2.0f) ++s.bad2;
+      }
+    }
+  }
+  return out;
+}
+
 cv::Mat ToPixels(const cv::Mat& fixed) {
   cv::Mat d;
   fixed.convertTo(d, CV_32F, 1.0 / 16.0);
@@ -252,6 +323,7 @@ int Run(const Args& args) {
   // BM inside the boxes of kBoxClasses: [class][all, near, far].
   std::array<std::array<StereoScore, 4>, kBoxClasses.size()> bm_boxes{};
   std::array<std::array<StereoScore, kNumCarSurfaces>, 2> bm_car_surfaces{};
+  ImageSurfaceScores bm_image_surfaces;
   ParallelFor(
       static_cast<size_t>(args.frames),
       [&](size_t i) {
@@ -291,7 +363,15 @@ int Run(const Args& args) {
         }
         const auto surfaces = ScoreCarSurfaces(bm_d, f, 0);
         const auto surfaces_right = ScoreCarSurfaces(bm_d, f, 128);
+        const ImageSurfaceScores image_surfaces = ScoreImageSurfaces(bm_d, f);
         std::lock_guard<std::mutex> lock(mutex);
+        for (int k = 0; k < 2; ++k) {
+          for (int m = 0; m < kNumImageSurfaces; ++m) {
+            for (size_t b = 0; b < kDepthBinsM.size(); ++b) {
+              Add(bm_image_surfaces.s[k][m][b], image_surfaces.s[k][m][b]);
+            }
+          }
+        }
         for (int k = 0; k < kNumCarSurfaces; ++k) {
           Add(bm_car_surfaces[0][k], surfaces[k]);
           Add(bm_car_surfaces[1][k], surfaces_right[k]);
@@ -506,6 +586,38 @@ int Run(const Args& args) {
                   100.0 * s.estimated / std::max<int64_t>(1, s.gt),
                   100.0 * s.bad / std::max<int64_t>(1, s.estimated),
                   100.0 * r.estimated / std::max<int64_t>(1, r.gt));
+    }
+    int64_t image_gt = 0;
+    for (const auto& bins : bm_image_surfaces.s[0]) {
+      for (const StereoScore& s : bins) image_gt += s.gt;
+    }
+    std::printf(
+        "\nStereoBM over the whole image by surface and depth (the left ray re-traced through "
+        "each ground-truth pixel; share of all GT pixels, density; density right of column "
+        "128):\n\n| surface | share | density | D1 | right of 128 |");
+    for (size_t b = 0; b < kDepthBinsM.size(); ++b) {
+      std::printf(" %s m: share, density |", kDepthBinNames[b]);
+    }
+    std::printf("\n|---|---:|---:|---:|---:|");
+    for (size_t b = 0; b < kDepthBinsM.size(); ++b) std::printf("---:|");
+    std::printf("\n");
+    for (int m = 0; m < kNumImageSurfaces; ++m) {
+      StereoScore all, right;
+      for (size_t b = 0; b < kDepthBinsM.size(); ++b) {
+        Add(all, bm_image_surfaces.s[0][m][b]);
+        Add(right, bm_image_surfaces.s[1][m][b]);
+      }
+      std::printf("| %s | %.1f%% | %.1f%% | %.1f%% | %.1f%% |", kImageSurfaceNames[m],
+                  100.0 * all.gt / std::max<int64_t>(1, image_gt),
+                  100.0 * all.estimated / std::max<int64_t>(1, all.gt),
+                  100.0 * all.bad / std::max<int64_t>(1, all.estimated),
+                  100.0 * right.estimated / std::max<int64_t>(1, right.gt));
+      for (size_t b = 0; b < kDepthBinsM.size(); ++b) {
+        const StereoScore& s = bm_image_surfaces.s[0][m][b];
+        std::printf(" %.1f%%, %.1f%% |", 100.0 * s.gt / std::max<int64_t>(1, image_gt),
+                    100.0 * s.estimated / std::max<int64_t>(1, s.gt));
+      }
+      std::printf("\n");
     }
   }
 

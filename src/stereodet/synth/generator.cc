@@ -41,8 +41,10 @@ enum Stream : uint64_t {
 // garments, the road shapes (bends, crests and sags, crossfall, the car's pitch and roll, side
 // streets; synth/road.h), and planes/ holding the least-squares plane of the true ground where the
 // stereo ground fit samples it; 5: the vehicle ahead in the ego lane keeps its rear at least 6 m
-// ahead of the camera (version 4 placed its centre there, so a truck could reach the camera).
-constexpr int kSettingsVersion = 5;
+// ahead of the camera (version 4 placed its centre there, so a truck could reach the camera); 6:
+// paving stones in a random bond with sand-filled joints (a regular grid of dark joints failed
+// block matching on most sidewalks).
+constexpr int kSettingsVersion = 6;
 
 // The settings (`key=value` tokens) in which two settings lines differ, as "key: a (folder), b
 // (this run)", for the refusal message.

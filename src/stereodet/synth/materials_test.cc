@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <vector>
 
 #include "stereodet/synth/texture.h"
 
@@ -132,6 +134,59 @@ TEST(MaterialsTest, StripedClothHasStripesOfItsSecondColour) {
   EXPECT_TRUE(albedo_at(0.3f).isApprox(cloth.albedo2, 1e-3f)) << albedo_at(0.3f).transpose();
   EXPECT_TRUE(albedo_at(0.35f).isApprox(cloth.albedo, 1e-3f)) << albedo_at(0.35f).transpose();
   EXPECT_TRUE(albedo_at(0.7f).isApprox(cloth.albedo2, 1e-3f));
+}
+
+// Paving (version 6) is laid in a random bond: within a course the joints come a stone apart
+// (give or take their 6 % wander on each side), but the courses' joints do not line up, as a
+// regular grid's would (which block matching cannot tell apart along an image row). The joints are
+// made to stand out with a bright joint colour (a test value) on a wall 10 m ahead.
+TEST(MaterialsTest, PavingCoursesHaveJointsAStoneApartThatDoNotLineUp) {
+  Scene scene;
+  Material paving = MakeMaterial(Pattern::kPaving, Rgb(0.1, 0.1, 0.1), 0.0f);
+  paving.albedo2 = Rgb(10.0, 10.0, 10.0);
+  paving.scale_m = 0.3f;
+  const int m = scene.AddMaterial(paving);
+  scene.primitives.push_back(MakeBox(Eigen::Vector3f(0.0f, 0.0f, 10.5f),
+                                     Eigen::Vector3f(3.0f, 1.5f, 0.5f), Eigen::Matrix3f::Identity(),
+                                     m));
+  scene.ground_y_m = 100.0f;
+  scene.Finalize();
+  const float s = paving.scale_m;
+  std::vector<float> phases;
+  for (int line = 0; line < 9; ++line) {
+    const float y = -1.2f + 0.3f * line + 0.07f;
+    std::vector<float> joints;  // centres of the bright runs along x
+    int bright = 0, samples = 0;
+    float run_start = 0.0f;
+    bool in_run = false;
+    for (float x = -2.5f; x <= 2.5f; x += 0.002f, ++samples) {
+      const SurfaceHit hit =
+          scene.Trace(Ray(Eigen::Vector3f::Zero(), Eigen::Vector3f(x, y, 10.0f)));
+      ASSERT_EQ(hit.kind, SurfaceHit::Kind::kPrimitive);
+      const bool is_joint = SurfaceAlbedo(scene, hit, 1e-3f).x() > 1.0f;
+      bright += is_joint;
+      if (is_joint && !in_run) run_start = x;
+      if (!is_joint && in_run) joints.push_back(0.5f * (run_start + x));
+      in_run = is_joint;
+    }
+    if (bright > samples / 2) continue;  // the scan ran along a joint between courses
+    ASSERT_GE(joints.size(), 12u) << "line " << line;
+    for (size_t i = 1; i < joints.size(); ++i) {
+      EXPECT_GT(joints[i] - joints[i - 1], 0.85f * s) << "line " << line << " joint " << i;
+      EXPECT_LT(joints[i] - joints[i - 1], 1.15f * s) << "line " << line << " joint " << i;
+    }
+    phases.push_back(std::fmod(joints[0] + 10.0f * s, s));
+  }
+  ASSERT_GE(phases.size(), 6u);
+  // The largest circular difference of two courses' phases: near 0 for a regular grid.
+  float largest = 0.0f;
+  for (float a : phases) {
+    for (float b : phases) {
+      const float d = std::abs(a - b);
+      largest = std::max(largest, std::min(d, s - d));
+    }
+  }
+  EXPECT_GT(largest, 0.25f * s);
 }
 
 }  // namespace

@@ -251,14 +251,24 @@ Eigen::Vector3f SurfaceAlbedo(const Scene& scene, const SurfaceHit& hit, float f
       return albedo;
     }
     case Pattern::kPaving: {
+      // Stones laid by hand (since version 6): each course (a row along v) has joints of its own
+      // phase (a random bond), and the joints wander by a few per cent of a stone. A perfectly
+      // regular grid of dark joints was periodic along the image rows and failed block matching's
+      // uniqueness test on most sidewalks (39 % density against the road's 70 %).
       const float s = m.scale_m;
-      const float joint =
-          std::max(LineCoverage(u, s, 0.0f, 0.012f, fp), LineCoverage(v, s, 0.0f, 0.012f, fp));
-      const float tone = CellTone(std::floor(u / s), std::floor(v / s), 17);
+      const float vj = v + 0.06f * s * Noise(0.9f * u + 3.0f, 0.3f * v);
+      const float course = std::floor(vj / s);
+      const float uj = u + s * (0.5f + 0.5f * CellTone(course, 0.0f, 19)) +
+                       0.06f * s * Noise(0.3f * u, 0.9f * v + 7.0f);
+      // Sand-filled joints: a third of the way to the joint colour.
+      const float joint = 0.35f * std::max(LineCoverage(uj, s, 0.0f, 0.012f, fp),
+                                           LineCoverage(vj, s, 0.0f, 0.012f, fp));
+      const float tone = CellTone(std::floor(uj / s), course, 17);
       // Stones with their own tones, concrete grain, and stains that run across the joints.
       const Eigen::Vector3f stone =
-          m.albedo * (1.0f + 0.12f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.75f, 7, fp) +
-                      0.12f * FilteredFbm(u + 9.0f, v, 1.5f, 0.6f, 4, fp));
+          m.albedo * (1.0f + 0.22f * tone + m.contrast * FilteredFbm(u, v, 8.0f, 0.75f, 7, fp) +
+                      0.12f * FilteredFbm(u + 9.0f, v, 1.5f, 0.6f, 4, fp) +
+                      0.2f * FilteredFbm(u + 5.0f, v + 3.0f, 4.0f, 0.6f, 3, fp));
       return stone + joint * (m.albedo2 - stone);
     }
     case Pattern::kFacade: {
