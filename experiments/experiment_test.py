@@ -13,12 +13,14 @@ with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
   exactly the steps downstream of it (its evaluations and compares);
 - a checkpoint replaced under the same path reruns its detections and their evaluations;
 - --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
-- a config error names the file and the field.
+- a config error names the file and the field;
+- committed checkpoints per training seed ("seed_model") expand into one model per seed.
 
 Usage: experiment_test.py REPO_ROOT BIN_DIR WORK_DIR
 """
 
 import csv
+import importlib.util
 import json
 import os
 import pathlib
@@ -348,6 +350,40 @@ p = subprocess.run([sys.executable, str(script), "--config", str(bad_path), "--o
                     "--bin", str(bin_dir)], capture_output=True, text=True)
 check(p.returncode == 1 and f"{bad_path}: models[1].family: one of ssd, rpn, det3d, got 'yolo'"
       in p.stderr, f"config error names the field: {p.stderr.strip()!r}")
+
+# Committed checkpoints per training seed ("seed_model"), without training: one model per seed,
+# the first seed's checkpoint is "model", the others' come from the template; a template without
+# {seed} is refused, naming the field.
+spec = importlib.util.spec_from_file_location("experiment", script)
+experiment = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(experiment)
+seeded = json.loads(config_path.read_text())
+seeded["train"] = False
+for i, name in ((0, "ssd-rgb"), (1, "ssd-rgbh-fixed")):
+    seeded["models"][i].update(seeds=[1, 3], train={"input": name[4:], "flags": []},
+                               seed_model=f"models/{name}-seed{{seed}}")
+seeded["pairs"] = [["ssd-rgb", "ssd-rgbh-fixed"], ["rpn-rgb", "rpn-rgbd"]]
+seeded_path = work / "seeded.json"
+seeded_path.write_text(json.dumps(seeded))
+loaded = experiment.load_config(seeded_path)
+by_name = {m["name"]: m for m in loaded["models"]}
+check(loaded["groups"]["ssd-rgbh-fixed"] == ["ssd-rgbh-fixed-seed1", "ssd-rgbh-fixed-seed3"],
+      f"seed_model: one model per seed ({loaded['groups']['ssd-rgbh-fixed']})")
+check(by_name.get("ssd-rgbh-fixed-seed1", {}).get("model") == "models/ssd-rgbh-fixed" and
+      by_name.get("ssd-rgbh-fixed-seed3", {}).get("model") == "models/ssd-rgbh-fixed-seed3",
+      "seed_model: the first seed's checkpoint is the model, the others' the template's")
+check(loaded["groups"]["rpn-rgb"] == ["rpn-rgb"], "without training a model without seed_model "
+      "stays its one checkpoint")
+check(loaded["pairs"][:2] == [["ssd-rgb-seed1", "ssd-rgbh-fixed-seed1"],
+                              ["ssd-rgb-seed3", "ssd-rgbh-fixed-seed3"]],
+      f"seed_model: one pair per seed ({loaded['pairs']})")
+seeded["models"][1]["seed_model"] = "models/ssd-rgbh-fixed-seed"
+seeded_path.write_text(json.dumps(seeded))
+try:
+    experiment.load_config(seeded_path)
+    check(False, "seed_model without {seed} is refused")
+except experiment.ConfigError as e:
+    check(f"{seeded_path}: models[1].seed_model:" in str(e), f"seed_model error names it: {e}")
 
 if failures:
     raise SystemExit(f"experiment.miniature: {len(failures)} failure(s)")

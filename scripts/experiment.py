@@ -49,8 +49,9 @@ def _need(obj, key, kind, where):
 
 def load_config(path, train=False):
     """Reads and checks the config (`train`: as --train); errors name the file and the field. A
-    model with "seeds" becomes one model per seed when training (NAME-seedS, "group" NAME), and a
-    pair of such groups one pair per seed."""
+    model with "seeds" becomes one model per seed when training, or without training when it names
+    its seeds' checkpoints ("seed_model"): NAME-seedS, "group" NAME; a pair of such groups becomes
+    one pair per seed."""
     try:
         with open(path) as f:
             config = json.load(f)
@@ -121,16 +122,25 @@ def load_config(path, train=False):
             raise ConfigError(f"{w}.seeds: a list of distinct integers, got {seeds!r}")
         if seeds and "train" not in m:
             raise ConfigError(f"{w}.seeds: only for a model with a train block")
+        if "seed_model" in m:
+            template = _need(m, "seed_model", str, w)
+            if "{seed}" not in template or len(seeds) < 2:
+                raise ConfigError(f"{w}.seed_model: a folder with {{seed}} in it, for a model with "
+                                  f"two seeds or more, got {template!r}")
     groups = {}  # model name -> the names it stands for (one per seed when training with seeds)
     expanded = []
     for m in config["models"]:
         m["group"] = m["name"]
-        if config["train"] and m.get("seeds"):
+        if m.get("seeds") and (config["train"] or "seed_model" in m):
+            # Trained here, or the committed checkpoints of each seed: the first seed's is
+            # `model`, the others' `seed_model`.
             groups[m["name"]] = []
-            for seed in m["seeds"]:
+            for k, seed in enumerate(m["seeds"]):
                 flags = [f.replace("{seed}", str(seed)) for f in m["train"]["flags"]]
                 e = dict(m, name=f"{m['name']}-seed{seed}", seed=seed,
                          train=dict(m["train"], flags=flags + ["--seed", str(seed)]))
+                if k > 0 and "seed_model" in m:
+                    e["model"] = m["seed_model"].replace("{seed}", str(seed))
                 groups[m["name"]].append(e["name"])
                 expanded.append(e)
         else:

@@ -12,6 +12,9 @@
 #                    at once (each is one network thread plus a data-loader thread, so three at once
 #                    keep both cores of a 2-core machine busy; output then goes to MODELS_DIR/ssd-*.out)
 #   SSD_EPOCHS=10    epochs (the committed models: 10)
+#   SSD_SEED=1       training seed; seed 1 trains MODELS_DIR/ssd-INPUT (the committed models), any
+#                    other seed S MODELS_DIR/ssd-INPUT-seedS (the training-variance checkpoints of
+#                    docs/experiment.md)
 #   SSD_FORCE=1      retrain a finished model (model.pt without checkpoint.pt, as committed) over it;
 #                    without it such a model is left alone and said so
 set -euo pipefail
@@ -22,6 +25,10 @@ inputs=${SSD_INPUTS:-rgb rgbh-fixed rgbh-learned}
 parallel=${SSD_PARALLEL:-1}
 epochs=${SSD_EPOCHS:-10}
 force=${SSD_FORCE:-0}
+seed=${SSD_SEED:-1}
+[[ "$seed" =~ ^[0-9]+$ ]] || { echo "train-ssd-models: SSD_SEED must be a whole number, got '$seed'" >&2; exit 1; }
+suffix=""
+(( seed == 1 )) || suffix="-seed$seed"
 bin="$build_dir/bin/stereodet"
 [[ -x "$bin" ]] || { echo "train-ssd-models: $bin not built; run make build" >&2; exit 1; }
 "$bin" train ssd --help >/dev/null 2>&1 ||
@@ -31,7 +38,7 @@ echo "==> synthetic data set ($data)"
 "$bin" synth --out "$data" --frames 4000 --seed 1 --val-fraction 0.25 --no-lidar
 
 train() {
-  local input=$1 dir="$models/ssd-$input" mode=--resume
+  local input=$1 dir="$models/ssd-$input$suffix" mode=--resume
   # A finished model without its checkpoint (the committed ones) cannot be resumed, and train ssd
   # refuses to train over it silently: retrain it only when asked.
   if [[ -f "$dir/model.pt" && ! -f "$dir/checkpoint.pt" ]]; then
@@ -42,15 +49,16 @@ train() {
     mode=--force
   fi
   "$bin" train ssd --data "$data" --split train --input "$input" --out "$dir" \
-    --epochs "$epochs" --seed 1 --threads 1 "$mode"
+    --epochs "$epochs" --seed "$seed" --threads 1 "$mode"
 }
 
 mkdir -p "$models"
 pids=()
 for input in $inputs; do
-  echo "==> training ssd-$input ($models/ssd-$input; log: $models/ssd-$input/train_log.csv)"
+  name="ssd-$input$suffix"
+  echo "==> training $name, seed $seed ($models/$name; log: $models/$name/train_log.csv)"
   if (( parallel > 1 )); then
-    train "$input" > "$models/ssd-$input.out" 2>&1 &
+    train "$input" > "$models/$name.out" 2>&1 &
     pids+=("$!")
   else
     train "$input"
@@ -59,4 +67,4 @@ done
 failed=0
 for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
 (( failed == 0 )) || { echo "train-ssd-models: a training failed; see $models/ssd-*.out" >&2; exit 1; }
-echo "train-ssd-models: done; commit $models/ssd-*/model.json and model.pt"
+echo "train-ssd-models: done; commit $models/ssd-*$suffix/model.json, model.pt, train_log.csv and run.json"
