@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "common.h"
+#include "stereodet/cli/commands.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/degradation.h"
 #include "stereodet/stereo/disparity.h"
@@ -415,6 +416,17 @@ PYBIND11_MODULE(_stereo, m) {
   });
   m.def("_calls_in_progress", &CallsInProgress,
         "The number of threads now inside C++ work with the GIL released (for the tests).");
+  m.def(
+      "_run_cli",
+      [](const std::vector<std::string>& args) {
+        ReleaseGil release;
+        return stereodet::cli::RunCommandInProcess(args, stereodet::cli::Program::kVision,
+                                                   stereodet::cli::VisionCommands());
+      },
+      py::arg("args"),
+      "`stereodet ARGS...` of a stereodet-vision command (synth, stereo) in this process, with "
+      "the GIL released; returns its exit code (its output goes to this process's stdout and "
+      "stderr). Used by stereodet.scale's in-process tasks.");
 
   BindOptions(m);
 

@@ -13,6 +13,7 @@ class ParseError(ValueError):
     message: str
 
 def _calls_in_progress() -> int: ...
+def _run_cli(args: Sequence[str]) -> int: ...
 
 # --- KITTI I/O (python/src/kitti_bindings.cc; documented in stereodet.kitti) ---
 Annos = Dict[str, np.ndarray]

@@ -1,12 +1,13 @@
 # Type stubs of the C++ extension stereodet._stereo (python/src/stereo_module.cc), used through
 # stereodet.stereo (which documents every function).
-from typing import Any, Dict, Mapping, Optional, Tuple
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
 from ._core import Calibration
 
 def _calls_in_progress() -> int: ...
+def _run_cli(args: Sequence[str]) -> int: ...
 
 class _Options:
     _fields: Tuple[str, ...]

@@ -62,9 +62,11 @@ class Task:
     # of another command line, e.g. another model into the same folder, does not count).
     same_argv: bool = False
     env: dict = field(default_factory=dict)
-    # True: the command runs inside the worker's process through the Python module
-    # (stereodet._core._run_cli, the GIL released), not as a subprocess: no process start per
-    # task; only for the front end's commands (eval). Its output goes to the worker's stdout.
+    # True: the command runs inside the worker's process through the Python module, not as a
+    # subprocess: no process start per task. The extension is the executable's: stereodet's
+    # commands (eval) through stereodet._core._run_cli, stereodet-vision's (synth, stereo)
+    # through stereodet._stereo._run_cli, the GIL released. Its output goes to the worker's
+    # stdout.
     in_process: bool = False
 
 
@@ -125,8 +127,12 @@ def run_task(task: Task) -> dict:
         return {"index": task.index, "skipped": True, "seconds": 0.0}
     start = time.monotonic()
     if task.in_process:
-        from stereodet import _core  # noqa: PLC0415 (the worker imports it on its first task)
-        code = _core._run_cli(list(task.argv[1:]))
+        # The worker imports the extension on its first task (_stereo loads OpenCV).
+        if Path(task.argv[0]).name == "stereodet-vision":
+            from stereodet import _stereo as extension  # noqa: PLC0415
+        else:
+            from stereodet import _core as extension  # noqa: PLC0415
+        code = extension._run_cli(list(task.argv[1:]))
         if code != 0:
             raise RuntimeError(f"task {task.index}/{task.count} failed (exit {code}) in process: "
                                f"{' '.join(task.argv)} (its error is on the worker's stderr)")
@@ -186,22 +192,24 @@ def count_eval_frames(gt: Path, split: Optional[str]) -> int:
 
 
 def synth_tasks(bin_dir: Path, out: Path, frames: int, seed: int, task_frames: int,
-                extra: Sequence[str]) -> List[Task]:
+                extra: Sequence[str], in_process: bool = False) -> List[Task]:
     n = num_tasks(frames, task_frames)
     return [Task(k, n, [str(bin_dir / "stereodet-vision"), "synth", "--out", str(out),
                         "--frames", str(frames), "--seed", str(seed), "--shard", f"{k}/{n}",
                         "--quiet", *extra],
-                 str(out / ".scale" / f"synth-{k}-of-{n}.done")) for k in range(n)]
+                 str(out / ".scale" / f"synth-{k}-of-{n}.done"), in_process=in_process)
+            for k in range(n)]
 
 
 def stereo_tasks(bin_dir: Path, data: Path, out: Path, split: Optional[str], task_frames: int,
-                 extra: Sequence[str]) -> List[Task]:
+                 extra: Sequence[str], in_process: bool = False) -> List[Task]:
     n = num_tasks(count_stereo_frames(data, split), task_frames)
     split_args = ["--split", split] if split else []
     return [Task(k, n, [str(bin_dir / "stereodet-vision"), "stereo", "--data", str(data),
                         "--out", str(out), *split_args, "--shard", f"{k}/{n}", "--quiet",
                         *extra],
-                 str(out / ".scale" / f"stereo-{k}-of-{n}.done")) for k in range(n)]
+                 str(out / ".scale" / f"stereo-{k}-of-{n}.done"), in_process=in_process)
+            for k in range(n)]
 
 
 def eval_shard_dir(out: Path, k: int, n: int) -> Path:
@@ -337,8 +345,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--bin", help="folder of the stereodet executables (default: found)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--in-process", action="store_true",
-                   help="eval: run each task inside its worker through the Python module (the "
-                        "GIL released) instead of as a subprocess")
+                   help="synth, stereo, eval: run each task inside its worker through the Python "
+                        "module (the GIL released) instead of as a subprocess")
     sub = p.add_subparsers(dest="command", required=True)
     s = sub.add_parser("synth", help="sharded `stereodet synth`")
     s.add_argument("--out", required=True, type=Path)
@@ -372,11 +380,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     bin_dir = find_bin_dir(args.bin)
     if args.command == "synth":
         tasks = synth_tasks(bin_dir, args.out.resolve(), args.frames, args.seed, args.task_frames,
-                            extra)
+                            extra, in_process=args.in_process)
     elif args.command == "stereo":
         tasks = stereo_tasks(bin_dir, args.data.resolve(), args.out.resolve(), args.split,
-                             args.task_frames, extra)
+                             args.task_frames, extra, in_process=args.in_process)
     elif args.command == "detect":
+        if args.in_process:
+            raise SystemExit("stereodet.scale: --in-process is for synth, stereo and eval; detect "
+                             "tasks run as subprocesses (docs/scale.md)")
         split = str(Path(args.split).resolve()) if Path(args.split).is_file() else args.split
         tasks = detect_tasks(bin_dir, args.model.resolve(), args.data.resolve(),
                              args.out.resolve(), split, args.task_frames, extra, args.family)

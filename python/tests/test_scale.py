@@ -64,11 +64,17 @@ def one_process_synth(bin_dir, out, frames, seed, flags=SYNTH_FLAGS):
                     str(frames), "--seed", str(seed), "--quiet", *flags], check=True)
 
 
-def test_sharded_synth_is_one_process_byte_for_byte_and_resumes(client, bin_dir, tmp_path):
+# in_process: each task runs in its worker through stereodet._stereo._run_cli (GIL released),
+# not as a subprocess of stereodet-vision; the bytes must be the same either way.
+@pytest.mark.parametrize("in_process", [False, True])
+def test_sharded_synth_is_one_process_byte_for_byte_and_resumes(client, bin_dir, tmp_path,
+                                                                in_process):
     flags = SYNTH_FLAGS + ["--no-lidar"]
     one_process_synth(bin_dir, tmp_path / "one", 7, 3, flags)
-    tasks = scale.synth_tasks(bin_dir, tmp_path / "sharded", 7, 3, 3, flags)
+    tasks = scale.synth_tasks(bin_dir, tmp_path / "sharded", 7, 3, 3, flags,
+                              in_process=in_process)
     assert [t.count for t in tasks] == [3, 3, 3]
+    assert all(t.in_process == in_process for t in tasks)
     lines = []
     results = scale.run_tasks(client, tasks, lines.append)
     assert [r["skipped"] for r in results] == [False] * 3
@@ -115,9 +121,13 @@ def test_merged_sharded_eval_is_the_single_process_eval(client, bin_dir, cli, da
 
 
 def test_an_in_process_task_of_another_executable_is_refused():
-    from stereodet import _core
+    from stereodet import _core, _stereo
     assert _core._run_cli(["synth", "--out", "/nonexistent/never-written"]) == 1
     assert not os.path.exists("/nonexistent/never-written")
+    assert _stereo._run_cli(["train", "ssd", "--out", "/nonexistent/never-written"]) == 1
+    assert not os.path.exists("/nonexistent/never-written")
+    # The front end's own commands are handed back too, not run by the vision module.
+    assert _stereo._run_cli(["eval", "--gt", "/nonexistent", "--det", "/nonexistent"]) == 1
 
 
 def run_killing_one_worker(client, tasks, name):
@@ -155,13 +165,15 @@ def test_a_worker_killed_mid_run_changes_nothing(client, bin_dir, tmp_path):
     assert [k for k in one if one[k] != sharded[k]] == []
 
 
-def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_path):
+@pytest.mark.parametrize("in_process", [False, True])
+def test_sharded_stereo_writes_the_files_of_one_process(client, bin_dir, tmp_path, in_process):
     data = tmp_path / "data"
     one_process_synth(bin_dir, data, 4, 9, SYNTH_FLAGS + ["--no-lidar"])
     subprocess.run([str(bin_dir / "stereodet-vision"), "stereo", "--data", str(data), "--out",
                     str(tmp_path / "one"), "--threads", "1", "--quiet"], check=True)
-    tasks = scale.stereo_tasks(bin_dir, data, tmp_path / "sharded", None, 2, ["--threads", "1"])
-    assert len(tasks) == 2
+    tasks = scale.stereo_tasks(bin_dir, data, tmp_path / "sharded", None, 2, ["--threads", "1"],
+                               in_process=in_process)
+    assert len(tasks) == 2 and all(t.in_process == in_process for t in tasks)
     scale.run_tasks(client, tasks, lambda line: None)
     one, sharded = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded")
     assert one.keys() == sharded.keys() and "rgbh/000003.png" in one

@@ -95,6 +95,10 @@ int RunCli(int argc, char** argv, Program self,
 // Add*Command functions: its main()'s list, and the Python module's (frontend_commands.cc).
 std::span<const std::pair<std::string_view, AddCommandFn>> FrontEndCommands();
 
+// The commands of stereodet-vision (synth, stereo): its main()'s list, and the stereodet._stereo
+// module's in-process tasks (vision_commands.cc).
+std::span<const std::pair<std::string_view, AddCommandFn>> VisionCommands();
+
 // `stereodet ARGS...` (args without the program name: {"eval", "--gt", "DIR", ...}) run in this
 // process, for callers that are not a main() (the Python module's in-process tasks, docs/scale.md):
 // RunCli's parsing, messages and exit codes, but a command of another executable is refused (an
