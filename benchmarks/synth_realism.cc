@@ -64,19 +64,22 @@ struct StereoScore {
   int64_t bad2 = 0;                        // of the estimated, error > 2 px (Middlebury's bad-2.0)
 };
 
+// Counts one ground-truth pixel (true disparity g > 0) whose estimate is e (<= 0: none).
+void Count(StereoScore& s, float e, float g) {
+  ++s.gt;
+  if (e <= 0.0f) return;
+  ++s.estimated;
+  const float err = std::abs(e - g);
+  if (err > 3.0f && err > 0.05f * g) ++s.bad;
+  if (err > 2.0f) ++s.bad2;
+}
+
 StereoScore Score(const cv::Mat& estimate, const cv::Mat& gt) {
   StereoScore s;
   for (int v = 0; v < gt.rows; ++v) {
     for (int u = 0; u < gt.cols; ++u) {
       const float g = gt.at<float>(v, u);
-      if (g <= 0.0f) continue;
-      ++s.gt;
-      const float e = estimate.at<float>(v, u);
-      if (e <= 0.0f) continue;
-      ++s.estimated;
-      const float err = std::abs(e - g);
-      if (err > 3.0f && err > 0.05f * g) ++s.bad;
-      if (err > 2.0f) ++s.bad2;
+      if (g > 0.0f) Count(s, estimate.at<float>(v, u), g);
     }
   }
   return s;
@@ -167,14 +170,7 @@ std::array<StereoScore, kNumCarSurfaces> ScoreCarSurfaces(const cv::Mat& estimat
           }
         }
       }
-      StereoScore& s = out[surface];
-      ++s.gt;
-      const float e = estimate.at<float>(v, u);
-      if (e <= 0.0f) continue;
-      ++s.estimated;
-      const float err = std::abs(e - g);
-      if (err > 3.0f && err > 0.05f * g) ++s.bad;
-      if (err > 2.0f) ++s.bad2;
+      Count(out[surface], estimate.at<float>(v, u), g);
     }
   }
   return out;
@@ -239,14 +235,7 @@ ImageSurfaceScores ScoreImageSurfaces(const cv::Mat& estimate, const SynthFrame&
       int bin = 0;
       while (depth >= kDepthBinsM[bin]) ++bin;
       for (int k = 0; k < (u >= 128 ? 2 : 1); ++k) {
-        StereoScore& s = out.s[k][surface][bin];
-        ++s.gt;
-        const float e = estimate.at<float>(v, u);
-        if (e <= 0.0f) continue;
-        ++s.estimated;
-        const float err = std::abs(e - g);
-        if (err > 3.0f && err > 0.05f * g) ++s.bad;
-        if (err > 2.0f) ++s.bad2;
+        Count(out.s[k][surface][bin], estimate.at<float>(v, u), g);
       }
     }
   }
