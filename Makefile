@@ -37,7 +37,8 @@ models: deps
 	./scripts/train-ssd-models.sh $(BUILD_DIR) $(SYNTH_DIR) models
 
 # The two-stage detectors models/rpn-{rgb,rgbd} (rgbd mirrored from rgb), seed 1, on the same
-# synthetic set (RPN_CONTROL=1 adds the widened-rgb control; docs/models.md for the time it takes).
+# synthetic set (RPN_CONTROL=1 adds the widened-rgb and the continued-rgb controls; docs/models.md
+# for the time it takes).
 rpn-models: deps
 	$(MAKE) build
 	./scripts/train-rpn-models.sh $(BUILD_DIR) $(SYNTH_DIR) models

@@ -6,8 +6,10 @@
 #      as train-ssd-models.sh, so an existing set is reused);
 #   2. rpn-rgb; then rpn-rgbd, its image branch, RPN and box head mirrored from rpn-rgb
 #      (--init-from, the paper's pretrained weights: none can be downloaded here);
-#   3. with RPN_CONTROL=1, rpn-rgb-wide: rgb with the image branch widened to the rgbd model's
-#      parameter count (--image-width 39: 3.29 M vs 3.26 M parameters).
+#   3. with RPN_CONTROL=1, the controls of docs/RESULTS.md: rpn-rgb-wide, rgb with the image
+#      branch widened to the rgbd model's parameter count (--image-width 39: 3.29 M vs 3.26 M
+#      parameters), and rpn-rgb-continued, rpn-rgb trained on as long as rgbd was (--init-from
+#      rpn-rgb, the same schedule), so that both branches of the comparison saw 2 x RPN_EPOCHS.
 # Every training resumes (--resume): rerunning after an interruption continues where it stopped.
 # Usage: scripts/train-rpn-models.sh BUILD_DIR [DATA_DIR] [MODELS_DIR]
 #   RPN_EPOCHS=6         epochs (the committed rpn-rgb: 6)
@@ -62,5 +64,6 @@ train rpn-rgbd rgbd --image-width "$image_width" --geometry-width "$image_width"
   --init-from "$models/rpn-rgb"
 if [[ "${RPN_CONTROL:-0}" == 1 ]]; then
   train rpn-rgb-wide rgb --image-width "$control_width"
+  train rpn-rgb-continued rgb --image-width "$image_width" --init-from "$models/rpn-rgb"
 fi
 echo "train-rpn-models: done; the models are in $models/rpn-*"
