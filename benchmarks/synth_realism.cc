@@ -58,6 +58,9 @@ struct Args {
 // Ground-truth pixels inside 2D boxes: the classes of issue 16's stereo targets.
 const std::array<const char*, 3> kBoxClasses = {"Car", "Pedestrian", "Cyclist"};
 constexpr double kNearM = 20.0;  // "near" objects: sqrt(x^2 + z^2) of the label below this
+// KITTI-typical settings: 128 disparities cover 3 m at full resolution. BM and SGBM leave the first
+// kNumDisparities columns empty, so the breakdowns also count "right of" them.
+constexpr int kNumDisparities = 128;
 
 struct StereoScore {
   int64_t gt = 0, estimated = 0, bad = 0;  // GT pixels, of which estimated, of which D1-bad
@@ -111,6 +114,15 @@ StereoScore ScoreInBoxes(const cv::Mat& estimate, const cv::Mat& gt,
   return Score(estimate, masked_gt);
 }
 
+// What the left camera's ray through pixel (u, v) hits at its ground-truth depth (re-traced within
+// a window around that depth, so the hit is the pixel's own surface).
+SurfaceHit TraceLeftPixel(const SynthFrame& f, int u, int v) {
+  const Eigen::Vector3f centre = f.calib.CameraCentreInRect(2).cast<float>();
+  const Eigen::Vector3f point =
+      f.calib.UnprojectImageToRect({u, v}, f.depth_left.at<float>(v, u), 2).cast<float>();
+  return f.scene.Trace(Ray(centre, point - centre), 0.5f, 1.5f);
+}
+
 // What the ground-truth pixels inside Car boxes show, for the breakdown of BM's density there.
 enum CarSurface {
   kBackground,
@@ -143,7 +155,6 @@ std::array<StereoScore, kNumCarSurfaces> ScoreCarSurfaces(const cv::Mat& estimat
     mask(cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1)).setTo(255);
   }
   if (min_u > 0) mask.colRange(0, std::min(min_u, mask.cols)).setTo(0);
-  const Eigen::Vector3f centre = f.calib.CameraCentreInRect(2).cast<float>();
   for (int v = 0; v < mask.rows; ++v) {
     for (int u = 0; u < mask.cols; ++u) {
       const float g = f.disparity.at<float>(v, u);
@@ -151,9 +162,7 @@ std::array<StereoScore, kNumCarSurfaces> ScoreCarSurfaces(const cv::Mat& estimat
       const int id = f.object_id.at<int>(v, u);
       int surface = kBackground;
       if (id >= 0 && f.scene.objects[id].type == "Car") {
-        const Eigen::Vector3f point =
-            f.calib.UnprojectImageToRect({u, v}, f.depth_left.at<float>(v, u), 2).cast<float>();
-        const SurfaceHit hit = f.scene.Trace(Ray(centre, point - centre), 0.5f, 1.5f);
+        const SurfaceHit hit = TraceLeftPixel(f, u, v);
         surface = kOtherPart;
         if (hit.kind == SurfaceHit::Kind::kPrimitive) {
           const Primitive& p = f.scene.primitives[hit.primitive];
@@ -201,20 +210,18 @@ constexpr std::array<double, 5> kDepthBinsM = {10.0, 20.0, 40.0, 80.0, 1e9};
 constexpr std::array<const char*, 5> kDepthBinNames = {"0-10", "10-20", "20-40", "40-80", "80+"};
 
 struct ImageSurfaceScores {
-  // [surface][depth bin]; column 0 to 127 apart: [0] all columns, [1] right of column 128.
+  // [surface][depth bin]; [0] all columns, [1] right of BM's empty first kNumDisparities.
   std::array<std::array<std::array<StereoScore, kDepthBinsM.size()>, kNumImageSurfaces>, 2> s{};
 };
 
 ImageSurfaceScores ScoreImageSurfaces(const cv::Mat& estimate, const SynthFrame& f) {
   ImageSurfaceScores out;
-  const Eigen::Vector3f centre = f.calib.CameraCentreInRect(2).cast<float>();
   for (int v = 0; v < f.disparity.rows; ++v) {
     for (int u = 0; u < f.disparity.cols; ++u) {
       const float g = f.disparity.at<float>(v, u);
       if (g <= 0.0f) continue;
       const float depth = f.depth_left.at<float>(v, u);
-      const Eigen::Vector3f point = f.calib.UnprojectImageToRect({u, v}, depth, 2).cast<float>();
-      const SurfaceHit hit = f.scene.Trace(Ray(centre, point - centre), 0.5f, 1.5f);
+      const SurfaceHit hit = TraceLeftPixel(f, u, v);
       int surface = kOtherBackground;
       if (hit.kind == SurfaceHit::Kind::kGround) {
         surface = hit.material == f.scene.road_material ? kRoadGround : kOffroadGround;
@@ -234,7 +241,7 @@ ImageSurfaceScores ScoreImageSurfaces(const cv::Mat& estimate, const SynthFrame&
       }
       int bin = 0;
       while (depth >= kDepthBinsM[bin]) ++bin;
-      for (int k = 0; k < (u >= 128 ? 2 : 1); ++k) {
+      for (int k = 0; k < (u >= kNumDisparities ? 2 : 1); ++k) {
         Count(out.s[k][surface][bin], estimate.at<float>(v, u), g);
       }
     }
@@ -325,9 +332,8 @@ int Run(const Args& args) {
         cv::Mat left, right;
         cv::cvtColor(f.image_left, left, cv::COLOR_BGR2GRAY);
         cv::cvtColor(f.image_right, right, cv::COLOR_BGR2GRAY);
-        // KITTI-typical settings: 128 disparities cover 3 m at full resolution.
         cv::Ptr<cv::StereoBM> bm =
-            cv::StereoBM::create(128, 11);  // the stereo module's default block
+            cv::StereoBM::create(kNumDisparities, 11);  // the stereo module's default block
         bm->setPreFilterCap(31);
         bm->setTextureThreshold(10);
         bm->setUniquenessRatio(15);
@@ -335,8 +341,8 @@ int Run(const Args& args) {
         bm->setSpeckleRange(32);
         const int block = 5;
         cv::Ptr<cv::StereoSGBM> sgbm =
-            cv::StereoSGBM::create(0, 128, block, 8 * block * block, 32 * block * block, 1, 63, 10,
-                                   100, 32, cv::StereoSGBM::MODE_SGBM);
+            cv::StereoSGBM::create(0, kNumDisparities, block, 8 * block * block, 32 * block * block,
+                                   1, 63, 10, 100, 32, cv::StereoSGBM::MODE_SGBM);
         cv::Mat bm_fixed, sgbm_fixed;
         bm->compute(left, right, bm_fixed);
         sgbm->compute(left, right, sgbm_fixed);
@@ -348,10 +354,11 @@ int Run(const Args& args) {
             const int near = k == 0 ? -1 : (k == 1 ? 1 : 0);
             boxes[c][k] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], near);
           }
-          boxes[c][3] = ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], -1, 128);
+          boxes[c][3] =
+              ScoreInBoxes(bm_d, f.disparity, f.labels, kBoxClasses[c], -1, kNumDisparities);
         }
         const auto surfaces = ScoreCarSurfaces(bm_d, f, 0);
-        const auto surfaces_right = ScoreCarSurfaces(bm_d, f, 128);
+        const auto surfaces_right = ScoreCarSurfaces(bm_d, f, kNumDisparities);
         const ImageSurfaceScores image_surfaces = ScoreImageSurfaces(bm_d, f);
         std::lock_guard<std::mutex> lock(mutex);
         for (int k = 0; k < 2; ++k) {

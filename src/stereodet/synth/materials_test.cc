@@ -110,21 +110,28 @@ TEST(MaterialsTest, ClothMaterialDrawsEveryVariantAndDenimOnlyBelow) {
   EXPECT_NEAR(upper[2] / 2000.0, 0.1, 0.03);
 }
 
+// A scene of one box of `material` (centre, half extents; rect frame, axis-aligned) and no ground
+// in view: a wall to sample a texture on with rays from the origin.
+Scene OneBoxScene(const Material& material, const Eigen::Vector3f& centre,
+                  const Eigen::Vector3f& half) {
+  Scene scene;
+  const int m = scene.AddMaterial(material);
+  scene.primitives.push_back(MakeBox(centre, half, Eigen::Matrix3f::Identity(), m));
+  scene.ground_y_m = 100.0f;
+  scene.Finalize();
+  return scene;
+}
+
 // A striped garment (period 0.1 m, stripes 4.5 cm wide centred on multiples of the period) shows
 // albedo2 on a stripe's centre line and albedo between stripes, on a box face 10 m ahead.
 TEST(MaterialsTest, StripedClothHasStripesOfItsSecondColour) {
-  Scene scene;
   Material cloth = MakeMaterial(Pattern::kCloth, Rgb(0.1, 0.1, 0.1), 0.0f);
   cloth.variant = 1;
   cloth.albedo2 = Rgb(0.6, 0.5, 0.4);
   cloth.scale_m = 0.1f;
-  const int m = scene.AddMaterial(cloth);
   // A box 1 m high from y = 1.0 (bottom) up to y = 0.0, its face towards the camera at z = 10.
-  scene.primitives.push_back(MakeBox(Eigen::Vector3f(0.0f, 0.5f, 10.5f),
-                                     Eigen::Vector3f(1.0f, 0.5f, 0.5f), Eigen::Matrix3f::Identity(),
-                                     m));
-  scene.ground_y_m = 100.0f;
-  scene.Finalize();
+  const Scene scene =
+      OneBoxScene(cloth, Eigen::Vector3f(0.0f, 0.5f, 10.5f), Eigen::Vector3f(1.0f, 0.5f, 0.5f));
   const auto albedo_at = [&](float height) {
     const Ray ray(Eigen::Vector3f::Zero(), Eigen::Vector3f(0.02f, (1.0f - height) / 10.0f, 1.0f));
     const SurfaceHit hit = scene.Trace(ray);
@@ -141,16 +148,11 @@ TEST(MaterialsTest, StripedClothHasStripesOfItsSecondColour) {
 // regular grid's would (which block matching cannot tell apart along an image row). The joints are
 // made to stand out with a bright joint colour (a test value) on a wall 10 m ahead.
 TEST(MaterialsTest, PavingCoursesHaveJointsAStoneApartThatDoNotLineUp) {
-  Scene scene;
   Material paving = MakeMaterial(Pattern::kPaving, Rgb(0.1, 0.1, 0.1), 0.0f);
   paving.albedo2 = Rgb(10.0, 10.0, 10.0);
   paving.scale_m = 0.3f;
-  const int m = scene.AddMaterial(paving);
-  scene.primitives.push_back(MakeBox(Eigen::Vector3f(0.0f, 0.0f, 10.5f),
-                                     Eigen::Vector3f(3.0f, 1.5f, 0.5f), Eigen::Matrix3f::Identity(),
-                                     m));
-  scene.ground_y_m = 100.0f;
-  scene.Finalize();
+  const Scene scene =
+      OneBoxScene(paving, Eigen::Vector3f(0.0f, 0.0f, 10.5f), Eigen::Vector3f(3.0f, 1.5f, 0.5f));
   const float s = paving.scale_m;
   std::vector<float> phases;
   for (int line = 0; line < 9; ++line) {
