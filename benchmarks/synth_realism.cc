@@ -2,6 +2,7 @@
 //
 //   synth_realism [--frames 200] [--stereo-frames 20] [--seed 1] [--threads 0] [--images DIR]
 //                 [--picture-frame 0] [--speed-frames 0] [--speed-rounds 1] [--road-shapes 1]
+//                 [--keep-buffers 1]
 //
 // Generates frames in memory and prints, as Markdown tables:
 //  - label statistics (objects per frame, class mix, difficulty mix, occlusion and truncation mix,
@@ -16,7 +17,9 @@
 //    both cameras, disparity, labels, LiDAR; nothing written) on --threads threads, frames/s,
 //    and the same frames with straight, flat roads (SceneOptions::road_shapes = false), in
 //    --speed-rounds alternating rounds, with the ratio of the two (paired in one process);
-//  --road-shapes 0 makes all frames with straight, flat roads;
+//  --road-shapes 0 makes all frames with straight, flat roads; --keep-buffers 0 leaves glibc's
+//  allocator at its defaults instead of the stereodet executables' policy (util/malloc_tuning.h),
+//  to measure what that policy is worth;
 // and, with --images, writes the pictures of docs/synth.md (a sample pair, the ground-truth and
 // SGBM disparity, BM's disparity (synth_bm.png), a bird's-eye view of the LiDAR scan with the
 // label boxes).
@@ -37,6 +40,7 @@
 
 #include "stereodet/kitti/object.h"
 #include "stereodet/synth/generator.h"
+#include "stereodet/util/malloc_tuning.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/strings.h"
 
@@ -662,6 +666,7 @@ int Run(const Args& args) {
 
 int main(int argc, char** argv) {
   stereodet::Args args;
+  bool keep_buffers = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
     const auto number = stereodet::ParseInt(value);
@@ -683,14 +688,20 @@ int main(int argc, char** argv) {
       args.road_shapes = *number != 0;
     } else if (number && key == "--threads") {
       args.threads = static_cast<int>(*number);
+    } else if (number && key == "--keep-buffers") {
+      keep_buffers = *number != 0;
     } else {
       std::fprintf(
           stderr,
           "usage: synth_realism [--frames N] [--stereo-frames K] [--seed S] [--threads T]\n"
           "                     [--images DIR] [--picture-frame I] [--speed-frames N]\n"
-          "                     [--speed-rounds R] [--road-shapes 0|1]\n");
+          "                     [--speed-rounds R] [--road-shapes 0|1] [--keep-buffers 0|1]\n");
       return 2;
     }
   }
+  // As the stereodet executables do (RunCli), so that the speed is the one `stereodet synth` has.
+  if (keep_buffers) stereodet::KeepLargeBuffersInHeap();
+  std::printf("allocator: %s\n",
+              keep_buffers ? "large buffers kept in the heap (as stereodet)" : "glibc defaults");
   return stereodet::Run(args);
 }

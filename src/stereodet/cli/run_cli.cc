@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/util/malloc_tuning.h"
 #include "stereodet/util/strings.h"
 #include "stereodet/util/version.h"
 
@@ -162,6 +163,9 @@ int RunCliIn(int argc, char** argv, Program self,
 
 int RunCli(int argc, char** argv, Program self,
            std::span<const std::pair<std::string_view, AddCommandFn>> own) {
+  // An executable's own process: its allocator policy is ours to set (RunCommandInProcess, which
+  // runs inside someone else's process, leaves it alone).
+  KeepLargeBuffersInHeap();
   return RunCliIn(argc, argv, self, own, /*may_exec=*/true);
 }
 
