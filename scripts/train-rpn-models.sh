@@ -20,6 +20,10 @@
 #   RPN_SYNTH_FRAMES=4000, RPN_SYNTH_ARGS=""   the data set (tiny runs: fewer, smaller frames)
 #   RPN_ARGS=""          more flags for every `train rpn` (e.g. --width 64 --height 32)
 #   RPN_FORCE=1          retrain a finished model (model.pt without checkpoint.pt) over it
+#   RPN_PARALLEL=1       train one after the other (default); 2 trains in two waves of two at once,
+#                        one core each: rpn-rgb beside rpn-rgb-wide (it needs no other model), then
+#                        rpn-rgbd beside rpn-rgb-continued (both start from rpn-rgb); without
+#                        RPN_CONTROL=1 it changes nothing. Output then goes to MODELS_DIR/rpn-*.out
 set -euo pipefail
 build_dir=${1:-build}
 data=${2:-data/synth}
@@ -33,6 +37,9 @@ synth_frames=${RPN_SYNTH_FRAMES:-4000}
 read -r -a synth_args <<< "${RPN_SYNTH_ARGS:-}"
 read -r -a extra <<< "${RPN_ARGS:-}"
 force=${RPN_FORCE:-0}
+parallel=${RPN_PARALLEL:-1}
+[[ "$parallel" =~ ^[0-9]+$ ]] || { echo "train-rpn-models: RPN_PARALLEL must be a whole number, got '$parallel'" >&2; exit 1; }
+control=${RPN_CONTROL:-0}
 bin="$build_dir/bin/stereodet"
 [[ -x "$bin" ]] || { echo "train-rpn-models: $bin not built; run make build" >&2; exit 1; }
 "$bin" train rpn --help >/dev/null 2>&1 ||
@@ -58,12 +65,39 @@ train() {  # NAME INPUT FLAGS...
     "${extra[@]}" "$@"
 }
 
+# One wave of trainings: each argument is a quoted "NAME INPUT FLAGS..." line. One after the other,
+# or with RPN_PARALLEL > 1 all at once (each is one LibTorch thread), output in MODELS_DIR/NAME.out.
+wave() {
+  local spec pids=() names=() failed=0 i
+  for spec in "$@"; do
+    read -r -a args <<< "$spec"
+    if (( parallel > 1 && $# > 1 )); then
+      echo "==> training ${args[0]} in the background (output: $models/${args[0]}.out)"
+      train "${args[@]}" > "$models/${args[0]}.out" 2>&1 &
+      pids+=("$!")
+      names+=("${args[0]}")
+    else
+      train "${args[@]}"
+    fi
+  done
+  for i in "${!pids[@]}"; do
+    wait "${pids[$i]}" || { echo "train-rpn-models: ${names[$i]} failed; see $models/${names[$i]}.out" >&2; failed=1; }
+  done
+  return "$failed"
+}
+
+# The waves pass each training as one line split at blanks: a models folder with one cannot be named.
+[[ "$models" != *[[:space:]]* ]] || { echo "train-rpn-models: MODELS_DIR '$models' holds a blank" >&2; exit 1; }
 mkdir -p "$models"
-train rpn-rgb rgb --image-width "$image_width"
-train rpn-rgbd rgbd --image-width "$image_width" --geometry-width "$image_width" \
-  --init-from "$models/rpn-rgb"
-if [[ "${RPN_CONTROL:-0}" == 1 ]]; then
-  train rpn-rgb-wide rgb --image-width "$control_width"
-  train rpn-rgb-continued rgb --image-width "$image_width" --init-from "$models/rpn-rgb"
+rgb="rpn-rgb rgb --image-width $image_width"
+rgbd="rpn-rgbd rgbd --image-width $image_width --geometry-width $image_width --init-from $models/rpn-rgb"
+wide="rpn-rgb-wide rgb --image-width $control_width"
+continued="rpn-rgb-continued rgb --image-width $image_width --init-from $models/rpn-rgb"
+if [[ "$control" == 1 ]]; then
+  wave "$rgb" "$wide"
+  wave "$rgbd" "$continued"
+else
+  wave "$rgb"
+  wave "$rgbd"
 fi
 echo "train-rpn-models: done; the models are in $models/rpn-*"
