@@ -112,8 +112,8 @@ steps = int(m.group(1)) if m else 0
 # trainings (2 x 2 RPN seeds), detect: 6 image models x 2 blurs + 2 3D models, 2 evals each,
 # compares: 3 image pairs (the SSDs, 2 RPN seed pairs) x 2 blurs x 2 matchers + the 3D pair x 2
 # matchers, figures: the models' report, the blur report, the 3D pair's compare report and the
-# filter sweep = 1 + 1 + 4 + 14 + 28 + 14 + 4
-check(steps == 66 and m.group(2) == "0", f"first run: 66 steps, none skipped (got {m.groups()})")
+# filter sweep, the compression overlay = 1 + 1 + 4 + 14 + 28 + 14 + 5
+check(steps == 67 and m.group(2) == "0", f"first run: 67 steps, none skipped (got {m.groups()})")
 table_text = (out / "table1.md").read_text()
 tables = parse_tables(table_text)
 
@@ -235,9 +235,25 @@ vrows = tables.get(("all", "verdicts"), [])
 # One row per claim, the RPN claim once per seed pair.
 check(sorted(r[0] for r in vrows) == sorted(list(claims) + ["RPN RGB-D has the higher AP_R40 (Car)"]),
       f"a verdict row per claim and seed pair: {[r[0] for r in vrows]}")
-seen = set()
+seen, flips_seen = set(), set()
 for row in vrows:
     c = claims[row[0]]
+    if c["measure"].startswith("sweep_"):
+        # A sweep claim: the share of swept values where stable is above naive, recounted from
+        # sweep.csv; confirmed at 80 % or more, refuted below 50 %.
+        measure = c["measure"][len("sweep_"):]
+        with open(out / "figures" / f"sweep-{c['a']}" / "sweep.csv") as f:
+            d = [float(r[f"stable_{measure}"]) - float(r[f"naive_{measure}"])
+                 for r in csv.DictReader(f) if r["class"] == c["class"]
+                 and r[f"stable_{measure}"] != "" and r[f"naive_{measure}"] != ""]
+        share = sum(x > 1e-12 for x in d) / len(d) if d else None
+        want = "confirmed" if share is not None and share >= 0.8 else \
+            "refuted" if share is not None and share < 0.5 else "inconclusive"
+        check(row[3] == want and (share is None or row[2].startswith(
+              f"{sum(x > 1e-12 for x in d)} / {len(d)} = ")),
+              f"sweep verdict of {c['id']}: {row[2:4]} vs {want} (share {share})")
+        seen.add(row[3].split(" (")[0])
+        continue
     pair_text, blur, cls, matcher, measure = (x.strip() for x in row[1].split(","))
     a_name, b_name = pair_text.split(" - ")
     check((a_name == c["a"] or a_name in groups[c["a"]]) and blur == f"blur {c['blur_sigma_px']}",
@@ -249,17 +265,26 @@ for row in vrows:
     else:
         path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
         with open(path / "bootstrap.csv") as f:
-            r = next(r for r in csv.DictReader(f) if r["class"] == c["class"] and r["metric"] == "2d"
-                     and r["difficulty"] == "Moderate" and r["measure"] == c["measure"])
-        lo, hi = float(r["a_minus_b_lower"]), float(r["a_minus_b_upper"])
-        if lo <= 0 <= hi:
+            by_measure = {r["measure"]: r for r in csv.DictReader(f) if r["class"] == c["class"]
+                          and r["metric"] == "2d" and r["difficulty"] == "Moderate"}
+        # Each measure's side of 0: +1, -1, or 0 when its interval holds 0.
+        sides = []
+        for measure in c["measure"].split("/"):
+            lo = float(by_measure[measure]["a_minus_b_lower"])
+            hi = float(by_measure[measure]["a_minus_b_upper"])
+            sides.append(0 if lo <= 0 <= hi else 1 if lo > 0 else -1)
+        if 0 in sides:
             want = "inconclusive"
+        elif c["expect"] == "flip":  # two Brier terms: confirmed when they rank A, B oppositely
+            want = "confirmed" if sides[0] != sides[1] else "refuted"
+            flips_seen.add(want)
         else:
-            want = "confirmed" if (lo > 0) == (c["expect"] == ">0") else "refuted"
+            want = "confirmed" if (sides[0] > 0) == (c["expect"] == ">0") else "refuted"
     check(row[3] == want, f"verdict of {c['id']} ({row[1]}): {row[3]!r} != {want!r}")
     seen.add(row[3].split(" (")[0])
 check(seen == {"confirmed", "refuted", "inconclusive", "not measured"},
       f"the miniature's claims cover every verdict: {sorted(seen)}")
+check(flips_seen, "a flip claim of the miniature is decided (confirmed or refuted)")
 
 # rpn-rgbd is initialised from rpn-rgb of its seed ({models}, {seed}): its training depends on it.
 for seed in (1, 2):
@@ -269,8 +294,14 @@ for seed in (1, 2):
           f"train-rpn-rgbd-seed{seed}: --init-from its rgb model, a dependency: {marker}")
 
 # The figures: one report per group, and the sweep's shares recounted from its sweep.csv.
-for folder in ("models", "blur", "compare-det3d-lidar-vs-det3d-stereo", "sweep-ssd-rgb/report"):
+for folder in ("models", "blur", "compare-det3d-lidar-vs-det3d-stereo", "sweep-ssd-rgb/report",
+               "compression"):
     check((out / "figures" / folder / "index.html").is_file(), f"figures/{folder}/index.html")
+compression_html = (out / "figures" / "compression" / "index.html")
+compression_html = compression_html.read_text() if compression_html.is_file() else ""
+check(all(label in compression_html for label in
+          ("ssd-rgb blur0", "ssd-rgb blur5", "ssd-rgbh-fixed blur0", "ssd-rgbh-fixed blur5")),
+      "figures.overlays: the compression report overlays both models sharp and blurred")
 # (`eval sweep --report` has no --no-png: only the `stereodet report` folders follow the setting.)
 check(not [p for p in (out / "figures").rglob("*.png") if "sweep-" not in str(p)],
       "figures.png false: no PNGs from stereodet report")
@@ -301,7 +332,7 @@ rerun = sorted(re.findall(r"^==> ([\w.-]+):", third.stdout, re.M))
 check(rerun == ["compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti",
                 "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal", "detect-ssd-rgbh-fixed-blur5",
                 "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal",
-                "report-blur"],
+                "report-blur", "report-compression"],
       f"a lost detection marker reruns it and what depends on it, only: {rerun}")
 check((out / "table1.md").read_text() == table_text, "the rerun step gives the same table")
 
@@ -311,6 +342,7 @@ ckpt = work / "ssd-copy"
 shutil.copytree(repo / "models" / "ssd-rgb", ckpt)
 ckpt_cfg["models"] = [dict(ckpt_cfg["models"][0], model=str(ckpt))]
 ckpt_cfg["pairs"], ckpt_cfg["claims"], ckpt_cfg["blur_sigmas_px"] = [], "", [0]
+ckpt_cfg["figures"]["overlays"] = {}
 ckpt_path = work / "checkpoint.json"
 ckpt_path.write_text(json.dumps(ckpt_cfg))
 
@@ -328,6 +360,55 @@ os.utime(ckpt / "model.pt", ns=(0, 12345))
 check(run_ckpt() == ["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal",
                     "report-models", "sweep-ssd-rgb"],
       "a replaced checkpoint reruns its detection, evaluations and figures")
+
+# A "kitti" source: a data set in KITTI's layout that the experiment does not generate (the
+# miniature's synthetic set, which synth writes in that layout). The same frames and checkpoints
+# give the same rows as the synth run: an image detector, and a stereo 3D detector whose stereo
+# points are computed from the root (a step without a data dependency).
+kitti_cfg = json.loads(config_path.read_text())
+kitti_cfg["datasets"] = {"real": {"source": "kitti", "root": str(out / "data" / "mini")}}
+kitti_cfg["models"] = [dict(m, data="real") for m in kitti_cfg["models"]
+                       if m["name"] in ("ssd-rgb", "det3d-stereo")]
+kitti_cfg["pairs"], kitti_cfg["claims"], kitti_cfg["blur_sigmas_px"] = [], "", [0]
+kitti_cfg["figures"] = {"png": False}
+kitti_path = work / "kitti.json"
+kitti_path.write_text(json.dumps(kitti_cfg))
+
+
+def run_kitti(config_file):
+    return subprocess.run([sys.executable, str(script), "--config", str(config_file), "--out",
+                           str(work / "kitti-out"), "--bin", str(bin_dir)], capture_output=True,
+                          text=True)
+
+
+p = run_kitti(kitti_path)
+check(p.returncode == 0, f"kitti source run: {p.stderr.strip()}")
+kitti_steps = sorted(re.findall(r"^==> ([\w.-]+):", p.stdout, re.M))
+check(not [s for s in kitti_steps if s.startswith("data-")] and "stereo-real-val" in kitti_steps,
+      f"kitti source: no data step, stereo points from its root ({kitti_steps})")
+kitti_tables = parse_tables((work / "kitti-out" / "table1.md").read_text()) \
+    if p.returncode == 0 else {}
+for cls in config["classes"]:
+    synth_rows = {(r[0], r[1]): r for r in tables.get((cls, "table"), [])}
+    kitti_rows = {(r[0], r[1]): r for r in kitti_tables.get((cls, "table"), [])}
+    for name in ("ssd-rgb", "det3d-stereo"):
+        a, b = synth_rows.get((name, "0")), kitti_rows.get((name, "0"))
+        check(a is not None and b is not None and a[3:8] == b[3:8],
+              f"kitti source {cls} {name}: the synth run's row {a}, the kitti run's {b}")
+# A root without training/ is refused before anything runs, naming the field.
+kitti_cfg["datasets"]["real"]["root"] = str(work / "no-such-kitti")
+kitti_path.write_text(json.dumps(kitti_cfg))
+p = run_kitti(kitti_path)
+check(p.returncode == 1 and "datasets.real.root:" in p.stderr and "no training/ folder" in p.stderr,
+      f"kitti root without training/: {p.returncode} {p.stderr.strip()!r}")
+# So is one without the evaluated split's ImageSets file.
+no_split = work / "kitti-no-split"
+(no_split / "training").mkdir(parents=True)
+kitti_cfg["datasets"]["real"]["root"] = str(no_split)
+kitti_path.write_text(json.dumps(kitti_cfg))
+p = run_kitti(kitti_path)
+check(p.returncode == 1 and "datasets.real.root:" in p.stderr and "ImageSets/val.txt" in p.stderr,
+      f"kitti root without ImageSets/val.txt: {p.returncode} {p.stderr.strip()!r}")
 
 # --table-only runs nothing; --update-docs replaces the marked section only.
 doc = work / "RESULTS.md"
@@ -384,6 +465,22 @@ try:
     check(False, "seed_model without {seed} is refused")
 except experiment.ConfigError as e:
     check(f"{seeded_path}: models[1].seed_model:" in str(e), f"seed_model error names it: {e}")
+
+# A claim of an unknown kind is refused, naming the file, the claim and what it accepts.
+header = "id,claim,a,b,blur_sigma_px,class,matcher,measure,expect,source\n"
+for line, wanted in (
+        ("f,x,ssd-rgb,ssd-rgbh-fixed,0,Car,optimal,brier_labels/ap_r40,flip,t",
+         "claim 1 (f): expect 'flip' needs a measure of two Brier terms"),
+        ("s,x,ssd-rgb,,0,Car,optimal,sweep_recall,>0,t",
+         "claim 1 (s): a sweep measure (sweep_recall) needs expect 'share'"),
+        ("m,x,ssd-rgb,ssd-rgbh-fixed,0,Car,optimal,ap_r11,<0,t", "claim 1 (m): expect '<0'")):
+    bad_claims = work / "bad_claims.csv"
+    bad_claims.write_text(header + line + "\n")
+    try:
+        experiment.read_claims(str(bad_claims))
+        check(False, f"claim {line!r} is refused")
+    except RuntimeError as e:
+        check(f"{bad_claims}: {wanted}" in str(e), f"claim error names it: {e}")
 
 if failures:
     raise SystemExit(f"experiment.miniature: {len(failures)} failure(s)")
