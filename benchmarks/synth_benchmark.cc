@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "stereodet/synth/generator.h"
+#include "stereodet/util/malloc_tuning.h"
 
 namespace stereodet {
 namespace {
@@ -69,4 +70,13 @@ BENCHMARK(BM_Dataset)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTim
 }  // namespace
 }  // namespace stereodet
 
-BENCHMARK_MAIN();
+// BENCHMARK_MAIN, under the stereodet executables' allocator policy (util/malloc_tuning.h), so that
+// the figures are the ones `stereodet synth` has.
+int main(int argc, char** argv) {
+  stereodet::KeepLargeBuffersInHeap();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
