@@ -973,9 +973,12 @@ def write_table(pipeline):
                      "side. A sweep claim is decided by the share of swept filter values where "
                      "the stable filter's measure is above the naive one's (a count, no interval): "
                      f"confirmed at {100 * SWEEP_CONFIRMED:.0f} % or more, refuted below "
-                     f"{100 * SWEEP_REFUTED:.0f} %. One training per model: training variance is "
-                     "not in the intervals."
-                     "\n\n"
+                     f"{100 * SWEEP_REFUTED:.0f} %. The intervals are over frames only: "
+                     + ("a model with training seeds has one row per seed pair, and the seeds' "
+                        "spread is the training-variance table." if any(
+                            len(g) > 1 for g in config["groups"].values()) else
+                        "one training per model, so training variance is not in them.")
+                     + "\n\n"
                      + markdown(["claim", "decided by", "A - B [95%]", "verdict",
                                  "what would change it"], vrows,
                                 ["---", "---", "---:", "---", "---"]))
