@@ -8,12 +8,16 @@ with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
   absent model's rows and pair are 'missing' rows;
 - the training-variance rows are the mean and standard deviation over the seeds' results.json;
 - each claim of miniature_claims.csv gets the verdict its bootstrap.csv interval gives (one of
-  each: confirmed, refuted, inconclusive, not measured for a missing model and for a non-pair);
+  each: confirmed, refuted, inconclusive, not measured for a missing model and for a non-pair;
+  the Brier-terms flip claims from both terms' intervals, the sweep claim from sweep.csv);
+- the compression overlay holds both SSDs sharp and blurred;
+- a "kitti" source (the miniature's synthetic set read as a KITTI root) gives the synth run's rows,
+  and a root without training/ or ImageSets/val.txt is refused naming the field;
 - a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
   exactly the steps downstream of it (its evaluations and compares);
 - a checkpoint replaced under the same path reruns its detections and their evaluations;
 - --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
-- a config error names the file and the field;
+- a config error, and a claim of an unknown kind, names the file and the field;
 - committed checkpoints per training seed ("seed_model") expand into one model per seed.
 
 Usage: experiment_test.py REPO_ROOT BIN_DIR WORK_DIR
