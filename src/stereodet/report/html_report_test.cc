@@ -528,5 +528,20 @@ TEST(ReportTest, PngFilesAreTheSvgRasterizedAtTwiceTheSize) {
   EXPECT_FALSE(fs::exists(dir.path() / "bad.png"));
 }
 
+// A figure overlaying many models (the experiment's 15) embeds more than 10 MB of curve data in
+// one <metadata> text node: libxml2's default limit, which librsvg's plain loader keeps.
+TEST(ReportTest, PngOfAnSvgWithMoreThanTenMegabytesOfMetadata) {
+  if (!PngFromSvgAvailable()) GTEST_SKIP() << "built without librsvg: no PNG output";
+  const std::string svg =
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4\" height=\"2\">\n<metadata>" +
+      std::string(11'000'000, '7') +
+      "</metadata>\n<rect x=\"2\" y=\"0\" width=\"2\" height=\"2\" fill=\"#ff0000\"/></svg>";
+  const RasterImage image = RasterizeSvg(svg);
+  ASSERT_EQ(image.width, 4);
+  ASSERT_EQ(image.height, 2);
+  EXPECT_EQ(image.At(0, 0), 0xffffffu);  // the white background
+  EXPECT_EQ(image.At(3, 1), 0xff0000u);  // the rectangle
+}
+
 }  // namespace
 }  // namespace stereodet

@@ -24,7 +24,8 @@ namespace {
 struct Rsvg {
   bool loaded = false;
   std::string error;  // why not loaded
-  decltype(&rsvg_handle_new_from_data) new_from_data = nullptr;
+  decltype(&rsvg_handle_new_from_stream_sync) new_from_stream = nullptr;
+  decltype(&g_memory_input_stream_new_from_data) memory_stream = nullptr;
   decltype(&rsvg_handle_get_intrinsic_size_in_pixels) intrinsic_size = nullptr;
   decltype(&rsvg_handle_render_document) render_document = nullptr;
   decltype(&g_object_unref) object_unref = nullptr;
@@ -62,7 +63,8 @@ const Rsvg& LoadRsvg() {
       return;
     }
     std::string& e = rsvg.error;
-    bool ok = Find(library, "rsvg_handle_new_from_data", rsvg.new_from_data, e);
+    bool ok = Find(library, "rsvg_handle_new_from_stream_sync", rsvg.new_from_stream, e);
+    ok &= Find(library, "g_memory_input_stream_new_from_data", rsvg.memory_stream, e);
     ok &= Find(library, "rsvg_handle_get_intrinsic_size_in_pixels", rsvg.intrinsic_size, e);
     ok &= Find(library, "rsvg_handle_render_document", rsvg.render_document, e);
     ok &= Find(library, "g_object_unref", rsvg.object_unref, e);
@@ -104,8 +106,13 @@ namespace {
 cairo_surface_t* Render(const Rsvg& r, const std::string& what, const std::string& svg,
                         double scale) {
   GError* error = nullptr;
+  // Without limits: libxml2 refuses a text node over 10 MB by default, and a figure that overlays
+  // many models carries more curve data than that in its <metadata>. The SVGs are this module's
+  // own output, not untrusted input.
+  GInputStream* stream = r.memory_stream(svg.data(), static_cast<gssize>(svg.size()), nullptr);
   RsvgHandle* handle =
-      r.new_from_data(reinterpret_cast<const guint8*>(svg.data()), svg.size(), &error);
+      r.new_from_stream(stream, nullptr, RSVG_HANDLE_FLAG_UNLIMITED, nullptr, &error);
+  r.object_unref(stream);
   if (handle == nullptr) {
     const std::string message = error != nullptr ? error->message : "unknown error";
     if (error != nullptr) r.error_free(error);
