@@ -8,7 +8,8 @@ those are seed 1), `detect FAMILY` with each committed model of the family, then
 optimal` on Car Moderate:
   - det3d (issue 14): models/det3d-lidar and models/det3d-stereo (on the frames' stereo point
     clouds), BEV AP_R40 at IoU 0.5 (`--loose`). Validation figures (docs/RESULTS.md, optimal
-    matcher): LiDAR 0.974, stereo 0.869; measured here 2026-12-03: 95.0 / 91.2 on 29 cars.
+    matcher): LiDAR 0.974, stereo 0.874; measured here 2026-12-04 (the version-6 models): 95.0 /
+    87.5 on 29 cars.
   - rpn (issue 15): models/rpn-rgb and models/rpn-rgbd (its stereo computed per frame), 2D AP_R40
     at IoU 0.7. Validation figures (docs/RESULTS.md, optimal matcher): rgb 0.861, rgbd 0.890;
     measured here 2026-12-03: 86.7 / 92.5 on 29 cars.
