@@ -11,8 +11,8 @@ optimal` on Car Moderate:
     matcher): LiDAR 0.974, stereo 0.874; measured here 2026-12-04 (the version-6 models): 95.0 /
     87.5 on 29 cars.
   - rpn (issue 15): models/rpn-rgb and models/rpn-rgbd (its stereo computed per frame), 2D AP_R40
-    at IoU 0.7. Validation figures (docs/RESULTS.md, optimal matcher): rgb 0.861, rgbd 0.890;
-    measured here 2026-12-03: 86.7 / 92.5 on 29 cars.
+    at IoU 0.7. Validation figures (docs/RESULTS.md, optimal matcher): rgb 0.838, rgbd 0.888;
+    measured here 2026-12-04 (the version-6 models): 83.3 / 84.9 on 29 cars.
 Each model must find its cars: the floors are about 60 % of the validation figures, so the noise
 of 8 frames does not fail the test, but a broken checkpoint, a changed input encoding or a changed
 box coding does (an untrained or mis-loaded model scores near 0). The optimal matcher, because
