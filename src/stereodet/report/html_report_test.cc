@@ -529,13 +529,13 @@ TEST(ReportTest, PngFilesAreTheSvgRasterizedAtTwiceTheSize) {
 }
 
 // A figure overlaying many models (the experiment's 15) embeds more than 10 MB of curve data in
-// one <metadata> text node: libxml2's default limit, which librsvg's plain loader keeps.
+// one <metadata> CDATA section: over libxml2's default limit, which librsvg's plain loader keeps.
 TEST(ReportTest, PngOfAnSvgWithMoreThanTenMegabytesOfMetadata) {
   if (!PngFromSvgAvailable()) GTEST_SKIP() << "built without librsvg: no PNG output";
   const std::string svg =
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4\" height=\"2\">\n<metadata>" +
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4\" height=\"2\">\n<metadata><![CDATA[" +
       std::string(11'000'000, '7') +
-      "</metadata>\n<rect x=\"2\" y=\"0\" width=\"2\" height=\"2\" fill=\"#ff0000\"/></svg>";
+      "]]></metadata>\n<rect x=\"2\" y=\"0\" width=\"2\" height=\"2\" fill=\"#ff0000\"/></svg>";
   const RasterImage image = RasterizeSvg(svg);
   ASSERT_EQ(image.width, 4);
   ASSERT_EQ(image.height, 2);
