@@ -1,4 +1,5 @@
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/util/atomic_file.h"
@@ -20,6 +21,15 @@ std::string FirstConfigDifference(const std::string& recorded_text, const std::s
   return "";
 }
 
+std::string SerializeArchive(torch::serialize::OutputArchive& archive) {
+  // Through a stream, not a file name: LibTorch names the archive's root folder after the file
+  // it writes, and our temporary files' names hold the process id, so the same tensors would
+  // give other bytes (and another model.json fingerprint) in every process.
+  std::ostringstream bytes;
+  archive.save_to(bytes);
+  return std::move(bytes).str();
+}
+
 void SaveTrainingCheckpoint(const std::filesystem::path& path, const torch::nn::Module& module,
                             const torch::optim::Optimizer& optimizer, int epochs_done,
                             const CheckpointRecord& record) {
@@ -32,10 +42,7 @@ void SaveTrainingCheckpoint(const std::filesystem::path& path, const torch::nn::
   root.write("config", c10::IValue(record.config_json));
   root.write("parameters", torch::tensor(record.parameters));
   root.write("training_run", c10::IValue(record.training_run));
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  AtomicPath out(path);
-  root.save_to(out.temp_path().string());
-  out.Commit();
+  WriteFileAtomically(path, SerializeArchive(root));
 }
 
 int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module& module,
@@ -86,13 +93,11 @@ int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module&
 }
 
 std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Module& module) {
-  AtomicPath weights(path);
   torch::serialize::OutputArchive archive;
   module.save(archive);
-  archive.save_to(weights.temp_path().string());
-  const std::string hash = HashFileHex(weights.temp_path());
-  weights.Commit();
-  return hash;
+  const std::string bytes = SerializeArchive(archive);
+  WriteFileAtomically(path, bytes);
+  return HashHex(Fnv1a64(bytes));
 }
 
 void LoadWeights(const std::filesystem::path& path, const std::string& config_source,

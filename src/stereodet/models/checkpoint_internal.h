@@ -37,8 +37,12 @@ int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module&
                            torch::optim::Optimizer& optimizer, const torch::Device& device,
                            const CheckpointRecord& expected);
 
-// Saves `module` to a LibTorch archive at `path` atomically; returns the FNV-1a 64 hash (16 hex
-// digits) of the file written.
+// The bytes of a LibTorch archive, a function of its contents alone (the archive's root folder is
+// always "archive", whatever file they go to).
+std::string SerializeArchive(torch::serialize::OutputArchive& archive);
+// Saves `module` to a LibTorch archive at `path` atomically (creating its folder); returns the
+// FNV-1a 64 hash (16 hex digits) of the file written: the same weights give the same file and
+// hash in any process.
 std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Module& module);
 // Loads weights into `module` on `device`; throws std::runtime_error naming both files.
 void LoadWeights(const std::filesystem::path& path, const std::string& config_source,

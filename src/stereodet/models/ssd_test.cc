@@ -11,6 +11,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/fuzz_corpus.h"
+#include "stereodet/util/hash.h"
 #include "stereodet/util/test_paths.h"
 
 namespace stereodet {
@@ -145,6 +146,24 @@ TEST(SsdTest, SaveThenLoadGivesIdenticalOutputs) {
     ++files;
   }
   EXPECT_EQ(files, 2);
+}
+
+TEST(SsdTest, TheSameWeightsSaveToTheSameBytesAndFingerprint) {
+  // model.json's fnv1a64 fingerprints the weights: two trainings that end with the same weights
+  // (the experiment on Dask workers and in one process) must write the same model.pt and record
+  // the same hash, whatever temporary file names the writers used.
+  namespace fs = std::filesystem;
+  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "same_bytes";
+  fs::remove_all(dir);
+  const SsdModel model(TinyConfig(InputEncoding::kRgb), 4);
+  model.Save(dir / "a");
+  model.Save(dir / "b");
+  const std::string a = ReadFile(dir / "a/model.pt"), b = ReadFile(dir / "b/model.pt");
+  EXPECT_EQ(a, b);
+  const WeightsRecord record = ReadWeightsRecord(ReadFile(dir / "a/model.json"), "a/model.json");
+  EXPECT_EQ(record.fnv1a64, ReadWeightsRecord(ReadFile(dir / "b/model.json"), "b").fnv1a64);
+  EXPECT_EQ(record.fnv1a64, HashHex(Fnv1a64(a)));
+  EXPECT_EQ(a.find(".model.tmp"), std::string::npos) << "a temporary file's name in the archive";
 }
 
 TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {

@@ -746,10 +746,7 @@ void RpnTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_do
   root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
   root.write("config", c10::IValue(RpnConfigToJson(impl_->model.config())));
   root.write("parameters", torch::tensor(impl_->model.ParameterCount()));
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  AtomicPath out(path);
-  root.save_to(out.temp_path().string());
-  out.Commit();
+  WriteFileAtomically(path, internal::SerializeArchive(root));
 }
 
 int RpnTrainer::LoadCheckpoint(const std::filesystem::path& path) {
