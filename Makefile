@@ -73,7 +73,8 @@ det3d-results: deps
 # The paper's Table 1 (docs/experiment.md): data, stereo points, detection with every model of
 # $(EXPERIMENT_CONFIG) (absent checkpoints are "missing" rows), sharp and blurred, both matchers,
 # bootstrap, paired compares; writes $(EXPERIMENT_DIR)/table1.md and docs/RESULTS.md's generated
-# section. Resumes where it stopped. EXPERIMENT_FLAGS=--train retrains (3 seeds for the SSDs).
+# section. Resumes where it stopped. EXPERIMENT_FLAGS=--train retrains (3 seeds for the SSDs);
+# EXPERIMENT_FLAGS="--train --workers 2" runs the steps on a local Dask cluster (docs/experiment.md).
 EXPERIMENT_CONFIG ?= experiments/table1.json
 EXPERIMENT_DIR ?= results/experiment
 EXPERIMENT_FLAGS ?=

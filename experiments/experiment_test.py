@@ -13,6 +13,9 @@ with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
 - the compression overlay holds both SSDs sharp and blurred;
 - a "kitti" source (the miniature's synthetic set read as a KITTI root) gives the synth run's rows,
   and a root without training/ or ImageSets/val.txt is refused naming the field;
+- on a local Dask cluster of 2 workers the same steps give the same table, weights, detections
+  and bootstrap tables byte for byte and the same results.json results, and a run without Dask finds them complete; a step failing on Dask stops the run with
+  its error, keeping the markers of what ran;
 - a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
   exactly the steps downstream of it (its evaluations and compares);
 - a checkpoint replaced under the same path reruns its detections and their evaluations;
@@ -322,6 +325,60 @@ for cls in config["classes"]:
                  f"{sum(x < -1e-12 for x in d)}"
         check(row is not None and row[k].startswith(counts),
               f"sweep {cls} {measure}: {row[k] if row else None} vs {counts}")
+
+# On Dask (a local cluster of 2 workers): the same steps, the same table and the same result
+# files byte for byte as the run without Dask; a run without Dask then finds it all complete.
+dask_out = work / "dask-out"
+
+
+def run_to(out_dir, *extra, config_file=config_path):
+    return subprocess.run([sys.executable, str(script), "--config", str(config_file), "--out",
+                           str(out_dir), "--bin", str(bin_dir), *extra], capture_output=True,
+                          text=True)
+
+
+p = run_to(dask_out, "--workers", "2")
+check(p.returncode == 0, f"Dask run: exit {p.returncode}: {p.stderr.strip()[-2000:]}")
+dask_steps = sorted(re.findall(r"^==> ([\w.-]+):", p.stdout, re.M))
+serial_steps = sorted(re.findall(r"^==> ([\w.-]+):", first.stdout, re.M))
+check(dask_steps == serial_steps and len(re.findall(r"^<== ", p.stdout, re.M)) == steps,
+      f"Dask run: the serial run's {steps} steps, each reported done")
+check(p.returncode == 0 and (dask_out / "table1.md").read_text() == table_text,
+      "Dask run: the same table1.md")
+# The files that hold results, byte for byte: the trained weights, the detections, the
+# bootstrap and sweep tables; results.json by its results (its provenance names its folders).
+same_bytes = sorted(f.relative_to(out) for pattern in (
+    "models/*/model.pt", "runs/*/*/detections/*.txt", "compare/**/*.csv",
+    "figures/sweep-*/sweep.csv") for f in out.glob(pattern))
+results_json = sorted(f.relative_to(out) for f in out.glob("runs/**/results.json"))
+check(len(same_bytes) > 40 and len(results_json) == 28,
+      f"the serial run's result files: {len(same_bytes)}, {len(results_json)} results.json")
+differ = [str(f) for f in same_bytes if not (dask_out / f).is_file() or
+          (dask_out / f).read_bytes() != (out / f).read_bytes()]
+differ += [str(f) for f in results_json if not (dask_out / f).is_file() or
+           json.loads((dask_out / f).read_text())["results"] !=
+           json.loads((out / f).read_text())["results"]]
+check(not differ, f"Dask run: result files equal to the serial run's ({differ[:5]})")
+p = run_to(dask_out)
+check(f"0 steps run, {steps} skipped" in p.stdout, "a run without Dask resumes the Dask run's "
+      f"folder: every step complete ({p.stdout.strip().splitlines()[-1:]})")
+# A step that fails on Dask: the run exits 1 with its error, submits nothing that depends on it,
+# and the steps that did run keep their markers.
+failing_cfg = json.loads(config_path.read_text())
+failing_cfg["models"] = [failing_cfg["models"][0], dict(failing_cfg["models"][1],
+                                                        detect_flags=["--no-such-flag"])]
+failing_cfg["pairs"], failing_cfg["claims"], failing_cfg["blur_sigmas_px"] = [], "", [0]
+failing_cfg["figures"] = {"png": False}
+failing_path = work / "failing.json"
+failing_path.write_text(json.dumps(failing_cfg))
+p = run_to(work / "failing-out", "--workers", "2", config_file=failing_path)
+bad_model = failing_cfg["models"][1]["name"]
+check(p.returncode == 1 and "--no-such-flag" in p.stderr and
+      f"eval-{bad_model}-blur0-kitti" not in p.stdout,
+      f"a failing step on Dask: exit 1, its error, nothing after it ({p.returncode}, "
+      f"{p.stderr.strip()[-300:]!r})")
+check((work / "failing-out" / "steps" / f"detect-{failing_cfg['models'][0]['name']}-blur0.json")
+      .is_file(), "a failing step on Dask: the steps that ran keep their markers")
 
 # Resumable: a second run runs nothing and writes the same table; a lost marker reruns its step.
 stamp = (out / "runs" / "ssd-rgb" / "blur0" / "eval-kitti" / "results.json").stat().st_mtime_ns
