@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Trains the two-stage detectors models/rpn-{rgb,rgbd} (and the widened-rgb control
-# models/rpn-rgb-wide) from seed 1 on the SSD's synthetic data set (docs/models.md "Two-stage
+# models/rpn-rgb-wide) from seed 1 (or RPN_SEED) on the SSD's synthetic data set (docs/models.md "Two-stage
 # detector"):
 #   1. the synthetic data set: 4000 frames, seed 1, 3000 train / 1000 val, no LiDAR (the same call
 #      as train-ssd-models.sh, so an existing set is reused);
@@ -13,6 +13,9 @@
 # Every training resumes (--resume): rerunning after an interruption continues where it stopped.
 # Usage: scripts/train-rpn-models.sh BUILD_DIR [DATA_DIR] [MODELS_DIR]
 #   RPN_EPOCHS=6         epochs (the committed rpn-rgb: 6)
+#   RPN_SEED=1           training seed; seed 1 trains MODELS_DIR/rpn-NAME (the committed models),
+#                        any other seed S MODELS_DIR/rpn-NAME-seedS, each initialised from the
+#                        rpn-rgb of its own seed (the training variance of docs/experiment.md)
 #   RPN_THREADS=1        LibTorch threads (fixed: the weights are bit-identical for a fixed count;
 #                        more threads than free cores is much slower: OpenMP spins at barriers)
 #   RPN_MAX_FRAMES=0     only the first N training frames (0 = all)
@@ -40,6 +43,10 @@ force=${RPN_FORCE:-0}
 parallel=${RPN_PARALLEL:-1}
 [[ "$parallel" =~ ^[0-9]+$ ]] || { echo "train-rpn-models: RPN_PARALLEL must be a whole number, got '$parallel'" >&2; exit 1; }
 control=${RPN_CONTROL:-0}
+seed=${RPN_SEED:-1}
+[[ "$seed" =~ ^[0-9]+$ ]] || { echo "train-rpn-models: RPN_SEED must be a whole number, got '$seed'" >&2; exit 1; }
+suffix=""
+(( seed == 1 )) || suffix="-seed$seed"
 bin="$build_dir/bin/stereodet"
 [[ -x "$bin" ]] || { echo "train-rpn-models: $bin not built; run make build" >&2; exit 1; }
 "$bin" train rpn --help >/dev/null 2>&1 ||
@@ -61,7 +68,7 @@ train() {  # NAME INPUT FLAGS...
   fi
   echo "==> training $name ($dir; log: $dir/train_log.csv)"
   "$bin" train rpn --data "$data" --split train --input "$input" --out "$dir" \
-    --epochs "$epochs" --seed 1 --threads "$threads" --max-frames "$max_frames" "$mode" \
+    --epochs "$epochs" --seed "$seed" --threads "$threads" --max-frames "$max_frames" "$mode" \
     "${extra[@]}" "$@"
 }
 
@@ -89,10 +96,10 @@ wave() {
 # The waves pass each training as one line split at blanks: a models folder with one cannot be named.
 [[ "$models" != *[[:space:]]* ]] || { echo "train-rpn-models: MODELS_DIR '$models' holds a blank" >&2; exit 1; }
 mkdir -p "$models"
-rgb="rpn-rgb rgb --image-width $image_width"
-rgbd="rpn-rgbd rgbd --image-width $image_width --geometry-width $image_width --init-from $models/rpn-rgb"
-wide="rpn-rgb-wide rgb --image-width $control_width"
-continued="rpn-rgb-continued rgb --image-width $image_width --init-from $models/rpn-rgb"
+rgb="rpn-rgb$suffix rgb --image-width $image_width"
+rgbd="rpn-rgbd$suffix rgbd --image-width $image_width --geometry-width $image_width --init-from $models/rpn-rgb$suffix"
+wide="rpn-rgb-wide$suffix rgb --image-width $control_width"
+continued="rpn-rgb-continued$suffix rgb --image-width $image_width --init-from $models/rpn-rgb$suffix"
 if [[ "$control" == 1 ]]; then
   wave "$rgb" "$wide"
   wave "$rgbd" "$continued"
