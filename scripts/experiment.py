@@ -27,6 +27,7 @@ import math
 import os
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -67,9 +68,14 @@ def run_step_command(command, log_path):
     """A step's command, as a Dask task: standard output to its log, standard error returned
     (the driver prints it). Returns (seconds, exit code, standard error). Plain data in and out,
     so that it runs on any worker that sees the same file system."""
+    # The command ends when its worker dies (SIGKILL included), so the scheduler's rerun of the
+    # step elsewhere never races an orphan writing the same folder: util-linux's setpriv sets
+    # PR_SET_PDEATHSIG and execs it, as stereodet.scale does (docs/scale.md).
+    setpriv = shutil.which("setpriv")
+    argv = [setpriv, "--pdeathsig", "KILL", *command] if setpriv else list(command)
     start = time.monotonic()
     with open(log_path, "w") as f:
-        p = subprocess.run(command, stdout=f, stderr=subprocess.PIPE, text=True)
+        p = subprocess.run(argv, stdout=f, stderr=subprocess.PIPE, text=True)
     return time.monotonic() - start, p.returncode, p.stderr
 
 
