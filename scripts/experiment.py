@@ -1164,9 +1164,13 @@ def update_docs(path, text):
 
 
 def main(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--config", default=str(REPO / "experiments" / "table1.json"))
-    parser.add_argument("--out", default=str(REPO / "results" / "experiment"))
+    parser = argparse.ArgumentParser(
+        description=" ".join(__doc__.split("\n\n")[0].split()),
+        epilog="docs/experiment.md describes the config, the steps, the table and the Dask runs.")
+    parser.add_argument("--config", default=str(REPO / "experiments" / "table1.json"),
+                        help="the experiment's config (default: experiments/table1.json)")
+    parser.add_argument("--out", default=str(REPO / "results" / "experiment"),
+                        help="its folder; a rerun resumes there (default: results/experiment)")
     parser.add_argument("--bin", default=str(REPO / "build" / "bin"),
                         help="folder of the stereodet executables")
     parser.add_argument("--update-docs", metavar="MD",
