@@ -14,8 +14,9 @@ with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
 - a "kitti" source (the miniature's synthetic set read as a KITTI root) gives the synth run's rows,
   and a root without training/ or ImageSets/val.txt is refused naming the field;
 - on a local Dask cluster of 2 workers the same steps give the same table, weights, detections
-  and bootstrap tables byte for byte and the same results.json results, and a run without Dask finds them complete; a step failing on Dask stops the run with
-  its error, keeping the markers of what ran;
+  and bootstrap tables byte for byte and the same results.json results, and a run without Dask
+  finds them complete; a step failing on Dask stops the run with its error, keeping the markers
+  of what ran;
 - a second run runs nothing and changes nothing; a detection whose marker is gone runs again with
   exactly the steps downstream of it (its evaluations and compares);
 - a checkpoint replaced under the same path reruns its detections and their evaluations;
