@@ -346,10 +346,9 @@ class Pipeline:
     def execute_on_dask(self, client):
         from distributed import as_completed
 
-        names = {s.name for s in self.plan}
-        # A dep outside the plan (a data set that is not generated here) is there already.
-        waiting = {s.name: {d for d in s.deps if d in names} for s in self.plan}
         by_name = {s.name: s for s in self.plan}
+        # A dep outside the plan (a data set that is not generated here) is there already.
+        waiting = {s.name: {d for d in s.deps if d in by_name} for s in self.plan}
         finished, running, failed = set(), {}, []
         pending = as_completed()
         run_id = f"{time.time_ns():x}"
