@@ -25,6 +25,7 @@
 #include "stereodet/report/eval_report.h"
 #include "stereodet/report/evaluation.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/version.h"
 
 namespace stereodet::python {
@@ -277,7 +278,7 @@ void WriteReport(PyEvalResult& r, const fs::path& out, bool records) {
     }
   }
   ReleaseGil release;
-  StagedFolder folder(out, "results.json");
+  StagedFolder folder(out, "eval", {kMakerEval});
   // Every run as evaluated (what evaluate() writes), or a copy of the one selected.
   std::vector<EvalRun> one;
   if (r.index >= 0) one.assign(selected.begin(), selected.end());

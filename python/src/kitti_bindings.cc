@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -57,6 +58,12 @@ std::vector<Object> ObjectsToWrite(py::handle annos, const std::optional<std::st
 
 // --- Calibration ---
 
+// A calibration of NaN or inf would project every point to NaN pixels, and every consumer would
+// drop them without a word: refused where it enters, naming the matrix and the element.
+void CheckFinite(double v, const std::string& what, const std::string& where) {
+  if (!std::isfinite(v)) ThrowValueError(what + ": element " + where + " is not finite");
+}
+
 template <int Rows, int Cols>
 Eigen::Matrix<double, Rows, Cols> MatrixFrom(py::handle value, const std::string& what) {
   auto a = NumericArray<double>(value, what);
@@ -66,7 +73,10 @@ Eigen::Matrix<double, Rows, Cols> MatrixFrom(py::handle value, const std::string
   }
   Eigen::Matrix<double, Rows, Cols> m;
   for (int r = 0; r < Rows; ++r) {
-    for (int c = 0; c < Cols; ++c) m(r, c) = a.at(r, c);
+    for (int c = 0; c < Cols; ++c) {
+      m(r, c) = a.at(r, c);
+      CheckFinite(m(r, c), what, "(" + std::to_string(r) + ", " + std::to_string(c) + ")");
+    }
   }
   return m;
 }
@@ -79,7 +89,10 @@ Eigen::Isometry3d IsometryFrom(py::handle value, const std::string& what) {
   }
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 4; ++c) t.matrix()(r, c) = a.at(r, c);
+    for (int c = 0; c < 4; ++c) {
+      t.matrix()(r, c) = a.at(r, c);
+      CheckFinite(a.at(r, c), what, "(" + std::to_string(r) + ", " + std::to_string(c) + ")");
+    }
   }
   if (a.shape(0) == 4 &&
       !(a.at(3, 0) == 0 && a.at(3, 1) == 0 && a.at(3, 2) == 0 && a.at(3, 3) == 1)) {
@@ -103,6 +116,15 @@ void SetProjections(Calibration& c, py::handle value) {
   auto a = NumericArray<double>(value, "projection");
   if (a.ndim() != 3 || a.shape(0) != 4 || a.shape(1) != 3 || a.shape(2) != 4) {
     ThrowValueError("projection: expected shape (4, 3, 4) (P0..P3), got " + Describe(a));
+  }
+  for (int i = 0; i < 4; ++i) {
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 4; ++k) {
+        CheckFinite(a.at(i, r, k), "projection",
+                    "(" + std::to_string(i) + ", " + std::to_string(r) + ", " + std::to_string(k) +
+                        ") of P" + std::to_string(i));
+      }
+    }
   }
   for (int i = 0; i < 4; ++i) {
     for (int r = 0; r < 3; ++r) {

@@ -231,6 +231,24 @@ def test_calibration_setters_check_shapes():
         kitti.parse_calib("P0: 1 2 3\n")
 
 
+def test_calibration_refuses_nan_and_inf_naming_the_element():
+    # A NaN calibration projected every point to NaN pixels, which every consumer dropped silently.
+    projection = np.zeros((4, 3, 4))
+    projection[2, 0, 0] = np.nan
+    with pytest.raises(ValueError, match=r"projection: element \(2, 0, 0\) of P2 is not finite"):
+        kitti.Calibration(projection=projection)
+    rect = np.eye(3)
+    rect[1, 2] = np.inf
+    with pytest.raises(ValueError, match=r"rect_from_cam0: element \(1, 2\) is not finite"):
+        kitti.Calibration(rect_from_cam0=rect)
+    calib = kitti.Calibration()
+    transform = np.eye(4)
+    transform[0, 3] = np.nan
+    with pytest.raises(ValueError, match=r"cam0_from_velo: element \(0, 3\) is not finite"):
+        calib.cam0_from_velo = transform
+    assert np.array_equal(calib.cam0_from_velo, np.eye(4))  # unchanged by the refused value
+
+
 def test_velodyne_round_trips(tmp_path):
     rng = np.random.default_rng(3)
     points = rng.normal(size=(1000, 4)).astype(np.float32)

@@ -29,6 +29,7 @@
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/models/ssd_train.h"
+#include "stereodet/models/train_common.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet::cli {
@@ -123,6 +124,13 @@ void AddDetectRunFlags(CLI::App* ds, DetectOptions& d) {
       ->capture_default_str();
 }
 
+// Warns (stderr, even with --quiet: it changes what the detections mean) when the model's
+// training stopped before its last epoch.
+void WarnIfTrainingUnfinished(const std::filesystem::path& model_dir) {
+  const std::string warning = UnfinishedTrainingWarning(model_dir);
+  if (!warning.empty()) std::fputs(warning.c_str(), stderr);
+}
+
 void RunTrain(TrainArgs& a) {
   TrainSsdOptions& options = a.options;
   const auto encoding = ParseInputEncoding(a.input);
@@ -166,6 +174,7 @@ void RunTrain(TrainArgs& a) {
 
 void RunDetect(DetectArgs& a) {
   DetectSsdOptions& options = a.options;
+  WarnIfTrainingUnfinished(options.model_dir);
   if (AnyGiven(a.stereo_flags)) {
     const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
     if (!recorded) {
@@ -228,6 +237,7 @@ void RunTrainDet3d(TrainDet3dArgs& a) {
 
 void RunDetectDet3d(DetectDet3dArgs& a) {
   DetectDet3dOptions& options = a.options;
+  WarnIfTrainingUnfinished(options.model_dir);
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
   const DetectDet3dSummary s = DetectDet3d(options);
@@ -360,6 +370,7 @@ void RunTrainRpn(TrainRpnArgs& a) {
 
 void RunDetectRpn(DetectRpnArgs& a) {
   DetectRpnOptions& options = a.options;
+  WarnIfTrainingUnfinished(options.model_dir);
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
   const DetectRpnSummary s = DetectRpn(options);

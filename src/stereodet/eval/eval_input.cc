@@ -40,10 +40,38 @@ fs::path LabelDir(const fs::path& p) {
   return p;
 }
 
+// Whether `dir` holds a frame file (NNNNNN.txt) at its top, whatever its kind.
+bool HoldsFrameFiles(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::string_view stem;
+    if (name.size() > 4 && name.compare(name.size() - 4, 4, ".txt") == 0 && name[0] != '.') {
+      stem = std::string_view(name).substr(0, name.size() - 4);
+      if (IsFrameId(stem)) return true;
+    }
+  }
+  return false;
+}
+
 fs::path DetectionDir(const fs::path& p) {
-  if (fs::is_directory(p / "data")) return p / "data";
+  if (fs::is_directory(p / "data")) {
+    // The devkit's layout (DIR/data/ID.txt) and a flat one in the same folder: which is meant
+    // cannot be told, and reading one silently would evaluate the wrong detections.
+    STEREODET_CHECK_IO(!HoldsFrameFiles(p))
+        << "--det: " << p.string() << " holds detection files both at its top and in data/ "
+        << "(the devkit's layout); give the folder that holds the ones to evaluate";
+    return p / "data";
+  }
   STEREODET_CHECK_IO(fs::is_directory(p)) << "--det: " << p.string() << " is not a folder";
   return p;
+}
+
+// A frame's file name that is not a regular file (a folder, a FIFO, a link to nothing or to
+// itself) would count as "no file" for its frame, silently: it is an error naming it.
+[[noreturn]] void ThrowNotARegularFrameFile(const std::string& path) {
+  STEREODET_THROW_IO() << path << " is not a regular file (a folder, a FIFO, or a link to "
+                       << "nothing); a frame's file must be one";
 }
 
 // Whether `name` (a folder entry) is a .txt file name that is not hidden, and its stem.
@@ -66,7 +94,12 @@ std::set<std::string> FrameStemsFs(const fs::path& dir, std::vector<std::string>
     const std::string& full = e.path().native();
     const std::string_view name = std::string_view(full).substr(full.rfind('/') + 1);
     std::string_view stem;
-    if (!TxtStem(name, &stem) || !e.is_regular_file()) continue;
+    if (!TxtStem(name, &stem)) continue;
+    std::error_code ec;
+    if (!e.is_regular_file(ec)) {
+      if (IsFrameId(stem)) ThrowNotARegularFrameFile(full);
+      continue;
+    }
     if (IsFrameId(stem)) {
       stems.emplace(stem);
     } else {
@@ -108,7 +141,10 @@ std::set<std::string> FrameStems(const fs::path& dir, std::vector<std::string>* 
       struct stat info {};
       regular = ::stat(full.c_str(), &info) == 0 && S_ISREG(info.st_mode);
     }
-    if (!regular) continue;
+    if (!regular) {
+      if (IsFrameId(stem)) ThrowNotARegularFrameFile(full);
+      continue;
+    }
     if (IsFrameId(stem)) {
       stems.emplace_back(stem);
     } else {

@@ -2,6 +2,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -119,17 +120,17 @@ TEST(EvalInputTest, KittiRootAndDevkitDataFolderAreFound) {
   EXPECT_TRUE(in.Notices().empty());
 }
 
-// The folders are listed with readdir(): a symbolic link counts as what it points to (a frame file,
-// or nothing for a folder or a dangling link), a folder named like a frame file is no frame, and
-// a trailing separator in the folder names the files as without one.
-TEST(EvalInputTest, LinksCountAsWhatTheyPointTo) {
+// The folders are listed with readdir(): a symbolic link to a file counts as that file, and a
+// trailing separator in the folder names the files as without one. A frame's name that is no
+// regular file (a folder, a link to a folder, to nothing or to itself, a FIFO) used to count as
+// "no detections" for its frame without a word: it is an error naming it, in labels and
+// detections alike. Other names stay ignored with the notice.
+TEST(EvalInputTest, LinksCountAsWhatTheyPointToAndAFrameNameThatIsNoFileIsAnError) {
   Folders f;
   Write(f.dir / "elsewhere" / "label.txt", kLabel);
   fs::create_symlink(f.dir / "elsewhere" / "label.txt", f.gt / "000003.txt");
-  fs::create_directory_symlink(f.dir / "elsewhere", f.gt / "000004.txt");
-  fs::create_symlink(f.dir / "nowhere.txt", f.gt / "000005.txt");
-  fs::create_directories(f.gt / "000006.txt");
   fs::create_symlink(f.dir / "elsewhere" / "label.txt", f.gt / "link.txt");
+  fs::create_directories(f.gt / "notes.txt");  // not a frame's name: ignored
   EvalInputOptions o = f.Options();
   o.gt = f.gt.string() + "/";
   const EvalInput in = LoadEvalFrames(o);
@@ -138,6 +139,45 @@ TEST(EvalInputTest, LinksCountAsWhatTheyPointTo) {
   EXPECT_EQ(in.frames[3].labels.size(), 1u);
   EXPECT_THAT(in.ignored_files, ElementsAre((f.gt / "link.txt").string()));
   EXPECT_THAT(in.frames_without_detections, ElementsAre("000002", "000003"));
+
+  const fs::path bad = f.det / "000002.txt";
+  auto expect_refused = [&](const char* what) {
+    for (const bool with_split : {false, true}) {
+      EvalInputOptions options = f.Options();
+      if (with_split) {
+        Write(f.dir / "split.txt", "000000\n000001\n000002\n");
+        options.split = (f.dir / "split.txt").string();
+      }
+      EXPECT_THAT(ErrorOf(options), HasSubstr(bad.string() + " is not a regular file"))
+          << what << (with_split ? " with a split" : "");
+    }
+    fs::remove_all(bad);
+  };
+  fs::create_directories(bad);
+  expect_refused("a folder");
+  fs::create_directory_symlink(f.dir / "elsewhere", bad);
+  expect_refused("a link to a folder");
+  fs::create_symlink(f.dir / "nowhere.txt", bad);
+  expect_refused("a dangling link");
+  fs::create_symlink(bad, bad);
+  expect_refused("a link to itself");
+  ASSERT_EQ(::mkfifo(bad.c_str(), 0600), 0);
+  expect_refused("a FIFO");
+  fs::remove(f.gt / "000002.txt");
+  fs::create_directories(f.gt / "000002.txt");
+  EXPECT_THAT(ErrorOf(f.Options()),
+              HasSubstr((f.gt / "000002.txt").string() + " is not a regular file"));
+}
+
+// The devkit's DIR/data/ beside detection files at DIR's top: which to evaluate is ambiguous.
+TEST(EvalInputTest, ADetectionFolderWithFilesAtTheTopAndInDataIsRefused) {
+  Folders f;
+  Write(f.det / "data" / "000000.txt", kDetection);
+  EXPECT_THAT(ErrorOf(f.Options()),
+              HasSubstr("--det: " + f.det.string() +
+                        " holds detection files both at its top and in data/"));
+  for (const char* id : {"000000", "000001"}) fs::remove(f.det / (std::string(id) + ".txt"));
+  EXPECT_EQ(LoadEvalFrames(f.Options()).det_dir, f.det / "data");  // only data/: the devkit's
 }
 
 TEST(EvalInputTest, StrayFilesAreIgnoredWithOneNotice) {

@@ -152,8 +152,12 @@ void EvalOptions::Check() const {
   STEREODET_CHECK(!std::isnan(score_threshold)) << "score_threshold is NaN";
   STEREODET_CHECK(calibration_bins >= 1 && calibration_bins <= 10000)
       << "calibration_bins must be in [1, 10000], got " << calibration_bins;
-  STEREODET_CHECK_GT(distance_bin_m, 0);
-  STEREODET_CHECK_GT(max_distance_m, 0);
+  // inf passes a "> 0" check and gives one bin of everything, NaN passes none of them silently.
+  STEREODET_CHECK(std::isfinite(distance_bin_m) && distance_bin_m > 0)
+      << "distance_bin_m must be a finite number > 0, got " << distance_bin_m
+      << " (--distance-bin)";
+  STEREODET_CHECK(std::isfinite(max_distance_m) && max_distance_m > 0)
+      << "max_distance_m must be a finite number > 0, got " << max_distance_m;
   STEREODET_CHECK_LE(max_distance_m / distance_bin_m, 100000) << " (localization bins)";
   STEREODET_CHECK_GE(num_threads, 0);
   filter.Check();

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -39,7 +40,15 @@ TEST(EvalOptionsTest, CheckMessagesNameTheFieldAndItsValue) {
   EXPECT_NE(message(o).find("num_threads = -2, must be >= 0"), std::string::npos) << message(o);
   o = EvalOptions();
   o.distance_bin_m = -5;
-  EXPECT_NE(message(o).find("distance_bin_m = -5, must be > 0"), std::string::npos) << message(o);
+  EXPECT_NE(message(o).find("distance_bin_m must be a finite number > 0, got -5"),
+            std::string::npos)
+      << message(o);
+  for (const double bad :
+       {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    o.distance_bin_m = bad;
+    EXPECT_NE(message(o).find("distance_bin_m must be a finite number > 0"), std::string::npos)
+        << message(o);
+  }
   o = EvalOptions();
   o.distance_bin_m = 1e-4;
   EXPECT_NE(message(o).find("must be <= 100000 (localization bins)"), std::string::npos)

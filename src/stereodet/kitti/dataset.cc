@@ -13,12 +13,12 @@ namespace stereodet {
 
 namespace fs = std::filesystem;
 
-namespace {
-
 bool IsFrameId(std::string_view text) {
   return !text.empty() &&
          std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
+
+namespace {
 
 // Numeric order for digit strings of any length ("999" before "1000"), plain order otherwise.
 bool IdLess(const std::string& a, const std::string& b) {

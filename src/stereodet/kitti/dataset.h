@@ -77,6 +77,10 @@ void WriteSplit(const std::filesystem::path& path, const std::vector<std::string
 // A frame id from an index: 123 -> "000123".
 std::string FrameId(int index);
 
+// Whether `text` is a frame id: one or more digits (so it names a file inside a subset folder,
+// never a path such as "../x").
+bool IsFrameId(std::string_view text);
+
 }  // namespace stereodet
 
 #endif  // STEREODET_KITTI_DATASET_H_

@@ -1,6 +1,7 @@
 #include "stereodet/kitti/velodyne_io.h"
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <string_view>
@@ -22,6 +23,19 @@ std::vector<VeloPoint> ParseVelodyne(std::string_view bytes, const std::string& 
          "truncated or not a KITTI velodyne scan";
   std::vector<VeloPoint> points(bytes.size() / sizeof(VeloPoint));
   if (!points.empty()) std::memcpy(points.data(), bytes.data(), bytes.size());
+  // A NaN or inf value is no measurement: a reader that skipped such points would turn a scan of
+  // them into an empty one without a word, so the file is refused, naming the first.
+  for (size_t i = 0; i < points.size(); ++i) {
+    const VeloPoint& p = points[i];
+    const float values[4] = {p.x, p.y, p.z, p.reflectance};
+    static constexpr const char* kFields[4] = {"x", "y", "z", "reflectance"};
+    for (int k = 0; k < 4; ++k) {
+      if (!std::isfinite(values[k])) {
+        throw ParseError(source, 0, std::string("point ") + std::to_string(i) + " " + kFields[k],
+                         "not a finite number (" + std::to_string(values[k]) + ")");
+      }
+    }
+  }
   return points;
 }
 

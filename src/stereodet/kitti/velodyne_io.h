@@ -17,10 +17,11 @@ struct VeloPoint {
 static_assert(sizeof(VeloPoint) == 16, "VeloPoint must match KITTI's on-disk layout");
 
 // The points of a velodyne file's bytes (little-endian float32 x, y, z, reflectance a point).
-// Throws std::runtime_error naming `source` when the size is not a multiple of 16 bytes.
+// Throws std::runtime_error naming `source` when the size is not a multiple of 16 bytes, and
+// ParseError naming the point (0-based) and field when a value is NaN or inf.
 std::vector<VeloPoint> ParseVelodyne(std::string_view bytes, const std::string& source);
-// Throws std::runtime_error naming the file if it cannot be read or its size is not a multiple of
-// 16 bytes.
+// Throws std::runtime_error naming the file if it cannot be read, its size is not a multiple of
+// 16 bytes or a value is not finite.
 std::vector<VeloPoint> ReadVelodyne(const std::filesystem::path& path);
 // Writes atomically.
 void WriteVelodyne(const std::filesystem::path& path, const std::vector<VeloPoint>& points);

@@ -6,8 +6,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 
+#include "stereodet/util/check.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -60,6 +62,25 @@ TEST_F(VelodyneIoTest, SizeNotAMultipleOf16IsRejectedWithTheFileName) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("55 bytes is not a multiple of 16"));
   }
   EXPECT_THROW(ReadVelodyne(dir_ / "missing.bin"), std::runtime_error);
+}
+
+// A scan whose reflectances are all NaN used to become an empty scan downstream, silently.
+TEST_F(VelodyneIoTest, ANonFiniteValueIsRefusedNamingThePointAndField) {
+  const fs::path path = dir_ / "nan.bin";
+  std::vector<VeloPoint> points = {{1, 2, 3, 0.5f}, {4, 5, 6, 0.5f}};
+  points[1].reflectance = std::numeric_limits<float>::quiet_NaN();
+  WriteVelodyne(path, points);
+  try {
+    ReadVelodyne(path);
+    ADD_FAILURE() << "no error";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.file(), path.string());
+    EXPECT_EQ(e.field(), "point 1 reflectance");
+  }
+  points[1].reflectance = 0.5f;
+  points[0].z = std::numeric_limits<float>::infinity();
+  WriteVelodyne(path, points);
+  EXPECT_THROW(ReadVelodyne(path), ParseError);
 }
 
 }  // namespace

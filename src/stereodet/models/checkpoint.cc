@@ -102,13 +102,31 @@ std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Modu
 
 void LoadWeights(const std::filesystem::path& path, const std::string& config_source,
                  torch::nn::Module& module, const torch::Device& device) {
+  // The bytes through ReadFile (a FIFO or a huge file is refused, not waited on), then LibTorch.
+  const std::string bytes = ReadFile(path);
   try {
     torch::serialize::InputArchive archive;
-    archive.load_from(path.string(), device);
+    archive.load_from(bytes.data(), bytes.size(), device);
     module.load(archive);
   } catch (const c10::Error& e) {
     STEREODET_THROW_IO() << "cannot load weights " << path.string() << " for the model in "
                          << config_source << ": " << e.what_without_backtrace();
+  }
+  // A diverged training or an edited file: NaN or inf weights give empty or arbitrary detections
+  // with no other sign, so they are refused here, for every family, naming the first tensor.
+  torch::NoGradGuard no_grad;
+  for (const auto& item : module.named_parameters(/*recurse=*/true)) {
+    const bool finite = torch::isfinite(item.value()).all().item().toBool();
+    STEREODET_CHECK_IO(finite)
+        << path.string() << " holds non-finite weights (NaN or inf) in '" << item.key()
+        << "': the training that wrote it diverged, or the file was changed; retrain the model";
+  }
+  for (const auto& item : module.named_buffers(/*recurse=*/true)) {
+    if (!item.value().is_floating_point()) continue;
+    const bool finite = torch::isfinite(item.value()).all().item().toBool();
+    STEREODET_CHECK_IO(finite)
+        << path.string() << " holds non-finite values (NaN or inf) in '" << item.key()
+        << "': the training that wrote it diverged, or the file was changed; retrain the model";
   }
 }
 

@@ -9,6 +9,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
 
@@ -126,6 +127,16 @@ DetectShardRecord ReadDetectShardRecord(const fs::path& dir) {
   return record;
 }
 
+std::vector<std::string> DetectFrameList(const KittiDataset& dataset, const fs::path& split,
+                                         int max_frames) {
+  std::vector<std::string> ids = dataset.ReadSplit(split);
+  STEREODET_CHECK_IO(!ids.empty())
+      << "the split " << split.string() << " of " << dataset.root().string()
+      << " lists no frames: nothing to detect";
+  if (max_frames > 0 && static_cast<int>(ids.size()) > max_frames) ids.resize(max_frames);
+  return ids;
+}
+
 void CommitDetectionFolder(StagedFolder& out, RunManifest manifest,
                            const std::vector<std::string>& ids,
                            const std::vector<std::string>& all_ids, const Shard& shard,
@@ -221,7 +232,7 @@ MergeDetectionsResult MergeDetections(const MergeDetectionsOptions& options) {
   std::vector<std::pair<std::string, fs::path>> inputs;
   for (const ShardFolder& s : shards) inputs.emplace_back("shard", s.dir);
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
-  StagedFolder out(options.out_dir, kRunManifestFile);
+  StagedFolder out(options.out_dir, "detect merge", DetectionFolderMakers());
   for (size_t i = 0; i < merged.frames.size(); ++i) {
     const auto& [id, hash] = merged.frames[i];
     const fs::path source = *frame_dirs[i] / (id + ".txt");

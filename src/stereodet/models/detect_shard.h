@@ -25,7 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "stereodet/util/atomic_file.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/shard.h"
 
@@ -50,6 +51,12 @@ std::string FrameListHash(const std::vector<std::string>& ids);
 // that fails Check() or batch_size < 1.
 std::vector<std::string> ShardFrames(const std::vector<std::string>& ids, const Shard& shard,
                                      int batch_size);
+
+// The frame list of a detect run, all shards together: the split's ids (KittiDataset::ReadSplit),
+// the first `max_frames` of them when max_frames > 0. Throws std::runtime_error naming the split
+// when it lists no frame (nothing would be detected, and an empty folder would look like a run).
+std::vector<std::string> DetectFrameList(const KittiDataset& dataset,
+                                         const std::filesystem::path& split, int max_frames);
 
 // Writes DIR/detect_shard.json atomically: {"format": 1, "tool", "shard": "K/N", "batch_size",
 // "list_frames", "list_fnv1a64"}.

@@ -226,7 +226,9 @@ TEST(DetectShardTest, MergeRefusesShardsThatAreNotAllOfOneRun) {
   MergeDetectionsOptions foreign;
   foreign.shards = {root / "s0", root / "s1", root / "s2"};
   foreign.out_dir = root / "notes";
-  EXPECT_NE(MessageOf([&] { MergeDetections(foreign); }).find("holds no run.json"),
+  EXPECT_NE(MessageOf([&] {
+              MergeDetections(foreign);
+            }).find("notes is a folder of other files (mine.txt); detect merge replaces"),
             std::string::npos);
   EXPECT_EQ(ReadFile(root / "notes" / "mine.txt"), "mine");
 }

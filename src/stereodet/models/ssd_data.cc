@@ -145,8 +145,10 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
         frame.targets =
             TargetsFromLabels(ReadObjects(paths.label).objects, config.classes, options);
         if (from_folder) {
+          // At the match size, as the in-line path below has them (ReadStereoFolderHeight's
+          // full-resolution codes, resized to the network, would differ).
           frame.height_code =
-              ResizeHeightCodes(ReadStereoFolderHeight(*folder, ids[i]), network_size);
+              ResizeHeightCodes(ReadStereoFolderHeightAtMatchScale(*folder, ids[i]), network_size);
         } else if (height) {
           // One encoder per frame: StereoEncoder is not thread-safe and cheap to make.
           StereoEncoder encoder(options.stereo);

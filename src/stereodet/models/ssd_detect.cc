@@ -20,6 +20,7 @@
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
@@ -118,17 +119,15 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
                                    {"--model", options.model_dir},
                                    {"--stereo", options.stereo_dir}});
   // Refuse a folder of something else before the work, not after it.
-  StagedFolder out(options.out_dir, kRunManifestFile);
+  StagedFolder out(options.out_dir, "detect ssd", DetectionFolderMakers());
   SetTorchThreads(options.threads);
   const SsdModel model = SsdModel::Load(options.model_dir, ResolveComputeDevice(options.device));
   const SsdConfig& config = model.config();
   const bool height = UsesHeight(config.encoding);
 
   const KittiDataset dataset(options.data_root, options.subset);
-  std::vector<std::string> all_ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(all_ids.size()) > options.max_frames) {
-    all_ids.resize(options.max_frames);
-  }
+  const std::vector<std::string> all_ids =
+      DetectFrameList(dataset, options.split, options.max_frames);
   // A shard is a choice of frames and a record beside them, nothing in the loop below.
   const std::vector<std::string> ids = ShardFrames(all_ids, options.shard, options.batch_size);
   RequiredFiles required;
@@ -191,12 +190,16 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
           if (from_folder) {
             {
               ScopedStage stage(times, "read");
-              height_code = ReadStereoFolderHeight(*folder, ids[batch.begin + i]);
+              // At the match size, as the in-line path below gives them: the folder's
+              // full-resolution codes resized to the network would differ.
+              height_code = ReadStereoFolderHeightAtMatchScale(*folder, ids[batch.begin + i]);
             }
-            STEREODET_CHECK_IO(height_code.size() == left.size())
-                << "--stereo " << options.stereo_dir.string() << ": the height image of frame "
-                << ids[batch.begin + i] << " is " << height_code.cols << "x" << height_code.rows
-                << " px, its left image " << left.cols << "x" << left.rows;
+            const cv::Size match = folder->stereo.disparity.MatchSize(left.size());
+            STEREODET_CHECK_IO(height_code.size() == match)
+                << "--stereo " << options.stereo_dir.string() << ": the heights of frame "
+                << ids[batch.begin + i] << " are " << height_code.cols << "x" << height_code.rows
+                << " px at the match scale, " << match.width << "x" << match.height
+                << " for its left image of " << left.cols << "x" << left.rows;
             if (options.blur_sigma_px > 0.0) {
               ScopedStage stage(times, "blur");
               network_image = GaussianBlurImage(left, options.blur_sigma_px);

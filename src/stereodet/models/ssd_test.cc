@@ -279,6 +279,22 @@ TEST(SsdTest, AFewStepsLowerTheLoss) {
   EXPECT_LT(last, 0.5 * first);
 }
 
+// A diverged training's weights (NaN or inf, with a model.json that records their hash) would give
+// empty or arbitrary detections with exit 0; opening the model refuses them, naming the tensor.
+TEST(SsdTest, LoadRefusesNonFiniteWeightsOfADivergedTraining) {
+  SetTorchThreads(1);
+  const std::filesystem::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "diverged";
+  std::filesystem::remove_all(dir);
+  SsdModel model(TinyConfig(InputEncoding::kRgb), 5);
+  SsdTrainer trainer(model);
+  const TrainBatch batch = ToyBatch(model, 2, 4);
+  for (int i = 0; i < 5; ++i) trainer.Step(batch, 1e30);  // diverges: inf, then NaN
+  model.Save(dir);
+  EXPECT_THAT([&] { SsdModel::Load(dir); }, ::testing::ThrowsMessage<std::runtime_error>(HasSubstr(
+                                                "holds non-finite weights (NaN or inf) in '")));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
   SetTorchThreads(1);
   const std::filesystem::path path =

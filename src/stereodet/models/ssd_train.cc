@@ -74,7 +74,8 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   SsdConfig config = options.model;
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
-  const bool resuming = PrepareModelFolder(options.out_dir, options.resume, options.force);
+  const bool resuming =
+      PrepareModelFolder(options.out_dir, "train ssd", options.resume, options.force);
   // The id that ties model.json to checkpoint.pt: kept by a resumed run, new for a new one (and
   // for a folder written before ids were recorded).
   std::string recorded_run;

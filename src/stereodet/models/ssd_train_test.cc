@@ -241,8 +241,10 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
     detect.threads = 1;
     detect.batch_size = 3;
     detect.progress.stream = nullptr;
-    // A stale file of another run in the folder does not survive the new run.
-    WriteFileAtomically(detect.out_dir / "run.json", "{}");
+    // A stale file of an earlier detection run in the folder does not survive the new run.
+    RunManifest earlier;
+    earlier.tool = "detect ssd";
+    WriteRunManifest(detect.out_dir, earlier);
     WriteFileAtomically(detect.out_dir / "000099.txt",
                         "Car -1 -1 -10 0 0 1 1 -1 -1 -1 -1000 -1000 -1000 -10 0.5\n");
     const DetectSsdSummary d = DetectSsd(detect);
@@ -456,14 +458,17 @@ TEST(SsdDetectTest, RefusesAnOutputInsideTheInputsOrAForeignFolder) {
   EXPECT_EQ(ReadFile(root / "training/label_2/000000.txt"), labels);
   detect.out_dir = detect.model_dir / "det";
   EXPECT_THROW(DetectSsd(detect), std::invalid_argument);
-  // A folder of other files (no run.json) is not an earlier detection folder.
+  // A folder of other files (no run.json of detect) is not an earlier detection folder.
   detect.out_dir = TempDir("refuse_foreign");
   WriteFileAtomically(detect.out_dir / "notes.txt", "mine");
   try {
     DetectSsd(detect);
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("holds no run.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(" is a folder of other files (notes.txt); detect ssd "
+                                         "replaces or writes into only a folder that detect"),
+              std::string::npos)
+        << e.what();
   }
   EXPECT_EQ(ReadFile(detect.out_dir / "notes.txt"), "mine");
 }

@@ -5,12 +5,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 #include <sstream>
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/strings.h"
 
@@ -42,8 +45,13 @@ std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs)
       total_steps, epochs, epochs == 1 ? "" : "s", steps_per_epoch, warmup_steps);
 }
 
-bool PrepareModelFolder(const std::filesystem::path& out_dir, bool resume, bool force) {
+bool PrepareModelFolder(const std::filesystem::path& out_dir, const std::string& tool, bool resume,
+                        bool force) {
   namespace fs = std::filesystem;
+  // A model folder is this training's only when this family's training made it: a detection
+  // folder, a data set or another family's model is refused whatever --force says.
+  CheckOutputFolderOwner(out_dir, tool, {tool});
+  RemoveStaleTemporaries(out_dir);
   const fs::path checkpoint_path = out_dir / kCheckpointFile;
   const fs::path weights_path = out_dir / "model.pt";
   const bool resuming = resume && fs::exists(checkpoint_path);
@@ -64,6 +72,23 @@ bool PrepareModelFolder(const std::filesystem::path& out_dir, bool resume, bool 
     }
   }
   return resuming;
+}
+
+std::string UnfinishedTrainingWarning(const std::filesystem::path& model_dir) {
+  const std::optional<RunManifest> manifest = ReadRunManifest(model_dir);
+  if (!manifest) return "";
+  const nlohmann::json settings = nlohmann::json::parse(manifest->settings_json, nullptr, false);
+  if (!settings.is_object() || !settings.contains("epochs") || !settings.contains("epochs_done") ||
+      !settings["epochs"].is_number_integer() || !settings["epochs_done"].is_number_integer()) {
+    return "";
+  }
+  const int64_t epochs = settings["epochs"].get<int64_t>();
+  const int64_t done = settings["epochs_done"].get<int64_t>();
+  if (done >= epochs) return "";
+  return fmt::format(
+      "warning: {} was trained for {} of its {} epochs (its training stopped early; --resume "
+      "finishes it); its detections are those of an unfinished model\n",
+      model_dir.string(), done, epochs);
 }
 
 std::string KeptLogLines(const std::filesystem::path& path, const std::string& header,

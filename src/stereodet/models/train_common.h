@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,10 @@ void CheckTrainingSchedule(const TrainOptions& o) {
   STEREODET_CHECK(o.batch_size >= 1) << "batch size must be >= 1, got " << o.batch_size;
   STEREODET_CHECK(o.learning_rate > 0.0 && std::isfinite(o.learning_rate))
       << "learning rate must be > 0, got " << o.learning_rate;
+  // LibTorch keeps it as a float: past that its own overflow message would be the user's.
+  STEREODET_CHECK(o.learning_rate <= std::numeric_limits<float>::max())
+      << "learning rate " << o.learning_rate << " is more than a float holds ("
+      << std::numeric_limits<float>::max() << ")";
   STEREODET_CHECK(o.warmup_steps >= 0) << "warmup_steps must be >= 0, got " << o.warmup_steps;
   STEREODET_CHECK(o.final_lr_fraction >= 0.0 && o.final_lr_fraction <= 1.0)
       << "final_lr_fraction must be in [0, 1], got " << o.final_lr_fraction;
@@ -62,11 +67,21 @@ inline constexpr char kCheckpointFile[] = "checkpoint.pt";
 inline constexpr char kTrainLogFile[] = "train_log.csv";
 
 // Decides how a training uses its model folder, before any work. Returns true when it resumes
-// (resume set and a checkpoint present). Throws std::invalid_argument when the folder holds a
-// trained model (model.pt or checkpoint.pt) and neither resume (with a checkpoint) nor force is
-// set; std::runtime_error when it cannot be written. With force, the earlier model's files are
-// removed. The caller holds the folder's OutputLock.
-bool PrepareModelFolder(const std::filesystem::path& out_dir, bool resume, bool force);
+// (resume set and a checkpoint present). Throws std::runtime_error when the folder is not empty
+// and not a model folder that `tool` ("train ssd") made (CheckOutputFolderOwner: a detection
+// folder, a data set, another family's model), or cannot be written; std::invalid_argument when
+// it holds a trained model (model.pt or checkpoint.pt) and neither resume (with a checkpoint) nor
+// force is set. With force, the earlier model's files are removed. Leftover temporaries of killed
+// runs are removed. The caller holds the folder's OutputLock.
+bool PrepareModelFolder(const std::filesystem::path& out_dir, const std::string& tool, bool resume,
+                        bool force);
+
+// The one-line warning (newline included) for detecting with a model whose training stopped before
+// its last epoch, as its run.json records it ("warning: models/x was trained for 3 of its 10
+// epochs (its training stopped early; --resume finishes it); its detections are those of an
+// unfinished model"). Empty when the training finished, or when the folder has no run.json
+// (a model from before run.json existed) or one without both counts.
+std::string UnfinishedTrainingWarning(const std::filesystem::path& model_dir);
 
 // The CSV log's text to continue with: `header`, then the lines of `path` (if it exists) whose
 // first field (the epoch) is <= epochs_done; a resumed run drops what came after its checkpoint.

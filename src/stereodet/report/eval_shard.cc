@@ -16,6 +16,8 @@
 #include "stereodet/report/evaluation_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
@@ -27,7 +29,8 @@ using nlohmann::json;
 constexpr char kShardFile[] = "eval_shard.json";
 constexpr char kFramesFile[] = "eval_frames.dat";
 constexpr char kFramesHeader[] = "stereodet eval frames 1\n";
-constexpr int kShardFormat = 1;
+// Format 2 records the frames file's hash (frames_fnv1a64), so a merge refuses an edited shard.
+constexpr int kShardFormat = 2;
 
 // eval_frames.dat: the header line, then per frame one line "ID HAS_DET N1 N2 N3 N4" and the
 // N1 + N2 + N3 + N4 bytes of the label path, label text, detection path and detection text.
@@ -133,9 +136,11 @@ void WriteEvalShardFiles(const fs::path& dir, const EvalInputOptions& options,
                          const EvalInput& input) {
   STEREODET_CHECK(input.sources.size() == input.frames.size())
       << "a shard's frames file needs the input read with keep_sources";
-  WriteFileAtomically(dir / kFramesFile, FramesText(input.sources));
+  const std::string frames = FramesText(input.sources);
+  WriteFileAtomically(dir / kFramesFile, frames);
   json j;
   j["format"] = kShardFormat;
+  j["frames_fnv1a64"] = HashHex(Fnv1a64(frames));
   j["shard"] = ShardName(options.shard);
   j["frames"] = input.frames.size();
   j["input"] = {{"gt", options.gt.string()},
@@ -159,6 +164,7 @@ EvalShardInfo ReadEvalShard(const fs::path& dir) {
     if (!shard) throw ParseError(file, 0, "shard", "not K/N: " + j.at("shard").dump());
     info.shard = *shard;
     info.frames = j.at("frames").get<int64_t>();
+    info.frames_hash = j.at("frames_fnv1a64").get<std::string>();
     const json& in = j.at("input");
     info.input.gt = in.at("gt").get<std::string>();
     info.input.det = in.at("det").get<std::string>();
@@ -195,10 +201,12 @@ EvalInput LoadEvalShards(const std::vector<fs::path>& dirs, int num_threads,
     STEREODET_CHECK(info.shard.count == n)
         << "eval shards: " << dir.string() << " is shard " << ShardName(info.shard) << ", but "
         << shards.front().second.string() << " is one of " << n;
+    STEREODET_CHECK(info.shard.index >= static_cast<int>(k))
+        << "eval shards: shard " << ShardName(info.shard) << " is given twice (at "
+        << shards[k - 1].second.string() << " and " << dir.string() << ")";
     STEREODET_CHECK(info.shard.index == static_cast<int>(k))
-        << "eval shards: shard " << k << "/" << n << " is "
-        << (info.shard.index < static_cast<int>(k) ? "given twice" : "missing") << " (at "
-        << dir.string() << ")";
+        << "eval shards: shard " << k << "/" << n << " is missing (the next given is "
+        << ShardName(info.shard) << ", at " << dir.string() << ")";
     STEREODET_CHECK(info.input.gt == first.gt && info.input.det == first.det &&
                     info.input.split == first.split && info.input.lenient == first.lenient)
         << "eval shards: " << dir.string() << " evaluated other input (--gt " << info.input.gt
@@ -212,7 +220,12 @@ EvalInput LoadEvalShards(const std::vector<fs::path>& dirs, int num_threads,
   std::vector<EvalFrameSource> sources;
   std::vector<std::string> det_not_from_run;
   for (const auto& [info, dir] : shards) {
-    std::vector<EvalFrameSource> part = ParseFrames(ReadFile(dir / kFramesFile), dir / kFramesFile);
+    const std::string frames = ReadFile(dir / kFramesFile);
+    STEREODET_CHECK_IO(HashHex(Fnv1a64(frames)) == info.frames_hash)
+        << (dir / kFramesFile).string() << " is not the file its " << kShardFile
+        << " records (hash " << HashHex(Fnv1a64(frames)) << ", recorded " << info.frames_hash
+        << "); it changed since its shard ran: evaluate that shard again";
+    std::vector<EvalFrameSource> part = ParseFrames(frames, dir / kFramesFile);
     STEREODET_CHECK_IO(static_cast<int64_t>(part.size()) == info.frames)
         << (dir / kFramesFile).string() << " holds " << part.size() << " frames, " << kShardFile
         << " says " << info.frames;
@@ -248,7 +261,8 @@ EvaluationResult RunEvaluationMerge(const EvaluationMergeOptions& options) {
   for (const fs::path& dir : options.shards) inputs.emplace_back("shard", dir);
   if (!evaluation.out.empty()) CheckOutputDoesNotOverlapInputs("--out", evaluation.out, inputs);
   std::optional<StagedFolder> out;
-  if (!evaluation.out.empty()) out.emplace(evaluation.out, "results.json");
+  if (!evaluation.out.empty())
+    out.emplace(evaluation.out, "eval merge", std::vector<std::string>{kMakerEval});
 
   return EvaluateAndWrite(
       evaluation, out, std::move(input), [&](const fs::path& staging, const EvaluationResult&) {

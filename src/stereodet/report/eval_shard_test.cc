@@ -159,8 +159,14 @@ TEST(EvalShardTest, RefusesMissingDuplicateOrMismatchedShards) {
   EXPECT_THAT([&] { RunEvaluationMerge(merge); },
               ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("shard 1/3 is missing")));
   merge.shards = {dirs[0], dirs[1], dirs[1]};
+  EXPECT_THAT(
+      [&] { RunEvaluationMerge(merge); },
+      ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr(
+          "shard 1/3 is given twice (at " + dirs[1].string() + " and " + dirs[1].string() + ")")));
+  merge.shards = {dirs[0], dirs[2], dirs[2]};
   EXPECT_THAT([&] { RunEvaluationMerge(merge); },
-              ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("given twice")));
+              ::testing::ThrowsMessage<std::invalid_argument>(
+                  HasSubstr("shard 1/3 is missing (the next given is 2/3")));
   merge.shards = {dirs[0], dirs[1], dirs[2]};
   merge.evaluation.runs.front().score_threshold = 0.5;
   EXPECT_THAT([&] { RunEvaluationMerge(merge); },
@@ -169,6 +175,36 @@ TEST(EvalShardTest, RefusesMissingDuplicateOrMismatchedShards) {
   merge.shards = {data.gt};
   EXPECT_THAT([&] { RunEvaluationMerge(merge); },
               ::testing::ThrowsMessage<std::runtime_error>(HasSubstr("not an evaluation shard")));
+}
+
+// A shard's frames edited after it ran (a label changed, a detection dropped) would change the
+// merged AP silently; the merge checks them against the hash the shard recorded.
+TEST(EvalShardTest, RefusesAShardWhoseFramesChangedSinceItRan) {
+  const RandomFolders data(6, 4);
+  const TestTempDir out("shard-tampered");
+  std::vector<fs::path> dirs;
+  for (int k = 0; k < 2; ++k) {
+    EvaluationOptions part =
+        Options(data, Matcher::kKitti, FilterMode::kStable, out.path() / ("s" + std::to_string(k)));
+    part.input.shard = Shard{k, 2};
+    RunEvaluation(part);
+    dirs.push_back(part.out);
+  }
+  EvaluationMergeOptions merge;
+  merge.evaluation = Options(data, Matcher::kKitti, FilterMode::kStable, out.path() / "m");
+  merge.shards = dirs;
+  RunEvaluationMerge(merge);  // as written: merges
+  const fs::path frames = dirs[1] / "eval_frames.dat";
+  std::string text = ReadFile(frames);
+  const size_t at = text.find("Car ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 4, "Van ");  // same length: only the hash can tell
+  WriteFileAtomically(frames, text);
+  merge.evaluation.out = out.path() / "m2";
+  EXPECT_THAT([&] { RunEvaluationMerge(merge); },
+              ::testing::ThrowsMessage<std::runtime_error>(
+                  HasSubstr(frames.string() + " is not the file its eval_shard.json records")));
+  EXPECT_FALSE(fs::exists(out.path() / "m2"));
 }
 
 // `eval sweep|compare --shards`: the frames of eval shards give the rows of one run's sweep and

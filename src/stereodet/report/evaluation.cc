@@ -13,6 +13,7 @@
 #include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/output_folder.h"
 
 namespace stereodet {
 namespace fs = std::filesystem;
@@ -66,7 +67,7 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
   options.Check();
   // Refuse a folder of something else before the work, not after it.
   std::optional<StagedFolder> out;
-  if (!options.out.empty()) out.emplace(options.out, "results.json");
+  if (!options.out.empty()) out.emplace(options.out, "eval", std::vector<std::string>{kMakerEval});
   const bool shard = !options.input.shard.Whole();
   EvalInputOptions input_options = options.input;
   input_options.keep_sources = input_options.keep_sources || (shard && out);
@@ -179,6 +180,7 @@ CsvOutput WriteCsvAndReport(const std::filesystem::path& out, const char* name,
 
 EvaluationSweepResult RunEvaluationSweep(const EvaluationSweepOptions& options) {
   options.Check();
+  if (!options.out.empty()) CheckOutputFolderOwner(options.out, "eval sweep", {kMakerSweep});
   EvaluationSweepResult result;
   result.input = options.shards.empty() ? LoadEvalFrames(options.input)
                                         : LoadEvalShards(options.shards, options.input.num_threads);
@@ -204,6 +206,7 @@ void EvaluationCompareOptions::Check() const {
 
 EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
   options.Check();
+  if (!options.out.empty()) CheckOutputFolderOwner(options.out, "eval compare", {kMakerCompare});
   EvaluationCompareResult result;
   if (options.shards.empty()) {
     result.input_a = LoadEvalFrames(options.input);

@@ -36,9 +36,9 @@ struct EvaluationOptions {
   // One evaluation of the frames per entry, e.g. one per overlap set (OverlapSetRuns). Every entry
   // has the same compat. Default: one run with EvalOptions' defaults.
   std::vector<EvalOptions> runs = {EvalOptions()};
-  // The results folder, one run per folder (StagedFolder with marker results.json): results.json,
-  // summary.csv and curves/ (WriteEvalReport). A folder of other files is refused before anything
-  // is read. Empty: nothing is written.
+  // The results folder, one run per folder (a StagedFolder: only an earlier eval output, with its
+  // results.json, is replaced): results.json, summary.csv and curves/ (WriteEvalReport). A folder
+  // of other files is refused before anything is read. Empty: nothing is written.
   std::filesystem::path out;
   // Also write the per-detection records (WriteMatchRecordsCsv) as OUT/matches.csv, or with several
   // runs OUT/matches_OVERLAPS.csv (DescribeOverlaps) per run; sets every run's keep_records.
@@ -120,8 +120,9 @@ struct EvaluationMergeOptions {
 // What a shard folder says about itself (OUT/eval_shard.json).
 struct EvalShardInfo {
   Shard shard;
-  int64_t frames = 0;      // frames of the shard
-  EvalInputOptions input;  // gt, det, split, lenient as the shard read them
+  int64_t frames = 0;       // frames of the shard
+  std::string frames_hash;  // FNV-1a 64 of its eval_frames.dat, 16 hex digits
+  EvalInputOptions input;   // gt, det, split, lenient as the shard read them
 };
 
 // Reads DIR/eval_shard.json. Throws std::runtime_error naming the folder when it is not a shard

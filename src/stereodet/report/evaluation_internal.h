@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "stereodet/report/evaluation.h"
-#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/output_folder.h"
 
 namespace stereodet {
 

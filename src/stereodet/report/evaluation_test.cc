@@ -165,7 +165,8 @@ TEST(RunEvaluationTest, RefusesAFolderOfOtherFilesBeforeReadingAnything) {
     RunEvaluation(options);
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("results.json"));
+    EXPECT_THAT(e.what(), HasSubstr("mine is a folder of other files (notes.txt); eval replaces "
+                                    "or writes into only a folder that eval made"));
     EXPECT_THAT(e.what(), ::testing::Not(HasSubstr("no_such_labels")));
   }
   EXPECT_EQ(ReadFile(dir / "mine/notes.txt"), "keep me\n");

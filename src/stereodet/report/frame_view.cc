@@ -26,14 +26,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string ReadBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  STEREODET_CHECK_IO(in.good()) << "cannot read " << path.string();
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::string Base64(const std::string& bytes) {
   static constexpr char kTable[] =
       "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -182,7 +174,7 @@ bool InCell(const ViewRecord& r, const ViewCell& cell) {
 }
 
 std::vector<ViewRecord> ReadMatchRecordsCsv(const fs::path& path) {
-  const std::string text = ReadBytes(path);
+  const std::string text = ReadFile(path);
   std::vector<ViewRecord> records;
   std::istringstream in(text);
   std::string line;
@@ -282,7 +274,7 @@ FrameView DrawFrameView(const FrameViewData& data, const FrameViewOptions& optio
   int width = options.canvas_width_px, height = options.canvas_height_px;
   std::string image_element;
   if (!data.image.empty() && fs::exists(data.image)) {
-    const std::string bytes = ReadBytes(data.image);
+    const std::string bytes = ReadFile(data.image);
     if (const auto size = PngSize(bytes)) {
       std::tie(width, height) = *size;
       image_element = fmt::format(
@@ -614,7 +606,7 @@ FrameViewsResult WriteFrameViews(const FrameViewsOptions& options) {
       << " is not a results folder of stereodet eval --out (no results.json)";
   json results;
   try {
-    results = json::parse(ReadBytes(results_path));
+    results = json::parse(ReadFile(results_path));
   } catch (const json::exception& e) {
     STEREODET_THROW_IO() << results_path.string() << ": not JSON: " << e.what();
   }

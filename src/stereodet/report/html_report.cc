@@ -12,6 +12,7 @@
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/strings.h"
 
 namespace stereodet {
@@ -967,7 +968,7 @@ ReportResult WriteReport(const ReportOptions& options) {
     sources.push_back(ReadReportSource(options.results[i], label));
   }
   const fs::path out = options.out.empty() ? options.results.front() / "report" : options.out;
-  StagedFolder staged(out, "index.html");
+  StagedFolder staged(out, "report", {kMakerReport});
   ReportResult result = WriteReportFiles(staged.path(), sources, options.png, options.png_scale,
                                          options.worst_frames);
   staged.Commit();

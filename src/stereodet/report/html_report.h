@@ -103,8 +103,8 @@ struct ReportOptions {
   // Results folders, all of one kind: each holds results.json, sweep.csv or compare.csv.
   std::vector<std::filesystem::path> results;
   std::vector<std::string> labels;  // one per folder for legends; empty: the folders' names
-  // The report folder (one run per folder, StagedFolder with marker index.html). Empty: with one
-  // results folder RESULTS/report, with several required.
+  // The report folder (one run per folder, a StagedFolder: a folder that report did not make is
+  // refused). Empty: with one results folder RESULTS/report, with several required.
   std::filesystem::path out;
   bool png = true;  // also figures/*.png (skipped with a note where PngFromSvgAvailable() is false)
   double png_scale = 2.0;  // PNG pixels per SVG px

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -20,6 +21,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/strings.h"
@@ -331,6 +333,22 @@ cv::Mat ReadStereoFolderHeight(const StereoFolderRecord& folder, const std::stri
   return UnpackRgbh(ReadImage(paths.rgbh, cv::IMREAD_COLOR, "RGB-H image")).height_code;
 }
 
+cv::Mat HeightCodesAtMatchSize(const cv::Mat& full_codes, cv::Size match_size) {
+  STEREODET_CHECK(match_size.width <= full_codes.cols && match_size.height <= full_codes.rows)
+      << "the match size " << match_size.width << "x" << match_size.height
+      << " is larger than the codes' " << full_codes.cols << "x" << full_codes.rows;
+  if (match_size == full_codes.size()) return full_codes;
+  cv::Mat codes;
+  cv::resize(full_codes, codes, match_size, 0, 0, cv::INTER_NEAREST_EXACT);
+  return codes;
+}
+
+cv::Mat ReadStereoFolderHeightAtMatchScale(const StereoFolderRecord& folder,
+                                           const std::string& id) {
+  const cv::Mat full = ReadStereoFolderHeight(folder, id);
+  return HeightCodesAtMatchSize(full, folder.stereo.disparity.MatchSize(full.size()));
+}
+
 std::string DisparityEvaluationJson(
     const DisparityErrorStats& pooled,
     const std::vector<std::pair<std::string, DisparityErrorStats>>& frames,
@@ -499,6 +517,8 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
 
   CheckOutputDoesNotOverlapInputs(
       "--out", out, {{"--data", dataset.SubsetDir()}, {"--data", dataset.root() / "ImageSets"}});
+  // stereo writes KITTI-named folders (velodyne/, image_2/): only into a folder of its own.
+  CheckOutputFolderOwner(out, "stereo", {kMakerStereo});
   // Two runs into one folder would interleave; the shards of one run write disjoint frames.
   const OutputLock lock(out, shard.Whole()
                                  ? std::string("lock")
@@ -528,6 +548,7 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
     }
   }
   fs::create_directories(out);
+  RemoveStaleTemporaries(out);
   // force: the outputs not asked for this time are another run's; they go.
   if (options.force && fs::exists(settings_path)) {
     const DatasetOutputs& o = options.outputs;

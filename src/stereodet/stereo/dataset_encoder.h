@@ -174,6 +174,19 @@ void CheckStereoFolderData(const StereoFolderRecord& folder, const KittiDataset&
 // when the frame is not done (no DIR/ground/ID.txt, written last) or its image is missing or bad.
 cv::Mat ReadStereoFolderHeight(const StereoFolderRecord& folder, const std::string& id);
 
+// The height codes of frame `id` at the folder's match size (DisparityOptions::MatchSize of the
+// image's size): exactly those StereoEncoder::Encode gives with StereoOutputs::full_resolution
+// false, which a detector that matches in line feeds its network. The folder's full-resolution
+// codes were upsampled from them by nearest-exact interpolation, which puts each match-size pixel
+// centre inside the block it was copied to, so sampling them back at those centres recovers them
+// exactly (`HeightCodesAtMatchSize`). With match_scale 1 this is ReadStereoFolderHeight.
+cv::Mat ReadStereoFolderHeightAtMatchScale(const StereoFolderRecord& folder, const std::string& id);
+
+// Nearest-exact samples of full-resolution height (or depth) codes at the pixel centres of
+// `match_size`: the inverse of the encoder's upsampling (see above). Requires match_size no larger
+// than the codes' size.
+cv::Mat HeightCodesAtMatchSize(const cv::Mat& full_codes, cv::Size match_size);
+
 // Encodes the frames `ids` of `dataset` into `out` (created), in parallel. Checks options first,
 // then that `ids` is not empty and that every frame has both images and a calibration, that `out`
 // does not overlap the dataset's subset folder or ImageSets/ (std::invalid_argument), then the

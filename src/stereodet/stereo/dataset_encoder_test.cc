@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,6 +54,29 @@ std::vector<fs::path> ListFiles(const fs::path& dir) {
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+// The encoder upsamples match-size codes by nearest-exact interpolation; sampling them back at the
+// match-size pixel centres is exact for every size and scale (a property over random codes,
+// KITTI's odd sizes included), so a `stereo` folder gives a detector the codes it would compute.
+TEST(HeightCodesAtMatchSizeTest, InvertsTheEncodersNearestExactUpsampling) {
+  cv::RNG rng(7);
+  DisparityOptions options;
+  for (const cv::Size full : {cv::Size(1242, 375), cv::Size(1224, 370), cv::Size(160, 48),
+                              cv::Size(333, 97), cv::Size(641, 211)}) {
+    for (const double scale : {0.25, 0.3, 0.5, 0.515, 0.75, 0.9, 1.0}) {
+      options.match_scale = scale;
+      const cv::Size match = options.MatchSize(full);
+      cv::Mat codes(match, CV_16UC1);
+      rng.fill(codes, cv::RNG::UNIFORM, 0, 512);
+      cv::Mat up;
+      cv::resize(codes, up, full, 0, 0, cv::INTER_NEAREST_EXACT);
+      EXPECT_EQ(cv::norm(HeightCodesAtMatchSize(up, match), codes, cv::NORM_INF), 0.0)
+          << full << " at " << scale;
+    }
+  }
+  EXPECT_THROW(HeightCodesAtMatchSize(cv::Mat(10, 10, CV_16UC1), cv::Size(11, 10)),
+               std::invalid_argument);
 }
 
 TEST(DatasetOutputsTest, ParsesAnyOrderAndNamesInOneOrder) {
@@ -543,6 +567,10 @@ TEST(FramePicturesTest, WritesFourPicturesOfTheImageSize) {
   EXPECT_LE(result.stereo_pixels, result.total_pixels);
   EXPECT_GT(result.points, 0);
   EXPECT_THROW(WriteFramePictures(dataset, "000009", dir / "out", options), std::runtime_error);
+  // An id that is a path would read and write outside --data and --out.
+  EXPECT_THAT([&] { WriteFramePictures(dataset, "../../000000", dir / "out", options); },
+              ::testing::ThrowsMessage<std::invalid_argument>(
+                  ::testing::HasSubstr("--id '../../000000' is not a frame id (digits only)")));
 }
 
 // The keyed pictures: the picture unchanged on top, then the colour bar, the turbo map from t = 0

@@ -8,6 +8,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/visualize.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 
@@ -15,6 +16,8 @@ FramePicturesResult WriteFramePictures(const KittiDataset& dataset, const std::s
                                        const std::filesystem::path& out,
                                        const StereoOptions& options) {
   StereoEncoder encoder(options);  // checks the options before any reading
+  // The id becomes file names under --data and --out: "../../x" would read and write elsewhere.
+  STEREODET_CHECK(IsFrameId(id)) << "--id '" << id << "' is not a frame id (digits only)";
   const FramePaths in = dataset.Paths(id);
   const cv::Mat left = ReadColourImage(in.image_left);
   const cv::Mat right = ReadColourImage(in.image_right);

@@ -1,5 +1,6 @@
 #include "stereodet/stereo/image_io.h"
 
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 
 #include "stereodet/util/atomic_file.h"
@@ -8,9 +9,14 @@
 namespace stereodet {
 
 cv::Mat ReadImage(const std::filesystem::path& path, int imread_flags, const char* what) {
+  // Through ReadFile, not cv::imread: imread opens a FIFO (or a device) and blocks forever, and
+  // reads a huge file without a bound; ReadFile refuses both, naming the file. Decoding from the
+  // bytes costs what imread's own read would.
+  const std::string bytes = ReadFile(path, std::numeric_limits<int>::max(), what);
   cv::Mat image;
   try {
-    image = cv::imread(path.string(), imread_flags);
+    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+    if (!bytes.empty()) image = cv::imdecode(buffer, imread_flags);
   } catch (const cv::Exception& e) {
     STEREODET_THROW_IO() << "cannot read " << what << " " << path.string() << ": " << e.err;
   }

@@ -2,6 +2,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <array>
 #include <cstdint>
@@ -68,6 +69,20 @@ TEST(ImageIoTest, MissingAndGarbageFilesNameThePath) {
   }
   WriteFileAtomically(temp / "zero.png", "");
   EXPECT_THROW(ReadColourImage(temp / "zero.png"), std::runtime_error);
+}
+
+TEST(ImageIoTest, AFifoInPlaceOfAnImageIsAnErrorNotAHang) {
+  // cv::imread opened a FIFO and blocked forever in open(); every image goes through ReadFile.
+  const TestTempDir temp;
+  const std::string path = (temp / "000001.png").string();
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  try {
+    ReadColourImage(path);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cannot read image " + path + ": not a regular file"));
+  }
+  EXPECT_THROW(ReadKittiDisparity(path), std::runtime_error);
 }
 
 TEST(ImageIoTest, AHeaderClaimingTenBillionPixelsIsAnErrorNamingTheFile) {

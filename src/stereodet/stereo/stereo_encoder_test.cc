@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/planar_scene.h"
 #include "stereodet/stereo/rgbh.h"
 #include "stereodet/util/check.h"
@@ -251,6 +252,10 @@ TEST(StereoEncoderTest, HalfScaleAgreesWithFullScaleOnAPlanarScene) {
   cv::Mat up_codes;
   cv::resize(small.height_code, up_codes, scene.left_bgr.size(), 0, 0, cv::INTER_NEAREST_EXACT);
   EXPECT_EQ(cv::norm(up_codes, half.height_code, cv::NORM_INF), 0.0);
+  // ... and the full-resolution codes (what a `stereo` folder holds) give them back exactly.
+  EXPECT_EQ(cv::norm(HeightCodesAtMatchSize(half.height_code, cv::Size(621, 188)),
+                     small.height_code, cv::NORM_INF),
+            0.0);
   EXPECT_EQ(cv::norm(UpsampleDisparity(small.disparity_px, scene.left_bgr.size()),
                      half.disparity_px, cv::NORM_INF),
             0.0);

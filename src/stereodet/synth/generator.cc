@@ -17,6 +17,7 @@
 #include "stereodet/synth/road.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/parallel.h"
 
 namespace stereodet {
@@ -214,8 +215,12 @@ std::vector<int> ValFrames(int frames, double val_fraction, uint64_t seed) {
 DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
   options.Check();
   Timer timer;
-  std::filesystem::create_directories(options.out / "training");
-  // Refuse to resume into a data set made with another seed or other settings.
+  // synth writes frames and split files: only into a folder it made (its synth_settings.txt),
+  // never over a KITTI download, a model or someone's files.
+  CheckOutputFolderOwner(options.out, "synth", {kMakerSynth});
+  // Refuse to resume into a data set made with another seed or other settings. The settings file
+  // is written before any folder inside, so a shard starting beside this one finds either an
+  // empty folder or a marked one.
   const std::string settings =
       fmt::format("seed={} {}\n", options.seed, options.synth.Fingerprint());
   const std::filesystem::path settings_path = options.out / "synth_settings.txt";
@@ -228,6 +233,8 @@ DatasetSummaryLine GenerateDataset(const DatasetOptions& options) {
   } else {
     WriteFileAtomically(settings_path, settings);
   }
+  std::filesystem::create_directories(options.out / "training");
+  RemoveStaleTemporaries(options.out);
   const KittiDataset dataset(options.out, "training");
   StageTimes times;
   std::atomic<int> generated{0}, skipped{0};

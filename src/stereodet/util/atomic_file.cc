@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
@@ -82,101 +83,79 @@ void WriteFileAtomically(const fs::path& path, std::string_view contents) {
 
 namespace {
 
-// A hidden sibling of `dir` named `.NAME.KIND-PID-N`, unique among threads and processes.
-fs::path SiblingName(const fs::path& dir, const char* kind) {
-  static std::atomic<unsigned long> counter{0};
-  const unsigned long n = counter.fetch_add(1);
-  std::string name = ".";
-  name.append(dir.filename().string()).append(".").append(kind).append("-");
-  name.append(std::to_string(::getpid())).append("-").append(std::to_string(n));
-  return dir.parent_path() / name;
-}
-
-// `dir` without a trailing separator, so that filename() names the folder itself.
-fs::path WithoutTrailingSeparator(fs::path dir) {
-  dir = dir.lexically_normal();
-  if (!dir.has_filename() && dir.has_parent_path()) dir = dir.parent_path();
-  return dir;
-}
-
-}  // namespace
-
-StagedFolder::StagedFolder(fs::path final_dir, const std::string& marker)
-    : final_dir_(WithoutTrailingSeparator(std::move(final_dir))) {
-  std::error_code ec;
-  if (fs::exists(final_dir_, ec)) {
-    STEREODET_CHECK_IO(fs::is_directory(final_dir_, ec))
-        << final_dir_.string() << " exists and is not a folder";
-    const bool empty = fs::is_empty(final_dir_, ec);
-    STEREODET_CHECK_IO(empty || fs::exists(final_dir_ / marker, ec))
-        << final_dir_.string() << " is a folder with other files in it (it holds no " << marker
-        << ", so it is not an earlier output of this command); give a new or empty folder";
+// "3000 bytes", "12.5 MB", "5.0 GB" (decimal units).
+std::string HumanBytes(uint64_t bytes) {
+  char text[32];
+  if (bytes < 1000000) {
+    std::snprintf(text, sizeof(text), "%llu bytes", static_cast<unsigned long long>(bytes));
+  } else if (bytes < 1000000000) {
+    std::snprintf(text, sizeof(text), "%.1f MB", static_cast<double>(bytes) / 1e6);
+  } else {
+    std::snprintf(text, sizeof(text), "%.1f GB", static_cast<double>(bytes) / 1e9);
   }
-  staging_dir_ = SiblingName(final_dir_, "staging");
-  fs::create_directories(staging_dir_, ec);
-  STEREODET_CHECK_IO(!ec) << "cannot create folder " << staging_dir_.string() << ": "
-                          << ec.message();
+  return text;
 }
 
-StagedFolder::~StagedFolder() {
-  if (!committed_) {
-    std::error_code ignored;
-    fs::remove_all(staging_dir_, ignored);
-  }
-}
-
-void StagedFolder::Commit() {
-  STEREODET_CHECK_IO(!committed_) << "StagedFolder::Commit called twice for "
-                                  << final_dir_.string();
-  std::error_code ec;
-  fs::path old;
-  if (fs::exists(final_dir_, ec)) {
-    old = SiblingName(final_dir_, "old");
-    fs::rename(final_dir_, old, ec);
-    STEREODET_CHECK_IO(!ec) << "cannot replace " << final_dir_.string() << ": " << ec.message();
-  }
-  fs::rename(staging_dir_, final_dir_, ec);
-  STEREODET_CHECK_IO(!ec) << "cannot write " << final_dir_.string() << ": " << ec.message()
-                          << (old.empty() ? "" : "; the previous run is kept as " + old.string());
-  committed_ = true;
-  if (!old.empty()) fs::remove_all(old, ec);  // best effort: the new run is in place
-}
-
-std::string ReadFile(const fs::path& path) {
-  // POSIX open/fstat/read rather than an ifstream: a KITTI split is thousands of small files and
-  // the stream set-up (and its seeks) would cost more than the parsing. fstat before reading, so a
-  // FIFO or a folder is refused instead of blocking (O_NONBLOCK: opening a FIFO without a writer
-  // would block; it does nothing to a regular file); the read loop also grows past st_size, so
-  // /proc files (size 0) read whole. A file of the size fstat reports takes one read().
+// Reads up to `max_bytes` of a regular file; with `whole`, a longer file is an error. POSIX
+// open/fstat/read rather than an ifstream: a KITTI split is thousands of small files and the
+// stream set-up (and its seeks) would cost more than the parsing. fstat before reading, so a FIFO
+// or a folder is refused instead of blocking (O_NONBLOCK: opening a FIFO without a writer would
+// block; it does nothing to a regular file); the read loop also grows past st_size, so /proc files
+// (size 0) read whole. A file of the size fstat reports takes one read().
+std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole,
+                            const char* what) {
+  const std::string name =
+      what == nullptr ? path.string() : std::string(what) + " " + path.string();
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  STEREODET_CHECK_IO(fd >= 0) << "cannot read " << path.string() << ": " << std::strerror(errno);
+  STEREODET_CHECK_IO(fd >= 0) << "cannot read " << name << ": " << std::strerror(errno);
   struct FdCloser {
     int fd;
     ~FdCloser() { ::close(fd); }
   } closer{fd};
   struct stat info {};
   STEREODET_CHECK_IO(::fstat(fd, &info) == 0)
-      << "cannot read " << path.string() << ": " << std::strerror(errno);
-  STEREODET_CHECK_IO(S_ISREG(info.st_mode))
-      << "cannot read " << path.string() << ": not a regular file";
+      << "cannot read " << name << ": " << std::strerror(errno);
+  STEREODET_CHECK_IO(S_ISREG(info.st_mode)) << "cannot read " << name << ": not a regular file";
+  const uint64_t size = static_cast<uint64_t>(info.st_size);
+  STEREODET_CHECK_IO(!whole || size <= max_bytes)
+      << "cannot read " << name << ": it is " << HumanBytes(size) << ", more than the "
+      << HumanBytes(max_bytes) << " read of one file";
+  const uint64_t wanted = std::min(size, max_bytes);
   std::string contents;
   // One byte more than the size, so a single read() both fills the file and sees its end.
-  contents.resize(static_cast<size_t>(info.st_size) + 1);
+  contents.resize(static_cast<size_t>(wanted) + (whole ? 1 : 0));
   size_t used = 0;
   while (true) {
-    if (used == contents.size()) contents.resize(contents.size() * 2);
+    if (used == contents.size()) {
+      if (!whole) break;
+      STEREODET_CHECK_IO(used <= max_bytes) << "cannot read " << name << ": it grew past the "
+                                            << HumanBytes(max_bytes) << " read of one file";
+      contents.resize(std::min<uint64_t>(contents.size() * 2, max_bytes + 1));
+    }
     const ssize_t got = ::read(fd, contents.data() + used, contents.size() - used);
     if (got < 0 && errno == EINTR) continue;
-    STEREODET_CHECK_IO(got >= 0) << "cannot read " << path.string() << ": " << std::strerror(errno);
+    STEREODET_CHECK_IO(got >= 0) << "cannot read " << name << ": " << std::strerror(errno);
     if (got == 0) break;
     used += static_cast<size_t>(got);
     // Exactly the size fstat reported: that is the whole file (one more byte was asked for, so a
     // file that grew since would have filled the buffer). No second read() just to see the end:
     // reading thousands of small files, that was a fifth of the system calls.
-    if (info.st_size > 0 && used == static_cast<size_t>(info.st_size)) break;
+    if (whole && size > 0 && used == size) break;
   }
+  STEREODET_CHECK_IO(!whole || used <= max_bytes) << "cannot read " << name << ": it grew past the "
+                                                  << HumanBytes(max_bytes) << " read of one file";
   contents.resize(used);
   return contents;
+}
+
+}  // namespace
+
+std::string ReadFile(const fs::path& path, uint64_t max_bytes, const char* what) {
+  return ReadRegularFile(path, max_bytes, /*whole=*/true, what);
+}
+
+std::string ReadFileHead(const fs::path& path, size_t bytes) {
+  return ReadRegularFile(path, bytes, /*whole=*/false, nullptr);
 }
 
 }  // namespace stereodet

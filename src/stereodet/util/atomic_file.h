@@ -4,6 +4,7 @@
 #ifndef STEREODET_UTIL_ATOMIC_FILE_H_
 #define STEREODET_UTIL_ATOMIC_FILE_H_
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -40,44 +41,23 @@ class AtomicPath {
   bool committed_ = false;
 };
 
-// An output folder written as one run. Files go into a hidden staging folder beside `final_dir`
-// (`.NAME.staging-PID-N`); Commit() puts it in place of `final_dir` with two renames (an existing
-// `final_dir` is renamed aside, then removed). So the folder never mixes the files of two runs, two
-// runs into one folder cannot interleave (the last to commit wins, whole), and an interrupted run
-// leaves the previous folder as it was. Without Commit() the destructor removes the staging folder.
-//
-//   StagedFolder out(dir, "results.json");
-//   WriteFileAtomically(out.path() / "results.json", ...);
-//   out.Commit();
-class StagedFolder {
- public:
-  // Throws std::runtime_error, naming the folder, if `final_dir` exists and is not a folder, or is
-  // a non-empty folder without the file `marker` (so it is not an earlier output of this kind and
-  // replacing it could destroy someone's data).
-  StagedFolder(std::filesystem::path final_dir, const std::string& marker);
-  StagedFolder(const StagedFolder&) = delete;
-  StagedFolder& operator=(const StagedFolder&) = delete;
-  ~StagedFolder();
+// The largest file ReadFile reads by default: 4 GiB. Far above any input the project reads whole
+// (a KITTI image is about 1 MB, a scan 2 MB, a model 10 MB, a results.json of 3769 frames 100 MB),
+// and below what would exhaust a machine's memory, so a huge or sparse file gets a message
+// instead of std::bad_alloc.
+inline constexpr uint64_t kMaxReadFileBytes = uint64_t{4} << 30;
 
-  // Where to write now: the staging folder (created empty).
-  const std::filesystem::path& path() const { return staging_dir_; }
-  const std::filesystem::path& final_path() const { return final_dir_; }
+// Reads a whole regular file (one read() for a file of the size fstat reports). The one checked
+// path every input file of the project is read through, images included. Throws
+// std::runtime_error naming the path if it cannot be read, is not a regular file (a FIFO, a
+// folder, a device: opened without blocking, so a reader never hangs) or is larger than
+// `max_bytes` ("... is 5.0 GB, more than the 4.0 GB read of one file"). `what`, when given, names
+// the kind of file in the messages: "cannot read image PATH: not a regular file".
+std::string ReadFile(const std::filesystem::path& path, uint64_t max_bytes = kMaxReadFileBytes,
+                     const char* what = nullptr);
 
-  // Replaces `final_dir` by the staging folder. Throws std::runtime_error naming the folder if a
-  // rename fails (`final_dir` is then the previous run's or, if the second rename failed, absent
-  // with the previous run kept as `.NAME.old-*` beside it, named in the message).
-  void Commit();
-
- private:
-  std::filesystem::path final_dir_;
-  std::filesystem::path staging_dir_;
-  bool committed_ = false;
-};
-
-// Reads a whole regular file (one read() for a file of the size fstat reports). Throws
-// std::runtime_error naming the path if it cannot be read or is not a regular file (a FIFO, a
-// folder), so a reader never blocks.
-std::string ReadFile(const std::filesystem::path& path);
+// The first `bytes` bytes of a regular file (fewer if it is shorter), with ReadFile's checks.
+std::string ReadFileHead(const std::filesystem::path& path, size_t bytes);
 
 }  // namespace stereodet
 

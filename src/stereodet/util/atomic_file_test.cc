@@ -74,56 +74,6 @@ TEST_F(AtomicFileTest, WritingIntoAFileAsIfAFolderFails) {
   EXPECT_THROW(WriteFileAtomically(dir_ / "plain" / "child.txt", "y"), std::runtime_error);
 }
 
-// StagedFolder: one run per folder.
-TEST_F(AtomicFileTest, StagedFolderReplacesAnEarlierRunWhole) {
-  const fs::path out = dir_ / "results";
-  {
-    StagedFolder run1(out, "results.json");
-    WriteFileAtomically(run1.path() / "results.json", "1");
-    WriteFileAtomically(run1.path() / "curves" / "only_in_run1.csv", "x");
-    EXPECT_FALSE(fs::exists(out));  // nothing visible before the commit
-    run1.Commit();
-  }
-  EXPECT_EQ(ReadFile(out / "results.json"), "1");
-  {
-    StagedFolder run2(out / "", "results.json");  // a trailing separator names the same folder
-    WriteFileAtomically(run2.path() / "results.json", "2");
-    EXPECT_EQ(ReadFile(out / "results.json"), "1");  // the old run stays whole until the commit
-    run2.Commit();
-  }
-  EXPECT_EQ(ReadFile(out / "results.json"), "2");
-  EXPECT_FALSE(fs::exists(out / "curves" / "only_in_run1.csv"));  // no stale file of run 1
-  EXPECT_EQ(CountFiles(), 1u);  // no staging or old folder left beside it
-}
-
-TEST_F(AtomicFileTest, UncommittedStagedFolderLeavesThePreviousRun) {
-  const fs::path out = dir_ / "results";
-  WriteFileAtomically(out / "results.json", "old");
-  {
-    StagedFolder run(out, "results.json");
-    WriteFileAtomically(run.path() / "results.json", "new");
-  }  // interrupted: no Commit()
-  EXPECT_EQ(ReadFile(out / "results.json"), "old");
-  EXPECT_EQ(CountFiles(), 1u);
-}
-
-TEST_F(AtomicFileTest, StagedFolderRefusesAFolderOfSomethingElse) {
-  WriteFileAtomically(dir_ / "home" / "thesis.tex", "precious");
-  EXPECT_THROW(StagedFolder(dir_ / "home", "results.json"), std::runtime_error);
-  try {
-    StagedFolder refused(dir_ / "home", "results.json");
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("holds no results.json"), std::string::npos) << e.what();
-  }
-  WriteFileAtomically(dir_ / "plain_file", "x");
-  EXPECT_THROW(StagedFolder(dir_ / "plain_file", "results.json"), std::runtime_error);
-  EXPECT_EQ(ReadFile(dir_ / "home" / "thesis.tex"), "precious");
-  fs::create_directories(dir_ / "empty");
-  StagedFolder ok(dir_ / "empty", "results.json");  // an empty folder is fine
-  ok.Commit();
-  EXPECT_TRUE(fs::is_directory(dir_ / "empty"));
-}
-
 TEST_F(AtomicFileTest, ReadFileRefusesAFifoAndAFolderWithoutBlocking) {
   const fs::path fifo = dir_ / "label.txt";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
@@ -135,6 +85,42 @@ TEST_F(AtomicFileTest, ReadFileRefusesAFifoAndAFolderWithoutBlocking) {
   }
   EXPECT_THROW(ReadFile(dir_), std::runtime_error);
   EXPECT_THROW(ReadFile(dir_ / "missing.txt"), std::runtime_error);
+}
+
+TEST_F(AtomicFileTest, ReadFileRefusesAFileLargerThanItsBoundNamingTheSize) {
+  const fs::path path = dir_ / "scan.bin";
+  WriteFileAtomically(path, std::string(3000, 'x'));
+  EXPECT_EQ(ReadFile(path, 3000).size(), 3000u);  // the bound itself is allowed
+  try {
+    ReadFile(path, 2000, "velodyne scan");
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("cannot read velodyne scan " + path.string() +
+                                   ": it is 3000 bytes, more than the 2000 bytes read of one file"),
+        std::string::npos)
+        << e.what();
+  }
+  // A sparse file far larger than memory: a message, not std::bad_alloc.
+  const fs::path huge = dir_ / "huge.bin";
+  WriteFileAtomically(huge, "");
+  fs::resize_file(huge, uint64_t{64} << 30);
+  try {
+    ReadFile(huge);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("it is 68.7 GB, more than the 4.3 GB read of one file"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(AtomicFileTest, ReadFileHeadReadsThePrefixAndRefusesAFifo) {
+  WriteFileAtomically(dir_ / "a.png", "0123456789");
+  EXPECT_EQ(ReadFileHead(dir_ / "a.png", 4), "0123");
+  EXPECT_EQ(ReadFileHead(dir_ / "a.png", 40), "0123456789");  // shorter than asked: all of it
+  ASSERT_EQ(::mkfifo((dir_ / "fifo.png").c_str(), 0600), 0);
+  EXPECT_THROW(ReadFileHead(dir_ / "fifo.png", 24), std::runtime_error);
 }
 
 TEST_F(AtomicFileTest, ReadFileReadsProcFilesWhoseSizeIsZero) {

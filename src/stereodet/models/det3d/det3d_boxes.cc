@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "stereodet/geometry/iou.h"
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -165,12 +166,11 @@ std::optional<Object> ToKitti3DDetection(const ScoredLidarBox& box,
 }
 
 std::pair<int, int> PngImageSize(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  STEREODET_CHECK_IO(in.good()) << "cannot open " << path.string();
+  const std::string head = ReadFileHead(path, 24);  // refuses a FIFO instead of blocking on it
   unsigned char header[24] = {};
-  in.read(reinterpret_cast<char*>(header), sizeof(header));
+  std::copy(head.begin(), head.end(), header);
   static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  STEREODET_CHECK_IO(in.gcount() == 24 && std::equal(kSignature, kSignature + 8, header) &&
+  STEREODET_CHECK_IO(head.size() == 24 && std::equal(kSignature, kSignature + 8, header) &&
                      std::equal(header + 12, header + 16, "IHDR"))
       << path.string() << " is not a PNG file";
   auto be32 = [&](int at) {

@@ -9,6 +9,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
@@ -40,7 +41,7 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
       {"--model", options.model_dir}};
   if (!options.points_dir.empty()) inputs.push_back({"--points", options.points_dir});
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
-  StagedFolder out(options.out_dir, kRunManifestFile);
+  StagedFolder out(options.out_dir, "detect det3d", DetectionFolderMakers());
   SetTorchThreads(options.threads);
   const Det3dModel model = Det3dModel::Load(options.model_dir, device);
   const Det3dConfig& config = model.config();
@@ -49,10 +50,8 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
       << " is a stereo model: --points must name the `stereodet stereo --encode points` folder";
 
   const KittiDataset dataset(options.data_root, options.subset);
-  std::vector<std::string> all_ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(all_ids.size()) > options.max_frames) {
-    all_ids.resize(options.max_frames);
-  }
+  const std::vector<std::string> all_ids =
+      DetectFrameList(dataset, options.split, options.max_frames);
   const std::vector<std::string> ids =
       ShardFrames(all_ids, options.shard, options.batch_size);  // detect_shard.h
   DetectDet3dSummary summary;

@@ -385,6 +385,13 @@ struct Det3dModel::Impl {
     // learn to say "background"; with zeros they would read a fixed logit 0 (p = 0.5) that no
     // weight can change, and the loss of such anchors could never fall.
     const torch::Tensor grid = internal::PartSamplingGrid(boxes, part_u, part_v, config.grid);
+    // A NaN or inf sampling position crashes LibTorch's grid_sampler_2d_backward (its index
+    // arithmetic overflows) instead of giving a NaN loss; a diverging training gets there first,
+    // so it is stopped here with a message rather than a segfault.
+    const bool finite = torch::isfinite(grid).all().item().toBool();
+    STEREODET_CHECK_IO(finite)
+        << "the network's box predictions are not finite (NaN or inf): the training diverged "
+           "(try a lower --lr) or the weights are broken";
     const torch::Tensor sampled = F::grid_sample(part_maps, grid,
                                                  F::GridSampleFuncOptions()
                                                      .mode(torch::kBilinear)

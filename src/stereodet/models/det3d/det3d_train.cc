@@ -52,7 +52,8 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   if (!options.points_dir.empty()) inputs.push_back({"--points", options.points_dir});
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
   const OutputLock lock(options.out_dir);
-  const bool resuming = PrepareModelFolder(options.out_dir, options.resume, options.force);
+  const bool resuming =
+      PrepareModelFolder(options.out_dir, "train det3d", options.resume, options.force);
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
   Det3dConfig config = options.model;

@@ -15,6 +15,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
@@ -45,17 +46,15 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
                                   {{"--data", options.data_root / options.subset},
                                    {"--data", options.data_root / "ImageSets"},
                                    {"--model", options.model_dir}});
-  StagedFolder out(options.out_dir, kRunManifestFile);
+  StagedFolder out(options.out_dir, "detect rpn", DetectionFolderMakers());
   SetTorchThreads(options.threads);
   const RpnModel model = RpnModel::Load(options.model_dir, device);
   const RpnConfig& config = model.config();
   const bool geometry = config.input == RpnInput::kRgbd;
 
   const KittiDataset dataset(options.data_root, options.subset);
-  std::vector<std::string> all_ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(all_ids.size()) > options.max_frames) {
-    all_ids.resize(options.max_frames);
-  }
+  const std::vector<std::string> all_ids =
+      DetectFrameList(dataset, options.split, options.max_frames);
   // A shard: whole batches of the list (detect_shard.h), nothing in the loop below.
   const std::vector<std::string> ids = ShardFrames(all_ids, options.shard, options.batch_size);
   RequiredFiles required;

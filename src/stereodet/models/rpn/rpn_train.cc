@@ -50,7 +50,8 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   if (!options.init_from.empty()) inputs.push_back({"--init-from", options.init_from});
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
   const OutputLock lock(options.out_dir);
-  const bool resuming = PrepareModelFolder(options.out_dir, options.resume, options.force);
+  const bool resuming =
+      PrepareModelFolder(options.out_dir, "train rpn", options.resume, options.force);
   const fs::path config_path = options.out_dir / "model.json";
   const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
   RpnConfig config = options.model;
