@@ -68,7 +68,9 @@ std::span<const Command> CommandTable() {
        "left image coloured TP / FP / FN with score and IoU, and the bird's-eye view with the "
        "points and 3D boxes (SVG, PNG); by default the worst frames"},
       {"train", Program::kModels, "train a detector on a KITTI-format split"},
-      {"detect", Program::kModels, "run a trained detector, write KITTI detection files"},
+      {"detect", Program::kModels,
+       "run a trained detector, write KITTI detection files (`detect --model DIR ...`: the family "
+       "model.json names)"},
   };
   return kCommands;
 }

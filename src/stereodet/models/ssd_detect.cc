@@ -13,10 +13,12 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
+#include "stereodet/models/detector.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_data.h"
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/degradation.h"
+#include "stereodet/stereo/disparity.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -120,10 +122,19 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
                                    {"--stereo", options.stereo_dir}});
   // Refuse a folder of something else before the work, not after it.
   StagedFolder out(options.out_dir, "detect ssd", DetectionFolderMakers());
-  SetTorchThreads(options.threads);
-  const SsdModel model = SsdModel::Load(options.model_dir, ResolveComputeDevice(options.device));
-  const SsdConfig& config = model.config();
-  const bool height = UsesHeight(config.encoding);
+  DetectorOptions detector_options;
+  detector_options.device = options.device;
+  detector_options.threads = options.threads;
+  detector_options.blur_sigma_px = options.blur_sigma_px;
+  detector_options.stereo = options.stereo;
+  detector_options.ssd = options.decode;
+  Detector detector = Detector::Open(options.model_dir, detector_options);
+  STEREODET_CHECK(detector.family() == "ssd")
+      << options.model_dir.string() << " holds a " << detector.family()
+      << " model, not an ssd one: use `detect " << detector.family() << "` or `detect --model`";
+  // The settings the heights are made with (the model's or the flags', with the blur).
+  const std::optional<StereoOptions> stereo = detector.stereo();
+  const bool height = stereo.has_value();
 
   const KittiDataset dataset(options.data_root, options.subset);
   const std::vector<std::string> all_ids =
@@ -140,14 +151,11 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
                          << dataset.SubsetDir().string() << ", e.g. " << missing.front();
   }
 
-  StereoOptions stereo = options.stereo.value_or(model.stereo());
-  stereo.blur.sigma_px = options.blur_sigma_px;
-  stereo.blur.mode = BlurMode::kNetworkImage;
   std::optional<StereoFolderRecord> folder;
   if (from_folder) {
     folder = ReadStereoFolder(options.stereo_dir);
     CheckStereoFolderData(*folder, dataset);
-    std::string differ = DifferingStereoSettings(stereo, folder->stereo);
+    std::string differ = DifferingStereoSettings(*stereo, folder->stereo);
     for (size_t at; (at = differ.find("(requested: ")) != std::string::npos;) {
       differ.replace(at, 12, "(stereo.json: ");
     }
@@ -160,95 +168,61 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   DetectSsdSummary summary;
   StageTimes times;
   ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), options.progress);
-  // One batch of frames read, matched and encoded for the network; two slots, so that batch k + 1
-  // can be prepared while the network runs on batch k.
-  struct PreparedBatch {
-    size_t begin = 0;
-    std::vector<PlanarImage> inputs;
-    std::vector<cv::Size> sizes;
-  };
-  PreparedBatch slots[2];
+  // One batch of frames read and prepared for the network (Detector::Prepare: stereo, encoding);
+  // two slots, so that batch k + 1 can be prepared while the network runs on batch k.
+  std::unique_ptr<Detector::PreparedBatch> slots[2];
   const size_t batch_size = static_cast<size_t>(options.batch_size);
   const int num_batches = static_cast<int>((ids.size() + batch_size - 1) / batch_size);
+  auto batch_begin = [&](int k) { return static_cast<size_t>(k) * batch_size; };
   auto prepare = [&](int k) {
-    PreparedBatch& batch = slots[k % 2];
-    batch.begin = static_cast<size_t>(k) * batch_size;
-    const size_t n = std::min(ids.size(), batch.begin + batch_size) - batch.begin;
-    batch.inputs.assign(n, PlanarImage{});
-    batch.sizes.assign(n, cv::Size());
+    const size_t begin = batch_begin(k);
+    const size_t n = std::min(ids.size(), begin + batch_size) - begin;
+    std::vector<StereoFrame> frames(n);
     ParallelFor(
         n,
         [&](size_t i) {
-          const FramePaths paths = dataset.Paths(ids[batch.begin + i]);
-          cv::Mat left;
-          {
-            ScopedStage stage(times, "read");
-            left = ReadColourImage(paths.image_left);
-          }
-          batch.sizes[i] = left.size();
-          cv::Mat network_image = left, height_code;
+          const std::string& id = ids[begin + i];
+          const FramePaths paths = dataset.Paths(id);
+          StereoFrame& frame = frames[i];
+          frame.id = id;
+          ScopedStage stage(times, "read");
+          frame.left = ReadColourImage(paths.image_left);
           if (from_folder) {
-            {
-              ScopedStage stage(times, "read");
-              // At the match size, as the in-line path below gives them: the folder's
-              // full-resolution codes resized to the network would differ.
-              height_code = ReadStereoFolderHeightAtMatchScale(*folder, ids[batch.begin + i]);
-            }
-            const cv::Size match = folder->stereo.disparity.MatchSize(left.size());
-            STEREODET_CHECK_IO(height_code.size() == match)
-                << "--stereo " << options.stereo_dir.string() << ": the heights of frame "
-                << ids[batch.begin + i] << " are " << height_code.cols << "x" << height_code.rows
-                << " px at the match scale, " << match.width << "x" << match.height
-                << " for its left image of " << left.cols << "x" << left.rows;
-            if (options.blur_sigma_px > 0.0) {
-              ScopedStage stage(times, "blur");
-              network_image = GaussianBlurImage(left, options.blur_sigma_px);
-            }
+            // At the match size, as matching in line gives them: the folder's full-resolution
+            // codes resized to the network would differ.
+            frame.height_code = ReadStereoFolderHeightAtMatchScale(*folder, id);
           } else if (height) {
-            cv::Mat right;
-            {
-              ScopedStage stage(times, "read");
-              right = ReadColourImage(paths.image_right);
-            }
-            CheckStereoPairSize(left, right, paths.image_left, paths.image_right);
-            CheckImageFitsMatcher(stereo.disparity, left.size(), paths.image_left);
-            ScopedStage stage(times, "stereo");
-            StereoEncoder encoder(stereo);
-            StereoOutputs outputs;
-            outputs.rgbh = false;
-            outputs.full_resolution = false;  // match-scale codes go to the network directly
-            StereoEncoding encoding = encoder.Encode(
-                left, right, StereoGeometry::FromCalibration(ReadCalibration(paths.calib)),
-                outputs);
-            network_image = encoding.network_image;  // blurred when asked; stereo saw it sharp
-            height_code = encoding.height_code;
-          } else if (options.blur_sigma_px > 0.0) {
-            ScopedStage stage(times, "blur");
-            network_image = GaussianBlurImage(left, options.blur_sigma_px);
+            frame.right = ReadColourImage(paths.image_right);
+            CheckStereoPairSize(frame.left, frame.right, paths.image_left, paths.image_right);
+            CheckImageFitsMatcher(stereo->disparity, frame.left.size(), paths.image_left);
+            frame.calib = ReadCalibration(paths.calib);
           }
-          ScopedStage stage(times, "encode");
-          batch.inputs[i] = PrepareNetworkInput(network_image, height_code, config);
         },
         options.threads);
+    if (from_folder) {
+      for (const StereoFrame& frame : frames) {
+        const cv::Size match = stereo->disparity.MatchSize(frame.left.size());
+        STEREODET_CHECK_IO(frame.height_code.size() == match)
+            << "--stereo " << options.stereo_dir.string() << ": the heights of frame " << frame.id
+            << " are " << frame.height_code.cols << "x" << frame.height_code.rows
+            << " px at the match scale, " << match.width << "x" << match.height
+            << " for its left image of " << frame.left.cols << "x" << frame.left.rows;
+      }
+    }
+    slots[k % 2] = detector.Prepare(frames);
   };
   auto consume = [&](int k) {
-    PreparedBatch& batch = slots[k % 2];
-    std::vector<std::vector<ScoredBox>> boxes;
-    {
-      ScopedStage stage(times, "network");
-      boxes = model.Detect(batch.inputs, options.decode);
-    }
+    const std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
     ScopedStage stage(times, "write");
-    for (size_t i = 0; i < batch.inputs.size(); ++i) {
-      const cv::Size size = batch.sizes[i];
-      const double sx = static_cast<double>(size.width) / config.InputWidth();
-      const double sy = static_cast<double>(size.height) / config.InputHeight();
-      const std::vector<Object> objects =
-          ToKittiDetections(boxes[i], config.classes, sx, sy, size.width, size.height);
-      WriteObjects(out.path() / (ids[batch.begin + i] + ".txt"), objects);
-      summary.detections += static_cast<int64_t>(objects.size());
+    for (const DetectResult& r : results) {
+      times.Add("stereo", r.times.stereo_s);
+      times.Add("encode", r.times.encode_s);
+      times.Add("network", r.times.network_s);
+      times.Add("decode", r.times.decode_s);
+      WriteObjects(out.path() / (r.id + ".txt"), r.objects);
+      summary.detections += static_cast<int64_t>(r.objects.size());
     }
-    progress.Add(static_cast<int64_t>(batch.inputs.size()));
+    progress.Add(static_cast<int64_t>(results.size()));
   };
   RunTwoStagePipeline(num_batches, options.pipeline, prepare, consume);
   progress.Finish();
@@ -265,11 +239,11 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   manifest.settings_json = fmt::format(
       R"({{"model_weights_fnv1a64": "{}", "encoding": "{}", "blur_sigma_px": {}, )"
       R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}{}}})",
-      HashFileHex(options.model_dir / "model.pt"), InputEncodingName(config.encoding),
-      options.blur_sigma_px, options.decode.score_threshold, options.decode.nms.iou_threshold,
+      HashFileHex(options.model_dir / "model.pt"), detector.input(), options.blur_sigma_px,
+      options.decode.score_threshold, options.decode.nms.iou_threshold,
       options.decode.nms.max_detections, options.max_frames,
       // The stereo settings the heights were made with (RGB-H only): the model's, or the flags'.
-      height ? ", \"stereo\": " + StereoSettingsJson(stereo) : std::string());
+      height ? ", \"stereo\": " + StereoSettingsJson(*stereo) : std::string());
   CommitDetectionFolder(out, std::move(manifest), ids, all_ids, options.shard, options.batch_size);
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();

@@ -35,22 +35,14 @@ std::filesystem::path PointsPath(const KittiDataset& dataset,
   return stereo_points_dir / "velodyne" / (id + ".bin");
 }
 
-Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
-                          const std::filesystem::path& stereo_points_dir, PointSource source,
-                          const std::string& id, const std::vector<std::string>& classes,
-                          const BevGridOptions& grid, const PointFilterOptions& filter,
-                          bool with_labels) {
-  filter.Check();
-  grid.Check();
-  const FramePaths paths = dataset.Paths(id);
-  Det3dFrame frame;
-  frame.id = id;
-  frame.calib = ReadCalibration(paths.calib);
-  std::tie(frame.image_width, frame.image_height) = PngImageSize(paths.image_left);
-  const std::vector<VeloPoint> raw =
-      ReadVelodyne(PointsPath(dataset, stereo_points_dir, source, id));
-  const Eigen::Affine3d rect_from_velo = frame.calib.RectFromVelo();
-  frame.points.reserve(raw.size());
+std::vector<VeloPoint> FilterDet3dPoints(const std::vector<VeloPoint>& raw,
+                                         const Calibration& calib, int image_width,
+                                         int image_height, PointSource source,
+                                         const BevGridOptions& grid,
+                                         const PointFilterOptions& filter) {
+  const Eigen::Affine3d rect_from_velo = calib.RectFromVelo();
+  std::vector<VeloPoint> points;
+  points.reserve(raw.size());
   for (const VeloPoint& p : raw) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
         !std::isfinite(p.reflectance)) {
@@ -63,18 +55,36 @@ Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
       }
     } else if (filter.camera_fov_only) {
       double depth = 0;
-      const Eigen::Vector2d px = frame.calib.ProjectRectToImage(
-          rect_from_velo * Eigen::Vector3d(p.x, p.y, p.z), 2, &depth);
-      if (depth <= 0 || px.x() < 0 || px.y() < 0 || px.x() >= frame.image_width ||
-          px.y() >= frame.image_height) {
+      const Eigen::Vector2d px =
+          calib.ProjectRectToImage(rect_from_velo * Eigen::Vector3d(p.x, p.y, p.z), 2, &depth);
+      if (depth <= 0 || px.x() < 0 || px.y() < 0 || px.x() >= image_width ||
+          px.y() >= image_height) {
         continue;
       }
     }
-    frame.points.push_back(p);
+    points.push_back(p);
   }
   // A training holds every frame: give back what the filters freed (a LiDAR scan keeps ~15% of
   // its points after the camera-view cut; the reserve above was for all of them).
-  frame.points.shrink_to_fit();
+  points.shrink_to_fit();
+  return points;
+}
+
+Det3dFrame LoadDet3dFrame(const KittiDataset& dataset,
+                          const std::filesystem::path& stereo_points_dir, PointSource source,
+                          const std::string& id, const std::vector<std::string>& classes,
+                          const BevGridOptions& grid, const PointFilterOptions& filter,
+                          bool with_labels) {
+  filter.Check();
+  grid.Check();
+  const FramePaths paths = dataset.Paths(id);
+  Det3dFrame frame;
+  frame.id = id;
+  frame.calib = ReadCalibration(paths.calib);
+  std::tie(frame.image_width, frame.image_height) = PngImageSize(paths.image_left);
+  frame.points =
+      FilterDet3dPoints(ReadVelodyne(PointsPath(dataset, stereo_points_dir, source, id)),
+                        frame.calib, frame.image_width, frame.image_height, source, grid, filter);
   if (with_labels) {
     for (const Object& o : ReadObjects(paths.label).objects) {
       const auto it = std::find(classes.begin(), classes.end(), o.type);

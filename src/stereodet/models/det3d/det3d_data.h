@@ -50,6 +50,15 @@ std::filesystem::path PointsPath(const KittiDataset& dataset,
                                  const std::filesystem::path& stereo_points_dir, PointSource source,
                                  const std::string& id);
 
+// The points of a scan that a model sees (PointFilterOptions), in their order: finite ones, in the
+// grid (crop_to_grid), for stereo within stereo_max_distance_m, for LiDAR in the left camera's
+// view of an image_width x image_height image (camera_fov_only).
+std::vector<VeloPoint> FilterDet3dPoints(const std::vector<VeloPoint>& raw,
+                                         const Calibration& calib, int image_width,
+                                         int image_height, PointSource source,
+                                         const BevGridOptions& grid,
+                                         const PointFilterOptions& filter);
+
 // Reads a frame: calibration, image size (image_2 header), points filtered by `filter` (non-finite
 // points always dropped; stereo truncated by distance; LiDAR cut to the camera's view; both cut to
 // `grid` with crop_to_grid), and, with `with_labels`, the boxes of `classes` (others, DontCare

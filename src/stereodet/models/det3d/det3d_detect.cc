@@ -4,8 +4,14 @@
 
 #include <utility>
 
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/kitti/velodyne_io.h"
+#include "stereodet/models/det3d/det3d_boxes.h"
+#include "stereodet/models/det3d/det3d_data.h"
 #include "stereodet/models/detect_shard.h"
+#include "stereodet/models/detector.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -42,10 +48,17 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
   if (!options.points_dir.empty()) inputs.push_back({"--points", options.points_dir});
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
   StagedFolder out(options.out_dir, "detect det3d", DetectionFolderMakers());
-  SetTorchThreads(options.threads);
-  const Det3dModel model = Det3dModel::Load(options.model_dir, device);
-  const Det3dConfig& config = model.config();
-  STEREODET_CHECK(config.input != PointSource::kStereo || !options.points_dir.empty())
+  DetectorOptions detector_options;
+  detector_options.device = options.device;
+  detector_options.threads = options.threads;
+  detector_options.det3d = options.decode;
+  detector_options.det3d_points = options.filter;
+  Detector detector = Detector::Open(options.model_dir, detector_options);
+  STEREODET_CHECK(detector.family() == "det3d")
+      << options.model_dir.string() << " holds a " << detector.family()
+      << " model, not a det3d one: use `detect " << detector.family() << "` or `detect --model`";
+  const PointSource source = *ParsePointSource(detector.input());
+  STEREODET_CHECK(source != PointSource::kStereo || !options.points_dir.empty())
       << options.model_dir.string()
       << " is a stereo model: --points must name the `stereodet stereo --encode points` folder";
 
@@ -57,32 +70,29 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
   DetectDet3dSummary summary;
   ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), options.progress);
   for (size_t begin = 0; begin < ids.size(); begin += options.batch_size) {
-    const size_t end = std::min(ids.size(), begin + options.batch_size);
-    std::vector<Det3dFrame> frames(end - begin);
-    std::vector<Det3dSample> samples(end - begin);
+    const size_t n = std::min(ids.size(), begin + options.batch_size) - begin;
+    std::vector<StereoFrame> frames(n);
     ParallelFor(
-        frames.size(),
+        n,
         [&](size_t i) {
-          frames[i] = LoadDet3dFrame(dataset, options.points_dir, config.input, ids[begin + i],
-                                     config.classes, config.grid, options.filter,
-                                     /*with_labels=*/false);
-          samples[i] = MakeDet3dSample(frames[i], config, model.anchors(), false);
+          // The calibration, the image's size (its PNG header: nothing decoded) and the points.
+          const std::string& id = ids[begin + i];
+          const FramePaths paths = dataset.Paths(id);
+          StereoFrame& frame = frames[i];
+          frame.id = id;
+          frame.calib = ReadCalibration(paths.calib);
+          const auto [width, height] = PngImageSize(paths.image_left);
+          frame.image_size = cv::Size(width, height);
+          frame.points = ReadVelodyne(PointsPath(dataset, options.points_dir, source, id));
         },
         options.threads);
-    const Timer network_timer;
-    const std::vector<std::vector<ScoredLidarBox>> boxes = model.Detect(samples, options.decode);
-    summary.network_seconds += network_timer.ElapsedSeconds();
-    for (size_t i = 0; i < frames.size(); ++i) {
-      std::vector<Object> objects;
-      for (const ScoredLidarBox& b : boxes[i]) {
-        std::optional<Object> o = ToKitti3DDetection(b, config.classes, frames[i].calib,
-                                                     frames[i].image_width, frames[i].image_height);
-        if (o) objects.push_back(*o);
-      }
-      WriteObjects(out.path() / (frames[i].id + ".txt"), objects);
-      summary.detections += static_cast<int64_t>(objects.size());
+    const std::vector<DetectResult> results = detector.DetectBatch(frames);
+    for (const DetectResult& r : results) {
+      summary.network_seconds += r.times.network_s;
+      WriteObjects(out.path() / (r.id + ".txt"), r.objects);
+      summary.detections += static_cast<int64_t>(r.objects.size());
     }
-    progress.Add(static_cast<int64_t>(frames.size()));
+    progress.Add(static_cast<int64_t>(n));
   }
   progress.Finish();
 
@@ -100,10 +110,9 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
       R"({{"model_weights_fnv1a64": "{}", "input": "{}", "score_threshold": {}, )"
       R"("nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}, "device": "{}", )"
       R"("stereo_max_distance_m": {}, "camera_fov_only": {}}})",
-      HashFileHex(options.model_dir / "model.pt"), PointSourceName(config.input),
-      options.decode.score_threshold, options.decode.nms.iou_threshold,
-      options.decode.nms.max_detections, options.max_frames, options.device,
-      options.filter.stereo_max_distance_m, options.filter.camera_fov_only);
+      HashFileHex(options.model_dir / "model.pt"), detector.input(), options.decode.score_threshold,
+      options.decode.nms.iou_threshold, options.decode.nms.max_detections, options.max_frames,
+      options.device, options.filter.stereo_max_distance_m, options.filter.camera_fov_only);
   CommitDetectionFolder(out, std::move(manifest), ids, all_ids, options.shard, options.batch_size);
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();

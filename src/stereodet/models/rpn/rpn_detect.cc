@@ -5,12 +5,15 @@
 #include <cmath>
 #include <utility>
 
+#include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
+#include "stereodet/models/detector.h"
 #include "stereodet/models/rpn/rpn_data.h"
 #include "stereodet/models/ssd.h"
 #include "stereodet/models/ssd_detect.h"
 #include "stereodet/stereo/degradation.h"
+#include "stereodet/stereo/disparity.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -47,10 +50,16 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
                                    {"--data", options.data_root / "ImageSets"},
                                    {"--model", options.model_dir}});
   StagedFolder out(options.out_dir, "detect rpn", DetectionFolderMakers());
-  SetTorchThreads(options.threads);
-  const RpnModel model = RpnModel::Load(options.model_dir, device);
-  const RpnConfig& config = model.config();
-  const bool geometry = config.input == RpnInput::kRgbd;
+  DetectorOptions detector_options;
+  detector_options.device = options.device;
+  detector_options.threads = options.threads;
+  detector_options.blur_sigma_px = options.blur_sigma_px;
+  detector_options.rpn = options.detect;
+  Detector detector = Detector::Open(options.model_dir, detector_options);
+  STEREODET_CHECK(detector.family() == "rpn")
+      << options.model_dir.string() << " holds a " << detector.family()
+      << " model, not an rpn one: use `detect " << detector.family() << "` or `detect --model`";
+  const bool geometry = detector.needs().right_image;
 
   const KittiDataset dataset(options.data_root, options.subset);
   const std::vector<std::string> all_ids =
@@ -65,61 +74,39 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
     STEREODET_THROW_IO() << missing.size() << " required files are missing under "
                          << dataset.SubsetDir().string() << ", e.g. " << missing.front();
   }
-  StereoOptions stereo = model.stereo();
-  stereo.blur.sigma_px = options.blur_sigma_px;
-  stereo.blur.mode = BlurMode::kNetworkImage;
 
   DetectRpnSummary summary;
   StageTimes times;
   ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), options.progress);
   for (size_t begin = 0; begin < ids.size(); begin += options.batch_size) {
-    const size_t end = std::min(ids.size(), begin + options.batch_size);
-    const size_t n = end - begin;
-    std::vector<PlanarImage> inputs(n);
-    std::vector<cv::Size> sizes(n);
+    const size_t n = std::min(ids.size(), begin + options.batch_size) - begin;
+    std::vector<StereoFrame> frames(n);
     ParallelFor(
         n,
         [&](size_t i) {
           const FramePaths paths = dataset.Paths(ids[begin + i]);
+          StereoFrame& frame = frames[i];
+          frame.id = ids[begin + i];
+          ScopedStage stage(times, "read");
+          frame.left = ReadColourImage(paths.image_left);
           if (geometry) {
-            RpnGeometry g;
-            {
-              ScopedStage stage(times, "stereo");
-              g = ComputeRpnGeometry(paths, stereo);  // blurs the network's image only
-            }
-            sizes[i] = g.network_image.size();
-            ScopedStage stage(times, "encode");
-            inputs[i] =
-                PrepareRpnInput(g.network_image, g.depth_code, g.height_code, config, stereo.depth);
-            return;
+            frame.right = ReadColourImage(paths.image_right);
+            CheckStereoPairSize(frame.left, frame.right, paths.image_left, paths.image_right);
+            CheckImageFitsMatcher(detector.stereo()->disparity, frame.left.size(),
+                                  paths.image_left);
+            frame.calib = ReadCalibration(paths.calib);
           }
-          cv::Mat image;
-          {
-            ScopedStage stage(times, "read");
-            image = ReadColourImage(paths.image_left);
-          }
-          sizes[i] = image.size();
-          if (options.blur_sigma_px > 0.0) {
-            ScopedStage stage(times, "blur");
-            image = GaussianBlurImage(image, options.blur_sigma_px);
-          }
-          ScopedStage stage(times, "encode");
-          inputs[i] = PrepareRpnInput(image, {}, {}, config);
         },
         options.threads);
-    std::vector<std::vector<ScoredBox>> boxes;
-    {
-      ScopedStage stage(times, "network");
-      boxes = model.Detect(inputs, options.detect);
-    }
+    const std::vector<DetectResult> results = detector.DetectBatch(frames);
     ScopedStage stage(times, "write");
-    for (size_t i = 0; i < n; ++i) {
-      const double sx = static_cast<double>(sizes[i].width) / config.input_width;
-      const double sy = static_cast<double>(sizes[i].height) / config.input_height;
-      const std::vector<Object> objects =
-          ToKittiDetections(boxes[i], config.classes, sx, sy, sizes[i].width, sizes[i].height);
-      WriteObjects(out.path() / (ids[begin + i] + ".txt"), objects);
-      summary.detections += static_cast<int64_t>(objects.size());
+    for (const DetectResult& r : results) {
+      times.Add("stereo", r.times.stereo_s);
+      times.Add("encode", r.times.encode_s);
+      times.Add("network", r.times.network_s);
+      times.Add("decode", r.times.decode_s);
+      WriteObjects(out.path() / (r.id + ".txt"), r.objects);
+      summary.detections += static_cast<int64_t>(r.objects.size());
     }
     progress.Add(static_cast<int64_t>(n));
   }
@@ -137,11 +124,10 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
       R"({{"model_weights_fnv1a64": "{}", "input": "{}", "blur_sigma_px": {}, )"
       R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, )"
       R"("proposals_before_nms": {}, "proposals": {}, "max_frames": {}, "device": "{}"}})",
-      HashFileHex(options.model_dir / "model.pt"), RpnInputName(config.input),
-      options.blur_sigma_px, options.detect.decode.score_threshold,
-      options.detect.decode.nms.iou_threshold, options.detect.decode.nms.max_detections,
-      options.detect.proposals.pre_nms_top_n, options.detect.proposals.post_nms_top_n,
-      options.max_frames, options.device);
+      HashFileHex(options.model_dir / "model.pt"), detector.input(), options.blur_sigma_px,
+      options.detect.decode.score_threshold, options.detect.decode.nms.iou_threshold,
+      options.detect.decode.nms.max_detections, options.detect.proposals.pre_nms_top_n,
+      options.detect.proposals.post_nms_top_n, options.max_frames, options.device);
   CommitDetectionFolder(out, std::move(manifest), ids, all_ids, options.shard, options.batch_size);
   summary.frames = static_cast<int>(ids.size());
   summary.seconds = timer.ElapsedSeconds();
