@@ -15,6 +15,8 @@
 #define STEREODET_CLI_COMMANDS_H_
 
 #include <CLI/CLI.hpp>
+#include <charconv>
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
@@ -81,6 +83,27 @@ inline CLI::Option* AddShardOption(CLI::App* cmd, Shard* shard) {
           "only shard K/N (K = 0..N-1) of the frames: the K-th of N contiguous ranges of the frame "
           "list (docs/scale.md)")
       ->default_str(ShardName(*shard));
+}
+
+// Adds `--seed N` to `cmd`, parsed into `seed` as a whole number in [0, 2^64 - 1]: a larger one is
+// a usage error naming the flag (CLI11's own conversion saturates it to 2^64 - 1, silently the seed
+// of another data set or training).
+inline CLI::Option* AddSeedOption(CLI::App* cmd, uint64_t* seed, const std::string& description) {
+  return cmd
+      ->add_option_function<std::string>(
+          "--seed",
+          [seed](const std::string& text) {
+            uint64_t value = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+            if (text.empty() || ec != std::errc() || end != text.data() + text.size()) {
+              throw CLI::ValidationError(
+                  "--seed",
+                  "expected a whole number from 0 to 18446744073709551615, got '" + text + "'");
+            }
+            *seed = value;
+          },
+          description)
+      ->default_str(std::to_string(*seed));
 }
 
 // The command line of this process (/proc/self/cmdline), arguments joined by spaces, those with

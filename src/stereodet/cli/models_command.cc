@@ -79,8 +79,7 @@ void AddTrainingFlags(CLI::App* ts, TrainOptions& t) {
   ts->add_flag("--resume", t.resume, "continue from MODEL_DIR/checkpoint.pt if present");
   ts->add_flag("--force", t.force,
                "train a new model over one already in MODEL_DIR (its files are removed)");
-  ts->add_option("--seed", t.seed, "seed of weights, data order, augmentation")
-      ->capture_default_str();
+  AddSeedOption(ts, &t.seed, "seed of weights, data order, augmentation");
   ts->add_option("--threads", t.threads, "threads (0 = all cores)")->capture_default_str();
   ts->add_option("--device", t.device, "cpu or cuda")
       ->check(CLI::IsMember({"cpu", "cuda"}))

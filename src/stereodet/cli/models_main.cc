@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <opencv2/core/utils/logger.hpp>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -48,6 +49,8 @@ int main(int argc, char** argv) {
       {"train", AddModelsCommand},  // adds train and detect
       {"detect", AddModelsCommand},
   };
+  // OpenCV's own warnings would print before our error line, which names the file: ours suffices.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   std::vector<std::string> args = WithModelFamily(argc, argv);
   std::vector<char*> c_args;
   for (std::string& arg : args) c_args.push_back(arg.data());

@@ -17,7 +17,7 @@ void AddSynthCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("synth", CommandDescription("synth"));
   cmd->add_option("--out", options->out, "output folder (the data set root)")->required();
   cmd->add_option("--frames", options->frames, "number of frames")->capture_default_str();
-  cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();
+  AddSeedOption(cmd, &options->seed, "random seed");
   cmd->add_option("--width", options->synth.width, "image width, px")->capture_default_str();
   cmd->add_option("--height", options->synth.height, "image height, px")->capture_default_str();
   cmd->add_option("--val-fraction", options->val_fraction, "share of frames in the val split")

@@ -20,7 +20,8 @@ cv::Mat ReadImage(const std::filesystem::path& path, int imread_flags, const cha
   } catch (const cv::Exception& e) {
     STEREODET_THROW_IO() << "cannot read " << what << " " << path.string() << ": " << e.err;
   }
-  STEREODET_CHECK_IO(!image.empty()) << "cannot read " << what << " " << path.string();
+  STEREODET_CHECK_IO(!image.empty()) << "cannot read " << what << " " << path.string()
+                                     << ": not a decodable image (empty, truncated or corrupt)";
   return image;
 }
 

@@ -68,7 +68,9 @@ TEST(ImageIoTest, MissingAndGarbageFilesNameThePath) {
     EXPECT_THAT(e.what(), HasSubstr("cannot read image " + missing));
   }
   WriteFileAtomically(temp / "zero.png", "");
-  EXPECT_THROW(ReadColourImage(temp / "zero.png"), std::runtime_error);
+  EXPECT_THAT([&] { ReadColourImage(temp / "zero.png"); },
+              ::testing::ThrowsMessage<std::runtime_error>(
+                  HasSubstr("zero.png: not a decodable image (empty, truncated or corrupt)")));
 }
 
 TEST(ImageIoTest, AFifoInPlaceOfAnImageIsAnErrorNotAHang) {
