@@ -6,6 +6,7 @@
 #include <set>
 #include <utility>
 
+#include "stereodet/kitti/label_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -135,6 +136,20 @@ std::vector<std::string> DetectFrameList(const KittiDataset& dataset, const fs::
       << " lists no frames: nothing to detect";
   if (max_frames > 0 && static_cast<int>(ids.size()) > max_frames) ids.resize(max_frames);
   return ids;
+}
+
+int64_t WriteDetectResults(const std::vector<DetectResult>& results, const fs::path& dir,
+                           StageTimes& times) {
+  int64_t objects = 0;
+  for (const DetectResult& r : results) {
+    times.Add("stereo", r.times.stereo_s);
+    times.Add("encode", r.times.encode_s);
+    times.Add("network", r.times.network_s);
+    times.Add("decode", r.times.decode_s);
+    WriteObjects(dir / (r.id + ".txt"), r.objects);
+    objects += static_cast<int64_t>(r.objects.size());
+  }
+  return objects;
 }
 
 void CommitDetectionFolder(StagedFolder& out, RunManifest manifest,

@@ -26,9 +26,11 @@
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
+#include "stereodet/models/detector.h"
 #include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/shard.h"
+#include "stereodet/util/timer.h"
 
 namespace stereodet {
 
@@ -57,6 +59,11 @@ std::vector<std::string> ShardFrames(const std::vector<std::string>& ids, const 
 // when it lists no frame (nothing would be detected, and an empty folder would look like a run).
 std::vector<std::string> DetectFrameList(const KittiDataset& dataset,
                                          const std::filesystem::path& split, int max_frames);
+
+// Writes each result's objects to DIR/ID.txt (KITTI detection files) and adds its stage times to
+// `times` ("stereo", "encode", "network", "decode"). Returns the number of objects written.
+int64_t WriteDetectResults(const std::vector<DetectResult>& results,
+                           const std::filesystem::path& dir, StageTimes& times);
 
 // Writes DIR/detect_shard.json atomically: {"format": 1, "tool", "shard": "K/N", "batch_size",
 // "list_frames", "list_fnv1a64"}.

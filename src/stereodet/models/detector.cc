@@ -447,4 +447,14 @@ DetectResult Detector::Detect(const StereoFrame& frame) {
   return std::move(results.front());
 }
 
+Detector OpenDetectorOfFamily(const fs::path& model_dir, const DetectorOptions& options,
+                              const std::string& family) {
+  Detector detector = Detector::Open(model_dir, options);
+  STEREODET_CHECK(detector.family() == family)
+      << model_dir.string() << " holds a " << detector.family() << " model, not "
+      << (family == "det3d" ? "a " : "an ") << family << " one: use `detect " << detector.family()
+      << "` or `detect --model`";
+  return detector;
+}
+
 }  // namespace stereodet

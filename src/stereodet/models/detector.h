@@ -148,6 +148,12 @@ class Detector {
   std::unique_ptr<Impl> impl_;
 };
 
+// Detector::Open for a command of one family (`detect ssd`): a model of another family is refused
+// naming both and the command that runs it ("models/det3d-lidar holds a det3d model, not an ssd
+// one: use `detect det3d` or `detect --model`").
+Detector OpenDetectorOfFamily(const std::filesystem::path& model_dir,
+                              const DetectorOptions& options, const std::string& family);
+
 // The family a model folder holds: model.json's "architecture" ("ssd" when absent: the first
 // models did not record it). Throws std::runtime_error / ParseError naming model.json.
 std::string ModelFamily(const std::filesystem::path& model_dir);

@@ -63,36 +63,29 @@ std::vector<StereoFrame> LoadFrames(const Detector& detector) {
   return frames;
 }
 
+// The options every family's batch command shares, for `model`, `batch_size` frames a pass.
+template <typename Options>
+Options BatchOptions(const fs::path& model, int batch_size, const fs::path& out) {
+  Options o;
+  o.model_dir = model;
+  o.data_root = DataDir();
+  o.out_dir = out;
+  o.batch_size = batch_size;
+  o.threads = 2;
+  o.progress.stream = nullptr;
+  return o;
+}
+
 // The batch command's detection folder for `model`, `batch_size` frames a forward pass.
 fs::path RunBatchCommand(const fs::path& model, const std::string& family, int batch_size,
                          const fs::path& out) {
   if (family == "ssd") {
-    DetectSsdOptions o;
-    o.model_dir = model;
-    o.data_root = DataDir();
-    o.out_dir = out;
-    o.batch_size = batch_size;
-    o.threads = 2;
-    o.progress.stream = nullptr;
-    DetectSsd(o);
+    DetectSsd(BatchOptions<DetectSsdOptions>(model, batch_size, out));
   } else if (family == "rpn") {
-    DetectRpnOptions o;
-    o.model_dir = model;
-    o.data_root = DataDir();
-    o.out_dir = out;
-    o.batch_size = batch_size;
-    o.threads = 2;
-    o.progress.stream = nullptr;
-    DetectRpn(o);
+    DetectRpn(BatchOptions<DetectRpnOptions>(model, batch_size, out));
   } else {
-    DetectDet3dOptions o;
-    o.model_dir = model;
-    o.data_root = DataDir();
-    o.out_dir = out;
-    o.batch_size = batch_size;
-    o.threads = 2;
-    o.progress.stream = nullptr;
-    if (fs::exists(PointsDir())) o.points_dir = PointsDir();
+    DetectDet3dOptions o = BatchOptions<DetectDet3dOptions>(model, batch_size, out);
+    o.points_dir = PointsDir();
     DetectDet3d(o);
   }
   return out;

@@ -128,10 +128,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   detector_options.blur_sigma_px = options.blur_sigma_px;
   detector_options.stereo = options.stereo;
   detector_options.ssd = options.decode;
-  Detector detector = Detector::Open(options.model_dir, detector_options);
-  STEREODET_CHECK(detector.family() == "ssd")
-      << options.model_dir.string() << " holds a " << detector.family()
-      << " model, not an ssd one: use `detect " << detector.family() << "` or `detect --model`";
+  Detector detector = OpenDetectorOfFamily(options.model_dir, detector_options, "ssd");
   // The settings the heights are made with (the model's or the flags', with the blur).
   const std::optional<StereoOptions> stereo = detector.stereo();
   const bool height = stereo.has_value();
@@ -214,14 +211,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   auto consume = [&](int k) {
     const std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
     ScopedStage stage(times, "write");
-    for (const DetectResult& r : results) {
-      times.Add("stereo", r.times.stereo_s);
-      times.Add("encode", r.times.encode_s);
-      times.Add("network", r.times.network_s);
-      times.Add("decode", r.times.decode_s);
-      WriteObjects(out.path() / (r.id + ".txt"), r.objects);
-      summary.detections += static_cast<int64_t>(r.objects.size());
-    }
+    summary.detections += WriteDetectResults(results, out.path(), times);
     progress.Add(static_cast<int64_t>(results.size()));
   };
   RunTwoStagePipeline(num_batches, options.pipeline, prepare, consume);

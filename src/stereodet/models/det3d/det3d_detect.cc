@@ -53,10 +53,7 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
   detector_options.threads = options.threads;
   detector_options.det3d = options.decode;
   detector_options.det3d_points = options.filter;
-  Detector detector = Detector::Open(options.model_dir, detector_options);
-  STEREODET_CHECK(detector.family() == "det3d")
-      << options.model_dir.string() << " holds a " << detector.family()
-      << " model, not a det3d one: use `detect " << detector.family() << "` or `detect --model`";
+  Detector detector = OpenDetectorOfFamily(options.model_dir, detector_options, "det3d");
   const PointSource source = *ParsePointSource(detector.input());
   STEREODET_CHECK(source != PointSource::kStereo || !options.points_dir.empty())
       << options.model_dir.string()

@@ -55,10 +55,7 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
   detector_options.threads = options.threads;
   detector_options.blur_sigma_px = options.blur_sigma_px;
   detector_options.rpn = options.detect;
-  Detector detector = Detector::Open(options.model_dir, detector_options);
-  STEREODET_CHECK(detector.family() == "rpn")
-      << options.model_dir.string() << " holds a " << detector.family()
-      << " model, not an rpn one: use `detect " << detector.family() << "` or `detect --model`";
+  Detector detector = OpenDetectorOfFamily(options.model_dir, detector_options, "rpn");
   const bool geometry = detector.needs().right_image;
 
   const KittiDataset dataset(options.data_root, options.subset);
@@ -100,14 +97,7 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
         options.threads);
     const std::vector<DetectResult> results = detector.DetectBatch(frames);
     ScopedStage stage(times, "write");
-    for (const DetectResult& r : results) {
-      times.Add("stereo", r.times.stereo_s);
-      times.Add("encode", r.times.encode_s);
-      times.Add("network", r.times.network_s);
-      times.Add("decode", r.times.decode_s);
-      WriteObjects(out.path() / (r.id + ".txt"), r.objects);
-      summary.detections += static_cast<int64_t>(r.objects.size());
-    }
+    summary.detections += WriteDetectResults(results, out.path(), times);
     progress.Add(static_cast<int64_t>(n));
   }
   progress.Finish();
