@@ -16,18 +16,22 @@ mkdir -p "$work/kitti"
 cp -r "$prov/data/training" "$prov/data/ImageSets" "$work/kitti/"  # a download: no marker
 mkdir -p "$work/home" && echo precious > "$work/home/thesis.tex"
 cp -r "$prov/model" "$work/model"
-"$bin" detect ssd --model "$work/model" --data "$prov/data" --split val --out "$work/detect" \
-  --threads 1 $q
+# Each command's own folder; run again at the end, each replaces or resumes its own.
+own_folders() {
+  "$bin" detect ssd --model "$work/model" --data "$prov/data" --split val --out "$work/detect" \
+    --threads 1 $q
+  "$bin" eval --gt "$prov/data" --split val --det "$work/detect" --out "$work/eval" > /dev/null
+  "$bin" report "$work/eval" --out "$work/report" > /dev/null
+  "$bin" stereo --data "$prov/data" --split val --out "$work/stereo" --encode points \
+    --num-disparities 32 $q
+  "$bin" synth --out "$work/synth" --frames 1 --width 160 --height 48 --seed 3 --threads 1 $q \
+    > /dev/null
+}
+own_folders
 for k in 0 1; do
   "$bin" detect ssd --model "$work/model" --data "$prov/data" --split "$prov/data/ImageSets/trainval.txt" \
     --shard $k/2 --batch-size 1 --out "$work/shard$k" --threads 1 $q
 done
-"$bin" eval --gt "$prov/data" --split val --det "$work/detect" --out "$work/eval" > /dev/null
-"$bin" report "$work/eval" --out "$work/report" > /dev/null
-"$bin" stereo --data "$prov/data" --split val --out "$work/stereo" --encode points \
-  --num-disparities 32 $q
-"$bin" synth --out "$work/synth" --frames 1 --width 160 --height 48 --seed 3 --threads 1 $q \
-  > /dev/null
 
 snapshot() {  # every file under $1 with its bytes' hash, hidden ones included
   (cd "$1" && find . -type f -exec md5sum {} + | LC_ALL=C sort)
@@ -77,13 +81,6 @@ try eval eval --gt "$prov/data" --split val --det "$work/detect" --out OUT
 try report report "$work/eval" --out OUT
 
 # Each command replaces or resumes its own folder.
-"$bin" detect ssd --model "$work/model" --data "$prov/data" --split val --out "$work/detect" \
-  --threads 1 $q
-"$bin" eval --gt "$prov/data" --split val --det "$work/detect" --out "$work/eval" > /dev/null
-"$bin" report "$work/eval" --out "$work/report" > /dev/null
-"$bin" stereo --data "$prov/data" --split val --out "$work/stereo" --encode points \
-  --num-disparities 32 $q
-"$bin" synth --out "$work/synth" --frames 1 --width 160 --height 48 --seed 3 --threads 1 $q \
-  > /dev/null
+own_folders
 rm -rf "$work"
 echo ok
