@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cerrno>
 #include <charconv>
+#include <chrono>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -49,6 +50,19 @@ std::optional<pid_t> TemporaryPid(std::string_view name, std::string_view kind) 
 bool IsOwnTemporary(std::string_view name) { return TemporaryPid(name, "tmp").has_value(); }
 
 bool ProcessRuns(pid_t pid) { return ::kill(pid, 0) == 0 || errno == EPERM; }
+
+// A leftover is stale when its PID runs no process here and nothing was written into it for this
+// long: a run on another host sharing the folder (a Dask cluster on a shared file system) has PIDs
+// that mean nothing here, but a live run keeps writing (a staging folder's time changes with each
+// file added to it; a temporary file is written in one go).
+constexpr auto kStaleAfter = std::chrono::minutes(10);
+
+bool IsStale(const fs::path& path, pid_t pid) {
+  if (ProcessRuns(pid)) return false;
+  std::error_code ec;
+  const fs::file_time_type written = fs::last_write_time(path, ec);
+  return !ec && fs::file_time_type::clock::now() - written > kStaleAfter;
+}
 
 bool IsFile(const fs::path& p) {
   std::error_code ec;
@@ -255,7 +269,7 @@ const std::vector<std::string>& DetectionFolderMakers() {
   return makers;
 }
 
-void RemoveStaleTemporaries(const fs::path& dir_in) {
+void RemoveStaleTemporaries(const fs::path& dir_in, bool inside) {
   const fs::path dir = WithoutTrailingSeparator(dir_in);
   std::error_code ec;
   // Siblings: `.NAME.staging-PID-N`, `.NAME.old-PID-N` of this folder.
@@ -267,19 +281,19 @@ void RemoveStaleTemporaries(const fs::path& dir_in) {
     const std::string_view rest = std::string_view(name).substr(prefix.size() - 1);
     for (const char* kind : {"staging", "old"}) {
       const std::optional<pid_t> pid = TemporaryPid(rest, kind);
-      if (pid && !ProcessRuns(*pid)) {
+      if (pid && IsStale(it->path(), *pid)) {
         std::error_code ignored;
         fs::remove_all(it->path(), ignored);
       }
     }
   }
   // Inside: `.FILE.tmp-PID-N[.EXT]` at any depth (stereo and synth write into subfolders).
-  if (!IsFolder(dir)) return;
+  if (!inside || !IsFolder(dir)) return;
   std::vector<fs::path> stale;
   ec.clear();
   for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::optional<pid_t> pid = TemporaryPid(it->path().filename().string(), "tmp");
-    if (pid && !ProcessRuns(*pid)) stale.push_back(it->path());
+    if (pid && IsStale(it->path(), *pid)) stale.push_back(it->path());
   }
   for (const fs::path& p : stale) {
     std::error_code ignored;
@@ -305,7 +319,8 @@ StagedFolder::StagedFolder(fs::path final_dir, const std::string& command,
                            const std::vector<std::string>& makers)
     : final_dir_(WithoutTrailingSeparator(std::move(final_dir))) {
   CheckOutputFolderOwner(final_dir_, command, makers);
-  RemoveStaleTemporaries(final_dir_);
+  // Only the siblings: nothing is written inside `final_dir`, which is replaced whole.
+  RemoveStaleTemporaries(final_dir_, /*inside=*/false);
   staging_dir_ = SiblingName(final_dir_, "staging");
   std::error_code ec;
   fs::create_directories(staging_dir_, ec);

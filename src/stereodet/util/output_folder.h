@@ -61,10 +61,12 @@ void CheckOutputFolderOwner(const std::filesystem::path& dir, const std::string&
 const std::vector<std::string>& DetectionFolderMakers();
 
 // Removes the leftovers of runs that died before they could clean up after themselves: hidden
-// siblings `.NAME.staging-PID-N` and `.NAME.old-PID-N` of `dir`, and `.FILE.tmp-PID-N` files inside
-// it, whose process PID no longer runs. Best effort: never throws. A run of our own still going
-// (its PID alive) is left alone.
-void RemoveStaleTemporaries(const std::filesystem::path& dir);
+// siblings `.NAME.staging-PID-N` and `.NAME.old-PID-N` of `dir`, and with `inside` the
+// `.FILE.tmp-PID-N` files at any depth inside it, whose process PID runs no more and which nothing
+// has written into for 10 minutes (a run on another host sharing the folder has PIDs that mean
+// nothing here). Best effort: never throws. A live run (its PID running, or still writing) is left
+// alone.
+void RemoveStaleTemporaries(const std::filesystem::path& dir, bool inside = true);
 
 // An output folder written as one run. Files go into a hidden staging folder beside `final_dir`
 // (`.NAME.staging-PID-N`); Commit() puts it in place of `final_dir` with two renames (an existing

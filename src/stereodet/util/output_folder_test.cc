@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <string>
 
@@ -263,6 +264,16 @@ TEST_F(OutputFolderTest, StaleTemporariesOfDeadRunsAreRemovedLiveOnesKept) {
   for (const fs::path& p : {stale_staging / "x", stale_old / "x", live_staging / "x",
                             other_staging / "x", stale_tmp, user_file}) {
     WriteFileAtomically(p, "x");
+  }
+  // Written into a minute ago: a run of another host could still be writing.
+  RemoveStaleTemporaries(out / "");
+  EXPECT_TRUE(fs::exists(stale_staging));
+  EXPECT_TRUE(fs::exists(stale_tmp));
+  // Untouched for an hour: stale.
+  const fs::file_time_type hour_ago = fs::file_time_type::clock::now() - std::chrono::hours(1);
+  for (const fs::path& p :
+       {stale_staging, stale_old, live_staging, other_staging, stale_tmp, user_file}) {
+    fs::last_write_time(p, hour_ago);
   }
   RemoveStaleTemporaries(out / "");
   EXPECT_FALSE(fs::exists(stale_staging));
