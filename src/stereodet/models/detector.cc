@@ -111,7 +111,7 @@ struct Detector::Impl {
 
 namespace {
 
-// The stereo geometry of a frame, its calibration checked against the matcher.
+// The stereo geometry of a frame (its calibration: CheckFrame made sure it has one).
 StereoGeometry GeometryOf(const StereoFrame& frame) {
   return StereoGeometry::FromCalibration(*frame.calib);
 }

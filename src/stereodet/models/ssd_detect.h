@@ -63,7 +63,7 @@ struct DetectSsdSummary {
   int64_t detections = 0;
   double seconds = 0;
   double images_per_second = 0;  // end to end: reading, stereo, encoding, network, writing
-  std::string stage_times;       // StageTimes::Format(): read, stereo, encode, network, write
+  std::string stage_times;  // StageTimes::Format(): read, stereo, encode, network, decode, write
 };
 
 // The stereo settings the model in `model_dir` was trained with (model.json's "stereo", the
