@@ -40,33 +40,6 @@ fs::path LabelDir(const fs::path& p) {
   return p;
 }
 
-// Whether `dir` holds a frame file (NNNNNN.txt) at its top, whatever its kind.
-bool HoldsFrameFiles(const fs::path& dir) {
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    std::string_view stem;
-    if (name.size() > 4 && name.compare(name.size() - 4, 4, ".txt") == 0 && name[0] != '.') {
-      stem = std::string_view(name).substr(0, name.size() - 4);
-      if (IsFrameId(stem)) return true;
-    }
-  }
-  return false;
-}
-
-fs::path DetectionDir(const fs::path& p) {
-  if (fs::is_directory(p / "data")) {
-    // The devkit's layout (DIR/data/ID.txt) and a flat one in the same folder: which is meant
-    // cannot be told, and reading one silently would evaluate the wrong detections.
-    STEREODET_CHECK_IO(!HoldsFrameFiles(p))
-        << "--det: " << p.string() << " holds detection files both at its top and in data/ "
-        << "(the devkit's layout); give the folder that holds the ones to evaluate";
-    return p / "data";
-  }
-  STEREODET_CHECK_IO(fs::is_directory(p)) << "--det: " << p.string() << " is not a folder";
-  return p;
-}
-
 // A frame's file name that is not a regular file (a folder, a FIFO, a link to nothing or to
 // itself) would count as "no file" for its frame, silently: it is an error naming it.
 [[noreturn]] void ThrowNotARegularFrameFile(const std::string& path) {
@@ -83,6 +56,30 @@ bool TxtStem(std::string_view name, std::string_view* stem) {
   }
   *stem = name.substr(0, name.size() - kTxt.size());
   return true;
+}
+
+// Whether `dir` holds a frame file (NNNNNN.txt) at its top, whatever its kind.
+bool HoldsFrameFiles(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::string_view stem;
+    if (TxtStem(name, &stem) && IsFrameId(stem)) return true;
+  }
+  return false;
+}
+
+fs::path DetectionDir(const fs::path& p) {
+  if (fs::is_directory(p / "data")) {
+    // The devkit's layout (DIR/data/ID.txt) and a flat one in the same folder: which is meant
+    // cannot be told, and reading one silently would evaluate the wrong detections.
+    STEREODET_CHECK_IO(!HoldsFrameFiles(p))
+        << "--det: " << p.string() << " holds detection files both at its top and in data/ "
+        << "(the devkit's layout); give the folder that holds the ones to evaluate";
+    return p / "data";
+  }
+  STEREODET_CHECK_IO(fs::is_directory(p)) << "--det: " << p.string() << " is not a folder";
+  return p;
 }
 
 // FrameStems through std::filesystem: for the folders readdir() cannot read, so that the error is
