@@ -42,7 +42,7 @@ fs::path LabelDir(const fs::path& p) {
 
 // A frame's file name that is not a regular file (a folder, a FIFO, a link to nothing or to
 // itself) would count as "no file" for its frame, silently: it is an error naming it.
-[[noreturn]] void ThrowNotARegularFrameFile(const std::string& path) {
+void ThrowNotARegularFrameFile(const std::string& path) {
   STEREODET_THROW_IO() << path << " is not a regular file (a folder, a FIFO, or a link to "
                        << "nothing); a frame's file must be one";
 }

@@ -39,7 +39,6 @@ void DetectDet3dOptions::Check() const {
 
 DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
   options.Check();
-  const ComputeDevice device = ResolveComputeDevice(options.device);
   const Timer timer;
   std::vector<std::pair<std::string, std::filesystem::path>> inputs = {
       {"--data", options.data_root / options.subset},

@@ -43,7 +43,6 @@ void DetectRpnOptions::Check() const {
 
 DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
   options.Check();
-  const ComputeDevice device = ResolveComputeDevice(options.device);
   const Timer timer;
   CheckOutputDoesNotOverlapInputs("--out", options.out_dir,
                                   {{"--data", options.data_root / options.subset},
