@@ -123,9 +123,10 @@ void CheckPair(const StereoFrame& frame, const DisparityOptions& disparity) {
   CheckImageFitsMatcher(disparity, frame.left.size(), left);
 }
 
-// --- ssd ---------------------------------------------------------------------------------------
+// --- the image families (ssd, rpn) --------------------------------------------------------------
 
-struct SsdBatch : Detector::PreparedBatch {
+// Their prepared batch: the network inputs and each frame's image size.
+struct ImageBatch : Detector::PreparedBatch {
   std::vector<PlanarImage> inputs;
   std::vector<cv::Size> sizes;
   void Resize(size_t n) {
@@ -133,6 +134,26 @@ struct SsdBatch : Detector::PreparedBatch {
     sizes.resize(n);
   }
 };
+
+// A 2D network's boxes (in input_width x input_height px) as KITTI objects in each frame's image
+// px; the batch's network time `network_s` is shared out over its frames.
+void DecodeImageBatch(ImageBatch& batch, const std::vector<std::vector<ScoredBox>>& boxes,
+                      const std::vector<std::string>& classes, int input_width, int input_height,
+                      double network_s) {
+  const double network_s_per_frame = network_s / std::max<size_t>(1, batch.inputs.size());
+  for (size_t i = 0; i < batch.inputs.size(); ++i) {
+    const Timer timer;
+    const cv::Size size = batch.sizes[i];
+    const double sx = static_cast<double>(size.width) / input_width;
+    const double sy = static_cast<double>(size.height) / input_height;
+    batch.results[i].objects =
+        ToKittiDetections(boxes[i], classes, sx, sy, size.width, size.height);
+    batch.results[i].times.network_s = network_s_per_frame;
+    batch.results[i].times.decode_s = timer.ElapsedSeconds();
+  }
+}
+
+// --- ssd ---------------------------------------------------------------------------------------
 
 struct SsdImpl : Detector::Impl {
   SsdModel model;
@@ -149,7 +170,7 @@ struct SsdImpl : Detector::Impl {
   std::unique_ptr<Detector::PreparedBatch> Prepare(
       const std::vector<StereoFrame>& frames) const override {
     const SsdConfig& config = model.config();
-    return PrepareEach<SsdBatch>(frames, [&](size_t i, SsdBatch& batch) {
+    return PrepareEach<ImageBatch>(frames, [&](size_t i, ImageBatch& batch) {
       const StereoFrame& frame = frames[i];
       DetectStageTimes& times = batch.results[i].times;
       batch.sizes[i] = frame.left.size();
@@ -192,34 +213,16 @@ struct SsdImpl : Detector::Impl {
   }
 
   void Run(Detector::PreparedBatch& prepared) override {
-    SsdBatch& batch = static_cast<SsdBatch&>(prepared);
+    ImageBatch& batch = static_cast<ImageBatch&>(prepared);
     const SsdConfig& config = model.config();
-    Timer timer;
+    const Timer timer;
     const std::vector<std::vector<ScoredBox>> boxes = model.Detect(batch.inputs, options.ssd);
-    const double network_s = timer.ElapsedSeconds() / std::max<size_t>(1, batch.inputs.size());
-    for (size_t i = 0; i < batch.inputs.size(); ++i) {
-      timer.Restart();
-      const cv::Size size = batch.sizes[i];
-      const double sx = static_cast<double>(size.width) / config.InputWidth();
-      const double sy = static_cast<double>(size.height) / config.InputHeight();
-      batch.results[i].objects =
-          ToKittiDetections(boxes[i], config.classes, sx, sy, size.width, size.height);
-      batch.results[i].times.network_s = network_s;
-      batch.results[i].times.decode_s = timer.ElapsedSeconds();
-    }
+    DecodeImageBatch(batch, boxes, config.classes, config.InputWidth(), config.InputHeight(),
+                     timer.ElapsedSeconds());
   }
 };
 
 // --- rpn ---------------------------------------------------------------------------------------
-
-struct RpnBatch : Detector::PreparedBatch {
-  std::vector<PlanarImage> inputs;
-  std::vector<cv::Size> sizes;
-  void Resize(size_t n) {
-    inputs.resize(n);
-    sizes.resize(n);
-  }
-};
 
 struct RpnImpl : Detector::Impl {
   RpnModel model;
@@ -236,7 +239,7 @@ struct RpnImpl : Detector::Impl {
   std::unique_ptr<Detector::PreparedBatch> Prepare(
       const std::vector<StereoFrame>& frames) const override {
     const RpnConfig& config = model.config();
-    return PrepareEach<RpnBatch>(frames, [&](size_t i, RpnBatch& batch) {
+    return PrepareEach<ImageBatch>(frames, [&](size_t i, ImageBatch& batch) {
       const StereoFrame& frame = frames[i];
       DetectStageTimes& times = batch.results[i].times;
       Timer timer;
@@ -265,21 +268,12 @@ struct RpnImpl : Detector::Impl {
   }
 
   void Run(Detector::PreparedBatch& prepared) override {
-    RpnBatch& batch = static_cast<RpnBatch&>(prepared);
+    ImageBatch& batch = static_cast<ImageBatch&>(prepared);
     const RpnConfig& config = model.config();
-    Timer timer;
+    const Timer timer;
     const std::vector<std::vector<ScoredBox>> boxes = model.Detect(batch.inputs, options.rpn);
-    const double network_s = timer.ElapsedSeconds() / std::max<size_t>(1, batch.inputs.size());
-    for (size_t i = 0; i < batch.inputs.size(); ++i) {
-      timer.Restart();
-      const cv::Size size = batch.sizes[i];
-      const double sx = static_cast<double>(size.width) / config.input_width;
-      const double sy = static_cast<double>(size.height) / config.input_height;
-      batch.results[i].objects =
-          ToKittiDetections(boxes[i], config.classes, sx, sy, size.width, size.height);
-      batch.results[i].times.network_s = network_s;
-      batch.results[i].times.decode_s = timer.ElapsedSeconds();
-    }
+    DecodeImageBatch(batch, boxes, config.classes, config.input_width, config.input_height,
+                     timer.ElapsedSeconds());
   }
 };
 

@@ -170,9 +170,8 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   std::unique_ptr<Detector::PreparedBatch> slots[2];
   const size_t batch_size = static_cast<size_t>(options.batch_size);
   const int num_batches = static_cast<int>((ids.size() + batch_size - 1) / batch_size);
-  auto batch_begin = [&](int k) { return static_cast<size_t>(k) * batch_size; };
   auto prepare = [&](int k) {
-    const size_t begin = batch_begin(k);
+    const size_t begin = static_cast<size_t>(k) * batch_size;
     const size_t n = std::min(ids.size(), begin + batch_size) - begin;
     std::vector<StereoFrame> frames(n);
     ParallelFor(
