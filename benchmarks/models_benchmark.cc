@@ -18,9 +18,9 @@
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/det3d/det3d_model.h"
 #include "stereodet/models/det3d/gt_database.h"
-#include "stereodet/models/input_encoding.h"
 #include "stereodet/models/rpn/rpn_model.h"
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd/input_encoding.h"
+#include "stereodet/models/ssd/ssd_model.h"
 
 namespace stereodet {
 namespace {

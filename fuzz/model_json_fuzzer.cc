@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd/ssd_model.h"
 #include "stereodet/util/check.h"
 
 namespace {

@@ -1,8 +1,8 @@
 // stereodet._core's evaluation: options, frames from annotation dicts or folders, Evaluate(), the
 // result object (attributes, the CLI's results.json as a dict, flat rows, per-detection records
 // as numpy arrays), OpenPCDet's get_official_eval_result, the filter sweep and compare. Folders go
-// through the library's evaluation calls (report/evaluation.h: RunEvaluation, RunEvaluationSweep,
-// RunEvaluationCompare), so that a results folder is the CLI's.
+// through the library's evaluation calls (pipelines/evaluation.h: RunEvaluation,
+// RunEvaluationSweep, RunEvaluationCompare), so that a results folder is the CLI's.
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
@@ -22,8 +22,8 @@
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/filter.h"
 #include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/eval_report.h"
-#include "stereodet/report/evaluation.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/output_folder.h"
 #include "stereodet/util/version.h"

@@ -12,7 +12,7 @@
 Annotation dicts are those of stereodet.kitti (OpenPCDet's and mmdetection3d's layout, dimensions
 l, h, w): gt_annos and dt_annos are lists of them, one per frame, in the same order. The numbers
 are those of `stereodet eval` on the same data, to the last digit (docs/metrics.md defines them):
-folders go through the CLI's library calls (report/evaluation.h), and the options of every overlap
+folders go through the CLI's library calls (pipelines/evaluation.h), and the options of every overlap
 set come from its OverlapSetRuns.
 """
 

@@ -12,7 +12,7 @@
 //   stereodet eval merge SHARD_DIR... --out DIR ...  (the shards' evaluation flags)
 //   stereodet eval sweep|compare --shards SHARD_DIR... [--shards-b SHARD_DIR...] ...  (the frames
 //   from eval shards instead of --gt/--det)
-// Each is one library call (report/evaluation.h: RunEvaluation, RunEvaluationSweep,
+// Each is one library call (pipelines/evaluation.h: RunEvaluation, RunEvaluationSweep,
 // RunEvaluationCompare); this file binds the flags to their options and prints the results.
 #include <fmt/format.h>
 
@@ -29,9 +29,9 @@
 #include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/bootstrap_report.h"
 #include "stereodet/report/eval_report.h"
-#include "stereodet/report/evaluation.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/strings.h"
 #include "stereodet/util/version.h"

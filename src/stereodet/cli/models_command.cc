@@ -26,9 +26,9 @@
 #include "stereodet/models/device.h"
 #include "stereodet/models/rpn/rpn_detect.h"
 #include "stereodet/models/rpn/rpn_train.h"
-#include "stereodet/models/ssd.h"
-#include "stereodet/models/ssd_detect.h"
-#include "stereodet/models/ssd_train.h"
+#include "stereodet/models/ssd/ssd_detect.h"
+#include "stereodet/models/ssd/ssd_model.h"
+#include "stereodet/models/ssd/ssd_train.h"
 #include "stereodet/models/train_common.h"
 #include "stereodet/util/check.h"
 

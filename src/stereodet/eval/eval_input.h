@@ -44,7 +44,7 @@ struct EvalInputOptions {
 };
 
 // The bytes one frame's evaluation reads: what `eval --shard` keeps so that `eval merge` can
-// evaluate the frames exactly as one process would (report/evaluation.h).
+// evaluate the frames exactly as one process would (pipelines/evaluation.h).
 struct EvalFrameSource {
   std::string id;
   std::string label_path;  // as LoadEvalFrames named it (in messages and lenient notices)

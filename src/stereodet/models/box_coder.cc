@@ -141,4 +141,30 @@ std::vector<ScoredBox> DecodeDetections(const float* deltas, const float* probab
   return NonMaximumSuppression(candidates, options.nms);
 }
 
+std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
+                                      const std::vector<std::string>& classes, double scale_x,
+                                      double scale_y, int image_width, int image_height) {
+  std::vector<Object> objects;
+  for (const ScoredBox& b : boxes) {
+    STEREODET_CHECK(b.label >= 1 && b.label <= static_cast<int>(classes.size()))
+        << "detection label " << b.label << " out of range";
+    Object o;
+    o.type = classes[b.label - 1];
+    o.truncated = -1.0;
+    o.occluded = -1;
+    // Rounded to 0.01 px (KITTI's own precision; the files stay short and read back exactly).
+    auto px = [](double v, double hi) {
+      return std::round(std::clamp(v, 0.0, hi) * 100.0) / 100.0;
+    };
+    o.box = {px(b.box.left * scale_x, image_width), px(b.box.top * scale_y, image_height),
+             px(b.box.right * scale_x, image_width), px(b.box.bottom * scale_y, image_height)};
+    if (o.box.Width() <= 0.0 || o.box.Height() <= 0.0) continue;
+    o.SetNot3DEstimated();
+    // Six decimals keep the ranking of all but near-identical scores.
+    o.score = std::round(static_cast<double>(b.score) * 1e6) / 1e6;
+    objects.push_back(o);
+  }
+  return objects;
+}
+
 }  // namespace stereodet

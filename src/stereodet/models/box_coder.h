@@ -7,9 +7,11 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "stereodet/geometry/box.h"
+#include "stereodet/kitti/object.h"
 #include "stereodet/models/default_boxes.h"
 #include "stereodet/models/nms.h"
 
@@ -79,6 +81,15 @@ struct DecodeOptions {
 std::vector<ScoredBox> DecodeDetections(const float* deltas, const float* probabilities,
                                         int num_classes, const std::vector<DefaultBox>& priors,
                                         const DecodeOptions& options);
+
+// Network-input boxes -> KITTI detections in the original image: scaled by (scale_x, scale_y),
+// clipped to [0, image_width] x [0, image_height], rounded to 0.01 px, empty boxes dropped, score
+// rounded to 1e-6, type = classes[label - 1],
+// truncated and occluded -1 (unknown), 3D fields "not estimated" (Object::SetNot3DEstimated), score
+// kept. Order kept (best first).
+std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
+                                      const std::vector<std::string>& classes, double scale_x,
+                                      double scale_y, int image_width, int image_height);
 
 }  // namespace stereodet
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "stereodet/geometry/iou.h"
 
@@ -108,6 +109,23 @@ TEST(BoxCoderTest, DecodeDetectionsFindsTheConfidentBox) {
   EXPECT_DOUBLE_EQ(d[0].box.left, 0.0);
   EXPECT_EQ(d[1].label, 2);
   EXPECT_DOUBLE_EQ(d[1].box.left, 45.0);
+}
+
+TEST(BoxCoderTest, ToKittiDetectionsScalesClipsAndMarks3DUnknown) {
+  const std::vector<ScoredBox> boxes = {{{10, 5, 20, 15}, 0.9f, 2},
+                                        {{-5, -5, 700, 200}, 0.5f, 1},
+                                        {{700, 0, 800, 10}, 0.4f, 1}};  // fully outside
+  const std::vector<Object> d =
+      ToKittiDetections(boxes, {"Car", "Pedestrian"}, 2.0, 2.0, 1242, 375);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].type, "Pedestrian");
+  EXPECT_EQ(d[0].box, (Box2D{20, 10, 40, 30}));
+  EXPECT_NEAR(*d[0].score, 0.9, 1e-6);
+  EXPECT_FALSE(d[0].Has3D());
+  EXPECT_EQ(d[0].alpha, -10.0);
+  EXPECT_EQ(d[1].box, (Box2D{0, 0, 1242, 375}));
+  EXPECT_THROW(ToKittiDetections({{{0, 0, 1, 1}, 0.5f, 3}}, {"Car", "Pedestrian"}, 1, 1, 10, 10),
+               std::invalid_argument);
 }
 
 }  // namespace

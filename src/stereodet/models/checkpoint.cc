@@ -2,6 +2,7 @@
 #include <sstream>
 
 #include "stereodet/models/checkpoint_internal.h"
+#include "stereodet/models/model_json.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -92,18 +93,39 @@ int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module&
   return 0;
 }
 
-std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Module& module) {
+int64_t CountParameters(const torch::nn::Module& module) {
+  int64_t count = 0;
+  for (const auto& p : module.parameters(/*recurse=*/true)) count += p.numel();
+  return count;
+}
+
+void SaveModelFolder(const std::filesystem::path& model_dir, const torch::nn::Module& module,
+                     const std::function<std::string(const std::string& fnv1a64)>& config_json) {
+  std::filesystem::create_directories(model_dir);
   torch::serialize::OutputArchive archive;
   module.save(archive);
   const std::string bytes = SerializeArchive(archive);
-  WriteFileAtomically(path, bytes);
-  return HashHex(Fnv1a64(bytes));
+  WriteFileAtomically(model_dir / kModelWeightsFile, bytes);
+  WriteFileAtomically(model_dir / kModelConfigFile, config_json(HashHex(Fnv1a64(bytes))));
 }
 
-void LoadWeights(const std::filesystem::path& path, const std::string& config_source,
-                 torch::nn::Module& module, const torch::Device& device) {
-  // The bytes through ReadFile (a FIFO or a huge file is refused, not waited on), then LibTorch.
+void LoadModelWeights(const std::filesystem::path& model_dir, const std::string& config_text,
+                      torch::nn::Module& module, const torch::Device& device) {
+  const std::filesystem::path path = model_dir / kModelWeightsFile;
+  const std::string config_source = (model_dir / kModelConfigFile).string();
+  const WeightsRecord record = ReadWeightsRecord(config_text, config_source);
+  STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
+      << "missing weights file " << path.string();
+  // The bytes once, through ReadFile (a FIFO or a huge file is refused, not waited on): hashed,
+  // then handed to LibTorch.
   const std::string bytes = ReadFile(path);
+  if (!record.fnv1a64.empty()) {
+    const std::string hash = HashHex(Fnv1a64(bytes));
+    STEREODET_CHECK_IO(hash == record.fnv1a64)
+        << path.string() << " does not belong to " << config_source << ": its hash is " << hash
+        << ", model.json records " << record.fnv1a64
+        << " (weights of another training?); copy the model folder whole";
+  }
   try {
     torch::serialize::InputArchive archive;
     archive.load_from(bytes.data(), bytes.size(), device);
@@ -128,26 +150,12 @@ void LoadWeights(const std::filesystem::path& path, const std::string& config_so
         << path.string() << " holds non-finite values (NaN or inf) in '" << item.key()
         << "': the training that wrote it diverged, or the file was changed; retrain the model";
   }
-}
-
-void CheckWeightsFile(const std::filesystem::path& weights_path, const std::string& config_source,
-                      const std::string& recorded_fnv1a64) {
-  STEREODET_CHECK_IO(std::filesystem::is_regular_file(weights_path))
-      << "missing weights file " << weights_path.string();
-  if (recorded_fnv1a64.empty()) return;
-  const std::string hash = HashFileHex(weights_path);
-  STEREODET_CHECK_IO(hash == recorded_fnv1a64)
-      << weights_path.string() << " does not belong to " << config_source << ": its hash is "
-      << hash << ", model.json records " << recorded_fnv1a64
-      << " (weights of another training?); copy the model folder whole";
-}
-
-void CheckParameterCount(int64_t count, int64_t recorded, const std::filesystem::path& weights_path,
-                         const std::string& config_source) {
-  if (recorded < 0) return;
-  STEREODET_CHECK_IO(count == recorded)
-      << weights_path.string() << " holds " << count << " parameters, " << config_source
-      << " records " << recorded;
+  if (record.parameters >= 0) {
+    const int64_t count = CountParameters(module);
+    STEREODET_CHECK_IO(count == record.parameters)
+        << path.string() << " holds " << count << " parameters, " << config_source << " records "
+        << record.parameters;
+  }
 }
 
 }  // namespace stereodet::internal

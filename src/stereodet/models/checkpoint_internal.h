@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace stereodet::internal {
@@ -40,23 +41,26 @@ int LoadTrainingCheckpoint(const std::filesystem::path& path, torch::nn::Module&
 // The bytes of a LibTorch archive, a function of its contents alone (the archive's root folder is
 // always "archive", whatever file they go to).
 std::string SerializeArchive(torch::serialize::OutputArchive& archive);
-// Saves `module` to a LibTorch archive at `path` atomically (creating its folder); returns the
-// FNV-1a 64 hash (16 hex digits) of the file written: the same weights give the same file and
-// hash in any process.
-std::string SaveWeights(const std::filesystem::path& path, const torch::nn::Module& module);
-// Loads weights into `module` on `device`; throws std::runtime_error naming both files.
-void LoadWeights(const std::filesystem::path& path, const std::string& config_source,
-                 torch::nn::Module& module, const torch::Device& device = torch::kCPU);
+// The number of scalars in `module`'s parameters (recursively): what model.json's WeightsRecord
+// and each family's ParameterCount() give.
+int64_t CountParameters(const torch::nn::Module& module);
 
-// Checks, before loading, that `weights_path` exists and, when model.json (`config_source`) records
-// a hash (`recorded_fnv1a64` not empty), that the file has it: another training's model.pt of the
-// same shapes would load and detect garbage. A model.json written before hashes were recorded is
-// loaded unchecked. Throws std::runtime_error naming both files.
-void CheckWeightsFile(const std::filesystem::path& weights_path, const std::string& config_source,
-                      const std::string& recorded_fnv1a64);
-// Checks a loaded model's parameter count against model.json's record (none when `recorded` < 0).
-void CheckParameterCount(int64_t count, int64_t recorded, const std::filesystem::path& weights_path,
-                         const std::string& config_source);
+// Writes `module`'s weights to `model_dir`/model.pt, then `config_json(hash)` (the family's
+// model.json text holding the FNV-1a 64 hash of model.pt, 16 hex digits) to `model_dir`/model.json,
+// each atomically; creates the folder. The same weights give the same bytes and hash in any
+// process. model.json is written second: until it is in place it still names the previous weights,
+// and LoadModelWeights refuses the pair rather than mixing them.
+void SaveModelFolder(const std::filesystem::path& model_dir, const torch::nn::Module& module,
+                     const std::function<std::string(const std::string& fnv1a64)>& config_json);
+
+// Loads `model_dir`/model.pt into `module` on `device`, reading the file once. Checks it against
+// model.json's WeightsRecord in `config_text` (a model.json written before hashes or counts were
+// recorded is loaded unchecked on those): its hash (another training's model.pt of the same
+// shapes would load and detect garbage), then the parameter count; and refuses non-finite weights
+// (a diverged training or an edited file), naming the first tensor. Throws std::runtime_error
+// naming model.pt and model.json.
+void LoadModelWeights(const std::filesystem::path& model_dir, const std::string& config_text,
+                      torch::nn::Module& module, const torch::Device& device);
 
 }  // namespace stereodet::internal
 

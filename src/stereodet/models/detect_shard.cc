@@ -1,18 +1,22 @@
 #include "stereodet/models/detect_shard.h"
 
 #include <algorithm>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <utility>
 
+#include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
+#include "stereodet/util/version.h"
 
 namespace stereodet {
 namespace {
@@ -266,6 +270,64 @@ MergeDetectionsResult MergeDetections(const MergeDetectionsOptions& options) {
   result.frames = static_cast<int>(merged.frames.size());
   result.seconds = timer.ElapsedSeconds();
   return result;
+}
+
+void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
+                         const std::function<void(int)>& consume) {
+  if (!overlap) {
+    for (int k = 0; k < num_batches; ++k) {
+      prepare(k);
+      consume(k);
+    }
+    return;
+  }
+  if (num_batches <= 0) return;
+  prepare(0);
+  for (int k = 0; k < num_batches; ++k) {
+    // A thread per batch: the batches are large (the network's batch of frames), so starting one
+    // costs nothing next to them, and std::async's future rethrows the preparation's exception.
+    std::future<void> next;
+    if (k + 1 < num_batches) next = std::async(std::launch::async, prepare, k + 1);
+    try {
+      consume(k);
+    } catch (...) {
+      if (next.valid()) next.wait();  // the preparation uses the caller's state: let it finish
+      throw;
+    }
+    if (next.valid()) next.get();
+  }
+}
+
+RunManifest DetectionManifest(const std::string& tool, const std::string& command_line,
+                              const std::filesystem::path& model_dir,
+                              const std::filesystem::path& data_root, const std::string& subset,
+                              const std::string& split) {
+  RunManifest manifest;
+  manifest.tool = tool;
+  manifest.version = StereodetVersion();
+  manifest.command_line = command_line;
+  manifest.inputs = {{"model", model_dir.string()},
+                     {"data", data_root.string()},
+                     {"subset", subset},
+                     {"split", split}};
+  return manifest;
+}
+
+void CheckRequiredFiles(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                        const RequiredFiles& required) {
+  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
+  if (!missing.empty()) {
+    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
+                         << dataset.SubsetDir().string() << ", e.g. " << missing.front();
+  }
+}
+
+void ReadStereoPairFiles(const FramePaths& paths, const DisparityOptions& disparity,
+                         StereoFrame& frame) {
+  frame.right = ReadColourImage(paths.image_right);
+  CheckStereoPairSize(frame.left, frame.right, paths.image_left, paths.image_right);
+  CheckImageFitsMatcher(disparity, frame.left.size(), paths.image_left);
+  frame.calib = ReadCalibration(paths.calib);
 }
 
 }  // namespace stereodet

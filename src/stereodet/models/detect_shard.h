@@ -22,11 +22,15 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/models/detector.h"
+#include "stereodet/models/device.h"
+#include "stereodet/stereo/disparity.h"
+#include "stereodet/util/check.h"
 #include "stereodet/util/output_folder.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/shard.h"
@@ -104,6 +108,48 @@ struct MergeDetectionsResult {
 // writes OUT as a StagedFolder (an earlier detection folder there is replaced whole): every
 // frame's file, copied, and run.json with the frames of all shards in list order.
 MergeDetectionsResult MergeDetections(const MergeDetectionsOptions& options);
+
+// Runs prepare(k) and then consume(k) for k = 0 .. num_batches - 1, consume in order of k on the
+// calling thread. With `overlap`, prepare(k + 1) runs on a second thread while consume(k) runs (one
+// batch ahead at most), so prepare(k) and consume(k - 1) must not share state (two slots, k % 2).
+// An exception of either is rethrown here, after the other has finished; no later batch starts.
+void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
+                         const std::function<void(int)>& consume);
+
+// The checks every detection run's options share (DetectSsdOptions, DetectRpnOptions and
+// DetectDet3dOptions::Check call it), on the fields of these names: --model, --data and --out
+// given, batch size >= 1, threads and max frames >= 0, the shard, a known device. Throws
+// std::invalid_argument naming the field.
+template <typename DetectOptions>
+void CheckDetectionRun(const DetectOptions& o) {
+  STEREODET_CHECK(!o.model_dir.empty()) << "--model is required";
+  STEREODET_CHECK(!o.data_root.empty()) << "--data is required";
+  STEREODET_CHECK(!o.out_dir.empty()) << "--out is required";
+  STEREODET_CHECK(o.batch_size >= 1) << "batch size must be >= 1, got " << o.batch_size;
+  STEREODET_CHECK(o.threads >= 0) << "threads must be >= 0, got " << o.threads;
+  STEREODET_CHECK(o.max_frames >= 0) << "max_frames must be >= 0, got " << o.max_frames;
+  o.shard.Check();
+  STEREODET_CHECK(ParseComputeDevice(o.device).has_value())
+      << "unknown device '" << o.device << "' (expected cpu or cuda)";
+}
+
+// run.json's fixed part for a detection run: its tool ("detect rpn"), this build's version, the
+// command line and the inputs model, data, subset and split (a family adds its own).
+RunManifest DetectionManifest(const std::string& tool, const std::string& command_line,
+                              const std::filesystem::path& model_dir,
+                              const std::filesystem::path& data_root, const std::string& subset,
+                              const std::string& split);
+
+// Throws std::runtime_error naming the folder, the count and the first missing file when a frame
+// of `ids` lacks a file that `required` names: before any work, not halfway through it.
+void CheckRequiredFiles(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                        const RequiredFiles& required);
+
+// Reads the right image and the calibration of `frame` (its left image read already) for stereo
+// matching with `disparity`, checking that the two images have one size and that the matcher fits
+// it. Throws std::runtime_error naming the file.
+void ReadStereoPairFiles(const FramePaths& paths, const DisparityOptions& disparity,
+                         StereoFrame& frame);
 
 }  // namespace stereodet
 

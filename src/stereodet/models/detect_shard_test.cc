@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <numeric>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -231,6 +233,42 @@ TEST(DetectShardTest, MergeRefusesShardsThatAreNotAllOfOneRun) {
             }).find("notes is a folder of other files (mine.txt); detect merge replaces"),
             std::string::npos);
   EXPECT_EQ(ReadFile(root / "notes" / "mine.txt"), "mine");
+}
+
+TEST(DetectShardTest, TwoStagePipelineConsumesInOrderAndRethrows) {
+  for (bool overlap : {false, true}) {
+    for (int n : {0, 1, 2, 7}) {
+      std::vector<int> slot(2, -1), consumed;
+      RunTwoStagePipeline(
+          n, overlap, [&](int k) { slot[k % 2] = k * 10; },
+          [&](int k) {
+            EXPECT_EQ(slot[k % 2], k * 10);  // its own preparation, not the next one's
+            consumed.push_back(k);
+          });
+      std::vector<int> expected(n);
+      std::iota(expected.begin(), expected.end(), 0);
+      EXPECT_EQ(consumed, expected) << "overlap " << overlap << ", " << n << " batches";
+    }
+    // A failing preparation stops the loop: nothing after it is consumed.
+    std::vector<int> consumed;
+    EXPECT_THROW(RunTwoStagePipeline(
+                     5, overlap,
+                     [](int k) {
+                       if (k == 2) throw std::runtime_error("frame 2 unreadable");
+                     },
+                     [&](int k) { consumed.push_back(k); }),
+                 std::runtime_error);
+    EXPECT_EQ(consumed, (std::vector<int>{0, 1}));
+    // So does a failing consumer, after the preparation in flight has finished.
+    int prepared = 0;
+    EXPECT_THROW(RunTwoStagePipeline(
+                     5, overlap, [&](int) { ++prepared; },
+                     [](int k) {
+                       if (k == 1) throw std::invalid_argument("bad batch");
+                     }),
+                 std::invalid_argument);
+    EXPECT_EQ(prepared, overlap ? 3 : 2);
+  }
 }
 
 }  // namespace

@@ -17,7 +17,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/det3d/det3d_detect.h"
 #include "stereodet/models/rpn/rpn_detect.h"
-#include "stereodet/models/ssd_detect.h"
+#include "stereodet/models/ssd/ssd_detect.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_paths.h"

@@ -1,6 +1,7 @@
 #include "stereodet/models/device.h"
 
 #include <torch/cuda.h>
+#include <torch/torch.h>
 
 #include "stereodet/util/check.h"
 
@@ -28,6 +29,27 @@ ComputeDevice ResolveComputeDevice(std::string_view text) {
            "(-DTorch_DIR=...)";
   }
   return *device;
+}
+
+void SetTorchThreads(int num_threads) {
+  STEREODET_CHECK(num_threads >= 0) << "threads must be >= 0, got " << num_threads;
+  if (num_threads > 0) torch::set_num_threads(num_threads);
+}
+
+std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
+                               int width) {
+  const size_t size = static_cast<size_t>(channels) * height * width;
+  std::vector<float> stacked;
+  stacked.reserve(inputs.size() * size);
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    const PlanarImage& input = inputs[i];
+    STEREODET_CHECK(input.channels == channels && input.rows == height && input.cols == width &&
+                    input.data.size() == size)
+        << "input " << i << " must have " << channels << " planes of " << width << "x" << height
+        << " px, got " << input.channels << " of " << input.cols << "x" << input.rows;
+    stacked.insert(stacked.end(), input.data.begin(), input.data.end());
+  }
+  return stacked;
 }
 
 }  // namespace stereodet

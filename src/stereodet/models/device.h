@@ -7,6 +7,9 @@
 
 #include <optional>
 #include <string_view>
+#include <vector>
+
+#include "stereodet/stereo/rgbh.h"
 
 namespace stereodet {
 
@@ -20,6 +23,15 @@ std::optional<ComputeDevice> ParseComputeDevice(std::string_view text);
 ComputeDevice ResolveComputeDevice(std::string_view text);
 // True when LibTorch was built with CUDA and sees at least one GPU.
 bool CudaAvailable();
+
+// Threads LibTorch's operators use (0 = leave LibTorch's default, all cores). Process-wide.
+void SetTorchThreads(int num_threads);
+
+// Concatenates `inputs` (each `channels` planes of height x width) into one
+// [image][channel][row][column] array: a batch as the image networks take it. Throws
+// std::invalid_argument for an input of another shape.
+std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
+                               int width);
 
 }  // namespace stereodet
 

@@ -1,4 +1,4 @@
-// What every `train` command shares (the SSD's loop, reused by det3d): the learning-rate schedule,
+// What every `train` command shares besides its loop (trainer.h): the learning-rate schedule,
 // the model folder's rules (never train over a model silently; --resume, --force), and the CSV
 // training log kept across a resume.
 #ifndef STEREODET_MODELS_TRAIN_COMMON_H_

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "stereodet/kitti/calib_io.h"
-#include "stereodet/report/evaluation.h"
+#include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/raster.h"
 #include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"

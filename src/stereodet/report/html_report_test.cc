@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "stereodet/report/evaluation.h"
+#include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_paths.h"

@@ -26,15 +26,7 @@ namespace stereodet {
 void DetectDet3dOptions::Check() const {
   decode.Check();
   filter.Check();
-  STEREODET_CHECK(!model_dir.empty()) << "--model is required";
-  STEREODET_CHECK(!data_root.empty()) << "--data is required";
-  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
-  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
-  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
-  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
-  shard.Check();
-  STEREODET_CHECK(ParseComputeDevice(device).has_value())
-      << "unknown device '" << device << "' (expected cpu or cuda)";
+  CheckDetectionRun(*this);
 }
 
 DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
@@ -92,14 +84,8 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
   }
   progress.Finish();
 
-  RunManifest manifest;
-  manifest.tool = "detect det3d";
-  manifest.version = StereodetVersion();
-  manifest.command_line = options.command_line;
-  manifest.inputs = {{"model", options.model_dir.string()},
-                     {"data", options.data_root.string()},
-                     {"subset", options.subset},
-                     {"split", options.split}};
+  RunManifest manifest = DetectionManifest("detect det3d", options.command_line, options.model_dir,
+                                           options.data_root, options.subset, options.split);
   if (!options.points_dir.empty())
     manifest.inputs.push_back({"points", options.points_dir.string()});
   manifest.settings_json = fmt::format(

@@ -13,20 +13,13 @@
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/det3d/det3d_net_internal.h"
 #include "stereodet/models/device_internal.h"
+#include "stereodet/models/model_json_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
-
-namespace {
-
-constexpr char kConfigFile[] = "model.json";
-constexpr char kWeightsFile[] = "model.pt";
-constexpr int kConfigVersion = 1;
-
-}  // namespace
 
 // --- Det3dConfig --------------------------------------------------------------------------------
 
@@ -52,9 +45,7 @@ std::vector<AnchorClass> Det3dConfig::AnchorClasses() const {
 }
 
 std::string Det3dConfigToJson(const Det3dConfig& config, const WeightsRecord& weights) {
-  nlohmann::json j;
-  j["version"] = kConfigVersion;
-  j["architecture"] = "det3d";
+  nlohmann::json j = internal::NewModelJson("det3d");
   j["input"] = PointSourceName(config.input);
   j["classes"] = config.classes;
   j["grid"] = {{"min_x_m", config.grid.min_x_m},  {"max_x_m", config.grid.max_x_m},
@@ -65,35 +56,14 @@ std::string Det3dConfigToJson(const Det3dConfig& config, const WeightsRecord& we
   j["max_points_per_pillar"] = config.max_points_per_pillar;
   j["parts_l"] = config.parts_l;
   j["parts_w"] = config.parts_w;
-  if (!weights.fnv1a64.empty()) {
-    j["weights"] = {{"file", kWeightsFile},
-                    {"fnv1a64", weights.fnv1a64},
-                    {"input_channels", weights.input_channels},
-                    {"parameters", weights.parameters}};
-    if (!weights.training_run.empty()) j["weights"]["training_run"] = weights.training_run;
-  }
-  return j.dump(2) + "\n";
+  return internal::FinishModelJson(std::move(j), weights);
 }
 
 Det3dConfig Det3dConfigFromJson(const std::string& text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
-  }
+  const nlohmann::json j = internal::ParseModelJson(text, source, "det3d");
   std::string field;
   try {
     Det3dConfig config;
-    field = "version";
-    const int version = j.at(field).get<int>();
-    if (version != kConfigVersion) {
-      throw ParseError(source, 0, field, "unsupported version " + std::to_string(version));
-    }
-    field = "architecture";
-    if (j.at(field).get<std::string>() != "det3d") {
-      throw ParseError(source, 0, field, "expected \"det3d\"");
-    }
     field = "input";
     const std::string input = j.at(field).get<std::string>();
     const std::optional<PointSource> parsed = ParsePointSource(input);
@@ -114,13 +84,13 @@ Det3dConfig Det3dConfigFromJson(const std::string& text, const std::string& sour
       *value = g.at(name).get<double>();
     }
     field = "base_channels";
-    config.base_channels = j.at(field).get<int>();
+    config.base_channels = internal::JsonInt(j, field, source);
     field = "max_points_per_pillar";
-    config.max_points_per_pillar = j.at(field).get<int>();
+    config.max_points_per_pillar = internal::JsonInt(j, field, source);
     field = "parts_l";
-    config.parts_l = j.at(field).get<int>();
+    config.parts_l = internal::JsonInt(j, field, source);
     field = "parts_w";
-    config.parts_w = j.at(field).get<int>();
+    config.parts_w = internal::JsonInt(j, field, source);
     field = "";
     config.Check();
     return config;
@@ -490,29 +460,22 @@ Det3dModel::Det3dModel(Det3dModel&&) noexcept = default;
 Det3dModel& Det3dModel::operator=(Det3dModel&&) noexcept = default;
 
 Det3dModel Det3dModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  const std::filesystem::path config_path = model_dir / kConfigFile;
+  const std::filesystem::path config_path = model_dir / kModelConfigFile;
   const std::string config_text = ReadFile(config_path);
   const Det3dConfig config = Det3dConfigFromJson(config_text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
-  const std::filesystem::path weights_path = model_dir / kWeightsFile;
-  const WeightsRecord record = ReadWeightsRecord(config_text, config_path.string());
-  internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
-  internal::LoadWeights(weights_path, config_path.string(), *impl->net, impl->torch_device);
-  Det3dModel model(std::move(impl));
-  internal::CheckParameterCount(model.ParameterCount(), record.parameters, weights_path,
-                                config_path.string());
-  return model;
+  internal::LoadModelWeights(model_dir, config_text, *impl->net, impl->torch_device);
+  return Det3dModel(std::move(impl));
 }
 
 void Det3dModel::Save(const std::filesystem::path& model_dir,
                       const std::string& training_run) const {
-  std::filesystem::create_directories(model_dir);
-  const std::string hash = internal::SaveWeights(model_dir / kWeightsFile, *impl_->net);
-  WriteFileAtomically(model_dir / kConfigFile,
-                      Det3dConfigToJson(impl_->config, {.fnv1a64 = hash,
-                                                        .input_channels = kPillarFeatures,
-                                                        .parameters = ParameterCount(),
-                                                        .training_run = training_run}));
+  internal::SaveModelFolder(model_dir, *impl_->net, [&](const std::string& hash) {
+    return Det3dConfigToJson(impl_->config, {.fnv1a64 = hash,
+                                             .input_channels = kPillarFeatures,
+                                             .parameters = ParameterCount(),
+                                             .training_run = training_run});
+  });
 }
 
 const Det3dConfig& Det3dModel::config() const { return impl_->config; }
@@ -557,18 +520,12 @@ std::vector<std::vector<ScoredLidarBox>> Det3dModel::Detect(
   return detections;
 }
 
-int64_t Det3dModel::ParameterCount() const {
-  int64_t count = 0;
-  for (const auto& p : impl_->net->parameters()) count += p.numel();
-  return count;
-}
+int64_t Det3dModel::ParameterCount() const { return internal::CountParameters(*impl_->net); }
 
 int64_t Det3dModel::AuxiliaryParameterCount() const {
-  int64_t count = 0;
-  for (const auto& p : impl_->net->aux->parameters()) count += p.numel();
-  for (const auto& p : impl_->net->aux_seg->parameters()) count += p.numel();
-  for (const auto& p : impl_->net->aux_offset->parameters()) count += p.numel();
-  return count;
+  return internal::CountParameters(*impl_->net->aux) +
+         internal::CountParameters(*impl_->net->aux_seg) +
+         internal::CountParameters(*impl_->net->aux_offset);
 }
 
 // --- Det3dTrainer --------------------------------------------------------------------------------
@@ -721,31 +678,21 @@ Det3dLossParts Det3dTrainer::Evaluate(const std::vector<Det3dSample>& batch) con
   return impl_->Loss(batch).second;
 }
 
-namespace {
-
-int64_t CountParameters(const torch::nn::Module& module) {
-  int64_t count = 0;
-  for (const auto& p : module.parameters()) count += p.numel();
-  return count;
-}
-
-}  // namespace
-
 void Det3dTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
                                   const std::string& training_run) const {
   internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done,
                                    {.config_json = Det3dConfigToJson(impl_->model.config),
-                                    .parameters = CountParameters(*impl_->model.net),
+                                    .parameters = internal::CountParameters(*impl_->model.net),
                                     .training_run = training_run});
 }
 
 int Det3dTrainer::LoadCheckpoint(const std::filesystem::path& path,
                                  const std::string& training_run) {
-  return internal::LoadTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer,
-                                          impl_->model.torch_device,
-                                          {.config_json = Det3dConfigToJson(impl_->model.config),
-                                           .parameters = CountParameters(*impl_->model.net),
-                                           .training_run = training_run});
+  return internal::LoadTrainingCheckpoint(
+      path, *impl_->model.net, impl_->optimizer, impl_->model.torch_device,
+      {.config_json = Det3dConfigToJson(impl_->model.config),
+       .parameters = internal::CountParameters(*impl_->model.net),
+       .training_run = training_run});
 }
 
 }  // namespace stereodet

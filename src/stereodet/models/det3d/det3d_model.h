@@ -10,8 +10,8 @@
 //   Score = mean of sigmoid(class logit) and the PSWarp confidence (the part maps sampled at the
 //   predicted box's part centres, averaged, sigmoid).
 //
-// A model folder is the SSD's (ssd.h): model.json (Det3dConfig + weights record), model.pt,
-// run.json, checkpoint.pt, train_log.csv.
+// A model folder is every family's (model_json.h): model.json (Det3dConfig + weights record),
+// model.pt, run.json, checkpoint.pt, train_log.csv.
 #ifndef STEREODET_MODELS_DET3D_DET3D_MODEL_H_
 #define STEREODET_MODELS_DET3D_DET3D_MODEL_H_
 
@@ -24,7 +24,7 @@
 #include "stereodet/models/det3d/det3d_data.h"
 #include "stereodet/models/det3d/det3d_targets.h"
 #include "stereodet/models/device.h"
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/model_json.h"
 
 namespace stereodet {
 

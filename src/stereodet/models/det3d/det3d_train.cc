@@ -5,8 +5,9 @@
 #include <cmath>
 
 #include "stereodet/models/det3d/gt_database.h"
-#include "stereodet/models/ssd_data.h"
 #include "stereodet/models/train_common.h"
+#include "stereodet/models/train_data.h"
+#include "stereodet/models/trainer.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
@@ -18,9 +19,62 @@ namespace stereodet {
 
 namespace {
 
-constexpr char kLogHeader[] =
-    "epoch,steps,frames,loss,classification_loss,box_loss,direction_loss,part_warp_loss,"
-    "segmentation_loss,centre_loss,learning_rate,frames_per_s,epoch_s";
+// The 3D detector's part of the training loop: a batch's frames augmented in parallel (GT
+// sampling, then AugmentFrame), each from its own seed, then one step of its losses.
+class Det3dTrainingTask : public TrainingTask {
+ public:
+  Det3dTrainingTask(const std::vector<Det3dFrame>& frames, const GtDatabase& gt_database,
+                    bool gt_sampling, const Det3dModel& model, Det3dTrainer& trainer,
+                    const TrainDet3dOptions& options, const std::string& training_run)
+      : frames_(frames),
+        gt_database_(gt_database),
+        gt_sampling_(gt_sampling),
+        model_(model),
+        trainer_(trainer),
+        options_(options),
+        training_run_(training_run) {}
+
+  StepLoss Step(int epoch, int64_t /*step*/, const std::vector<int>& batch_frames,
+                double learning_rate) override {
+    std::vector<Det3dSample> batch(batch_frames.size());
+    ParallelFor(
+        batch.size(),
+        [&](size_t k) {
+          const int index = batch_frames[k];
+          // GT sampling draws from ~seed: a stream apart from AugmentFrame's, both fixed by
+          // (seed, epoch, frame), so a resumed training samples the same objects.
+          const uint64_t seed = SampleSeed(options_.seed, epoch, index);
+          const Det3dFrame augmented =
+              gt_sampling_ ? AugmentFrame(SampleGtObjects(frames_[index], gt_database_,
+                                                          options_.gt_sampling, ~seed)
+                                              .frame,
+                                          options_.augment, seed)
+                           : AugmentFrame(frames_[index], options_.augment, seed);
+          batch[k] = MakeDet3dSample(augmented, model_.config(), model_.anchors(), true,
+                                     options_.max_aux_points);
+        },
+        options_.threads);
+    const Det3dLossParts loss = trainer_.Step(batch, learning_rate);
+    return {loss.total,
+            {loss.classification, loss.box, loss.direction, loss.part_warp, loss.segmentation,
+             loss.centre},
+            {}};
+  }
+
+  void Save(int epochs_done) override {
+    model_.Save(options_.out_dir, training_run_);
+    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
+  }
+
+ private:
+  const std::vector<Det3dFrame>& frames_;
+  const GtDatabase& gt_database_;
+  const bool gt_sampling_;
+  const Det3dModel& model_;
+  Det3dTrainer& trainer_;
+  const TrainDet3dOptions& options_;
+  const std::string& training_run_;
+};
 
 }  // namespace
 
@@ -47,20 +101,14 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   TrainDet3dSummary summary;
 
   namespace fs = std::filesystem;
-  std::vector<std::pair<std::string, fs::path>> inputs = {
-      {"--data", options.data_root / "training"}, {"--data", options.data_root / "ImageSets"}};
-  if (!options.points_dir.empty()) inputs.push_back({"--points", options.points_dir});
-  CheckOutputDoesNotOverlapInputs("--out", options.out_dir, inputs);
-  const OutputLock lock(options.out_dir);
-  const bool resuming =
-      PrepareModelFolder(options.out_dir, "train det3d", options.resume, options.force);
-  const fs::path config_path = options.out_dir / "model.json";
-  const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
+  const TrainingFolder folder(options.out_dir, options.data_root,
+                              {{"--points", options.points_dir}}, "train det3d", options.resume,
+                              options.force);
+  const bool resuming = folder.resuming();
+  const fs::path& config_path = folder.config_path();
   Det3dConfig config = options.model;
-  std::string recorded_run;  // ties model.json to checkpoint.pt (train_common.h)
   if (resuming) {
-    const std::string saved_text = ReadFile(config_path);
-    recorded_run = ReadWeightsRecord(saved_text, config_path.string()).training_run;
+    const std::string& saved_text = folder.config_text();
     const Det3dConfig saved = Det3dConfigFromJson(saved_text, config_path.string());
     STEREODET_CHECK(saved.input == config.input)
         << "--resume: " << config_path.string() << " was trained with --input "
@@ -69,19 +117,15 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   }
 
   const KittiDataset dataset(options.data_root, "training");
-  std::vector<std::string> ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
-    ids.resize(options.max_frames);
-  }
-  STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
+  const std::vector<std::string> ids = TrainingFrameIds(dataset, options.split, options.max_frames);
 
   Det3dModel model(config, options.seed, device);
   Det3dTrainer trainer(model, options.loss, options.weight_decay);
   summary.parameters = model.ParameterCount();
   summary.auxiliary_parameters = model.AuxiliaryParameterCount();
-  const int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path, recorded_run) : 0;
-  const std::string training_run = recorded_run.empty() ? NewTrainingRunId() : recorded_run;
-  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << checkpoint_path.string();
+  const int start_epoch =
+      resuming ? trainer.LoadCheckpoint(folder.checkpoint_path(), folder.recorded_run()) : 0;
+  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << folder.checkpoint_path().string();
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -114,15 +158,25 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   summary.gt_database_objects = gt_database.ObjectCount();
   summary.gt_database_points = gt_database.PointCount();
 
-  RunManifest manifest;
-  manifest.tool = "train det3d";
-  manifest.version = StereodetVersion();
-  manifest.command_line = options.command_line;
-  manifest.inputs = {{"data", options.data_root.string()}, {"split", options.split}};
-  if (!options.points_dir.empty())
-    manifest.inputs.push_back({"points", options.points_dir.string()});
-  auto write_manifest = [&](int epochs_done) {
-    manifest.settings_json = fmt::format(
+  TrainingLoopOptions loop;
+  loop.out_dir = options.out_dir;
+  loop.num_frames = static_cast<int>(frames.size());
+  loop.start_epoch = start_epoch;
+  loop.schedule = TrainingSchedule::Of(options);
+  // The progress line leaves the direction term out (it is small and steady).
+  loop.columns = {.frames = "frames",
+                  .terms = {"classification_loss", "box_loss", "direction_loss", "part_warp_loss",
+                            "segmentation_loss", "centre_loss"},
+                  .term_labels = {"cls", "box", "", "psw", "seg", "ctr"},
+                  .counts = {},
+                  .rate = "frames_per_s"};
+  loop.manifest =
+      TrainingManifest("train det3d", options.command_line, options.data_root, options.split);
+  if (!options.points_dir.empty()) {
+    loop.manifest.inputs.push_back({"points", options.points_dir.string()});
+  }
+  loop.settings_json = [&](int epochs_done) {
+    return fmt::format(
         R"({{"input": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
         R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
         R"("max_frames": {}, "frames": {}, "base_channels": {}, "pillar_m": {}, "device": "{}", )"
@@ -136,96 +190,16 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
         options.filter.camera_fov_only, options.filter.crop_to_grid, gt_sampling,
         options.gt_sampling.max_per_class, options.gt_database.min_points,
         options.gt_database.box_margin_m, gt_database.ObjectCount());
-    WriteRunManifest(options.out_dir, manifest);
   };
-  write_manifest(start_epoch);
-  const fs::path log_path = options.out_dir / kTrainLogFile;
-  std::string log = KeptLogLines(log_path, kLogHeader, start_epoch);
-
-  const int n = static_cast<int>(frames.size());
-  const int64_t steps_per_epoch = (n + options.batch_size - 1) / options.batch_size;
-  const int64_t total_steps = steps_per_epoch * options.epochs;
-  if (const std::string warning =
-          WarmupWarning(options.warmup_steps, steps_per_epoch, options.epochs);
-      !warning.empty() && options.progress.stream != nullptr) {
-    std::fputs(warning.c_str(), options.progress.stream);
-  }
-  const int end_epoch = options.max_epochs_this_run > 0
-                            ? std::min(options.epochs, start_epoch + options.max_epochs_this_run)
-                            : options.epochs;
-  double train_seconds = 0;
-  int64_t frames_trained = 0, steps_trained = 0;
-  for (int epoch = start_epoch; epoch < end_epoch; ++epoch) {
-    const Timer epoch_timer;
-    const std::vector<int> order = EpochOrder(n, options.seed, epoch);
-    ProgressReporter progress(fmt::format("epoch {}/{}", epoch + 1, options.epochs), n,
-                              options.progress);
-    Det3dLossParts sum;
-    double lr = 0;
-    int64_t step = epoch * steps_per_epoch;
-    int steps = 0, done = 0;
-    for (int begin = 0; begin < n; begin += options.batch_size) {
-      const int end = std::min(n, begin + options.batch_size);
-      std::vector<Det3dSample> batch(end - begin);
-      ParallelFor(
-          batch.size(),
-          [&](size_t k) {
-            const int index = order[begin + k];
-            // GT sampling draws from ~seed: a stream apart from AugmentFrame's, both fixed by
-            // (seed, epoch, frame), so a resumed training samples the same objects.
-            const uint64_t seed = SampleSeed(options.seed, epoch, index);
-            const Det3dFrame augmented =
-                gt_sampling ? AugmentFrame(SampleGtObjects(frames[index], gt_database,
-                                                           options.gt_sampling, ~seed)
-                                               .frame,
-                                           options.augment, seed)
-                            : AugmentFrame(frames[index], options.augment, seed);
-            batch[k] =
-                MakeDet3dSample(augmented, config, model.anchors(), true, options.max_aux_points);
-          },
-          options.threads);
-      lr = WarmupCosineLearningRate(options.learning_rate, options.warmup_steps,
-                                    options.final_lr_fraction, step, total_steps);
-      const Det3dLossParts loss = trainer.Step(batch, lr);
-      STEREODET_CHECK_IO(std::isfinite(loss.total))
-          << "training diverged at epoch " << epoch + 1 << ", step " << step << " (loss "
-          << loss.total << "); try a lower --lr";
-      sum.total += loss.total;
-      sum.classification += loss.classification;
-      sum.box += loss.box;
-      sum.direction += loss.direction;
-      sum.part_warp += loss.part_warp;
-      sum.segmentation += loss.segmentation;
-      sum.centre += loss.centre;
-      ++steps;
-      ++step;
-      done += end - begin;
-      progress.Add(end - begin, fmt::format("loss {:.3f} (cls {:.3f} box {:.3f} psw {:.3f} "
-                                            "seg {:.3f} ctr {:.3f})",
-                                            sum.total / steps, sum.classification / steps,
-                                            sum.box / steps, sum.part_warp / steps,
-                                            sum.segmentation / steps, sum.centre / steps));
-    }
-    progress.Finish();
-    const double epoch_seconds = epoch_timer.ElapsedSeconds();
-    train_seconds += epoch_seconds;
-    frames_trained += done;
-    steps_trained += steps;
-    model.Save(options.out_dir, training_run);
-    trainer.SaveCheckpoint(checkpoint_path, epoch + 1, training_run);
-    log += fmt::format(
-        "{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6g},{:.3f},{:.1f}\n",
-        epoch + 1, steps, done, sum.total / steps, sum.classification / steps, sum.box / steps,
-        sum.direction / steps, sum.part_warp / steps, sum.segmentation / steps, sum.centre / steps,
-        lr, done / epoch_seconds, epoch_seconds);
-    WriteFileAtomically(log_path, log);
-    write_manifest(epoch + 1);
-    summary.epochs_done = epoch + 1;
-    ++summary.epochs_run;
-    summary.final_loss = sum.total / steps;
-  }
-  summary.frames_per_second = train_seconds > 0 ? frames_trained / train_seconds : 0;
-  summary.seconds_per_step = steps_trained > 0 ? train_seconds / steps_trained : 0;
+  loop.progress = options.progress;
+  Det3dTrainingTask task(frames, gt_database, gt_sampling, model, trainer, options,
+                         folder.training_run());
+  const TrainingLoopSummary done = RunTrainingLoop(task, loop);
+  summary.epochs_done = done.epochs_done;
+  summary.epochs_run = done.epochs_run;
+  summary.final_loss = done.final_loss;
+  summary.frames_per_second = done.FramesPerSecond();
+  summary.seconds_per_step = done.SecondsPerStep();
   summary.seconds = total_timer.ElapsedSeconds();
   return summary;
 }

@@ -1,5 +1,5 @@
 // Training the 3D detector on a KITTI-format split: `stereodet train det3d --input lidar|stereo`.
-// The SSD's loop and model folder (ssd_train.h, train_common.h): frames in a seeded order per
+// The families' one loop and model folder (trainer.h, train_common.h): frames in a seeded order per
 // epoch, AdamW with warm-up and cosine decay, a progress line, then (atomically) the model, the
 // checkpoint, the CSV log and run.json after every epoch. The data order and the augmentation
 // depend only on (seed, epoch, frame), so --resume ends with the same weights as an uninterrupted

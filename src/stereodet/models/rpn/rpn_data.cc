@@ -78,9 +78,6 @@ RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<
     STEREODET_THROW_IO() << missing.size() << " required files are missing under "
                          << dataset.SubsetDir().string() << ", e.g." << list;
   }
-  SsdDataOptions labels;
-  labels.ignore_types = options.ignore_types;
-  labels.min_object_height_px = options.min_object_height_px;
   frames_.resize(ids.size());
   ProgressReporter reporter(geometry ? "stereo" : "labels", static_cast<int64_t>(ids.size()),
                             progress);
@@ -94,7 +91,8 @@ RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<
         RpnFrame& frame = frames_[i];
         frame.id = ids[i];
         frame.image_path = paths.image_left;
-        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, config.classes, labels);
+        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, config.classes,
+                                          options.ignore_types, options.min_object_height_px);
         if (geometry) {
           const RpnGeometry g = ComputeRpnGeometry(paths, stereo);
           frame.depth_code = ResizeCodes(g.depth_code, network_size);

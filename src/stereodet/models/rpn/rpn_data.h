@@ -2,7 +2,7 @@
 // targets and, for RGB-D models, the stereo depth and height codes (computed once, kept in memory
 // at the network's resolution). Augmentation, fully determined by a sample's seed: a horizontal
 // flip of image, geometry and boxes together (depth and height above the ground do not change
-// under a flip), and photometric jitter of the colour only (ssd_data.h's JitterColour). Samples
+// under a flip), and photometric jitter of the colour only (train_data.h's JitterColour). Samples
 // are made in the caller's thread, in order: nothing here runs ahead asynchronously, so a training
 // step depends only on (seed, epoch, frame).
 #ifndef STEREODET_MODELS_RPN_RPN_DATA_H_
@@ -17,15 +17,15 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/rpn/rpn_model.h"
-#include "stereodet/models/ssd_data.h"
+#include "stereodet/models/train_data.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
 
 struct RpnDataOptions {
-  // As SsdDataOptions: label types that become ignore regions, and objects of a class less tall
-  // than this (original px) become ignore regions too.
+  // As ssd/ssd_data.h's SsdDataOptions (TargetsFromLabels): label types that become ignore
+  // regions, and objects of a class less tall than this (original px) become ignore regions too.
   std::vector<std::string> ignore_types = {"DontCare", "Van", "Person_sitting"};
   double min_object_height_px = 20.0;
   bool augment = true;

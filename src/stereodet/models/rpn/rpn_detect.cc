@@ -10,8 +10,6 @@
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/models/detector.h"
 #include "stereodet/models/rpn/rpn_data.h"
-#include "stereodet/models/ssd.h"
-#include "stereodet/models/ssd_detect.h"
 #include "stereodet/stereo/degradation.h"
 #include "stereodet/stereo/disparity.h"
 #include "stereodet/stereo/image_io.h"
@@ -28,17 +26,9 @@ namespace stereodet {
 
 void DetectRpnOptions::Check() const {
   detect.Check();
-  STEREODET_CHECK(!model_dir.empty()) << "--model is required";
-  STEREODET_CHECK(!data_root.empty()) << "--data is required";
-  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
+  CheckDetectionRun(*this);
   STEREODET_CHECK(blur_sigma_px >= 0.0 && std::isfinite(blur_sigma_px))
       << "blur sigma must be >= 0, got " << blur_sigma_px;
-  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
-  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
-  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
-  shard.Check();
-  STEREODET_CHECK(ParseComputeDevice(device).has_value())
-      << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
 DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
@@ -65,11 +55,7 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
   RequiredFiles required;
   required.image_left = true;
   required.image_right = required.calib = geometry;
-  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
-  if (!missing.empty()) {
-    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
-                         << dataset.SubsetDir().string() << ", e.g. " << missing.front();
-  }
+  CheckRequiredFiles(dataset, ids, required);
 
   DetectRpnSummary summary;
   StageTimes times;
@@ -85,13 +71,7 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
           frame.id = ids[begin + i];
           ScopedStage stage(times, "read");
           frame.left = ReadColourImage(paths.image_left);
-          if (geometry) {
-            frame.right = ReadColourImage(paths.image_right);
-            CheckStereoPairSize(frame.left, frame.right, paths.image_left, paths.image_right);
-            CheckImageFitsMatcher(detector.stereo()->disparity, frame.left.size(),
-                                  paths.image_left);
-            frame.calib = ReadCalibration(paths.calib);
-          }
+          if (geometry) ReadStereoPairFiles(paths, detector.stereo()->disparity, frame);
         },
         options.threads);
     const std::vector<DetectResult> results = detector.DetectBatch(frames);
@@ -101,14 +81,8 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
   }
   progress.Finish();
 
-  RunManifest manifest;
-  manifest.tool = "detect rpn";
-  manifest.version = StereodetVersion();
-  manifest.command_line = options.command_line;
-  manifest.inputs = {{"model", options.model_dir.string()},
-                     {"data", options.data_root.string()},
-                     {"subset", options.subset},
-                     {"split", options.split}};
+  RunManifest manifest = DetectionManifest("detect rpn", options.command_line, options.model_dir,
+                                           options.data_root, options.subset, options.split);
   manifest.settings_json = fmt::format(
       R"({{"model_weights_fnv1a64": "{}", "input": "{}", "blur_sigma_px": {}, )"
       R"("score_threshold": {}, "nms_iou_threshold": {}, "max_detections": {}, )"

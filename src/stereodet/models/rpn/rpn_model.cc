@@ -9,6 +9,7 @@
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
+#include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/rpn/rpn_net_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -19,24 +20,7 @@ namespace stereodet {
 
 namespace {
 
-constexpr char kConfigFile[] = "model.json";
-constexpr char kWeightsFile[] = "model.pt";
-constexpr int kConfigVersion = 1;
 constexpr int kStride = 16;
-
-int GetInt(const nlohmann::json& j, const std::string& field, const std::string& source) {
-  const nlohmann::json& value = j.at(field);
-  if (!value.is_number_integer()) {
-    throw ParseError(source, 0, field, "expected an integer, got " + value.dump().substr(0, 40));
-  }
-  const int64_t v = value.is_number_unsigned()
-                        ? static_cast<int64_t>(std::min<uint64_t>(value.get<uint64_t>(), INT64_MAX))
-                        : value.get<int64_t>();
-  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
-    throw ParseError(source, 0, field, value.dump() + " is out of range");
-  }
-  return static_cast<int>(v);
-}
 
 }  // namespace
 
@@ -82,9 +66,7 @@ void RpnConfig::Check() const {
 
 std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weights,
                             const std::optional<StereoOptions>& stereo) {
-  nlohmann::json j;
-  j["version"] = kConfigVersion;
-  j["architecture"] = "rpn";
+  nlohmann::json j = internal::NewModelJson("rpn");
   j["input"] = RpnInputName(config.input);
   j["classes"] = config.classes;
   j["input_width"] = config.input_width;
@@ -98,40 +80,19 @@ std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weight
   j["feature_stride"] = config.feature_stride;
   j["anchor_sizes_px"] = config.anchors.sizes_px;
   j["anchor_ratios"] = config.anchors.ratios;
-  if (!weights.fnv1a64.empty()) {
-    j["weights"] = {{"file", kWeightsFile},
-                    {"fnv1a64", weights.fnv1a64},
-                    {"input_channels", weights.input_channels},
-                    {"parameters", weights.parameters}};
-  }
   if (stereo) {
-    j["stereo"] = nlohmann::json::parse(StereoSettingsJson(*stereo));
     j["depth_code"] = {{"min_m", stereo->depth.min_m},
                        {"max_m", stereo->depth.max_m},
                        {"bits", stereo->depth.bits}};
   }
-  return j.dump(2) + "\n";
+  return internal::FinishModelJson(std::move(j), weights, stereo);
 }
 
 RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
-  }
+  const nlohmann::json j = internal::ParseModelJson(text, source, "rpn");
   std::string field;
   try {
     RpnConfig config;
-    field = "version";
-    const int version = GetInt(j, field, source);
-    if (version != kConfigVersion) {
-      throw ParseError(source, 0, field, "unsupported version " + std::to_string(version));
-    }
-    field = "architecture";
-    if (j.at(field).get<std::string>() != "rpn") {
-      throw ParseError(source, 0, field, "expected \"rpn\" (a model of `train rpn`)");
-    }
     field = "input";
     const std::string input = j.at(field).get<std::string>();
     const std::optional<RpnInput> parsed = ParseRpnInput(input);
@@ -148,10 +109,10 @@ RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) 
                                 {"pooled_size", &config.pooled_size},
                                 {"sampling_ratio", &config.sampling_ratio}}) {
       field = name;
-      *target = GetInt(j, field, source);
+      *target = internal::JsonInt(j, field, source);
     }
     field = "feature_stride";  // absent: 16, the only stride before it was recorded
-    config.feature_stride = j.contains(field) ? GetInt(j, field, source) : 16;
+    config.feature_stride = j.contains(field) ? internal::JsonInt(j, field, source) : 16;
     config.anchors.stride_px = config.feature_stride;
     field = "anchor_sizes_px";
     config.anchors.sizes_px = j.at(field).get<std::vector<double>>();
@@ -406,12 +367,6 @@ std::pair<torch::Tensor, torch::Tensor> RpnNetImpl::Head(const torch::Tensor& po
 
 namespace {
 
-int64_t CountParameters(torch::nn::Module& module) {
-  int64_t count = 0;
-  for (const auto& p : module.parameters()) count += p.numel();
-  return count;
-}
-
 std::vector<Box2D> BoxesOf(const std::vector<ScoredBox>& boxes) {
   std::vector<Box2D> out;
   out.reserve(boxes.size());
@@ -475,32 +430,25 @@ RpnModel::RpnModel(RpnModel&&) noexcept = default;
 RpnModel& RpnModel::operator=(RpnModel&&) noexcept = default;
 
 RpnModel RpnModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  const std::filesystem::path config_path = model_dir / kConfigFile;
+  const std::filesystem::path config_path = model_dir / kModelConfigFile;
   const std::string text = ReadFile(config_path);
   const RpnConfig config = RpnConfigFromJson(text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
   impl->stereo = ReadRpnStereoRecord(text, config_path.string());
-  const std::filesystem::path weights_path = model_dir / kWeightsFile;
-  const WeightsRecord record = ReadWeightsRecord(text, config_path.string());
-  internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
-  internal::LoadWeights(weights_path, config_path.string(), *impl->net, impl->device);
-  RpnModel model(std::move(impl));
-  internal::CheckParameterCount(model.ParameterCount(), record.parameters, weights_path,
-                                config_path.string());
-  return model;
+  internal::LoadModelWeights(model_dir, text, *impl->net, impl->device);
+  return RpnModel(std::move(impl));
 }
 
 void RpnModel::Save(const std::filesystem::path& model_dir) const {
-  std::filesystem::create_directories(model_dir);
-  const std::string hash = internal::SaveWeights(model_dir / kWeightsFile, *impl_->net);
   const bool geometry = impl_->config.input == RpnInput::kRgbd;
-  WriteFileAtomically(model_dir / kConfigFile,
-                      RpnConfigToJson(impl_->config,
-                                      {.fnv1a64 = hash,
-                                       .input_channels = RpnInputChannels(impl_->config.input),
-                                       .parameters = ParameterCount(),
-                                       .training_run = {}},
-                                      geometry ? std::optional(impl_->stereo) : std::nullopt));
+  internal::SaveModelFolder(model_dir, *impl_->net, [&](const std::string& hash) {
+    return RpnConfigToJson(impl_->config,
+                           {.fnv1a64 = hash,
+                            .input_channels = RpnInputChannels(impl_->config.input),
+                            .parameters = ParameterCount(),
+                            .training_run = {}},
+                           geometry ? std::optional(impl_->stereo) : std::nullopt);
+  });
 }
 
 const RpnConfig& RpnModel::config() const { return impl_->config; }
@@ -557,10 +505,12 @@ std::vector<std::vector<ScoredBox>> RpnModel::Detect(const std::vector<PlanarIma
   return detections;
 }
 
-int64_t RpnModel::ParameterCount() const { return CountParameters(*impl_->net); }
-int64_t RpnModel::ImageBranchParameterCount() const { return CountParameters(*impl_->net->image); }
+int64_t RpnModel::ParameterCount() const { return internal::CountParameters(*impl_->net); }
+int64_t RpnModel::ImageBranchParameterCount() const {
+  return internal::CountParameters(*impl_->net->image);
+}
 int64_t RpnModel::GeometryBranchParameterCount() const {
-  return impl_->net->geometry ? CountParameters(*impl_->net->geometry) : 0;
+  return impl_->net->geometry ? internal::CountParameters(*impl_->net->geometry) : 0;
 }
 
 int RpnModel::InitFrom(const RpnModel& rgb, bool geometry_too) {

@@ -24,8 +24,8 @@
 
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/model_json.h"
 #include "stereodet/models/rpn/rpn_boxes.h"
-#include "stereodet/models/ssd.h"
 #include "stereodet/stereo/rgbh.h"
 #include "stereodet/stereo/stereo_encoder.h"
 
@@ -73,8 +73,8 @@ struct RpnConfig {
 std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weights = {},
                             const std::optional<StereoOptions>& stereo = std::nullopt);
 RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source);
-// The stereo settings model.json records (ssd.h's ReadStereoRecord, plus the depth code's range
-// and bits); absent ones read as StereoOptions' defaults. Throws ParseError naming `source`.
+// The stereo settings model.json records (model_json.h's ReadStereoRecord, plus the depth code's
+// range and bits); absent ones read as StereoOptions' defaults. Throws ParseError naming `source`.
 StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source);
 
 // The network input of one frame at the network's size. `bgr` is CV_8UC3 of the network size;

@@ -1,7 +1,7 @@
 // Training the two-stage detector on a KITTI-format split: `stereodet train rpn --input rgb|rgbd`.
-// The SSD's and det3d's loop and model folder (train_common.h): frames in a seeded order per epoch,
-// AdamW with a linear warm-up and a cosine decay, a progress line, then (atomically) the model, the
-// checkpoint, the CSV log and run.json after every epoch.
+// The families' one loop and model folder (trainer.h, train_common.h): frames in a seeded order per
+// epoch, AdamW with a linear warm-up and a cosine decay, a progress line, then (atomically) the
+// model, the checkpoint, the CSV log and run.json after every epoch.
 //
 // Determinism (bit-identical --resume): a step's batch is made in order in this thread (samples in
 // parallel, each into its own slot, from SampleSeed(seed, epoch, frame)); the anchor and RoI

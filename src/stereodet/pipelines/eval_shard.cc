@@ -1,4 +1,4 @@
-// `eval --shard` files and `eval merge` (report/evaluation.h). Why the merge re-evaluates the
+// `eval --shard` files and `eval merge` (pipelines/evaluation.h). Why the merge re-evaluates the
 // shards' frame bytes instead of summing per-shard statistics: docs/scale.md ("What eval merge
 // computes").
 #include <fmt/format.h>
@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "stereodet/report/evaluation.h"
-#include "stereodet/report/evaluation_internal.h"
+#include "stereodet/pipelines/evaluation.h"
+#include "stereodet/pipelines/evaluation_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"

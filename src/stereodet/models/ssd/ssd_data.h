@@ -12,8 +12,8 @@
 //   - horizontal flip of colour, height and boxes together (height above the ground does not change
 //     under a flip or a zoom, so the codes themselves are kept);
 //   - photometric jitter (brightness, contrast, saturation) on the colour only, before encoding.
-#ifndef STEREODET_MODELS_SSD_DATA_H_
-#define STEREODET_MODELS_SSD_DATA_H_
+#ifndef STEREODET_MODELS_SSD_SSD_DATA_H_
+#define STEREODET_MODELS_SSD_SSD_DATA_H_
 
 #include <condition_variable>
 #include <cstdint>
@@ -31,33 +31,12 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/object.h"
 #include "stereodet/models/box_coder.h"
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd/ssd_model.h"
+#include "stereodet/models/train_data.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
-
-struct AugmentOptions {
-  bool enabled = true;
-  double flip_probability = 0.5;
-  // Window = image / zoom, zoom log-uniform in [min_zoom, max_zoom] (< 1 zooms out, > 1 crops in).
-  double min_zoom = 0.8;
-  double max_zoom = 1.6;
-  // Colour only: value += U(-brightness, brightness) * 255; value = mean + U(1 - contrast,
-  // 1 + contrast) * (value - mean); saturation blends with grey by U(1 - saturation, 1 +
-  // saturation).
-  double brightness = 0.12;
-  double contrast = 0.25;
-  double saturation = 0.25;
-  // An object that keeps less than this fraction of its box inside the window becomes an ignore
-  // region (neither positive nor negative).
-  double min_visible_fraction = 0.5;
-  void Check() const;  // throws std::invalid_argument
-};
-
-// The photometric jitter of AugmentOptions (brightness, contrast, saturation) on an 8-bit BGR
-// image in place, drawing three numbers from `rng`. Also used by the two-stage detector (rpn/).
-void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& rng);
 
 struct SsdDataOptions {
   // Label types that become ignore regions; other types not among the model's classes are
@@ -80,12 +59,6 @@ struct SsdDataOptions {
   int threads = 0;
   void Check() const;
 };
-
-// The training targets of a frame's labels in original image px: classes -> 1 + index in `classes`,
-// ignore types and too-small objects -> kIgnoreLabel, anything else dropped.
-std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
-                                         const std::vector<std::string>& classes,
-                                         const SsdDataOptions& options);
 
 // One frame's network input at the model's size, from a full-resolution BGR image and, for RGB-H
 // encodings, the height codes: at the image's size, or at the stereo match size (match_scale < 1,
@@ -137,11 +110,6 @@ class SsdTrainingData {
   std::vector<DefaultBox> default_boxes_;
 };
 
-// A seed per (run seed, epoch, frame), independent of the order frames are visited in.
-uint64_t SampleSeed(uint64_t seed, int epoch, int frame_index);
-// Frame order of an epoch: a permutation of 0..n-1 drawn from (seed, epoch).
-std::vector<int> EpochOrder(int n, uint64_t seed, int epoch);
-
 // Builds the batches of one epoch on a background thread, up to `capacity` batches ahead of the
 // consumer (a bounded queue: memory stays small and the producer waits when training is slower).
 class BatchLoader {
@@ -180,4 +148,4 @@ class BatchLoader {
 
 }  // namespace stereodet
 
-#endif  // STEREODET_MODELS_SSD_DATA_H_
+#endif  // STEREODET_MODELS_SSD_SSD_DATA_H_

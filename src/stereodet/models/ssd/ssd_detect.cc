@@ -1,4 +1,4 @@
-#include "stereodet/models/ssd_detect.h"
+#include "stereodet/models/ssd/ssd_detect.h"
 
 #include <fmt/format.h>
 
@@ -14,8 +14,8 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/models/detector.h"
-#include "stereodet/models/ssd.h"
-#include "stereodet/models/ssd_data.h"
+#include "stereodet/models/ssd/ssd_data.h"
+#include "stereodet/models/ssd/ssd_model.h"
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/degradation.h"
 #include "stereodet/stereo/disparity.h"
@@ -33,17 +33,9 @@ namespace stereodet {
 void DetectSsdOptions::Check() const {
   decode.Check();
   if (stereo) stereo->Check();
-  STEREODET_CHECK(!model_dir.empty()) << "--model is required";
-  STEREODET_CHECK(!data_root.empty()) << "--data is required";
-  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
+  CheckDetectionRun(*this);
   STEREODET_CHECK(blur_sigma_px >= 0.0 && std::isfinite(blur_sigma_px))
       << "blur sigma must be >= 0, got " << blur_sigma_px;
-  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
-  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
-  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
-  shard.Check();
-  STEREODET_CHECK(ParseComputeDevice(device).has_value())
-      << "unknown device '" << device << "' (expected cpu or cuda)";
 }
 
 std::optional<StereoOptions> ModelStereoSettings(const std::filesystem::path& model_dir) {
@@ -58,58 +50,6 @@ std::string StereoMismatch(const DetectSsdOptions& options) {
   const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
   if (!recorded) return "";
   return DifferingStereoSettings(*recorded, *options.stereo);
-}
-
-std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
-                                      const std::vector<std::string>& classes, double scale_x,
-                                      double scale_y, int image_width, int image_height) {
-  std::vector<Object> objects;
-  for (const ScoredBox& b : boxes) {
-    STEREODET_CHECK(b.label >= 1 && b.label <= static_cast<int>(classes.size()))
-        << "detection label " << b.label << " out of range";
-    Object o;
-    o.type = classes[b.label - 1];
-    o.truncated = -1.0;
-    o.occluded = -1;
-    // Rounded to 0.01 px (KITTI's own precision; the files stay short and read back exactly).
-    auto px = [](double v, double hi) {
-      return std::round(std::clamp(v, 0.0, hi) * 100.0) / 100.0;
-    };
-    o.box = {px(b.box.left * scale_x, image_width), px(b.box.top * scale_y, image_height),
-             px(b.box.right * scale_x, image_width), px(b.box.bottom * scale_y, image_height)};
-    if (o.box.Width() <= 0.0 || o.box.Height() <= 0.0) continue;
-    o.SetNot3DEstimated();
-    // Six decimals keep the ranking of all but near-identical scores.
-    o.score = std::round(static_cast<double>(b.score) * 1e6) / 1e6;
-    objects.push_back(o);
-  }
-  return objects;
-}
-
-void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
-                         const std::function<void(int)>& consume) {
-  if (!overlap) {
-    for (int k = 0; k < num_batches; ++k) {
-      prepare(k);
-      consume(k);
-    }
-    return;
-  }
-  if (num_batches <= 0) return;
-  prepare(0);
-  for (int k = 0; k < num_batches; ++k) {
-    // A thread per batch: the batches are large (the network's batch of frames), so starting one
-    // costs nothing next to them, and std::async's future rethrows the preparation's exception.
-    std::future<void> next;
-    if (k + 1 < num_batches) next = std::async(std::launch::async, prepare, k + 1);
-    try {
-      consume(k);
-    } catch (...) {
-      if (next.valid()) next.wait();  // the preparation uses the caller's state: let it finish
-      throw;
-    }
-    if (next.valid()) next.get();
-  }
 }
 
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
@@ -142,11 +82,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   required.image_left = true;
   const bool from_folder = height && !options.stereo_dir.empty();
   required.image_right = required.calib = height && !from_folder;
-  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
-  if (!missing.empty()) {
-    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
-                         << dataset.SubsetDir().string() << ", e.g. " << missing.front();
-  }
+  CheckRequiredFiles(dataset, ids, required);
 
   std::optional<StereoFolderRecord> folder;
   if (from_folder) {
@@ -188,10 +124,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
             // codes resized to the network would differ.
             frame.height_code = ReadStereoFolderHeightAtMatchScale(*folder, id);
           } else if (height) {
-            frame.right = ReadColourImage(paths.image_right);
-            CheckStereoPairSize(frame.left, frame.right, paths.image_left, paths.image_right);
-            CheckImageFitsMatcher(stereo->disparity, frame.left.size(), paths.image_left);
-            frame.calib = ReadCalibration(paths.calib);
+            ReadStereoPairFiles(paths, stereo->disparity, frame);
           }
         },
         options.threads);
@@ -216,14 +149,8 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
   RunTwoStagePipeline(num_batches, options.pipeline, prepare, consume);
   progress.Finish();
 
-  RunManifest manifest;
-  manifest.tool = "detect ssd";
-  manifest.version = StereodetVersion();
-  manifest.command_line = options.command_line;
-  manifest.inputs = {{"model", options.model_dir.string()},
-                     {"data", options.data_root.string()},
-                     {"subset", options.subset},
-                     {"split", options.split}};
+  RunManifest manifest = DetectionManifest("detect ssd", options.command_line, options.model_dir,
+                                           options.data_root, options.subset, options.split);
   if (from_folder) manifest.inputs.emplace_back("stereo", options.stereo_dir.string());
   manifest.settings_json = fmt::format(
       R"({{"model_weights_fnv1a64": "{}", "encoding": "{}", "blur_sigma_px": {}, )"

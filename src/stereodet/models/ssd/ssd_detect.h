@@ -6,8 +6,8 @@
 // no detection file of an earlier run survives beside the new ones. With a shard K/N, OUT is the
 // shard's folder (detect_shard.h): its frames' files, its run.json and detect_shard.json, which
 // `detect merge` (MergeDetections) turns into the folder of one run.
-#ifndef STEREODET_MODELS_SSD_DETECT_H_
-#define STEREODET_MODELS_SSD_DETECT_H_
+#ifndef STEREODET_MODELS_SSD_SSD_DETECT_H_
+#define STEREODET_MODELS_SSD_SSD_DETECT_H_
 
 #include <cstdint>
 #include <filesystem>
@@ -83,22 +83,6 @@ std::string StereoMismatch(const DetectSsdOptions& options);
 // at the end. An interrupted call leaves the previous folder as it was.
 DetectSsdSummary DetectSsd(const DetectSsdOptions& options);
 
-// Runs prepare(k) and then consume(k) for k = 0 .. num_batches - 1, consume in order of k on the
-// calling thread. With `overlap`, prepare(k + 1) runs on a second thread while consume(k) runs (one
-// batch ahead at most), so prepare(k) and consume(k - 1) must not share state (two slots, k % 2).
-// An exception of either is rethrown here, after the other has finished; no later batch starts.
-void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
-                         const std::function<void(int)>& consume);
-
-// Network-input boxes -> KITTI detections in the original image: scaled by (scale_x, scale_y),
-// clipped to [0, image_width] x [0, image_height], rounded to 0.01 px, empty boxes dropped, score
-// rounded to 1e-6, type = classes[label - 1],
-// truncated and occluded -1 (unknown), 3D fields "not estimated" (Object::SetNot3DEstimated), score
-// kept. Order kept (best first).
-std::vector<Object> ToKittiDetections(const std::vector<ScoredBox>& boxes,
-                                      const std::vector<std::string>& classes, double scale_x,
-                                      double scale_y, int image_width, int image_height);
-
 }  // namespace stereodet
 
-#endif  // STEREODET_MODELS_SSD_DETECT_H_
+#endif  // STEREODET_MODELS_SSD_SSD_DETECT_H_

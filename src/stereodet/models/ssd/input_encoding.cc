@@ -1,4 +1,4 @@
-#include "stereodet/models/input_encoding.h"
+#include "stereodet/models/ssd/input_encoding.h"
 
 #include "stereodet/util/check.h"
 

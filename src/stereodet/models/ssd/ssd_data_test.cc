@@ -1,4 +1,4 @@
-#include "stereodet/models/ssd_data.h"
+#include "stereodet/models/ssd/ssd_data.h"
 
 #include <gtest/gtest.h>
 
@@ -63,8 +63,10 @@ TEST(SsdDataTest, TargetsFromLabels) {
   small_car.box = {0, 0, 10, 10};
   Object cyclist = car;
   cyclist.type = "Cyclist";
-  const std::vector<TargetBox> t = TargetsFromLabels({car, van, truck, small_car, cyclist},
-                                                     {"Car", "Pedestrian", "Cyclist"}, {});
+  const SsdDataOptions defaults;  // ignores DontCare, Van and Person_sitting; below 20 px
+  const std::vector<TargetBox> t =
+      TargetsFromLabels({car, van, truck, small_car, cyclist}, {"Car", "Pedestrian", "Cyclist"},
+                        defaults.ignore_types, defaults.min_object_height_px);
   ASSERT_EQ(t.size(), 4u);  // the truck is background
   EXPECT_EQ(t[0].label, 1);
   EXPECT_EQ(t[1].label, kIgnoreLabel);

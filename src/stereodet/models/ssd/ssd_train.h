@@ -1,21 +1,21 @@
 // Training an SSD on a KITTI-format split: `stereodet train ssd`.
 //
-// Per epoch: frames in a seeded random order, batches built by a BatchLoader thread while the
-// network trains, AdamW with a linear warm-up then a cosine decay of the learning rate over all
-// steps, a progress line with the loss and images per second, then (atomically) the checkpoint, the
-// model and the CSV log. --resume continues from the checkpoint's epoch; because the data order,
-// the augmentation and the schedule depend only on (seed, epoch, step), a resumed run ends with the
-// same weights as an uninterrupted one (same threads; LibTorch's CPU kernels are deterministic for
-// a fixed thread count).
-#ifndef STEREODET_MODELS_SSD_TRAIN_H_
-#define STEREODET_MODELS_SSD_TRAIN_H_
+// The families' one loop (trainer.h). Per epoch: frames in a seeded random order, batches built
+// by a BatchLoader thread while the network trains, AdamW with a linear warm-up then a cosine decay
+// of the learning rate over all steps, a progress line with the loss and images per second, then
+// (atomically) the model, the checkpoint and the CSV log. --resume continues from the checkpoint's
+// epoch; because the data order, the augmentation and the schedule depend only on (seed, epoch,
+// step), a resumed run ends with the same weights as an uninterrupted one (same threads;
+// LibTorch's CPU kernels are deterministic for a fixed thread count).
+#ifndef STEREODET_MODELS_SSD_SSD_TRAIN_H_
+#define STEREODET_MODELS_SSD_SSD_TRAIN_H_
 
 #include <cstdint>
 #include <filesystem>
 #include <string>
 
-#include "stereodet/models/ssd.h"
-#include "stereodet/models/ssd_data.h"
+#include "stereodet/models/ssd/ssd_data.h"
+#include "stereodet/models/ssd/ssd_model.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
@@ -90,4 +90,4 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& options);
 
 }  // namespace stereodet
 
-#endif  // STEREODET_MODELS_SSD_TRAIN_H_
+#endif  // STEREODET_MODELS_SSD_SSD_TRAIN_H_

@@ -1,5 +1,5 @@
 // Tests of the network through the public, torch-free API (tiny inputs, a few steps: fast).
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd/ssd_model.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

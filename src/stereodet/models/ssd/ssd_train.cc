@@ -1,4 +1,4 @@
-#include "stereodet/models/ssd_train.h"
+#include "stereodet/models/ssd/ssd_train.h"
 
 #include <fmt/format.h>
 
@@ -6,11 +6,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
 
 #include "stereodet/models/train_common.h"
+#include "stereodet/models/trainer.h"
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
@@ -25,8 +27,47 @@ namespace stereodet {
 
 namespace {
 
-constexpr char kLogHeader[] =
-    "epoch,steps,images,loss,localization_loss,confidence_loss,learning_rate,images_per_s,epoch_s";
+// The SSD's part of the training loop: batches from a BatchLoader thread (the epoch's order,
+// prepared ahead), MultiBox loss.
+class SsdTrainingTask : public TrainingTask {
+ public:
+  SsdTrainingTask(const SsdTrainingData& data, const SsdModel& model, SsdTrainer& trainer,
+                  const TrainSsdOptions& options, const std::string& training_run)
+      : data_(data),
+        model_(model),
+        trainer_(trainer),
+        options_(options),
+        training_run_(training_run) {}
+
+  void BeginEpoch(int epoch, const std::vector<int>& order) override {
+    loader_.reset();  // the previous epoch's thread first
+    loader_ = std::make_unique<BatchLoader>(data_, order, options_.batch_size, options_.seed, epoch,
+                                            options_.loader_capacity);
+  }
+
+  StepLoss Step(int /*epoch*/, int64_t /*step*/, const std::vector<int>& batch,
+                double learning_rate) override {
+    // The loader's batches are the same consecutive slices of the order as the loop's.
+    const std::optional<TrainBatch> next = loader_->Next();
+    STEREODET_CHECK(next && next->batch_size == static_cast<int>(batch.size()))
+        << "the batch loader is out of step with the training loop";
+    const LossParts loss = trainer_.Step(*next, learning_rate);
+    return {loss.total, {loss.localization, loss.confidence}, {}};
+  }
+
+  void Save(int epochs_done) override {
+    model_.Save(options_.out_dir, training_run_);
+    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
+  }
+
+ private:
+  const SsdTrainingData& data_;
+  const SsdModel& model_;
+  SsdTrainer& trainer_;
+  const TrainSsdOptions& options_;
+  const std::string& training_run_;
+  std::unique_ptr<BatchLoader> loader_;
+};
 
 }  // namespace
 
@@ -65,23 +106,15 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   TrainSsdSummary summary;
 
   namespace fs = std::filesystem;
-  CheckOutputDoesNotOverlapInputs("--out", options.out_dir,
-                                  {{"--data", options.data_root / "training"},
-                                   {"--data", options.data_root / "ImageSets"},
-                                   {"--stereo", options.data.stereo_dir}});
-  const OutputLock lock(options.out_dir);  // two trainings into one folder would interleave
+  const TrainingFolder folder(options.out_dir, options.data_root,
+                              {{"--stereo", options.data.stereo_dir}}, "train ssd", options.resume,
+                              options.force);
+  const bool resuming = folder.resuming();
+  const fs::path& config_path = folder.config_path();
   // With --resume the model folder's settings win; asking for different ones is a mistake.
   SsdConfig config = options.model;
-  const fs::path config_path = options.out_dir / "model.json";
-  const fs::path checkpoint_path = options.out_dir / kCheckpointFile;
-  const bool resuming =
-      PrepareModelFolder(options.out_dir, "train ssd", options.resume, options.force);
-  // The id that ties model.json to checkpoint.pt: kept by a resumed run, new for a new one (and
-  // for a folder written before ids were recorded).
-  std::string recorded_run;
   if (resuming) {
-    const std::string saved_text = ReadFile(config_path);
-    recorded_run = ReadWeightsRecord(saved_text, config_path.string()).training_run;
+    const std::string& saved_text = folder.config_text();
     const SsdConfig saved = SsdConfigFromJson(saved_text, config_path.string());
     STEREODET_CHECK(saved.encoding == config.encoding)
         << "--resume: " << config_path.string() << " was trained with --input "
@@ -100,11 +133,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   }
 
   const KittiDataset dataset(options.data_root, "training");
-  std::vector<std::string> ids = dataset.ReadSplit(options.split);
-  if (options.max_frames > 0 && static_cast<int>(ids.size()) > options.max_frames) {
-    ids.resize(options.max_frames);
-  }
-  STEREODET_CHECK(!ids.empty()) << "split '" << options.split << "' has no frames";
+  const std::vector<std::string> ids = TrainingFrameIds(dataset, options.split, options.max_frames);
   if (options.auto_match_scale && !resuming && UsesHeight(config.encoding) &&
       options.data.stereo_dir.empty()) {
     // A missing first image is reported by SsdTrainingData with the other missing files.
@@ -122,9 +151,9 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
-  int start_epoch = resuming ? trainer.LoadCheckpoint(checkpoint_path, recorded_run) : 0;
-  const std::string training_run = recorded_run.empty() ? NewTrainingRunId() : recorded_run;
-  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << checkpoint_path.string();
+  const int start_epoch =
+      resuming ? trainer.LoadCheckpoint(folder.checkpoint_path(), folder.recorded_run()) : 0;
+  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << folder.checkpoint_path().string();
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -136,16 +165,23 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   summary.stereo_seconds = data_timer.ElapsedSeconds();
   summary.frames = data.size();
 
-  RunManifest manifest;
-  manifest.tool = "train ssd";
-  manifest.version = StereodetVersion();
-  manifest.command_line = options.command_line;
-  manifest.inputs = {{"data", options.data_root.string()}, {"split", options.split}};
+  TrainingLoopOptions loop;
+  loop.out_dir = options.out_dir;
+  loop.num_frames = data.size();
+  loop.start_epoch = start_epoch;
+  loop.schedule = TrainingSchedule::Of(options);
+  loop.columns = {.frames = "images",
+                  .terms = {"localization_loss", "confidence_loss"},
+                  .term_labels = {"box", "cls"},
+                  .counts = {},
+                  .rate = "images_per_s"};
+  loop.manifest =
+      TrainingManifest("train ssd", options.command_line, options.data_root, options.split);
   if (!options.data.stereo_dir.empty()) {
-    manifest.inputs.emplace_back("stereo", options.data.stereo_dir.string());
+    loop.manifest.inputs.emplace_back("stereo", options.data.stereo_dir.string());
   }
-  auto write_manifest = [&](int epochs_done) {
-    manifest.settings_json = fmt::format(
+  loop.settings_json = [&](int epochs_done) {
+    return fmt::format(
         R"({{"encoding": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
         R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
         R"("max_frames": {}, "frames": {}, "width": {}, "height": {}, "base_channels": {}}})",
@@ -153,68 +189,14 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
         options.learning_rate, options.warmup_steps, options.final_lr_fraction, options.seed,
         options.max_frames, ids.size(), config.InputWidth(), config.InputHeight(),
         config.base_channels);
-    WriteRunManifest(options.out_dir, manifest);
   };
-  write_manifest(start_epoch);
-  const std::filesystem::path log_path = options.out_dir / kTrainLogFile;
-  std::string log = KeptLogLines(log_path, kLogHeader, start_epoch);
-
-  const int64_t steps_per_epoch = (data.size() + options.batch_size - 1) / options.batch_size;
-  const int64_t total_steps = steps_per_epoch * options.epochs;
-  if (const std::string warning =
-          WarmupWarning(options.warmup_steps, steps_per_epoch, options.epochs);
-      !warning.empty() && options.progress.stream != nullptr) {
-    std::fputs(warning.c_str(), options.progress.stream);
-  }
-  double train_seconds = 0;
-  int64_t images_trained = 0;
-  const int end_epoch = options.max_epochs_this_run > 0
-                            ? std::min(options.epochs, start_epoch + options.max_epochs_this_run)
-                            : options.epochs;
-  for (int epoch = start_epoch; epoch < end_epoch; ++epoch) {
-    const Timer epoch_timer;
-    BatchLoader loader(data, EpochOrder(data.size(), options.seed, epoch), options.batch_size,
-                       options.seed, epoch, options.loader_capacity);
-    ProgressReporter progress(fmt::format("epoch {}/{}", epoch + 1, options.epochs), data.size(),
-                              options.progress);
-    double loss_sum = 0, loc_sum = 0, conf_sum = 0, lr = 0;
-    int64_t step = epoch * steps_per_epoch;
-    int steps = 0, images = 0;
-    while (std::optional<TrainBatch> batch = loader.Next()) {
-      lr = ScheduledLearningRate(options, step, total_steps);
-      const LossParts loss = trainer.Step(*batch, lr);
-      STEREODET_CHECK_IO(std::isfinite(loss.total))
-          << "training diverged at epoch " << epoch + 1 << ", step " << step << " (loss "
-          << loss.total << "); try a lower --lr";
-      loss_sum += loss.total;
-      loc_sum += loss.localization;
-      conf_sum += loss.confidence;
-      ++steps;
-      ++step;
-      images += batch->batch_size;
-      progress.Add(batch->batch_size,
-                   fmt::format("loss {:.3f} (box {:.3f} cls {:.3f})", loss_sum / steps,
-                               loc_sum / steps, conf_sum / steps));
-    }
-    progress.Finish();
-    const double epoch_seconds = epoch_timer.ElapsedSeconds();
-    train_seconds += epoch_seconds;
-    images_trained += images;
-
-    // Weights and config first, then the checkpoint: a crash in between resumes from the previous
-    // epoch and redoes this one.
-    model.Save(options.out_dir, training_run);
-    trainer.SaveCheckpoint(checkpoint_path, epoch + 1, training_run);
-    log += fmt::format("{},{},{},{:.6f},{:.6f},{:.6f},{:.6g},{:.3f},{:.1f}\n", epoch + 1, steps,
-                       images, loss_sum / steps, loc_sum / steps, conf_sum / steps, lr,
-                       images / epoch_seconds, epoch_seconds);
-    WriteFileAtomically(log_path, log);
-    write_manifest(epoch + 1);
-    summary.epochs_done = epoch + 1;
-    ++summary.epochs_run;
-    summary.final_loss = loss_sum / steps;
-  }
-  summary.images_per_second = train_seconds > 0 ? images_trained / train_seconds : 0;
+  loop.progress = options.progress;
+  SsdTrainingTask task(data, model, trainer, options, folder.training_run());
+  const TrainingLoopSummary done = RunTrainingLoop(task, loop);
+  summary.epochs_done = done.epochs_done;
+  summary.epochs_run = done.epochs_run;
+  summary.final_loss = done.final_loss;
+  summary.images_per_second = done.FramesPerSecond();
   summary.seconds = total_timer.ElapsedSeconds();
   return summary;
 }

@@ -1,5 +1,5 @@
 // Internal tests of the network (includes LibTorch): the folded learned compression is exact.
-#include "stereodet/models/ssd_net.h"
+#include "stereodet/models/ssd/ssd_net.h"
 
 #include <gtest/gtest.h>
 

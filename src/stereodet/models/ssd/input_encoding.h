@@ -4,8 +4,8 @@
 // backbone: rgb and rgbh-fixed give it three channels directly; rgbh-learned gives four (5-bit R,
 // G, B and the 9-bit height) and the network's first layer, a learned 1x1 convolution, compresses
 // R, G, B to two channels, so the backbone again sees three.
-#ifndef STEREODET_MODELS_INPUT_ENCODING_H_
-#define STEREODET_MODELS_INPUT_ENCODING_H_
+#ifndef STEREODET_MODELS_SSD_INPUT_ENCODING_H_
+#define STEREODET_MODELS_SSD_INPUT_ENCODING_H_
 
 #include <opencv2/core.hpp>
 #include <optional>
@@ -48,4 +48,4 @@ PlanarImage EncodeNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
 
 }  // namespace stereodet
 
-#endif  // STEREODET_MODELS_INPUT_ENCODING_H_
+#endif  // STEREODET_MODELS_SSD_INPUT_ENCODING_H_

@@ -1,12 +1,11 @@
 // End to end on a tiny KITTI-format dataset written by the test: train, resume, detect (seconds).
-#include "stereodet/models/ssd_train.h"
+#include "stereodet/models/ssd/ssd_train.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -16,8 +15,8 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
-#include "stereodet/models/ssd.h"
-#include "stereodet/models/ssd_detect.h"
+#include "stereodet/models/ssd/ssd_detect.h"
+#include "stereodet/models/ssd/ssd_model.h"
 #include "stereodet/models/train_common.h"
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/util/atomic_file.h"
@@ -404,42 +403,6 @@ TEST(SsdTrainTest, StereoFolderHeightsGiveWhatMatchingGives) {
   }
 }
 
-TEST(SsdDetectTest, TwoStagePipelineConsumesInOrderAndRethrows) {
-  for (bool overlap : {false, true}) {
-    for (int n : {0, 1, 2, 7}) {
-      std::vector<int> slot(2, -1), consumed;
-      RunTwoStagePipeline(
-          n, overlap, [&](int k) { slot[k % 2] = k * 10; },
-          [&](int k) {
-            EXPECT_EQ(slot[k % 2], k * 10);  // its own preparation, not the next one's
-            consumed.push_back(k);
-          });
-      std::vector<int> expected(n);
-      std::iota(expected.begin(), expected.end(), 0);
-      EXPECT_EQ(consumed, expected) << "overlap " << overlap << ", " << n << " batches";
-    }
-    // A failing preparation stops the loop: nothing after it is consumed.
-    std::vector<int> consumed;
-    EXPECT_THROW(RunTwoStagePipeline(
-                     5, overlap,
-                     [](int k) {
-                       if (k == 2) throw std::runtime_error("frame 2 unreadable");
-                     },
-                     [&](int k) { consumed.push_back(k); }),
-                 std::runtime_error);
-    EXPECT_EQ(consumed, (std::vector<int>{0, 1}));
-    // So does a failing consumer, after the preparation in flight has finished.
-    int prepared = 0;
-    EXPECT_THROW(RunTwoStagePipeline(
-                     5, overlap, [&](int) { ++prepared; },
-                     [](int k) {
-                       if (k == 1) throw std::invalid_argument("bad batch");
-                     }),
-                 std::invalid_argument);
-    EXPECT_EQ(prepared, overlap ? 3 : 2);
-  }
-}
-
 TEST(SsdDetectTest, RefusesAnOutputInsideTheInputsOrAForeignFolder) {
   const fs::path root = WriteTinyDataset("refuse_data", 1);
   DetectSsdOptions detect;
@@ -636,23 +599,6 @@ TEST(DetectSsdShardTest, MergedShardsAreOneRunByteForByte) {
   EXPECT_EQ(files, 6);  // five frames and run.json
   EXPECT_GT(fs::file_size(detect.out_dir / (FrameId(4) + ".txt")), 100u);  // not vacuous
   EXPECT_FALSE(fs::exists(merge.out_dir / kDetectShardFile));
-}
-
-TEST(SsdDetectTest, ToKittiDetectionsScalesClipsAndMarks3DUnknown) {
-  const std::vector<ScoredBox> boxes = {{{10, 5, 20, 15}, 0.9f, 2},
-                                        {{-5, -5, 700, 200}, 0.5f, 1},
-                                        {{700, 0, 800, 10}, 0.4f, 1}};  // fully outside
-  const std::vector<Object> d =
-      ToKittiDetections(boxes, {"Car", "Pedestrian"}, 2.0, 2.0, 1242, 375);
-  ASSERT_EQ(d.size(), 2u);
-  EXPECT_EQ(d[0].type, "Pedestrian");
-  EXPECT_EQ(d[0].box, (Box2D{20, 10, 40, 30}));
-  EXPECT_NEAR(*d[0].score, 0.9, 1e-6);
-  EXPECT_FALSE(d[0].Has3D());
-  EXPECT_EQ(d[0].alpha, -10.0);
-  EXPECT_EQ(d[1].box, (Box2D{0, 0, 1242, 375}));
-  EXPECT_THROW(ToKittiDetections({{{0, 0, 1, 1}, 0.5f, 3}}, {"Car", "Pedestrian"}, 1, 1, 10, 10),
-               std::invalid_argument);
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "stereodet/report/evaluation.h"
+#include "stereodet/pipelines/evaluation.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

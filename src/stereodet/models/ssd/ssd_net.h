@@ -1,7 +1,7 @@
 // INTERNAL to the models module (includes LibTorch): the SSD network and the MultiBox loss. Only
 // ssd_net.cc and ssd.cc include this header; everything else uses ssd.h.
-#ifndef STEREODET_MODELS_SSD_NET_H_
-#define STEREODET_MODELS_SSD_NET_H_
+#ifndef STEREODET_MODELS_SSD_SSD_NET_H_
+#define STEREODET_MODELS_SSD_SSD_NET_H_
 
 #include <torch/torch.h>
 
@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd/ssd_model.h"
 
 namespace stereodet::internal {
 
@@ -79,4 +79,4 @@ int64_t CountMultiplyAccumulates(const SsdConfig& config);
 
 }  // namespace stereodet::internal
 
-#endif  // STEREODET_MODELS_SSD_NET_H_
+#endif  // STEREODET_MODELS_SSD_SSD_NET_H_

@@ -1,4 +1,4 @@
-#include "stereodet/models/ssd_net.h"
+#include "stereodet/models/ssd/ssd_net.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// eval --shard and eval merge (report/evaluation.h): random frames split into 2 and 3 shards,
+// eval --shard and eval merge (pipelines/evaluation.h): random frames split into 2 and 3 shards,
 // evaluated shard by shard and merged, give the files of one run byte for byte (results.json up
 // to its provenance), with every matcher, a filter in both modes, two overlap sets and records.
 #include <gmock/gmock.h>
@@ -15,7 +15,7 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/kitti/label_io.h"
-#include "stereodet/report/evaluation.h"
+#include "stereodet/pipelines/evaluation.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_temp_dir.h"
 

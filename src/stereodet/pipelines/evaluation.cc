@@ -1,4 +1,4 @@
-#include "stereodet/report/evaluation.h"
+#include "stereodet/pipelines/evaluation.h"
 
 #include <fmt/format.h>
 
@@ -8,8 +8,8 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/pipelines/evaluation_internal.h"
 #include "stereodet/report/bootstrap_report.h"
-#include "stereodet/report/evaluation_internal.h"
 #include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"

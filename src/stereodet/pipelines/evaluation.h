@@ -8,8 +8,8 @@
 //   options.out = "eval";  // results.json, summary.csv, curves/
 //   const EvaluationResult result = RunEvaluation(options);
 //   std::cout << FormatEvalTable(result.runs);
-#ifndef STEREODET_REPORT_EVALUATION_H_
-#define STEREODET_REPORT_EVALUATION_H_
+#ifndef STEREODET_PIPELINES_EVALUATION_H_
+#define STEREODET_PIPELINES_EVALUATION_H_
 
 #include <cstdint>
 #include <filesystem>
@@ -216,4 +216,4 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
 
 }  // namespace stereodet
 
-#endif  // STEREODET_REPORT_EVALUATION_H_
+#endif  // STEREODET_PIPELINES_EVALUATION_H_

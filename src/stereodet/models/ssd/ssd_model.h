@@ -12,8 +12,8 @@
 //   checkpoint.pt   training state for --resume (weights, optimizer, epochs done, the config and
 //                   the training run it was written by); not needed to detect
 //   train_log.csv   one line per epoch (ssd_train.h)
-#ifndef STEREODET_MODELS_SSD_H_
-#define STEREODET_MODELS_SSD_H_
+#ifndef STEREODET_MODELS_SSD_SSD_MODEL_H_
+#define STEREODET_MODELS_SSD_SSD_MODEL_H_
 
 #include <cstdint>
 #include <filesystem>
@@ -25,7 +25,8 @@
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/default_boxes.h"
 #include "stereodet/models/device.h"
-#include "stereodet/models/input_encoding.h"
+#include "stereodet/models/model_json.h"
+#include "stereodet/models/ssd/input_encoding.h"
 #include "stereodet/stereo/stereo_encoder.h"
 
 namespace stereodet {
@@ -46,30 +47,14 @@ struct SsdConfig {
   int InputHeight() const { return boxes.input_height; }
 };
 
-// What model.json records about its model.pt, so that weights from another training (another
-// input encoding, other shapes) are refused instead of loading silently.
-struct WeightsRecord {
-  std::string fnv1a64;      // FNV-1a 64 of model.pt's bytes, 16 hex digits; empty = not recorded
-  int input_channels = 0;   // NetworkInputChannels(encoding)
-  int64_t parameters = -1;  // SsdModel::ParameterCount(); -1 = not recorded
-  // The training run (train ssd) that wrote model.pt, 16 hex digits; its checkpoint.pt records the
-  // same, so --resume refuses a checkpoint copied from another folder. Empty = not recorded.
-  std::string training_run;
-};
-
 // JSON text of a config, and back. Parse errors throw ParseError naming `source`. With a
 // non-empty `weights.fnv1a64` the text has a "weights" object {file, fnv1a64, input_channels,
 // parameters, and training_run when not empty}, which SsdConfigFromJson ignores and
-// ReadWeightsRecord reads (empty record when absent). With `stereo` the text has a "stereo" object,
-// StereoSettingsJson's (disparity, ground, height_code), which ReadStereoRecord reads.
+// ReadWeightsRecord (model_json.h) reads. With `stereo` the text has a "stereo" object,
+// which ReadStereoRecord reads.
 std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights = {},
                             const std::optional<StereoOptions>& stereo = std::nullopt);
 SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source);
-WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source);
-// The stereo settings model.json records; a setting (or the whole "stereo" object: rgb models,
-// model.json written before session 5) that is absent reads as StereoOptions' documented default.
-// Throws ParseError naming `source` and the key for a bad value.
-StereoOptions ReadStereoRecord(const std::string& text, const std::string& source);
 
 // Raw network outputs for a batch, row-major: deltas [image][default box][4], probabilities
 // [image][default box][class] (softmax over background + classes).
@@ -89,14 +74,6 @@ struct TrainBatch {
   std::vector<float> deltas;    // [batch][default box][4]: box targets (box_coder.h) for positives
   int num_positive = 0;         // over the batch
 };
-
-// Concatenates `inputs` (each `channels` planes of height x width) into one
-// [image][channel][row][column] array. Throws std::invalid_argument for an input of another shape.
-std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
-                               int width);
-
-// Threads LibTorch's operators use (0 = leave LibTorch's default, all cores). Process-wide.
-void SetTorchThreads(int num_threads);
 
 // Not thread-safe: one thread at a time may call Forward/Detect (LibTorch parallelises inside).
 class SsdModel {
@@ -206,4 +183,4 @@ class SsdTrainer {
 
 }  // namespace stereodet
 
-#endif  // STEREODET_MODELS_SSD_H_
+#endif  // STEREODET_MODELS_SSD_SSD_MODEL_H_

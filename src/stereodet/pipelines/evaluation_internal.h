@@ -1,13 +1,13 @@
 // RunEvaluation's steps, shared with RunEvaluationMerge (eval_shard.cc). For the report module and
 // its tests only.
-#ifndef STEREODET_REPORT_EVALUATION_INTERNAL_H_
-#define STEREODET_REPORT_EVALUATION_INTERNAL_H_
+#ifndef STEREODET_PIPELINES_EVALUATION_INTERNAL_H_
+#define STEREODET_PIPELINES_EVALUATION_INTERNAL_H_
 
 #include <filesystem>
 #include <functional>
 #include <optional>
 
-#include "stereodet/report/evaluation.h"
+#include "stereodet/pipelines/evaluation.h"
 #include "stereodet/util/output_folder.h"
 
 namespace stereodet {
@@ -30,4 +30,4 @@ void WriteEvalShardFiles(const std::filesystem::path& dir, const EvalInputOption
 
 }  // namespace stereodet
 
-#endif  // STEREODET_REPORT_EVALUATION_INTERNAL_H_
+#endif  // STEREODET_PIPELINES_EVALUATION_INTERNAL_H_

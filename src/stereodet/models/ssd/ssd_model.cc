@@ -1,5 +1,5 @@
 // SsdModel and SsdTrainer: the pimpl boundary between the torch-free API (ssd.h) and LibTorch.
-#include "stereodet/models/ssd.h"
+#include "stereodet/models/ssd/ssd_model.h"
 
 #include <cstdint>
 #include <limits>
@@ -7,38 +7,14 @@
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
-#include "stereodet/models/ssd_net.h"
+#include "stereodet/models/model_json_internal.h"
+#include "stereodet/models/ssd/ssd_net.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
-
-namespace {
-
-constexpr char kConfigFile[] = "model.json";
-constexpr char kWeightsFile[] = "model.pt";
-constexpr int kConfigVersion = 1;
-
-// j[field] as an int: a JSON integer in int's range. nlohmann's get<int>() would cast a float such
-// as 1e300 (undefined behaviour) or cut a large integer silently.
-int GetInt(const nlohmann::json& j, const std::string& field, const std::string& source) {
-  const nlohmann::json& value = j.at(field);
-  if (!value.is_number_integer()) {
-    throw ParseError(source, 0, field, "expected an integer, got " + value.dump().substr(0, 40));
-  }
-  const bool in_range =
-      value.is_number_unsigned()
-          ? value.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<int>::max())
-          : value.get<int64_t>() >= std::numeric_limits<int>::min() &&
-                value.get<int64_t>() <= std::numeric_limits<int>::max();
-  if (!in_range) throw ParseError(source, 0, field, value.dump() + " is out of range");
-  return value.is_number_unsigned() ? static_cast<int>(value.get<uint64_t>())
-                                    : static_cast<int>(value.get<int64_t>());
-}
-
-}  // namespace
 
 // --- SsdConfig
 // --------------------------------------------------------------------------------------
@@ -59,9 +35,7 @@ void SsdConfig::Check() const {
 
 std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weights,
                             const std::optional<StereoOptions>& stereo) {
-  nlohmann::json j;
-  j["version"] = kConfigVersion;
-  j["architecture"] = "ssd";
+  nlohmann::json j = internal::NewModelJson("ssd");
   j["encoding"] = InputEncodingName(config.encoding);
   j["classes"] = config.classes;
   j["input_width"] = config.boxes.input_width;
@@ -71,36 +45,14 @@ std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weight
   j["min_size_fraction"] = config.boxes.min_size_fraction;
   j["aspect_ratios"] = config.boxes.aspect_ratios;
   j["base_channels"] = config.base_channels;
-  if (!weights.fnv1a64.empty()) {
-    j["weights"] = {{"file", kWeightsFile},
-                    {"fnv1a64", weights.fnv1a64},
-                    {"input_channels", weights.input_channels},
-                    {"parameters", weights.parameters}};
-    if (!weights.training_run.empty()) j["weights"]["training_run"] = weights.training_run;
-  }
-  if (stereo) j["stereo"] = nlohmann::json::parse(StereoSettingsJson(*stereo));
-  return j.dump(2) + "\n";
+  return internal::FinishModelJson(std::move(j), weights, stereo);
 }
 
 SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
-  }
+  const nlohmann::json j = internal::ParseModelJson(text, source, "ssd");
   std::string field;
   try {
     SsdConfig config;
-    field = "version";
-    const int version = GetInt(j, field, source);
-    if (version != kConfigVersion) {
-      throw ParseError(source, 0, field, "unsupported version " + std::to_string(version));
-    }
-    field = "architecture";
-    if (j.at(field).get<std::string>() != "ssd") {
-      throw ParseError(source, 0, field, "expected \"ssd\"");
-    }
     field = "encoding";
     const std::string encoding = j.at(field).get<std::string>();
     const std::optional<InputEncoding> parsed = ParseInputEncoding(encoding);
@@ -113,19 +65,19 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
     field = "classes";
     config.classes = j.at(field).get<std::vector<std::string>>();
     field = "input_width";
-    config.boxes.input_width = GetInt(j, field, source);
+    config.boxes.input_width = internal::JsonInt(j, field, source);
     field = "input_height";
-    config.boxes.input_height = GetInt(j, field, source);
+    config.boxes.input_height = internal::JsonInt(j, field, source);
     field = "num_maps";
-    config.boxes.num_maps = GetInt(j, field, source);
+    config.boxes.num_maps = internal::JsonInt(j, field, source);
     field = "first_map_stride_log2";
-    config.boxes.first_map_stride_log2 = GetInt(j, field, source);
+    config.boxes.first_map_stride_log2 = internal::JsonInt(j, field, source);
     field = "min_size_fraction";
     config.boxes.min_size_fraction = j.at(field).get<double>();
     field = "aspect_ratios";
     config.boxes.aspect_ratios = j.at(field).get<std::vector<double>>();
     field = "base_channels";
-    config.base_channels = GetInt(j, field, source);
+    config.base_channels = internal::JsonInt(j, field, source);
     field = "";
     config.Check();
     return config;
@@ -136,71 +88,8 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
   }
 }
 
-StereoOptions ReadStereoRecord(const std::string& text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, "", std::string("not valid JSON: ") + e.what());
-  }
-  if (!j.is_object() || !j.contains("stereo")) return StereoOptions();
-  if (!j["stereo"].is_object()) throw ParseError(source, 0, "stereo", "expected an object");
-  return StereoOptionsFromJson(j["stereo"].dump(), source);
-}
-
-WeightsRecord ReadWeightsRecord(const std::string& text, const std::string& source) {
-  WeightsRecord record;
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-    if (!j.contains("weights")) return record;
-    const nlohmann::json& w = j.at("weights");
-    record.fnv1a64 = w.at("fnv1a64").get<std::string>();
-    record.input_channels = GetInt(w, "input_channels", source);
-    if (!w.at("parameters").is_number_integer()) {
-      throw ParseError(source, 0, "weights.parameters", "expected an integer");
-    }
-    record.parameters = w.at("parameters").get<int64_t>();
-    if (w.contains("training_run")) record.training_run = w.at("training_run").get<std::string>();
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, "weights", e.what());
-  }
-  return record;
-}
-
-std::vector<float> StackPlanar(const std::vector<PlanarImage>& inputs, int channels, int height,
-                               int width) {
-  const size_t size = static_cast<size_t>(channels) * height * width;
-  std::vector<float> stacked;
-  stacked.reserve(inputs.size() * size);
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    const PlanarImage& input = inputs[i];
-    STEREODET_CHECK(input.channels == channels && input.rows == height && input.cols == width &&
-                    input.data.size() == size)
-        << "input " << i << " must have " << channels << " planes of " << width << "x" << height
-        << " px, got " << input.channels << " of " << input.cols << "x" << input.rows;
-    stacked.insert(stacked.end(), input.data.begin(), input.data.end());
-  }
-  return stacked;
-}
-
-void SetTorchThreads(int num_threads) {
-  STEREODET_CHECK(num_threads >= 0) << "threads must be >= 0, got " << num_threads;
-  if (num_threads > 0) torch::set_num_threads(num_threads);
-}
-
 // --- SsdModel
 // ---------------------------------------------------------------------------------------
-
-namespace {
-
-int64_t CountParameters(internal::SsdNetImpl& net) {
-  int64_t count = 0;
-  for (const auto& p : net.parameters()) count += p.numel();
-  return count;
-}
-
-}  // namespace
 
 struct SsdModel::Impl {
   Impl(const SsdConfig& c, ComputeDevice d)
@@ -242,35 +131,25 @@ SsdModel::SsdModel(SsdModel&&) noexcept = default;
 SsdModel& SsdModel::operator=(SsdModel&&) noexcept = default;
 
 SsdModel SsdModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  const std::filesystem::path config_path = model_dir / kConfigFile;
+  const std::filesystem::path config_path = model_dir / kModelConfigFile;
   const std::string config_text = ReadFile(config_path);
   const SsdConfig config = SsdConfigFromJson(config_text, config_path.string());
   auto impl = std::make_unique<Impl>(config, device);
   impl->stereo = ReadStereoRecord(config_text, config_path.string());
-  const std::filesystem::path weights_path = model_dir / kWeightsFile;
-  const WeightsRecord record = ReadWeightsRecord(config_text, config_path.string());
-  internal::CheckWeightsFile(weights_path, config_path.string(), record.fnv1a64);
-  internal::LoadWeights(weights_path, config_path.string(), *impl->net, impl->device);
-  SsdModel model(std::move(impl));
-  internal::CheckParameterCount(model.ParameterCount(), record.parameters, weights_path,
-                                config_path.string());
-  return model;
+  internal::LoadModelWeights(model_dir, config_text, *impl->net, impl->device);
+  return SsdModel(std::move(impl));
 }
 
 void SsdModel::Save(const std::filesystem::path& model_dir, const std::string& training_run) const {
-  std::filesystem::create_directories(model_dir);
-  const std::string hash = internal::SaveWeights(model_dir / kWeightsFile, *impl_->net);
-  // Written second, with the weights' hash: until it is in place, model.json still names the
-  // previous weights, and Load refuses the pair rather than mixing them.
-  WriteFileAtomically(
-      model_dir / kConfigFile,
-      SsdConfigToJson(
-          impl_->config,
-          {.fnv1a64 = hash,
-           .input_channels = NetworkInputChannels(impl_->config.encoding),
-           .parameters = ParameterCount(),
-           .training_run = training_run},
-          UsesHeight(impl_->config.encoding) ? std::optional(impl_->stereo) : std::nullopt));
+  internal::SaveModelFolder(model_dir, *impl_->net, [&](const std::string& hash) {
+    return SsdConfigToJson(
+        impl_->config,
+        {.fnv1a64 = hash,
+         .input_channels = NetworkInputChannels(impl_->config.encoding),
+         .parameters = ParameterCount(),
+         .training_run = training_run},
+        UsesHeight(impl_->config.encoding) ? std::optional(impl_->stereo) : std::nullopt);
+  });
 }
 
 const SsdConfig& SsdModel::config() const { return impl_->config; }
@@ -313,7 +192,7 @@ std::vector<std::vector<ScoredBox>> SsdModel::Detect(const std::vector<PlanarIma
   return detections;
 }
 
-int64_t SsdModel::ParameterCount() const { return CountParameters(*impl_->net); }
+int64_t SsdModel::ParameterCount() const { return internal::CountParameters(*impl_->net); }
 
 int64_t SsdModel::CompressionParameterCount() const {
   return impl_->net->CompressionParameterCount();
@@ -416,16 +295,16 @@ void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_do
                                 const std::string& training_run) const {
   internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done,
                                    {.config_json = SsdConfigToJson(impl_->model.config),
-                                    .parameters = CountParameters(*impl_->model.net),
+                                    .parameters = internal::CountParameters(*impl_->model.net),
                                     .training_run = training_run});
 }
 
 int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run) {
-  return internal::LoadTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer,
-                                          impl_->model.device,
-                                          {.config_json = SsdConfigToJson(impl_->model.config),
-                                           .parameters = CountParameters(*impl_->model.net),
-                                           .training_run = training_run});
+  return internal::LoadTrainingCheckpoint(
+      path, *impl_->model.net, impl_->optimizer, impl_->model.device,
+      {.config_json = SsdConfigToJson(impl_->model.config),
+       .parameters = internal::CountParameters(*impl_->model.net),
+       .training_run = training_run});
 }
 
 }  // namespace stereodet

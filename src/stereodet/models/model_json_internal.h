@@ -1,0 +1,34 @@
+// model.json's shared parts as nlohmann::json, for the families' config readers and writers.
+#ifndef STEREODET_MODELS_MODEL_JSON_INTERNAL_H_
+#define STEREODET_MODELS_MODEL_JSON_INTERNAL_H_
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "stereodet/models/model_json.h"
+
+namespace stereodet::internal {
+
+// j[field] as an int: a JSON integer in int's range. nlohmann's get<int>() would cast a float such
+// as 1e300 (undefined behaviour) or cut a large integer silently. Throws ParseError naming
+// `source` and `field`, nlohmann's exception when the field is missing.
+int JsonInt(const nlohmann::json& j, const std::string& field, const std::string& source);
+
+// A new model.json object: {"version": kModelConfigVersion, "architecture": architecture}.
+nlohmann::json NewModelJson(const std::string& architecture);
+// Adds `weights` as the "weights" object (nothing when its hash is empty) and, when given, the
+// stereo settings as the "stereo" object; returns the text model.json holds (2-space indent, a
+// final newline).
+std::string FinishModelJson(nlohmann::json j, const WeightsRecord& weights,
+                            const std::optional<StereoOptions>& stereo = std::nullopt);
+
+// model.json's text parsed, its version checked and its architecture `architecture` ("ssd",
+// "rpn", "det3d"). Throws ParseError naming `source` and the field ("not valid JSON", "unsupported
+// version 2", "expected \"rpn\" (a model of `train rpn`)").
+nlohmann::json ParseModelJson(const std::string& text, const std::string& source,
+                              const std::string& architecture);
+
+}  // namespace stereodet::internal
+
+#endif  // STEREODET_MODELS_MODEL_JSON_INTERNAL_H_

@@ -1,0 +1,57 @@
+// What the families' training data share: the order frames are visited in, each sample's seed,
+// the image augmentation's options and its photometric jitter, and a frame's 2D labels as training
+// targets. Every draw is a function of (run seed, epoch, frame), never of the order or the thread
+// that made it, so a resumed training draws what an uninterrupted one draws.
+#ifndef STEREODET_MODELS_TRAIN_DATA_H_
+#define STEREODET_MODELS_TRAIN_DATA_H_
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "stereodet/kitti/object.h"
+#include "stereodet/models/box_coder.h"
+
+namespace stereodet {
+
+// The image augmentation of the single-shot detector (ssd/ssd_data.h: zoom, flip, jitter); the
+// two-stage detector (rpn/) uses its photometric jitter.
+struct AugmentOptions {
+  bool enabled = true;
+  double flip_probability = 0.5;
+  // Window = image / zoom, zoom log-uniform in [min_zoom, max_zoom] (< 1 zooms out, > 1 crops in).
+  double min_zoom = 0.8;
+  double max_zoom = 1.6;
+  // Colour only: value += U(-brightness, brightness) * 255; value = mean + U(1 - contrast,
+  // 1 + contrast) * (value - mean); saturation blends with grey by U(1 - saturation, 1 +
+  // saturation).
+  double brightness = 0.12;
+  double contrast = 0.25;
+  double saturation = 0.25;
+  // An object that keeps less than this fraction of its box inside the window becomes an ignore
+  // region (neither positive nor negative).
+  double min_visible_fraction = 0.5;
+  void Check() const;  // throws std::invalid_argument
+};
+
+// The photometric jitter of AugmentOptions (brightness, contrast, saturation) on an 8-bit BGR
+// image in place, drawing three numbers from `rng`.
+void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& rng);
+
+// The training targets of a frame's labels in original image px: classes -> 1 + index in `classes`,
+// ignore types and too-small objects -> kIgnoreLabel, anything else dropped.
+std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
+                                         const std::vector<std::string>& classes,
+                                         const std::vector<std::string>& ignore_types,
+                                         double min_object_height_px);
+
+// A seed per (run seed, epoch, frame), independent of the order frames are visited in.
+uint64_t SampleSeed(uint64_t seed, int epoch, int frame_index);
+// Frame order of an epoch: a permutation of 0..n-1 drawn from (seed, epoch).
+std::vector<int> EpochOrder(int n, uint64_t seed, int epoch);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_TRAIN_DATA_H_

@@ -1,0 +1,185 @@
+#include "stereodet/models/trainer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "stereodet/models/model_json.h"
+#include "stereodet/models/train_common.h"
+#include "stereodet/models/train_data.h"
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/timer.h"
+#include "stereodet/util/version.h"
+
+namespace stereodet {
+
+std::string TrainingLogColumns::Header() const {
+  std::string header = "epoch,steps," + frames + ",loss";
+  for (const std::string& term : terms) header += "," + term;
+  for (const std::string& count : counts) header += "," + count;
+  return header + ",learning_rate," + rate + ",epoch_s";
+}
+
+namespace {
+
+// The running means of an epoch's loss and terms, and its counts' sums.
+struct EpochLoss {
+  double total = 0;
+  std::vector<double> terms;
+  std::vector<int64_t> counts;
+  int steps = 0;
+
+  void Add(const StepLoss& loss, const TrainingLogColumns& columns) {
+    STEREODET_CHECK(loss.terms.size() == columns.terms.size() &&
+                    loss.counts.size() == columns.counts.size())
+        << "a step gave " << loss.terms.size() << " loss terms and " << loss.counts.size()
+        << " counts; the log has " << columns.terms.size() << " and " << columns.counts.size();
+    if (terms.empty()) {
+      terms.assign(loss.terms.size(), 0.0);
+      counts.assign(loss.counts.size(), 0);
+    }
+    total += loss.total;
+    for (size_t i = 0; i < terms.size(); ++i) terms[i] += loss.terms[i];
+    for (size_t i = 0; i < counts.size(); ++i) counts[i] += loss.counts[i];
+    ++steps;
+  }
+  double Mean() const { return total / steps; }
+  double TermMean(size_t i) const { return terms[i] / steps; }
+
+  std::string ProgressText(const TrainingLogColumns& columns) const {
+    std::string text = fmt::format("loss {:.3f}", Mean());
+    std::string parts;
+    for (size_t i = 0; i < terms.size(); ++i) {
+      if (i >= columns.term_labels.size() || columns.term_labels[i].empty()) continue;
+      parts +=
+          fmt::format("{}{} {:.3f}", parts.empty() ? "" : " ", columns.term_labels[i], TermMean(i));
+    }
+    return parts.empty() ? text : text + " (" + parts + ")";
+  }
+};
+
+}  // namespace
+
+TrainingLoopSummary RunTrainingLoop(TrainingTask& task, const TrainingLoopOptions& options) {
+  const TrainingSchedule& schedule = options.schedule;
+  const int n = options.num_frames;
+  STEREODET_CHECK(n >= 1) << "no frames to train on";
+  STEREODET_CHECK(schedule.batch_size >= 1) << "batch size must be >= 1";
+  TrainingLoopSummary summary;
+  summary.epochs_done = options.start_epoch;
+
+  RunManifest manifest = options.manifest;
+  auto write_manifest = [&](int epochs_done) {
+    manifest.settings_json = options.settings_json(epochs_done);
+    WriteRunManifest(options.out_dir, manifest);
+  };
+  write_manifest(options.start_epoch);
+  const std::filesystem::path log_path = options.out_dir / kTrainLogFile;
+  std::string log = KeptLogLines(log_path, options.columns.Header(), options.start_epoch);
+
+  const int64_t steps_per_epoch = (n + schedule.batch_size - 1) / schedule.batch_size;
+  const int64_t total_steps = steps_per_epoch * schedule.epochs;
+  if (const std::string warning =
+          WarmupWarning(schedule.warmup_steps, steps_per_epoch, schedule.epochs);
+      !warning.empty() && options.progress.stream != nullptr) {
+    std::fputs(warning.c_str(), options.progress.stream);
+  }
+  const int end_epoch =
+      schedule.max_epochs_this_run > 0
+          ? std::min(schedule.epochs, options.start_epoch + schedule.max_epochs_this_run)
+          : schedule.epochs;
+  for (int epoch = options.start_epoch; epoch < end_epoch; ++epoch) {
+    const Timer epoch_timer;
+    const std::vector<int> order = EpochOrder(n, schedule.seed, epoch);
+    task.BeginEpoch(epoch, order);
+    ProgressReporter progress(fmt::format("epoch {}/{}", epoch + 1, schedule.epochs), n,
+                              options.progress);
+    EpochLoss sum;
+    double lr = 0;
+    int64_t step = epoch * steps_per_epoch;
+    int frames = 0;
+    for (int begin = 0; begin < n; begin += schedule.batch_size) {
+      const int end = std::min(n, begin + schedule.batch_size);
+      const std::vector<int> batch(order.begin() + begin, order.begin() + end);
+      lr = WarmupCosineLearningRate(schedule.learning_rate, schedule.warmup_steps,
+                                    schedule.final_lr_fraction, step, total_steps);
+      const StepLoss loss = task.Step(epoch, step, batch, lr);
+      STEREODET_CHECK_IO(std::isfinite(loss.total))
+          << "training diverged at epoch " << epoch + 1 << ", step " << step << " (loss "
+          << loss.total << "); try a lower --lr";
+      sum.Add(loss, options.columns);
+      ++step;
+      frames += end - begin;
+      progress.Add(end - begin, sum.ProgressText(options.columns));
+    }
+    progress.Finish();
+    const double epoch_seconds = epoch_timer.ElapsedSeconds();
+    summary.train_seconds += epoch_seconds;
+    summary.frames_trained += frames;
+    summary.steps_trained += sum.steps;
+
+    task.Save(epoch + 1);
+    log += fmt::format("{},{},{},{:.6f}", epoch + 1, sum.steps, frames, sum.Mean());
+    for (size_t i = 0; i < sum.terms.size(); ++i) log += fmt::format(",{:.6f}", sum.TermMean(i));
+    for (const int64_t count : sum.counts) log += fmt::format(",{}", count);
+    log += fmt::format(",{:.6g},{:.3f},{:.1f}\n", lr, frames / epoch_seconds, epoch_seconds);
+    WriteFileAtomically(log_path, log);
+    write_manifest(epoch + 1);
+    summary.epochs_done = epoch + 1;
+    ++summary.epochs_run;
+    summary.final_loss = sum.Mean();
+  }
+  return summary;
+}
+
+std::vector<std::string> TrainingFrameIds(const KittiDataset& dataset, const std::string& split,
+                                          int max_frames) {
+  std::vector<std::string> ids = dataset.ReadSplit(split);
+  if (max_frames > 0 && static_cast<int>(ids.size()) > max_frames) ids.resize(max_frames);
+  STEREODET_CHECK(!ids.empty()) << "split '" << split << "' has no frames";
+  return ids;
+}
+
+RunManifest TrainingManifest(const std::string& tool, const std::string& command_line,
+                             const std::filesystem::path& data_root, const std::string& split) {
+  RunManifest manifest;
+  manifest.tool = tool;
+  manifest.version = StereodetVersion();
+  manifest.command_line = command_line;
+  manifest.inputs = {{"data", data_root.string()}, {"split", split}};
+  return manifest;
+}
+
+namespace {
+
+// Runs before the lock is taken: an --out inside an input is refused before anything is created.
+const std::filesystem::path& CheckedOutDir(
+    const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
+    std::vector<std::pair<std::string, std::filesystem::path>> inputs) {
+  inputs.insert(inputs.begin(),
+                {{"--data", data_root / "training"}, {"--data", data_root / "ImageSets"}});
+  CheckOutputDoesNotOverlapInputs("--out", out_dir, inputs);
+  return out_dir;
+}
+
+}  // namespace
+
+TrainingFolder::TrainingFolder(
+    const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
+    const std::vector<std::pair<std::string, std::filesystem::path>>& inputs,
+    const std::string& tool, bool resume, bool force)
+    : lock_(CheckedOutDir(out_dir, data_root, inputs)),
+      config_path_(out_dir / kModelConfigFile),
+      checkpoint_path_(out_dir / kCheckpointFile) {
+  resuming_ = PrepareModelFolder(out_dir, tool, resume, force);
+  if (resuming_) {
+    config_text_ = ReadFile(config_path_);
+    recorded_run_ = ReadWeightsRecord(config_text_, config_path_.string()).training_run;
+  }
+  training_run_ = recorded_run_.empty() ? NewTrainingRunId() : recorded_run_;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,156 @@
+// The one training loop of the three families (`train ssd|rpn|det3d`): each family gives its data,
+// its loss and its network as a TrainingTask; the loop owns what they share, written once:
+//   - the frame order of every epoch (EpochOrder of the run's seed), in batches of batch_size;
+//   - the learning rate of every step (WarmupCosineLearningRate over all epochs' steps) and the
+//     warning when the warm-up outlasts the training;
+//   - the divergence check (a non-finite loss stops the run before anything of that epoch is
+//     saved, naming the epoch and step);
+//   - a progress line per epoch with the running mean of the loss and its terms;
+//   - after every epoch, in this order: the task's Save (model.pt, model.json, checkpoint.pt),
+//     the CSV log train_log.csv (kept across a resume: KeptLogLines), run.json's epochs_done.
+// Every draw a task makes is a function of (seed, epoch, frame) or (seed, step), never of the
+// order or thread, so a resumed training ends with the bytes of an uninterrupted one.
+#ifndef STEREODET_MODELS_TRAINER_H_
+#define STEREODET_MODELS_TRAINER_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/util/progress.h"
+#include "stereodet/util/run_manifest.h"
+
+namespace stereodet {
+
+// One optimizer step's loss: the total, the family's named terms (averaged over the epoch's steps
+// in the log) and counts (summed over the epoch), in TrainingLogColumns' order.
+struct StepLoss {
+  double total = 0;
+  std::vector<double> terms;
+  std::vector<int64_t> counts;
+};
+
+// The CSV log's columns: epoch, steps, `frames`, loss, terms..., counts..., learning_rate, `rate`,
+// epoch_s. Losses are written with 6 decimals, the rate with 6 significant digits, the rate of
+// frames with 3 decimals and the epoch's seconds with 1.
+struct TrainingLogColumns {
+  std::string frames = "frames";  // the column of frames trained ("images" for the SSD)
+  std::vector<std::string> terms;
+  // The progress line's short name of each term ("box", "cls"); an empty one is not shown.
+  std::vector<std::string> term_labels;
+  std::vector<std::string> counts;
+  std::string rate = "frames_per_s";
+  std::string Header() const;  // without the newline
+};
+
+// A family's part of a training. The loop calls, per epoch: BeginEpoch, then Step for each batch
+// in order, then Save.
+class TrainingTask {
+ public:
+  virtual ~TrainingTask() = default;
+  // The epoch's frame order (every frame index once), before its first step.
+  virtual void BeginEpoch(int epoch, const std::vector<int>& order) {
+    (void)epoch;
+    (void)order;
+  }
+  // One optimizer step at `learning_rate` on the frames `batch` (indices into the training data,
+  // the next slice of the epoch's order); `step` counts from the training's first step (epoch *
+  // steps per epoch + the step in the epoch). Returns the loss before the step.
+  virtual StepLoss Step(int epoch, int64_t step, const std::vector<int>& batch,
+                        double learning_rate) = 0;
+  // Writes the model folder's model.pt and model.json, then checkpoint.pt, after `epochs_done`
+  // epochs (a crash in between resumes from the previous epoch and redoes this one).
+  virtual void Save(int epochs_done) = 0;
+};
+
+// The schedule's fields, as every family's Train*Options names them.
+struct TrainingSchedule {
+  int epochs = 1;
+  int batch_size = 1;
+  double learning_rate = 1e-3;
+  int warmup_steps = 0;
+  double final_lr_fraction = 0;
+  uint64_t seed = 1;
+  int max_epochs_this_run = 0;  // 0 = run to `epochs`
+
+  template <typename TrainOptions>
+  static TrainingSchedule Of(const TrainOptions& o) {
+    return {o.epochs, o.batch_size,         o.learning_rate, o.warmup_steps, o.final_lr_fraction,
+            o.seed,   o.max_epochs_this_run};
+  }
+};
+
+struct TrainingLoopOptions {
+  std::filesystem::path out_dir;  // the model folder: train_log.csv and run.json go here
+  int num_frames = 0;             // the training data's frames (>= 1)
+  int start_epoch = 0;            // epochs done before this run (a resumed checkpoint's)
+  TrainingSchedule schedule;
+  TrainingLogColumns columns;
+  // run.json: written before the first epoch and after each, its settings those of
+  // settings_json(epochs done so far).
+  RunManifest manifest;
+  std::function<std::string(int epochs_done)> settings_json;
+  ProgressOptions progress;
+};
+
+struct TrainingLoopSummary {
+  int epochs_done = 0;    // in total, including those before a resume
+  int epochs_run = 0;     // in this run
+  double final_loss = 0;  // the mean loss of the last epoch run (0 when none ran)
+  int64_t frames_trained = 0, steps_trained = 0;  // in this run
+  double train_seconds = 0;                       // the epochs' time, without loading
+  double FramesPerSecond() const { return train_seconds > 0 ? frames_trained / train_seconds : 0; }
+  double SecondsPerStep() const { return steps_trained > 0 ? train_seconds / steps_trained : 0; }
+};
+
+// Runs the epochs [start_epoch, min(epochs, start_epoch + max_epochs_this_run)) of `task`.
+// Throws std::runtime_error when a step's loss is not finite ("training diverged at epoch 3, step
+// 412 (loss nan); try a lower --lr"), std::invalid_argument for an empty training set; what the
+// task throws goes through.
+TrainingLoopSummary RunTrainingLoop(TrainingTask& task, const TrainingLoopOptions& options);
+
+// The frames a training reads: the split's ids (ImageSets/SPLIT.txt or a split file), the first
+// `max_frames` of them when that is > 0. Throws std::invalid_argument for an empty split.
+std::vector<std::string> TrainingFrameIds(const KittiDataset& dataset, const std::string& split,
+                                          int max_frames);
+
+// run.json's fixed part for a training: its tool ("train ssd"), this build's version, the command
+// line and the inputs "data" and "split" (a family adds its own).
+RunManifest TrainingManifest(const std::string& tool, const std::string& command_line,
+                             const std::filesystem::path& data_root, const std::string& split);
+
+// A training's model folder, opened before any work: the --out folder is checked against the
+// training's inputs (--data's training/ and ImageSets/, and `inputs`, e.g. {"--points", dir}),
+// locked for the life of this object (two trainings into one folder would interleave), and
+// PrepareModelFolder (train_common.h) decides whether it resumes. When it does, model.json's text
+// (the config the training continues with; the flags' config otherwise) and the training run that
+// model.json and checkpoint.pt record are read.
+class TrainingFolder {
+ public:
+  TrainingFolder(const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
+                 const std::vector<std::pair<std::string, std::filesystem::path>>& inputs,
+                 const std::string& tool, bool resume, bool force);
+
+  bool resuming() const { return resuming_; }
+  const std::filesystem::path& config_path() const { return config_path_; }  // out_dir/model.json
+  const std::filesystem::path& checkpoint_path() const { return checkpoint_path_; }
+  const std::string& config_text() const { return config_text_; }    // when resuming
+  const std::string& recorded_run() const { return recorded_run_; }  // when resuming; may be empty
+  // The id this run writes into model.json and checkpoint.pt: the recorded one, or a new one
+  // (NewTrainingRunId) for a new training and a folder written before ids were recorded.
+  const std::string& training_run() const { return training_run_; }
+
+ private:
+  OutputLock lock_;
+  bool resuming_ = false;
+  std::filesystem::path config_path_, checkpoint_path_;
+  std::string config_text_, recorded_run_, training_run_;
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_MODELS_TRAINER_H_
