@@ -17,10 +17,12 @@
 #include <vector>
 
 #include "common.h"
+#include "image.h"
 #include "stereodet/cli/commands.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/stereo/degradation.h"
 #include "stereodet/stereo/disparity.h"
+#include "stereodet/stereo/image_io.h"
 #include "stereodet/stereo/point_cloud.h"
 #include "stereodet/stereo/reprojection.h"
 #include "stereodet/stereo/rgbh.h"
@@ -31,34 +33,6 @@ namespace stereodet::python {
 namespace {
 
 // --- numpy <-> cv::Mat ---
-
-// A view of a C-contiguous array (kept alive by the caller for the call).
-template <typename T>
-cv::Mat View(const py::array_t<T, py::array::c_style>& a, int type) {
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), type,
-                 const_cast<T*>(a.data()));
-}
-
-// An (H, W, 3) BGR or, with `allow_grey`, an (H, W) grey uint8 image.
-struct Image {
-  py::array_t<uint8_t, py::array::c_style> array;
-  cv::Mat mat;
-};
-Image Image8(py::handle value, const std::string& what, bool allow_grey) {
-  const std::string expected = allow_grey
-                                   ? "a uint8 array of shape (H, W, 3) (OpenCV's BGR) or (H, W)"
-                                   : "a uint8 array of shape (H, W, 3) (OpenCV's BGR)";
-  const bool grey = allow_grey && py::isinstance<py::array>(value) &&
-                    py::reinterpret_borrow<py::array>(value).ndim() == 2;
-  Image image;
-  image.array = grey ? ExactArray<uint8_t>(value, what, {-1, -1}, expected)
-                     : ExactArray<uint8_t>(value, what, {-1, -1, 3}, expected);
-  if (image.array.shape(0) == 0 || image.array.shape(1) == 0) {
-    ThrowValueError(what + ": the image is empty, got " + Describe(value));
-  }
-  image.mat = View(image.array, grey ? CV_8UC1 : CV_8UC3);
-  return image;
-}
 
 // An (H, W) float32 image; any numeric array converts.
 struct FloatImage {
@@ -87,15 +61,6 @@ CodeImage Codes(py::handle value, const std::string& what) {
   image.array = ExactArray<uint16_t>(value, what, {-1, -1}, "a uint16 array of shape (H, W)");
   image.mat = View(image.array, CV_16UC1);
   return image;
-}
-
-void CheckSameSize(const cv::Mat& a, const cv::Mat& b, const std::string& what_a,
-                   const std::string& what_b) {
-  if (a.size() != b.size()) {
-    ThrowValueError(what_a + " and " + what_b + " differ in size: " + std::to_string(a.rows) +
-                    " x " + std::to_string(a.cols) + " vs " + std::to_string(b.rows) + " x " +
-                    std::to_string(b.cols));
-  }
 }
 
 // Hands `mat` to numpy without a copy: (rows, cols) or (rows, cols, channels).
@@ -430,6 +395,17 @@ PYBIND11_MODULE(_stereo, m) {
 
   BindOptions(m);
 
+  m.def(
+      "read_image",
+      [](const std::string& path) {
+        cv::Mat image;
+        {
+          ReleaseGil release;
+          image = ReadColourImage(path);
+        }
+        return ToArray(std::move(image));
+      },
+      py::arg("path"));
   m.def(
       "disparity",
       [](py::handle left, py::handle right, const DisparityOptions& options) {

@@ -14,7 +14,9 @@ filter_sweep(), compare().
 Submodules: stereodet.kitti (labels, detections, calibrations, velodyne scans to and from numpy),
 stereodet.mmdet3d (kitti_eval, a drop-in for mmdetection3d's),
 stereodet.stereo (disparity, depth, height, RGB-H / RGB-D, point clouds from numpy images; loads
-OpenCV on first use). The evaluation functions are at the top level. docs/python.md is the guide.
+OpenCV on first use). stereodet.Detector runs a trained detector of any family on numpy frames
+(loads LibTorch on first use; built with the models module). The evaluation functions are at the
+top level. docs/python.md is the guide.
 """
 
 from . import kitti, mmdet3d
@@ -23,18 +25,26 @@ from .evaluation import (ClassResult, ClassSpec, EvalOptions, EvalResult, compar
                          filter_sweep, get_official_eval_result)
 
 __all__ = ["ClassResult", "ClassSpec", "EvalOptions", "EvalResult", "ParseError", "__version__",
-           "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti", "mmdet3d",
-           "stereo"]
+           "Detector", "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti",
+           "mmdet3d", "stereo"]
 
 
 def __getattr__(name: str):
-    # stereodet.stereo loads OpenCV: only when first used.
-    if name == "stereo":
-        import importlib
+    # stereodet.stereo loads OpenCV, stereodet.Detector LibTorch: only when first used.
+    import importlib
 
+    if name == "stereo":
         return importlib.import_module(".stereo", __name__)
+    if name == "Detector":
+        try:
+            detector = importlib.import_module("._detector", __name__)
+        except ImportError as e:
+            raise ImportError("stereodet.Detector needs the _detector extension, built with the "
+                              "models module (LibTorch: cmake -DSTEREODET_BUILD_MODELS=ON, the "
+                              "default, with libtorch-dev installed)") from e
+        return detector.Detector
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__():
-    return sorted(set(globals()) | {"stereo"})
+    return sorted(set(globals()) | {"stereo", "Detector"})

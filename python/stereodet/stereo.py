@@ -17,7 +17,8 @@ This module loads OpenCV (stereodet._stereo); `import stereodet` alone does not.
 
 from __future__ import annotations
 
-from typing import Any, Dict, Iterable, Mapping, Optional, Tuple
+import os
+from typing import Any, Dict, Iterable, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -34,7 +35,7 @@ __all__ = [
     "StereoOptions", "WlsFilterOptions",
     "depth_from_disparity", "disparity", "encode", "fit_ground_plane", "height_from_disparity",
     "pack_rgbh", "point_cloud", "points_in_rect", "quantize_depth", "quantize_height",
-    "rgb_planar", "rgbd_planar", "rgbh_planar", "unpack_rgbh",
+    "read_image", "rgb_planar", "rgbd_planar", "rgbh_planar", "unpack_rgbh",
 ]
 
 for _options in (BlockMatchingOptions, BlurOptions, DepthQuantization, DisparityOptions,
@@ -105,6 +106,12 @@ def quantize_depth(depth_m: np.ndarray, **options: Any) -> np.ndarray:
     options: DepthQuantization's fields (min_m=0, max_m=80, bits=16).
     """
     return _stereo.quantize_depth(depth_m, DepthQuantization(**options))
+
+
+def read_image(path: Union[str, "os.PathLike[str]"]) -> np.ndarray:
+    """An image file (PNG, JPEG, ...) as an (H, W, 3) uint8 BGR array, decoded by OpenCV (what
+    cv2.imread gives). Raises OSError naming the file when it is missing or does not decode."""
+    return _stereo.read_image(str(path))
 
 
 def pack_rgbh(bgr: np.ndarray, height_code: np.ndarray) -> np.ndarray:

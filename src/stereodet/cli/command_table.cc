@@ -71,6 +71,10 @@ std::span<const Command> CommandTable() {
       {"detect", Program::kModels,
        "run a trained detector, write KITTI detection files (`detect --model DIR ...`: the family "
        "model.json names)"},
+      {"run", Program::kModels,
+       "run a trained detector (any family) over a stream of stereo pairs (a KITTI split, image "
+       "sequences, videos, a camera): JSON Lines as it goes, per-stage latency; --realtime drops "
+       "frames it cannot keep up with"},
   };
   return kCommands;
 }

@@ -16,7 +16,7 @@ TEST(CommandTableTest, NamesAreUniqueAndDescribed) {
     EXPECT_FALSE(command.description.empty()) << command.name;
   }
   EXPECT_EQ(names, (std::set<std::string_view>{"synth", "stereo", "info", "eval", "report", "view",
-                                               "train", "detect"}));
+                                               "train", "detect", "run"}));
 }
 
 // The front end must hold only the commands that need neither OpenCV nor LibTorch.

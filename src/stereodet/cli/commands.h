@@ -5,7 +5,7 @@
 // so that a command loads only the libraries it uses:
 //   stereodet         info, eval, report, view  (util, geometry, kitti, eval, report)
 //   stereodet-vision  synth, stereo         (+ OpenCV)
-//   stereodet-models  train, detect         (+ OpenCV, LibTorch; only with STEREODET_BUILD_MODELS)
+//   stereodet-models  train, detect, run    (+ OpenCV, LibTorch; only with STEREODET_BUILD_MODELS)
 // CommandTable() below is the one list of commands (name, owner, description) that every executable
 // shares; each executable's main() passes its own Add*Command functions to RunCli(), which adds the
 // others as stand-ins that execv() their owner with the same argv, so usage, messages and exit
@@ -60,6 +60,7 @@ void AddViewCommand(CLI::App& app);    // report_command.cc (frame views)
 void AddSynthCommand(CLI::App& app);   // synth_command.cc
 void AddStereoCommand(CLI::App& app);  // stereo_command.cc
 void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect ssd)
+void AddRunCommand(CLI::App& app);     // run_command.cc (stereodet run: streams, latency)
 
 // The whole main() of the executable `self`: `own` maps each command that `self` implements to the
 // function adding it (a function named twice, as train and detect, is called once). A command of

@@ -1,5 +1,5 @@
-// stereodet-models: the LibTorch commands (train, detect). `stereodet train|detect ...` runs this
-// executable with the same arguments; it also works when called directly (see commands.h).
+// stereodet-models: the LibTorch commands (train, detect, run). `stereodet train|detect ...` runs
+// this executable with the same arguments; it also works when called directly (see commands.h).
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   static constexpr std::pair<std::string_view, AddCommandFn> kOwn[] = {
       {"train", AddModelsCommand},  // adds train and detect
       {"detect", AddModelsCommand},
+      {"run", AddRunCommand},
   };
   // OpenCV's own warnings would print before our error line, which names the file: ours suffices.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);

@@ -136,6 +136,16 @@ std::vector<std::string> FindMissingFiles(const KittiDataset& dataset,
   return missing;
 }
 
+void CheckRequiredFiles(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                        const RequiredFiles& required) {
+  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
+  if (missing.empty()) return;
+  std::string list;
+  for (size_t i = 0; i < std::min<size_t>(missing.size(), 5); ++i) list += "\n  " + missing[i];
+  STEREODET_THROW_IO() << missing.size() << " required files are missing under "
+                       << dataset.SubsetDir().string() << ", e.g." << list;
+}
+
 void WriteSplit(const fs::path& path, const std::vector<std::string>& ids) {
   std::string text;
   text.reserve(ids.size() * 7);

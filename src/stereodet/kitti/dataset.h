@@ -64,6 +64,11 @@ struct RequiredFiles {
 std::vector<std::string> FindMissingFiles(const KittiDataset& dataset,
                                           const std::vector<std::string>& ids,
                                           const RequiredFiles& required);
+// Before any work, not halfway through it: throws std::runtime_error when a frame of `ids` lacks a
+// file `required` names, with the count, the folder and the first five ("3 required files are
+// missing under D/training, e.g.\n  000001: image_3/000001.png\n  ...").
+void CheckRequiredFiles(const KittiDataset& dataset, const std::vector<std::string>& ids,
+                        const RequiredFiles& required);
 
 // The ids of a split file's text, in file order: one id per line, blanks around it and blank lines
 // ignored, and a UTF-8 byte-order mark at the start of the text too. Throws ParseError(source,

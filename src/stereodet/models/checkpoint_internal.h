@@ -8,7 +8,12 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
+
+#include "stereodet/models/device_internal.h"
+#include "stereodet/models/model_json.h"
+#include "stereodet/util/atomic_file.h"
 
 namespace stereodet::internal {
 
@@ -61,6 +66,30 @@ void SaveModelFolder(const std::filesystem::path& model_dir, const torch::nn::Mo
 // naming model.pt and model.json.
 void LoadModelWeights(const std::filesystem::path& model_dir, const std::string& config_text,
                       torch::nn::Module& module, const torch::Device& device);
+
+// A family's model pimpl, new: `config` checked, then the weights drawn from `seed` (the same seed
+// gives the same weights). Impl(config, device) builds the network on `device`.
+template <typename Impl, typename Config>
+std::unique_ptr<Impl> NewModelImpl(const Config& config, uint64_t seed, ComputeDevice device) {
+  config.Check();
+  torch::manual_seed(seed);
+  return std::make_unique<Impl>(config, device);
+}
+
+// A family's model pimpl from `model_dir`: model.json's text parsed by `parse_config` (the
+// family's *ConfigFromJson(text, source)), Impl(config, device) built, `with_text(impl, text,
+// source)` called for what else model.json records (stereo settings), then model.pt loaded into
+// impl.net (LoadModelWeights). Throws what those throw, naming the files.
+template <typename Impl, typename ParseConfig, typename WithText>
+std::unique_ptr<Impl> LoadModelImpl(const std::filesystem::path& model_dir, ComputeDevice device,
+                                    ParseConfig parse_config, WithText with_text) {
+  const std::filesystem::path config_path = model_dir / kModelConfigFile;
+  const std::string text = ReadFile(config_path);
+  auto impl = std::make_unique<Impl>(parse_config(text, config_path.string()), device);
+  with_text(*impl, text, config_path.string());
+  LoadModelWeights(model_dir, text, *impl->net, TorchDevice(device));
+  return impl;
+}
 
 }  // namespace stereodet::internal
 

@@ -313,15 +313,6 @@ RunManifest DetectionManifest(const std::string& tool, const std::string& comman
   return manifest;
 }
 
-void CheckRequiredFiles(const KittiDataset& dataset, const std::vector<std::string>& ids,
-                        const RequiredFiles& required) {
-  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
-  if (!missing.empty()) {
-    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
-                         << dataset.SubsetDir().string() << ", e.g. " << missing.front();
-  }
-}
-
 void ReadStereoPairFiles(const FramePaths& paths, const DisparityOptions& disparity,
                          StereoFrame& frame) {
   frame.right = ReadColourImage(paths.image_right);

@@ -140,11 +140,6 @@ RunManifest DetectionManifest(const std::string& tool, const std::string& comman
                               const std::filesystem::path& data_root, const std::string& subset,
                               const std::string& split);
 
-// Throws std::runtime_error naming the folder, the count and the first missing file when a frame
-// of `ids` lacks a file that `required` names: before any work, not halfway through it.
-void CheckRequiredFiles(const KittiDataset& dataset, const std::vector<std::string>& ids,
-                        const RequiredFiles& required);
-
 // Reads the right image and the calibration of `frame` (its left image read already) for stereo
 // matching with `disparity`, checking that the two images have one size and that the matcher fits
 // it. Throws std::runtime_error naming the file.

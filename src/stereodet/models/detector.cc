@@ -79,11 +79,16 @@ struct Detector::Impl {
                              << what << "; the frame has none";
   }
   void CheckFrame(const StereoFrame& frame) const {
-    if (needs.left_image) Require(!frame.left.empty(), frame, "the left image");
-    // Heights given (RGB-H from a `stereo` folder) stand for the pair and its calibration.
-    const bool pair = frame.height_code.empty();
+    // What the pair would give, given: heights (RGB-H from a `stereo` folder) stand for the pair
+    // and its calibration; a stereo 3D model's points for the pair (it still needs the image's
+    // size and the calibration).
+    const bool points_for_pair = family == "det3d" && !needs.points && frame.points.has_value();
+    const bool pair = frame.height_code.empty() && !points_for_pair;
+    if (needs.left_image && !points_for_pair) Require(!frame.left.empty(), frame, "the left image");
     if (needs.right_image && pair) Require(!frame.right.empty(), frame, "the right image");
-    if (needs.calibration && pair) Require(frame.calib.has_value(), frame, "a calibration");
+    if (needs.calibration && (pair || points_for_pair)) {
+      Require(frame.calib.has_value(), frame, "a calibration");
+    }
     if (needs.points) Require(frame.points.has_value(), frame, "the LiDAR points");
     for (const cv::Mat* image : {&frame.left, &frame.right}) {
       STEREODET_CHECK(image->empty() || image->type() == CV_8UC3)
@@ -399,10 +404,10 @@ Detector Detector::Open(const fs::path& model_dir, const DetectorOptions& option
     det3d->input = PointSourceName(config.input);
     det3d->classes = config.classes;
     det3d->stereo = options.stereo.value_or(StereoOptions());
-    det3d->needs = {.left_image = false,
-                    .right_image = false,
-                    .calibration = true,
-                    .points = config.input == PointSource::kLidar};
+    // A stereo model reads the pair, unless the frame carries its points (CheckFrame).
+    const bool stereo = config.input == PointSource::kStereo;
+    det3d->needs = {
+        .left_image = stereo, .right_image = stereo, .calibration = true, .points = !stereo};
     impl = std::move(det3d);
   }
   impl->model_dir = model_dir;

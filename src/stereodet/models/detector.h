@@ -60,8 +60,11 @@ struct StereoFrame {
 
 // What a family reads of a StereoFrame; a frame without it is refused naming the frame and part.
 struct DetectorNeeds {
-  bool left_image = false;   // the image itself (not only its size)
-  bool right_image = false;  // unless the frame carries what the pair would give
+  // The images themselves (not only the left one's size). A frame that carries what the pair
+  // would give needs no pair: RGB-H heights (StereoFrame::height_code; the left image still
+  // needed), a stereo 3D model's points (StereoFrame::points; the left image's size suffices).
+  bool left_image = false;
+  bool right_image = false;
   bool calibration = false;
   bool points = false;  // a LiDAR model: the scan (a stereo 3D model computes its own)
 };

@@ -159,6 +159,12 @@ TEST(DetectorTest, AFrameWithoutWhatTheModelNeedsIsRefusedNamingIt) {
   no_points.calib = Calibration();
   EXPECT_THAT([&] { lidar.Detect(no_points); },
               ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("needs the LiDAR points")));
+  // A stereo 3D model reads the pair unless the frame carries its points.
+  Detector stereo = Detector::Open(TestSourceDir() / "models" / "det3d-stereo");
+  EXPECT_TRUE(stereo.needs().left_image && stereo.needs().right_image);
+  EXPECT_FALSE(stereo.needs().points);
+  EXPECT_THAT([&] { stereo.Detect(no_points); },
+              ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("needs the left image")));
   // A batch prepared by one detector is refused by another.
   Detector rgb = Detector::Open(TestSourceDir() / "models" / "ssd-rgb");
   frame.calib.reset();

@@ -510,10 +510,7 @@ EncodeDatasetResult EncodeDataset(const KittiDataset& dataset,
   const std::vector<std::string> ids(all_ids.begin() + shard.Begin(all_ids.size()),
                                      all_ids.begin() + shard.End(all_ids.size()));
   STEREODET_CHECK_IO(!ids.empty()) << "no frames to process in " << dataset.SubsetDir();
-  const std::vector<std::string> missing =
-      FindMissingFiles(dataset, ids, {.image_left = true, .image_right = true, .calib = true});
-  STEREODET_CHECK_IO(missing.empty())
-      << missing.size() << " input files are missing, first: " << missing.front();
+  CheckRequiredFiles(dataset, ids, {.image_left = true, .image_right = true, .calib = true});
 
   CheckOutputDoesNotOverlapInputs(
       "--out", out, {{"--data", dataset.SubsetDir()}, {"--data", dataset.root() / "ImageSets"}});

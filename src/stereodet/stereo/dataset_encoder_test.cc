@@ -493,7 +493,8 @@ TEST(EncodeDatasetTest, RefusesMissingInputsAndNoFramesBeforeWriting) {
     EncodeDataset(dataset, ids, dir / "out", SmallOptions());
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("1 input files are missing, first: 000001"));
+    EXPECT_THAT(e.what(), HasSubstr("1 required files are missing under"));
+    EXPECT_THAT(e.what(), HasSubstr("000001: image_3/000001.png"));
   }
   EXPECT_THROW(EncodeDataset(dataset, {}, dir / "out", SmallOptions()), std::runtime_error);
   EXPECT_FALSE(fs::exists(dir / "out"));

@@ -265,7 +265,8 @@ void CheckOutputFolderOwner(const fs::path& dir, const std::string& command,
 }
 
 const std::vector<std::string>& DetectionFolderMakers() {
-  static const std::vector<std::string> makers = {"detect ssd", "detect rpn", "detect det3d"};
+  static const std::vector<std::string> makers = {"detect ssd", "detect rpn", "detect det3d",
+                                                  "run"};
   return makers;
 }
 

@@ -56,8 +56,8 @@ OutputFolderIdentity IdentifyOutputFolder(const std::filesystem::path& dir);
 void CheckOutputFolderOwner(const std::filesystem::path& dir, const std::string& command,
                             const std::vector<std::string>& makers);
 
-// The makers of detection folders (detect ssd|rpn|det3d; detect merge keeps its shards' tool):
-// every detect command may replace any of them, as they are one kind of folder.
+// The makers of detection folders (detect ssd|rpn|det3d, run --kitti-out; detect merge keeps its
+// shards' tool): each of these commands may replace any of them, as they are one kind of folder.
 const std::vector<std::string>& DetectionFolderMakers();
 
 // Removes the leftovers of runs that died before they could clean up after themselves: hidden

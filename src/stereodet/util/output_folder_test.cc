@@ -113,7 +113,7 @@ TEST_F(OutputFolderTest, ModelFoldersBelongToTheirTrainingOnly) {
                          "model.pt; run.json of 'train ssd')"),
             std::string::npos)
       << refusal;
-  EXPECT_NE(refusal.find("detect ssd, detect rpn or detect det3d made"), std::string::npos)
+  EXPECT_NE(refusal.find("detect ssd, detect rpn, detect det3d or run made"), std::string::npos)
       << refusal;
 
   // Without run.json, model.json's architecture says which training made it.

@@ -448,11 +448,8 @@ struct Det3dModel::Impl {
   }
 };
 
-Det3dModel::Det3dModel(const Det3dConfig& config, uint64_t seed, ComputeDevice device) {
-  config.Check();
-  torch::manual_seed(seed);
-  impl_ = std::make_unique<Impl>(config, device);
-}
+Det3dModel::Det3dModel(const Det3dConfig& config, uint64_t seed, ComputeDevice device)
+    : impl_(internal::NewModelImpl<Impl>(config, seed, device)) {}
 
 Det3dModel::Det3dModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Det3dModel::~Det3dModel() = default;
@@ -460,12 +457,9 @@ Det3dModel::Det3dModel(Det3dModel&&) noexcept = default;
 Det3dModel& Det3dModel::operator=(Det3dModel&&) noexcept = default;
 
 Det3dModel Det3dModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  const std::filesystem::path config_path = model_dir / kModelConfigFile;
-  const std::string config_text = ReadFile(config_path);
-  const Det3dConfig config = Det3dConfigFromJson(config_text, config_path.string());
-  auto impl = std::make_unique<Impl>(config, device);
-  internal::LoadModelWeights(model_dir, config_text, *impl->net, impl->torch_device);
-  return Det3dModel(std::move(impl));
+  return Det3dModel(
+      internal::LoadModelImpl<Impl>(model_dir, device, Det3dConfigFromJson,
+                                    [](Impl&, const std::string&, const std::string&) {}));
 }
 
 void Det3dModel::Save(const std::filesystem::path& model_dir,

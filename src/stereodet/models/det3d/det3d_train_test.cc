@@ -17,6 +17,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/det3d/det3d_detect.h"
 #include "stereodet/models/det3d/gt_database.h"
+#include "stereodet/models/models_test_util.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/test_paths.h"
@@ -26,17 +27,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 // Frames with one or two cars (labels in the camera frame), a LiDAR scan of points inside each
 // car and a flat ground 1.73 m under the sensor; also a copy of the scans as "stereo" points.
 fs::path WriteTinyDataset(const std::string& name, int frames) {
-  const fs::path root = TempDir(name);
+  const fs::path root = ModelsTestDir(name);
   for (const char* folder : {"image_2", "label_2", "calib", "velodyne"}) {
     fs::create_directories(root / "training" / folder);
   }
@@ -117,7 +111,7 @@ TrainDet3dOptions TinyTraining(const fs::path& root, const fs::path& out) {
 
 TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   const fs::path root = WriteTinyDataset("det3d_data", 4);
-  const fs::path out = TempDir("det3d_model");
+  const fs::path out = ModelsTestDir("det3d_model");
   TrainDet3dOptions options = TinyTraining(root, out);
   options.epochs = 40;
   const TrainDet3dSummary s = TrainDet3d(options);
@@ -172,7 +166,7 @@ TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
 
 TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
   const fs::path root = WriteTinyDataset("det3d_resume_data", 2);
-  const fs::path out = TempDir("det3d_resume");
+  const fs::path out = ModelsTestDir("det3d_resume");
   TrainDet3dOptions options = TinyTraining(root, out);
   options.augment.enabled = true;  // seeded per (seed, epoch, frame): resumes exactly
   options.epochs = 2;
@@ -184,7 +178,7 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
   options.resume = true;
   EXPECT_EQ(TrainDet3d(options).epochs_run, 1);
 
-  const fs::path straight = TempDir("det3d_straight");
+  const fs::path straight = ModelsTestDir("det3d_straight");
   TrainDet3dOptions direct = TinyTraining(root, straight);
   direct.augment.enabled = true;
   direct.epochs = 2;
@@ -233,7 +227,7 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
   EXPECT_THROW(Det3dModel::Load(out), std::runtime_error);
 
   // A stereo model reads its points from --points.
-  const fs::path stereo_out = TempDir("det3d_stereo");
+  const fs::path stereo_out = ModelsTestDir("det3d_stereo");
   TrainDet3dOptions stereo = TinyTraining(root, stereo_out);
   stereo.model.input = PointSource::kStereo;
   stereo.epochs = 1;
@@ -318,7 +312,7 @@ TEST(Det3dTrainTest, LoadDropsPointsOutsideTheGridAndPillarsDoNotChange) {
 TEST(Det3dTrainTest, ResumeRefusesACheckpointOfAnotherRunOrModel) {
   const fs::path root = WriteTinyDataset("det3d_tie_data", 2);
   auto half_train = [&](const std::string& name, int base_channels) {
-    TrainDet3dOptions options = TinyTraining(root, TempDir(name));
+    TrainDet3dOptions options = TinyTraining(root, ModelsTestDir(name));
     options.model.base_channels = base_channels;
     options.epochs = 2;
     options.max_epochs_this_run = 1;

@@ -418,11 +418,8 @@ struct RpnModel::Impl {
   }
 };
 
-RpnModel::RpnModel(const RpnConfig& config, uint64_t seed, ComputeDevice device) {
-  config.Check();
-  torch::manual_seed(seed);
-  impl_ = std::make_unique<Impl>(config, device);
-}
+RpnModel::RpnModel(const RpnConfig& config, uint64_t seed, ComputeDevice device)
+    : impl_(internal::NewModelImpl<Impl>(config, seed, device)) {}
 
 RpnModel::RpnModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RpnModel::~RpnModel() = default;
@@ -430,13 +427,11 @@ RpnModel::RpnModel(RpnModel&&) noexcept = default;
 RpnModel& RpnModel::operator=(RpnModel&&) noexcept = default;
 
 RpnModel RpnModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  const std::filesystem::path config_path = model_dir / kModelConfigFile;
-  const std::string text = ReadFile(config_path);
-  const RpnConfig config = RpnConfigFromJson(text, config_path.string());
-  auto impl = std::make_unique<Impl>(config, device);
-  impl->stereo = ReadRpnStereoRecord(text, config_path.string());
-  internal::LoadModelWeights(model_dir, text, *impl->net, impl->device);
-  return RpnModel(std::move(impl));
+  return RpnModel(internal::LoadModelImpl<Impl>(
+      model_dir, device, RpnConfigFromJson,
+      [](Impl& impl, const std::string& text, const std::string& source) {
+        impl.stereo = ReadRpnStereoRecord(text, source);
+      }));
 }
 
 void RpnModel::Save(const std::filesystem::path& model_dir) const {

@@ -16,6 +16,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/models_test_util.h"
 #include "stereodet/models/rpn/rpn_detect.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_paths.h"
@@ -25,17 +26,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 // Frames of 256 x 128 px: dark noise, one bright textured "car" per frame at its own place and
 // size (shifted by 8 px in the right image so stereo finds it), labelled Car.
 fs::path WriteTinyDataset(const std::string& name, int frames) {
-  const fs::path root = TempDir(name);
+  const fs::path root = ModelsTestDir(name);
   // cv::randu would draw from OpenCV's process-wide generator: the frames would depend on the
   // tests run before. A generator of our own keeps them fixed.
   cv::RNG rng(5);
@@ -109,7 +103,7 @@ std::string WithoutTimes(const std::string& log) {  // the CSV without its two t
 
 TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   const fs::path root = WriteTinyDataset("rpn_data", 3);
-  const fs::path out = TempDir("rpn_model");
+  const fs::path out = ModelsTestDir("rpn_model");
   TrainRpnOptions options = TinyTraining(root, out);
   options.epochs = 150;
   options.learning_rate = 5e-3;
@@ -159,7 +153,7 @@ TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
 
 TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
   const fs::path root = WriteTinyDataset("rpn_resume_data", 2);
-  const fs::path out = TempDir("rpn_resume");
+  const fs::path out = ModelsTestDir("rpn_resume");
   TrainRpnOptions options = TinyTraining(root, out);
   options.data.augment = true;  // seeded per (seed, epoch, frame): resumes exactly
   options.batch_size = 1;
@@ -173,7 +167,7 @@ TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
 
   std::vector<fs::path> straight;
   for (const char* name : {"rpn_straight_a", "rpn_straight_b"}) {
-    straight.push_back(TempDir(name));
+    straight.push_back(ModelsTestDir(name));
     TrainRpnOptions direct = TinyTraining(root, straight.back());
     direct.data.augment = true;
     direct.batch_size = 1;
@@ -209,12 +203,12 @@ TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
 
 TEST(RpnTrainTest, RgbdTrainsFromStereoMirrorsAnRgbModelAndDetects) {
   const fs::path root = WriteTinyDataset("rpn_rgbd_data", 2);
-  const fs::path rgb_out = TempDir("rpn_rgb_for_init");
+  const fs::path rgb_out = ModelsTestDir("rpn_rgb_for_init");
   TrainRpnOptions rgb = TinyTraining(root, rgb_out);
   rgb.epochs = 1;
   TrainRpn(rgb);
 
-  const fs::path out = TempDir("rpn_rgbd");
+  const fs::path out = ModelsTestDir("rpn_rgbd");
   TrainRpnOptions options = TinyTraining(root, out);
   options.model.input = RpnInput::kRgbd;
   options.epochs = 1;
@@ -229,7 +223,7 @@ TEST(RpnTrainTest, RgbdTrainsFromStereoMirrorsAnRgbModelAndDetects) {
   EXPECT_NE(ReadFile(out / "model.json").find("\"num_disparities\": 32"), std::string::npos);
   // --init-from an rgbd model is refused.
   TrainRpnOptions again = options;
-  again.out_dir = TempDir("rpn_rgbd_from_rgbd");
+  again.out_dir = ModelsTestDir("rpn_rgbd_from_rgbd");
   again.init_from = out;
   EXPECT_THROW(TrainRpn(again), std::invalid_argument);
 

@@ -74,13 +74,7 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
         << "--stereo " << options.stereo_dir.string()
         << ": its stereo.json differs from the training's settings: " << differ;
   }
-  const std::vector<std::string> missing = FindMissingFiles(dataset, ids, required);
-  if (!missing.empty()) {
-    std::string list;
-    for (size_t i = 0; i < std::min<size_t>(missing.size(), 5); ++i) list += "\n  " + missing[i];
-    STEREODET_THROW_IO() << missing.size() << " required files are missing under "
-                         << dataset.SubsetDir().string() << ", e.g." << list;
-  }
+  CheckRequiredFiles(dataset, ids, required);
   frames_.resize(ids.size());
   ProgressReporter reporter(height ? "stereo" : "labels", static_cast<int64_t>(ids.size()),
                             progress);

@@ -119,11 +119,8 @@ struct SsdModel::Impl {
   }
 };
 
-SsdModel::SsdModel(const SsdConfig& config, uint64_t seed, ComputeDevice device) {
-  config.Check();
-  torch::manual_seed(seed);
-  impl_ = std::make_unique<Impl>(config, device);
-}
+SsdModel::SsdModel(const SsdConfig& config, uint64_t seed, ComputeDevice device)
+    : impl_(internal::NewModelImpl<Impl>(config, seed, device)) {}
 
 SsdModel::SsdModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 SsdModel::~SsdModel() = default;
@@ -131,13 +128,11 @@ SsdModel::SsdModel(SsdModel&&) noexcept = default;
 SsdModel& SsdModel::operator=(SsdModel&&) noexcept = default;
 
 SsdModel SsdModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  const std::filesystem::path config_path = model_dir / kModelConfigFile;
-  const std::string config_text = ReadFile(config_path);
-  const SsdConfig config = SsdConfigFromJson(config_text, config_path.string());
-  auto impl = std::make_unique<Impl>(config, device);
-  impl->stereo = ReadStereoRecord(config_text, config_path.string());
-  internal::LoadModelWeights(model_dir, config_text, *impl->net, impl->device);
-  return SsdModel(std::move(impl));
+  return SsdModel(internal::LoadModelImpl<Impl>(
+      model_dir, device, SsdConfigFromJson,
+      [](Impl& impl, const std::string& text, const std::string& source) {
+        impl.stereo = ReadStereoRecord(text, source);
+      }));
 }
 
 void SsdModel::Save(const std::filesystem::path& model_dir, const std::string& training_run) const {

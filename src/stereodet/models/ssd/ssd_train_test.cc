@@ -15,6 +15,7 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/models/detect_shard.h"
+#include "stereodet/models/models_test_util.h"
 #include "stereodet/models/ssd/ssd_detect.h"
 #include "stereodet/models/ssd/ssd_model.h"
 #include "stereodet/models/train_common.h"
@@ -28,17 +29,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 // Frames of 256 x 80 px: textured background, one bright textured "car" (shifted by 8 px in the
 // right image so stereo finds something), labelled Car.
 fs::path WriteTinyDataset(const std::string& name, int frames) {
-  const fs::path root = TempDir(name);
+  const fs::path root = ModelsTestDir(name);
   std::mt19937 rng(5);
   std::vector<std::string> ids;
   for (int i = 0; i < frames; ++i) {
@@ -127,7 +121,8 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
   EXPECT_THROW(DefaultRgbhMatchScale(config, 0, 375), std::invalid_argument);
 
   const fs::path root = WriteTinyDataset("scale_data", 2);
-  TrainSsdOptions options = TinyTraining(root, TempDir("scale_model"));  // 256 x 80 -> 128 x 40
+  TrainSsdOptions options =
+      TinyTraining(root, ModelsTestDir("scale_model"));  // 256 x 80 -> 128 x 40
   options.epochs = 1;
   options.auto_match_scale = true;
   TrainSsd(options);
@@ -138,7 +133,7 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
   DetectSsdOptions detect;
   detect.model_dir = options.out_dir;
   detect.data_root = root;
-  detect.out_dir = TempDir("scale_det");
+  detect.out_dir = ModelsTestDir("scale_det");
   detect.threads = 1;
   detect.progress.stream = nullptr;
   EXPECT_EQ(DetectSsd(detect).frames, 2);
@@ -148,7 +143,7 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
   detect.stereo->disparity.match_scale = 1.0;
   EXPECT_EQ(StereoMismatch(detect), "disparity.match_scale: 0.5 (requested: 1.0)");
   // Without auto_match_scale the settings are used as given.
-  TrainSsdOptions as_given = TinyTraining(root, TempDir("scale_model_given"));
+  TrainSsdOptions as_given = TinyTraining(root, ModelsTestDir("scale_model_given"));
   as_given.epochs = 1;
   TrainSsd(as_given);
   EXPECT_EQ(ModelStereoSettings(as_given.out_dir)->disparity.match_scale, 1.0);
@@ -164,7 +159,7 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
     const std::string key = "\"match_scale\": 0.5,";
     const size_t at = json.find(key);
     ASSERT_NE(at, std::string::npos) << model;
-    const fs::path old_dir = TempDir("scale_old_model");
+    const fs::path old_dir = ModelsTestDir("scale_old_model");
     std::ofstream(old_dir / "model.json") << json.substr(0, at) << json.substr(at + key.size());
     const std::optional<StereoOptions> old = ModelStereoSettings(old_dir);
     ASSERT_TRUE(old.has_value()) << model;
@@ -174,7 +169,7 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
 
 TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
   const fs::path root = WriteTinyDataset("e2e_data", 4);
-  const fs::path out = TempDir("e2e_model");
+  const fs::path out = ModelsTestDir("e2e_model");
 
   // Three epochs, interrupted after two, then resumed.
   TrainSsdOptions options = TinyTraining(root, out);
@@ -196,7 +191,7 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
   EXPECT_EQ(CountLines(out / "train_log.csv"), 4);
 
   // An uninterrupted 3-epoch run ends with the same weights.
-  const fs::path straight = TempDir("e2e_straight");
+  const fs::path straight = ModelsTestDir("e2e_straight");
   TrainSsdOptions direct = TinyTraining(root, straight);
   direct.epochs = 3;
   TrainSsd(direct);
@@ -234,7 +229,7 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
     DetectSsdOptions detect;
     detect.model_dir = out;
     detect.data_root = root;
-    detect.out_dir = TempDir(sigma > 0 ? "e2e_det_blur" : "e2e_det");
+    detect.out_dir = ModelsTestDir(sigma > 0 ? "e2e_det_blur" : "e2e_det");
     detect.blur_sigma_px = sigma;
     detect.stereo = TinyStereo();
     detect.threads = 1;
@@ -276,10 +271,10 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
       DetectSsdOptions sequential = detect;
       sequential.pipeline = false;
       sequential.batch_size = batch_size;
-      sequential.out_dir = TempDir("e2e_det_sequential");
+      sequential.out_dir = ModelsTestDir("e2e_det_sequential");
       DetectSsdOptions pipelined = sequential;
       pipelined.pipeline = true;
-      pipelined.out_dir = TempDir("e2e_det_pipelined");
+      pipelined.out_dir = ModelsTestDir("e2e_det_pipelined");
       DetectSsd(sequential);
       DetectSsd(pipelined);
       for (int i = 0; i < 4; ++i) {
@@ -304,7 +299,7 @@ TEST(SsdTrainTest, StereoFolderHeightsGiveWhatMatchingGives) {
   const KittiDataset dataset(root, "training");
   const std::vector<std::string> ids = dataset.ReadSplit("val");
   auto encode = [&](const std::string& name, const StereoOptions& stereo) {
-    const fs::path dir = TempDir(name);
+    const fs::path dir = ModelsTestDir(name);
     fs::remove_all(dir);
     EncodeDatasetOptions encode_options;
     encode_options.stereo = stereo;
@@ -319,10 +314,10 @@ TEST(SsdTrainTest, StereoFolderHeightsGiveWhatMatchingGives) {
   const fs::path other_dir = encode("stdir_stereo48", other);
 
   // Training: one epoch from the folder's heights ends with the weights of one from matching.
-  TrainSsdOptions matched = TinyTraining(root, TempDir("stdir_model"));
+  TrainSsdOptions matched = TinyTraining(root, ModelsTestDir("stdir_model"));
   matched.epochs = 1;
   TrainSsd(matched);
-  TrainSsdOptions read = TinyTraining(root, TempDir("stdir_model_read"));
+  TrainSsdOptions read = TinyTraining(root, ModelsTestDir("stdir_model_read"));
   read.epochs = 1;
   read.data.stereo = StereoOptions();  // ignored: the folder's settings are used
   read.data.stereo_dir = stereo_dir;
@@ -354,11 +349,11 @@ TEST(SsdTrainTest, StereoFolderHeightsGiveWhatMatchingGives) {
     detect.threads = 1;
     detect.batch_size = 2;
     detect.progress.stream = nullptr;
-    detect.out_dir = TempDir("stdir_det_matched");
+    detect.out_dir = ModelsTestDir("stdir_det_matched");
     DetectSsd(detect);
     DetectSsdOptions from_folder = detect;
     from_folder.stereo_dir = stereo_dir;
-    from_folder.out_dir = TempDir("stdir_det_read");
+    from_folder.out_dir = ModelsTestDir("stdir_det_read");
     DetectSsd(from_folder);
     for (const std::string& id : ids) {
       const std::string text = ReadFile(from_folder.out_dir / (id + ".txt"));
@@ -371,7 +366,7 @@ TEST(SsdTrainTest, StereoFolderHeightsGiveWhatMatchingGives) {
   detect.model_dir = matched.out_dir;
   detect.data_root = root;
   detect.progress.stream = nullptr;
-  detect.out_dir = TempDir("stdir_det_refused");
+  detect.out_dir = ModelsTestDir("stdir_det_refused");
   detect.stereo_dir = other_dir;
   try {
     DetectSsd(detect);
@@ -422,7 +417,7 @@ TEST(SsdDetectTest, RefusesAnOutputInsideTheInputsOrAForeignFolder) {
   detect.out_dir = detect.model_dir / "det";
   EXPECT_THROW(DetectSsd(detect), std::invalid_argument);
   // A folder of other files (no run.json of detect) is not an earlier detection folder.
-  detect.out_dir = TempDir("refuse_foreign");
+  detect.out_dir = ModelsTestDir("refuse_foreign");
   WriteFileAtomically(detect.out_dir / "notes.txt", "mine");
   try {
     DetectSsd(detect);
@@ -464,7 +459,7 @@ std::string TrainAndCaptureProgress(TrainSsdOptions options) {
 
 TEST(SsdTrainTest, TrainingShorterThanTheWarmupWarnsOnce) {
   const fs::path root = WriteTinyDataset("warmup_data", 2);
-  TrainSsdOptions options = TinyTraining(root, TempDir("warmup_model"));
+  TrainSsdOptions options = TinyTraining(root, ModelsTestDir("warmup_model"));
   options.model.encoding = InputEncoding::kRgb;
   options.epochs = 1;  // 1 step of 2 frames
   options.warmup_steps = 5;
@@ -484,7 +479,7 @@ TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
   const fs::path root = WriteTinyDataset("rgb_data", 2);
   fs::remove_all(root / "training/image_3");
   fs::remove_all(root / "training/calib");
-  TrainSsdOptions options = TinyTraining(root, TempDir("rgb_model"));
+  TrainSsdOptions options = TinyTraining(root, ModelsTestDir("rgb_model"));
   options.model.encoding = InputEncoding::kRgb;
   options.epochs = 1;
   EXPECT_EQ(TrainSsd(options).epochs_done, 1);
@@ -513,7 +508,7 @@ TEST(SsdTrainTest, RgbTrainingNeedsNoStereoFiles) {
   EXPECT_THROW(TrainSsd(force), std::invalid_argument);  // the two exclude each other
   // ... but RGB-H does, and says which are missing.
   options.model.encoding = InputEncoding::kRgbhFixed;
-  options.out_dir = TempDir("rgbh_model");
+  options.out_dir = ModelsTestDir("rgbh_model");
   try {
     TrainSsd(options);
     FAIL() << "expected an error";
@@ -526,12 +521,12 @@ TEST(SsdTrainTest, ResumeRefusesACheckpointOfAnotherFolder) {
   // The audit's model.pt case, for checkpoint.pt: another training's checkpoint of the same shapes
   // copied in would resume silently from the other run's weights.
   const fs::path root = WriteTinyDataset("tied_data", 2);
-  TrainSsdOptions a = TinyTraining(root, TempDir("tied_a"));
+  TrainSsdOptions a = TinyTraining(root, ModelsTestDir("tied_a"));
   a.model.encoding = InputEncoding::kRgb;
   a.epochs = 2;
   a.max_epochs_this_run = 1;
   TrainSsdOptions b = a;
-  b.out_dir = TempDir("tied_b");
+  b.out_dir = ModelsTestDir("tied_b");
   EXPECT_EQ(TrainSsd(a).epochs_done, 1);
   EXPECT_EQ(TrainSsd(b).epochs_done, 1);
   fs::copy_file(b.out_dir / "checkpoint.pt", a.out_dir / "checkpoint.pt",
@@ -564,7 +559,7 @@ TEST(SsdTrainTest, ResumeRefusesACheckpointOfAnotherFolder) {
 // one run's in the sixth decimal: LibTorch's floats depend on the batch size).
 TEST(DetectSsdShardTest, MergedShardsAreOneRunByteForByte) {
   const fs::path root = WriteTinyDataset("shard_data", 5);
-  TrainSsdOptions training = TinyTraining(root, TempDir("shard_model"));
+  TrainSsdOptions training = TinyTraining(root, ModelsTestDir("shard_model"));
   training.epochs = 1;
   TrainSsd(training);
   DetectSsdOptions detect;
@@ -574,19 +569,19 @@ TEST(DetectSsdShardTest, MergedShardsAreOneRunByteForByte) {
   detect.batch_size = 3;
   detect.decode.score_threshold = 0.0;  // every box: many scores, compared to the last digit
   detect.progress.stream = nullptr;
-  detect.out_dir = TempDir("shard_one");
+  detect.out_dir = ModelsTestDir("shard_one");
   detect.command_line = "the command line";
   EXPECT_EQ(DetectSsd(detect).frames, 5);
   MergeDetectionsOptions merge;
   for (int k : {1, 0}) {
     DetectSsdOptions shard = detect;
     shard.shard = {k, 2};
-    shard.out_dir = TempDir("shard_" + std::to_string(k));
+    shard.out_dir = ModelsTestDir("shard_" + std::to_string(k));
     EXPECT_EQ(DetectSsd(shard).frames, k == 0 ? 3 : 2);
     EXPECT_TRUE(fs::exists(shard.out_dir / kDetectShardFile));
     merge.shards.push_back(shard.out_dir);
   }
-  merge.out_dir = TempDir("shard_merged");
+  merge.out_dir = ModelsTestDir("shard_merged");
   merge.command_line = detect.command_line;
   EXPECT_EQ(MergeDetections(merge).frames, 5);
   int files = 0;

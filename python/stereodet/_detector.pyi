@@ -1,0 +1,29 @@
+# Type stubs of the C++ extension stereodet._detector (python/src/detector_module.cc), used as
+# stereodet.Detector (loads LibTorch on first use).
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from ._core import Calibration
+
+CalibLike = Union[Calibration, Tuple[np.ndarray, np.ndarray], Sequence[np.ndarray]]
+
+def _calls_in_progress() -> int: ...
+
+class Detector:
+    def __init__(self, model_dir: str, *, device: str = "cpu", threads: int = 0,
+                 blur_sigma_px: float = 0.0) -> None: ...
+    @property
+    def family(self) -> str: ...
+    @property
+    def input(self) -> str: ...
+    @property
+    def classes(self) -> List[str]: ...
+    @property
+    def model_dir(self) -> str: ...
+    @property
+    def needs(self) -> Dict[str, bool]: ...
+    def detect(self, left: Optional[np.ndarray], right: Optional[np.ndarray] = None,
+               calib: Optional[CalibLike] = None, *, points: Optional[np.ndarray] = None,
+               frame_id: str = "") -> Dict[str, Any]: ...
+    def detect_batch(self, frames: List[Dict[str, Any]]) -> List[Dict[str, Any]]: ...
