@@ -24,11 +24,14 @@ namespace {
 
 // `run --out FILE` writes in place (a stream can be followed as it grows), so it replaces only
 // an empty file or one it wrote: a first line that is a frame line (index, objects, latency_ms).
+// A device or a FIFO is written to as it is.
 void CheckJsonLinesTarget(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) return;
-  STEREODET_CHECK_IO(fs::is_regular_file(path, ec))
-      << "run: --out " << path.string() << " exists and is not a file";
+  STEREODET_CHECK_IO(!fs::is_directory(path, ec))
+      << "run: --out " << path.string() << " is a folder; give a file (or - for stdout)";
+  // A device or a pipe (/dev/null, a FIFO a consumer reads) is a stream, not a file to keep.
+  if (!fs::is_regular_file(path, ec)) return;
   // The first line whole (a frame with many objects is a long line).
   std::ifstream in(path);
   std::string first;

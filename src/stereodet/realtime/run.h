@@ -28,7 +28,8 @@ struct RunOptions {
   StreamOptions stream;
   // The JSON Lines, one line per frame, flushed as each frame is done: "-" = stdout. A file is
   // written in place as the stream goes (so that it can be followed), and only over a file that
-  // is empty or that `run` wrote (its first line is a frame line); anything else is refused.
+  // is empty or that `run` wrote (its first line is a frame line), or to a device or FIFO
+  // (/dev/null, a pipe a consumer reads); anything else is refused.
   std::string out = "-";
   // The frames' KITTI detection files (ID.txt) and run.json (tool "run"), committed whole at the
   // end (also after Ctrl-C: run.json then says "interrupted" and lists the frames done). Empty =
