@@ -7,14 +7,18 @@
 namespace stereodet {
 
 void DefaultBoxOptions::Check() const {
-  STEREODET_CHECK(input_width >= 16 && input_height >= 16)
-      << "input size must be at least 16x16 px, got " << input_width << "x" << input_height;
+  // At most 4096 px a side: a model.json asking for more is an error, not a bad_alloc after
+  // minutes of default boxes.
+  STEREODET_CHECK(input_width >= 16 && input_height >= 16 && input_width <= 4096 &&
+                  input_height <= 4096)
+      << "input size must be in [16, 4096] px a side, got " << input_width << "x" << input_height;
   STEREODET_CHECK(num_maps >= 1 && num_maps <= 8) << "num_maps must be in [1, 8], got " << num_maps;
   STEREODET_CHECK(first_map_stride_log2 >= 0 && first_map_stride_log2 <= 6)
       << "first_map_stride_log2 must be in [0, 6], got " << first_map_stride_log2;
   STEREODET_CHECK(min_size_fraction > 0.0 && min_size_fraction <= 1.0)
       << "min_size_fraction must be in (0, 1], got " << min_size_fraction;
-  STEREODET_CHECK(!aspect_ratios.empty()) << "aspect_ratios must not be empty";
+  STEREODET_CHECK(!aspect_ratios.empty() && aspect_ratios.size() <= 16)
+      << "aspect_ratios must hold 1 to 16 ratios, got " << aspect_ratios.size();
   for (double ratio : aspect_ratios) {
     STEREODET_CHECK(ratio > 0.0 && std::isfinite(ratio))
         << "aspect ratio must be > 0, got " << ratio;

@@ -21,7 +21,8 @@ namespace stereodet {
 
 void SsdConfig::Check() const {
   boxes.Check();
-  STEREODET_CHECK(!classes.empty()) << "need at least one class";
+  STEREODET_CHECK(!classes.empty() && classes.size() <= 256)
+      << "need 1 to 256 classes, got " << classes.size();
   for (const std::string& name : classes) {
     STEREODET_CHECK(!name.empty() && name.find_first_of(" \t\n") == std::string::npos)
         << "class names must be non-empty and without spaces, got '" << name << "'";

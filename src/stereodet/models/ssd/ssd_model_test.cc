@@ -266,6 +266,30 @@ TEST(SsdTest, ConfigWithAnUnknownEncodingNamesTheField) {
   }
 }
 
+// A model.json with absurd sizes is refused at once, naming the field (it ran out of memory after a
+// long wait before).
+TEST(SsdTest, ConfigWithAbsurdSizesIsRefusedNamingThem) {
+  const std::string json = SsdConfigToJson(TinyConfig(InputEncoding::kRgb));
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"\"input_width\": 64", "\"input_width\": 1000000"},
+           {"\"input_height\": 48", "\"input_height\": 70000"}}) {
+    std::string bad = json;
+    const size_t at = bad.find(from);
+    ASSERT_NE(at, std::string::npos) << json;
+    bad.replace(at, from.size(), to);
+    try {
+      SsdConfigFromJson(bad, "model.json");
+      FAIL() << to;
+    } catch (const ParseError& e) {
+      EXPECT_NE(e.message().find("input size must be in [16, 4096] px a side"), std::string::npos)
+          << e.what();
+    }
+  }
+  SsdConfig many = TinyConfig(InputEncoding::kRgb);
+  many.classes.assign(300, "Car");
+  EXPECT_THROW(many.Check(), std::invalid_argument);
+}
+
 TEST(SsdTest, AFewStepsLowerTheLoss) {
   SetTorchThreads(1);
   SsdModel model(TinyConfig(InputEncoding::kRgb), 21);
