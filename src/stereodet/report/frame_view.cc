@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <set>
@@ -579,6 +580,32 @@ FrameViewsResult WriteViews(
   return result;
 }
 
+// `view` adds files to its folder and deletes none, but it writes only into a folder of views: an
+// absent or empty one, or one whose every file is a frame view (ID_CELL_image|bev.svg|png) or a
+// leftover temporary of one; a model folder, a data set or someone's files are refused before
+// anything is drawn, naming the first file that is not a view.
+void CheckViewsFolder(const fs::path& out) {
+  std::error_code ec;
+  if (!fs::exists(out, ec)) return;
+  STEREODET_CHECK_IO(fs::is_directory(out, ec))
+      << "view: --out " << out.string() << " is a file, not a folder";
+  for (const fs::directory_entry& entry : fs::directory_iterator(out)) {
+    const std::string name = entry.path().filename().string();
+    const bool temporary =
+        !name.empty() && name[0] == '.' && name.find(".tmp-") != std::string::npos;
+    bool view = false;
+    for (const char* suffix : {"_image.svg", "_bev.svg", "_image.png", "_bev.png"}) {
+      view =
+          view || (name.size() > std::strlen(suffix) &&
+                   name.compare(name.size() - std::strlen(suffix), std::string::npos, suffix) == 0);
+    }
+    STEREODET_CHECK_IO(entry.is_regular_file(ec) && (view || temporary))
+        << "view: --out " << out.string() << " holds " << name
+        << ", which is not a frame view; view writes only into an empty folder or one of frame "
+           "views: give a new or empty folder";
+  }
+}
+
 // The worst frames of every cell, most FN then most FP.
 std::vector<std::pair<ViewCell, std::vector<std::pair<std::string, std::string>>>> WorstJobs(
     const std::vector<ViewRecord>& records, const std::vector<ViewCell>& cells, int worst) {
@@ -628,6 +655,7 @@ FrameViewsResult WriteFrameViews(const FrameViewsOptions& options) {
     }
   }
   const fs::path out = options.out.empty() ? options.results / "views" : options.out;
+  CheckViewsFolder(out);
   return WriteViews(dataset, records, jobs, out, options);
 }
 

@@ -14,6 +14,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/raster.h"
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"
 
@@ -194,6 +195,30 @@ TEST(FrameViewTest, WritesTheWorstFramesViewsAsSvgAndPng) {
   }
   options.frames = {"000042"};
   EXPECT_THROW(WriteFrameViews(options), std::runtime_error);
+}
+
+// view adds files and deletes none, but only into a folder of views.
+TEST(FrameViewTest, WritesOnlyIntoAFolderOfViews) {
+  TestTempDir dir;
+  EvaluateViewSmall(dir.path() / "eval");
+  FrameViewsOptions options;
+  options.results = dir.path() / "eval";
+  options.worst = 1;
+  options.out = dir.path() / "home";
+  fs::create_directories(options.out);
+  WriteFileAtomically(options.out / "thesis.tex", "precious");
+  try {
+    WriteFrameViews(options);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds thesis.tex, which is not a frame view"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(std::distance(fs::directory_iterator(options.out), fs::directory_iterator()), 1);
+  options.out = dir.path() / "views";
+  EXPECT_NO_THROW(WriteFrameViews(options));
+  EXPECT_NO_THROW(WriteFrameViews(options));  // its own views again
 }
 
 TEST(FrameViewTest, ARecordOutsideTheFramesFilesIsRefused) {
