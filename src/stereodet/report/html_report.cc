@@ -33,6 +33,39 @@ double Num(const json& j, const char* key) {
   return j.is_object() && j.contains(key) ? Num(j[key]) : kNaN;
 }
 
+// The numbers the report reads from results.json must be numbers (or null: not computed). A
+// string or an object there (an edited or damaged file) would show as an empty cell or a missing
+// point, so it is refused naming the file, the entry and the field.
+void CheckResultNumbers(const json& results, const std::filesystem::path& path) {
+  auto check = [&](const json& parent, const char* key, const std::string& where) {
+    if (!parent.is_object() || !parent.contains(key)) return;
+    const json& v = parent[key];
+    STEREODET_CHECK_IO(v.is_number() || v.is_null())
+        << path.string() << ": " << where << key << " is " << v.dump().substr(0, 40)
+        << ", not a number; is the file damaged or edited? Evaluate again";
+  };
+  check(results.value("input", json::object()), "num_frames", "input.");
+  int index = 0;
+  for (const json& e : results["results"]) {
+    auto text = [&](const char* key) {
+      return e.is_object() && e.contains(key) && e[key].is_string() ? e[key].get<std::string>()
+                                                                    : std::string("?");
+    };
+    const std::string where = fmt::format("results[{}] ({} {} {}): ", index, text("class"),
+                                          text("metric"), text("difficulty"));
+    for (const char* key : {"min_overlap", "ap_r40", "ap_r11", "aos_r40", "aos_r11", "ap_voc",
+                            "num_detections", "num_valid_labels", "curve_points"}) {
+      check(e, key, where);
+    }
+    if (e.is_object() && e.contains("best_f1")) {
+      for (const char* key : {"f1", "precision", "recall", "threshold"}) {
+        check(e["best_f1"], key, where + "best_f1.");
+      }
+    }
+    ++index;
+  }
+}
+
 std::vector<double> Numbers(const json& j, const char* key) {
   std::vector<double> out;
   if (!j.is_object() || !j.contains(key) || !j[key].is_array()) return out;
@@ -588,6 +621,7 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
   STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
                      source.results["results"].is_array())
       << path.string() << " is not a stereodet results.json (it has no \"results\" array)";
+  CheckResultNumbers(source.results, path);
   // The exact curves are in the CSVs results.json names; the figures read them as "curve".
   for (json& e : source.results["results"]) {
     if (e.is_object() && e.contains("curve_csv") && e["curve_csv"].is_string() &&

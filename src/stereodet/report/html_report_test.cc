@@ -238,6 +238,25 @@ TEST(ReportTest, ReadReportSourceLoadsTheExactCurvesOfTheCsvsResultsJsonNames) {
   EXPECT_GT(cells, 10);
 }
 
+// A results.json with a string where a number belongs is refused naming the field (it gave empty
+// cells before).
+TEST(ReportTest, AStringWhereANumberBelongsIsRefusedNamingTheField) {
+  TestTempDir dir;
+  EvaluateSmall(dir.path() / "eval", Matcher::kOptimal);
+  const fs::path path = dir.path() / "eval" / "results.json";
+  json results = json::parse(ReadFile(path));
+  results["results"][0]["ap_r40"] = "0.5";
+  WriteFileAtomically(path, results.dump(2));
+  try {
+    ReadReportSource(dir.path() / "eval", "optimal");
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("results[0] ("), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ap_r40 is \"0.5\", not a number"), std::string::npos)
+        << e.what();
+  }
+}
+
 // The pixels agree with the data too: every polyline vertex of the exact PR curve maps back, with
 // the figure's frame, to the curve's (recall, precision) within the SVG's 0.01 px rounding.
 TEST(ReportTest, PolylineVerticesMapBackToTheCurve) {
