@@ -125,6 +125,11 @@ json ComparedOptions(const fs::path& dir) {
   } catch (const json::exception& e) {
     throw ParseError(path.string(), 0, "json", e.what());
   }
+  if (!j.is_object() || (j.contains("options") && !j["options"].is_object()) ||
+      (j.contains("overlap_sets") && !j["overlap_sets"].is_array())) {
+    throw ParseError(path.string(), 0, "options",
+                     "not a results.json of eval: expected an object with an \"options\" object");
+  }
   json o = j.value("options", json::object());
   o.erase("num_threads");
   return {{"options", o}, {"overlap_sets", j.value("overlap_sets", json::array())}};
@@ -157,22 +162,52 @@ EvalShardInfo ReadEvalShard(const fs::path& dir) {
   const json j = ShardJson(dir);
   const std::string file = (dir / kShardFile).string();
   EvalShardInfo info;
+  // The field being read, so that a wrong type is reported as "field input.det: expected a
+  // string, got {...}" rather than nlohmann's words alone.
+  std::string field;
+  auto at = [&](const json& parent, const std::string& name,
+                const std::string& path) -> const json& {
+    field = path;
+    if (!parent.is_object()) {
+      throw ParseError(file, 0, field, "expected an object holding '" + name + "'");
+    }
+    if (!parent.contains(name)) throw ParseError(file, 0, field, "missing");
+    return parent.at(name);
+  };
+  auto expect = [&](const json& value, bool ok, const char* what) -> const json& {
+    if (!ok)
+      throw ParseError(file, 0, field,
+                       std::string("expected ") + what + ", got " + value.dump().substr(0, 60));
+    return value;
+  };
   try {
-    STEREODET_CHECK_IO(j.at("format").get<int>() == kShardFormat)
-        << file << ": format " << j.at("format").dump() << ", this version reads " << kShardFormat;
-    const std::optional<Shard> shard = ParseShard(j.at("shard").get<std::string>());
-    if (!shard) throw ParseError(file, 0, "shard", "not K/N: " + j.at("shard").dump());
+    const json& format = at(j, "format", "format");
+    expect(format, format.is_number_integer(), "an integer");
+    STEREODET_CHECK_IO(format.get<int64_t>() == kShardFormat)
+        << file << ": format " << format.dump() << ", this version reads " << kShardFormat;
+    const json& shard_text = at(j, "shard", "shard");
+    expect(shard_text, shard_text.is_string(), "a string K/N");
+    const std::optional<Shard> shard = ParseShard(shard_text.get<std::string>());
+    if (!shard) throw ParseError(file, 0, "shard", "not K/N: " + shard_text.dump());
     info.shard = *shard;
-    info.frames = j.at("frames").get<int64_t>();
-    info.frames_hash = j.at("frames_fnv1a64").get<std::string>();
-    const json& in = j.at("input");
+    const json& frames = at(j, "frames", "frames");
+    expect(frames, frames.is_number_integer(), "an integer");
+    info.frames = frames.get<int64_t>();
+    const json& hash = at(j, "frames_fnv1a64", "frames_fnv1a64");
+    info.frames_hash = expect(hash, hash.is_string(), "a string").get<std::string>();
+    const json& in = at(j, "input", "input");
+    for (const char* name : {"gt", "det", "split"}) {
+      const json& v = at(in, name, std::string("input.") + name);
+      expect(v, v.is_string(), "a string");
+    }
     info.input.gt = in.at("gt").get<std::string>();
     info.input.det = in.at("det").get<std::string>();
     info.input.split = in.at("split").get<std::string>();
-    info.input.lenient = in.at("lenient").get<bool>();
+    const json& lenient = at(in, "lenient", "input.lenient");
+    info.input.lenient = expect(lenient, lenient.is_boolean(), "true or false").get<bool>();
     info.input.shard = info.shard;
   } catch (const json::exception& e) {
-    throw ParseError(file, 0, "field", e.what());
+    throw ParseError(file, 0, field, e.what());
   }
   return info;
 }

@@ -17,6 +17,7 @@
 #include "stereodet/kitti/label_io.h"
 #include "stereodet/pipelines/evaluation.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -205,6 +206,33 @@ TEST(EvalShardTest, RefusesAShardWhoseFramesChangedSinceItRan) {
               ::testing::ThrowsMessage<std::runtime_error>(
                   HasSubstr(frames.string() + " is not the file its eval_shard.json records")));
   EXPECT_FALSE(fs::exists(out.path() / "m2"));
+}
+
+// A shard record of the wrong shape (an edited file, nested JSON where a value belongs) is refused
+// naming the field and what it holds, not in nlohmann's words alone.
+TEST(EvalShardTest, AShardRecordOfTheWrongShapeNamesTheField) {
+  const RandomFolders data(4, 3);
+  const TestTempDir out("shard-shape");
+  EvaluationOptions part = Options(data, Matcher::kKitti, FilterMode::kStable, out.path() / "s0");
+  part.input.shard = Shard{0, 2};
+  RunEvaluation(part);
+  const fs::path record = part.out / "eval_shard.json";
+  const std::string good = ReadFile(record);
+  for (const auto& [edit, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"frames": {"a": [1, {"b": 2}]}})", "field frames: expected an integer, got {"},
+           {R"({"input": {"det": [[[[1]]]]}})", "field input.det: expected a string, got [[[["},
+           {R"({"input": "x"})", "field input.gt: expected an object holding 'gt'"},
+           {R"({"shard": 3})", "field shard: expected a string K/N, got 3"}}) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    j.merge_patch(nlohmann::json::parse(edit));
+    WriteFileAtomically(record, j.dump(2));
+    EXPECT_THAT([&] { ReadEvalShard(part.out); },
+                ::testing::ThrowsMessage<ParseError>(HasSubstr(expected)))
+        << edit;
+  }
+  WriteFileAtomically(record, std::string(1000, '[') + std::string(1000, ']'));
+  EXPECT_THAT([&] { ReadEvalShard(part.out); },
+              ::testing::ThrowsMessage<ParseError>(HasSubstr("expected an object holding")));
 }
 
 // `eval sweep|compare --shards`: the frames of eval shards give the rows of one run's sweep and
