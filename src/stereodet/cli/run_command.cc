@@ -99,7 +99,7 @@ void AddRunCommand(CLI::App& app) {
       ->group(kSource);
   cmd->add_flag("--preload", o.source.preload,
                 "read and decode every frame first, then stream them from memory (benchmarks: "
-                "detection alone)")
+                "detection alone; about 2.8 MB a 1242 x 375 pair: use with --max-frames)")
       ->group(kSource);
   cmd->add_option("--max-frames", o.source.max_frames, "stop after N frames (0 = all)")
       ->capture_default_str()

@@ -42,7 +42,7 @@ struct FrameSourceOptions {
   int max_frames = 0;  // stop after this many frames (0 = all)
   // Read and decode every frame before the first is given (a finite source only): the stream then
   // times detection alone, without file reading or PNG decoding (benchmarks). Each frame's `read_s`
-  // is then 0.
+  // is then 0. Every frame is held in memory at once (about 2.8 MB a 1242 x 375 pair).
   bool preload = false;
   // What to read of each frame (Detector::needs(): the right image and the calibration for stereo
   // models, the LiDAR scan for a LiDAR 3D model; a KITTI source only has scans).
