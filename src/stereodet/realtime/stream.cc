@@ -129,11 +129,13 @@ StreamSummary RunStream(Detector& detector, FrameSource& source, const StreamOpt
   StreamSummary summary;
   summary.source = source.Describe();
   summary.latency = LatencyRecorder(options.warmup_frames);
-  // Realtime: one slot before the prepare stage, so a frame waits there at most until the next
-  // one is due; without it the queues block the reader.
-  BoundedQueue<Item> to_prepare(options.realtime ? 1 : options.queue_capacity);
-  BoundedQueue<Item> to_network(options.queue_capacity);
-  BoundedQueue<Item> to_sink(options.queue_capacity);
+  // Realtime: one slot between every two stages, so that at most one frame waits before each
+  // (latency stays bounded when a stage is slower than the source: frames are dropped at the first
+  // slot instead of piling up); without it the queues block the reader.
+  const size_t capacity = options.realtime ? 1 : static_cast<size_t>(options.queue_capacity);
+  BoundedQueue<Item> to_prepare(capacity);
+  BoundedQueue<Item> to_network(capacity);
+  BoundedQueue<Item> to_sink(capacity);
   std::atomic<bool> abort{false};
   std::atomic<int64_t> frames_read{0};
   int64_t dropped = 0;  // by the reader only, read after it is joined

@@ -32,7 +32,7 @@ namespace stereodet {
 
 struct StreamOptions {
   bool realtime = false;   // replay at the source's fps, dropping frames the detector misses
-  int queue_capacity = 2;  // frames waiting between two stages (without realtime)
+  int queue_capacity = 2;  // frames waiting between two stages (realtime: 1)
   int warmup_frames = 5;   // the first frames' latencies are reported apart
   // A frame the source could not give (a missing or broken file, a pair of two sizes) or the
   // detector refused stops the stream with an error naming it; otherwise it is reported in its
