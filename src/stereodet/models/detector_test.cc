@@ -18,6 +18,7 @@
 #include "stereodet/models/det3d/det3d_detect.h"
 #include "stereodet/models/rpn/rpn_detect.h"
 #include "stereodet/models/ssd/ssd_detect.h"
+#include "stereodet/models/train_common.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/test_paths.h"
@@ -36,7 +37,12 @@ fs::path PointsDir() { return TestBinaryDir() / "detector_points"; }
 std::vector<fs::path> CommittedModels() {
   std::vector<fs::path> dirs;
   for (const fs::directory_entry& e : fs::directory_iterator(TestSourceDir() / "models")) {
-    if (e.is_directory() && fs::exists(e.path() / "model.pt")) dirs.push_back(e.path());
+    // A training still running in the checkout (its run.json has fewer epochs done than asked)
+    // rewrites model.pt at every epoch: not a model to compare two runs of.
+    if (e.is_directory() && fs::exists(e.path() / "model.pt") &&
+        UnfinishedTrainingWarning(e.path()).empty()) {
+      dirs.push_back(e.path());
+    }
   }
   std::sort(dirs.begin(), dirs.end());
   return dirs;
