@@ -119,7 +119,8 @@ from its model folder (model.json names the family; model.pt is checked against 
 Images are (H, W, 3) uint8 BGR arrays (OpenCV's layout), the rectified pair; `calib` a
 stereodet.kitti.Calibration or a pair (P2, P3) of (3, 4) matrices; `points` (N, 4) float32 in the
 velodyne frame (the LiDAR scan of a LiDAR 3D model; a stereo 3D model computes its points from the
-pair when not given). What a model does not need may be None (`needs` says what it reads). The
+pair when not given). What a model does not need may be None (`needs` says what it reads; a LiDAR
+3D model still takes `left` for the image's size, to keep the objects inside it). The
 objects are those `stereodet detect` writes for the same frame. One thread at a time per Detector
 (the GIL is released while it runs; two Detectors on two threads run in parallel).)")
       .def(py::init([](const std::string& model_dir, const std::string& device, int threads,
