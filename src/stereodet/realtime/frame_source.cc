@@ -47,15 +47,6 @@ void ReadOrNote(SourceFrame& out, Read read) {
   out.read_s = timer.ElapsedSeconds();
 }
 
-void CheckPairSize(SourceFrame& out) {
-  if (!out.error.empty() || out.frame.right.empty()) return;
-  if (out.frame.left.size() != out.frame.right.size()) {
-    out.error = fmt::format("left and right images differ in size ({}x{} and {}x{} px)",
-                            out.frame.left.cols, out.frame.left.rows, out.frame.right.cols,
-                            out.frame.right.rows);
-  }
-}
-
 // --- KITTI split -------------------------------------------------------------------------------
 
 class KittiSource : public FrameSource {
@@ -81,11 +72,13 @@ class KittiSource : public FrameSource {
         const auto [width, height] = PngImageSize(paths.image_left);
         out.frame.image_size = cv::Size(width, height);
       }
-      if (needs.right_image) out.frame.right = ReadColourImage(paths.image_right);
+      if (needs.right_image) {
+        out.frame.right = ReadColourImage(paths.image_right);
+        CheckStereoPairSize(out.frame.left, out.frame.right, paths.image_left, paths.image_right);
+      }
       if (needs.calibration) out.frame.calib = ReadCalibration(paths.calib);
       if (needs.points) out.frame.points = ReadVelodyne(paths.velodyne);
     });
-    CheckPairSize(out);
     return out;
   }
   double fps() const override { return options_.fps > 0 ? options_.fps : kKittiFps; }
@@ -133,10 +126,10 @@ class SequenceSource : public FrameSource {
             << "no right image for " << left.string() << ": the right sequence " << options_.right
             << " has " << right_.size() << " files, the left one more";
         out.frame.right = ReadColourImage(right_[out.index]);
+        CheckStereoPairSize(out.frame.left, out.frame.right, left, right_[out.index]);
       }
       if (calib_) out.frame.calib = *calib_;
     });
-    CheckPairSize(out);
     return out;
   }
   double fps() const override { return options_.fps > 0 ? options_.fps : kKittiFps; }
@@ -241,6 +234,13 @@ class VideoSource : public FrameSource {
       }
       out.frame.left = left;
       out.frame.right = right;
+      if (left.size() != right.size()) {
+        try {
+          CheckStereoPairSize(left, right, options_.left_video, options_.right_video);
+        } catch (const std::exception& e) {
+          out.error = e.what();
+        }
+      }
     } else {
       // Side by side: the left camera's image in the left half.
       if (left.cols % 2 != 0) {
@@ -253,7 +253,6 @@ class VideoSource : public FrameSource {
       }
     }
     if (calib_) out.frame.calib = *calib_;
-    CheckPairSize(out);
     out.read_s = timer.ElapsedSeconds();
     ++next_;
     return out;

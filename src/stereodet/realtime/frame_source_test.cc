@@ -78,7 +78,8 @@ TEST(FrameSourceTest, SequenceGivesFramesInOrderAndReportsWhatAFrameLacks) {
   EXPECT_EQ(frames[0].frame.left.size(), cv::Size(1242, 375));
   EXPECT_EQ(frames[0].frame.right.size(), cv::Size(1242, 375));
   ASSERT_TRUE(frames[0].frame.calib.has_value());
-  EXPECT_THAT(frames[1].error, HasSubstr("left and right images differ in size"));
+  EXPECT_THAT(frames[1].error, HasSubstr("a stereo pair must have equal sizes"));
+  EXPECT_THAT(frames[1].error, HasSubstr("frame_1.png is 1240x375 px"));
   EXPECT_THAT(frames[2].error, HasSubstr("no right image for"));
 }
 
