@@ -176,19 +176,21 @@ PyFrames FramesFromAnnos(py::handle gt_annos, py::handle dt_annos) {
 }
 
 EvalInputOptions InputOptions(const fs::path& gt, const fs::path& det, const std::string& split,
-                              bool lenient, int num_threads) {
+                              bool lenient, int num_threads, bool missing_as_empty) {
   EvalInputOptions input;
   input.gt = gt;
   input.det = det;
   input.split = split;
   input.lenient = lenient;
+  input.missing_as_empty = missing_as_empty;
   input.num_threads = num_threads;
   return input;
 }
 
 PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const std::string& split,
-                           bool lenient, int num_threads) {
-  const EvalInputOptions options = InputOptions(gt, det, split, lenient, num_threads);
+                           bool lenient, int num_threads, bool missing_as_empty) {
+  const EvalInputOptions options =
+      InputOptions(gt, det, split, lenient, num_threads, missing_as_empty);
   EvalInput input;
   {
     ReleaseGil release;
@@ -243,9 +245,9 @@ std::vector<EvalOptions> OverlapRuns(const EvalOptions& base,
 // (and with `records` its matches*.csv). Records without out are kept in memory only.
 PyEvalResult RunFolders(const fs::path& gt, const fs::path& det, const std::string& split,
                         bool lenient, int num_threads, std::vector<EvalOptions> runs,
-                        const fs::path& out, bool records) {
+                        const fs::path& out, bool records, bool missing_as_empty) {
   EvaluationOptions options;
-  options.input = InputOptions(gt, det, split, lenient, num_threads);
+  options.input = InputOptions(gt, det, split, lenient, num_threads, missing_as_empty);
   if (records && out.empty()) {
     for (EvalOptions& run : runs) run.keep_records = true;
   }
@@ -865,7 +867,7 @@ void BindEval(py::module_& m) {
       });
   m.def("_frames_from_annos", &FramesFromAnnos, py::arg("gt_annos"), py::arg("dt_annos"));
   m.def("_frames_from_folders", &FramesFromFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
-        py::arg("lenient"), py::arg("num_threads"));
+        py::arg("lenient"), py::arg("num_threads"), py::arg("missing_as_empty") = false);
   m.def("_evaluate", &EvaluateFrames, py::arg("frames"), py::arg("options"));
 
   // get_official_eval_result's two evaluations, strict and loose, and its printout. The same
@@ -899,7 +901,7 @@ void BindEval(py::module_& m) {
         "OverlapSetRuns: base once per overlap set (names), with that set's class specs.");
   m.def("_run_evaluation", &RunFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
         py::arg("lenient"), py::arg("num_threads"), py::arg("runs"), py::arg("out"),
-        py::arg("records"));
+        py::arg("records"), py::arg("missing_as_empty") = false);
   m.def("_write_report", &WriteReport, py::arg("result"), py::arg("out"), py::arg("records"));
 
   m.def(
@@ -921,9 +923,9 @@ void BindEval(py::module_& m) {
       "_run_sweep",
       [](const fs::path& gt, const fs::path& det, const std::string& split, bool lenient,
          const EvalOptions& eval, const std::string& bound, double from, double to, double step,
-         const fs::path& out) {
+         const fs::path& out, bool missing_as_empty) {
         EvaluationSweepOptions options;
-        options.input = InputOptions(gt, det, split, lenient, eval.num_threads);
+        options.input = InputOptions(gt, det, split, lenient, eval.num_threads, missing_as_empty);
         options.eval = eval;
         options.bound = ParseBound(bound);
         options.from = from;
@@ -938,7 +940,8 @@ void BindEval(py::module_& m) {
         return SweepRowsList(result.rows, options.bound);
       },
       py::arg("gt"), py::arg("det"), py::arg("split"), py::arg("lenient"), py::arg("options"),
-      py::arg("bound"), py::arg("start"), py::arg("stop"), py::arg("step"), py::arg("out"));
+      py::arg("bound"), py::arg("start"), py::arg("stop"), py::arg("step"), py::arg("out"),
+      py::arg("missing_as_empty") = false);
 
   m.def(
       "_compare",
@@ -962,9 +965,9 @@ void BindEval(py::module_& m) {
       "_run_compare",
       [](const fs::path& gt, const fs::path& det_a, const fs::path& det_b, const std::string& split,
          bool lenient, const EvalOptions& eval, const fs::path& calib, double disparity_error_px,
-         const fs::path& out) {
+         const fs::path& out, bool missing_as_empty) {
         EvaluationCompareOptions options;
-        options.input = InputOptions(gt, det_a, split, lenient, eval.num_threads);
+        options.input = InputOptions(gt, det_a, split, lenient, eval.num_threads, missing_as_empty);
         options.det_b = det_b;
         options.eval = eval;
         options.calib = calib;
@@ -978,7 +981,8 @@ void BindEval(py::module_& m) {
         return CompareRowsList(result.rows);
       },
       py::arg("gt"), py::arg("det_a"), py::arg("det_b"), py::arg("split"), py::arg("lenient"),
-      py::arg("options"), py::arg("calib"), py::arg("disparity_error_px"), py::arg("out"));
+      py::arg("options"), py::arg("calib"), py::arg("disparity_error_px"), py::arg("out"),
+      py::arg("missing_as_empty") = false);
 }
 
 }  // namespace stereodet::python

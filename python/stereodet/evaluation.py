@@ -46,14 +46,14 @@ def _is_path(value: Any) -> bool:
 
 
 def _frames(gt: Source, det: Source, split: Optional[PathLike], lenient: bool,
-            num_threads: int) -> Any:
+            num_threads: int, missing_as_empty: bool = False) -> Any:
     """Folders through the library's LoadEvalFrames, or annotation dicts."""
     if _is_path(gt) != _is_path(det):
         raise ValueError("gt and det: give two folders or two lists of annotation dicts")
     if _is_path(gt):
         return _core._frames_from_folders(os.fspath(gt), os.fspath(det),
                                           "" if split is None else os.fspath(split), lenient,
-                                          num_threads)
+                                          num_threads, missing_as_empty=missing_as_empty)
     if split is not None:
         raise ValueError("split: only for folders (annotation lists are evaluated as given)")
     return _core._frames_from_annos(gt, det)
@@ -132,7 +132,7 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              filter_mode: str = "stable", score_threshold: float = -math.inf,
              score_transform: str = "none", all_classes: bool = False, calibration_bins: int = 10,
              distance_bin_m: float = 5.0, max_distance_m: float = 80.0, records: bool = False,
-             lenient: bool = False, num_threads: int = 0,
+             lenient: bool = False, missing_as_empty: bool = False, num_threads: int = 0,
              out: Optional[PathLike] = None) -> EvalResult:
     """Evaluates detections against labels; `stereodet eval` with the same options.
 
@@ -154,6 +154,10 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
     records: keep what every detection and label counts as (EvalResult.records()); with out, also
       OUT/matches.csv (the CLI's --records).
     lenient: folders only: skip malformed lines (listed in to_dict()["input"]["skipped_lines"]).
+    missing_as_empty: folders without a split only: evaluate labelled frames that have no
+      detection file as frames without detections even when more than 10 % lack one (otherwise
+      refused, OSError: a folder of detections for part of the frames would read as a weak
+      detector; give `split` with the frames that were detected instead).
     num_threads: 0 = all hardware threads.
     out: write the results folder there, `stereodet eval --out`'s (results.json, summary.csv,
       curves/; result.files lists them): for folders through the CLI's very call (RunEvaluation),
@@ -175,8 +179,10 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
     if _is_path(gt) and _is_path(det):
         return _core._run_evaluation(os.fspath(gt), os.fspath(det),
                                      "" if split is None else os.fspath(split), lenient,
-                                     num_threads, runs, target, records)
-    result = _core._evaluate(_frames(gt, det, split, lenient, num_threads), runs)
+                                     num_threads, runs, target, records,
+                                     missing_as_empty=missing_as_empty)
+    result = _core._evaluate(_frames(gt, det, split, lenient, num_threads, missing_as_empty),
+                             runs)
     if out is not None:
         _core._write_report(result, target, records)
     return result
@@ -245,12 +251,13 @@ def get_official_eval_result(gt_annos: Sequence[Annos], dt_annos: Sequence[Annos
 
 def filter_sweep(gt: Source, det: Source, bound: str, start: float = 0.0, stop: float = 200.0,
                  step: float = 5.0, *, split: Optional[PathLike] = None, lenient: bool = False,
-                 out: Optional[PathLike] = None, **options: Any) -> List[Dict[str, Any]]:
+                 missing_as_empty: bool = False, out: Optional[PathLike] = None,
+                 **options: Any) -> List[Dict[str, Any]]:
     """`stereodet eval sweep`: for each value of `bound` ("min-area", "max-distance", ...) from
     `start` to `stop` by `step`, TP/FP/FN, precision and recall under the naive and the stable
     filter, one dict per class x metric x difficulty x value (pandas.DataFrame takes the list).
 
-    gt, det, split, lenient: as evaluate(). options: evaluate()'s (classes, metrics, matcher, ...;
+    gt, det, split, lenient, missing_as_empty: as evaluate(). options: evaluate()'s (classes, metrics, matcher, ...;
     one overlap set); `filters` there are the fixed extra conditions (the CLI's --where).
     Folders go through the CLI's call (RunEvaluationSweep); out: folders only, also write
     OUT/sweep.csv, the CLI's.
@@ -260,16 +267,18 @@ def filter_sweep(gt: Source, det: Source, bound: str, start: float = 0.0, stop: 
     if _is_path(gt) and _is_path(det):
         return _core._run_sweep(os.fspath(gt), os.fspath(det),
                                 "" if split is None else os.fspath(split), lenient, eval_options,
-                                bound, start, stop, step, "" if out is None else os.fspath(out))
+                                bound, start, stop, step, "" if out is None else os.fspath(out),
+                                missing_as_empty=missing_as_empty)
     if out is not None:
         raise ValueError("out: only for folders (the CLI's sweep.csv)")
-    frames = _frames(gt, det, split, lenient, merged["num_threads"])
+    frames = _frames(gt, det, split, lenient, merged["num_threads"], missing_as_empty)
     return _core._filter_sweep(frames, eval_options, bound, start, stop, step)
 
 
 def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLike] = None,
             calib: Any = None, disparity_error_px: float = 1.0, lenient: bool = False,
-            out: Optional[PathLike] = None, **options: Any) -> List[Dict[str, Any]]:
+            missing_as_empty: bool = False, out: Optional[PathLike] = None,
+            **options: Any) -> List[Dict[str, Any]]:
     """`stereodet eval compare`: the 3D localization error of two detection sets on the same
     labels (e.g. stereo vs LiDAR) per label-distance bin, beside the stereo depth-error model
     dz = z^2 / (b f) * dd.
@@ -289,12 +298,15 @@ def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLik
         return _core._run_compare(os.fspath(gt), os.fspath(det_a), os.fspath(det_b),
                                   "" if split is None else os.fspath(split), lenient, opts,
                                   "" if calib is None else os.fspath(calib), disparity_error_px,
-                                  "" if out is None else os.fspath(out))
+                                  "" if out is None else os.fspath(out),
+                                  missing_as_empty=missing_as_empty)
     if out is not None:
         raise ValueError("out: only for folders with calib None or a path (the CLI's "
                          "compare.csv)")
-    a = _core._evaluate(_frames(gt, det_a, split, lenient, merged["num_threads"]), [opts])
-    b = _core._evaluate(_frames(gt, det_b, split, lenient, merged["num_threads"]), [opts])
+    a = _core._evaluate(
+        _frames(gt, det_a, split, lenient, merged["num_threads"], missing_as_empty), [opts])
+    b = _core._evaluate(
+        _frames(gt, det_b, split, lenient, merged["num_threads"], missing_as_empty), [opts])
     if calib is None:
         calib = kitti.Calibration.kitti_like()
     elif _is_path(calib):
@@ -304,4 +316,5 @@ def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLik
 
 # evaluate()'s keyword options and their defaults, for filter_sweep() and compare().
 _EVALUATE_DEFAULTS = {name: p.default for name, p in inspect.signature(evaluate).parameters.items()
-                      if p.kind == p.KEYWORD_ONLY and name not in ("lenient", "out")}
+                      if p.kind == p.KEYWORD_ONLY
+                      and name not in ("lenient", "missing_as_empty", "out")}

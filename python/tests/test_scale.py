@@ -120,6 +120,22 @@ def test_merged_sharded_eval_is_the_single_process_eval(client, bin_dir, cli, da
     assert [r["skipped"] for r in scale.run_tasks(client, tasks, lambda line: None)] == [True] * 3
 
 
+def test_an_eval_that_fits_one_task_merges_as_the_single_process_eval(client, bin_dir, cli, data,
+                                                                      tmp_path):
+    # One task runs `eval --shard 0/1`, which must write its shard record like any other shard
+    # (it wrote none, and the merge refused it, whenever the frames fit in one task).
+    gt, det = data / "eval_small", data / "eval_small" / "det"
+    flags = ["--metrics", "2d", "--classes", "Car"]
+    cli("eval", "--gt", gt, "--det", det, "--out", tmp_path / "one", *flags)
+    tasks = scale.eval_tasks(bin_dir, gt, det, tmp_path / "sharded", None, 100000, flags)
+    assert len(tasks) == 1
+    scale.run_tasks(client, tasks, lambda line: None)
+    assert (scale.eval_shard_dir(tmp_path / "sharded", 0, 1) / "eval_shard.json").is_file()
+    scale.eval_merge(bin_dir, tmp_path / "sharded", 1, flags)
+    assert (tmp_path / "one" / "summary.csv").read_bytes() == (
+        tmp_path / "sharded" / "merged" / "summary.csv").read_bytes()
+
+
 def test_an_in_process_task_of_another_executable_is_refused():
     from stereodet import _core, _stereo
     assert _core._run_cli(["synth", "--out", "/nonexistent/never-written"]) == 1

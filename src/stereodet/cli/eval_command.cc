@@ -159,6 +159,11 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
                 "KITTI's loose BEV/3D thresholds (0.5/0.25/0.25): --overlaps loose");
   cmd->add_flag("--lenient", a->input.lenient,
                 "skip malformed label/detection lines, count and list them");
+  cmd->add_flag("--missing-as-empty", a->input.missing_as_empty,
+                fmt::format("without --split: evaluate labelled frames that have no detection file "
+                            "as frames without detections, even when more than {:.0f}% lack one "
+                            "(refused otherwise)",
+                            100 * kMaxMissingDetectionShare));
   cmd->add_flag("--all-classes", a->all_classes,
                 "evaluate classes without any detection too (the devkit skips them)");
   cmd->add_option("--calibration-bins", a->eval.calibration_bins, "reliability bins")

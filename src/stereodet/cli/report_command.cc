@@ -104,7 +104,8 @@ void AddViewCommand(CLI::App& app) {
       ->capture_default_str();
   view->add_option("--points", args->options.points,
                    "point clouds (.bin, velodyne frame) for the bird's-eye view instead of "
-                   "DATASET/velodyne, e.g. the stereo points of `stereodet stereo`");
+                   "DATASET/velodyne: a folder of scans, or the output folder of `stereodet "
+                   "stereo --encode points`");
   view->add_option("--out", args->options.out,
                    "where the views go (default: RESULTS/views; files replaced atomically)");
   view->add_flag("--no-png", args->no_png, "SVG views only");

@@ -330,6 +330,21 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options) {
   }
   in.ignored_files.insert(in.ignored_files.end(), label_not_ids.begin(), label_not_ids.end());
   STEREODET_CHECK_IO(!ids.empty()) << "no frame to evaluate in " << in.label_dir.string();
+  if (options.split.empty() && !options.missing_as_empty) {
+    // Counted over the whole list, so that every shard of one run decides alike.
+    std::vector<std::string> missing;
+    for (const std::string& id : ids) {
+      if (!det_stems.count(id)) missing.push_back(id);
+    }
+    STEREODET_CHECK_IO(static_cast<double>(missing.size()) <=
+                       kMaxMissingDetectionShare * static_cast<double>(ids.size()))
+        << "--det " << in.det_dir.string() << " has no detection file for " << missing.size()
+        << " of the " << ids.size() << " labelled frames in " << in.label_dir.string()
+        << " (first: " << missing.front() << ".txt). Without --split every label file is a frame "
+        << "to evaluate, and these would count as frames where the detector found nothing; pass "
+           "--split with the frames that were detected, or --missing-as-empty to evaluate them "
+           "so";
+  }
 
   const size_t first = options.shard.Begin(ids.size()), last = options.shard.End(ids.size());
   std::vector<EvalFrameSource> sources(last - first);

@@ -19,6 +19,11 @@
 
 namespace stereodet {
 
+// The share of the labelled frames that may lack a detection file when no split is given (a
+// detector that writes no file for a frame where it found nothing): above it, LoadEvalFrames
+// refuses unless EvalInputOptions::missing_as_empty.
+inline constexpr double kMaxMissingDetectionShare = 0.10;
+
 struct EvalInputOptions {
   // Labels: a KITTI root (with training/label_2), a folder with label_2/ inside, or a folder of
   // label .txt files.
@@ -31,6 +36,13 @@ struct EvalInputOptions {
   // Strict (default): the first bad line of a label or detection file throws a ParseError naming
   // file, line and field. Lenient: bad lines are skipped and listed in EvalInput::skipped_lines.
   bool lenient = false;
+  // Without a split every label file is a frame to evaluate, and a frame without a detection file
+  // is evaluated as one where the detector found nothing. A folder of detections for part of the
+  // frames would then read as a weak detector (Car Moderate 83 as 39), so when more than
+  // kMaxMissingDetectionShare of the labelled frames have no detection file LoadEvalFrames
+  // refuses, unless this is set (`--missing-as-empty`). With a split, the split says which frames
+  // count: a frame of it without a detection file is evaluated with no detections.
+  bool missing_as_empty = false;
   int num_threads = 0;  // 0 = all hardware threads
   // Read only this shard of the frame list (util/shard.h: a contiguous range of the split's order,
   // or of the sorted label files). What is checked and reported about the folders (ignored files,

@@ -45,6 +45,7 @@ struct Folders {
     o.gt = gt;
     o.det = det;
     o.num_threads = 2;
+    o.missing_as_empty = true;  // 000002 has no detection file on purpose (one of three)
     return o;
   }
 };
@@ -71,6 +72,43 @@ TEST(EvalInputTest, ReadsEveryLabelFileAndNotesFramesWithoutDetections) {
   EXPECT_THAT(in.frames_without_detections, ElementsAre("000002"));
   EXPECT_TRUE(in.ignored_files.empty());
   EXPECT_THAT(in.Notices(), ElementsAre("frames without a detection file (no detections): 1"));
+}
+
+// Without a split, a folder of detections for part of the labelled frames would read as a weak
+// detector: more than 10 % of the frames without a detection file is refused unless
+// missing_as_empty or a split says what counts.
+TEST(EvalInputTest, WithoutASplitMoreThanATenthOfTheFramesWithoutDetectionsIsRefused) {
+  TestTempDir dir;
+  const fs::path gt = dir / "gt", det = dir / "det";
+  for (int i = 0; i < 20; ++i) {
+    const std::string id = "0000" + std::to_string(10 + i);
+    Write(gt / (id + ".txt"), kLabel);
+    if (i != 3 && i != 7) Write(det / (id + ".txt"), kDetection);  // 2 of 20 missing: 10 %
+  }
+  EvalInputOptions o;
+  o.gt = gt;
+  o.det = det;
+  EXPECT_EQ(LoadEvalFrames(o).frames_without_detections.size(), 2u);  // not more than 10 %
+  fs::remove(det / "000011.txt");                                     // 3 of 20: 15 %
+  EXPECT_THAT(ErrorOf(o),
+              HasSubstr("--det " + det.string() +
+                        " has no detection file for 3 of the 20 labelled "
+                        "frames in " +
+                        gt.string() +
+                        " (first: 000011.txt). Without --split every "
+                        "label file is a frame to evaluate, and these would count as frames where "
+                        "the detector found nothing; pass --split with the frames that were "
+                        "detected, or --missing-as-empty to evaluate them so"));
+  o.missing_as_empty = true;
+  EXPECT_EQ(LoadEvalFrames(o).frames_without_detections.size(), 3u);
+  o.missing_as_empty = false;
+  Write(dir / "split.txt", "000010\n000011\n000012\n");  // a split: its frames count, as given
+  o.split = (dir / "split.txt").string();
+  EXPECT_EQ(LoadEvalFrames(o).frames_without_detections, std::vector<std::string>{"000011"});
+  // Every shard of one run decides alike: the count is the whole list's.
+  o.split.clear();
+  o.shard = Shard{1, 2, /*named=*/true};
+  EXPECT_THAT(ErrorOf(o), HasSubstr("3 of the 20 labelled frames"));
 }
 
 TEST(EvalInputTest, WarnsAboutDetectionFilesThatTheFoldersRunDidNotWrite) {

@@ -1,6 +1,7 @@
-// eval --shard and eval merge (pipelines/evaluation.h): random frames split into 2 and 3 shards,
-// evaluated shard by shard and merged, give the files of one run byte for byte (results.json up
-// to its provenance), with every matcher, a filter in both modes, two overlap sets and records.
+// eval --shard and eval merge (pipelines/evaluation.h): random frames split into 1 (a named 0/1),
+// 2 and 3 shards, evaluated shard by shard and merged, give the files of one run byte for byte
+// (results.json up to its provenance), with every matcher, a filter in both modes, two overlap
+// sets and records.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -69,6 +70,7 @@ EvaluationOptions Options(const RandomFolders& data, Matcher matcher, FilterMode
   EvaluationOptions options;
   options.input.gt = data.gt;
   options.input.det = data.det;
+  options.input.missing_as_empty = true;  // frame 000005 has no detection file on purpose
   EvalOptions run;
   run.matcher = matcher;
   run.filter.conditions = ParseFilterConditions("min-area=400,max-distance=45");
@@ -99,7 +101,7 @@ TEST_P(EvalShardByMatcherTest, MergedShardsAreOneRun) {
   for (int k = c.shards - 1; k >= 0; --k) {  // given in reverse order
     const fs::path dir = out.path() / ("shard" + std::to_string(k));
     EvaluationOptions part = Options(data, c.matcher, c.mode, dir);
-    part.input.shard = Shard{k, c.shards};
+    part.input.shard = Shard{k, c.shards, /*named=*/true};
     part.input.num_threads = 1 + k % 2;
     const EvaluationResult r = RunEvaluation(part);
     EXPECT_EQ(static_cast<size_t>(r.input.frames.size()),
@@ -131,7 +133,8 @@ TEST_P(EvalShardByMatcherTest, MergedShardsAreOneRun) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Matchers, EvalShardByMatcherTest,
-                         ::testing::Values(Case{Matcher::kKitti, FilterMode::kStable, 2},
+                         ::testing::Values(Case{Matcher::kKitti, FilterMode::kStable, 1},
+                                           Case{Matcher::kKitti, FilterMode::kStable, 2},
                                            Case{Matcher::kKitti, FilterMode::kNaive, 3},
                                            Case{Matcher::kOptimal, FilterMode::kStable, 3},
                                            Case{Matcher::kOptimal, FilterMode::kNaive, 2},

@@ -68,7 +68,7 @@ EvaluationResult RunEvaluation(const EvaluationOptions& options) {
   // Refuse a folder of something else before the work, not after it.
   std::optional<StagedFolder> out;
   if (!options.out.empty()) out.emplace(options.out, "eval", std::vector<std::string>{kMakerEval});
-  const bool shard = !options.input.shard.Whole();
+  const bool shard = options.input.shard.Recorded();
   EvalInputOptions input_options = options.input;
   input_options.keep_sources = input_options.keep_sources || (shard && out);
   EvalInput input = LoadEvalFrames(input_options);
@@ -119,8 +119,7 @@ EvaluationResult EvaluateAndWrite(
     }
   }
   if (options.report) {
-    std::vector<ReportSource> sources = {
-        ReadReportSource(staging, options.out.lexically_normal().filename().string())};
+    std::vector<ReportSource> sources = {ReadReportSource(staging, FolderLabel(options.out))};
     sources.front().folder = options.out;  // where it will be, not the staging folder
     const ReportResult report = WriteReportFiles(staging / "report", sources, options.report_png,
                                                  ReportOptions().png_scale);

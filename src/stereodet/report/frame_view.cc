@@ -490,11 +490,33 @@ std::vector<ViewCell> Cells(const json& results, const FrameViewsOptions& option
   return cells;
 }
 
+// The folder of .bin point clouds that `points` (FrameViewsOptions::points) names: the folder
+// itself, or its velodyne/ (the output folder of `stereodet stereo --encode points`). Throws
+// std::runtime_error naming it when it holds no .bin file: every view would say "0 points".
+fs::path PointsFolder(const fs::path& points) {
+  auto has_scans = [](const fs::path& dir) {
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) return false;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+      if (e.path().extension() == ".bin") return true;
+    }
+    return false;
+  };
+  if (has_scans(points)) return points;
+  STEREODET_CHECK_IO(has_scans(points / "velodyne"))
+      << "view --points " << points.string()
+      << ": no point cloud (.bin) there or in its velodyne/; give a folder of "
+         ".bin scans, or the output folder of `stereodet stereo --encode points`";
+  return points / "velodyne";
+}
+
 FrameViewsResult WriteViews(
     const Dataset& dataset, const std::vector<ViewRecord>& records,
     const std::vector<std::pair<ViewCell, std::vector<std::pair<std::string, std::string>>>>& jobs,
     const fs::path& out, const FrameViewsOptions& options) {
   FrameViewsResult result;
+  const fs::path points_dir =
+      options.points.empty() ? dataset.root / "velodyne" : PointsFolder(options.points);
   const bool png = options.png && PngFromSvgAvailable();
   if (options.png && !png) {
     result.notes.push_back("view: PNG files not written: this build has no librsvg");
@@ -533,9 +555,7 @@ FrameViewsResult WriteViews(
       data.image = dataset.root / "image_2" / (frame_id + ".png");
       const fs::path calib = dataset.root / "calib" / (frame_id + ".txt");
       if (fs::exists(calib)) data.calib = ReadCalibration(calib);
-      const fs::path points =
-          (options.points.empty() ? dataset.root / "velodyne" : options.points) /
-          (frame_id + ".bin");
+      const fs::path points = points_dir / (frame_id + ".bin");
       if (data.calib && fs::exists(points)) data.points = ReadVelodyne(points);
       const FrameView view = DrawFrameView(data, options.view);
       if (!view.has_image) without_image.insert(frame_id);

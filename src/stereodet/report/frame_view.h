@@ -140,8 +140,9 @@ struct FrameViewsOptions {
   std::vector<std::string> classes;
   std::string metric;
   Difficulty difficulty = Difficulty::kModerate;
-  // Point clouds (.bin, velodyne frame) instead of DATASET/velodyne, e.g. the stereo points of
-  // `stereodet stereo --encode points` (OUT/points).
+  // Point clouds (.bin, velodyne frame) instead of DATASET/velodyne: a folder of .bin files, or
+  // the output folder of `stereodet stereo --encode points` (its velodyne/). A folder with no
+  // .bin file there or in velodyne/ is refused (std::runtime_error naming it).
   std::filesystem::path points;
   // Where the views go: OUT/FRAME_CELL_image.svg and _bev.svg (and .png). Empty: RESULTS/views.
   // Files are written atomically; the folder is not cleared.

@@ -221,6 +221,39 @@ TEST(FrameViewTest, WritesOnlyIntoAFolderOfViews) {
   EXPECT_NO_THROW(WriteFrameViews(options));  // its own views again
 }
 
+// --points takes a folder of scans or the `stereo --encode points` output folder (its velodyne/);
+// one with no scan would draw "0 points" in every view.
+TEST(FrameViewTest, PointsTakeAScanFolderOrAStereoOutputAndRefuseAFolderWithoutScans) {
+  TestTempDir dir;
+  EvaluateViewSmall(dir.path() / "eval");
+  FrameViewsOptions options;
+  options.results = dir.path() / "eval";
+  options.worst = 1;
+  options.png = false;
+  options.points = dir.path() / "empty";
+  fs::create_directories(options.points);
+  WriteFileAtomically(options.points / "README.txt", "no scans");
+  EXPECT_THAT([&] { WriteFrameViews(options); },
+              ::testing::ThrowsMessage<std::runtime_error>(::testing::HasSubstr(
+                  "view --points " + options.points.string() + ": no point cloud (.bin)")));
+  EXPECT_FALSE(fs::exists(dir.path() / "eval/views"));  // refused before drawing
+  options.points = dir.path() / "stereo_out";
+  fs::create_directories(options.points / "velodyne");
+  for (const char* id : {"000000", "000001"}) {
+    fs::copy_file(kViewData / "velodyne" / (std::string(id) + ".bin"),
+                  options.points / "velodyne" / (std::string(id) + ".bin"));
+  }
+  const FrameViewsResult from_root = WriteFrameViews(options);
+  options.points /= "velodyne";
+  options.out = dir.path() / "views2";
+  const FrameViewsResult from_scans = WriteFrameViews(options);
+  ASSERT_EQ(from_root.views.size(), from_scans.views.size());
+  for (size_t i = 0; i < from_root.views.size(); ++i) {
+    EXPECT_EQ(ReadFile(dir.path() / "eval/views" / from_root.views[i].bev_svg),
+              ReadFile(options.out / from_scans.views[i].bev_svg));
+  }
+}
+
 TEST(FrameViewTest, ARecordOutsideTheFramesFilesIsRefused) {
   FrameViewData data;
   data.frame_id = "000000";

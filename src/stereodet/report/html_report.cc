@@ -594,6 +594,11 @@ json ReadCurveCsv(const fs::path& path) {
 
 }  // namespace
 
+std::string FolderLabel(const fs::path& folder) {
+  const fs::path p = folder.lexically_normal();  // "a/b/." -> "a/b/"
+  return (p.has_filename() ? p.filename() : p.parent_path().filename()).string();
+}
+
 ReportSource ReadReportSource(const fs::path& folder, const std::string& label) {
   const fs::path path = folder / "results.json";
   ReportSource source;
@@ -995,10 +1000,7 @@ ReportResult WriteReport(const ReportOptions& options) {
   std::vector<ReportSource> sources;
   for (size_t i = 0; i < options.results.size(); ++i) {
     std::string label = options.labels.empty() ? "" : options.labels[i];
-    if (label.empty()) {
-      const fs::path p = options.results[i].lexically_normal();
-      label = (p.has_filename() ? p.filename() : p.parent_path().filename()).string();
-    }
+    if (label.empty()) label = FolderLabel(options.results[i]);
     sources.push_back(ReadReportSource(options.results[i], label));
   }
   const fs::path out = options.out.empty() ? options.results.front() / "report" : options.out;

@@ -47,6 +47,10 @@ struct ReportSource {
   std::filesystem::path records;
 };
 
+// A results folder's label in a report: its last path component, trailing separators and `.`
+// ignored ("runs/eval/" and "runs/eval/." give "eval").
+std::string FolderLabel(const std::filesystem::path& folder);
+
 // Reads FOLDER/results.json (and the curve CSVs it names), or else FOLDER/sweep.csv, or else
 // FOLDER/compare.csv. Throws std::runtime_error naming the folder if it holds none of them, or the
 // file if it is not one of stereodet's (results.json without a "results" array, a CSV without its

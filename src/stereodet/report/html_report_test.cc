@@ -259,6 +259,14 @@ TEST(ReportTest, AStringWhereANumberBelongsIsRefusedNamingTheField) {
 
 // The pixels agree with the data too: every polyline vertex of the exact PR curve maps back, with
 // the figure's frame, to the curve's (recall, precision) within the SVG's 0.01 px rounding.
+TEST(ReportTest, AFolderLabelIgnoresTrailingSeparatorsAndDots) {
+  EXPECT_EQ(FolderLabel("runs/eval"), "eval");
+  EXPECT_EQ(FolderLabel("runs/eval/"), "eval");  // `--out eval/` blanked the label
+  EXPECT_EQ(FolderLabel("runs/eval/."), "eval");
+  EXPECT_EQ(FolderLabel("eval//"), "eval");
+  EXPECT_EQ(FolderLabel("/abs/eval"), "eval");
+}
+
 TEST(ReportTest, PolylineVerticesMapBackToTheCurve) {
   TestTempDir dir;
   EvaluateSmall(dir.path() / "eval", Matcher::kOptimal);

@@ -43,7 +43,7 @@ std::optional<Shard> ParseShard(std::string_view text) {
   const std::optional<int> k = parse(text.substr(0, slash));
   const std::optional<int> n = parse(text.substr(slash + 1));
   if (!k || !n) return std::nullopt;
-  const Shard shard{*k, *n};
+  const Shard shard{*k, *n, /*named=*/true};
   if (shard.count < 1 || shard.count > 1000000 || shard.index >= shard.count) return std::nullopt;
   return shard;
 }

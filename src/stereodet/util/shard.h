@@ -21,8 +21,15 @@ namespace stereodet {
 struct Shard {
   int index = 0;  // K, in 0 .. count-1
   int count = 1;  // N >= 1; 1 = the whole list (the default: no sharding)
+  // True when the shard was named (ParseShard, `--shard K/N`), 0/1 included: the output is one
+  // part of a sharded run and carries its shard record, so that `eval merge` / `detect merge` take
+  // a run whose frames fit in one shard like any other (stereodet.scale with one task).
+  bool named = false;
 
+  // All the frames (count 1), named or not.
   bool Whole() const { return count == 1; }
+  // The output must carry a shard record: a part of several, or a shard named on the command line.
+  bool Recorded() const { return named || count != 1; }
   // Throws std::invalid_argument unless 1 <= count <= 1000000 and 0 <= index < count.
   void Check() const;
   // The first and one-past-the-last positions of this shard in a list of `n` items.
@@ -32,8 +39,8 @@ struct Shard {
 
 // "K/N". Name then Parse gives the shard back.
 std::string ShardName(const Shard& shard);
-// Parses "K/N" (decimal digits only, no spaces); nullopt for any other text or a shard that fails
-// Check().
+// Parses "K/N" (decimal digits only, no spaces) into a shard with `named` set; nullopt for any
+// other text or a shard that fails Check().
 std::optional<Shard> ParseShard(std::string_view text);
 
 }  // namespace stereodet

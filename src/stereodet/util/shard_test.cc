@@ -43,7 +43,11 @@ TEST(ShardTest, NameThenParseGivesTheShardBack) {
     ASSERT_TRUE(p.has_value()) << ShardName(s);
     EXPECT_EQ(p->index, s.index);
     EXPECT_EQ(p->count, s.count);
+    EXPECT_TRUE(p->named);  // a parsed shard, 0/1 included, carries a shard record
+    EXPECT_TRUE(p->Recorded());
   }
+  EXPECT_FALSE(Shard().Recorded());  // no --shard: a whole run, no record
+  EXPECT_TRUE((Shard{1, 2}).Recorded());
   EXPECT_EQ(ShardName(Shard{1, 4}), "1/4");
 }
 
