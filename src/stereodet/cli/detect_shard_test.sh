@@ -1,7 +1,8 @@
 #!/bin/sh
 # cli.detect.shard_merge: `detect ssd|det3d|rpn --shard` twice (out of order) and `detect merge` give
 # the detection folder of one run: every ID.txt byte for byte, run.json but its command line; a
-# merge with a shard missing is refused naming it.
+# merge with a shard missing is refused naming it. One shard of one (`--shard 0/1`, what
+# stereodet.scale runs when the frames fit in one task) merges the same.
 # Usage: detect_shard_test.sh STEREODET PROV_DIR WORK_DIR
 set -eu
 bin=$1 prov=$2 work=$3
@@ -31,6 +32,10 @@ for family in ssd det3d rpn; do
   "$bin" detect merge "$work/$family-s1" "$work/$family-s0" --out "$work/$family-merged" --quiet
   same_run "$work/$family-one" "$work/$family-merged"
   echo "$family identical"
+  detect --shard 0/1 --out "$work/$family-only"
+  "$bin" detect merge "$work/$family-only" --out "$work/$family-merged-one" --quiet
+  same_run "$work/$family-one" "$work/$family-merged-one"
+  echo "$family one shard identical"
 done
 "$bin" detect merge "$work/ssd-s0" --out "$work/refused" 2>&1 || echo "exit=$?"
 rm -rf "$work"

@@ -14,6 +14,7 @@
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/output_folder.h"
+#include "stereodet/util/parallel.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/timer.h"
 #include "stereodet/util/version.h"
@@ -164,7 +165,7 @@ void CommitDetectionFolder(StagedFolder& out, RunManifest manifest,
     manifest.frames.emplace_back(id, HashFileHex(out.path() / (id + ".txt")));
   }
   WriteRunManifest(out.path(), manifest);
-  if (!shard.Whole()) {
+  if (shard.Recorded()) {
     WriteDetectShardRecord(out.path(),
                            {manifest.tool, shard, batch_size, static_cast<int64_t>(all_ids.size()),
                             FrameListHash(all_ids)});
@@ -311,6 +312,68 @@ RunManifest DetectionManifest(const std::string& tool, const std::string& comman
                      {"subset", subset},
                      {"split", split}};
   return manifest;
+}
+
+std::filesystem::path DetectionRun::CheckedOutputDir(
+    const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
+    const std::string& subset, const std::filesystem::path& model_dir,
+    const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs) {
+  std::vector<std::pair<std::string, std::filesystem::path>> inputs = {
+      {"--data", data_root / subset}, {"--data", data_root / "ImageSets"}, {"--model", model_dir}};
+  inputs.insert(inputs.end(), more_inputs.begin(), more_inputs.end());
+  CheckOutputDoesNotOverlapInputs("--out", out_dir, inputs);
+  return out_dir;
+}
+
+DetectorOptions DetectionRun::WithDevice(DetectorOptions options, const std::string& device,
+                                         int threads) {
+  options.device = device;
+  options.threads = threads;
+  return options;
+}
+
+int64_t DetectionRun::DetectFrames(
+    const std::function<void(const std::string& id, StereoFrame& frame)>& read, bool overlap,
+    StageTimes& times) {
+  ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), progress_);
+  // Two slots: batch k + 1 is read and prepared (slot (k + 1) % 2) while batch k runs.
+  std::unique_ptr<Detector::PreparedBatch> slots[2];
+  const size_t batch_size = static_cast<size_t>(batch_size_);
+  const int num_batches = static_cast<int>((ids.size() + batch_size - 1) / batch_size);
+  int64_t objects = 0;
+  auto prepare = [&](int k) {
+    const size_t begin = static_cast<size_t>(k) * batch_size;
+    const size_t n = std::min(ids.size(), begin + batch_size) - begin;
+    std::vector<StereoFrame> frames(n);
+    ParallelFor(
+        n,
+        [&](size_t i) {
+          StereoFrame& frame = frames[i];
+          frame.id = ids[begin + i];
+          ScopedStage stage(times, "read");
+          read(frame.id, frame);
+        },
+        threads_);
+    slots[k % 2] = detector.Prepare(frames);
+  };
+  auto consume = [&](int k) {
+    const std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
+    ScopedStage stage(times, "write");
+    objects += WriteDetectResults(results, out.path(), times);
+    progress.Add(static_cast<int64_t>(results.size()));
+  };
+  RunTwoStagePipeline(num_batches, overlap, prepare, consume);
+  progress.Finish();
+  return objects;
+}
+
+void DetectionRun::Commit(const std::vector<std::pair<std::string, std::string>>& more_inputs,
+                          const std::string& settings) {
+  RunManifest manifest = manifest_;
+  manifest.inputs.insert(manifest.inputs.end(), more_inputs.begin(), more_inputs.end());
+  manifest.settings_json =
+      "{\"model_weights_fnv1a64\": \"" + detector.weights_fnv1a64() + "\", " + settings + "}";
+  CommitDetectionFolder(out, std::move(manifest), ids, all_ids, shard_, batch_size_);
 }
 
 void ReadStereoPairFiles(const FramePaths& paths, const DisparityOptions& disparity,

@@ -32,6 +32,7 @@
 #include "stereodet/stereo/disparity.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/output_folder.h"
+#include "stereodet/util/progress.h"
 #include "stereodet/util/run_manifest.h"
 #include "stereodet/util/shard.h"
 #include "stereodet/util/timer.h"
@@ -78,8 +79,9 @@ DetectShardRecord ReadDetectShardRecord(const std::filesystem::path& dir);
 
 // Finishes the folder of a detection run or of one of its shards (`detect ssd|det3d|rpn`): adds
 // each of `ids` (the frames this run or shard detected) with the hash of out/ID.txt to
-// manifest.frames, writes run.json, the shard record when `shard` is not whole (its tool that of
-// `manifest`, its frame list `all_ids`, before ShardFrames) and commits `out`.
+// manifest.frames, writes run.json, the shard record when the shard is Recorded() (a part of
+// several, or named on the command line: 0/1 too; its tool that of `manifest`, its frame list
+// `all_ids`, before ShardFrames) and commits `out`.
 void CommitDetectionFolder(StagedFolder& out, RunManifest manifest,
                            const std::vector<std::string>& ids,
                            const std::vector<std::string>& all_ids, const Shard& shard,
@@ -139,6 +141,69 @@ RunManifest DetectionManifest(const std::string& tool, const std::string& comman
                               const std::filesystem::path& model_dir,
                               const std::filesystem::path& data_root, const std::string& subset,
                               const std::string& split);
+
+// What the three batch detection commands (`detect ssd|rpn|det3d`) do around their frames.
+// `DetectOptions` is one of their options structs; the fields read: model_dir, data_root, subset,
+// split, out_dir, max_frames, shard, batch_size, threads, device, progress and command_line.
+class DetectionRun {
+ public:
+  // Checks --out against the inputs (--data's subset and ImageSets, --model, and `more_inputs`,
+  // each (flag, path)), opens the output folder (anything but an earlier detection folder is
+  // refused before any work), opens the `family` detector ("ssd", "rpn", "det3d") with
+  // `detector_options` and the run's device and threads, and lists the run's frames and this
+  // shard's. Throws what those throw, naming the file or the flag.
+  template <typename DetectOptions>
+  DetectionRun(const DetectOptions& o, const std::string& family, DetectorOptions detector_options,
+               const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs = {})
+      : out(CheckedOutputDir(o.out_dir, o.data_root, o.subset, o.model_dir, more_inputs),
+            "detect " + family, DetectionFolderMakers()),
+        detector(OpenDetectorOfFamily(o.model_dir,
+                                      WithDevice(detector_options, o.device, o.threads), family)),
+        dataset(o.data_root, o.subset),
+        all_ids(DetectFrameList(dataset, o.split, o.max_frames)),
+        ids(ShardFrames(all_ids, o.shard, o.batch_size)),
+        manifest_(DetectionManifest("detect " + family, o.command_line, o.model_dir, o.data_root,
+                                    o.subset, o.split)),
+        shard_(o.shard),
+        batch_size_(o.batch_size),
+        threads_(o.threads),
+        progress_(o.progress) {}
+
+  // Detects this shard's frames (`ids`) batch by batch and writes each frame's objects to
+  // out/ID.txt: `read(id, frame)` fills a frame (a batch's frames in parallel, on the run's
+  // threads), then Detector::Prepare and Run. With `overlap`, the next batch is read and prepared
+  // while the network runs on this one (RunTwoStagePipeline; the same bytes either way). Adds the
+  // stage times ("read", the detector's, "write") to `times`; returns the objects written.
+  int64_t DetectFrames(const std::function<void(const std::string& id, StereoFrame& frame)>& read,
+                       bool overlap, StageTimes& times);
+
+  // Writes run.json (the tool, version, command line, the inputs model, data, subset, split and
+  // `more_inputs`, each frame's hash, settings {"model_weights_fnv1a64": the detector's, then
+  // `settings`: more JSON fields, without braces}) and, for a shard, its record; commits the
+  // folder.
+  void Commit(const std::vector<std::pair<std::string, std::string>>& more_inputs,
+              const std::string& settings);
+
+  StagedFolder out;
+  Detector detector;
+  KittiDataset dataset;
+  std::vector<std::string> all_ids;  // the run's frames, all shards together (DetectFrameList)
+  std::vector<std::string> ids;      // this shard's (ShardFrames)
+
+ private:
+  static std::filesystem::path CheckedOutputDir(
+      const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
+      const std::string& subset, const std::filesystem::path& model_dir,
+      const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs);
+  static DetectorOptions WithDevice(DetectorOptions options, const std::string& device,
+                                    int threads);
+
+  RunManifest manifest_;
+  Shard shard_;
+  int batch_size_;
+  int threads_;
+  ProgressOptions progress_;
+};
 
 // Reads the right image and the calibration of `frame` (its left image read already) for stereo
 // matching with `disparity`, checking that the two images have one size and that the matcher fits

@@ -53,14 +53,14 @@ RunManifest Manifest(const std::vector<std::string>& ids, const std::string& set
   return m;
 }
 
-// What DetectSsd writes for the whole list (shard 1/1) or one shard of it.
+// What DetectSsd writes for the whole list (no --shard) or one shard of it (0/1 included).
 void WriteRun(const fs::path& dir, const std::vector<std::string>& all, const Shard& shard,
               const std::string& settings = R"({"score_threshold": 0.01})", int batch = 2) {
   fs::create_directories(dir);
   const std::vector<std::string> ids = ShardFrames(all, shard, batch);
   for (const std::string& id : ids) WriteFileAtomically(dir / (id + ".txt"), FileFor(id));
   WriteRunManifest(dir, Manifest(ids, settings));
-  if (!shard.Whole()) {
+  if (shard.Recorded()) {
     WriteDetectShardRecord(
         dir, {"detect ssd", shard, batch, static_cast<int64_t>(all.size()), FrameListHash(all)});
   }

@@ -8,6 +8,8 @@
 
 #include "stereodet/models/det3d/det3d_boxes.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/model_json.h"
+#include "stereodet/models/network_output.h"
 #include "stereodet/models/rpn/rpn_data.h"
 #include "stereodet/models/ssd/input_encoding.h"
 #include "stereodet/models/ssd/ssd_data.h"
@@ -19,6 +21,7 @@
 #include "stereodet/stereo/reprojection.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/timer.h"
 
@@ -39,7 +42,7 @@ void DetectorOptions::Check() const {
 }
 
 std::string ModelFamily(const fs::path& model_dir) {
-  const fs::path path = model_dir / "model.json";
+  const fs::path path = model_dir / kModelConfigFile;
   const std::string text = ReadFile(path);
   nlohmann::json j;
   try {
@@ -63,6 +66,7 @@ std::string ModelFamily(const fs::path& model_dir) {
 struct Detector::Impl {
   fs::path model_dir;
   std::string family, input;
+  std::string weights_fnv1a64;
   std::vector<std::string> classes;
   DetectorNeeds needs;
   DetectorOptions options;
@@ -413,6 +417,11 @@ Detector Detector::Open(const fs::path& model_dir, const DetectorOptions& option
   impl->model_dir = model_dir;
   impl->family = family;
   impl->options = options;
+  const fs::path config = model_dir / kModelConfigFile;
+  impl->weights_fnv1a64 = ReadWeightsRecord(ReadFile(config), config.string()).fnv1a64;
+  if (impl->weights_fnv1a64.empty()) {
+    impl->weights_fnv1a64 = HashHex(Fnv1a64(ReadFile(model_dir / kModelWeightsFile)));
+  }
   return Detector(std::move(impl));
 }
 
@@ -423,6 +432,7 @@ const std::vector<std::string>& Detector::classes() const { return impl_->classe
 const DetectorNeeds& Detector::needs() const { return impl_->needs; }
 const DetectorOptions& Detector::options() const { return impl_->options; }
 std::optional<StereoOptions> Detector::stereo() const { return impl_->Stereo(); }
+const std::string& Detector::weights_fnv1a64() const { return impl_->weights_fnv1a64; }
 
 std::unique_ptr<Detector::PreparedBatch> Detector::Prepare(
     const std::vector<StereoFrame>& frames) const {
@@ -433,7 +443,17 @@ std::vector<DetectResult> Detector::Run(std::unique_ptr<PreparedBatch> batch) {
   STEREODET_CHECK(batch != nullptr && batch->owner == impl_.get())
       << "Detector::Run: a batch that this detector's Prepare did not make";
   if (batch->results.empty()) return {};
-  impl_->Run(*batch);
+  try {
+    impl_->Run(*batch);
+  } catch (const NonFiniteOutputError& e) {
+    // The model names no frame; the batch does.
+    const std::string& id = batch->results.at(e.batch_index()).id;
+    STEREODET_THROW_IO() << "frame " << (id.empty() ? "(no id)" : id) << ": "
+                         << impl_->model_dir.string() << " (" << impl_->family << " "
+                         << impl_->input << "): the network's " << e.output()
+                         << " are not finite (NaN or inf); its weights overflow on this input "
+                            "(a training that diverged?): retrain the model";
+  }
   return std::move(batch->results);
 }
 

@@ -120,6 +120,10 @@ class Detector {
   const DetectorOptions& options() const;
   // The stereo settings the model's stereo stage uses (empty for models without one).
   std::optional<StereoOptions> stereo() const;
+  // FNV-1a 64 of the model's model.pt, 16 hex digits: the hash model.json records, which opening
+  // the model checked against the bytes it loaded (for run.json's model_weights_fnv1a64, without
+  // reading the weights again); hashed from model.pt for a model.json that records none.
+  const std::string& weights_fnv1a64() const;
 
   // One frame; the same objects as the frame inside any batch of DetectBatch.
   DetectResult Detect(const StereoFrame& frame);

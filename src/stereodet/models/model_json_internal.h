@@ -4,9 +4,11 @@
 
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "stereodet/models/model_json.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet::internal {
 
@@ -28,6 +30,26 @@ std::string FinishModelJson(nlohmann::json j, const WeightsRecord& weights,
 // version 2", "expected \"rpn\" (a model of `train rpn`)").
 nlohmann::json ParseModelJson(const std::string& text, const std::string& source,
                               const std::string& architecture);
+
+// A family's config read from model.json's fields (after ParseModelJson): `read(config, field)`
+// fills `config`, setting `field` to each field's name before it reads it; then config.Check().
+// A JSON error (a field missing or of another type) or a refused value (std::invalid_argument,
+// from `read` or from Check()) becomes a ParseError naming `source` and that field.
+template <typename Config, typename Read>
+Config ReadConfigFields(const std::string& source, Read read) {
+  std::string field;
+  try {
+    Config config;
+    read(config, field);
+    field.clear();
+    config.Check();
+    return config;
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(source, 0, field, e.what());
+  } catch (const std::invalid_argument& e) {
+    throw ParseError(source, 0, field, e.what());
+  }
+}
 
 }  // namespace stereodet::internal
 

@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 
+#include "stereodet/models/model_json.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -53,13 +54,13 @@ bool PrepareModelFolder(const std::filesystem::path& out_dir, const std::string&
   CheckOutputFolderOwner(out_dir, tool, {tool});
   RemoveStaleTemporaries(out_dir);
   const fs::path checkpoint_path = out_dir / kCheckpointFile;
-  const fs::path weights_path = out_dir / "model.pt";
+  const fs::path weights_path = out_dir / kModelWeightsFile;
   const bool resuming = resume && fs::exists(checkpoint_path);
   // Never train over a model silently: it is resumed (with its checkpoint) or replaced on request.
   const bool has_model = fs::exists(weights_path) || fs::exists(checkpoint_path);
   if (has_model && !resuming && !force) {
     STEREODET_THROW_ARG() << out_dir.string() << " holds a trained model ("
-                          << (fs::exists(weights_path) ? "model.pt" : "checkpoint.pt") << ")"
+                          << (fs::exists(weights_path) ? kModelWeightsFile : kCheckpointFile) << ")"
                           << (resume ? " but no checkpoint.pt to resume from" : "")
                           << "; use --resume to continue its training, --force to train a new "
                              "model over it, or another --out";
@@ -67,7 +68,7 @@ bool PrepareModelFolder(const std::filesystem::path& out_dir, const std::string&
   CheckFolderWritable(out_dir);
   if (has_model && force) {
     for (const char* file :
-         {"model.pt", "model.json", kCheckpointFile, kTrainLogFile, kRunManifestFile}) {
+         {kModelWeightsFile, kModelConfigFile, kCheckpointFile, kTrainLogFile, kRunManifestFile}) {
       fs::remove(out_dir / file);
     }
   }

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "stereodet/models/model_json.h"
+#include "stereodet/models/network_output.h"
 #include "stereodet/models/train_common.h"
 #include "stereodet/models/train_data.h"
 #include "stereodet/util/atomic_file.h"
@@ -106,7 +107,14 @@ TrainingLoopSummary RunTrainingLoop(TrainingTask& task, const TrainingLoopOption
       const std::vector<int> batch(order.begin() + begin, order.begin() + end);
       lr = WarmupCosineLearningRate(schedule.learning_rate, schedule.warmup_steps,
                                     schedule.final_lr_fraction, step, total_steps);
-      const StepLoss loss = task.Step(epoch, step, batch, lr);
+      StepLoss loss;
+      try {
+        loss = task.Step(epoch, step, batch, lr);
+      } catch (const NonFiniteOutputError& e) {
+        // A network output the step needs finite (det3d's part sampling) overflowed first.
+        STEREODET_THROW_IO() << "training diverged at epoch " << epoch + 1 << ", step " << step
+                             << " (" << e.what() << "); try a lower --lr";
+      }
       STEREODET_CHECK_IO(std::isfinite(loss.total))
           << "training diverged at epoch " << epoch + 1 << ", step " << step << " (loss "
           << loss.total << "); try a lower --lr";

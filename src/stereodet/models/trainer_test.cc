@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/models/network_output.h"
 #include "stereodet/models/train_common.h"
 #include "stereodet/models/train_data.h"
 #include "stereodet/util/atomic_file.h"
@@ -27,7 +28,8 @@ class RecordingTask : public TrainingTask {
   std::vector<int64_t> steps;
   std::vector<double> rates;
   std::vector<int> saves;
-  int64_t diverge_at = -1;
+  int64_t diverge_at = -1;   // a NaN loss at this step
+  int64_t overflow_at = -1;  // a non-finite network output at this step
 
   void BeginEpoch(int /*epoch*/, const std::vector<int>& order) override {
     orders.push_back(order);
@@ -37,6 +39,7 @@ class RecordingTask : public TrainingTask {
     batches.push_back(batch);
     steps.push_back(step);
     rates.push_back(learning_rate);
+    if (step == overflow_at) throw NonFiniteOutputError(1, "box predictions");
     const double loss = step == diverge_at ? std::numeric_limits<double>::quiet_NaN()
                                            : 1.0 / (1.0 + static_cast<double>(step));
     return {loss, {loss / 4, 3 * loss / 4}, {static_cast<int64_t>(batch.size())}};
@@ -140,6 +143,15 @@ TEST(TrainerTest, ANonFiniteLossStopsBeforeTheEpochIsSaved) {
               ::testing::ThrowsMessage<std::runtime_error>(
                   HasSubstr("training diverged at epoch 2, step 4 (loss nan); try a lower --lr")));
   EXPECT_EQ(task.saves, (std::vector<int>{1}));
+  // A network output that overflows inside the step (det3d's part sampling) says the same.
+  TestTempDir other;
+  RecordingTask overflowing;
+  overflowing.overflow_at = 1;
+  EXPECT_THAT([&] { RunTrainingLoop(overflowing, Options(other.path(), 7, 2)); },
+              ::testing::ThrowsMessage<std::runtime_error>(HasSubstr(
+                  "training diverged at epoch 1, step 1 (the network's box predictions for input "
+                  "1 of the batch are not finite (NaN or inf)); try a lower --lr")));
+  EXPECT_TRUE(overflowing.saves.empty());
 }
 
 }  // namespace

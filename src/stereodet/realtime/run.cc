@@ -135,9 +135,9 @@ RunSummary RunDetectorStream(const RunOptions& options, const std::atomic<bool>*
         R"({{"model_weights_fnv1a64": "{}", "family": "{}", "input": "{}", "blur_sigma_px": {}, )"
         R"("device": "{}", "realtime": {}, "interrupted": {}, "frames_dropped": {}, )"
         R"("frames_failed": {}}})",
-        HashFileHex(options.model_dir / "model.pt"), summary.family, summary.input,
-        options.detector.blur_sigma_px, options.detector.device, options.stream.realtime,
-        summary.stream.interrupted, summary.stream.frames_dropped, summary.stream.frames_failed);
+        detector.weights_fnv1a64(), summary.family, summary.input, options.detector.blur_sigma_px,
+        options.detector.device, options.stream.realtime, summary.stream.interrupted,
+        summary.stream.frames_dropped, summary.stream.frames_failed);
     WriteRunManifest(kitti->path(), manifest);
     kitti->Commit();
   }

@@ -61,44 +61,36 @@ std::string Det3dConfigToJson(const Det3dConfig& config, const WeightsRecord& we
 
 Det3dConfig Det3dConfigFromJson(const std::string& text, const std::string& source) {
   const nlohmann::json j = internal::ParseModelJson(text, source, "det3d");
-  std::string field;
-  try {
-    Det3dConfig config;
-    field = "input";
-    const std::string input = j.at(field).get<std::string>();
-    const std::optional<PointSource> parsed = ParsePointSource(input);
-    if (!parsed) throw ParseError(source, 0, field, "expected lidar or stereo, got " + input);
-    config.input = *parsed;
-    field = "classes";
-    config.classes = j.at(field).get<std::vector<std::string>>();
-    const nlohmann::json& g = j.at("grid");
-    for (auto [name, value] : std::initializer_list<std::pair<const char*, double*>>{
-             {"min_x_m", &config.grid.min_x_m},
-             {"max_x_m", &config.grid.max_x_m},
-             {"min_y_m", &config.grid.min_y_m},
-             {"max_y_m", &config.grid.max_y_m},
-             {"min_z_m", &config.grid.min_z_m},
-             {"max_z_m", &config.grid.max_z_m},
-             {"pillar_m", &config.grid.pillar_m}}) {
-      field = std::string("grid.") + name;
-      *value = g.at(name).get<double>();
-    }
-    field = "base_channels";
-    config.base_channels = internal::JsonInt(j, field, source);
-    field = "max_points_per_pillar";
-    config.max_points_per_pillar = internal::JsonInt(j, field, source);
-    field = "parts_l";
-    config.parts_l = internal::JsonInt(j, field, source);
-    field = "parts_w";
-    config.parts_w = internal::JsonInt(j, field, source);
-    field = "";
-    config.Check();
-    return config;
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, field, e.what());
-  } catch (const std::invalid_argument& e) {
-    throw ParseError(source, 0, field, e.what());
-  }
+  return internal::ReadConfigFields<Det3dConfig>(
+      source, [&](Det3dConfig& config, std::string& field) {
+        field = "input";
+        const std::string input = j.at(field).get<std::string>();
+        const std::optional<PointSource> parsed = ParsePointSource(input);
+        if (!parsed) throw ParseError(source, 0, field, "expected lidar or stereo, got " + input);
+        config.input = *parsed;
+        field = "classes";
+        config.classes = j.at(field).get<std::vector<std::string>>();
+        const nlohmann::json& g = j.at("grid");
+        for (auto [name, value] : std::initializer_list<std::pair<const char*, double*>>{
+                 {"min_x_m", &config.grid.min_x_m},
+                 {"max_x_m", &config.grid.max_x_m},
+                 {"min_y_m", &config.grid.min_y_m},
+                 {"max_y_m", &config.grid.max_y_m},
+                 {"min_z_m", &config.grid.min_z_m},
+                 {"max_z_m", &config.grid.max_z_m},
+                 {"pillar_m", &config.grid.pillar_m}}) {
+          field = std::string("grid.") + name;
+          *value = g.at(name).get<double>();
+        }
+        field = "base_channels";
+        config.base_channels = internal::JsonInt(j, field, source);
+        field = "max_points_per_pillar";
+        config.max_points_per_pillar = internal::JsonInt(j, field, source);
+        field = "parts_l";
+        config.parts_l = internal::JsonInt(j, field, source);
+        field = "parts_w";
+        config.parts_w = internal::JsonInt(j, field, source);
+      });
 }
 
 Det3dSample MakeDet3dSample(const Det3dFrame& frame, const Det3dConfig& config,
@@ -357,11 +349,9 @@ struct Det3dModel::Impl {
     const torch::Tensor grid = internal::PartSamplingGrid(boxes, part_u, part_v, config.grid);
     // A NaN or inf sampling position crashes LibTorch's grid_sampler_2d_backward (its index
     // arithmetic overflows) instead of giving a NaN loss; a diverging training gets there first,
-    // so it is stopped here with a message rather than a segfault.
-    const bool finite = torch::isfinite(grid).all().item().toBool();
-    STEREODET_CHECK_IO(finite)
-        << "the network's box predictions are not finite (NaN or inf): the training diverged "
-           "(try a lower --lr) or the weights are broken";
+    // so it is stopped here rather than with a segfault (the training loop and Detector::Run say
+    // which step or frame).
+    internal::CheckFiniteRows(grid, "box predictions");
     const torch::Tensor sampled = F::grid_sample(part_maps, grid,
                                                  F::GridSampleFuncOptions()
                                                      .mode(torch::kBilinear)
@@ -484,6 +474,10 @@ std::vector<std::vector<ScoredLidarBox>> Det3dModel::Detect(
   torch::NoGradGuard no_grad;
   impl_->net->eval();
   const internal::NetOutputs out = impl_->Forward(samples);
+  internal::CheckFiniteRows(out.cls, "class scores");
+  internal::CheckFiniteRows(out.psw, "PSWarp scores");
+  internal::CheckFiniteRows(out.box, "box offsets");
+  internal::CheckFiniteRows(out.dir, "direction scores");
   const torch::Tensor score =
       ((torch::sigmoid(out.cls) + torch::sigmoid(out.psw)) / 2.0).to(torch::kCPU).contiguous();
   const torch::Tensor boxes = impl_->Decode(out.box).to(torch::kCPU).contiguous();

@@ -90,7 +90,8 @@ class Det3dModel {
   ComputeDevice device() const;
 
   // Inference (no gradients, BN in evaluation mode; the auxiliary network is not run): per sample,
-  // scored boxes after rotated NMS, best first.
+  // scored boxes after rotated NMS, best first. Throws NonFiniteOutputError (network_output.h)
+  // when a sample's outputs hold a NaN or an inf.
   std::vector<std::vector<ScoredLidarBox>> Detect(const std::vector<Det3dSample>& samples,
                                                   const Det3dDecodeOptions& options = {}) const;
 

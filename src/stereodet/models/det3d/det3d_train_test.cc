@@ -85,21 +85,11 @@ fs::path WriteTinyDataset(const std::string& name, int frames) {
   return root;
 }
 
-Det3dConfig TinyConfig() {
-  Det3dConfig c;
-  c.grid.min_x_m = 0;
-  c.grid.max_x_m = 25.6;
-  c.grid.min_y_m = -12.8;
-  c.grid.max_y_m = 12.8;
-  c.base_channels = 16;
-  return c;
-}
-
 TrainDet3dOptions TinyTraining(const fs::path& root, const fs::path& out) {
   TrainDet3dOptions o;
   o.data_root = root;
   o.out_dir = out;
-  o.model = TinyConfig();
+  o.model = TinyDet3dConfig();
   o.batch_size = 2;
   o.warmup_steps = 4;
   o.learning_rate = 5e-3;
@@ -245,7 +235,7 @@ TEST(Det3dTrainTest, ResumeIsBitIdenticalAndFoldersAreGuarded) {
 TEST(Det3dTrainTest, GtDatabaseHoldsTheModelsOwnPointsOnly) {
   const fs::path root = WriteTinyDataset("det3d_gtdb_data", 4);
   const KittiDataset dataset(root);
-  const Det3dConfig config = TinyConfig();
+  const Det3dConfig config = TinyDet3dConfig();
   std::vector<Det3dFrame> lidar, stereo;
   for (int i = 0; i < 4; ++i) {
     lidar.push_back(LoadDet3dFrame(dataset, "", PointSource::kLidar, FrameId(i), {"Car"},

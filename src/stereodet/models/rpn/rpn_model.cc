@@ -90,9 +90,7 @@ std::string RpnConfigToJson(const RpnConfig& config, const WeightsRecord& weight
 
 RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) {
   const nlohmann::json j = internal::ParseModelJson(text, source, "rpn");
-  std::string field;
-  try {
-    RpnConfig config;
+  return internal::ReadConfigFields<RpnConfig>(source, [&](RpnConfig& config, std::string& field) {
     field = "input";
     const std::string input = j.at(field).get<std::string>();
     const std::optional<RpnInput> parsed = ParseRpnInput(input);
@@ -118,14 +116,7 @@ RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) 
     config.anchors.sizes_px = j.at(field).get<std::vector<double>>();
     field = "anchor_ratios";
     config.anchors.ratios = j.at(field).get<std::vector<double>>();
-    field = "";
-    config.Check();
-    return config;
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, field, e.what());
-  } catch (const std::invalid_argument& e) {
-    throw ParseError(source, 0, field, e.what());
-  }
+  });
 }
 
 StereoOptions ReadRpnStereoRecord(const std::string& text, const std::string& source) {
@@ -461,6 +452,8 @@ std::vector<std::vector<ScoredBox>> RpnModel::Propose(const std::vector<PlanarIm
   impl_->net->eval();
   const torch::Tensor features = impl_->net->Features(impl_->ToTensor(inputs));
   const auto [objectness, deltas] = impl_->net->Rpn(features);
+  internal::CheckFiniteRows(objectness, "objectness scores");
+  internal::CheckFiniteRows(deltas, "proposal offsets");
   std::vector<std::vector<ScoredBox>> proposals = impl_->Proposals(objectness, deltas, options);
   for (auto& image : proposals) {
     for (ScoredBox& p : image) p.score = 1.0f / (1.0f + std::exp(-p.score));
@@ -477,6 +470,8 @@ std::vector<std::vector<ScoredBox>> RpnModel::Detect(const std::vector<PlanarIma
   const RpnConfig& c = impl_->config;
   const torch::Tensor features = impl_->net->Features(impl_->ToTensor(inputs));
   const auto [objectness, deltas] = impl_->net->Rpn(features);
+  internal::CheckFiniteRows(objectness, "objectness scores");
+  internal::CheckFiniteRows(deltas, "proposal offsets");
   const std::vector<std::vector<ScoredBox>> proposals =
       impl_->Proposals(objectness, deltas, options.proposals);
   std::vector<std::vector<Box2D>> rois(proposals.size());
@@ -486,6 +481,11 @@ std::vector<std::vector<ScoredBox>> RpnModel::Detect(const std::vector<PlanarIma
       internal::RoiAlign(features, rois, 1.0 / c.feature_stride, c.pooled_size, c.sampling_ratio);
   if (pooled.size(0) == 0) return detections;
   const auto [logits, box] = impl_->net->Head(pooled);
+  std::vector<size_t> image_of_roi;  // the head's rows are the images' regions, image by image
+  for (size_t b = 0; b < rois.size(); ++b)
+    image_of_roi.insert(image_of_roi.end(), rois[b].size(), b);
+  internal::CheckFiniteRows(logits, "class scores", image_of_roi);
+  internal::CheckFiniteRows(box, "box offsets", image_of_roi);
   const torch::Tensor probabilities =
       torch::softmax(logits, 1).to(torch::kCPU, torch::kFloat32).contiguous();
   const torch::Tensor box_host = box.to(torch::kCPU, torch::kFloat32).contiguous();

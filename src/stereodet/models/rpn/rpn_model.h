@@ -121,7 +121,8 @@ class RpnModel {
   const std::vector<Box2D>& anchors() const;  // GenerateRpnAnchors of the feature map
 
   // Inference (evaluation-mode batch norm, no gradients): per input, boxes in network px, labels
-  // >= 1, scores (softmax probabilities) in [0, 1], best first.
+  // >= 1, scores (softmax probabilities) in [0, 1], best first. Throws NonFiniteOutputError
+  // (network_output.h) when an input's outputs hold a NaN or an inf (Propose too).
   std::vector<std::vector<ScoredBox>> Detect(const std::vector<PlanarImage>& inputs,
                                              const RpnDetectOptions& options = {}) const;
   // The proposals alone (label 0, score = objectness probability), per input.

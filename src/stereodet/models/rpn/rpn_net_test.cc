@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "stereodet/models/models_test_util.h"
 #include "stereodet/models/rpn/rpn_net_internal.h"
 
 namespace stereodet::internal {
@@ -149,23 +150,9 @@ TEST(RpnRoiAlignTest, BackwardIsDeterministic) {
   EXPECT_TRUE(torch::equal(a, b));
 }
 
-RpnConfig TinyConfig(RpnInput input) {
-  RpnConfig config;
-  config.input = input;
-  config.input_width = 64;
-  config.input_height = 32;
-  config.image_width = 4;
-  config.geometry_width = 4;
-  config.blocks_per_stage = 1;
-  config.head_channels = 16;
-  config.pooled_size = 3;
-  config.anchors.sizes_px = {16, 32};
-  return config;
-}
-
 TEST(RpnNetTest, OutputLayoutAndBranchParameterCounts) {
   torch::manual_seed(1);
-  RpnNet rgb(TinyConfig(RpnInput::kRgb)), rgbd(TinyConfig(RpnInput::kRgbd));
+  RpnNet rgb(TinyRpnConfig(RpnInput::kRgb)), rgbd(TinyRpnConfig(RpnInput::kRgbd));
   rgb->eval();
   const torch::Tensor features = rgb->Features(torch::rand({2, 3, 32, 64}));
   ASSERT_EQ(features.sizes(), (torch::IntArrayRef{2, 16, 2, 4}));
@@ -192,10 +179,10 @@ TEST(RpnNetTest, OutputLayoutAndBranchParameterCounts) {
 }
 
 TEST(RpnNetTest, FeatureStride8KeepsTheSecondStagesResolution) {
-  RpnConfig config = TinyConfig(RpnInput::kRgbd);
+  RpnConfig config = TinyRpnConfig(RpnInput::kRgbd);
   config.feature_stride = 8;
   config.anchors.stride_px = 8;
-  RpnNet net(config), coarse(TinyConfig(RpnInput::kRgbd));
+  RpnNet net(config), coarse(TinyRpnConfig(RpnInput::kRgbd));
   net->eval();
   const torch::Tensor features = net->Features(torch::rand({1, 6, 32, 64}));
   EXPECT_EQ(features.sizes(), (torch::IntArrayRef{1, 16, 4, 8}));
@@ -214,8 +201,8 @@ TEST(RpnNetTest, FeatureStride8KeepsTheSecondStagesResolution) {
 TEST(RpnNetTest, MirroredRgbdModelStartsAsTheRgbModel) {
   // Train-free: a random RGB model, mirrored into an RGB-D model, detects the same boxes whatever
   // the geometry channels hold (the fusion starts as [identity | 0]).
-  const RpnModel rgb(TinyConfig(RpnInput::kRgb), 3);
-  RpnModel rgbd(TinyConfig(RpnInput::kRgbd), 4);
+  const RpnModel rgb(TinyRpnConfig(RpnInput::kRgb), 3);
+  RpnModel rgbd(TinyRpnConfig(RpnInput::kRgbd), 4);
   EXPECT_GT(rgbd.InitFrom(rgb, /*geometry_too=*/true), 0);
   std::mt19937 rng(1);
   PlanarImage colour{3, 32, 64, std::vector<float>(3 * 32 * 64)};
@@ -236,7 +223,7 @@ TEST(RpnNetTest, MirroredRgbdModelStartsAsTheRgbModel) {
     EXPECT_LE(a[0][i].score, 1.0f);
   }
   // Another image width cannot be mirrored.
-  RpnConfig wide = TinyConfig(RpnInput::kRgbd);
+  RpnConfig wide = TinyRpnConfig(RpnInput::kRgbd);
   wide.image_width = 8;
   RpnModel other(wide, 1);
   EXPECT_THROW(other.InitFrom(rgb), std::invalid_argument);

@@ -51,9 +51,7 @@ std::string SsdConfigToJson(const SsdConfig& config, const WeightsRecord& weight
 
 SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) {
   const nlohmann::json j = internal::ParseModelJson(text, source, "ssd");
-  std::string field;
-  try {
-    SsdConfig config;
+  return internal::ReadConfigFields<SsdConfig>(source, [&](SsdConfig& config, std::string& field) {
     field = "encoding";
     const std::string encoding = j.at(field).get<std::string>();
     const std::optional<InputEncoding> parsed = ParseInputEncoding(encoding);
@@ -79,14 +77,7 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
     config.boxes.aspect_ratios = j.at(field).get<std::vector<double>>();
     field = "base_channels";
     config.base_channels = internal::JsonInt(j, field, source);
-    field = "";
-    config.Check();
-    return config;
-  } catch (const nlohmann::json::exception& e) {
-    throw ParseError(source, 0, field, e.what());
-  } catch (const std::invalid_argument& e) {
-    throw ParseError(source, 0, field, e.what());
-  }
+  });
 }
 
 // --- SsdModel
@@ -167,6 +158,8 @@ SsdOutputs SsdModel::Forward(const std::vector<PlanarImage>& inputs) const {
   auto [deltas, logits] = impl_->net->forward(impl_->ToTensor(inputs));
   STEREODET_CHECK(deltas.size(1) == outputs.num_boxes)
       << "network emits " << deltas.size(1) << " boxes, default boxes are " << outputs.num_boxes;
+  internal::CheckFiniteRows(logits, "class scores");
+  internal::CheckFiniteRows(deltas, "box offsets");
   const torch::Tensor probabilities = torch::softmax(logits, 2).to(torch::kCPU).contiguous();
   deltas = deltas.to(torch::kCPU).contiguous();
   outputs.deltas.assign(deltas.data_ptr<float>(), deltas.data_ptr<float>() + deltas.numel());

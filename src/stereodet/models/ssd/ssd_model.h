@@ -105,6 +105,7 @@ class SsdModel {
 
   // Inference (no gradients, batch norm in evaluation mode). Requires: each input has
   // NetworkInputChannels(config().encoding) planes of the config's input size (EncodeNetworkInput).
+  // Throws NonFiniteOutputError (network_output.h) when an input's outputs hold a NaN or an inf.
   SsdOutputs Forward(const std::vector<PlanarImage>& inputs) const;
   // Forward + DecodeDetections: per input, boxes in network-input px, labels >= 1, best first.
   std::vector<std::vector<ScoredBox>> Detect(const std::vector<PlanarImage>& inputs,

@@ -8,6 +8,9 @@
 #include <filesystem>
 #include <random>
 
+#include "stereodet/models/det3d/det3d_model.h"
+#include "stereodet/models/models_test_util.h"
+#include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/fuzz_corpus.h"
@@ -18,16 +21,6 @@ namespace stereodet {
 namespace {
 
 using ::testing::HasSubstr;
-
-SsdConfig TinyConfig(InputEncoding encoding) {
-  SsdConfig config;
-  config.encoding = encoding;
-  config.boxes.input_width = 64;
-  config.boxes.input_height = 48;
-  config.boxes.min_size_fraction = 0.2;
-  config.base_channels = 8;
-  return config;
-}
 
 std::vector<PlanarImage> RandomInputs(const SsdConfig& config, int n, unsigned seed) {
   std::mt19937 rng(seed);
@@ -95,7 +88,7 @@ TEST(SsdTest, ParameterCountsEqualApartFromTheLearnedCompression) {
 TEST(SsdTest, OutputsCoverEveryDefaultBoxAndAreProbabilities) {
   for (InputEncoding encoding :
        {InputEncoding::kRgb, InputEncoding::kRgbhFixed, InputEncoding::kRgbhLearned}) {
-    const SsdModel model(TinyConfig(encoding), 5);
+    const SsdModel model(TinySsdConfig(encoding), 5);
     const SsdOutputs out = model.Forward(RandomInputs(model.config(), 2, 1));
     EXPECT_EQ(out.num_images, 2);
     EXPECT_EQ(out.num_boxes, static_cast<int>(model.default_boxes().size()));
@@ -111,14 +104,14 @@ TEST(SsdTest, OutputsCoverEveryDefaultBoxAndAreProbabilities) {
 }
 
 TEST(SsdTest, WrongInputShapeThrows) {
-  const SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 5);
-  EXPECT_THROW(model.Forward(RandomInputs(TinyConfig(InputEncoding::kRgb), 1, 1)),
+  const SsdModel model(TinySsdConfig(InputEncoding::kRgbhLearned), 5);
+  EXPECT_THROW(model.Forward(RandomInputs(TinySsdConfig(InputEncoding::kRgb), 1, 1)),
                std::invalid_argument);
 }
 
 TEST(SsdTest, SameSeedSameWeights) {
-  const SsdModel a(TinyConfig(InputEncoding::kRgb), 9), b(TinyConfig(InputEncoding::kRgb), 9),
-      c(TinyConfig(InputEncoding::kRgb), 10);
+  const SsdModel a(TinySsdConfig(InputEncoding::kRgb), 9), b(TinySsdConfig(InputEncoding::kRgb), 9),
+      c(TinySsdConfig(InputEncoding::kRgb), 10);
   const auto inputs = RandomInputs(a.config(), 1, 2);
   EXPECT_EQ(a.Forward(inputs).deltas, b.Forward(inputs).deltas);
   EXPECT_NE(a.Forward(inputs).deltas, c.Forward(inputs).deltas);
@@ -127,7 +120,7 @@ TEST(SsdTest, SameSeedSameWeights) {
 TEST(SsdTest, SaveThenLoadGivesIdenticalOutputs) {
   const std::filesystem::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "save_load";
   std::filesystem::remove_all(dir);
-  SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 3);
+  SsdModel model(TinySsdConfig(InputEncoding::kRgbhLearned), 3);
   // Train one step so batch-norm statistics differ from their initial values.
   SsdTrainer trainer(model);
   trainer.Step(ToyBatch(model, 2, 1), 1e-2);
@@ -155,7 +148,7 @@ TEST(SsdTest, TheSameWeightsSaveToTheSameBytesAndFingerprint) {
   namespace fs = std::filesystem;
   const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "same_bytes";
   fs::remove_all(dir);
-  const SsdModel model(TinyConfig(InputEncoding::kRgb), 4);
+  const SsdModel model(TinySsdConfig(InputEncoding::kRgb), 4);
   model.Save(dir / "a");
   model.Save(dir / "b");
   const std::string a = ReadFile(dir / "a/model.pt"), b = ReadFile(dir / "b/model.pt");
@@ -173,8 +166,8 @@ TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {
   const fs::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "tied";
   fs::remove_all(dir);
   // Same encoding and shapes, other weights: LibTorch alone would load them silently.
-  SsdModel(TinyConfig(InputEncoding::kRgb), 1).Save(dir / "a");
-  SsdModel(TinyConfig(InputEncoding::kRgb), 2).Save(dir / "b");
+  SsdModel(TinySsdConfig(InputEncoding::kRgb), 1).Save(dir / "a");
+  SsdModel(TinySsdConfig(InputEncoding::kRgb), 2).Save(dir / "b");
   const std::string json = ReadFile(dir / "a/model.json");
   const WeightsRecord record = ReadWeightsRecord(json, "model.json");
   EXPECT_EQ(record.fnv1a64.size(), 16u);
@@ -191,7 +184,7 @@ TEST(SsdTest, LoadRefusesWeightsThatModelJsonDoesNotRecord) {
     EXPECT_NE(what.find("a/model.json"), std::string::npos) << what;
   }
   // A model.json written before the record existed loads unchecked.
-  WriteFileAtomically(dir / "a/model.json", SsdConfigToJson(TinyConfig(InputEncoding::kRgb)));
+  WriteFileAtomically(dir / "a/model.json", SsdConfigToJson(TinySsdConfig(InputEncoding::kRgb)));
   EXPECT_TRUE(ReadWeightsRecord(ReadFile(dir / "a/model.json"), "m").fnv1a64.empty());
   EXPECT_NO_THROW(SsdModel::Load(dir / "a"));
 }
@@ -204,7 +197,7 @@ TEST(SsdTest, ModelJsonRecordsTheStereoSettingsOfRgbhModels) {
   stereo.disparity.uniqueness_ratio = 5;
   stereo.disparity.num_disparities = 32;
   stereo.ground.enabled = false;
-  SsdModel rgbh(TinyConfig(InputEncoding::kRgbhFixed), 1);
+  SsdModel rgbh(TinySsdConfig(InputEncoding::kRgbhFixed), 1);
   EXPECT_TRUE(DifferingStereoSettings(rgbh.stereo(), StereoOptions()).empty());  // new: defaults
   rgbh.set_stereo(stereo);
   rgbh.Save(dir / "rgbh");
@@ -220,10 +213,10 @@ TEST(SsdTest, ModelJsonRecordsTheStereoSettingsOfRgbhModels) {
                 .find("disparity.uniqueness_ratio: 5 (requested: 15)"),
             std::string::npos);
   // An rgb model records none; a model.json written before the record existed reads as defaults.
-  SsdModel(TinyConfig(InputEncoding::kRgb), 1).Save(dir / "rgb");
+  SsdModel(TinySsdConfig(InputEncoding::kRgb), 1).Save(dir / "rgb");
   EXPECT_EQ(ReadFile(dir / "rgb/model.json").find("\"stereo\""), std::string::npos);
   WriteFileAtomically(dir / "rgbh/model.json",
-                      SsdConfigToJson(TinyConfig(InputEncoding::kRgbhFixed),
+                      SsdConfigToJson(TinySsdConfig(InputEncoding::kRgbhFixed),
                                       ReadWeightsRecord(json, "model.json")));
   EXPECT_EQ(DifferingStereoSettings(SsdModel::Load(dir / "rgbh").stereo(), StereoOptions()), "");
   EXPECT_EQ(DifferingStereoSettings(ReadStereoRecord("{}", "m"), StereoOptions()), "");
@@ -238,7 +231,7 @@ TEST(SsdTest, LoadReportsMissingFiles) {
 }
 
 TEST(SsdTest, ConfigJsonRoundTrip) {
-  SsdConfig config = TinyConfig(InputEncoding::kRgbhFixed);
+  SsdConfig config = TinySsdConfig(InputEncoding::kRgbhFixed);
   config.classes = {"Car"};
   config.boxes.aspect_ratios = {0.5, 2.5};
   const SsdConfig back = SsdConfigFromJson(SsdConfigToJson(config), "test");
@@ -252,7 +245,7 @@ TEST(SsdTest, ConfigJsonRoundTrip) {
 }
 
 TEST(SsdTest, ConfigWithAnUnknownEncodingNamesTheField) {
-  std::string json = SsdConfigToJson(TinyConfig(InputEncoding::kRgb));
+  std::string json = SsdConfigToJson(TinySsdConfig(InputEncoding::kRgb));
   const size_t at = json.find("\"rgb\"");
   ASSERT_NE(at, std::string::npos) << json;
   json.replace(at, 5, "\"rgbd\"");
@@ -269,7 +262,7 @@ TEST(SsdTest, ConfigWithAnUnknownEncodingNamesTheField) {
 // A model.json with absurd sizes is refused at once, naming the field (it ran out of memory after a
 // long wait before).
 TEST(SsdTest, ConfigWithAbsurdSizesIsRefusedNamingThem) {
-  const std::string json = SsdConfigToJson(TinyConfig(InputEncoding::kRgb));
+  const std::string json = SsdConfigToJson(TinySsdConfig(InputEncoding::kRgb));
   for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
            {"\"input_width\": 64", "\"input_width\": 1000000"},
            {"\"input_height\": 48", "\"input_height\": 70000"}}) {
@@ -285,14 +278,14 @@ TEST(SsdTest, ConfigWithAbsurdSizesIsRefusedNamingThem) {
           << e.what();
     }
   }
-  SsdConfig many = TinyConfig(InputEncoding::kRgb);
+  SsdConfig many = TinySsdConfig(InputEncoding::kRgb);
   many.classes.assign(300, "Car");
   EXPECT_THROW(many.Check(), std::invalid_argument);
 }
 
 TEST(SsdTest, AFewStepsLowerTheLoss) {
   SetTorchThreads(1);
-  SsdModel model(TinyConfig(InputEncoding::kRgb), 21);
+  SsdModel model(TinySsdConfig(InputEncoding::kRgb), 21);
   SsdTrainer trainer(model);
   const TrainBatch batch = ToyBatch(model, 4, 2);
   ASSERT_GT(batch.num_positive, 0);
@@ -309,7 +302,7 @@ TEST(SsdTest, LoadRefusesNonFiniteWeightsOfADivergedTraining) {
   SetTorchThreads(1);
   const std::filesystem::path dir = ::stereodet::TestBinaryDir() / "models_test_tmp" / "diverged";
   std::filesystem::remove_all(dir);
-  SsdModel model(TinyConfig(InputEncoding::kRgb), 5);
+  SsdModel model(TinySsdConfig(InputEncoding::kRgb), 5);
   SsdTrainer trainer(model);
   const TrainBatch batch = ToyBatch(model, 2, 4);
   for (int i = 0; i < 5; ++i) trainer.Step(batch, 1e30);  // diverges: inf, then NaN
@@ -324,7 +317,7 @@ TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
   const std::filesystem::path path =
       ::stereodet::TestBinaryDir() / "models_test_tmp" / "resume" / "checkpoint.pt";
   std::filesystem::remove_all(path.parent_path());
-  SsdModel model(TinyConfig(InputEncoding::kRgbhLearned), 4);
+  SsdModel model(TinySsdConfig(InputEncoding::kRgbhLearned), 4);
   SsdTrainer trainer(model);
   const TrainBatch batch = ToyBatch(model, 2, 3);
   trainer.Step(batch, 1e-2);
@@ -333,7 +326,7 @@ TEST(SsdTest, ResumingFromACheckpointContinuesExactly) {
   const double continued = trainer.Step(batch, 1e-2).total;
   const double next = trainer.Step(batch, 1e-2).total;
 
-  SsdModel fresh(TinyConfig(InputEncoding::kRgbhLearned), 99);
+  SsdModel fresh(TinySsdConfig(InputEncoding::kRgbhLearned), 99);
   SsdTrainer resumed(fresh);
   EXPECT_EQ(resumed.LoadCheckpoint(path), 7);
   EXPECT_DOUBLE_EQ(resumed.Step(batch, 1e-2).total, continued);
@@ -346,10 +339,10 @@ TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
   const std::filesystem::path path =
       ::stereodet::TestBinaryDir() / "models_test_tmp" / "tied" / "checkpoint.pt";
   std::filesystem::remove_all(path.parent_path());
-  SsdModel model(TinyConfig(InputEncoding::kRgb), 4);
+  SsdModel model(TinySsdConfig(InputEncoding::kRgb), 4);
   SsdTrainer(model).SaveCheckpoint(path, 3, "00000000000000aa");
 
-  SsdModel same(TinyConfig(InputEncoding::kRgb), 5);
+  SsdModel same(TinySsdConfig(InputEncoding::kRgb), 5);
   SsdTrainer same_trainer(same);
   EXPECT_EQ(same_trainer.LoadCheckpoint(path, "00000000000000aa"), 3);
   EXPECT_EQ(same_trainer.LoadCheckpoint(path), 3);  // no run to check against: config only
@@ -363,7 +356,7 @@ TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
                                           "(00000000000000bb)"));
   }
   // Another input encoding: the first setting that differs is named, before LibTorch's shapes.
-  SsdModel other(TinyConfig(InputEncoding::kRgbhFixed), 5);
+  SsdModel other(TinySsdConfig(InputEncoding::kRgbhFixed), 5);
   SsdTrainer other_trainer(other);
   try {
     other_trainer.LoadCheckpoint(path);
@@ -372,7 +365,7 @@ TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
     EXPECT_THAT(e.what(), HasSubstr(path.string() + " was written for another model: encoding: "
                                                     "\"rgb\" here, \"rgbh-fixed\" in the model"));
   }
-  SsdConfig wider = TinyConfig(InputEncoding::kRgb);
+  SsdConfig wider = TinySsdConfig(InputEncoding::kRgb);
   wider.base_channels *= 2;
   SsdModel wide(wider, 5);
   SsdTrainer wide_trainer(wide);
@@ -388,13 +381,30 @@ TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
       std::runtime_error);
 }
 
-// The model_json fuzzer's corpus (fuzz/model_json_fuzzer.cc), replayed: each model.json parses
-// or throws ParseError naming the file (1e300 or 99999999999 where an int belongs included: no
-// undefined behaviour), and what parses round-trips.
+// Parses `text` with `read` and round-trips what parses through `write`; 1 when it parsed, 0 when
+// it threw ParseError naming `source`.
+template <typename Read, typename Write>
+int ParsesAndRoundTrips(const std::string& text, const std::string& source, Read read,
+                        Write write) {
+  try {
+    const std::string written = write(read(text, source));
+    EXPECT_EQ(write(read(written, "written")), written);
+    return 1;
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.file(), source);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "unexpected exception: " << e.what();
+  }
+  return 0;
+}
+
+// The model_json fuzzer's corpus (fuzz/model_json_fuzzer.cc), replayed for every family: each
+// model.json parses or throws ParseError naming the file (1e300 or 99999999999 where an int belongs
+// included: no undefined behaviour), and what parses round-trips.
 TEST(SsdTest, ModelJsonFuzzCorpusParsesOrThrowsParseError) {
   const std::vector<std::filesystem::path> files = FuzzCorpusFiles("model_json");
   ASSERT_GE(files.size(), 5u) << "the model_json corpus is missing";
-  int parsed = 0, rejected = 0;
+  int parsed = 0, rejected = 0, rpn = 0, det3d = 0;
   for (const std::filesystem::path& path : files) {
     SCOPED_TRACE(path.filename().string());
     const std::string text = ReadFile(path);
@@ -403,20 +413,19 @@ TEST(SsdTest, ModelJsonFuzzCorpusParsesOrThrowsParseError) {
     } catch (const ParseError& e) {
       EXPECT_EQ(e.file(), path.string());
     }
-    try {
-      const SsdConfig config = SsdConfigFromJson(text, path.string());
-      const std::string written = SsdConfigToJson(config);
-      EXPECT_EQ(SsdConfigToJson(SsdConfigFromJson(written, "written")), written);
-      ++parsed;
-    } catch (const ParseError& e) {
-      EXPECT_EQ(e.file(), path.string());
-      ++rejected;
-    } catch (const std::exception& e) {
-      ADD_FAILURE() << "unexpected exception: " << e.what();
-    }
+    const int ssd = ParsesAndRoundTrips(text, path.string(), SsdConfigFromJson,
+                                        [](const SsdConfig& c) { return SsdConfigToJson(c); });
+    parsed += ssd;
+    rejected += 1 - ssd;
+    rpn += ParsesAndRoundTrips(text, path.string(), RpnConfigFromJson,
+                               [](const RpnConfig& c) { return RpnConfigToJson(c); });
+    det3d += ParsesAndRoundTrips(text, path.string(), Det3dConfigFromJson,
+                                 [](const Det3dConfig& c) { return Det3dConfigToJson(c); });
   }
   EXPECT_GT(parsed, 0);
   EXPECT_GT(rejected, 0);
+  EXPECT_GT(rpn, 0);    // rpn_rgbd.json
+  EXPECT_GT(det3d, 0);  // det3d_lidar.json
   try {
     SsdConfigFromJson(
         ReadFile(FuzzCorpusFiles("model_json").at(0).parent_path() / "float_width.json"),
