@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
+#include "stereodet/util/check.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/run_manifest.h"
 
@@ -143,6 +144,20 @@ class TrainingFolder {
   // The id this run writes into model.json and checkpoint.pt: the recorded one, or a new one
   // (NewTrainingRunId) for a new training and a folder written before ids were recorded.
   const std::string& training_run() const { return training_run_; }
+
+  // The model's config for this run: `requested` for a new training; when resuming, the one
+  // model.json records (`parse(text, source)`: the family's *ConfigFromJson), which must have the
+  // input `requested` asks for (`input_name(config)`: the --input text, as a std::string). Throws
+  // std::invalid_argument naming model.json and both inputs, what `parse` throws.
+  template <typename Config, typename Parse, typename InputName>
+  Config ModelConfig(const Config& requested, Parse parse, InputName input_name) const {
+    if (!resuming_) return requested;
+    Config saved = parse(config_text_, config_path_.string());
+    STEREODET_CHECK(input_name(saved) == input_name(requested))
+        << "--resume: " << config_path_.string() << " was trained with --input "
+        << input_name(saved) << ", not " << input_name(requested);
+    return saved;
+  }
 
  private:
   OutputLock lock_;

@@ -100,21 +100,13 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   SetTorchThreads(options.threads);
   TrainDet3dSummary summary;
 
-  namespace fs = std::filesystem;
   const TrainingFolder folder(options.out_dir, options.data_root,
                               {{"--points", options.points_dir}}, "train det3d", options.resume,
                               options.force);
   const bool resuming = folder.resuming();
-  const fs::path& config_path = folder.config_path();
-  Det3dConfig config = options.model;
-  if (resuming) {
-    const std::string& saved_text = folder.config_text();
-    const Det3dConfig saved = Det3dConfigFromJson(saved_text, config_path.string());
-    STEREODET_CHECK(saved.input == config.input)
-        << "--resume: " << config_path.string() << " was trained with --input "
-        << PointSourceName(saved.input) << ", not " << PointSourceName(config.input);
-    config = saved;
-  }
+  const Det3dConfig config = folder.ModelConfig(
+      options.model, Det3dConfigFromJson,
+      [](const Det3dConfig& c) { return std::string(PointSourceName(c.input)); });
 
   const KittiDataset dataset(options.data_root, "training");
   const std::vector<std::string> ids = TrainingFrameIds(dataset, options.split, options.max_frames);

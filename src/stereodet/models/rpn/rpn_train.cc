@@ -89,19 +89,13 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
                               options.force);
   const bool resuming = folder.resuming();
   const fs::path& config_path = folder.config_path();
-  RpnConfig config = options.model;
+  const RpnConfig config =
+      folder.ModelConfig(options.model, RpnConfigFromJson,
+                         [](const RpnConfig& c) { return std::string(RpnInputName(c.input)); });
   RpnDataOptions data_options = options.data;
-  if (resuming) {
-    const std::string& text = folder.config_text();
-    const RpnConfig saved = RpnConfigFromJson(text, config_path.string());
-    STEREODET_CHECK(saved.input == config.input)
-        << "--resume: " << config_path.string() << " was trained with --input "
-        << RpnInputName(saved.input) << ", not " << RpnInputName(config.input);
-    config = saved;
+  if (resuming && config.input == RpnInput::kRgbd) {
     // The geometry the model was trained on so far, whatever the flags say now.
-    if (config.input == RpnInput::kRgbd) {
-      data_options.stereo = ReadRpnStereoRecord(text, config_path.string());
-    }
+    data_options.stereo = ReadRpnStereoRecord(folder.config_text(), config_path.string());
   }
 
   const KittiDataset dataset(options.data_root, "training");

@@ -163,6 +163,17 @@ TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
   options.max_epochs_this_run = 0;
   EXPECT_THROW(TrainRpn(options), std::invalid_argument);  // a model there, no --resume
   options.resume = true;
+  TrainRpnOptions other_input = options;  // --resume takes model.json's config, of its input
+  other_input.model.input = RpnInput::kRgbd;
+  try {
+    TrainRpn(other_input);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--resume: " + (out / "model.json").string() +
+                                         " was trained with --input rgb, not rgbd"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_EQ(TrainRpn(options).epochs_run, 2);
 
   std::vector<fs::path> straight;

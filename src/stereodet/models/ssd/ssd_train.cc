@@ -112,24 +112,22 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   const bool resuming = folder.resuming();
   const fs::path& config_path = folder.config_path();
   // With --resume the model folder's settings win; asking for different ones is a mistake.
-  SsdConfig config = options.model;
+  const SsdConfig config = folder.ModelConfig(
+      options.model, SsdConfigFromJson,
+      [](const SsdConfig& c) { return std::string(InputEncodingName(c.encoding)); });
   if (resuming) {
-    const std::string& saved_text = folder.config_text();
-    const SsdConfig saved = SsdConfigFromJson(saved_text, config_path.string());
-    STEREODET_CHECK(saved.encoding == config.encoding)
-        << "--resume: " << config_path.string() << " was trained with --input "
-        << InputEncodingName(saved.encoding) << ", not " << InputEncodingName(config.encoding);
-    STEREODET_CHECK(saved.InputWidth() == config.InputWidth() &&
-                    saved.InputHeight() == config.InputHeight())
-        << "--resume: " << config_path.string() << " has input size " << saved.InputWidth() << "x"
-        << saved.InputHeight() << ", not " << config.InputWidth() << "x" << config.InputHeight();
-    if (UsesHeight(saved.encoding)) {
+    const SsdConfig& requested = options.model;
+    STEREODET_CHECK(config.InputWidth() == requested.InputWidth() &&
+                    config.InputHeight() == requested.InputHeight())
+        << "--resume: " << config_path.string() << " has input size " << config.InputWidth() << "x"
+        << config.InputHeight() << ", not " << requested.InputWidth() << "x"
+        << requested.InputHeight();
+    if (UsesHeight(config.encoding)) {
       const std::string differ = DifferingStereoSettings(
-          ReadStereoRecord(saved_text, config_path.string()), options.data.stereo);
+          ReadStereoRecord(folder.config_text(), config_path.string()), options.data.stereo);
       STEREODET_CHECK(differ.empty()) << "--resume: " << config_path.string()
                                       << " was trained with other stereo settings: " << differ;
     }
-    config = saved;
   }
 
   const KittiDataset dataset(options.data_root, "training");

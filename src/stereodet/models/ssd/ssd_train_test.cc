@@ -185,6 +185,24 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
   EXPECT_EQ(CountLines(out / "train_log.csv"), 3);
   options.max_epochs_this_run = 0;
   options.resume = true;
+  // --resume takes model.json's config: another input or input size is refused, naming both.
+  auto refusal = [](const TrainSsdOptions& o) -> std::string {
+    try {
+      TrainSsd(o);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  TrainSsdOptions other = options;
+  other.model.encoding = InputEncoding::kRgb;
+  EXPECT_NE(refusal(other).find("was trained with --input rgbh-learned, not rgb"),
+            std::string::npos)
+      << refusal(other);
+  other = options;
+  other.model.boxes.input_width = 64;
+  EXPECT_NE(refusal(other).find("has input size 128x40, not 64x40"), std::string::npos)
+      << refusal(other);
   s = TrainSsd(options);
   EXPECT_EQ(s.epochs_run, 1);
   EXPECT_EQ(s.epochs_done, 3);
