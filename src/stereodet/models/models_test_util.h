@@ -3,8 +3,16 @@
 #define STEREODET_MODELS_MODELS_TEST_UTIL_H_
 
 #include <filesystem>
+#include <functional>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <vector>
 
+#include "stereodet/geometry/calibration.h"
+#include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
 #include "stereodet/models/det3d/det3d_model.h"
 #include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/models/ssd/ssd_model.h"
@@ -19,6 +27,50 @@ inline std::filesystem::path ModelsTestDir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// Frames for the image families' training tests, in the KITTI layout under models_test_tmp/NAME
+// (image_2, image_3, label_2, calib; ImageSets/train.txt and val.txt list every frame): `frames`
+// frames of `size` px, dark noise 0..`background_max`, one bright textured "car" (`car_min`..255)
+// at `car(i)` in frame i, 8 px further left in the right image so that stereo finds it, labelled
+// Car (1.5 x 1.6 x 3.9 m, 10 m ahead), KittiLikeCalibration. Drawn from a generator of its own
+// (cv::RNG(5)): cv::randu would use OpenCV's process-wide one, and the frames would depend on the
+// tests run before.
+inline std::filesystem::path WriteTinyImageDataset(const std::string& name, int frames,
+                                                   cv::Size size, int background_max, int car_min,
+                                                   const std::function<cv::Rect(int)>& car) {
+  const std::filesystem::path root = ModelsTestDir(name);
+  cv::RNG rng(5);
+  std::vector<std::string> ids;
+  for (const char* folder : {"image_2", "image_3", "label_2", "calib"}) {
+    std::filesystem::create_directories(root / "training" / folder);
+  }
+  for (int i = 0; i < frames; ++i) {
+    const std::string id = FrameId(i);
+    ids.push_back(id);
+    cv::Mat left(size, CV_8UC3);
+    rng.fill(left, cv::RNG::UNIFORM, 0, background_max);
+    const cv::Rect box = car(i);
+    cv::Mat patch(box.size(), CV_8UC3);
+    rng.fill(patch, cv::RNG::UNIFORM, car_min, 255);
+    const cv::Mat right = left.clone();
+    patch.copyTo(left(box));
+    patch.copyTo(right(box - cv::Point(8, 0)));
+    cv::imwrite((root / "training/image_2" / (id + ".png")).string(), left);
+    cv::imwrite((root / "training/image_3" / (id + ".png")).string(), right);
+    WriteCalibration(root / "training/calib" / (id + ".txt"), KittiLikeCalibration());
+    Object label;
+    label.type = "Car";
+    label.box = {double(box.x), double(box.y), double(box.br().x), double(box.br().y)};
+    label.box3d.h = 1.5;
+    label.box3d.w = 1.6;
+    label.box3d.l = 3.9;
+    label.box3d.location = {0, 1.6, 10};
+    WriteObjects(root / "training/label_2" / (id + ".txt"), {label});
+  }
+  WriteSplit(root / "ImageSets/train.txt", ids);
+  WriteSplit(root / "ImageSets/val.txt", ids);
+  return root;
 }
 
 // Tiny networks of each family, for tests that build, train a few steps or save a model in seconds.

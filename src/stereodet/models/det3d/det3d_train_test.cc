@@ -131,7 +131,6 @@ TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   const DetectDet3dSummary ds = DetectDet3d(d);
   EXPECT_EQ(ds.frames, 4);
   EXPECT_TRUE(fs::exists(d.out_dir / "run.json"));
-  const Calibration calib = KittiLikeCalibration();
   for (int i = 0; i < 4; ++i) {
     const std::string id = FrameId(i);
     const std::vector<Object> labels =

@@ -26,43 +26,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Frames of 256 x 128 px: dark noise, one bright textured "car" per frame at its own place and
-// size (shifted by 8 px in the right image so stereo finds it), labelled Car.
+// Frames of 256 x 128 px, one car per frame at its own place and size (WriteTinyImageDataset).
 fs::path WriteTinyDataset(const std::string& name, int frames) {
-  const fs::path root = ModelsTestDir(name);
-  // cv::randu would draw from OpenCV's process-wide generator: the frames would depend on the
-  // tests run before. A generator of our own keeps them fixed.
-  cv::RNG rng(5);
-  std::vector<std::string> ids;
-  for (const char* folder : {"image_2", "image_3", "label_2", "calib"}) {
-    fs::create_directories(root / "training" / folder);
-  }
-  for (int i = 0; i < frames; ++i) {
-    const std::string id = FrameId(i);
-    ids.push_back(id);
-    cv::Mat left(128, 256, CV_8UC3), right;
-    rng.fill(left, cv::RNG::UNIFORM, 0, 60);
-    const cv::Rect car(30 + 50 * i, 40 + 6 * i, 72 - 8 * i, 44 - 4 * i);
-    cv::Mat patch(car.size(), CV_8UC3);
-    rng.fill(patch, cv::RNG::UNIFORM, 170, 255);
-    right = left.clone();
-    patch.copyTo(left(car));
-    patch.copyTo(right(car - cv::Point(8, 0)));
-    cv::imwrite((root / "training/image_2" / (id + ".png")).string(), left);
-    cv::imwrite((root / "training/image_3" / (id + ".png")).string(), right);
-    WriteCalibration(root / "training/calib" / (id + ".txt"), KittiLikeCalibration());
-    Object label;
-    label.type = "Car";
-    label.box = {double(car.x), double(car.y), double(car.br().x), double(car.br().y)};
-    label.box3d.h = 1.5;
-    label.box3d.w = 1.6;
-    label.box3d.l = 3.9;
-    label.box3d.location = {0, 1.6, 10};
-    WriteObjects(root / "training/label_2" / (id + ".txt"), {label});
-  }
-  WriteSplit(root / "ImageSets/train.txt", ids);
-  WriteSplit(root / "ImageSets/val.txt", ids);
-  return root;
+  return WriteTinyImageDataset(name, frames, {256, 128}, 60, 170, [](int i) {
+    return cv::Rect(30 + 50 * i, 40 + 6 * i, 72 - 8 * i, 44 - 4 * i);
+  });
 }
 
 TrainRpnOptions TinyTraining(const fs::path& root, const fs::path& out) {

@@ -29,41 +29,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Frames of 256 x 80 px: textured background, one bright textured "car" (shifted by 8 px in the
-// right image so stereo finds something), labelled Car.
+// Frames of 256 x 80 px, one car per frame, 20 px further right in each (WriteTinyImageDataset).
 fs::path WriteTinyDataset(const std::string& name, int frames) {
-  const fs::path root = ModelsTestDir(name);
-  std::mt19937 rng(5);
-  std::vector<std::string> ids;
-  for (int i = 0; i < frames; ++i) {
-    const std::string id = FrameId(i);
-    ids.push_back(id);
-    cv::Mat left(80, 256, CV_8UC3), right;
-    cv::randu(left, 0, 90);
-    const cv::Rect car(40 + 20 * i, 30, 70, 36);
-    cv::Mat patch(car.size(), CV_8UC3);
-    cv::randu(patch, 160, 255);
-    patch.copyTo(left(car));
-    right = left.clone();
-    patch.copyTo(right(car - cv::Point(8, 0)));
-    for (const char* folder : {"image_2", "image_3", "label_2", "calib"}) {
-      fs::create_directories(root / "training" / folder);
-    }
-    cv::imwrite((root / "training/image_2" / (id + ".png")).string(), left);
-    cv::imwrite((root / "training/image_3" / (id + ".png")).string(), right);
-    WriteCalibration(root / "training/calib" / (id + ".txt"), KittiLikeCalibration());
-    Object label;
-    label.type = "Car";
-    label.box = {double(car.x), double(car.y), double(car.br().x), double(car.br().y)};
-    label.box3d.h = 1.5;
-    label.box3d.w = 1.6;
-    label.box3d.l = 3.9;
-    label.box3d.location = {0, 1.6, 10};
-    WriteObjects(root / "training/label_2" / (id + ".txt"), {label});
-  }
-  WriteSplit(root / "ImageSets/train.txt", ids);
-  WriteSplit(root / "ImageSets/val.txt", ids);
-  return root;
+  return WriteTinyImageDataset(name, frames, {256, 80}, 90, 160,
+                               [](int i) { return cv::Rect(40 + 20 * i, 30, 70, 36); });
 }
 
 StereoOptions TinyStereo() {
