@@ -175,6 +175,24 @@ const std::filesystem::path& CheckedOutDir(
 
 }  // namespace
 
+void TrainingRunSummary::Finish(const TrainingLoopSummary& done, double wall_seconds) {
+  epochs_done = done.epochs_done;
+  epochs_run = done.epochs_run;
+  final_loss = done.final_loss;
+  seconds_per_step = done.SecondsPerStep();
+  seconds = wall_seconds;
+}
+
+int TrainingFolder::StartEpoch(
+    const std::function<int(const std::filesystem::path&, const std::string&)>& load_checkpoint)
+    const {
+  if (!resuming_) return 0;
+  const int epochs = load_checkpoint(checkpoint_path_, recorded_run_);
+  STEREODET_CHECK_IO(epochs >= 0) << "bad epoch count " << epochs << " in "
+                                  << checkpoint_path_.string();
+  return epochs;
+}
+
 TrainingFolder::TrainingFolder(
     const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
     const std::vector<std::pair<std::string, std::filesystem::path>>& inputs,

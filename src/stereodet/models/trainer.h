@@ -108,6 +108,20 @@ struct TrainingLoopSummary {
   double SecondsPerStep() const { return steps_trained > 0 ? train_seconds / steps_trained : 0; }
 };
 
+// What every family's `train` reports (TrainSsdSummary, TrainRpnSummary and TrainDet3dSummary add
+// their own counts and their rate of frames).
+struct TrainingRunSummary {
+  int frames = 0;               // training frames read
+  int epochs_done = 0;          // in total, including those before a resume
+  int epochs_run = 0;           // in this call
+  double final_loss = 0;        // mean training loss of the last epoch run
+  double seconds_per_step = 0;  // this call's epochs' time per optimizer step
+  double seconds = 0;           // wall time of this call, data preparation included
+  int64_t parameters = 0;
+  // The epochs, the loss and the time per step from `done`; `wall_seconds` as `seconds`.
+  void Finish(const TrainingLoopSummary& done, double wall_seconds);
+};
+
 // Runs the epochs [start_epoch, min(epochs, start_epoch + max_epochs_this_run)) of `task`.
 // Throws std::runtime_error when a step's loss is not finite ("training diverged at epoch 3, step
 // 412 (loss nan); try a lower --lr"), std::invalid_argument for an empty training set; what the
@@ -149,6 +163,13 @@ class TrainingFolder {
   // model.json records (`parse(text, source)`: the family's *ConfigFromJson), which must have the
   // input `requested` asks for (`input_name(config)`: the --input text, as a std::string). Throws
   // std::invalid_argument naming model.json and both inputs, what `parse` throws.
+  // The epochs done before this run: 0 for a new training; when resuming, what
+  // `load_checkpoint(checkpoint_path(), recorded_run())` returns (the family's trainer loads the
+  // weights and optimizer state of checkpoint.pt and returns its epoch count). Throws
+  // std::runtime_error naming checkpoint.pt for a negative count, what `load_checkpoint` throws.
+  int StartEpoch(const std::function<int(const std::filesystem::path& checkpoint,
+                                         const std::string& recorded_run)>& load_checkpoint) const;
+
   template <typename Config, typename Parse, typename InputName>
   Config ModelConfig(const Config& requested, Parse parse, InputName input_name) const {
     if (!resuming_) return requested;

@@ -103,7 +103,6 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   const TrainingFolder folder(options.out_dir, options.data_root,
                               {{"--points", options.points_dir}}, "train det3d", options.resume,
                               options.force);
-  const bool resuming = folder.resuming();
   const Det3dConfig config = folder.ModelConfig(
       options.model, Det3dConfigFromJson,
       [](const Det3dConfig& c) { return std::string(PointSourceName(c.input)); });
@@ -116,8 +115,9 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   summary.parameters = model.ParameterCount();
   summary.auxiliary_parameters = model.AuxiliaryParameterCount();
   const int start_epoch =
-      resuming ? trainer.LoadCheckpoint(folder.checkpoint_path(), folder.recorded_run()) : 0;
-  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << folder.checkpoint_path().string();
+      folder.StartEpoch([&](const std::filesystem::path& path, const std::string& run) {
+        return trainer.LoadCheckpoint(path, run);
+      });
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -187,12 +187,8 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   Det3dTrainingTask task(frames, gt_database, gt_sampling, model, trainer, options,
                          folder.training_run());
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
-  summary.epochs_done = done.epochs_done;
-  summary.epochs_run = done.epochs_run;
-  summary.final_loss = done.final_loss;
+  summary.Finish(done, total_timer.ElapsedSeconds());
   summary.frames_per_second = done.FramesPerSecond();
-  summary.seconds_per_step = done.SecondsPerStep();
-  summary.seconds = total_timer.ElapsedSeconds();
   return summary;
 }
 

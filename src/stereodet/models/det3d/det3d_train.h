@@ -13,6 +13,7 @@
 
 #include "stereodet/models/det3d/det3d_model.h"
 #include "stereodet/models/det3d/gt_database.h"
+#include "stereodet/models/trainer.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
@@ -49,18 +50,11 @@ struct TrainDet3dOptions {
   void Check() const;  // throws std::invalid_argument
 };
 
-struct TrainDet3dSummary {
-  int frames = 0;
+struct TrainDet3dSummary : TrainingRunSummary {
   int objects = 0;                  // ground-truth boxes of the model's classes over the frames
   int64_t gt_database_objects = 0;  // objects in the GT database (0 without GT sampling)
   int64_t gt_database_points = 0;   // their points (16 bytes each in memory)
-  int epochs_done = 0;
-  int epochs_run = 0;
-  double final_loss = 0;
-  double frames_per_second = 0;  // training throughput of this call
-  double seconds_per_step = 0;
-  double seconds = 0;
-  int64_t parameters = 0;
+  double frames_per_second = 0;     // training throughput of this call
   int64_t auxiliary_parameters = 0;
 };
 

@@ -111,8 +111,8 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   summary.parameters = model.ParameterCount();
   summary.image_branch_parameters = model.ImageBranchParameterCount();
   summary.geometry_branch_parameters = model.GeometryBranchParameterCount();
-  const int start_epoch = resuming ? trainer.LoadCheckpoint(folder.checkpoint_path()) : 0;
-  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << folder.checkpoint_path().string();
+  const int start_epoch = folder.StartEpoch(
+      [&](const fs::path& path, const std::string&) { return trainer.LoadCheckpoint(path); });
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -156,12 +156,8 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   loop.progress = options.progress;
   RpnTrainingTask task(data, model, trainer, options);
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
-  summary.epochs_done = done.epochs_done;
-  summary.epochs_run = done.epochs_run;
-  summary.final_loss = done.final_loss;
+  summary.Finish(done, total_timer.ElapsedSeconds());
   summary.images_per_second = done.FramesPerSecond();
-  summary.seconds_per_step = done.SecondsPerStep();
-  summary.seconds = total_timer.ElapsedSeconds();
   return summary;
 }
 

@@ -18,6 +18,7 @@
 
 #include "stereodet/models/rpn/rpn_data.h"
 #include "stereodet/models/rpn/rpn_model.h"
+#include "stereodet/models/trainer.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
@@ -52,17 +53,10 @@ struct TrainRpnOptions {
   void Check() const;  // throws std::invalid_argument
 };
 
-struct TrainRpnSummary {
-  int frames = 0;
+struct TrainRpnSummary : TrainingRunSummary {
   int objects = 0;
-  int epochs_done = 0;
-  int epochs_run = 0;
-  double final_loss = 0;  // mean training loss of the last epoch run
   double images_per_second = 0;
-  double seconds_per_step = 0;
-  double seconds = 0;
   double stereo_seconds = 0;  // the one-off label / stereo pass
-  int64_t parameters = 0;
   int64_t image_branch_parameters = 0;
   int64_t geometry_branch_parameters = 0;
   int init_tensors = 0;  // tensors copied from init_from (0 without)

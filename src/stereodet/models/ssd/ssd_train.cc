@@ -149,9 +149,9 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
-  const int start_epoch =
-      resuming ? trainer.LoadCheckpoint(folder.checkpoint_path(), folder.recorded_run()) : 0;
-  STEREODET_CHECK(start_epoch >= 0) << "bad epoch count in " << folder.checkpoint_path().string();
+  const int start_epoch = folder.StartEpoch([&](const fs::path& path, const std::string& run) {
+    return trainer.LoadCheckpoint(path, run);
+  });
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -191,11 +191,8 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   loop.progress = options.progress;
   SsdTrainingTask task(data, model, trainer, options, folder.training_run());
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
-  summary.epochs_done = done.epochs_done;
-  summary.epochs_run = done.epochs_run;
-  summary.final_loss = done.final_loss;
+  summary.Finish(done, total_timer.ElapsedSeconds());
   summary.images_per_second = done.FramesPerSecond();
-  summary.seconds = total_timer.ElapsedSeconds();
   return summary;
 }
 

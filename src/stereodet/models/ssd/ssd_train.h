@@ -16,6 +16,7 @@
 
 #include "stereodet/models/ssd/ssd_data.h"
 #include "stereodet/models/ssd/ssd_model.h"
+#include "stereodet/models/trainer.h"
 #include "stereodet/util/progress.h"
 
 namespace stereodet {
@@ -55,15 +56,9 @@ struct TrainSsdOptions {
   void Check() const;  // throws std::invalid_argument
 };
 
-struct TrainSsdSummary {
-  int frames = 0;
-  int epochs_done = 0;           // in total, including those before a resume
-  int epochs_run = 0;            // in this call
-  double final_loss = 0;         // mean training loss of the last epoch run
+struct TrainSsdSummary : TrainingRunSummary {
   double images_per_second = 0;  // training throughput of this call (loader included)
-  double seconds = 0;            // wall time of this call, stereo pre-pass included
   double stereo_seconds = 0;     // the one-off stereo/label pass
-  int64_t parameters = 0;
   int64_t compression_parameters = 0;
 };
 
