@@ -73,6 +73,21 @@ inline std::filesystem::path WriteTinyImageDataset(const std::string& name, int 
   return root;
 }
 
+// A family's detect options (DetectSsdOptions, DetectRpnOptions, DetectDet3dOptions) for the model
+// in `model` over the KITTI-layout `root` (its val split), into `out`, on one thread, quiet.
+template <typename DetectOptions>
+DetectOptions TinyDetectOptions(const std::filesystem::path& model,
+                                const std::filesystem::path& root,
+                                const std::filesystem::path& out) {
+  DetectOptions o;
+  o.model_dir = model;
+  o.data_root = root;
+  o.out_dir = out;
+  o.threads = 1;
+  o.progress.stream = nullptr;
+  return o;
+}
+
 // Tiny networks of each family, for tests that build, train a few steps or save a model in seconds.
 // SSD: 64 x 48 px input, 8 base channels.
 inline SsdConfig TinySsdConfig(InputEncoding encoding = InputEncoding::kRgb) {

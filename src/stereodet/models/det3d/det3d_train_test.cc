@@ -122,12 +122,8 @@ TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   };
   EXPECT_LT(loss(last), 0.5 * loss(first)) << first << "\n" << last;
 
-  DetectDet3dOptions d;
-  d.model_dir = out;
-  d.data_root = root;
-  d.out_dir = root / "detections";
-  d.threads = 1;
-  d.progress.stream = nullptr;
+  const DetectDet3dOptions d =
+      TinyDetectOptions<DetectDet3dOptions>(out, root, root / "detections");
   const DetectDet3dSummary ds = DetectDet3d(d);
   EXPECT_EQ(ds.frames, 4);
   EXPECT_TRUE(fs::exists(d.out_dir / "run.json"));

@@ -84,12 +84,7 @@ TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   EXPECT_GT(s.parameters, s.image_branch_parameters);
   EXPECT_EQ(s.geometry_branch_parameters, 0);
 
-  DetectRpnOptions d;
-  d.model_dir = out;
-  d.data_root = root;
-  d.out_dir = root / "detections";
-  d.threads = 1;
-  d.progress.stream = nullptr;
+  const DetectRpnOptions d = TinyDetectOptions<DetectRpnOptions>(out, root, root / "detections");
   const DetectRpnSummary ds = DetectRpn(d);
   EXPECT_EQ(ds.frames, 3);
   EXPECT_TRUE(fs::exists(d.out_dir / "run.json"));
@@ -206,13 +201,8 @@ TEST(RpnTrainTest, RgbdTrainsFromStereoMirrorsAnRgbModelAndDetects) {
   again.init_from = out;
   EXPECT_THROW(TrainRpn(again), std::invalid_argument);
 
-  DetectRpnOptions d;
-  d.model_dir = out;
-  d.data_root = root;
-  d.out_dir = root / "detections";
-  d.threads = 1;
+  DetectRpnOptions d = TinyDetectOptions<DetectRpnOptions>(out, root, root / "detections");
   d.blur_sigma_px = 2.0;
-  d.progress.stream = nullptr;
   const DetectRpnSummary ds = DetectRpn(d);
   EXPECT_EQ(ds.frames, 2);
   EXPECT_TRUE(fs::exists(d.out_dir / (FrameId(1) + ".txt")));

@@ -99,12 +99,8 @@ TEST(SsdTrainTest, NewRgbhTrainingsMatchAtTheNetworksScale) {
   ASSERT_TRUE(recorded.has_value());
   EXPECT_EQ(recorded->disparity.match_scale, 0.5);
   EXPECT_EQ(recorded->disparity.num_disparities, 32);  // the full-resolution setting is recorded
-  DetectSsdOptions detect;
-  detect.model_dir = options.out_dir;
-  detect.data_root = root;
-  detect.out_dir = ModelsTestDir("scale_det");
-  detect.threads = 1;
-  detect.progress.stream = nullptr;
+  DetectSsdOptions detect =
+      TinyDetectOptions<DetectSsdOptions>(options.out_dir, root, ModelsTestDir("scale_det"));
   EXPECT_EQ(DetectSsd(detect).frames, 2);
   EXPECT_NE(ReadFile(detect.out_dir / "run.json").find("\"match_scale\": 0.5"), std::string::npos);
   // Asking for full resolution is a named mismatch.
@@ -213,15 +209,11 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
 
   // Detection writes one parseable file per frame, also with blur.
   for (double sigma : {0.0, 3.0}) {
-    DetectSsdOptions detect;
-    detect.model_dir = out;
-    detect.data_root = root;
-    detect.out_dir = ModelsTestDir(sigma > 0 ? "e2e_det_blur" : "e2e_det");
+    DetectSsdOptions detect = TinyDetectOptions<DetectSsdOptions>(
+        out, root, ModelsTestDir(sigma > 0 ? "e2e_det_blur" : "e2e_det"));
     detect.blur_sigma_px = sigma;
     detect.stereo = TinyStereo();
-    detect.threads = 1;
     detect.batch_size = 3;
-    detect.progress.stream = nullptr;
     // A stale file of an earlier detection run in the folder does not survive the new run.
     RunManifest earlier;
     earlier.tool = "detect ssd";
