@@ -163,13 +163,6 @@ class TrainingFolder {
   // model.json records (`parse(text, source)`: the family's *ConfigFromJson), which must have the
   // input `requested` asks for (`input_name(config)`: the --input text, as a std::string). Throws
   // std::invalid_argument naming model.json and both inputs, what `parse` throws.
-  // The epochs done before this run: 0 for a new training; when resuming, what
-  // `load_checkpoint(checkpoint_path(), recorded_run())` returns (the family's trainer loads the
-  // weights and optimizer state of checkpoint.pt and returns its epoch count). Throws
-  // std::runtime_error naming checkpoint.pt for a negative count, what `load_checkpoint` throws.
-  int StartEpoch(const std::function<int(const std::filesystem::path& checkpoint,
-                                         const std::string& recorded_run)>& load_checkpoint) const;
-
   template <typename Config, typename Parse, typename InputName>
   Config ModelConfig(const Config& requested, Parse parse, InputName input_name) const {
     if (!resuming_) return requested;
@@ -179,6 +172,13 @@ class TrainingFolder {
         << input_name(saved) << ", not " << input_name(requested);
     return saved;
   }
+
+  // The epochs done before this run: 0 for a new training; when resuming, what
+  // `load_checkpoint(checkpoint_path(), recorded_run())` returns (the family's trainer loads the
+  // weights and optimizer state of checkpoint.pt and returns its epoch count). Throws
+  // std::runtime_error naming checkpoint.pt for a negative count, what `load_checkpoint` throws.
+  int StartEpoch(const std::function<int(const std::filesystem::path& checkpoint,
+                                         const std::string& recorded_run)>& load_checkpoint) const;
 
  private:
   OutputLock lock_;
