@@ -171,12 +171,18 @@ TEST(FrameViewTest, DrawsOneBoxPerRecordSideInItsOutcomesColour) {
             0x787878u);
 }
 
+// view_small evaluated into DIR/eval (with records), and views of its worst frame per outcome.
+FrameViewsOptions WorstViewOfViewSmall(const fs::path& dir) {
+  EvaluateViewSmall(dir / "eval");
+  FrameViewsOptions options;
+  options.results = dir / "eval";
+  options.worst = 1;
+  return options;
+}
+
 TEST(FrameViewTest, WritesTheWorstFramesViewsAsSvgAndPng) {
   TestTempDir dir;
-  EvaluateViewSmall(dir.path() / "eval");
-  FrameViewsOptions options;
-  options.results = dir.path() / "eval";
-  options.worst = 1;
+  FrameViewsOptions options = WorstViewOfViewSmall(dir.path());
   const FrameViewsResult views = WriteFrameViews(options);
   // Car only is evaluated (no Pedestrian or Cyclist detection): one most-FN, one most-FP frame.
   ASSERT_EQ(views.views.size(), 2u);
@@ -200,10 +206,7 @@ TEST(FrameViewTest, WritesTheWorstFramesViewsAsSvgAndPng) {
 // view adds files and deletes none, but only into a folder of views.
 TEST(FrameViewTest, WritesOnlyIntoAFolderOfViews) {
   TestTempDir dir;
-  EvaluateViewSmall(dir.path() / "eval");
-  FrameViewsOptions options;
-  options.results = dir.path() / "eval";
-  options.worst = 1;
+  FrameViewsOptions options = WorstViewOfViewSmall(dir.path());
   options.out = dir.path() / "home";
   fs::create_directories(options.out);
   WriteFileAtomically(options.out / "thesis.tex", "precious");
@@ -225,10 +228,7 @@ TEST(FrameViewTest, WritesOnlyIntoAFolderOfViews) {
 // one with no scan would draw "0 points" in every view.
 TEST(FrameViewTest, PointsTakeAScanFolderOrAStereoOutputAndRefuseAFolderWithoutScans) {
   TestTempDir dir;
-  EvaluateViewSmall(dir.path() / "eval");
-  FrameViewsOptions options;
-  options.results = dir.path() / "eval";
-  options.worst = 1;
+  FrameViewsOptions options = WorstViewOfViewSmall(dir.path());
   options.png = false;
   options.points = dir.path() / "empty";
   fs::create_directories(options.points);
