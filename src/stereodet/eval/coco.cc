@@ -1,0 +1,739 @@
+#include "stereodet/eval/coco.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <optional>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/parallel.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+namespace {
+
+using json = nlohmann::json;
+
+// ---------------------------------------------------------------------------------------------
+// Reading.
+
+// The 1-based line of byte offset `byte` in `text` (nlohmann reports syntax errors by byte).
+int LineOfByte(std::string_view text, size_t byte) {
+  byte = std::min(byte, text.size());
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + byte, '\n'));
+}
+
+json ParseJsonText(std::string_view text, const std::string& source) {
+  try {
+    return json::parse(text.begin(), text.end());
+  } catch (const json::parse_error& e) {
+    throw ParseError(source, LineOfByte(text, e.byte), "",
+                     std::string("not valid JSON: ") + e.what());
+  }
+}
+
+// Reads typed fields of one JSON document, naming the field ("annotations[3].bbox") in errors.
+class FieldReader {
+ public:
+  explicit FieldReader(const std::string& source) : source_(source) {}
+
+  [[noreturn]] void Fail(const std::string& field, const std::string& message) const {
+    throw ParseError(source_, 0, field, message);
+  }
+
+  // The member `name` of `object` (itself at `field`), or nullptr when absent and not required.
+  const json* Member(const json& object, const std::string& field, const char* name,
+                     bool required) const {
+    if (!object.is_object()) Fail(field, "expected an object, got " + Excerpt(object));
+    const auto it = object.find(name);
+    if (it == object.end()) {
+      if (required) Fail(Join(field, name), "missing");
+      return nullptr;
+    }
+    return &*it;
+  }
+
+  const json& Array(const json& object, const std::string& field, const char* name) const {
+    const json& value = *Member(object, field, name, true);
+    if (!value.is_array()) Fail(Join(field, name), "expected an array, got " + Excerpt(value));
+    return value;
+  }
+
+  int64_t Integer(const json& object, const std::string& field, const char* name) const {
+    const json& value = *Member(object, field, name, true);
+    if (!value.is_number_integer() ||
+        (value.is_number_unsigned() &&
+         value.get<uint64_t>() > static_cast<uint64_t>(std::numeric_limits<int64_t>::max()))) {
+      Fail(Join(field, name), "expected an integer id, got " + Excerpt(value));
+    }
+    return value.get<int64_t>();
+  }
+
+  double Number(const json& object, const std::string& field, const char* name) const {
+    const json& value = *Member(object, field, name, true);
+    if (!value.is_number()) Fail(Join(field, name), "expected a number, got " + Excerpt(value));
+    return value.get<double>();
+  }
+
+  // An optional 0/1 flag ("iscrowd", "ignore"): an integer or a boolean, nonzero is set.
+  bool Flag(const json& object, const std::string& field, const char* name) const {
+    const json* value = Member(object, field, name, false);
+    if (value == nullptr) return false;
+    if (value->is_boolean()) return value->get<bool>();
+    if (!value->is_number_integer()) {
+      Fail(Join(field, name), "expected an integer or a boolean, got " + Excerpt(*value));
+    }
+    return value->get<int64_t>() != 0;
+  }
+
+  CocoBox Box(const json& object, const std::string& field) const {
+    const json& value = *Member(object, field, "bbox", true);
+    if (!value.is_array() || value.size() != 4 ||
+        !std::all_of(value.begin(), value.end(), [](const json& v) { return v.is_number(); })) {
+      Fail(Join(field, "bbox"), "expected 4 numbers [x, y, width, height], got " + Excerpt(value));
+    }
+    return {value[0].get<double>(), value[1].get<double>(), value[2].get<double>(),
+            value[3].get<double>()};
+  }
+
+  static std::string Join(const std::string& field, const char* name) {
+    return field.empty() ? std::string(name) : field + "." + name;
+  }
+  static std::string Element(const char* array, size_t i) {
+    return fmt::format("{}[{}]", array, i);
+  }
+
+ private:
+  static std::string Excerpt(const json& value) {
+    std::string text = value.dump();
+    if (text.size() > 60) text = text.substr(0, 57) + "...";
+    return text;
+  }
+
+  const std::string& source_;
+};
+
+}  // namespace
+
+CocoGroundTruth ParseCocoGroundTruth(std::string_view text, const std::string& source) {
+  const json root = ParseJsonText(text, source);
+  const FieldReader read(source);
+  if (!root.is_object()) read.Fail("", "a COCO ground-truth file is a JSON object");
+  CocoGroundTruth gt;
+  gt.source = source;
+
+  const json& images = read.Array(root, "", "images");
+  gt.image_ids.reserve(images.size());
+  for (size_t i = 0; i < images.size(); ++i) {
+    gt.image_ids.push_back(read.Integer(images[i], FieldReader::Element("images", i), "id"));
+  }
+  // pycocotools keys images and categories by id: a repeated one is the same image.
+  std::sort(gt.image_ids.begin(), gt.image_ids.end());
+  gt.image_ids.erase(std::unique(gt.image_ids.begin(), gt.image_ids.end()), gt.image_ids.end());
+
+  const json& categories = read.Array(root, "", "categories");
+  std::unordered_map<int64_t, size_t> category_index;
+  for (size_t i = 0; i < categories.size(); ++i) {
+    const std::string field = FieldReader::Element("categories", i);
+    CocoCategory category;
+    category.id = read.Integer(categories[i], field, "id");
+    if (const json* name = read.Member(categories[i], field, "name", false)) {
+      if (!name->is_string()) read.Fail(FieldReader::Join(field, "name"), "expected a string");
+      category.name = name->get<std::string>();
+    }
+    const auto [it, inserted] = category_index.emplace(category.id, gt.categories.size());
+    if (inserted) {
+      gt.categories.push_back(std::move(category));
+    } else {
+      gt.categories[it->second] = std::move(category);  // the last wins, as in COCO.createIndex
+    }
+  }
+  std::sort(gt.categories.begin(), gt.categories.end(),
+            [](const CocoCategory& a, const CocoCategory& b) { return a.id < b.id; });
+
+  if (const json* annotations = read.Member(root, "", "annotations", false)) {
+    if (!annotations->is_array()) read.Fail("annotations", "expected an array");
+    gt.annotations.reserve(annotations->size());
+    std::unordered_map<int64_t, size_t> first_of_id;
+    first_of_id.reserve(annotations->size());
+    for (size_t i = 0; i < annotations->size(); ++i) {
+      const json& a = (*annotations)[i];
+      const std::string field = FieldReader::Element("annotations", i);
+      CocoAnnotation annotation;
+      annotation.id = read.Integer(a, field, "id");
+      annotation.image_id = read.Integer(a, field, "image_id");
+      annotation.category_id = read.Integer(a, field, "category_id");
+      annotation.bbox = read.Box(a, field);
+      annotation.area = read.Number(a, field, "area");
+      annotation.iscrowd = read.Flag(a, field, "iscrowd");
+      annotation.ignore = read.Flag(a, field, "ignore");
+      const auto [it, inserted] = first_of_id.emplace(annotation.id, i);
+      if (!inserted) {
+        read.Fail(FieldReader::Join(field, "id"),
+                  fmt::format("id {} is also annotations[{}]'s: annotation ids must be unique",
+                              annotation.id, it->second));
+      }
+      gt.annotations.push_back(annotation);
+    }
+  }
+  return gt;
+}
+
+CocoGroundTruth ReadCocoGroundTruth(const std::filesystem::path& path) {
+  return ParseCocoGroundTruth(ReadFile(path, kMaxReadFileBytes, "COCO ground truth"),
+                              path.string());
+}
+
+std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
+                                               const CocoGroundTruth& gt) {
+  const json root = ParseJsonText(text, source);
+  const FieldReader read(source);
+  if (!root.is_array()) {
+    read.Fail("", "a COCO results file is a JSON array of {image_id, category_id, bbox, score}");
+  }
+  std::vector<CocoDetection> dets;
+  dets.reserve(root.size());
+  for (size_t i = 0; i < root.size(); ++i) {
+    const json& d = root[i];
+    const std::string field = FieldReader::Element("", i);
+    CocoDetection det;
+    det.image_id = read.Integer(d, field, "image_id");
+    det.category_id = read.Integer(d, field, "category_id");
+    det.bbox = read.Box(d, field);
+    det.score = read.Number(d, field, "score");
+    if (!std::binary_search(gt.image_ids.begin(), gt.image_ids.end(), det.image_id)) {
+      read.Fail(FieldReader::Join(field, "image_id"),
+                fmt::format("image {} is not in the ground truth {} (its \"images\"): the results "
+                            "do not belong to this data set",
+                            det.image_id, gt.source));
+    }
+    dets.push_back(det);
+  }
+  return dets;
+}
+
+std::vector<CocoDetection> ReadCocoDetections(const std::filesystem::path& path,
+                                              const CocoGroundTruth& gt) {
+  return ParseCocoDetections(ReadFile(path, kMaxReadFileBytes, "COCO results"), path.string(), gt);
+}
+
+// -----------------------------------------------------------------------------------------------
+// Options.
+
+std::vector<double> CocoIouThresholds() {
+  // numpy's linspace: start + i * step, with the end point set exactly.
+  constexpr int kNum = 10;
+  const double step = (0.95 - 0.5) / (kNum - 1);
+  std::vector<double> thresholds(kNum);
+  for (int i = 0; i < kNum; ++i) thresholds[i] = i * step + 0.5;
+  thresholds.back() = 0.95;
+  return thresholds;
+}
+
+std::vector<double> CocoRecallThresholds() {
+  constexpr int kNum = 101;
+  const double step = (1.0 - 0.0) / (kNum - 1);
+  std::vector<double> thresholds(kNum);
+  for (int i = 0; i < kNum; ++i) thresholds[i] = i * step + 0.0;
+  thresholds.back() = 1.0;
+  return thresholds;
+}
+
+std::vector<CocoAreaRange> CocoAreaRanges() {
+  return {{"all", 0, 1e5 * 1e5},
+          {"small", 0, 32 * 32},
+          {"medium", 32 * 32, 96 * 96},
+          {"large", 96 * 96, 1e5 * 1e5}};
+}
+
+void CocoEvalOptions::Check() const {
+  STEREODET_CHECK(!iou_thresholds.empty()) << "COCO evaluation: no IoU threshold";
+  for (const double t : iou_thresholds) {
+    STEREODET_CHECK(t >= 0 && t <= 1)
+        << "COCO evaluation: IoU threshold " << t << " outside [0, 1]";
+  }
+  STEREODET_CHECK(!recall_thresholds.empty()) << "COCO evaluation: no recall threshold";
+  for (size_t r = 0; r < recall_thresholds.size(); ++r) {
+    STEREODET_CHECK(recall_thresholds[r] >= 0 && recall_thresholds[r] <= 1)
+        << "COCO evaluation: recall threshold " << recall_thresholds[r] << " outside [0, 1]";
+    STEREODET_CHECK(r == 0 || recall_thresholds[r] >= recall_thresholds[r - 1])
+        << "COCO evaluation: recall thresholds must not decrease (" << recall_thresholds[r - 1]
+        << " then " << recall_thresholds[r] << ")";
+  }
+  STEREODET_CHECK_EQ(max_dets.size(), 3u) << "(COCO evaluation's max_dets: the summary's three)";
+  for (size_t m = 0; m < max_dets.size(); ++m) {
+    STEREODET_CHECK(max_dets[m] >= 1 && (m == 0 || max_dets[m] > max_dets[m - 1]))
+        << "COCO evaluation: max_dets must be >= 1 and strictly increasing, got "
+        << fmt::format("{}", fmt::join(max_dets, ", "));
+  }
+  STEREODET_CHECK(!area_ranges.empty()) << "COCO evaluation: no area range";
+  for (size_t a = 0; a < area_ranges.size(); ++a) {
+    const CocoAreaRange& range = area_ranges[a];
+    STEREODET_CHECK(!range.label.empty()) << "COCO evaluation: area range " << a << " has no label";
+    STEREODET_CHECK(range.min_area <= range.max_area)
+        << "COCO evaluation: area range '" << range.label << "' is [" << range.min_area << ", "
+        << range.max_area << "]";
+    for (size_t b = 0; b < a; ++b) {
+      STEREODET_CHECK(area_ranges[b].label != range.label)
+          << "COCO evaluation: area range label '" << range.label << "' given twice";
+    }
+  }
+  STEREODET_CHECK_GE(num_threads, 0) << "(COCO evaluation's num_threads)";
+}
+
+size_t CocoEvalResult::PrecisionIndex(int t, int r, int k, int a, int m) const {
+  const size_t R = options.recall_thresholds.size(), K = category_ids.size(),
+               A = options.area_ranges.size(), M = options.max_dets.size();
+  return (((t * R + r) * K + k) * A + a) * M + m;
+}
+
+size_t CocoEvalResult::RecallIndex(int t, int k, int a, int m) const {
+  const size_t K = category_ids.size(), A = options.area_ranges.size(), M = options.max_dets.size();
+  return ((t * K + k) * A + a) * M + m;
+}
+
+// -----------------------------------------------------------------------------------------------
+// Evaluation.
+
+namespace {
+
+// np.spacing(1): what pycocotools adds to tp + fp so that precision is defined without detections.
+constexpr double kNumpySpacingOfOne = std::numeric_limits<double>::epsilon();
+
+// The IoU of a detection and a ground-truth box, as maskApi.c's bbIou computes it, operation by
+// operation: for a crowd the union is the detection's area.
+double BoxIou(const CocoBox& d, const CocoBox& g, bool crowd) {
+  const double w = std::min(d.width + d.x, g.width + g.x) - std::max(d.x, g.x);
+  if (w <= 0) return 0;
+  const double h = std::min(d.height + d.y, g.height + g.y) - std::max(d.y, g.y);
+  if (h <= 0) return 0;
+  const double intersection = w * h;
+  const double det_area = d.width * d.height;
+  const double union_area = crowd ? det_area : det_area + g.width * g.height - intersection;
+  return intersection / union_area;
+}
+
+bool OutsideRange(double area, const CocoAreaRange& range) {
+  return area < range.min_area || area > range.max_area;
+}
+
+// Per detection and (area range, IoU threshold): evaluateImg's dtMatches != 0 and dtIgnore.
+constexpr uint8_t kMatched = 1;  // matched to a ground truth whose id is not 0
+constexpr uint8_t kIgnored = 2;
+
+// One category's detections over all images, as accumulate() concatenates them.
+struct CategoryDetections {
+  std::vector<double> score;          // in concatenation order: image by image, each by score
+  std::vector<int32_t> rank;          // the detection's position in its image's score order
+  std::vector<uint8_t> flags;         // [detection][area range][threshold]
+  std::vector<int64_t> num_valid_gt;  // per area range: ground truths not ignored (npig)
+};
+
+// The indices of `items` grouped by (category index, image index), each group in file order:
+// sorted with a stable sort on the pair.
+template <typename Item>
+std::vector<uint32_t> GroupByCategoryAndImage(const std::vector<Item>& items,
+                                              const std::vector<int32_t>& category,
+                                              const std::vector<int32_t>& image) {
+  std::vector<uint32_t> order;
+  order.reserve(items.size());
+  for (size_t i = 0; i < items.size(); ++i) {
+    if (category[i] >= 0 && image[i] >= 0) order.push_back(static_cast<uint32_t>(i));
+  }
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    return category[a] != category[b] ? category[a] < category[b] : image[a] < image[b];
+  });
+  return order;
+}
+
+// numpy's float64 add.reduce of a contiguous array: pairwise summation, 8 accumulators in blocks
+// of at most 128, over buffer-sized chunks of 8192 elements added in order.
+double NumpyPairwiseSum(const double* a, size_t n) {
+  if (n < 8) {
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i) sum += a[i];
+    return sum;
+  }
+  if (n <= 128) {
+    double r[8];
+    for (int j = 0; j < 8; ++j) r[j] = a[j];
+    size_t i = 8;
+    for (; i < n - n % 8; i += 8) {
+      for (int j = 0; j < 8; ++j) r[j] += a[i + j];
+    }
+    double sum = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+    for (; i < n; ++i) sum += a[i];
+    return sum;
+  }
+  size_t half = n / 2;
+  half -= half % 8;
+  return NumpyPairwiseSum(a, half) + NumpyPairwiseSum(a + half, n - half);
+}
+
+double NumpyMean(const std::vector<double>& values) {
+  constexpr size_t kBufferSize = 8192;
+  double sum = 0.0;
+  for (size_t start = 0; start < values.size(); start += kBufferSize) {
+    sum += NumpyPairwiseSum(values.data() + start, std::min(kBufferSize, values.size() - start));
+  }
+  return sum / static_cast<double>(values.size());
+}
+
+// One line of summarize() (_summarizeDets): AP or AR, at one IoU threshold or averaged over all,
+// in one area range, at one max_dets.
+struct SummaryLine {
+  bool ap = true;
+  std::optional<double> iou;  // unset: all thresholds
+  const char* area = "all";
+  int max_dets = 100;
+};
+
+std::array<SummaryLine, kNumCocoStats> SummaryLines(const std::vector<int>& max_dets) {
+  const int m0 = max_dets.at(0), m1 = max_dets.at(1), m2 = max_dets.at(2);
+  // The first line's 100 is _summarize's default argument, not max_dets[2] (reproduced).
+  return {{{true, std::nullopt, "all", 100},
+           {true, 0.5, "all", m2},
+           {true, 0.75, "all", m2},
+           {true, std::nullopt, "small", m2},
+           {true, std::nullopt, "medium", m2},
+           {true, std::nullopt, "large", m2},
+           {false, std::nullopt, "all", m0},
+           {false, std::nullopt, "all", m1},
+           {false, std::nullopt, "all", m2},
+           {false, std::nullopt, "small", m2},
+           {false, std::nullopt, "medium", m2},
+           {false, std::nullopt, "large", m2}}};
+}
+
+class CocoEvaluator {
+ public:
+  CocoEvaluator(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
+                CocoEvalResult* result)
+      : gt_(gt), dets_(dets), result_(*result), options_(result->options) {}
+
+  void Run() {
+    Index();
+    const size_t T = options_.iou_thresholds.size(), R = options_.recall_thresholds.size(),
+                 K = result_.category_ids.size(), A = options_.area_ranges.size(),
+                 M = options_.max_dets.size();
+    result_.precision.assign(T * R * K * A * M, -1.0);
+    result_.scores.assign(T * R * K * A * M, -1.0);
+    result_.recall.assign(T * K * A * M, -1.0);
+    ParallelFor(
+        K, [&](size_t k) { Accumulate(static_cast<int>(k), EvaluateCategory(k)); },
+        options_.num_threads);
+    Summarize();
+  }
+
+ private:
+  // Maps ids to indices; groups the ground truths and detections by category and image.
+  void Index() {
+    result_.image_ids = gt_.image_ids;
+    for (const CocoCategory& c : gt_.categories) {
+      result_.category_ids.push_back(c.id);
+      result_.category_names.push_back(c.name);
+    }
+    std::unordered_map<int64_t, int32_t> image_index, category_index;
+    image_index.reserve(result_.image_ids.size());
+    for (size_t i = 0; i < result_.image_ids.size(); ++i) {
+      image_index.emplace(result_.image_ids[i], static_cast<int32_t>(i));
+    }
+    for (size_t k = 0; k < result_.category_ids.size(); ++k) {
+      category_index.emplace(result_.category_ids[k], static_cast<int32_t>(k));
+    }
+    auto lookup = [](const std::unordered_map<int64_t, int32_t>& index, int64_t id) {
+      const auto it = index.find(id);
+      return it == index.end() ? -1 : it->second;
+    };
+    std::vector<int32_t> gt_category(gt_.annotations.size()), gt_image(gt_.annotations.size());
+    for (size_t i = 0; i < gt_.annotations.size(); ++i) {
+      gt_category[i] = lookup(category_index, gt_.annotations[i].category_id);
+      gt_image[i] = lookup(image_index, gt_.annotations[i].image_id);
+    }
+    std::vector<int32_t> det_category(dets_.size()), det_image(dets_.size());
+    for (size_t i = 0; i < dets_.size(); ++i) {
+      det_category[i] = lookup(category_index, dets_[i].category_id);
+      det_image[i] = lookup(image_index, dets_[i].image_id);
+      STEREODET_CHECK(det_image[i] >= 0)
+          << "COCO detection " << i << " is on image " << dets_[i].image_id
+          << ", which the ground truth does not have";
+    }
+    gt_order_ = GroupByCategoryAndImage(gt_.annotations, gt_category, gt_image);
+    det_order_ = GroupByCategoryAndImage(dets_, det_category, det_image);
+    result_.num_gt = static_cast<int64_t>(gt_order_.size());
+    result_.num_gt_skipped = static_cast<int64_t>(gt_.annotations.size()) - result_.num_gt;
+    result_.num_detections = static_cast<int64_t>(det_order_.size());
+    result_.num_detections_skipped = static_cast<int64_t>(dets_.size()) - result_.num_detections;
+    // Where each category's range starts in the two orders, and each item's image.
+    const size_t K = result_.category_ids.size();
+    gt_start_.assign(K + 1, 0);
+    det_start_.assign(K + 1, 0);
+    for (const uint32_t i : gt_order_) ++gt_start_[gt_category[i] + 1];
+    for (const uint32_t i : det_order_) ++det_start_[det_category[i] + 1];
+    std::partial_sum(gt_start_.begin(), gt_start_.end(), gt_start_.begin());
+    std::partial_sum(det_start_.begin(), det_start_.end(), det_start_.begin());
+    gt_image_ = std::move(gt_image);
+    det_image_ = std::move(det_image);
+  }
+
+  // evaluate() for one category: evaluateImg on every image with a ground truth or a detection
+  // of it, for every area range, at the largest max_dets; the results in accumulate()'s order.
+  CategoryDetections EvaluateCategory(size_t k) const {
+    const size_t T = options_.iou_thresholds.size(), A = options_.area_ranges.size();
+    const int max_det = options_.max_dets.back();
+    CategoryDetections out;
+    out.num_valid_gt.assign(A, 0);
+    std::vector<uint32_t> gts, dts, gt_sorted;
+    std::vector<double> iou;
+    std::vector<uint8_t> gt_ignore, det_outside;
+    std::vector<char> gt_matched;
+    size_t g_at = gt_start_[k], d_at = det_start_[k];
+    while (g_at < gt_start_[k + 1] || d_at < det_start_[k + 1]) {
+      // The next image of the category, and its ground truths and detections in file order.
+      const int32_t image = std::min(
+          g_at < gt_start_[k + 1] ? gt_image_[gt_order_[g_at]] : std::numeric_limits<int>::max(),
+          d_at < det_start_[k + 1] ? det_image_[det_order_[d_at]]
+                                   : std::numeric_limits<int>::max());
+      gts.clear();
+      dts.clear();
+      for (; g_at < gt_start_[k + 1] && gt_image_[gt_order_[g_at]] == image; ++g_at) {
+        gts.push_back(gt_order_[g_at]);
+      }
+      for (; d_at < det_start_[k + 1] && det_image_[det_order_[d_at]] == image; ++d_at) {
+        dts.push_back(det_order_[d_at]);
+      }
+      // Highest score first, ties in file order (numpy's stable mergesort), at most max_det.
+      std::stable_sort(dts.begin(), dts.end(),
+                       [&](uint32_t a, uint32_t b) { return dets_[a].score > dets_[b].score; });
+      if (dts.size() > static_cast<size_t>(max_det)) dts.resize(max_det);
+      const size_t G = gts.size(), D = dts.size();
+
+      iou.resize(D * G);
+      for (size_t d = 0; d < D; ++d) {
+        for (size_t g = 0; g < G; ++g) {
+          const CocoAnnotation& truth = gt_.annotations[gts[g]];
+          iou[d * G + g] = BoxIou(dets_[dts[d]].bbox, truth.bbox, truth.iscrowd);
+        }
+      }
+
+      const size_t first = out.score.size();
+      for (size_t d = 0; d < D; ++d) {
+        out.score.push_back(dets_[dts[d]].score);
+        out.rank.push_back(static_cast<int32_t>(d));
+      }
+      out.flags.resize(out.score.size() * A * T, 0);
+      for (size_t a = 0; a < A; ++a) {
+        const CocoAreaRange& range = options_.area_ranges[a];
+        // Ground truths not ignored first, each part in file order (a stable sort on _ignore).
+        gt_sorted.clear();
+        gt_ignore.clear();
+        for (const bool ignored_part : {false, true}) {
+          for (size_t g = 0; g < G; ++g) {
+            const CocoAnnotation& truth = gt_.annotations[gts[g]];
+            const bool ignored = truth.iscrowd || (options_.honor_ignore_flag && truth.ignore) ||
+                                 OutsideRange(truth.area, range);
+            if (ignored != ignored_part) continue;
+            gt_sorted.push_back(static_cast<uint32_t>(g));
+            gt_ignore.push_back(ignored);
+          }
+        }
+        out.num_valid_gt[a] += std::count(gt_ignore.begin(), gt_ignore.end(), 0);
+        det_outside.resize(D);
+        for (size_t d = 0; d < D; ++d) {
+          const CocoBox& box = dets_[dts[d]].bbox;
+          det_outside[d] = OutsideRange(box.width * box.height, range);
+        }
+        for (size_t t = 0; t < T; ++t) {
+          gt_matched.assign(G, 0);
+          for (size_t d = 0; d < D; ++d) {
+            // evaluateImg's loop: the best IoU >= the threshold among the ground truths not yet
+            // matched (crowds match any number of times), stopping at the ignored ones once a
+            // valid one is found.
+            double best = std::min(options_.iou_thresholds[t], 1 - 1e-10);
+            int match = -1;
+            for (size_t j = 0; j < G; ++j) {
+              const CocoAnnotation& truth = gt_.annotations[gts[gt_sorted[j]]];
+              if (gt_matched[j] && !truth.iscrowd) continue;
+              if (match > -1 && !gt_ignore[match] && gt_ignore[j]) break;
+              const double overlap = iou[d * G + gt_sorted[j]];
+              if (overlap < best) continue;
+              best = overlap;
+              match = static_cast<int>(j);
+            }
+            uint8_t flags = 0;
+            // dtMatches holds the matched ground truth's id, and 0 means unmatched: a match to
+            // id 0 is no match (pycocotools' quirk, reproduced).
+            bool matched = false;
+            if (match > -1) {
+              gt_matched[match] = 1;
+              matched = gt_.annotations[gts[gt_sorted[match]]].id != 0;
+              if (gt_ignore[match]) flags |= kIgnored;
+            }
+            if (matched) flags |= kMatched;
+            if (!matched && det_outside[d]) flags |= kIgnored;
+            out.flags[((first + d) * A + a) * T + t] = flags;
+          }
+        }
+      }
+    }
+    return out;
+  }
+
+  // accumulate() for one category: precision, recall and scores at every threshold, area range
+  // and max_dets.
+  void Accumulate(int k, const CategoryDetections& in) {
+    const size_t T = options_.iou_thresholds.size(), R = options_.recall_thresholds.size(),
+                 A = options_.area_ranges.size(), M = options_.max_dets.size();
+    // All of the category's detections by score, ties in concatenation order (numpy's stable
+    // mergesort). Keeping those of rank < max_dets[m] gives the order of each smaller max_dets.
+    std::vector<uint32_t> order(in.score.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint32_t a, uint32_t b) { return in.score[a] > in.score[b]; });
+    std::vector<uint32_t> kept;
+    std::vector<double> rc, pr;
+    for (size_t a = 0; a < A; ++a) {
+      const int64_t npig = in.num_valid_gt[a];
+      if (npig == 0) continue;  // -1 stays: no ground truth to find
+      for (size_t m = 0; m < M; ++m) {
+        kept.clear();
+        for (const uint32_t i : order) {
+          if (in.rank[i] < options_.max_dets[m]) kept.push_back(i);
+        }
+        const size_t nd = kept.size();
+        for (size_t t = 0; t < T; ++t) {
+          rc.resize(nd);
+          pr.resize(nd);
+          double tp = 0, fp = 0;
+          for (size_t j = 0; j < nd; ++j) {
+            const uint8_t flags = in.flags[(kept[j] * A + a) * T + t];
+            if (!(flags & kIgnored)) {
+              if (flags & kMatched) {
+                tp += 1;
+              } else {
+                fp += 1;
+              }
+            }
+            rc[j] = tp / static_cast<double>(npig);
+            pr[j] = tp / (fp + tp + kNumpySpacingOfOne);
+          }
+          result_.recall[result_.RecallIndex(t, k, a, m)] = nd > 0 ? rc.back() : 0.0;
+          // The precision envelope: from the right, each precision raised to the best after it.
+          for (size_t j = nd; j-- > 1;) {
+            if (pr[j] > pr[j - 1]) pr[j - 1] = pr[j];
+          }
+          // np.searchsorted(rc, recall_thresholds, side='left'): the first detection whose
+          // recall reaches the threshold; none for the rest once one is out of range.
+          for (size_t r = 0; r < R; ++r) {
+            const size_t at = static_cast<size_t>(
+                std::lower_bound(rc.begin(), rc.end(), options_.recall_thresholds[r]) - rc.begin());
+            const size_t index = result_.PrecisionIndex(t, r, k, a, m);
+            if (at >= nd) {
+              for (size_t rest = r; rest < R; ++rest) {
+                result_.precision[result_.PrecisionIndex(t, rest, k, a, m)] = 0.0;
+                result_.scores[result_.PrecisionIndex(t, rest, k, a, m)] = 0.0;
+              }
+              break;
+            }
+            result_.precision[index] = pr[at];
+            result_.scores[index] = in.score[kept[at]];
+          }
+        }
+      }
+    }
+  }
+
+  // summarize(): each number the mean of its slice's entries other than -1, in numpy's order.
+  void Summarize() {
+    const int T = static_cast<int>(options_.iou_thresholds.size()),
+              R = static_cast<int>(options_.recall_thresholds.size()),
+              K = static_cast<int>(result_.category_ids.size());
+    const std::vector<int>& md = options_.max_dets;
+    const std::array<SummaryLine, kNumCocoStats> lines = SummaryLines(md);
+    std::vector<double> values;
+    for (int s = 0; s < kNumCocoStats; ++s) {
+      const SummaryLine& line = lines[s];
+      std::vector<int> ts;
+      for (int t = 0; t < T; ++t) {
+        // np.where(iouThr == p.iouThrs): exact equality.
+        if (!line.iou || options_.iou_thresholds[t] == *line.iou) ts.push_back(t);
+      }
+      int a = -1, m = -1;
+      for (size_t i = 0; i < options_.area_ranges.size(); ++i) {
+        if (options_.area_ranges[i].label == line.area) a = static_cast<int>(i);
+      }
+      for (size_t i = 0; i < md.size(); ++i) {
+        if (md[i] == line.max_dets) m = static_cast<int>(i);
+      }
+      values.clear();
+      if (a >= 0 && m >= 0) {
+        for (const int t : ts) {
+          if (line.ap) {
+            for (int r = 0; r < R; ++r) {
+              for (int k = 0; k < K; ++k) {
+                const double v = result_.precision[result_.PrecisionIndex(t, r, k, a, m)];
+                if (v > -1) values.push_back(v);
+              }
+            }
+          } else {
+            for (int k = 0; k < K; ++k) {
+              const double v = result_.recall[result_.RecallIndex(t, k, a, m)];
+              if (v > -1) values.push_back(v);
+            }
+          }
+        }
+      }
+      result_.stats[s] = values.empty() ? -1.0 : NumpyMean(values);
+    }
+  }
+
+  const CocoGroundTruth& gt_;
+  const std::vector<CocoDetection>& dets_;
+  CocoEvalResult& result_;
+  const CocoEvalOptions& options_;
+  // Ground truths and detections grouped by category then image, file order within; category
+  // k's are [start_[k], start_[k + 1]). The image index of every annotation and detection.
+  std::vector<uint32_t> gt_order_, det_order_;
+  std::vector<size_t> gt_start_, det_start_;
+  std::vector<int32_t> gt_image_, det_image_;
+};
+
+}  // namespace
+
+CocoEvalResult EvaluateCoco(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
+                            const CocoEvalOptions& options) {
+  options.Check();
+  const Timer timer;
+  CocoEvalResult result;
+  result.options = options;
+  CocoEvaluator(gt, dets, &result).Run();
+  result.seconds = timer.ElapsedSeconds();
+  return result;
+}
+
+std::string FormatCocoSummary(const CocoEvalResult& result) {
+  const CocoEvalOptions& o = result.options;
+  const std::array<SummaryLine, kNumCocoStats> lines = SummaryLines(o.max_dets);
+  std::string out;
+  for (int s = 0; s < kNumCocoStats; ++s) {
+    const SummaryLine& line = lines[s];
+    const std::string iou = line.iou ? fmt::format("{:0.2f}", *line.iou)
+                                     : fmt::format("{:0.2f}:{:0.2f}", o.iou_thresholds.front(),
+                                                   o.iou_thresholds.back());
+    out += fmt::format(" {:<18} {} @[ IoU={:<9} | area={:>6s} | maxDets={:>3d} ] = {:0.3f}\n",
+                       line.ap ? "Average Precision" : "Average Recall", line.ap ? "(AP)" : "(AR)",
+                       iou, line.area, line.max_dets, result.stats[s]);
+  }
+  return out;
+}
+
+}  // namespace stereodet

@@ -1,0 +1,185 @@
+// COCO-format bounding-box evaluation, equal to pycocotools' COCOeval with iouType 'bbox'.
+//
+//   const CocoGroundTruth gt = ReadCocoGroundTruth("instances_val2017.json");
+//   const std::vector<CocoDetection> dets = ReadCocoDetections("detections.json", gt);
+//   const CocoEvalResult result = EvaluateCoco(gt, dets, CocoEvalOptions());
+//   std::cout << FormatCocoSummary(result);  // the 12 lines of COCOeval.summarize()
+//
+// What "equal" means: the precision, recall and scores arrays and the 12 summary numbers are those
+// of pycocotools 2.0 (cocodataset/cocoapi; PyPI's pycocotools, ppwwyyxx/cocoapi, computes the
+// same) to the last bit, with numpy's float64 arithmetic reproduced where it decides a value:
+// the IoU thresholds are np.linspace's, precision is tp / (tp + fp + np.spacing(1)), and a summary
+// number is np.mean's pairwise sum. pycocotools' quirks are reproduced, not fixed
+// (docs/metrics.md, "COCO mode"):
+//   - a ground truth's "ignore" field is overwritten by its "iscrowd" (COCOeval._prepare): only
+//     crowds and boxes outside the area range are ignored (CocoEvalOptions::honor_ignore_flag
+//     changes that);
+//   - a detection matched to a ground truth whose id is 0 counts as unmatched (pycocotools stores
+//     the matched id and tests it against 0), so such a ground truth can never be found;
+//   - summary number 0 (AP@[.5:.95]) averages maxDets = 100 whatever max_dets holds, and AP50 /
+//     AP75 look up IoU thresholds equal to 0.5 / 0.75 exactly: -1 when there is none.
+// Where pycocotools fails, this code decides: an empty results list evaluates (pycocotools'
+// loadRes raises IndexError), a missing "iscrowd" reads as 0 (pycocotools raises KeyError), and a
+// duplicated annotation id is refused (pycocotools silently evaluates one of the two twice).
+// Segmentation and keypoint evaluation are not implemented.
+#ifndef STEREODET_EVAL_COCO_H_
+#define STEREODET_EVAL_COCO_H_
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace stereodet {
+
+// A COCO box: top-left corner and size, pixels. Width and height are not checked for sign, as
+// pycocotools does not check them (a box of negative size overlaps nothing).
+struct CocoBox {
+  double x = 0, y = 0, width = 0, height = 0;
+};
+
+// One element of a COCO data set's "annotations".
+struct CocoAnnotation {
+  int64_t id = 0;
+  int64_t image_id = 0;
+  int64_t category_id = 0;
+  CocoBox bbox;
+  // The file's "area", px^2: for COCO the segment's area, not the box's. It decides the area
+  // range, and so whether the annotation is ignored there.
+  double area = 0;
+  bool iscrowd = false;  // "iscrowd" nonzero; absent: false
+  bool ignore = false;   // "ignore" nonzero; absent: false (see honor_ignore_flag)
+};
+
+struct CocoCategory {
+  int64_t id = 0;
+  std::string name;  // "" when the file has none
+};
+
+// A COCO ground-truth file (instances_*.json), as far as bbox evaluation reads it.
+struct CocoGroundTruth {
+  std::string source;                       // the file it was read from, for messages
+  std::vector<int64_t> image_ids;           // "images"[*].id, sorted, each once
+  std::vector<CocoCategory> categories;     // by id, each id once (the last of a repeated id)
+  std::vector<CocoAnnotation> annotations;  // in file order
+};
+
+// One element of a COCO results file (the list COCO.loadRes reads).
+struct CocoDetection {
+  int64_t image_id = 0;
+  int64_t category_id = 0;
+  CocoBox bbox;
+  double score = 0;
+};
+
+// Parses a ground-truth file's text; `source` names it in messages. Requires "images" and
+// "categories" arrays (of objects with an integer "id"); "annotations" may be absent. Throws
+// ParseError naming the source and the field ("annotations[12].bbox: expected 4 numbers") for
+// text that is not JSON, a missing or mistyped field, or an annotation id given twice.
+CocoGroundTruth ParseCocoGroundTruth(std::string_view text, const std::string& source);
+
+// ReadFile + ParseCocoGroundTruth. Throws std::runtime_error if the file cannot be read.
+CocoGroundTruth ReadCocoGroundTruth(const std::filesystem::path& path);
+
+// Parses a results file's text: a JSON array of {"image_id", "category_id", "bbox": [x, y, w, h],
+// "score"} objects (other fields are ignored), returned in file order. As pycocotools' loadRes,
+// refuses a detection on an image that `gt` does not have: ParseError naming the element and the
+// image id. Throws ParseError for text that is not JSON, a missing or mistyped field or a score
+// that is not finite.
+std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
+                                               const CocoGroundTruth& gt);
+
+// ReadFile + ParseCocoDetections.
+std::vector<CocoDetection> ReadCocoDetections(const std::filesystem::path& path,
+                                              const CocoGroundTruth& gt);
+
+// An object area range: an annotation is inside when min_area <= area <= max_area.
+struct CocoAreaRange {
+  std::string label;    // how the summary finds it: "all", "small", "medium", "large"
+  double min_area = 0;  // px^2
+  double max_area = 0;  // px^2
+};
+
+// pycocotools' defaults (Params.setDetParams).
+// np.linspace(.5, .95, 10): 0.5 + i * ((0.95 - 0.5) / 9), the last exactly 0.95; the 9th is
+// 0.8999999999999999, as numpy computes it.
+std::vector<double> CocoIouThresholds();
+// np.linspace(0, 1, 101): i * 0.01, the last exactly 1.
+std::vector<double> CocoRecallThresholds();
+// all [0, 1e10], small [0, 32^2], medium [32^2, 96^2], large [96^2, 1e10].
+std::vector<CocoAreaRange> CocoAreaRanges();
+
+struct CocoEvalOptions {
+  // T IoU thresholds; a detection matches a box when IoU >= threshold (a threshold of 1 acts as
+  // 1 - 1e-10, as in pycocotools). Each in [0, 1].
+  std::vector<double> iou_thresholds = CocoIouThresholds();
+  // R recall points of the interpolated precision, increasing, each in [0, 1].
+  std::vector<double> recall_thresholds = CocoRecallThresholds();
+  // M limits on the detections kept per image and category (the highest scores), strictly
+  // increasing, each >= 1. Three of them: the summary's AR lines name max_dets[0..2].
+  std::vector<int> max_dets = {1, 10, 100};
+  // A area ranges, labels distinct and non-empty, min_area <= max_area.
+  std::vector<CocoAreaRange> area_ranges = CocoAreaRanges();
+  // false (pycocotools): a ground truth is ignored when it is a crowd or outside the area range;
+  // its "ignore" field is not read. true: also when its "ignore" is set (COCO's documented intent).
+  bool honor_ignore_flag = false;
+  int num_threads = 0;  // threads over categories (0 = all); the result does not depend on it
+
+  // Throws std::invalid_argument naming the field for a setting outside the ranges above.
+  void Check() const;
+};
+
+// The number of summary numbers of COCOeval.summarize() for bbox.
+inline constexpr int kNumCocoStats = 12;
+
+// COCOeval.accumulate()'s arrays and summarize()'s numbers. The arrays are row-major in the order
+// of their names, as numpy holds them: precision[t][r][k][a][m] is at
+// (((t * R + r) * K + k) * A + a) * M + m, where t indexes options.iou_thresholds, r
+// options.recall_thresholds, k category_ids, a options.area_ranges and m options.max_dets.
+struct CocoEvalResult {
+  CocoEvalOptions options;                  // as evaluated
+  std::vector<int64_t> image_ids;           // the I images evaluated, sorted
+  std::vector<int64_t> category_ids;        // the K categories, sorted
+  std::vector<std::string> category_names;  // of category_ids, in their order
+  // T x R x K x A x M: the interpolated precision (the precision envelope at the first detection
+  // reaching recall r; 0 beyond the highest recall), in [0, 1]. -1 where the category has no
+  // ground truth that is not ignored in the area range.
+  std::vector<double> precision;
+  // T x K x A x M: the recall with all max_dets[m] detections, -1 as above.
+  std::vector<double> recall;
+  // T x R x K x A x M: the score of the detection each precision entry was read at, 0 beyond the
+  // highest recall, -1 as above.
+  std::vector<double> scores;
+  // summarize()'s numbers in its order: AP@[.5:.95], AP50, AP75, AP small, medium, large (at
+  // maxDets max_dets[2], except the first at 100), AR@max_dets[0], [1], [2], AR small, medium,
+  // large (at max_dets[2]). Each the mean of its array entries that are not -1; -1 when there is
+  // none.
+  std::array<double, kNumCocoStats> stats{};
+
+  int64_t num_gt = 0;          // ground truths evaluated (on an evaluated image and category)
+  int64_t num_gt_skipped = 0;  // ground truths of an image or category the file does not list
+  int64_t num_detections = 0;  // detections evaluated (before max_dets)
+  int64_t num_detections_skipped = 0;  // of a category the ground truth does not have
+  double seconds = 0;                  // EvaluateCoco's time, s
+
+  size_t PrecisionIndex(int t, int r, int k, int a, int m) const;
+  size_t RecallIndex(int t, int k, int a, int m) const;
+};
+
+// COCOeval(gt, loadRes(dets), 'bbox'): evaluate(), accumulate(), summarize(). Every image and
+// category of `gt` is evaluated; detections of a category `gt` does not list are left out
+// (counted in num_detections_skipped), as are ground truths of unlisted images or categories.
+// Requires: every detection's image_id is one of gt.image_ids (ParseCocoDetections ensures it;
+// std::invalid_argument otherwise), options.Check().
+CocoEvalResult EvaluateCoco(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
+                            const CocoEvalOptions& options);
+
+// The summary as COCOeval.summarize() prints it, 12 lines:
+//  " Average Precision  (AP) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ] = 0.370".
+std::string FormatCocoSummary(const CocoEvalResult& result);
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_COCO_H_

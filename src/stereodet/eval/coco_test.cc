@@ -1,0 +1,414 @@
+#include "stereodet/eval/coco.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stereodet/util/check.h"
+
+namespace stereodet {
+namespace {
+
+// A ground truth of one category (id 1) on the given images, from its annotations.
+CocoGroundTruth OneCategory(std::vector<int64_t> image_ids,
+                            std::vector<CocoAnnotation> annotations) {
+  CocoGroundTruth gt;
+  gt.source = "test";
+  gt.image_ids = std::move(image_ids);
+  gt.categories = {{1, "thing"}};
+  gt.annotations = std::move(annotations);
+  return gt;
+}
+
+CocoAnnotation Box(int64_t id, int64_t image, CocoBox box, bool crowd = false) {
+  CocoAnnotation a;
+  a.id = id;
+  a.image_id = image;
+  a.category_id = 1;
+  a.bbox = box;
+  a.area = box.width * box.height;
+  a.iscrowd = crowd;
+  return a;
+}
+
+CocoDetection Det(int64_t image, CocoBox box, double score, int64_t category = 1) {
+  return {image, category, box, score};
+}
+
+// The summary indices.
+enum Stat {
+  kAp,
+  kAp50,
+  kAp75,
+  kApSmall,
+  kApMedium,
+  kApLarge,
+  kAr1,
+  kAr10,
+  kAr100,
+  kArSmall,
+  kArMedium,
+  kArLarge
+};
+
+// pycocotools' precision of a run of true positives: tp / (tp + 0 + np.spacing(1)) is 1 - 2^-52
+// when tp = 1, not 1.
+const double kPerfect = 1.0 / (1.0 + std::numeric_limits<double>::epsilon());
+
+// Area range indices of CocoAreaRanges().
+constexpr int kAll = 0, kSmall = 1, kMedium = 2, kLarge = 3;
+
+TEST(CocoTest, ThresholdsAreNumpysLinspace) {
+  const std::vector<double> iou = CocoIouThresholds();
+  ASSERT_EQ(iou.size(), 10u);
+  EXPECT_EQ(iou[0], 0.5);
+  EXPECT_EQ(iou[5], 0.75);                // so that summarize() finds AP75
+  EXPECT_EQ(iou[8], 0.8999999999999999);  // numpy's value, not 0.9
+  EXPECT_NE(iou[8], 0.9);
+  EXPECT_EQ(iou[9], 0.95);
+  const std::vector<double> recall = CocoRecallThresholds();
+  ASSERT_EQ(recall.size(), 101u);
+  EXPECT_EQ(recall[50], 0.5);
+  EXPECT_EQ(recall[35], 35 * 0.01);
+  EXPECT_NE(recall[35], 0.35);  // 0.35000000000000003 in numpy too
+  EXPECT_EQ(recall[100], 1.0);
+}
+
+// Two boxes of one image and three detections, by hand. Highest score first: d1 covers gt 1
+// (IoU 1), d2 covers nothing, d3 overlaps gt 2 with IoU 90 / 110 = 0.818. At thresholds <= 0.8
+// the sequence is TP FP TP: recall 1/2, 1/2, 1, precision 1, 1/2, 2/3, whose envelope is 1, 2/3,
+// 2/3; the 51 recall points 0.00..0.50 read 1, the 50 above read 2/3. At 0.85, 0.9 and 0.95 d3 is
+// a FP: recall stops at 1/2 and the 50 points above read 0.
+TEST(CocoTest, TwoBoxesThreeDetectionsByHand) {
+  const CocoGroundTruth gt =
+      OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {
+      Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+  const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
+  const double ap_low = (51 * 1.0 + 50 * (2.0 / 3.0)) / 101;  // thresholds 0.5 .. 0.8
+  const double ap_high = 51.0 / 101;                          // 0.85 .. 0.95
+  const int m100 = 2;
+  for (int t = 0; t < 10; ++t) {
+    const bool low = t <= 6;
+    EXPECT_EQ(r.precision[r.PrecisionIndex(t, 0, 0, kAll, m100)], kPerfect) << t;
+    EXPECT_EQ(r.precision[r.PrecisionIndex(t, 50, 0, kAll, m100)], kPerfect) << t;
+    EXPECT_EQ(r.precision[r.PrecisionIndex(t, 51, 0, kAll, m100)], low ? 2.0 / 3.0 : 0.0) << t;
+    EXPECT_EQ(r.scores[r.PrecisionIndex(t, 51, 0, kAll, m100)], low ? 0.7 : 0.0) << t;
+    EXPECT_EQ(r.recall[r.RecallIndex(t, 0, kAll, m100)], low ? 1.0 : 0.5) << t;
+  }
+  EXPECT_NEAR(r.stats[kAp], (7 * ap_low + 3 * ap_high) / 10, 1e-15);
+  EXPECT_NEAR(r.stats[kAp50], ap_low, 1e-15);
+  EXPECT_NEAR(r.stats[kAp75], ap_low, 1e-15);
+  EXPECT_NEAR(r.stats[kApSmall], r.stats[kAp], 1e-15);  // both boxes are small (100 px^2)
+  EXPECT_EQ(r.stats[kApMedium], -1);                    // no box there
+  EXPECT_EQ(r.stats[kApLarge], -1);
+  EXPECT_NEAR(r.stats[kAr1], 0.5, 1e-15);    // d1 alone
+  EXPECT_NEAR(r.stats[kAr10], 0.85, 1e-15);  // 7 thresholds at 1, 3 at 1/2
+  EXPECT_NEAR(r.stats[kAr100], 0.85, 1e-15);
+  EXPECT_NEAR(r.stats[kArSmall], 0.85, 1e-15);
+  EXPECT_EQ(r.stats[kArMedium], -1);
+  EXPECT_EQ(r.num_gt, 2);
+  EXPECT_EQ(r.num_detections, 3);
+}
+
+// A crowd region matches any number of detections by intersection over the detection's area, and
+// a detection matched to it is ignored: neither a TP nor a FP.
+TEST(CocoTest, CrowdRegionAbsorbsDetections) {
+  const CocoGroundTruth gt =
+      OneCategory({1}, {Box(1, 1, {0, 0, 100, 100}, /*crowd=*/true), Box(2, 1, {200, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {
+      Det(1, {10, 10, 20, 20}, 0.9), Det(1, {50, 50, 20, 20}, 0.8), Det(1, {200, 0, 10, 10}, 0.7)};
+  const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
+  EXPECT_NEAR(r.stats[kAp], 1.0, 1e-15);
+  EXPECT_NEAR(r.stats[kAr100], 1.0, 1e-15);
+  for (int t = 0; t < 10; ++t) {
+    EXPECT_EQ(r.precision[r.PrecisionIndex(t, 100, 0, kAll, 2)], kPerfect);
+  }
+
+  // The same region not a crowd: an IoU of 400 / 10000, so both detections in it are false
+  // positives, ranked first.
+  CocoGroundTruth plain = gt;
+  plain.annotations[0].iscrowd = false;
+  const CocoEvalResult p = EvaluateCoco(plain, dets, CocoEvalOptions());
+  // Two valid boxes now: recall 1/2, precision 1/3 until 0.50, then 0.
+  EXPECT_NEAR(p.precision[p.PrecisionIndex(0, 0, 0, kAll, 2)], 1.0 / 3.0, 1e-15);
+  EXPECT_EQ(p.precision[p.PrecisionIndex(0, 51, 0, kAll, 2)], 0.0);
+  EXPECT_EQ(p.recall[p.RecallIndex(0, 0, kAll, 2)], 0.5);
+}
+
+// pycocotools sets a ground truth's ignore from its iscrowd alone (COCOeval._prepare): the file's
+// "ignore" is not read unless honor_ignore_flag asks for it.
+TEST(CocoTest, IgnoreFieldIsOverwrittenByIscrowd) {
+  CocoAnnotation ignored = Box(1, 1, {0, 0, 10, 10});
+  ignored.ignore = true;
+  const CocoGroundTruth gt = OneCategory({1}, {ignored, Box(2, 1, {50, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {Det(1, {50, 0, 10, 10}, 0.9)};
+  const CocoEvalResult quirk = EvaluateCoco(gt, dets, CocoEvalOptions());
+  EXPECT_NEAR(quirk.stats[kAr100], 0.5, 1e-15);  // the "ignored" box counts as missed
+  CocoEvalOptions honor;
+  honor.honor_ignore_flag = true;
+  const CocoEvalResult fixed = EvaluateCoco(gt, dets, honor);
+  EXPECT_NEAR(fixed.stats[kAr100], 1.0, 1e-15);
+  EXPECT_NEAR(fixed.stats[kAp], 1.0, 1e-15);
+}
+
+// The area ranges go by the ground truth's "area" and the detection's box area. An unmatched
+// detection outside a range is ignored there; inside it is a FP. One box per range (small 100,
+// medium 2500, large 40000 px^2), each found, and an unmatched medium detection with the highest
+// score: a FP first in "all" and "medium", ignored in the others.
+TEST(CocoTest, AreaRangesByHand) {
+  const CocoGroundTruth gt = OneCategory(
+      {1}, {Box(1, 1, {0, 0, 10, 10}), Box(2, 1, {100, 0, 50, 50}), Box(3, 1, {300, 0, 200, 200})});
+  const std::vector<CocoDetection> dets = {
+      Det(1, {0, 600, 50, 50}, 0.95),  // medium, matches nothing
+      Det(1, {0, 0, 10, 10}, 0.9), Det(1, {100, 0, 50, 50}, 0.8), Det(1, {300, 0, 200, 200}, 0.7)};
+  const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
+  EXPECT_NEAR(r.stats[kApSmall], 1.0, 1e-15);  // the FP is ignored: outside, unmatched
+  EXPECT_NEAR(r.stats[kApLarge], 1.0, 1e-15);
+  // Medium: FP then TP: precision 0 then 1/2; the envelope is 1/2 at every recall point.
+  EXPECT_NEAR(r.stats[kApMedium], 0.5, 1e-15);
+  // All: FP, TP, TP, TP: precision 0, 1/2, 2/3, 3/4 at recall 0, 1/3, 2/3, 1: the envelope is 3/4
+  // everywhere.
+  EXPECT_NEAR(r.stats[kAp], 0.75, 1e-15);
+  // In the small range the medium and large ground truths are ignored and their detections,
+  // matched to ignored boxes, are ignored too.
+  EXPECT_EQ(r.recall[r.RecallIndex(0, 0, kSmall, 2)], 1.0);
+  // The ground truth's area, not its box's, decides: the small box declared 5000 px^2 is medium.
+  CocoGroundTruth declared = gt;
+  declared.annotations[0].area = 5000;
+  const CocoEvalResult d = EvaluateCoco(declared, dets, CocoEvalOptions());
+  EXPECT_EQ(d.stats[kApSmall], -1);  // no small ground truth left
+  EXPECT_EQ(d.recall[d.RecallIndex(0, 0, kMedium, 2)], 1.0);
+}
+
+// max_dets keeps the highest-scored detections per image and category: AR@1 counts only the
+// first of each image.
+TEST(CocoTest, MaxDetsPerImage) {
+  const CocoGroundTruth gt = OneCategory(
+      {1, 2}, {Box(1, 1, {0, 0, 10, 10}), Box(2, 2, {0, 0, 10, 10}), Box(3, 2, {50, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {
+      Det(1, {0, 0, 10, 10}, 0.5),  // image 1: found by its only detection
+      Det(2, {90, 90, 5, 5}, 0.9),  // image 2: a FP first...
+      Det(2, {0, 0, 10, 10}, 0.8),  // ...then both boxes
+      Det(2, {50, 0, 10, 10}, 0.6)};
+  const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
+  EXPECT_NEAR(r.stats[kAr1], 1.0 / 3.0, 1e-15);  // image 1's box; image 2's FP
+  EXPECT_NEAR(r.stats[kAr10], 1.0, 1e-15);
+  // maxDets 1: scores 0.9 (FP), 0.5 (TP): recall 0, 1/3; precision 0, 1/2, enveloped to 1/2 up
+  // to recall 1/3 (34 points 0.00..0.33), 0 above.
+  EXPECT_NEAR(r.precision[r.PrecisionIndex(0, 33, 0, kAll, 0)], 0.5, 1e-15);
+  EXPECT_EQ(r.precision[r.PrecisionIndex(0, 34, 0, kAll, 0)], 0.0);
+  CocoEvalOptions options;
+  options.max_dets = {1, 2, 5};
+  const CocoEvalResult small = EvaluateCoco(gt, dets, options);
+  // AR@2 misses image 2's third detection; stats[0] still looks for maxDets 100 (pycocotools'
+  // quirk): -1.
+  EXPECT_NEAR(small.stats[kAr10], 2.0 / 3.0, 1e-15);
+  EXPECT_EQ(small.stats[kAp], -1);
+  EXPECT_NE(small.stats[kAp50], -1);
+  EXPECT_NE(FormatCocoSummary(small).find("maxDets=  2 ] = 0.667"), std::string::npos);
+}
+
+// Ties in score keep file order (numpy's stable sort), across images in image-id order.
+TEST(CocoTest, ScoreTiesKeepFileOrder) {
+  const CocoGroundTruth gt = OneCategory({1}, {Box(1, 1, {0, 0, 10, 10})});
+  // Same score: the FP listed first is ranked first, so precision at recall 1 is 1/2.
+  const CocoEvalResult fp_first = EvaluateCoco(
+      gt, {Det(1, {50, 50, 10, 10}, 0.5), Det(1, {0, 0, 10, 10}, 0.5)}, CocoEvalOptions());
+  EXPECT_NEAR(fp_first.stats[kAp], 0.5, 1e-15);
+  const CocoEvalResult tp_first = EvaluateCoco(
+      gt, {Det(1, {0, 0, 10, 10}, 0.5), Det(1, {50, 50, 10, 10}, 0.5)}, CocoEvalOptions());
+  EXPECT_NEAR(tp_first.stats[kAp], 1.0, 1e-15);
+}
+
+// A ground truth with id 0 is never found: pycocotools records a match by the matched id, and 0
+// reads as no match (reproduced).
+TEST(CocoTest, GroundTruthIdZeroIsNeverFound) {
+  const CocoGroundTruth gt = OneCategory({1}, {Box(0, 1, {0, 0, 10, 10})});
+  const CocoEvalResult r = EvaluateCoco(gt, {Det(1, {0, 0, 10, 10}, 0.9)}, CocoEvalOptions());
+  EXPECT_EQ(r.recall[r.RecallIndex(0, 0, kAll, 2)], 0.0);
+  EXPECT_EQ(r.stats[kAp], 0.0);
+}
+
+// -1 for a category without ground truth (in an area range), 0 for one whose boxes are all missed,
+// and a category without ground truth does not enter the means.
+TEST(CocoTest, EmptyCategoriesAndImages) {
+  CocoGroundTruth gt = OneCategory({1, 2, 3}, {Box(1, 1, {0, 0, 10, 10})});
+  gt.categories.push_back({2, "other"});   // no ground truth; a detection of it
+  gt.categories.push_back({3, "unseen"});  // nothing at all
+  const std::vector<CocoDetection> dets = {Det(1, {0, 0, 10, 10}, 0.9),
+                                           Det(2, {0, 0, 10, 10}, 0.9, /*category=*/2),
+                                           Det(3, {0, 0, 10, 10}, 0.9, /*category=*/7)};
+  const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
+  ASSERT_EQ(r.category_ids, (std::vector<int64_t>{1, 2, 3}));
+  EXPECT_EQ(r.num_detections, 2);
+  EXPECT_EQ(r.num_detections_skipped, 1);  // category 7 is not in the ground truth
+  for (int k : {1, 2}) {
+    EXPECT_EQ(r.precision[r.PrecisionIndex(0, 0, k, kAll, 2)], -1) << k;
+    EXPECT_EQ(r.recall[r.RecallIndex(0, k, kAll, 2)], -1) << k;
+  }
+  EXPECT_NEAR(r.stats[kAp], 1.0, 1e-15);
+
+  // No detection at all (pycocotools' loadRes fails on an empty list): zeros, not -1.
+  const CocoEvalResult none = EvaluateCoco(gt, {}, CocoEvalOptions());
+  EXPECT_EQ(none.stats[kAp], 0.0);
+  EXPECT_EQ(none.stats[kAr100], 0.0);
+  EXPECT_EQ(none.stats[kApMedium], -1);
+}
+
+// The results depend neither on the number of threads nor on the order of the categories' ids.
+TEST(CocoTest, ThreadsDoNotChangeTheResult) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coord(0, 200), size(2, 120), score(0, 1);
+  CocoGroundTruth gt;
+  gt.source = "random";
+  for (int64_t i = 1; i <= 20; ++i) gt.image_ids.push_back(i);
+  for (int64_t k = 1; k <= 5; ++k) gt.categories.push_back({k, ""});
+  std::vector<CocoDetection> dets;
+  for (int i = 0; i < 300; ++i) {
+    CocoAnnotation a =
+        Box(i + 1, 1 + i % 20, {coord(rng), coord(rng), size(rng), size(rng)}, i % 17 == 0);
+    a.category_id = 1 + i % 5;
+    gt.annotations.push_back(a);
+    const CocoBox jitter = {a.bbox.x + size(rng) / 20, a.bbox.y, a.bbox.width, a.bbox.height};
+    dets.push_back(Det(a.image_id, i % 3 == 0 ? jitter : a.bbox, score(rng), a.category_id));
+    dets.push_back(
+        Det(1 + i % 20, {coord(rng), coord(rng), size(rng), size(rng)}, score(rng), 1 + i % 5));
+  }
+  CocoEvalOptions one, many;
+  one.num_threads = 1;
+  many.num_threads = 4;
+  const CocoEvalResult a = EvaluateCoco(gt, dets, one);
+  const CocoEvalResult b = EvaluateCoco(gt, dets, many);
+  EXPECT_EQ(a.precision, b.precision);
+  EXPECT_EQ(a.recall, b.recall);
+  EXPECT_EQ(a.scores, b.scores);
+  EXPECT_EQ(a.stats, b.stats);
+  EXPECT_GT(a.stats[kAp], 0.1);
+  EXPECT_LT(a.stats[kAp], 1.0);
+}
+
+TEST(CocoTest, SummaryInPycocotoolsLayout) {
+  const CocoGroundTruth gt = OneCategory({1}, {Box(1, 1, {0, 0, 10, 10})});
+  const CocoEvalResult r = EvaluateCoco(gt, {Det(1, {0, 0, 10, 10}, 0.9)}, CocoEvalOptions());
+  const std::string summary = FormatCocoSummary(r);
+  EXPECT_EQ(summary.substr(0, summary.find('\n') + 1),
+            " Average Precision  (AP) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ] = 1.000\n");
+  EXPECT_NE(summary.find(" Average Precision  (AP) @[ IoU=0.75      | area=   all | maxDets=100 ]"
+                         " = 1.000\n"),
+            std::string::npos);
+  EXPECT_NE(summary.find(" Average Recall     (AR) @[ IoU=0.50:0.95 | area= large | maxDets=100 ]"
+                         " = -1.000\n"),
+            std::string::npos);
+  EXPECT_EQ(std::count(summary.begin(), summary.end(), '\n'), kNumCocoStats);
+}
+
+TEST(CocoTest, ParsesGroundTruthAndResults) {
+  const std::string gt_text = R"({
+    "images": [{"id": 3, "file_name": "a.jpg"}, {"id": 1}, {"id": 3}],
+    "categories": [{"id": 5, "name": "cat"}],
+    "annotations": [
+      {"id": 10, "image_id": 1, "category_id": 5, "bbox": [1, 2.5, 3, 4], "area": 11.5,
+       "iscrowd": 0, "segmentation": [[1, 2, 3, 4]]},
+      {"id": 11, "image_id": 3, "category_id": 5, "bbox": [0, 0, 9, 9], "area": 81,
+       "iscrowd": 1, "ignore": 1}]})";
+  const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, "gt.json");
+  EXPECT_EQ(gt.image_ids, (std::vector<int64_t>{1, 3}));
+  ASSERT_EQ(gt.categories.size(), 1u);
+  EXPECT_EQ(gt.categories[0].name, "cat");
+  ASSERT_EQ(gt.annotations.size(), 2u);
+  EXPECT_EQ(gt.annotations[0].bbox.y, 2.5);
+  EXPECT_EQ(gt.annotations[0].area, 11.5);
+  EXPECT_FALSE(gt.annotations[0].iscrowd);
+  EXPECT_TRUE(gt.annotations[1].iscrowd);
+  EXPECT_TRUE(gt.annotations[1].ignore);
+  const std::vector<CocoDetection> dets = ParseCocoDetections(
+      R"([{"image_id": 3, "category_id": 5, "bbox": [0, 0, 9, 9], "score": 0.25, "id": 99}])",
+      "det.json", gt);
+  ASSERT_EQ(dets.size(), 1u);
+  EXPECT_EQ(dets[0].score, 0.25);
+  EXPECT_EQ(dets[0].bbox.width, 9);
+}
+
+// The message of the ParseError `text` raises, or "" if it raises none.
+template <typename Fn>
+std::string ParseErrorOf(Fn fn) {
+  try {
+    fn();
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CocoTest, BadFilesNameTheFileAndField) {
+  const std::string images = R"("images": [{"id": 1}], "categories": [{"id": 1}])";
+  EXPECT_EQ(ParseErrorOf([&] {
+              ParseCocoGroundTruth("{" + images + R"(, "annotations": [{"id": 1, "image_id": 1,
+                "category_id": 1, "bbox": [0, 0, 1], "area": 1}]})",
+                                   "gt.json");
+            }),
+            "gt.json: field annotations[0].bbox: expected 4 numbers [x, y, width, height], got "
+            "[0,0,1]");
+  EXPECT_EQ(ParseErrorOf([&] {
+              ParseCocoGroundTruth("{" + images + R"(, "annotations": [{"id": 1, "image_id": 1,
+                "category_id": 1, "bbox": [0, 0, 1, 1]}]})",
+                                   "gt.json");
+            }),
+            "gt.json: field annotations[0].area: missing");
+  EXPECT_NE(ParseErrorOf([&] {
+              ParseCocoGroundTruth("{" + images + R"(, "annotations": [
+                  {"id": 4, "image_id": 1, "category_id": 1, "bbox": [0, 0, 1, 1], "area": 1},
+                  {"id": 4, "image_id": 1, "category_id": 1, "bbox": [0, 0, 1, 1], "area": 1}]})",
+                                   "gt.json");
+            }).find("annotations[1].id: id 4 is also annotations[0]'s"),
+            std::string::npos);
+  EXPECT_EQ(ParseErrorOf([] { ParseCocoGroundTruth(R"({"images": [{"id": "x"}]})", "gt.json"); }),
+            "gt.json: field images[0].id: expected an integer id, got \"x\"");
+  EXPECT_EQ(ParseErrorOf([] {
+              ParseCocoGroundTruth("{\n\"images\": [,]}", "gt.json");
+            }).rfind("gt.json:2: not valid JSON", 0),
+            0u);
+  const CocoGroundTruth gt = ParseCocoGroundTruth("{" + images + "}", "gt.json");
+  EXPECT_NE(ParseErrorOf([&] {
+              ParseCocoDetections(R"([{"image_id": 2, "category_id": 1, "bbox": [0, 0, 1, 1],
+                "score": 1}])",
+                                  "det.json", gt);
+            }).find("det.json: field [0].image_id: image 2 is not in the ground truth gt.json"),
+            std::string::npos);
+  EXPECT_EQ(ParseErrorOf([&] {
+              ParseCocoDetections(R"([{"image_id": 1, "category_id": 1, "bbox": [0, 0, 1, 1]}])",
+                                  "det.json", gt);
+            }),
+            "det.json: field [0].score: missing");
+  EXPECT_NE(ParseErrorOf([&] { ParseCocoDetections(R"({"image_id": 1})", "det.json", gt); }), "");
+}
+
+TEST(CocoTest, OptionsCheck) {
+  EXPECT_NO_THROW(CocoEvalOptions().Check());
+  CocoEvalOptions o;
+  o.max_dets = {10, 10, 100};
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = CocoEvalOptions();
+  o.max_dets = {1, 100};
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = CocoEvalOptions();
+  o.iou_thresholds = {0.5, 1.5};
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = CocoEvalOptions();
+  o.recall_thresholds = {0.5, 0.2};
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = CocoEvalOptions();
+  o.area_ranges.push_back({"small", 0, 1});
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+  o = CocoEvalOptions();
+  o.area_ranges[1].min_area = 5000;
+  EXPECT_THROW(o.Check(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereodet
