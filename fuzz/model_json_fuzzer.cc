@@ -3,18 +3,17 @@
 //
 // Any input must either parse or throw ParseError; the sanitizers catch undefined behaviour (a
 // float such as 1e300 where an integer belongs). What parses round-trips through the family's
-// *ConfigToJson. Built only with the models module (fuzz/CMakeLists.txt says why `make fuzz`
-// cannot build it with Debian's LibTorch yet).
+// *ConfigToJson. Links models_core alone: the torch-free half of the models module.
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
-#include "stereodet/models/det3d/det3d_model.h"
+#include "stereodet/models/det3d/det3d_config.h"
 #include "stereodet/models/model_json.h"
-#include "stereodet/models/rpn/rpn_model.h"
-#include "stereodet/models/ssd/ssd_model.h"
+#include "stereodet/models/rpn/rpn_config.h"
+#include "stereodet/models/ssd/ssd_config.h"
 #include "stereodet/util/check.h"
 
 namespace {

@@ -8,12 +8,15 @@
 //                  [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
 //                  [--disparity-error-px 1] [--bootstrap N ...] [--out DIR]
+//   stereodet eval --coco-gt FILE --coco-det FILE [--coco-honor-ignore] [--out DIR] [--threads N]
+//                  (COCO mode: pycocotools' COCOeval for bbox, docs/metrics.md)
 //   stereodet eval --shard K/N --gt DIR --det DIR --out SHARD_DIR ...   (docs/scale.md)
 //   stereodet eval merge SHARD_DIR... --out DIR ...  (the shards' evaluation flags)
 //   stereodet eval sweep|compare --shards SHARD_DIR... [--shards-b SHARD_DIR...] ...  (the frames
 //   from eval shards instead of --gt/--det)
 // Each is one library call (pipelines/evaluation.h: RunEvaluation, RunEvaluationSweep,
-// RunEvaluationCompare); this file binds the flags to their options and prints the results.
+// RunEvaluationCompare; pipelines/coco_evaluation.h: RunCocoEvaluation); this file binds the
+// flags to their options and prints the results.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -29,6 +32,7 @@
 #include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/openpcdet_compat.h"
+#include "stereodet/pipelines/coco_evaluation.h"
 #include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/bootstrap_report.h"
 #include "stereodet/report/eval_report.h"
@@ -86,6 +90,9 @@ struct EvalArgs {
   BootstrapOptions bootstrap;
   bool bootstrap_given = false;
   bool bootstrap_settings_given = false;  // --bootstrap-seed or --bootstrap-confidence
+  // COCO mode (eval only): --coco-gt, --coco-det, --coco-honor-ignore; out and num_threads come
+  // from --out and --threads.
+  CocoEvaluationOptions coco;
 };
 
 // The bootstrap flags (docs/metrics.md, "Bootstrap intervals").
@@ -316,6 +323,51 @@ void RunEval(const EvalArgs& a) {
   if (a.report) fmt::print("report: open {}\n", result.report_index.string());
 }
 
+// The flags of `eval` that COCO mode takes; the others are for KITTI-layout data.
+bool IsCocoModeFlag(const std::string& name) {
+  return name == "--coco-gt" || name == "--coco-det" || name == "--coco-honor-ignore" ||
+         name == "--out" || name == "--threads" || name == "--help";
+}
+
+// `eval --coco-gt FILE --coco-det FILE`: pycocotools' COCOeval for bbox, its summary printed in
+// its own layout.
+void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
+  for (const CLI::Option* option : eval->get_options()) {
+    STEREODET_CHECK(option->count() == 0 || IsCocoModeFlag(option->get_name()))
+        << option->get_name()
+        << " is a flag of KITTI-layout evaluation; COCO mode (--coco-gt, --coco-det) takes "
+           "--out, --threads and --coco-honor-ignore";
+  }
+  STEREODET_CHECK(!a.coco.gt.empty() && !a.coco.det.empty())
+      << "COCO mode needs both --coco-gt FILE and --coco-det FILE";
+  CocoEvaluationOptions options = a.coco;
+  options.eval.num_threads = a.eval.num_threads;
+  options.out = a.out;
+  options.tool_version = StereodetVersion();
+  options.command_line = ProcessCommandLine();
+  const CocoEvaluationResult run = RunCocoEvaluation(options);
+  const CocoEvalResult& r = run.result;
+  if (r.num_gt_skipped > 0) {
+    fmt::print(
+        "{} ground-truth annotations of images or categories the file does not list were "
+        "left out, as pycocotools leaves them out\n",
+        r.num_gt_skipped);
+  }
+  if (r.num_detections_skipped > 0) {
+    fmt::print(
+        "{} detections of categories the ground truth does not list were left out, as "
+        "pycocotools leaves them out\n",
+        r.num_detections_skipped);
+  }
+  fmt::print("{}", FormatCocoSummary(r));
+  fmt::print(
+      "{} images, {} categories, {} ground truths, {} detections; read in {:.3f} s, "
+      "evaluated in {:.3f} s\n",
+      r.image_ids.size(), r.category_ids.size(), r.num_gt, r.num_detections, run.read_seconds,
+      r.seconds);
+  if (!a.out.empty()) fmt::print("wrote {} files to {}\n", run.files.size(), a.out);
+}
+
 // `eval --shard` and `eval merge` (docs/scale.md).
 void RunMerge(const EvalArgs& given, const std::vector<std::string>& shards) {
   STEREODET_CHECK(!given.out.empty()) << "eval merge: --out is required";
@@ -437,6 +489,15 @@ void AddEvalCommand(CLI::App& app) {
       ->description(
           "only shard K/N (K = 0..N-1) of the frames, a contiguous range of the frame list; with "
           "--out the folder also holds what `eval merge` needs (docs/scale.md)");
+  eval->add_option("--coco-gt", args->coco.gt,
+                   "COCO mode: a COCO ground-truth file (instances_*.json); with --coco-det, "
+                   "evaluates boxes exactly as pycocotools' COCOeval does and prints its summary "
+                   "(docs/metrics.md, COCO mode)");
+  eval->add_option("--coco-det", args->coco.det,
+                   "COCO mode: a COCO results file, [{image_id, category_id, bbox, score}, ...]");
+  eval->add_flag("--coco-honor-ignore", args->coco.eval.honor_ignore_flag,
+                 "COCO mode: also ignore ground truths whose \"ignore\" is set (pycocotools "
+                 "overwrites it with \"iscrowd\")");
   eval->require_subcommand(0, 1);
   // Options of eval itself must come before a sub-subcommand; the sub-subcommands have their own.
   eval->fallthrough(false);
@@ -510,6 +571,10 @@ void AddEvalCommand(CLI::App& app) {
   eval->callback([eval, sweep, compare, merge, args] {
     if (eval->got_subcommand(sweep) || eval->got_subcommand(compare) ||
         eval->got_subcommand(merge)) {
+      return;
+    }
+    if (eval->count("--coco-gt") > 0 || eval->count("--coco-det") > 0) {
+      RunCocoEval(eval, *args);
       return;
     }
     NoteBootstrapFlags(eval, args.get());

@@ -2,7 +2,7 @@
 // in every normal build: each input either parses or throws ParseError (or std::runtime_error),
 // never anything else, and what parses round-trips. Keeps every crash the fuzzers once found fixed.
 // The other corpora are replayed beside their parsers (run_manifest: util, disparity: stereo,
-// model_json: models); EveryCorpusIsReplayed keeps that list complete.
+// model_json: models_core); EveryCorpusIsReplayed keeps that list complete.
 #include "stereodet/util/fuzz_corpus.h"
 
 #include <gtest/gtest.h>

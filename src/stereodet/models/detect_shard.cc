@@ -9,6 +9,7 @@
 
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/model_json_internal.h"
 #include "stereodet/stereo/image_io.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -108,7 +109,7 @@ DetectShardRecord ReadDetectShardRecord(const fs::path& dir) {
   DetectShardRecord record;
   std::string field = "format";
   try {
-    if (j.at(field).get<int>() != kDetectShardFormat) {
+    if (internal::JsonInt(j, field, file) != kDetectShardFormat) {
       throw ParseError(file, 0, field,
                        "format " + j.at(field).dump() + ", this version reads " +
                            std::to_string(kDetectShardFormat));
@@ -120,7 +121,7 @@ DetectShardRecord ReadDetectShardRecord(const fs::path& dir) {
     if (!shard) throw ParseError(file, 0, field, "not K/N: " + j.at(field).dump());
     record.shard = *shard;
     field = "batch_size";
-    record.batch_size = j.at(field).get<int>();
+    record.batch_size = internal::JsonInt(j, field, file);
     if (record.batch_size < 1) throw ParseError(file, 0, field, "must be >= 1");
     field = "list_frames";
     record.list_frames = j.at(field).get<int64_t>();

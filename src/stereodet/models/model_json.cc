@@ -37,6 +37,15 @@ int JsonInt(const nlohmann::json& j, const std::string& field, const std::string
                                     : static_cast<int>(value.get<int64_t>());
 }
 
+void CheckClassNames(const std::vector<std::string>& classes) {
+  STEREODET_CHECK(!classes.empty() && classes.size() <= 256)
+      << "need 1 to 256 classes, got " << classes.size();
+  for (const std::string& name : classes) {
+    STEREODET_CHECK(!name.empty() && name.find_first_of(" \t\n,") == std::string::npos)
+        << "class names must be non-empty, without spaces or commas, got '" << name << "'";
+  }
+}
+
 nlohmann::json NewModelJson(const std::string& architecture) {
   nlohmann::json j;
   j["version"] = kModelConfigVersion;

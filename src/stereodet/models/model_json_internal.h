@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "stereodet/models/model_json.h"
 #include "stereodet/util/check.h"
@@ -16,6 +17,11 @@ namespace stereodet::internal {
 // as 1e300 (undefined behaviour) or cut a large integer silently. Throws ParseError naming
 // `source` and `field`, nlohmann's exception when the field is missing.
 int JsonInt(const nlohmann::json& j, const std::string& field, const std::string& source);
+
+// Every family's rule for its config's class names (KITTI's spelling): 1 to 256 names, each
+// non-empty, without white space or commas (a label file's fields and the CLI's --classes lists).
+// Throws std::invalid_argument naming the first bad one.
+void CheckClassNames(const std::vector<std::string>& classes);
 
 // A new model.json object: {"version": kModelConfigVersion, "architecture": architecture}.
 nlohmann::json NewModelJson(const std::string& architecture);

@@ -2,6 +2,9 @@
 #ifndef STEREODET_MODELS_MODELS_TEST_UTIL_H_
 #define STEREODET_MODELS_MODELS_TEST_UTIL_H_
 
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <filesystem>
 #include <functional>
 #include <opencv2/core.hpp>
@@ -13,6 +16,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/kitti/label_io.h"
+#include "stereodet/models/config_test_util.h"
 #include "stereodet/models/det3d/det3d_model.h"
 #include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/models/ssd/ssd_model.h"
@@ -88,42 +92,28 @@ DetectOptions TinyDetectOptions(const std::filesystem::path& model,
   return o;
 }
 
-// Tiny networks of each family, for tests that build, train a few steps or save a model in seconds.
-// SSD: 64 x 48 px input, 8 base channels.
-inline SsdConfig TinySsdConfig(InputEncoding encoding = InputEncoding::kRgb) {
-  SsdConfig config;
-  config.encoding = encoding;
-  config.boxes.input_width = 64;
-  config.boxes.input_height = 48;
-  config.boxes.min_size_fraction = 0.2;
-  config.base_channels = 8;
-  return config;
+// The labels of frame `id` of a tiny dataset, and the detections a detect command wrote for it.
+inline std::vector<Object> TinyLabels(const std::filesystem::path& root, const std::string& id) {
+  return ReadObjects(root / "training/label_2" / (id + ".txt")).objects;
+}
+inline std::vector<Object> TinyDetections(const std::filesystem::path& dir,
+                                          const std::string& id) {
+  return ReadObjects(dir / (id + ".txt"), {.kind = ObjectFileKind::kDetection}).objects;
 }
 
-// Two-stage: 64 x 32 px input, one block a stage, 3 x 3 pooled regions, anchors of 16 and 32 px.
-inline RpnConfig TinyRpnConfig(RpnInput input = RpnInput::kRgb) {
-  RpnConfig config;
-  config.input = input;
-  config.input_width = 64;
-  config.input_height = 32;
-  config.image_width = 4;
-  config.geometry_width = 4;
-  config.blocks_per_stage = 1;
-  config.head_channels = 16;
-  config.pooled_size = 3;
-  config.anchors.sizes_px = {16, 32};
-  return config;
-}
-
-// 3D: a 25.6 m x 25.6 m grid (x 0 .. 25.6, y -12.8 .. 12.8), 16 base channels.
-inline Det3dConfig TinyDet3dConfig() {
-  Det3dConfig c;
-  c.grid.min_x_m = 0;
-  c.grid.max_x_m = 25.6;
-  c.grid.min_y_m = -12.8;
-  c.grid.max_y_m = 12.8;
-  c.base_channels = 16;
-  return c;
+// The largest `overlap(detection)` over the detections scoring at least `min_score` (0 when
+// none does); every detection must have a score in [0, 1] (a test failure otherwise).
+template <typename Overlap>
+double BestConfidentOverlap(const std::vector<Object>& detections, double min_score,
+                            Overlap overlap) {
+  double best = 0;
+  for (const Object& det : detections) {
+    EXPECT_TRUE(det.score.has_value() && *det.score >= 0.0 && *det.score <= 1.0)
+        << "a detection without a score in [0, 1]";
+    if (det.score.value_or(0.0) < min_score) continue;
+    best = std::max(best, overlap(det));
+  }
+  return best;
 }
 
 }  // namespace stereodet

@@ -623,6 +623,9 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
   } catch (const json::exception& e) {
     STEREODET_THROW_IO() << path.string() << ": not JSON: " << e.what();
   }
+  STEREODET_CHECK_IO(!source.results.is_object() || source.results.value("mode", "") != "coco")
+      << path.string()
+      << " holds COCO-mode results (eval --coco-gt): the report does not draw them yet";
   STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
                      source.results["results"].is_array())
       << path.string() << " is not a stereodet results.json (it has no \"results\" array)";

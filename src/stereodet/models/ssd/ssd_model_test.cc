@@ -230,59 +230,6 @@ TEST(SsdTest, LoadReportsMissingFiles) {
   EXPECT_THROW(SsdModel::Load("/nonexistent/model"), std::runtime_error);
 }
 
-TEST(SsdTest, ConfigJsonRoundTrip) {
-  SsdConfig config = TinySsdConfig(InputEncoding::kRgbhFixed);
-  config.classes = {"Car"};
-  config.boxes.aspect_ratios = {0.5, 2.5};
-  const SsdConfig back = SsdConfigFromJson(SsdConfigToJson(config), "test");
-  EXPECT_EQ(back.encoding, config.encoding);
-  EXPECT_EQ(back.classes, config.classes);
-  EXPECT_EQ(back.boxes.aspect_ratios, config.boxes.aspect_ratios);
-  EXPECT_EQ(back.boxes.min_size_fraction, config.boxes.min_size_fraction);
-  EXPECT_EQ(back.base_channels, config.base_channels);
-  EXPECT_THROW(SsdConfigFromJson("{\"version\": 1}", "model.json"), ParseError);
-  EXPECT_THROW(SsdConfigFromJson("not json", "model.json"), ParseError);
-}
-
-TEST(SsdTest, ConfigWithAnUnknownEncodingNamesTheField) {
-  std::string json = SsdConfigToJson(TinySsdConfig(InputEncoding::kRgb));
-  const size_t at = json.find("\"rgb\"");
-  ASSERT_NE(at, std::string::npos) << json;
-  json.replace(at, 5, "\"rgbd\"");
-  try {
-    SsdConfigFromJson(json, "model.json");
-    FAIL() << "an unknown encoding was accepted";
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.file(), "model.json");
-    EXPECT_EQ(e.field(), "encoding");
-    EXPECT_NE(e.message().find("unknown input encoding 'rgbd'"), std::string::npos) << e.what();
-  }
-}
-
-// A model.json with absurd sizes is refused at once, naming the field (it ran out of memory after a
-// long wait before).
-TEST(SsdTest, ConfigWithAbsurdSizesIsRefusedNamingThem) {
-  const std::string json = SsdConfigToJson(TinySsdConfig(InputEncoding::kRgb));
-  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
-           {"\"input_width\": 64", "\"input_width\": 1000000"},
-           {"\"input_height\": 48", "\"input_height\": 70000"}}) {
-    std::string bad = json;
-    const size_t at = bad.find(from);
-    ASSERT_NE(at, std::string::npos) << json;
-    bad.replace(at, from.size(), to);
-    try {
-      SsdConfigFromJson(bad, "model.json");
-      FAIL() << to;
-    } catch (const ParseError& e) {
-      EXPECT_NE(e.message().find("input size must be in [16, 4096] px a side"), std::string::npos)
-          << e.what();
-    }
-  }
-  SsdConfig many = TinySsdConfig(InputEncoding::kRgb);
-  many.classes.assign(300, "Car");
-  EXPECT_THROW(many.Check(), std::invalid_argument);
-}
-
 TEST(SsdTest, AFewStepsLowerTheLoss) {
   SetTorchThreads(1);
   SsdModel model(TinySsdConfig(InputEncoding::kRgb), 21);
@@ -379,62 +326,6 @@ TEST(SsdTest, ACheckpointOfAnotherRunOrModelIsRefusedNamingWhy) {
         }
       },
       std::runtime_error);
-}
-
-// Parses `text` with `read` and round-trips what parses through `write`; 1 when it parsed, 0 when
-// it threw ParseError naming `source`.
-template <typename Read, typename Write>
-int ParsesAndRoundTrips(const std::string& text, const std::string& source, Read read,
-                        Write write) {
-  try {
-    const std::string written = write(read(text, source));
-    EXPECT_EQ(write(read(written, "written")), written);
-    return 1;
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.file(), source);
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "unexpected exception: " << e.what();
-  }
-  return 0;
-}
-
-// The model_json fuzzer's corpus (fuzz/model_json_fuzzer.cc), replayed for every family: each
-// model.json parses or throws ParseError naming the file (1e300 or 99999999999 where an int belongs
-// included: no undefined behaviour), and what parses round-trips.
-TEST(SsdTest, ModelJsonFuzzCorpusParsesOrThrowsParseError) {
-  const std::vector<std::filesystem::path> files = FuzzCorpusFiles("model_json");
-  ASSERT_GE(files.size(), 5u) << "the model_json corpus is missing";
-  int parsed = 0, rejected = 0, rpn = 0, det3d = 0;
-  for (const std::filesystem::path& path : files) {
-    SCOPED_TRACE(path.filename().string());
-    const std::string text = ReadFile(path);
-    try {
-      (void)ReadWeightsRecord(text, path.string());
-    } catch (const ParseError& e) {
-      EXPECT_EQ(e.file(), path.string());
-    }
-    const int ssd = ParsesAndRoundTrips(text, path.string(), SsdConfigFromJson,
-                                        [](const SsdConfig& c) { return SsdConfigToJson(c); });
-    parsed += ssd;
-    rejected += 1 - ssd;
-    rpn += ParsesAndRoundTrips(text, path.string(), RpnConfigFromJson,
-                               [](const RpnConfig& c) { return RpnConfigToJson(c); });
-    det3d += ParsesAndRoundTrips(text, path.string(), Det3dConfigFromJson,
-                                 [](const Det3dConfig& c) { return Det3dConfigToJson(c); });
-  }
-  EXPECT_GT(parsed, 0);
-  EXPECT_GT(rejected, 0);
-  EXPECT_GT(rpn, 0);    // rpn_rgbd.json
-  EXPECT_GT(det3d, 0);  // det3d_lidar.json
-  try {
-    SsdConfigFromJson(
-        ReadFile(FuzzCorpusFiles("model_json").at(0).parent_path() / "float_width.json"),
-        "model.json");
-    ADD_FAILURE() << "no error";
-  } catch (const ParseError& e) {
-    EXPECT_EQ(e.field(), "input_width");
-    EXPECT_THAT(e.message(), HasSubstr("expected an integer"));
-  }
 }
 
 }  // namespace

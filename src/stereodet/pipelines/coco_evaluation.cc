@@ -1,0 +1,141 @@
+#include "stereodet/pipelines/coco_evaluation.h"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "stereodet/util/atomic_file.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/output_folder.h"
+#include "stereodet/util/run_manifest.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+// A float64 array in numpy's .npy format, version 1.0: the magic, a header dict padded with
+// spaces to a multiple of 64 bytes, then the values in C order, little-endian.
+std::string NpyFloat64(const std::vector<size_t>& shape, const std::vector<double>& values) {
+  static_assert(std::endian::native == std::endian::little, "the .npy writer writes '<f8'");
+  std::string dims = fmt::format("{}", fmt::join(shape, ", "));
+  if (shape.size() == 1) dims += ',';  // Python's one-element tuple: (3,)
+  std::string header =
+      fmt::format("{{'descr': '<f8', 'fortran_order': False, 'shape': ({}), }}", dims);
+  const size_t unpadded = 6 + 2 + 2 + header.size() + 1;  // magic, version, length, dict, '\n'
+  header.append((64 - unpadded % 64) % 64, ' ');
+  header.push_back('\n');
+  std::string out = "\x93NUMPY";
+  out.push_back('\x01');
+  out.push_back('\x00');
+  out.push_back(static_cast<char>(header.size() & 0xff));
+  out.push_back(static_cast<char>(header.size() >> 8));
+  out += header;
+  const size_t at = out.size();
+  out.resize(at + values.size() * sizeof(double));
+  std::memcpy(out.data() + at, values.data(), values.size() * sizeof(double));
+  return out;
+}
+
+ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluationResult& run) {
+  const CocoEvalResult& r = run.result;
+  const CocoEvalOptions& o = r.options;
+  ordered_json j;
+  j["tool"] = {{"name", "stereodet eval"}, {"version", options.tool_version}};
+  j["command_line"] = options.command_line;
+  j["mode"] = "coco";
+  j["input_hash"] = run.input_hash;
+  j["input"] = {{"coco_gt", options.gt.string()},
+                {"coco_det", options.det.string()},
+                {"num_images", r.image_ids.size()},
+                {"num_categories", r.category_ids.size()},
+                {"num_gt", r.num_gt},
+                {"num_gt_skipped", r.num_gt_skipped},
+                {"num_detections", r.num_detections},
+                {"num_detections_skipped", r.num_detections_skipped}};
+  ordered_json areas = ordered_json::array();
+  for (const CocoAreaRange& a : o.area_ranges) {
+    areas.push_back({{"label", a.label}, {"min_area", a.min_area}, {"max_area", a.max_area}});
+  }
+  j["options"] = {{"iou_type", "bbox"},
+                  {"iou_thresholds", o.iou_thresholds},
+                  {"recall_thresholds", o.recall_thresholds},
+                  {"max_dets", o.max_dets},
+                  {"area_ranges", areas},
+                  {"honor_ignore_flag", o.honor_ignore_flag}};
+  j["seconds"] = r.seconds;
+  j["read_seconds"] = run.read_seconds;
+  ordered_json stats = ordered_json::object();
+  for (int s = 0; s < kNumCocoStats; ++s) stats[CocoStatNames()[s]] = r.stats[s];
+  j["stats"] = stats;
+  j["categories"] = ordered_json::array();
+  for (size_t k = 0; k < r.category_ids.size(); ++k) {
+    j["categories"].push_back({{"id", r.category_ids[k]}, {"name", r.category_names[k]}});
+  }
+  const size_t T = o.iou_thresholds.size(), R = o.recall_thresholds.size(),
+               K = r.category_ids.size(), A = o.area_ranges.size(), M = o.max_dets.size();
+  j["arrays"] = {{"precision", {{"file", "precision.npy"}, {"shape", {T, R, K, A, M}}}},
+                 {"recall", {{"file", "recall.npy"}, {"shape", {T, K, A, M}}}},
+                 {"scores", {{"file", "scores.npy"}, {"shape", {T, R, K, A, M}}}}};
+  return j;
+}
+
+}  // namespace
+
+const std::array<const char*, kNumCocoStats>& CocoStatNames() {
+  static const std::array<const char*, kNumCocoStats> kNames = {
+      "AP", "AP50", "AP75", "APs", "APm", "APl", "AR1", "AR10", "AR100", "ARs", "ARm", "ARl"};
+  return kNames;
+}
+
+void CocoEvaluationOptions::Check() const {
+  STEREODET_CHECK(!gt.empty()) << "COCO evaluation: no ground-truth file (--coco-gt)";
+  STEREODET_CHECK(!det.empty()) << "COCO evaluation: no results file (--coco-det)";
+  eval.Check();
+}
+
+CocoEvaluationResult RunCocoEvaluation(const CocoEvaluationOptions& options) {
+  options.Check();
+  std::optional<StagedFolder> out;
+  if (!options.out.empty()) {
+    CheckOutputDoesNotOverlapInputs("--out", options.out,
+                                    {{"--coco-gt", options.gt}, {"--coco-det", options.det}});
+    out.emplace(options.out, "eval", std::vector<std::string>{kMakerEval});
+  }
+  CocoEvaluationResult run;
+  const Timer read_timer;
+  const std::string gt_text = ReadFile(options.gt, kMaxReadFileBytes, "COCO ground truth");
+  const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, options.gt.string());
+  const std::string det_text = ReadFile(options.det, kMaxReadFileBytes, "COCO results");
+  const std::vector<CocoDetection> dets = ParseCocoDetections(det_text, options.det.string(), gt);
+  run.input_hash = HashHex(Fnv1a64(det_text, Fnv1a64(gt_text)));
+  run.read_seconds = read_timer.ElapsedSeconds();
+  run.result = EvaluateCoco(gt, dets, options.eval);
+  if (!out) return run;
+
+  const CocoEvalResult& r = run.result;
+  const CocoEvalOptions& o = r.options;
+  const size_t T = o.iou_thresholds.size(), R = o.recall_thresholds.size(),
+               K = r.category_ids.size(), A = o.area_ranges.size(), M = o.max_dets.size();
+  const fs::path& staging = out->path();
+  WriteFileAtomically(staging / "precision.npy", NpyFloat64({T, R, K, A, M}, r.precision));
+  WriteFileAtomically(staging / "recall.npy", NpyFloat64({T, K, A, M}, r.recall));
+  WriteFileAtomically(staging / "scores.npy", NpyFloat64({T, R, K, A, M}, r.scores));
+  // results.json last: the folder's marker.
+  WriteFileAtomically(staging / "results.json", ResultsJson(options, run).dump(2) + "\n");
+  for (const char* name : {"precision.npy", "recall.npy", "scores.npy", "results.json"}) {
+    run.files.push_back(options.out / name);
+  }
+  out->Commit();
+  return run;
+}
+
+}  // namespace stereodet
