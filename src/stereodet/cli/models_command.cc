@@ -130,6 +130,14 @@ void WarnIfTrainingUnfinished(const std::filesystem::path& model_dir) {
   if (!warning.empty()) std::fputs(warning.c_str(), stderr);
 }
 
+// The closing lines of `detect ssd|rpn|det3d` (stderr; nothing with --quiet).
+void PrintDetectSummary(const DetectSummary& s, const std::filesystem::path& out_dir, bool quiet) {
+  if (quiet) return;
+  std::fprintf(stderr, "detected %lld objects in %d frames, %.1f frames/s; wrote %s\n%s",
+               static_cast<long long>(s.detections), s.frames, s.frames_per_second, out_dir.c_str(),
+               s.stage_times.c_str());
+}
+
 void RunTrain(TrainArgs& a) {
   TrainSsdOptions& options = a.options;
   const auto encoding = ParseInputEncoding(a.input);
@@ -166,7 +174,7 @@ void RunTrain(TrainArgs& a) {
         " %.0f s (stereo %.0f s); %lld parameters (%lld in the learned compression)\n"
         "model: %s\n",
         a.input.c_str(), s.frames, s.epochs_done, options.epochs, s.epochs_run, s.final_loss,
-        s.images_per_second, s.seconds, s.stereo_seconds, static_cast<long long>(s.parameters),
+        s.frames_per_second, s.seconds, s.stereo_seconds, static_cast<long long>(s.parameters),
         static_cast<long long>(s.compression_parameters), options.out_dir.c_str());
   }
 }
@@ -193,12 +201,7 @@ void RunDetect(DetectArgs& a) {
   }
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
-  const DetectSsdSummary s = DetectSsd(options);
-  if (!a.quiet) {
-    std::fprintf(stderr, "detected %lld objects in %d frames, %.1f images/s; wrote %s\n%s",
-                 static_cast<long long>(s.detections), s.frames, s.images_per_second,
-                 options.out_dir.c_str(), s.stage_times.c_str());
-  }
+  PrintDetectSummary(DetectSsd(options), options.out_dir, a.quiet);
 }
 
 struct TrainDet3dArgs {
@@ -239,13 +242,7 @@ void RunDetectDet3d(DetectDet3dArgs& a) {
   WarnIfTrainingUnfinished(options.model_dir);
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
-  const DetectDet3dSummary s = DetectDet3d(options);
-  if (!a.quiet) {
-    std::fprintf(stderr,
-                 "detected %lld objects in %d frames, %.1f frames/s (network %.3f s); wrote %s\n",
-                 static_cast<long long>(s.detections), s.frames, s.frames_per_second,
-                 s.network_seconds, options.out_dir.c_str());
-  }
+  PrintDetectSummary(DetectDet3d(options), options.out_dir, a.quiet);
 }
 
 void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
@@ -356,7 +353,7 @@ void RunTrainRpn(TrainRpnArgs& a) {
         "loss %.4f, %.2f images/s, %.3f s/step, %.0f s (labels/stereo %.0f s); %lld "
         "parameters (image branch %lld, geometry branch %lld)%s\nmodel: %s\n",
         a.input.c_str(), s.frames, s.objects, s.epochs_done, options.epochs, s.epochs_run,
-        s.final_loss, s.images_per_second, s.seconds_per_step, s.seconds, s.stereo_seconds,
+        s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds, s.stereo_seconds,
         static_cast<long long>(s.parameters), static_cast<long long>(s.image_branch_parameters),
         static_cast<long long>(s.geometry_branch_parameters),
         s.init_tensors > 0
@@ -372,12 +369,7 @@ void RunDetectRpn(DetectRpnArgs& a) {
   WarnIfTrainingUnfinished(options.model_dir);
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
-  const DetectRpnSummary s = DetectRpn(options);
-  if (!a.quiet) {
-    std::fprintf(stderr, "detected %lld objects in %d frames, %.1f images/s; wrote %s\n%s",
-                 static_cast<long long>(s.detections), s.frames, s.images_per_second,
-                 options.out_dir.c_str(), s.stage_times.c_str());
-  }
+  PrintDetectSummary(DetectRpn(options), options.out_dir, a.quiet);
 }
 
 void AddRpnCommands(CLI::App* train, CLI::App* detect) {

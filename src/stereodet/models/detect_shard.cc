@@ -334,8 +334,7 @@ DetectorOptions DetectionRun::WithDevice(DetectorOptions options, const std::str
 }
 
 int64_t DetectionRun::DetectFrames(
-    const std::function<void(const std::string& id, StereoFrame& frame)>& read, bool overlap,
-    StageTimes& times) {
+    const std::function<void(const std::string& id, StereoFrame& frame)>& read, bool overlap) {
   ProgressReporter progress("detect", static_cast<int64_t>(ids.size()), progress_);
   // Two slots: batch k + 1 is read and prepared (slot (k + 1) % 2) while batch k runs.
   std::unique_ptr<Detector::PreparedBatch> slots[2];
@@ -351,7 +350,7 @@ int64_t DetectionRun::DetectFrames(
         [&](size_t i) {
           StereoFrame& frame = frames[i];
           frame.id = ids[begin + i];
-          ScopedStage stage(times, "read");
+          ScopedStage stage(times_, "read");
           read(frame.id, frame);
         },
         threads_);
@@ -359,22 +358,31 @@ int64_t DetectionRun::DetectFrames(
   };
   auto consume = [&](int k) {
     const std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
-    ScopedStage stage(times, "write");
-    objects += WriteDetectResults(results, out.path(), times);
+    ScopedStage stage(times_, "write");
+    objects += WriteDetectResults(results, out.path(), times_);
     progress.Add(static_cast<int64_t>(results.size()));
   };
   RunTwoStagePipeline(num_batches, overlap, prepare, consume);
   progress.Finish();
+  detections_ += objects;
   return objects;
 }
 
-void DetectionRun::Commit(const std::vector<std::pair<std::string, std::string>>& more_inputs,
-                          const std::string& settings) {
+DetectSummary DetectionRun::Commit(
+    const std::vector<std::pair<std::string, std::string>>& more_inputs,
+    const std::string& settings) {
   RunManifest manifest = manifest_;
   manifest.inputs.insert(manifest.inputs.end(), more_inputs.begin(), more_inputs.end());
   manifest.settings_json =
       "{\"model_weights_fnv1a64\": \"" + detector.weights_fnv1a64() + "\", " + settings + "}";
   CommitDetectionFolder(out, std::move(manifest), ids, all_ids, shard_, batch_size_);
+  DetectSummary summary;
+  summary.frames = static_cast<int>(ids.size());
+  summary.detections = detections_;
+  summary.seconds = timer_.ElapsedSeconds();
+  summary.frames_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
+  summary.stage_times = times_.Format();
+  return summary;
 }
 
 void ReadStereoPairFiles(const FramePaths& paths, const DisparityOptions& disparity,

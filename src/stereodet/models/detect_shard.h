@@ -142,10 +142,23 @@ RunManifest DetectionManifest(const std::string& tool, const std::string& comman
                               const std::filesystem::path& data_root, const std::string& subset,
                               const std::string& split);
 
+// What a batch detection command (`detect ssd|rpn|det3d`) did.
+struct DetectSummary {
+  int frames = 0;          // this shard's
+  int64_t detections = 0;  // objects written
+  double seconds = 0;      // end to end: opening the model, reading, stereo, network, writing
+  double frames_per_second = 0;
+  std::string stage_times;  // StageTimes::Format(): read, the detector's stages, write
+};
+
 // What the three batch detection commands (`detect ssd|rpn|det3d`) do around their frames.
 // `DetectOptions` is one of their options structs; the fields read: model_dir, data_root, subset,
 // split, out_dir, max_frames, shard, batch_size, threads, device, progress and command_line.
 class DetectionRun {
+  // Made first (members are made in declaration order), so that DetectSummary::seconds counts
+  // opening the output folder and the model too.
+  Timer timer_;
+
  public:
   // Checks --out against the inputs (--data's subset and ImageSets, --model, and `more_inputs`,
   // each (flag, path)), opens the output folder (anything but an earlier detection folder is
@@ -172,17 +185,17 @@ class DetectionRun {
   // Detects this shard's frames (`ids`) batch by batch and writes each frame's objects to
   // out/ID.txt: `read(id, frame)` fills a frame (a batch's frames in parallel, on the run's
   // threads), then Detector::Prepare and Run. With `overlap`, the next batch is read and prepared
-  // while the network runs on this one (RunTwoStagePipeline; the same bytes either way). Adds the
-  // stage times ("read", the detector's, "write") to `times`; returns the objects written.
+  // while the network runs on this one (RunTwoStagePipeline; the same bytes either way). Times
+  // the stages ("read", the detector's, "write") for the summary; returns the objects written.
   int64_t DetectFrames(const std::function<void(const std::string& id, StereoFrame& frame)>& read,
-                       bool overlap, StageTimes& times);
+                       bool overlap);
 
   // Writes run.json (the tool, version, command line, the inputs model, data, subset, split and
   // `more_inputs`, each frame's hash, settings {"model_weights_fnv1a64": the detector's, then
   // `settings`: more JSON fields, without braces}) and, for a shard, its record; commits the
-  // folder.
-  void Commit(const std::vector<std::pair<std::string, std::string>>& more_inputs,
-              const std::string& settings);
+  // folder. Returns the run's summary (after DetectFrames).
+  DetectSummary Commit(const std::vector<std::pair<std::string, std::string>>& more_inputs,
+                       const std::string& settings);
 
   StagedFolder out;
   Detector detector;
@@ -203,6 +216,8 @@ class DetectionRun {
   int batch_size_;
   int threads_;
   ProgressOptions progress_;
+  StageTimes times_;
+  int64_t detections_ = 0;
 };
 
 // Reads the right image and the calibration of `frame` (its left image read already) for stereo

@@ -6,13 +6,19 @@
 #define STEREODET_MODELS_TRAIN_DATA_H_
 
 #include <cstdint>
+#include <filesystem>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/label_io.h"
 #include "stereodet/kitti/object.h"
 #include "stereodet/models/box_coder.h"
+#include "stereodet/util/parallel.h"
+#include "stereodet/util/progress.h"
 
 namespace stereodet {
 
@@ -46,6 +52,44 @@ std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
                                          const std::vector<std::string>& classes,
                                          const std::vector<std::string>& ignore_types,
                                          double min_object_height_px);
+
+// What the image families (ssd, rpn) keep of every training frame; each adds its stereo codes.
+struct LabelledImageFrame {
+  std::string id;
+  std::filesystem::path image_path;  // left image (image_2), read at every use
+  std::vector<TargetBox> targets;    // original image px (TargetsFromLabels)
+};
+
+// One Frame (a LabelledImageFrame with a family's fields) per id of `ids`, in their order, read in
+// parallel on `threads` (0 = all cores) with a progress line named `stage`: its id, its left
+// image's path and its label's targets (TargetsFromLabels of the other arguments), then
+// `more(paths, frame)` adds the family's fields. Throws what reading throws, naming the file.
+template <typename Frame>
+std::vector<Frame> ReadLabelledFrames(const KittiDataset& dataset,
+                                      const std::vector<std::string>& ids,
+                                      const std::vector<std::string>& classes,
+                                      const std::vector<std::string>& ignore_types,
+                                      double min_object_height_px, int threads,
+                                      const std::string& stage, const ProgressOptions& progress,
+                                      const std::function<void(const FramePaths&, Frame&)>& more) {
+  std::vector<Frame> frames(ids.size());
+  ProgressReporter reporter(stage, static_cast<int64_t>(ids.size()), progress);
+  ParallelFor(
+      ids.size(),
+      [&](size_t i) {
+        const FramePaths paths = dataset.Paths(ids[i]);
+        Frame& frame = frames[i];
+        frame.id = ids[i];
+        frame.image_path = paths.image_left;
+        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, classes, ignore_types,
+                                          min_object_height_px);
+        more(paths, frame);
+        reporter.Add(1);
+      },
+      threads);
+  reporter.Finish();
+  return frames;
+}
 
 // A seed per (run seed, epoch, frame), independent of the order frames are visited in.
 uint64_t SampleSeed(uint64_t seed, int epoch, int frame_index);

@@ -180,6 +180,7 @@ void TrainingRunSummary::Finish(const TrainingLoopSummary& done, double wall_sec
   epochs_run = done.epochs_run;
   final_loss = done.final_loss;
   seconds_per_step = done.SecondsPerStep();
+  frames_per_second = done.FramesPerSecond();
   seconds = wall_seconds;
 }
 

@@ -96,6 +96,13 @@ struct TrainingLoopOptions {
   RunManifest manifest;
   std::function<std::string(int epochs_done)> settings_json;
   ProgressOptions progress;
+
+  // What every family fills the same way from its Train*Options `o`: the model folder (out_dir),
+  // the schedule, run.json's fixed part (TrainingManifest of `tool`, e.g. "train rpn") and the
+  // progress; the family adds its columns, its inputs to the manifest and settings_json.
+  template <typename TrainOptions>
+  static TrainingLoopOptions Of(const TrainOptions& o, const std::string& tool, int num_frames,
+                                int start_epoch);
 };
 
 struct TrainingLoopSummary {
@@ -109,16 +116,18 @@ struct TrainingLoopSummary {
 };
 
 // What every family's `train` reports (TrainSsdSummary, TrainRpnSummary and TrainDet3dSummary add
-// their own counts and their rate of frames).
+// their own counts).
 struct TrainingRunSummary {
-  int frames = 0;               // training frames read
-  int epochs_done = 0;          // in total, including those before a resume
-  int epochs_run = 0;           // in this call
-  double final_loss = 0;        // mean training loss of the last epoch run
-  double seconds_per_step = 0;  // this call's epochs' time per optimizer step
-  double seconds = 0;           // wall time of this call, data preparation included
+  int frames = 0;                // training frames read
+  int epochs_done = 0;           // in total, including those before a resume
+  int epochs_run = 0;            // in this call
+  double final_loss = 0;         // mean training loss of the last epoch run
+  double seconds_per_step = 0;   // this call's epochs' time per optimizer step
+  double seconds = 0;            // wall time of this call, data preparation included
+  double frames_per_second = 0;  // training throughput of this call's epochs (loading excluded)
   int64_t parameters = 0;
-  // The epochs, the loss and the time per step from `done`; `wall_seconds` as `seconds`.
+  // The epochs, the loss, the time per step and the rate from `done`; `wall_seconds` as
+  // `seconds`.
   void Finish(const TrainingLoopSummary& done, double wall_seconds);
 };
 
@@ -137,6 +146,19 @@ std::vector<std::string> TrainingFrameIds(const KittiDataset& dataset, const std
 // line and the inputs "data" and "split" (a family adds its own).
 RunManifest TrainingManifest(const std::string& tool, const std::string& command_line,
                              const std::filesystem::path& data_root, const std::string& split);
+
+template <typename TrainOptions>
+TrainingLoopOptions TrainingLoopOptions::Of(const TrainOptions& o, const std::string& tool,
+                                            int num_frames, int start_epoch) {
+  TrainingLoopOptions loop;
+  loop.out_dir = o.out_dir;
+  loop.num_frames = num_frames;
+  loop.start_epoch = start_epoch;
+  loop.schedule = TrainingSchedule::Of(o);
+  loop.manifest = TrainingManifest(tool, o.command_line, o.data_root, o.split);
+  loop.progress = o.progress;
+  return loop;
+}
 
 // A training's model folder, opened before any work: the --out folder is checked against the
 // training's inputs (--data's training/ and ImageSets/, and `inputs`, e.g. {"--points", dir}),

@@ -31,9 +31,8 @@ void DetectDet3dOptions::Check() const {
   CheckDetectionRun(*this);
 }
 
-DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
+DetectSummary DetectDet3d(const DetectDet3dOptions& options) {
   options.Check();
-  const Timer timer;
   DetectorOptions detector_options;
   detector_options.det3d = options.decode;
   detector_options.det3d_points = options.filter;
@@ -45,9 +44,7 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
       << options.model_dir.string()
       << " is a stereo model: --points must name the `stereodet stereo --encode points` folder";
 
-  DetectDet3dSummary summary;
-  StageTimes times;
-  summary.detections = run.DetectFrames(
+  run.DetectFrames(
       [&](const std::string& id, StereoFrame& frame) {
         // The calibration, the image's size (its PNG header: nothing decoded) and the points.
         const FramePaths paths = run.dataset.Paths(id);
@@ -56,26 +53,19 @@ DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options) {
         frame.image_size = cv::Size(width, height);
         frame.points = ReadVelodyne(PointsPath(run.dataset, options.points_dir, source, id));
       },
-      /*overlap=*/true, times);
+      /*overlap=*/true);
   std::vector<std::pair<std::string, std::string>> manifest_inputs;
   if (!options.points_dir.empty())
     manifest_inputs.emplace_back("points", options.points_dir.string());
-  run.Commit(manifest_inputs,
-             fmt::format(R"("input": "{}", "score_threshold": {}, "nms_iou_threshold": {}, )"
-                         R"("max_detections": {}, "max_frames": {}, "device": "{}", )"
-                         R"("stereo_max_distance_m": {}, "camera_fov_only": {})",
-                         run.detector.input(), options.decode.score_threshold,
-                         options.decode.nms.iou_threshold, options.decode.nms.max_detections,
-                         options.max_frames, options.device, options.filter.stereo_max_distance_m,
-                         options.filter.camera_fov_only));
-  const std::map<std::string, StageTimes::Stage> stages = times.Snapshot();
-  for (const char* stage : {"network", "decode"}) {
-    if (stages.count(stage)) summary.network_seconds += stages.at(stage).total_s;
-  }
-  summary.frames = static_cast<int>(run.ids.size());
-  summary.seconds = timer.ElapsedSeconds();
-  summary.frames_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
-  return summary;
+  return run.Commit(
+      manifest_inputs,
+      fmt::format(R"("input": "{}", "score_threshold": {}, "nms_iou_threshold": {}, )"
+                  R"("max_detections": {}, "max_frames": {}, "device": "{}", )"
+                  R"("stereo_max_distance_m": {}, "camera_fov_only": {})",
+                  run.detector.input(), options.decode.score_threshold,
+                  options.decode.nms.iou_threshold, options.decode.nms.max_detections,
+                  options.max_frames, options.device, options.filter.stereo_max_distance_m,
+                  options.filter.camera_fov_only));
 }
 
 }  // namespace stereodet

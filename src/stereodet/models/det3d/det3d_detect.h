@@ -11,6 +11,7 @@
 #include <string>
 
 #include "stereodet/models/det3d/det3d_model.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/shard.h"
 
@@ -37,15 +38,7 @@ struct DetectDet3dOptions {
   void Check() const;
 };
 
-struct DetectDet3dSummary {
-  int frames = 0;
-  int64_t detections = 0;
-  double seconds = 0;
-  double frames_per_second = 0;  // end to end: reading, pillars, network, NMS, writing
-  double network_seconds = 0;    // forward + decoding alone
-};
-
-DetectDet3dSummary DetectDet3d(const DetectDet3dOptions& options);
+DetectSummary DetectDet3d(const DetectDet3dOptions& options);
 
 }  // namespace stereodet
 

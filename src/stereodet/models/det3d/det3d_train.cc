@@ -150,11 +150,8 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
   summary.gt_database_objects = gt_database.ObjectCount();
   summary.gt_database_points = gt_database.PointCount();
 
-  TrainingLoopOptions loop;
-  loop.out_dir = options.out_dir;
-  loop.num_frames = static_cast<int>(frames.size());
-  loop.start_epoch = start_epoch;
-  loop.schedule = TrainingSchedule::Of(options);
+  TrainingLoopOptions loop =
+      TrainingLoopOptions::Of(options, "train det3d", static_cast<int>(frames.size()), start_epoch);
   // The progress line leaves the direction term out (it is small and steady).
   loop.columns = {.frames = "frames",
                   .terms = {"classification_loss", "box_loss", "direction_loss", "part_warp_loss",
@@ -162,8 +159,6 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
                   .term_labels = {"cls", "box", "", "psw", "seg", "ctr"},
                   .counts = {},
                   .rate = "frames_per_s"};
-  loop.manifest =
-      TrainingManifest("train det3d", options.command_line, options.data_root, options.split);
   if (!options.points_dir.empty()) {
     loop.manifest.inputs.push_back({"points", options.points_dir.string()});
   }
@@ -183,12 +178,10 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
         options.gt_sampling.max_per_class, options.gt_database.min_points,
         options.gt_database.box_margin_m, gt_database.ObjectCount());
   };
-  loop.progress = options.progress;
   Det3dTrainingTask task(frames, gt_database, gt_sampling, model, trainer, options,
                          folder.training_run());
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
   summary.Finish(done, total_timer.ElapsedSeconds());
-  summary.frames_per_second = done.FramesPerSecond();
   return summary;
 }
 

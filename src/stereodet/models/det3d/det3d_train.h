@@ -54,7 +54,6 @@ struct TrainDet3dSummary : TrainingRunSummary {
   int objects = 0;                  // ground-truth boxes of the model's classes over the frames
   int64_t gt_database_objects = 0;  // objects in the GT database (0 without GT sampling)
   int64_t gt_database_points = 0;   // their points (16 bytes each in memory)
-  double frames_per_second = 0;     // training throughput of this call
   int64_t auxiliary_parameters = 0;
 };
 

@@ -124,26 +124,18 @@ TEST(Det3dTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
 
   const DetectDet3dOptions d =
       TinyDetectOptions<DetectDet3dOptions>(out, root, root / "detections");
-  const DetectDet3dSummary ds = DetectDet3d(d);
+  const DetectSummary ds = DetectDet3d(d);
   EXPECT_EQ(ds.frames, 4);
   EXPECT_TRUE(fs::exists(d.out_dir / "run.json"));
   for (int i = 0; i < 4; ++i) {
     const std::string id = FrameId(i);
-    const std::vector<Object> labels =
-        ReadObjects(root / "training/label_2" / (id + ".txt")).objects;
-    const std::vector<Object> dets =
-        ReadObjects(d.out_dir / (id + ".txt"), {.kind = ObjectFileKind::kDetection}).objects;
+    const std::vector<Object> labels = TinyLabels(root, id);
+    const std::vector<Object> dets = TinyDetections(d.out_dir, id);
     ASSERT_GE(dets.size(), labels.size()) << id;
     EXPECT_LE(dets.size(), 100u);
     for (const Object& label : labels) {
-      double best = 0;
-      for (const Object& det : dets) {
-        ASSERT_TRUE(det.score.has_value());
-        EXPECT_GE(*det.score, 0.0);
-        EXPECT_LE(*det.score, 1.0);
-        if (*det.score < 0.3) continue;
-        best = std::max(best, BevIou(det.box3d, label.box3d));
-      }
+      const double best = BestConfidentOverlap(
+          dets, 0.3, [&](const Object& det) { return BevIou(det.box3d, label.box3d); });
       EXPECT_GT(best, 0.5) << "frame " << id << ": no confident detection of its car";
     }
   }

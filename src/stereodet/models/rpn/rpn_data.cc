@@ -72,30 +72,18 @@ RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<
   required.image_left = required.label = true;
   required.image_right = required.calib = geometry;
   CheckRequiredFiles(dataset, ids, required);
-  frames_.resize(ids.size());
-  ProgressReporter reporter(geometry ? "stereo" : "labels", static_cast<int64_t>(ids.size()),
-                            progress);
   const cv::Size network_size(config.input_width, config.input_height);
   StereoOptions stereo = options.stereo;
   stereo.blur.sigma_px = 0.0;  // training sees sharp images; blur is an evaluation setting
-  ParallelFor(
-      ids.size(),
-      [&](size_t i) {
-        const FramePaths paths = dataset.Paths(ids[i]);
-        RpnFrame& frame = frames_[i];
-        frame.id = ids[i];
-        frame.image_path = paths.image_left;
-        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, config.classes,
-                                          options.ignore_types, options.min_object_height_px);
-        if (geometry) {
-          const RpnGeometry g = ComputeRpnGeometry(paths, stereo);
-          frame.depth_code = ResizeCodes(g.depth_code, network_size);
-          frame.height_code = ResizeCodes(g.height_code, network_size);
-        }
-        reporter.Add(1);
-      },
-      options.threads);
-  reporter.Finish();
+  frames_ = ReadLabelledFrames<RpnFrame>(
+      dataset, ids, config.classes, options.ignore_types, options.min_object_height_px,
+      options.threads, geometry ? "stereo" : "labels", progress,
+      [&](const FramePaths& paths, RpnFrame& frame) {
+        if (!geometry) return;
+        const RpnGeometry g = ComputeRpnGeometry(paths, stereo);
+        frame.depth_code = ResizeCodes(g.depth_code, network_size);
+        frame.height_code = ResizeCodes(g.height_code, network_size);
+      });
 }
 
 RpnTrainingData::RpnTrainingData(std::vector<RpnFrame> frames, const RpnConfig& config,

@@ -39,11 +39,8 @@ struct RpnDataOptions {
 };
 
 // A frame held in memory for training.
-struct RpnFrame {
-  std::string id;
-  std::filesystem::path image_path;  // left image, read at every use
-  std::vector<TargetBox> targets;    // original image px
-  cv::Mat depth_code, height_code;   // CV_16UC1 at the network's size (empty for rgb)
+struct RpnFrame : LabelledImageFrame {
+  cv::Mat depth_code, height_code;  // CV_16UC1 at the network's size (empty for rgb)
 };
 
 struct RpnSample {

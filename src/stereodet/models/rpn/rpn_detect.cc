@@ -30,9 +30,8 @@ void DetectRpnOptions::Check() const {
       << "blur sigma must be >= 0, got " << blur_sigma_px;
 }
 
-DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
+DetectSummary DetectRpn(const DetectRpnOptions& options) {
   options.Check();
-  const Timer timer;
   DetectorOptions detector_options;
   detector_options.blur_sigma_px = options.blur_sigma_px;
   detector_options.rpn = options.detect;
@@ -43,16 +42,14 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
   required.image_right = required.calib = geometry;
   CheckRequiredFiles(run.dataset, run.ids, required);
 
-  DetectRpnSummary summary;
-  StageTimes times;
-  summary.detections = run.DetectFrames(
+  run.DetectFrames(
       [&](const std::string& id, StereoFrame& frame) {
         const FramePaths paths = run.dataset.Paths(id);
         frame.left = ReadColourImage(paths.image_left);
         if (geometry) ReadStereoPairFiles(paths, run.detector.stereo()->disparity, frame);
       },
-      /*overlap=*/true, times);
-  run.Commit(
+      /*overlap=*/true);
+  return run.Commit(
       {},
       fmt::format(R"("input": "{}", "blur_sigma_px": {}, "score_threshold": {}, )"
                   R"("nms_iou_threshold": {}, "max_detections": {}, )"
@@ -62,11 +59,6 @@ DetectRpnSummary DetectRpn(const DetectRpnOptions& options) {
                   options.detect.decode.score_threshold, options.detect.decode.nms.iou_threshold,
                   options.detect.decode.nms.max_detections, options.detect.proposals.pre_nms_top_n,
                   options.detect.proposals.post_nms_top_n, options.max_frames, options.device));
-  summary.frames = static_cast<int>(run.ids.size());
-  summary.seconds = timer.ElapsedSeconds();
-  summary.images_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
-  summary.stage_times = times.Format();
-  return summary;
 }
 
 }  // namespace stereodet

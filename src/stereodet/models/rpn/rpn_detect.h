@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/shard.h"
@@ -37,17 +38,9 @@ struct DetectRpnOptions {
   void Check() const;  // throws std::invalid_argument
 };
 
-struct DetectRpnSummary {
-  int frames = 0;
-  int64_t detections = 0;
-  double seconds = 0;
-  double images_per_second = 0;  // end to end: reading, stereo, network, writing
-  std::string stage_times;       // read, stereo, blur, encode, network, write
-};
-
 // Throws before any work as DetectSsd does (an output overlapping the data or the model, a
 // non-empty folder that is not an earlier detection folder).
-DetectRpnSummary DetectRpn(const DetectRpnOptions& options);
+DetectSummary DetectRpn(const DetectRpnOptions& options);
 
 }  // namespace stereodet
 

@@ -125,18 +125,13 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   summary.frames = data.size();
   summary.objects = data.NumObjects();
 
-  TrainingLoopOptions loop;
-  loop.out_dir = options.out_dir;
-  loop.num_frames = data.size();
-  loop.start_epoch = start_epoch;
-  loop.schedule = TrainingSchedule::Of(options);
+  TrainingLoopOptions loop =
+      TrainingLoopOptions::Of(options, "train rpn", data.size(), start_epoch);
   loop.columns = {.frames = "frames",
                   .terms = {"objectness_loss", "rpn_box_loss", "head_class_loss", "head_box_loss"},
                   .term_labels = {"obj", "rpn-box", "cls", "box"},
                   .counts = {"positive_anchors", "foreground_rois"},
                   .rate = "images_per_s"};
-  loop.manifest =
-      TrainingManifest("train rpn", options.command_line, options.data_root, options.split);
   if (!options.init_from.empty()) {
     loop.manifest.inputs.push_back({"init_from", options.init_from.string()});
   }
@@ -153,11 +148,9 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
         config.geometry_width, options.threads, options.device, options.data.augment,
         options.init_from.string(), options.init_geometry, summary.parameters);
   };
-  loop.progress = options.progress;
   RpnTrainingTask task(data, model, trainer, options);
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
   summary.Finish(done, total_timer.ElapsedSeconds());
-  summary.images_per_second = done.FramesPerSecond();
   return summary;
 }
 

@@ -55,7 +55,6 @@ struct TrainRpnOptions {
 
 struct TrainRpnSummary : TrainingRunSummary {
   int objects = 0;
-  double images_per_second = 0;
   double stereo_seconds = 0;  // the one-off label / stereo pass
   int64_t image_branch_parameters = 0;
   int64_t geometry_branch_parameters = 0;

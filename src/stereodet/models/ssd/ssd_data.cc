@@ -75,24 +75,16 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
         << ": its stereo.json differs from the training's settings: " << differ;
   }
   CheckRequiredFiles(dataset, ids, required);
-  frames_.resize(ids.size());
-  ProgressReporter reporter(height ? "stereo" : "labels", static_cast<int64_t>(ids.size()),
-                            progress);
   const cv::Size network_size(config.InputWidth(), config.InputHeight());
-  ParallelFor(
-      ids.size(),
-      [&](size_t i) {
-        const FramePaths paths = dataset.Paths(ids[i]);
-        TrainingFrame& frame = frames_[i];
-        frame.id = ids[i];
-        frame.image_path = paths.image_left;
-        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, config.classes,
-                                          options.ignore_types, options.min_object_height_px);
+  frames_ = ReadLabelledFrames<TrainingFrame>(
+      dataset, ids, config.classes, options.ignore_types, options.min_object_height_px,
+      options.threads, height ? "stereo" : "labels", progress,
+      [&](const FramePaths& paths, TrainingFrame& frame) {
         if (from_folder) {
           // At the match size, as the in-line path below has them (ReadStereoFolderHeight's
           // full-resolution codes, resized to the network, would differ).
-          frame.height_code =
-              ResizeHeightCodes(ReadStereoFolderHeightAtMatchScale(*folder, ids[i]), network_size);
+          frame.height_code = ResizeHeightCodes(
+              ReadStereoFolderHeightAtMatchScale(*folder, frame.id), network_size);
         } else if (height) {
           // One encoder per frame: StereoEncoder is not thread-safe and cheap to make.
           StereoEncoder encoder(options.stereo);
@@ -110,10 +102,7 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
           const StereoEncoding encoding = encoder.Encode(left, right, geometry, outputs);
           frame.height_code = ResizeHeightCodes(encoding.height_code, network_size);
         }
-        reporter.Add(1);
-      },
-      options.threads);
-  reporter.Finish();
+      });
 }
 
 SsdTrainingData::SsdTrainingData(std::vector<TrainingFrame> frames, const SsdConfig& config,

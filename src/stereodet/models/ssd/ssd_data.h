@@ -68,11 +68,8 @@ PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
                                 const SsdConfig& config);
 
 // A frame held in memory for training.
-struct TrainingFrame {
-  std::string id;
-  std::filesystem::path image_path;  // left image (image_2), read at every use
-  std::vector<TargetBox> targets;    // original image px
-  cv::Mat height_code;               // CV_16UC1 at the network's input size (empty for rgb)
+struct TrainingFrame : LabelledImageFrame {
+  cv::Mat height_code;  // CV_16UC1 at the network's input size (empty for rgb)
 };
 
 struct TrainSample {

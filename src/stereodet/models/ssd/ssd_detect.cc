@@ -53,9 +53,8 @@ std::string StereoMismatch(const DetectSsdOptions& options) {
   return DifferingStereoSettings(*recorded, *options.stereo);
 }
 
-DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
+DetectSummary DetectSsd(const DetectSsdOptions& options) {
   options.Check();
-  const Timer timer;
   DetectorOptions detector_options;
   detector_options.blur_sigma_px = options.blur_sigma_px;
   detector_options.stereo = options.stereo;
@@ -84,9 +83,7 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
         << ": " << differ << "; use a stereo folder made with the model's settings, or no --stereo";
   }
 
-  DetectSsdSummary summary;
-  StageTimes times;
-  summary.detections = run.DetectFrames(
+  run.DetectFrames(
       [&](const std::string& id, StereoFrame& frame) {
         const FramePaths paths = run.dataset.Paths(id);
         frame.left = ReadColourImage(paths.image_left);
@@ -104,23 +101,19 @@ DetectSsdSummary DetectSsd(const DetectSsdOptions& options) {
           ReadStereoPairFiles(paths, stereo->disparity, frame);
         }
       },
-      options.pipeline, times);
+      options.pipeline);
   std::vector<std::pair<std::string, std::string>> manifest_inputs;
   if (from_folder) manifest_inputs.emplace_back("stereo", options.stereo_dir.string());
-  run.Commit(manifest_inputs,
-             fmt::format(R"("encoding": "{}", "blur_sigma_px": {}, "score_threshold": {}, )"
-                         R"("nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}{})",
-                         run.detector.input(), options.blur_sigma_px,
-                         options.decode.score_threshold, options.decode.nms.iou_threshold,
-                         options.decode.nms.max_detections, options.max_frames,
-                         // The stereo settings the heights were made with (RGB-H only): the
-                         // model's, or the flags'.
-                         height ? ", \"stereo\": " + StereoSettingsJson(*stereo) : std::string()));
-  summary.frames = static_cast<int>(run.ids.size());
-  summary.seconds = timer.ElapsedSeconds();
-  summary.images_per_second = summary.seconds > 0 ? summary.frames / summary.seconds : 0;
-  summary.stage_times = times.Format();
-  return summary;
+  return run.Commit(
+      manifest_inputs,
+      fmt::format(R"("encoding": "{}", "blur_sigma_px": {}, "score_threshold": {}, )"
+                  R"("nms_iou_threshold": {}, "max_detections": {}, "max_frames": {}{})",
+                  run.detector.input(), options.blur_sigma_px, options.decode.score_threshold,
+                  options.decode.nms.iou_threshold, options.decode.nms.max_detections,
+                  options.max_frames,
+                  // The stereo settings the heights were made with (RGB-H only): the
+                  // model's, or the flags'.
+                  height ? ", \"stereo\": " + StereoSettingsJson(*stereo) : std::string()));
 }
 
 }  // namespace stereodet

@@ -18,6 +18,7 @@
 
 #include "stereodet/kitti/object.h"
 #include "stereodet/models/box_coder.h"
+#include "stereodet/models/detect_shard.h"
 #include "stereodet/stereo/stereo_encoder.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/shard.h"
@@ -58,14 +59,6 @@ struct DetectSsdOptions {
   void Check() const;        // throws std::invalid_argument
 };
 
-struct DetectSsdSummary {
-  int frames = 0;
-  int64_t detections = 0;
-  double seconds = 0;
-  double images_per_second = 0;  // end to end: reading, stereo, encoding, network, writing
-  std::string stage_times;  // StageTimes::Format(): read, stereo, encode, network, decode, write
-};
-
 // The stereo settings the model in `model_dir` was trained with (model.json's "stereo", the
 // defaults for a model.json written before they were recorded); nullopt for an rgb model, which
 // uses none. Throws std::runtime_error / ParseError naming model.json.
@@ -81,7 +74,7 @@ std::string StereoMismatch(const DetectSsdOptions& options);
 // its ImageSets/ or the model folder, and std::runtime_error when out_dir is a non-empty folder
 // without run.json (not an earlier detection folder); an earlier run's folder is replaced whole
 // at the end. An interrupted call leaves the previous folder as it was.
-DetectSsdSummary DetectSsd(const DetectSsdOptions& options);
+DetectSummary DetectSsd(const DetectSsdOptions& options);
 
 }  // namespace stereodet
 

@@ -163,18 +163,13 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   summary.stereo_seconds = data_timer.ElapsedSeconds();
   summary.frames = data.size();
 
-  TrainingLoopOptions loop;
-  loop.out_dir = options.out_dir;
-  loop.num_frames = data.size();
-  loop.start_epoch = start_epoch;
-  loop.schedule = TrainingSchedule::Of(options);
+  TrainingLoopOptions loop =
+      TrainingLoopOptions::Of(options, "train ssd", data.size(), start_epoch);
   loop.columns = {.frames = "images",
                   .terms = {"localization_loss", "confidence_loss"},
                   .term_labels = {"box", "cls"},
                   .counts = {},
                   .rate = "images_per_s"};
-  loop.manifest =
-      TrainingManifest("train ssd", options.command_line, options.data_root, options.split);
   if (!options.data.stereo_dir.empty()) {
     loop.manifest.inputs.emplace_back("stereo", options.data.stereo_dir.string());
   }
@@ -188,11 +183,9 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
         options.max_frames, ids.size(), config.InputWidth(), config.InputHeight(),
         config.base_channels);
   };
-  loop.progress = options.progress;
   SsdTrainingTask task(data, model, trainer, options, folder.training_run());
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
   summary.Finish(done, total_timer.ElapsedSeconds());
-  summary.images_per_second = done.FramesPerSecond();
   return summary;
 }
 

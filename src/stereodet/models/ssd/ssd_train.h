@@ -57,8 +57,7 @@ struct TrainSsdOptions {
 };
 
 struct TrainSsdSummary : TrainingRunSummary {
-  double images_per_second = 0;  // training throughput of this call (loader included)
-  double stereo_seconds = 0;     // the one-off stereo/label pass
+  double stereo_seconds = 0;  // the one-off stereo/label pass
   int64_t compression_parameters = 0;
 };
 

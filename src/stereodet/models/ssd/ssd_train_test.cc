@@ -220,7 +220,7 @@ TEST(SsdTrainTest, TrainResumeAndDetectEndToEnd) {
     WriteRunManifest(detect.out_dir, earlier);
     WriteFileAtomically(detect.out_dir / "000099.txt",
                         "Car -1 -1 -10 0 0 1 1 -1 -1 -1 -1000 -1000 -1000 -10 0.5\n");
-    const DetectSsdSummary d = DetectSsd(detect);
+    const DetectSummary d = DetectSsd(detect);
     EXPECT_EQ(d.frames, 4);
     EXPECT_FALSE(fs::exists(detect.out_dir / "000099.txt"));
     const std::optional<RunManifest> manifest = ReadRunManifest(detect.out_dir);
