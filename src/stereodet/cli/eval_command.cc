@@ -78,6 +78,7 @@ struct EvalArgs {
   std::string compat = EvalCompatName(EvalOptions().compat);
   std::string filter;
   std::string filter_mode = FilterModeName(EvalOptions().filter.mode);
+  std::vector<std::string> breakdowns;  // --breakdown AXIS=EDGES, repeatable (eval only)
   std::string score_transform = ScoreTransformName(EvalOptions().score_transform);
   bool loose = false;
   std::string overlaps;  // empty: strict, or loose with --loose
@@ -252,6 +253,13 @@ EvalOptions MakeOptions(const EvalArgs& a) {
       << "--filter-mode: unknown '" << a.filter_mode << "' (naive, stable)";
   o.filter.mode = *mode;
   if (!a.filter.empty()) o.filter.conditions = ParseFilterConditions(a.filter);
+  for (const std::string& text : a.breakdowns) {
+    try {
+      o.breakdowns.push_back(ParseBreakdown(text));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--breakdown: ") + e.what());
+    }
+  }
   const auto transform = ParseScoreTransform(a.score_transform);
   STEREODET_CHECK(transform.has_value())
       << "--score-transform: unknown '" << a.score_transform << "' (none, sigmoid)";
@@ -293,6 +301,9 @@ void RunEval(const EvalArgs& a) {
   STEREODET_CHECK(!a.records || !a.out.empty())
       << "--records needs --out (it writes OUT/matches.csv)";
   STEREODET_CHECK(!a.report || !a.out.empty()) << "--report needs --out (it writes OUT/report/)";
+  STEREODET_CHECK(a.breakdowns.empty() || !a.input.shard.Recorded())
+      << "--breakdown with --shard: `eval merge` does not merge breakdowns yet; evaluate the "
+         "whole set (one process is fast: docs/BENCHMARKS.md)";
   EvaluationOptions options;
   const std::vector<OverlapSet> sets = OverlapSets(a);
   options.runs = OverlapSetRuns(MakeOptions(a), sets);
@@ -476,6 +487,12 @@ void AddEvalCommand(CLI::App& app) {
       "--out", args->out,
       "write results.json and CSVs here (one run per folder: an earlier run's folder is "
       "replaced whole; a folder of other files is refused)");
+  eval->add_option("--breakdown", args->breakdowns,
+                   "every figure again per bin of one property, from one matching: AXIS=EDGES, "
+                   "e.g. distance=0,30,50,inf (axes: distance m, height px, occlusion, truncation, "
+                   "column px; bins [a, b)); repeatable; in the table, results.json and "
+                   "OUT/breakdown.csv (docs/metrics.md, Breakdowns)")
+      ->allow_extra_args(false);
   eval->add_flag("--records", args->records,
                  "also write OUT/matches.csv: what every detection and label counts as, per class, "
                  "metric and difficulty (docs/metrics.md)");

@@ -11,20 +11,22 @@
 namespace stereodet {
 
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
-                       const std::vector<FilterCondition>* conditions) {
+                       const StableSelection* selection) {
   auto label_passes = [&](int i) {
-    return conditions == nullptr ||
-           PassesFilter(frame.labels[cf.label_object[i]], true, *conditions);
+    return selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]);
   };
   auto det_passes = [&](int j) {
-    return conditions == nullptr ||
-           PassesFilter(frame.detections[cf.det_object[j]], false, *conditions);
+    return selection == nullptr || selection->KeepsDetection(frame.detections[cf.det_object[j]]);
+  };
+  auto pair_passes = [&](int i, int j) {
+    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
+                                                        frame.detections[cf.det_object[j]]);
   };
   Tally t;
   for (int i = 0; i < cf.num_labels(); ++i) {
     if (a.label_outcome[i] == Outcome::kTp) {
       const int j = a.label_det[i];
-      if (label_passes(i) && det_passes(j)) {
+      if (pair_passes(i, j)) {
         ++t.tp;
         t.similarity += (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[i])) / 2.0;
       }
@@ -50,9 +52,8 @@ constexpr size_t kAosSamples = 64;
 // or VOC association, only its own outcome). Cost: one association per distinct score.
 FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& frame,
                                              const ClassFrame& cf, Difficulty difficulty,
-                                             const std::vector<FilterCondition>* conditions,
-                                             bool similarity_only, bool with_aos,
-                                             std::vector<CurveEvent> append_to) {
+                                             const StableSelection* selection, bool similarity_only,
+                                             bool with_aos, std::vector<CurveEvent> append_to) {
   FrameCurveEvents out;
   out.events = std::move(append_to);
   std::vector<CurveEvent>* events = &out.events;
@@ -64,7 +65,7 @@ FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& f
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
   Tally prev = TallyAssociation(
       frame, cf, Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity()),
-      conditions);
+      selection);
   out.base_fn = prev.fn;
   std::vector<double> scores;  // the distinct scores at which the association is recomputed
   for (size_t k = 0; k < order.size();) {
@@ -85,7 +86,7 @@ FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& f
   }
   for (const double score : scores) {
     const Tally cur =
-        TallyAssociation(frame, cf, Associate(matcher, cf, difficulty, score), conditions);
+        TallyAssociation(frame, cf, Associate(matcher, cf, difficulty, score), selection);
     CurveEvent ev;
     ev.score = score;
     // Without AOS the similarity takes no part (it must not add curve points).
@@ -251,10 +252,9 @@ void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty dif
 }  // namespace
 
 FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
-                                   Difficulty difficulty,
-                                   const std::vector<FilterCondition>* conditions, bool with_aos,
-                                   std::vector<CurveEvent> append_to) {
-  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, conditions, false, with_aos,
+                                   Difficulty difficulty, const StableSelection* selection,
+                                   bool with_aos, std::vector<CurveEvent> append_to) {
+  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, selection, false, with_aos,
                                      std::move(append_to));
 }
 

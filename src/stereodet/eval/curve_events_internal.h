@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "stereodet/eval/association.h"
+#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/curves.h"
 #include "stereodet/eval/eval_options.h"
 #include "stereodet/eval/filter.h"
@@ -17,14 +18,15 @@
 
 namespace stereodet {
 
-// TP/FP/FN and the TP similarity of one association; with `conditions`, the stable filter's counts.
+// TP/FP/FN and the TP similarity of one association; with `selection`, the stable filter's or a
+// breakdown bin's counts (breakdown.h).
 struct Tally {
   int64_t tp = 0, fp = 0, fn = 0;
   double similarity = 0.0;
 };
 
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
-                       const std::vector<FilterCondition>* conditions);
+                       const StableSelection* selection);
 
 // A frame's curve events and its share of the curve's starting FN count.
 struct FrameCurveEvents {
@@ -34,14 +36,15 @@ struct FrameCurveEvents {
 
 // Curve events of one frame derived from the matcher's association at every distinct detection
 // score of the frame (exact by construction, one association per distinct score), appended to
-// `append_to`. With `conditions` non-null the counts are the stable filter's (pairs whose label
-// and detection both pass; unmatched labels / detections that pass); the similarity is that of the
+// `append_to`. With `selection` non-null the counts are the stable filter's (pairs whose label
+// and detection both pass; unmatched labels / detections that pass) or a breakdown bin's
+// (breakdown.h); the similarity is that of the
 // counted TP pairs, and is left out (0) without `with_aos`. `frame` is the EvalFrame `cf` was
 // prepared from.
 FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
                                    Difficulty difficulty,
-                                   const std::vector<FilterCondition>* conditions = nullptr,
-                                   bool with_aos = true, std::vector<CurveEvent> append_to = {});
+                                   const StableSelection* selection = nullptr, bool with_aos = true,
+                                   std::vector<CurveEvent> append_to = {});
 
 // The similarity events (AOS) of the optimal matcher's association on one frame, appended to
 // `append_to`: each connected component of the overlap graph on its own, one-label components in

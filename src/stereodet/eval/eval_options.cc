@@ -161,6 +161,7 @@ void EvalOptions::Check() const {
   STEREODET_CHECK_LE(max_distance_m / distance_bin_m, 100000) << " (localization bins)";
   STEREODET_CHECK_GE(num_threads, 0);
   filter.Check();
+  for (const BreakdownOptions& b : breakdowns) b.Check();
 }
 
 }  // namespace stereodet

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/filter.h"
 #include "stereodet/kitti/object.h"
 #include "stereodet/util/strings.h"  // EqualsIgnoreCase, for the class names
@@ -111,6 +112,10 @@ struct EvalOptions {
 
   // Extra filter on labels and detections (difficulty filtering is always KITTI's).
   FilterOptions filter;
+
+  // Breakdowns (breakdown.h): each cell's figures again per bin of each axis, from the cell's own
+  // matching (ClassResult::breakdown). Empty: none.
+  std::vector<BreakdownOptions> breakdowns;
 
   // Keep every cell's per-detection records (ClassResult::records). Memory: 24 bytes a row, about
   // (detections + unmatched labels) x overlap kinds x difficulties rows.

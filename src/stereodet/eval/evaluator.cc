@@ -137,31 +137,31 @@ OperatingPoint CountAll(const std::vector<FrameAssociation>& assocs, double thre
   return MakeOperatingPoint(threshold, tp, fp, fn);
 }
 
-// Stable filter: the unfiltered association, keeping pairs whose both sides pass and unmatched
-// labels / detections that pass.
+// The valid labels of `difficulty` that `selection` keeps.
+int64_t CountValidLabels(const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs,
+                         Difficulty difficulty, const StableSelection& selection) {
+  int64_t n = 0;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    for (int i = 0; i < cfs[f].num_labels(); ++i) {
+      n += cfs[f].LabelValid(i, difficulty) &&
+           selection.KeepsLabel(frames[f].labels[cfs[f].label_object[i]]);
+    }
+  }
+  return n;
+}
+
+// The stable counts at the operating point: the unfiltered association, kept as `selection` says
+// (the stable filter: pairs whose both sides pass, unmatched labels / detections that pass; a
+// breakdown bin: breakdown.h).
 OperatingPoint CountStable(const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs,
                            const std::vector<FrameAssociation>& assocs,
-                           const std::vector<FilterCondition>& conditions, double threshold) {
+                           const StableSelection& selection, double threshold) {
   int64_t tp = 0, fp = 0, fn = 0;
   for (size_t f = 0; f < frames.size(); ++f) {
-    const ClassFrame& cf = cfs[f];
-    const FrameAssociation& a = assocs[f];
-    auto label_passes = [&](int i) {
-      return PassesFilter(frames[f].labels[cf.label_object[i]], true, conditions);
-    };
-    auto det_passes = [&](int j) {
-      return PassesFilter(frames[f].detections[cf.det_object[j]], false, conditions);
-    };
-    for (int i = 0; i < cf.num_labels(); ++i) {
-      if (a.label_outcome[i] == Outcome::kTp) {
-        if (label_passes(i) && det_passes(a.label_det[i])) ++tp;
-      } else if (a.label_outcome[i] == Outcome::kFn) {
-        if (label_passes(i)) ++fn;
-      }
-    }
-    for (int j = 0; j < cf.num_dets(); ++j) {
-      if (a.det_outcome[j] == Outcome::kFp && det_passes(j)) ++fp;
-    }
+    const Tally t = TallyAssociation(frames[f], cfs[f], assocs[f], &selection);
+    tp += t.tp;
+    fp += t.fp;
+    fn += t.fn;
   }
   return MakeOperatingPoint(threshold, tp, fp, fn);
 }
@@ -235,15 +235,14 @@ ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frame
 // The stable filter's exact curve (optimal / VOC): the unfiltered association at every score.
 FilteredCurve StableExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames,
                                const std::vector<ClassFrame>& cfs, Difficulty difficulty,
-                               const std::vector<FilterCondition>& conditions, bool with_aos,
-                               int num_threads) {
+                               const StableSelection& selection, bool with_aos, int num_threads) {
   std::vector<std::vector<CurveEvent>> frame_events(cfs.size());
   std::vector<int64_t> base_fn(cfs.size(), 0);
   ParallelFor(
       cfs.size(),
       [&](size_t i) {
         FrameCurveEvents e =
-            AssociationEvents(matcher, frames[i], cfs[i], difficulty, &conditions, with_aos);
+            AssociationEvents(matcher, frames[i], cfs[i], difficulty, &selection, with_aos);
         frame_events[i] = std::move(e.events);
         base_fn[i] = e.base_fn;
       },
@@ -257,51 +256,66 @@ FilteredCurve StableExactCurve(Matcher matcher, const std::vector<EvalFrame>& fr
   return SummarizeExact(BuildCurve(std::move(events), num_labels), with_aos);
 }
 
-// The stable filter's curve with the KITTI matcher: the devkit's pass 2 association of the
-// unfiltered set at the unfiltered evaluation's thresholds, counted under the filter, then the
-// devkit's 41-slot arithmetic (NaN for 0 / 0 kept, envelope, AP_R40 / AP_R11).
-FilteredCurve StableKittiCurve(const std::vector<EvalFrame>& frames,
-                               const std::vector<ClassFrame>& cfs, Difficulty difficulty,
-                               const std::vector<double>& thresholds,
-                               const std::vector<FilterCondition>& conditions, bool with_aos,
-                               int num_threads) {
+// The stable filter's curves with the KITTI matcher, one per selection: the devkit's pass 2
+// association of the unfiltered set at the unfiltered evaluation's thresholds (made once, whatever
+// the number of selections), counted under each selection, then the devkit's 41-slot arithmetic
+// (NaN for 0 / 0 kept, envelope, AP_R40 / AP_R11). With `empty_slots_zero` (breakdown bins) a
+// threshold at which the selection holds no detection has precision 0 instead of NaN: a bin's
+// labels that nothing finds above it score 0, where NaN would spread through the envelope to the
+// whole AP.
+std::vector<FilteredCurve> StableKittiCurves(
+    const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs, Difficulty difficulty,
+    const std::vector<double>& thresholds, const std::vector<StableSelection>& selections,
+    bool with_aos, int num_threads, bool empty_slots_zero = false) {
   const size_t n_t = std::min<size_t>(thresholds.size(), kKittiSamplePoints);
-  std::vector<std::vector<Tally>> per_frame(cfs.size(), std::vector<Tally>(n_t));
+  const size_t n_s = selections.size();
+  // [frame][threshold * n_s + selection]
+  std::vector<std::vector<Tally>> per_frame(cfs.size(), std::vector<Tally>(n_t * n_s));
   ParallelFor(
       cfs.size(),
       [&](size_t i) {
         for (size_t t = 0; t < n_t; ++t) {
-          per_frame[i][t] = TallyAssociation(
-              frames[i], cfs[i], KittiAssociate(cfs[i], difficulty, thresholds[t]), &conditions);
+          const FrameAssociation a = KittiAssociate(cfs[i], difficulty, thresholds[t]);
+          for (size_t s = 0; s < n_s; ++s) {
+            per_frame[i][t * n_s + s] = TallyAssociation(frames[i], cfs[i], a, &selections[s]);
+          }
         }
       },
       num_threads);
-  FilteredCurve c;
-  std::array<double, kKittiSamplePoints> precision{}, aos{};
-  for (size_t t = 0; t < n_t; ++t) {
-    CurvePoint p;
-    p.threshold = thresholds[t];
-    for (size_t i = 0; i < cfs.size(); ++i) {
-      p.tp += per_frame[i][t].tp;
-      p.fp += per_frame[i][t].fp;
-      p.fn += per_frame[i][t].fn;
-      p.similarity += per_frame[i][t].similarity;
+  std::vector<FilteredCurve> curves(n_s);
+  for (size_t s = 0; s < n_s; ++s) {
+    FilteredCurve& c = curves[s];
+    std::array<double, kKittiSamplePoints> precision{}, aos{};
+    for (size_t t = 0; t < n_t; ++t) {
+      CurvePoint p;
+      p.threshold = thresholds[t];
+      for (size_t i = 0; i < cfs.size(); ++i) {
+        const Tally& tally = per_frame[i][t * n_s + s];
+        p.tp += tally.tp;
+        p.fp += tally.fp;
+        p.fn += tally.fn;
+        p.similarity += tally.similarity;
+      }
+      p = FinishPoint(p);
+      c.curve.push_back(p);
+      if (empty_slots_zero && p.tp + p.fp == 0) {
+        precision[t] = aos[t] = 0.0;
+        continue;
+      }
+      precision[t] = static_cast<double>(p.tp) / static_cast<double>(p.tp + p.fp);
+      aos[t] = p.similarity / static_cast<double>(p.tp + p.fp);
     }
-    p = FinishPoint(p);
-    c.curve.push_back(p);
-    precision[t] = static_cast<double>(p.tp) / static_cast<double>(p.tp + p.fp);
-    aos[t] = p.similarity / static_cast<double>(p.tp + p.fp);
+    for (size_t t = 0; t < n_t; ++t) {
+      precision[t] = *std::max_element(precision.begin() + t, precision.end());
+      aos[t] = *std::max_element(aos.begin() + t, aos.end());
+    }
+    c.ap_r40 = KittiApR40(precision);
+    c.ap_r11 = KittiApR11(precision);
+    c.ap_voc = kNaN;
+    c.aos_r40 = with_aos ? KittiApR40(aos) : kNaN;
+    c.aos_r11 = with_aos ? KittiApR11(aos) : kNaN;
   }
-  for (size_t t = 0; t < n_t; ++t) {
-    precision[t] = *std::max_element(precision.begin() + t, precision.end());
-    aos[t] = *std::max_element(aos.begin() + t, aos.end());
-  }
-  c.ap_r40 = KittiApR40(precision);
-  c.ap_r11 = KittiApR11(precision);
-  c.ap_voc = kNaN;
-  c.aos_r40 = with_aos ? KittiApR40(aos) : kNaN;
-  c.aos_r11 = with_aos ? KittiApR11(aos) : kNaN;
-  return c;
+  return curves;
 }
 
 // The rows of one frame (see MatchRecord), in the documented order.
@@ -584,7 +598,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
 
         if (!options.filter.empty()) {
           FilteredStats fs;
-          fs.stable = CountStable(frames, cfs, assocs[d], options.filter.conditions, t_op);
+          const StableSelection filter = StableSelection::Filter(options.filter.conditions);
+          fs.stable = CountStable(frames, cfs, assocs[d], filter, t_op);
           fs.naive =
               CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           // Naive curve: the struck set evaluated exactly like the unfiltered one.
@@ -596,16 +611,54 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             fs.naive_curve.ap_voc = kNaN;
             fs.naive_curve.aos_r40 = naive.aos_r40;
             fs.naive_curve.aos_r11 = naive.aos_r11;
-            fs.stable_curve = StableKittiCurve(frames, cfs, difficulty, r.kitti_thresholds,
-                                               options.filter.conditions, with_aos, threads);
+            fs.stable_curve = StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds,
+                                                {filter}, with_aos, threads)
+                                  .front();
           } else {
             fs.naive_curve =
                 ExactCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads)
                     .curve;
-            fs.stable_curve = StableExactCurve(options.matcher, frames, cfs, difficulty,
-                                               options.filter.conditions, with_aos, threads);
+            fs.stable_curve = StableExactCurve(options.matcher, frames, cfs, difficulty, filter,
+                                               with_aos, threads);
           }
           r.filtered = fs;
+        }
+        // Breakdowns: every bin from the cell's association; the KITTI matcher's curves of all
+        // bins from one association per threshold.
+        std::vector<StableSelection> bins;
+        for (const BreakdownOptions& breakdown : options.breakdowns) {
+          for (int b = 0; b < breakdown.num_bins(); ++b) {
+            bins.push_back(
+                StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
+          }
+        }
+        std::vector<FilteredCurve> kitti_bin_curves;
+        if (kitti && !bins.empty()) {
+          kitti_bin_curves = StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds, bins,
+                                               with_aos, threads, /*empty_slots_zero=*/true);
+        }
+        for (size_t k = 0; k < bins.size(); ++k) {
+          const StableSelection& selection = bins[k];
+          BreakdownBin bin;
+          bin.axis = selection.axis;
+          bin.lower = selection.lower;
+          bin.upper = selection.upper;
+          bin.num_valid_labels = CountValidLabels(frames, cfs, difficulty, selection);
+          bin.at_threshold = CountStable(frames, cfs, assocs[d], selection, t_op);
+          bin.curve = kitti ? std::move(kitti_bin_curves[k])
+                            : StableExactCurve(options.matcher, frames, cfs, difficulty, selection,
+                                               with_aos, threads);
+          if (bin.num_valid_labels == 0) {  // no label in the bin: no recall, AP undefined
+            bin.curve.ap_r40 = bin.curve.ap_r11 = bin.curve.ap_voc = kNaN;
+            bin.curve.aos_r40 = bin.curve.aos_r11 = kNaN;
+          }
+          ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
+                                      options.max_distance_m, options.score_transform);
+          for (size_t f = 0; f < frames.size(); ++f) {
+            acc.Add(frames[f], cfs[f], assocs[d][f], difficulty, &selection);
+          }
+          bin.brier = result.probability_metrics ? acc.Brier() : WithoutProbabilities(acc.Brier());
+          r.breakdown.push_back(std::move(bin));
         }
         result.results.push_back(std::move(r));
       }
@@ -646,7 +699,8 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
           row.metric = kind;
           row.difficulty = difficulty;
           row.value = value;
-          row.stats.stable = CountStable(frames, cfs, assocs, conditions, t_op);
+          row.stats.stable =
+              CountStable(frames, cfs, assocs, StableSelection::Filter(conditions), t_op);
           const std::vector<ClassFrame> struck_cfs =
               PrepareAll(StrikeFailing(frames, conditions, threads), spec, kind, options.matcher,
                          threads, options.compat);

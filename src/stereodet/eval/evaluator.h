@@ -64,6 +64,18 @@ struct MatchRecord {
   double iou = 0.0;
 };
 
+// One bin of a breakdown of a cell (breakdown.h: what counts in a bin), from the cell's matching.
+struct BreakdownBin {
+  BreakdownAxis axis = BreakdownAxis::kDistance;
+  double lower = 0.0, upper = 0.0;  // the bin [lower, upper), in the axis' unit
+  int64_t num_valid_labels = 0;     // the cell's valid labels in the bin
+  OperatingPoint at_threshold;      // at EvalOptions::score_threshold
+  // Its curve: KITTI matcher, the devkit's arithmetic at the cell's thresholds; optimal / VOC,
+  // exact at every score (as FilteredStats::stable_curve).
+  FilteredCurve curve;
+  BrierScores brier;  // NaN where the cell's are (EvalResult::probability_metrics)
+};
+
 // One class x overlap kind x difficulty.
 struct ClassResult {
   std::string class_name;
@@ -91,6 +103,8 @@ struct ClassResult {
   OperatingPoint at_threshold;            // at EvalOptions::score_threshold
   OperatingPoint best_f1;                 // over the curve's points
   std::optional<FilteredStats> filtered;  // when EvalOptions::filter has conditions
+  // With EvalOptions::breakdowns: every breakdown's bins, in the options' order, bins ascending.
+  std::vector<BreakdownBin> breakdown;
 
   BrierScores brier;
   CalibrationResult calibration;

@@ -51,11 +51,17 @@ ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double di
 }
 
 void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
-                                  const FrameAssociation& a, Difficulty difficulty) {
+                                  const FrameAssociation& a, Difficulty difficulty,
+                                  const StableSelection* selection) {
   const int num_bins = static_cast<int>(bin_count_.size());
+  auto pair_kept = [&](int i, int j) {
+    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
+                                                        frame.detections[cf.det_object[j]]);
+  };
   for (int i = 0; i < cf.num_labels(); ++i) {
     if (a.label_outcome[i] == Outcome::kTp) {
       const int j = a.label_det[i];
+      if (!pair_kept(i, j)) continue;
       const double s = ApplyScoreTransform(transform_, cf.det_score[j]);
       brier_sums_.over_labels += (1 - s) * (1 - s);
       brier_sums_.over_all += (1 - s) * (1 - s);
@@ -70,7 +76,8 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
         centre_errors_[bin].push_back((det.box3d.Centre() - label.box3d.Centre()).norm());
         depth_errors_[bin].push_back(det.box3d.location.z() - z);
       }
-    } else if (cf.LabelValid(i, difficulty)) {
+    } else if (cf.LabelValid(i, difficulty) &&
+               (selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]))) {
       // FN, or excused by an ignored (too low) detection: the label's term is there all the same,
       // so that every detector is scored over the same labels.
       brier_sums_.over_labels += 1.0;
@@ -82,6 +89,11 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
   for (int j = 0; j < cf.num_dets(); ++j) {
     const Outcome o = a.det_outcome[j];
     if (o != Outcome::kTp && o != Outcome::kFp) continue;
+    if (o == Outcome::kTp ? !pair_kept(a.det_label[j], j)
+                          : selection != nullptr &&
+                                !selection->KeepsDetection(frame.detections[cf.det_object[j]])) {
+      continue;
+    }
     const double s = ApplyScoreTransform(transform_, cf.det_score[j]);
     const double y = o == Outcome::kTp ? 1.0 : 0.0;
     brier_sums_.over_detections += (s - y) * (s - y);

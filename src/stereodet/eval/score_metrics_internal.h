@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "stereodet/eval/association.h"
+#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/eval_options.h"
 #include "stereodet/eval/frame_data.h"
 #include "stereodet/eval/frame_data_internal.h"
@@ -26,9 +27,11 @@ class ScoreMetricsAccumulator {
   ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m, double max_distance_m,
                           ScoreTransform transform = ScoreTransform::kNone);
 
-  // `association` is that of `class_frame` at `difficulty` (which decides the valid labels).
+  // `association` is that of `class_frame` at `difficulty` (which decides the valid labels). With
+  // `selection`, only what it keeps (a breakdown bin's pairs, labels and detections) adds terms.
   void Add(const EvalFrame& frame, const ClassFrame& class_frame,
-           const FrameAssociation& association, Difficulty difficulty);
+           const FrameAssociation& association, Difficulty difficulty,
+           const StableSelection* selection = nullptr);
 
   BrierScores Brier() const;  // means
   CalibrationResult Calibration() const;

@@ -96,20 +96,27 @@ json OptionsJson(const EvalOptions& options) {
   for (const FilterCondition& c : options.filter.conditions) {
     filter.push_back({{"bound", FilterBoundName(c.bound)}, {"value", c.value}});
   }
-  return {{"matcher", MatcherName(options.matcher)},
-          {"compat", EvalCompatName(options.compat)},
-          {"classes", ClassesJson(options.classes)},
-          {"metrics", metrics},
-          {"difficulties", difficulties},
-          {"score_threshold", options.score_threshold},
-          {"score_transform", ScoreTransformName(options.score_transform)},
-          {"require_detections", options.require_detections},
-          {"calibration_bins", options.calibration_bins},
-          {"distance_bin_m", options.distance_bin_m},
-          {"max_distance_m", options.max_distance_m},
-          {"filter", filter},
-          {"filter_mode", FilterModeName(options.filter.mode)},
-          {"num_threads", options.num_threads}};
+  json j = {{"matcher", MatcherName(options.matcher)},
+            {"compat", EvalCompatName(options.compat)},
+            {"classes", ClassesJson(options.classes)},
+            {"metrics", metrics},
+            {"difficulties", difficulties},
+            {"score_threshold", options.score_threshold},
+            {"score_transform", ScoreTransformName(options.score_transform)},
+            {"require_detections", options.require_detections},
+            {"calibration_bins", options.calibration_bins},
+            {"distance_bin_m", options.distance_bin_m},
+            {"max_distance_m", options.max_distance_m},
+            {"filter", filter},
+            {"filter_mode", FilterModeName(options.filter.mode)},
+            {"num_threads", options.num_threads}};
+  // Only when asked, so that the records of runs without one stay as they were.
+  if (!options.breakdowns.empty()) {
+    json breakdowns = json::array();
+    for (const BreakdownOptions& b : options.breakdowns) breakdowns.push_back(BreakdownText(b));
+    j["breakdowns"] = breakdowns;
+  }
+  return j;
 }
 
 // The curve CSVs' names of a cell: "curves/" + prefix + CurveStem + suffix + ".csv" (suffix: ""
@@ -151,6 +158,25 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
         {"stable", OperatingPointJson(fs.stable)},
         {"naive_curve", FilteredCurveJson(fs.naive_curve, CurveFile("pr_naive_", r, suffix))},
         {"stable_curve", FilteredCurveJson(fs.stable_curve, CurveFile("pr_stable_", r, suffix))}};
+  }
+  if (!r.breakdown.empty()) {
+    json bins = json::array();
+    for (const BreakdownBin& b : r.breakdown) {
+      // "upper": null is inf (JSON has no infinity); "bin" names it.
+      bins.push_back({{"axis", BreakdownAxisName(b.axis)},
+                      {"bin", BreakdownBinName(b.lower, b.upper)},
+                      {"lower", b.lower},
+                      {"upper", b.upper},
+                      {"num_valid_labels", b.num_valid_labels},
+                      {"at_threshold", OperatingPointJson(b.at_threshold)},
+                      {"ap_r40", b.curve.ap_r40},
+                      {"ap_r11", b.curve.ap_r11},
+                      {"ap_voc", b.curve.ap_voc},
+                      {"brier_over_labels", b.brier.over_labels},
+                      {"brier_over_detections", b.brier.over_detections},
+                      {"brier_over_all", b.brier.over_all}});
+    }
+    e["breakdown"] = bins;
   }
   AddCurveFile(e, CurveFile("pr_", r, suffix), r.curve.size());
   e["roc_csv"] = CurveFile("roc_", r, suffix);
@@ -495,6 +521,32 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
   }
   write(out_dir / "summary.csv", summary.str());
 
+  // breakdown.csv: one row per cell and bin, when a run has breakdowns (the bins' figures would
+  // repeat summary.csv's keys there).
+  std::ostringstream breakdown;
+  bool any_breakdown = false;
+  breakdown << "class,metric,difficulty,axis,lower,upper,num_valid_labels,ap_r40,ap_r11,ap_voc,"
+               "threshold,tp,fp,fn,precision,recall,brier_labels,brier_detections,brier_all,"
+               "overlaps\n";
+  for (const EvalRun& run : runs) {
+    const std::string tag = DescribeOverlaps(run.options.classes);
+    for (const ClassResult& r : run.result.results) {
+      for (const BreakdownBin& b : r.breakdown) {
+        any_breakdown = true;
+        const OperatingPoint& op = b.at_threshold;
+        breakdown << r.class_name << ',' << OverlapKindName(r.metric) << ','
+                  << DifficultyName(r.difficulty) << ',' << BreakdownAxisName(b.axis) << ','
+                  << Csv(b.lower) << ',' << Csv(b.upper) << ',' << b.num_valid_labels << ','
+                  << Csv(b.curve.ap_r40) << ',' << Csv(b.curve.ap_r11) << ',' << Csv(b.curve.ap_voc)
+                  << ',' << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ',' << op.fn << ','
+                  << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(b.brier.over_labels)
+                  << ',' << Csv(b.brier.over_detections) << ',' << Csv(b.brier.over_all) << ','
+                  << tag << '\n';
+      }
+    }
+  }
+  if (any_breakdown) write(out_dir / "breakdown.csv", breakdown.str());
+
   for (const EvalRun& run : runs) {
     const EvalResult& result = run.result;
     const std::string suffix = RunSuffix(runs, run);
@@ -628,6 +680,21 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
         out << fmt::format("{:<12} {:<4} {:>5} | filtered AP_R40: naive {}, stable {}\n", "", "",
                            "", FormatNumber(fs.naive_curve.ap_r40, 2),
                            FormatNumber(fs.stable_curve.ap_r40, 2));
+      }
+      // Breakdowns: AP_R40 per difficulty, then the operating point and Brier at the operating
+      // point's difficulty.
+      for (size_t k = 0; k < first->breakdown.size(); ++k) {
+        const BreakdownBin& bin = first->breakdown[k];
+        const std::string name =
+            std::string(BreakdownAxisName(bin.axis)) + " " + BreakdownBinName(bin.lower, bin.upper);
+        const std::string aps = cells([&](const ClassResult& r) {
+          return k < r.breakdown.size() ? FormatNumber(r.breakdown[k].curve.ap_r40, 2)
+                                        : std::string("-");
+        });
+        const OperatingPoint& op = bin.at_threshold;
+        out << fmt::format("{:>23} | {:<7}{} |  labels {}  TP {} FP {} FN {}  Brier_L {}\n", name,
+                           "AP_R40", aps, bin.num_valid_labels, op.tp, op.fp, op.fn,
+                           FormatNumber(bin.brier.over_labels, 4));
       }
     }
   }
