@@ -308,18 +308,23 @@ TEST(CocoTest, SummaryInPycocotoolsLayout) {
 }
 
 TEST(CocoTest, ParsesGroundTruthAndResults) {
+  // Unread keys are skipped whatever they hold; a repeated key counts its last value, a repeated
+  // category id its last category (as Python's json and COCO.createIndex do).
   const std::string gt_text = R"({
+    "info": {"year": 2017, "nested": [1, {"a": [[]]}], "images": 7},
     "images": [{"id": 3, "file_name": "a.jpg"}, {"id": 1}, {"id": 3}],
-    "categories": [{"id": 5, "name": "cat"}],
+    "categories": [{"id": 5, "name": "dog"}, {"id": 2}, {"id": 5, "name": "cat"}],
     "annotations": [
-      {"id": 10, "image_id": 1, "category_id": 5, "bbox": [1, 2.5, 3, 4], "area": 11.5,
-       "iscrowd": 0, "segmentation": [[1, 2, 3, 4]]},
+      {"id": 10, "image_id": 1, "category_id": 5, "bbox": [1, 2.5, 3, 4], "area": 2,
+       "iscrowd": 0, "segmentation": [[1, 2, 3, 4]], "area": 11.5},
       {"id": 11, "image_id": 3, "category_id": 5, "bbox": [0, 0, 9, 9], "area": 81,
        "iscrowd": 1, "ignore": 1}]})";
   const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, "gt.json");
   EXPECT_EQ(gt.image_ids, (std::vector<int64_t>{1, 3}));
-  ASSERT_EQ(gt.categories.size(), 1u);
-  EXPECT_EQ(gt.categories[0].name, "cat");
+  ASSERT_EQ(gt.categories.size(), 2u);
+  EXPECT_EQ(gt.categories[0].id, 2);
+  EXPECT_EQ(gt.categories[0].name, "");
+  EXPECT_EQ(gt.categories[1].name, "cat");
   ASSERT_EQ(gt.annotations.size(), 2u);
   EXPECT_EQ(gt.annotations[0].bbox.y, 2.5);
   EXPECT_EQ(gt.annotations[0].area, 11.5);
@@ -385,7 +390,22 @@ TEST(CocoTest, BadFilesNameTheFileAndField) {
                                   "det.json", gt);
             }),
             "det.json: field [0].score: missing");
-  EXPECT_NE(ParseErrorOf([&] { ParseCocoDetections(R"({"image_id": 1})", "det.json", gt); }), "");
+  EXPECT_EQ(ParseErrorOf([&] { ParseCocoDetections(R"({"image_id": 1})", "det.json", gt); }),
+            "det.json: a COCO results file is a JSON array of {image_id, category_id, bbox, "
+            "score}");
+  EXPECT_EQ(ParseErrorOf([&] {
+              ParseCocoDetections(R"([{"image_id": 1, "category_id": 1, "bbox": [0, 0, 1, 1],
+                "score": 1}, 5])",
+                                  "det.json", gt);
+            }),
+            "det.json: field [1]: expected an object, got 5");
+  EXPECT_EQ(ParseErrorOf([] { ParseCocoGroundTruth(R"({"categories": []})", "gt.json"); }),
+            "gt.json: field images: missing");
+  EXPECT_EQ(
+      ParseErrorOf([] { ParseCocoGroundTruth(R"({"images": {}, "categories": []})", "gt.json"); }),
+      "gt.json: field images: expected an array, got an object");
+  EXPECT_EQ(ParseErrorOf([] { ParseCocoGroundTruth("[]", "gt.json"); }),
+            "gt.json: a COCO ground-truth file is a JSON object");
 }
 
 TEST(CocoTest, OptionsCheck) {
