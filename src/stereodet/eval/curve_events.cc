@@ -47,26 +47,32 @@ namespace {
 constexpr size_t kMaxExactAosScores = 256;
 constexpr size_t kAosSamples = 64;
 
-// AssociationEvents; with `similarity_only` only the similarity changes are emitted, and scores
-// whose detections overlap no label are skipped (such a detection changes no pair of the optimal
-// or VOC association, only its own outcome). Cost: one association per distinct score.
-FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& frame,
-                                             const ClassFrame& cf, Difficulty difficulty,
-                                             const StableSelection* selection, bool similarity_only,
-                                             bool with_aos, std::vector<CurveEvent> append_to) {
-  FrameCurveEvents out;
-  out.events = std::move(append_to);
-  std::vector<CurveEvent>* events = &out.events;
+// AssociationEvents for each of `selections` (nullptr: no selection) from one association per
+// distinct score; with `similarity_only` only the similarity changes are emitted, and scores whose
+// detections overlap no label are skipped (such a detection changes no pair of the optimal or VOC
+// association, only its own outcome). out[0].events starts as `append_to`.
+std::vector<FrameCurveEvents> FrameEventsFromAssociations(
+    Matcher matcher, const EvalFrame& frame, const ClassFrame& cf, Difficulty difficulty,
+    const std::vector<const StableSelection*>& selections, bool similarity_only, bool with_aos,
+    std::vector<CurveEvent> append_to) {
+  const size_t n_s = selections.size();
+  std::vector<FrameCurveEvents> out(n_s);
+  if (n_s > 0) out[0].events = std::move(append_to);
   std::vector<uint8_t> has_edge(cf.num_dets(), 0);
   for (int e = 0; e < static_cast<int>(cf.edge_det.size()); ++e) has_edge[cf.edge_det[e]] = 1;
   std::vector<int32_t> order(cf.num_dets());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
-  Tally prev = TallyAssociation(
-      frame, cf, Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity()),
-      selection);
-  out.base_fn = prev.fn;
+  std::vector<Tally> prev(n_s);
+  {
+    const FrameAssociation a =
+        Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity());
+    for (size_t s = 0; s < n_s; ++s) {
+      prev[s] = TallyAssociation(frame, cf, a, selections[s]);
+      out[s].base_fn = prev[s].fn;
+    }
+  }
   std::vector<double> scores;  // the distinct scores at which the association is recomputed
   for (size_t k = 0; k < order.size();) {
     const double score = cf.det_score[order[k]];
@@ -85,19 +91,23 @@ FrameCurveEvents FrameEventsFromAssociations(Matcher matcher, const EvalFrame& f
     scores = std::move(sampled);
   }
   for (const double score : scores) {
-    const Tally cur =
-        TallyAssociation(frame, cf, Associate(matcher, cf, difficulty, score), selection);
-    CurveEvent ev;
-    ev.score = score;
-    // Without AOS the similarity takes no part (it must not add curve points).
-    ev.similarity = with_aos ? cur.similarity - prev.similarity : 0.0;
-    if (!similarity_only) {
-      ev.tp = static_cast<int32_t>(cur.tp - prev.tp);
-      ev.fp = static_cast<int32_t>(cur.fp - prev.fp);
-      ev.fn = static_cast<int32_t>(cur.fn - prev.fn);
+    const FrameAssociation a = Associate(matcher, cf, difficulty, score);
+    for (size_t s = 0; s < n_s; ++s) {
+      const Tally cur = TallyAssociation(frame, cf, a, selections[s]);
+      CurveEvent ev;
+      ev.score = score;
+      // Without AOS the similarity takes no part (it must not add curve points).
+      ev.similarity = with_aos ? cur.similarity - prev[s].similarity : 0.0;
+      if (!similarity_only) {
+        ev.tp = static_cast<int32_t>(cur.tp - prev[s].tp);
+        ev.fp = static_cast<int32_t>(cur.fp - prev[s].fp);
+        ev.fn = static_cast<int32_t>(cur.fn - prev[s].fn);
+      }
+      if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) {
+        out[s].events.push_back(ev);
+      }
+      prev[s] = cur;
     }
-    if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) events->push_back(ev);
-    prev = cur;
   }
   return out;
 }
@@ -254,8 +264,18 @@ void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty dif
 FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
                                    Difficulty difficulty, const StableSelection* selection,
                                    bool with_aos, std::vector<CurveEvent> append_to) {
-  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, selection, false, with_aos,
-                                     std::move(append_to));
+  return std::move(FrameEventsFromAssociations(matcher, frame, cf, difficulty, {selection}, false,
+                                               with_aos, std::move(append_to))
+                       .front());
+}
+
+std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const EvalFrame& frame,
+                                                const ClassFrame& cf, Difficulty difficulty,
+                                                const std::vector<StableSelection>& selections,
+                                                bool with_aos) {
+  std::vector<const StableSelection*> pointers;
+  for (const StableSelection& s : selections) pointers.push_back(&s);
+  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, pointers, false, with_aos, {});
 }
 
 std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const ClassFrame& cf,
@@ -268,9 +288,11 @@ std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const Cl
   };
   EdgeComponents(cf, on_label, &scratch);
   for (int k = 0; k < scratch.num_comps; ++k) {
-    events = FrameEventsFromAssociations(Matcher::kOptimal, frame, scratch.comps[k], difficulty,
-                                         nullptr, true, true, std::move(events))
-                 .events;
+    events =
+        std::move(FrameEventsFromAssociations(Matcher::kOptimal, frame, scratch.comps[k],
+                                              difficulty, {nullptr}, true, true, std::move(events))
+                      .front()
+                      .events);
   }
   return events;
 }

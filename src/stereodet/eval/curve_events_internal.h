@@ -45,6 +45,12 @@ FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, cons
                                    Difficulty difficulty,
                                    const StableSelection* selection = nullptr, bool with_aos = true,
                                    std::vector<CurveEvent> append_to = {});
+// AssociationEvents for several selections at once (breakdown bins): one association per distinct
+// score serves them all; out[s] is selection s's.
+std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const EvalFrame& frame,
+                                                const ClassFrame& cf, Difficulty difficulty,
+                                                const std::vector<StableSelection>& selections,
+                                                bool with_aos);
 
 // The similarity events (AOS) of the optimal matcher's association on one frame, appended to
 // `append_to`: each connected component of the overlap graph on its own, one-label components in

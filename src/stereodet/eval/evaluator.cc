@@ -256,6 +256,34 @@ FilteredCurve StableExactCurve(Matcher matcher, const std::vector<EvalFrame>& fr
   return SummarizeExact(BuildCurve(std::move(events), num_labels), with_aos);
 }
 
+// StableExactCurve for several selections (breakdown bins), from one association per distinct
+// score of a frame.
+std::vector<FilteredCurve> StableExactCurves(Matcher matcher, const std::vector<EvalFrame>& frames,
+                                             const std::vector<ClassFrame>& cfs,
+                                             Difficulty difficulty,
+                                             const std::vector<StableSelection>& selections,
+                                             bool with_aos, int num_threads) {
+  std::vector<std::vector<FrameCurveEvents>> per_frame(cfs.size());
+  ParallelFor(
+      cfs.size(),
+      [&](size_t i) {
+        per_frame[i] =
+            AssociationEvents(matcher, frames[i], cfs[i], difficulty, selections, with_aos);
+      },
+      num_threads);
+  std::vector<FilteredCurve> curves;
+  for (size_t s = 0; s < selections.size(); ++s) {
+    std::vector<CurveEvent> events;
+    int64_t num_labels = 0;
+    for (size_t i = 0; i < cfs.size(); ++i) {
+      num_labels += per_frame[i][s].base_fn;
+      events.insert(events.end(), per_frame[i][s].events.begin(), per_frame[i][s].events.end());
+    }
+    curves.push_back(SummarizeExact(BuildCurve(std::move(events), num_labels), with_aos));
+  }
+  return curves;
+}
+
 // The stable filter's curves with the KITTI matcher, one per selection: the devkit's pass 2
 // association of the unfiltered set at the unfiltered evaluation's thresholds (made once, whatever
 // the number of selections), counted under each selection, then the devkit's 41-slot arithmetic
@@ -632,10 +660,12 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
                 StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
           }
         }
-        std::vector<FilteredCurve> kitti_bin_curves;
-        if (kitti && !bins.empty()) {
-          kitti_bin_curves = StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds, bins,
-                                               with_aos, threads, /*empty_slots_zero=*/true);
+        std::vector<FilteredCurve> bin_curves;
+        if (!bins.empty()) {
+          bin_curves = kitti ? StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds, bins,
+                                                 with_aos, threads, /*empty_slots_zero=*/true)
+                             : StableExactCurves(options.matcher, frames, cfs, difficulty, bins,
+                                                 with_aos, threads);
         }
         for (size_t k = 0; k < bins.size(); ++k) {
           const StableSelection& selection = bins[k];
@@ -645,9 +675,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           bin.upper = selection.upper;
           bin.num_valid_labels = CountValidLabels(frames, cfs, difficulty, selection);
           bin.at_threshold = CountStable(frames, cfs, assocs[d], selection, t_op);
-          bin.curve = kitti ? std::move(kitti_bin_curves[k])
-                            : StableExactCurve(options.matcher, frames, cfs, difficulty, selection,
-                                               with_aos, threads);
+          bin.curve = std::move(bin_curves[k]);
           if (bin.num_valid_labels == 0) {  // no label in the bin: no recall, AP undefined
             bin.curve.ap_r40 = bin.curve.ap_r11 = bin.curve.ap_voc = kNaN;
             bin.curve.aos_r40 = bin.curve.aos_r11 = kNaN;
