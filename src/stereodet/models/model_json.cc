@@ -113,7 +113,16 @@ StereoOptions ReadStereoRecord(const std::string& text, const std::string& sourc
   const nlohmann::json j = ParseJsonText(text, source);
   if (!j.is_object() || !j.contains("stereo")) return StereoOptions();
   if (!j["stereo"].is_object()) throw ParseError(source, 0, "stereo", "expected an object");
-  return StereoOptionsFromJson(j["stereo"].dump(), source);
+  try {
+    return StereoOptionsFromJson(j["stereo"].dump(), source);
+  } catch (const std::invalid_argument& e) {
+    // A value out of range (StereoOptions' checks; found by the model_json fuzzer: a ground
+    // min_inlier_fraction of 1.2). The checks' message names the setting; it starts with the
+    // source, which ParseError adds again.
+    std::string message = e.what();
+    if (message.rfind(source + ": ", 0) == 0) message.erase(0, source.size() + 2);
+    throw ParseError(source, 0, "stereo", message);
+  }
 }
 
 }  // namespace stereodet
