@@ -358,17 +358,14 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
   options.command_line = ProcessCommandLine();
   const CocoEvaluationResult run = RunCocoEvaluation(options);
   const CocoEvalResult& r = run.result;
+  // Left out as pycocotools leaves them out: worth a line, as they are often a mistake.
   if (r.num_gt_skipped > 0) {
-    fmt::print(
-        "{} ground-truth annotations of images or categories the file does not list were "
-        "left out, as pycocotools leaves them out\n",
-        r.num_gt_skipped);
+    fmt::print("annotations of an image or category the ground truth does not list, left out: {}\n",
+               r.num_gt_skipped);
   }
   if (r.num_detections_skipped > 0) {
-    fmt::print(
-        "{} detections of categories the ground truth does not list were left out, as "
-        "pycocotools leaves them out\n",
-        r.num_detections_skipped);
+    fmt::print("detections of a category the ground truth does not list, left out: {}\n",
+               r.num_detections_skipped);
   }
   fmt::print("{}", FormatCocoSummary(r));
   fmt::print(
