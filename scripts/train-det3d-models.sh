@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Reproduces the 3D detectors models/det3d-{lidar,stereo} from seed 1 (docs/det3d.md "Reproducing
-# the checkpoints"):
+# Reproduces the 3D detectors models/det3d-{lidar,stereo} from seed 1 (or DET3D_SEED) (docs/det3d.md
+# "Reproducing the checkpoints"):
 #   1. the synthetic data set with LiDAR scans: DET3D_FRAMES frames, seed 1, a DET3D_VAL_FRACTION
 #      share in val (default 2500 frames: 2000 train, 500 val);
 #   2. the stereo point clouds of every frame (`stereo --encode points`, default settings) into
@@ -15,6 +15,9 @@
 #   DET3D_FRAMES=2500            frames of the synthetic set (train + val)
 #   DET3D_VAL_FRACTION=0.2       share of them in val
 #   DET3D_EPOCHS=12              epochs
+#   DET3D_SEED=1                 training seed; seed 1 trains MODELS_DIR/det3d-INPUT (the committed
+#                                models), any other seed S MODELS_DIR/det3d-INPUT-seedS on the same
+#                                data (the training variance of docs/experiment.md)
 #   DET3D_PARALLEL=1             train one after the other (default); 2 trains both at once, one
 #                                core each (output then goes to MODELS_DIR/det3d-*.out)
 #   DET3D_FORCE=1                retrain a finished model (model.pt without checkpoint.pt, as
@@ -28,6 +31,10 @@ inputs=${DET3D_INPUTS:-lidar stereo}
 frames=${DET3D_FRAMES:-2500}
 val_fraction=${DET3D_VAL_FRACTION:-0.2}
 epochs=${DET3D_EPOCHS:-12}
+seed=${DET3D_SEED:-1}
+[[ "$seed" =~ ^[0-9]+$ ]] || { echo "train-det3d-models: DET3D_SEED must be a whole number, got '$seed'" >&2; exit 1; }
+suffix=""
+(( seed == 1 )) || suffix="-seed$seed"
 parallel=${DET3D_PARALLEL:-1}
 force=${DET3D_FORCE:-0}
 extra=${DET3D_EXTRA:-}
@@ -48,7 +55,7 @@ if [[ " $inputs " == *" stereo "* ]]; then
 fi
 
 train() {
-  local input=$1 dir="$models/det3d-$input" mode=--resume
+  local input=$1 dir="$models/det3d-$input$suffix" mode=--resume
   # A finished model without its checkpoint (a committed one) cannot be resumed, and train det3d
   # refuses to train over it silently: retrain it only when asked.
   if [[ -f "$dir/model.pt" && ! -f "$dir/checkpoint.pt" ]]; then
@@ -62,15 +69,15 @@ train() {
   [[ "$input" == stereo ]] && stereo_flags=(--points "$points")
   # shellcheck disable=SC2086  # DET3D_EXTRA is a list of flags
   "$bin" train det3d --data "$data" --split train --input "$input" "${stereo_flags[@]}" \
-    --out "$dir" --epochs "$epochs" --seed 1 --threads 1 "$mode" $extra
+    --out "$dir" --epochs "$epochs" --seed "$seed" --threads 1 "$mode" $extra
 }
 
 mkdir -p "$models"
 pids=()
 for input in $inputs; do
-  echo "==> training det3d-$input ($models/det3d-$input; log: $models/det3d-$input/train_log.csv)"
+  echo "==> training det3d-$input$suffix ($models/det3d-$input$suffix; log: $models/det3d-$input$suffix/train_log.csv)"
   if (( parallel > 1 )); then
-    train "$input" > "$models/det3d-$input.out" 2>&1 &
+    train "$input" > "$models/det3d-$input$suffix.out" 2>&1 &
     pids+=("$!")
   else
     train "$input"
