@@ -2,13 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/fuzz_corpus.h"
 
 namespace stereodet {
 namespace {
@@ -406,6 +410,44 @@ TEST(CocoTest, BadFilesNameTheFileAndField) {
       "gt.json: field images: expected an array, got an object");
   EXPECT_EQ(ParseErrorOf([] { ParseCocoGroundTruth("[]", "gt.json"); }),
             "gt.json: a COCO ground-truth file is a JSON object");
+}
+
+// fuzz/corpus/coco (fuzz/coco_fuzzer.cc): the first byte chooses the file, even a ground truth
+// (evaluated with one detection per annotation), odd a results file (read against a fixed ground
+// truth). Each input parses or throws ParseError, and what parses evaluates to probabilities.
+TEST(CocoTest, FuzzCorpusInputsParseOrThrowParseError) {
+  const std::vector<std::filesystem::path> files = FuzzCorpusFiles("coco");
+  ASSERT_GE(files.size(), 6u) << "the coco corpus is missing";
+  const CocoGroundTruth fixed = OneCategory(
+      {1, 2, 3}, {Box(1, 1, {10, 10, 40, 30}), Box(2, 2, {0, 0, 200, 150}, /*crowd=*/true)});
+  int parsed = 0, rejected = 0;
+  for (const std::filesystem::path& path : files) {
+    SCOPED_TRACE(path.filename().string());
+    const std::string bytes = ReadFile(path);
+    ASSERT_FALSE(bytes.empty());
+    const std::string text = bytes.substr(1);
+    try {
+      CocoGroundTruth gt = fixed;
+      std::vector<CocoDetection> dets;
+      if (bytes[0] % 2 == 0) {
+        gt = ParseCocoGroundTruth(text, "gt.json");
+        for (const CocoAnnotation& a : gt.annotations) {
+          if (std::binary_search(gt.image_ids.begin(), gt.image_ids.end(), a.image_id)) {
+            dets.push_back({a.image_id, a.category_id, a.bbox, 1.0});
+          }
+        }
+      } else {
+        dets = ParseCocoDetections(text, "det.json", fixed);
+      }
+      ++parsed;
+      const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
+      for (const double v : r.stats) EXPECT_TRUE(v == -1 || (v >= 0 && v <= 1)) << v;
+    } catch (const ParseError&) {
+      ++rejected;
+    }
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(rejected, 0);
 }
 
 TEST(CocoTest, OptionsCheck) {

@@ -2,7 +2,7 @@
 // in every normal build: each input either parses or throws ParseError (or std::runtime_error),
 // never anything else, and what parses round-trips. Keeps every crash the fuzzers once found fixed.
 // The other corpora are replayed beside their parsers (run_manifest: util, disparity: stereo,
-// model_json: models_core); EveryCorpusIsReplayed keeps that list complete.
+// model_json: models_core, coco: eval); EveryCorpusIsReplayed keeps that list complete.
 #include "stereodet/util/fuzz_corpus.h"
 
 #include <gtest/gtest.h>
@@ -152,8 +152,8 @@ TEST(FuzzCorpusTest, VelodyneInputsParseOrThrowNamingTheFile) {
 
 TEST(FuzzCorpusTest, EveryCorpusIsReplayed) {
   // A corpus folder that no test replays would let a fixed crash come back unnoticed.
-  const std::vector<std::string> replayed = {"calib",        "disparity", "label",   "model_json",
-                                             "run_manifest", "split",     "velodyne"};
+  const std::vector<std::string> replayed = {"calib",      "coco",         "disparity", "label",
+                                             "model_json", "run_manifest", "split",     "velodyne"};
   std::vector<std::string> found;
   for (const auto& entry : fs::directory_iterator(::stereodet::TestSourceDir() / "fuzz/corpus")) {
     if (entry.is_directory()) found.push_back(entry.path().filename().string());
