@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "stereodet/eval/associate_internal.h"
+#include "stereodet/eval/curve_events_internal.h"
 #include "stereodet/eval/curves.h"
 #include "stereodet/eval/frame_data_internal.h"
 #include "stereodet/eval/kitti_matcher_internal.h"
@@ -46,12 +47,38 @@ struct Step {
   int32_t tp = 0, fp = 0, fn = 0;
 };
 
-// A frame's Brier terms in Evaluate's order (ScoreMetricsAccumulator::Add), flattened by frame:
-// frame f's terms are [begin[f], begin[f + 1]).
+// The frames' Brier terms in Evaluate's order (ScoreMetricsAccumulator::Add), flattened, for the
+// frames that have any (ascending): frame[k]'s terms are values[begin[k], begin[k + 1]). Sparse, so
+// that a breakdown bin, whose terms sit in a few frames, costs a resample only those.
 struct Terms {
+  std::vector<int32_t> frame;
   std::vector<int32_t> begin = {0};
   std::vector<double> values;
-  void EndFrame() { begin.push_back(static_cast<int32_t>(values.size())); }
+  void Add(int32_t f, const std::vector<double>& terms) {
+    if (terms.empty()) return;
+    frame.push_back(f);
+    values.insert(values.end(), terms.begin(), terms.end());
+    begin.push_back(static_cast<int32_t>(values.size()));
+  }
+};
+
+// Per-frame counts of the frames where they are not 0, ascending frame: (frame, count).
+using FrameCounts = std::vector<std::pair<int32_t, int32_t>>;
+
+int64_t WeightedSum(const FrameCounts& counts, const std::vector<int32_t>& w) {
+  int64_t sum = 0;
+  for (const auto& [f, count] : counts) sum += static_cast<int64_t>(w[f]) * count;
+  return sum;
+}
+
+// What the resamples of one breakdown bin of a cell need, per frame (BreakdownBin's figures).
+struct BinData {
+  FrameCounts valid_labels;  // the cell's valid labels in the bin (CountValidLabels)
+  FrameCounts base_fn;       // exact matchers: the bin's FN with no detection (the curve's start)
+  // KITTI: the bin's tally of pass 2's association (TP, FP), changing only at the frame's own
+  // scores; exact matchers: the bin's curve events (AssociationEvents). Descending score.
+  std::vector<Step> steps;
+  Terms label_terms, det_terms, all_terms;
 };
 
 // What the resamples of one class x overlap kind x difficulty need, per frame.
@@ -62,6 +89,8 @@ struct CellData {
   std::vector<int32_t> tp_frames;     // the frame of each
   std::vector<Step> steps;            // descending score, then frame
   Terms label_terms, det_terms, all_terms;
+  std::vector<BinData> bins;  // EvalOptions::breakdowns' bins (none for a cell not evaluated)
+  size_t first_bin = 0;       // the index of bins[0]'s values after every cell's (CellValues)
 };
 
 struct Prepared {
@@ -73,6 +102,59 @@ struct Prepared {
   std::vector<std::vector<uint8_t>> evaluable;  // per class x kind, per frame
   std::vector<BootstrapCell> headers;           // the cells, intervals empty
   std::vector<CellData> cells;
+  size_t num_bins = 0;  // over all cells
+};
+
+// The Brier terms of one frame at the operating point's association `a`, in the order
+// ScoreMetricsAccumulator::Add sums them, with `selection` (a breakdown bin) or without (nullptr).
+struct FrameTerms {
+  std::vector<double> label_terms, det_terms, all_terms;
+};
+FrameTerms BrierTerms(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
+                      Difficulty difficulty, ScoreTransform transform,
+                      const StableSelection* selection) {
+  auto pair_kept = [&](int i, int j) {
+    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
+                                                        frame.detections[cf.det_object[j]]);
+  };
+  FrameTerms out;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    double term = 0.0;
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      if (!pair_kept(i, j)) continue;
+      const double s = ApplyScoreTransform(transform, cf.det_score[j]);
+      term = (1 - s) * (1 - s);
+    } else if (cf.LabelValid(i, difficulty) &&
+               (selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]))) {
+      term = 1.0;
+    } else {
+      continue;
+    }
+    out.label_terms.push_back(term);
+    out.all_terms.push_back(term);
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    const Outcome o = a.det_outcome[j];
+    if (o != Outcome::kTp && o != Outcome::kFp) continue;
+    if (o == Outcome::kTp ? !pair_kept(a.det_label[j], j)
+                          : selection != nullptr &&
+                                !selection->KeepsDetection(frame.detections[cf.det_object[j]])) {
+      continue;
+    }
+    const double s = ApplyScoreTransform(transform, cf.det_score[j]);
+    const double y = o == Outcome::kTp ? 1.0 : 0.0;
+    out.det_terms.push_back((s - y) * (s - y));
+    if (o == Outcome::kFp) out.all_terms.push_back(s * s);
+  }
+  return out;
+}
+
+// Frame f's statistics for one breakdown bin (see BinData).
+struct FrameBin {
+  int32_t valid_labels = 0, base_fn = 0;
+  std::vector<Step> steps;
+  FrameTerms terms;
 };
 
 // Frame f's per-frame statistics for one cell (see CellData), from its ClassFrame.
@@ -80,19 +162,44 @@ struct FrameCell {
   int32_t valid_labels = 0;
   std::vector<double> tp_scores;
   std::vector<Step> steps;
-  std::vector<double> label_terms, det_terms, all_terms;
+  FrameTerms terms;
+  std::vector<FrameBin> bins;
 };
 
-FrameCell FrameStatistics(int32_t f, const ClassFrame& cf, Difficulty difficulty,
-                          const EvalOptions& eval) {
+// `frame` is the EvalFrame `cf` was prepared from; `bins`: the breakdown bins' selections.
+FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& cf,
+                          Difficulty difficulty, const EvalOptions& eval,
+                          const std::vector<StableSelection>& bins) {
   FrameCell out;
-  for (int i = 0; i < cf.num_labels(); ++i) out.valid_labels += cf.LabelValid(i, difficulty);
+  out.bins.resize(bins.size());
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (!cf.LabelValid(i, difficulty)) continue;
+    ++out.valid_labels;
+    const Object& label = frame.labels[cf.label_object[i]];
+    for (size_t s = 0; s < bins.size(); ++s) out.bins[s].valid_labels += bins[s].KeepsLabel(label);
+  }
   if (eval.matcher == Matcher::kKitti) {
     out.tp_scores = KittiCollectTpScores(cf, difficulty).scores;
     // Pass 2's counts change only where a detection of the frame enters: at its distinct scores.
     std::vector<double> scores = cf.det_score;
     std::sort(scores.begin(), scores.end(), std::greater<double>());
     scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
+    if (!bins.empty()) {
+      // The bins' tallies of pass 2's association (StableKittiCurves' counts) at each distinct
+      // score; above the highest, no detection takes part: 0 TP, 0 FP.
+      std::vector<Tally> previous(bins.size());
+      for (const double score : scores) {
+        const FrameAssociation a = KittiAssociate(cf, difficulty, score);
+        for (size_t s = 0; s < bins.size(); ++s) {
+          const Tally t = TallyAssociation(frame, cf, a, &bins[s]);
+          if (t.tp != previous[s].tp || t.fp != previous[s].fp) {
+            out.bins[s].steps.push_back(Step{score, f, static_cast<int32_t>(t.tp - previous[s].tp),
+                                             static_cast<int32_t>(t.fp - previous[s].fp), 0});
+          }
+          previous[s] = t;
+        }
+      }
+    }
     if (!scores.empty()) {
       const std::vector<KittiCounts> counts = KittiAddFrameCounts(cf, difficulty, scores);
       KittiCounts previous;
@@ -113,40 +220,45 @@ FrameCell FrameStatistics(int32_t f, const ClassFrame& cf, Difficulty difficulty
                                                ? OptimalFrameEvents(cf, difficulty)
                                                : VocFrameEvents(cf, difficulty);
     for (const CurveEvent& e : events) out.steps.push_back(Step{e.score, f, e.tp, e.fp, e.fn});
-  }
-  // The Brier terms at the operating point, as ScoreMetricsAccumulator::Add sums them.
-  const FrameAssociation a = Associate(eval.matcher, cf, difficulty, eval.score_threshold);
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    double term = 0.0;
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const double s = ApplyScoreTransform(eval.score_transform, cf.det_score[a.label_det[i]]);
-      term = (1 - s) * (1 - s);
-    } else if (cf.LabelValid(i, difficulty)) {
-      term = 1.0;
-    } else {
-      continue;
+    if (!bins.empty()) {
+      // The bins' curve events (StableExactCurves'). Without the similarity, which only adds
+      // points that repeat their predecessor's precision and recall: no AP changes.
+      const std::vector<FrameCurveEvents> bin_events =
+          AssociationEvents(eval.matcher, frame, cf, difficulty, bins, /*with_aos=*/false);
+      for (size_t s = 0; s < bins.size(); ++s) {
+        out.bins[s].base_fn = static_cast<int32_t>(bin_events[s].base_fn);
+        for (const CurveEvent& e : bin_events[s].events) {
+          out.bins[s].steps.push_back(Step{e.score, f, e.tp, e.fp, e.fn});
+        }
+      }
     }
-    out.label_terms.push_back(term);
-    out.all_terms.push_back(term);
   }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    const Outcome o = a.det_outcome[j];
-    if (o != Outcome::kTp && o != Outcome::kFp) continue;
-    const double s = ApplyScoreTransform(eval.score_transform, cf.det_score[j]);
-    const double y = o == Outcome::kTp ? 1.0 : 0.0;
-    out.det_terms.push_back((s - y) * (s - y));
-    if (o == Outcome::kFp) out.all_terms.push_back(s * s);
+  // The Brier terms at the operating point, as ScoreMetricsAccumulator::Add sums them: the cell's
+  // and each bin's, from one association.
+  const FrameAssociation a = Associate(eval.matcher, cf, difficulty, eval.score_threshold);
+  out.terms = BrierTerms(frame, cf, a, difficulty, eval.score_transform, nullptr);
+  for (size_t s = 0; s < bins.size(); ++s) {
+    out.bins[s].terms = BrierTerms(frame, cf, a, difficulty, eval.score_transform, &bins[s]);
   }
   return out;
 }
 
-void Append(const std::vector<double>& values, Terms* terms) {
-  terms->values.insert(terms->values.end(), values.begin(), values.end());
-  terms->EndFrame();
+void AddTerms(int32_t f, const FrameTerms& frame_terms, Terms* labels, Terms* detections,
+              Terms* all) {
+  labels->Add(f, frame_terms.label_terms);
+  detections->Add(f, frame_terms.det_terms);
+  all->Add(f, frame_terms.all_terms);
 }
 
-// Per-frame statistics of every cell, in Evaluate's cell order.
-Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) {
+void SortByDescendingScore(std::vector<Step>* steps) {
+  std::stable_sort(steps->begin(), steps->end(),
+                   [](const Step& a, const Step& b) { return a.score > b.score; });
+}
+
+// Per-frame statistics of every cell, in Evaluate's cell order, and without `with_breakdowns`
+// none of eval.breakdowns' bins.
+Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval,
+                 bool with_breakdowns) {
   Prepared p;
   p.matcher = eval.matcher;
   p.compat = eval.compat;
@@ -163,6 +275,22 @@ Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) 
   }
   const OverlapArithmetic arithmetic =
       eval.matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
+  // The bins of every breakdown, in Evaluate's order (ClassResult::breakdown).
+  std::vector<StableSelection> bins;
+  std::vector<BootstrapBin> bin_headers;
+  if (with_breakdowns) {
+    for (const BreakdownOptions& breakdown : eval.breakdowns) {
+      for (int b = 0; b < breakdown.num_bins(); ++b) {
+        bins.push_back(
+            StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
+        BootstrapBin header;
+        header.axis = breakdown.axis;
+        header.lower = breakdown.edges[b];
+        header.upper = breakdown.edges[b + 1];
+        bin_headers.push_back(header);
+      }
+    }
+  }
   std::vector<ClassFrame> cfs(n);
   for (const ClassSpec& spec : eval.classes) {
     for (const OverlapKind kind : eval.metrics) {
@@ -201,6 +329,7 @@ Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) 
         header.metric = kind;
         header.difficulty = difficulty;
         header.evaluated = evaluated;
+        if (evaluated) header.breakdown = bin_headers;
         p.headers.push_back(header);
         CellData cell;
         cell.class_kind = class_kind;
@@ -209,19 +338,31 @@ Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) 
           ParallelFor(
               n,
               [&](size_t f) {
-                per_frame[f] = FrameStatistics(static_cast<int32_t>(f), cfs[f], difficulty, eval);
+                per_frame[f] = FrameStatistics(static_cast<int32_t>(f), frames[f], cfs[f],
+                                               difficulty, eval, bins);
               },
               threads);
           cell.valid_labels.resize(n);
+          cell.bins.resize(bins.size());
+          cell.first_bin = p.num_bins;
+          p.num_bins += bins.size();
           std::vector<std::pair<double, int32_t>> tp;
           for (size_t f = 0; f < n; ++f) {
             FrameCell& fc = per_frame[f];
+            const auto f32 = static_cast<int32_t>(f);
             cell.valid_labels[f] = fc.valid_labels;
-            for (const double s : fc.tp_scores) tp.emplace_back(s, static_cast<int32_t>(f));
+            for (const double s : fc.tp_scores) tp.emplace_back(s, f32);
             cell.steps.insert(cell.steps.end(), fc.steps.begin(), fc.steps.end());
-            Append(fc.label_terms, &cell.label_terms);
-            Append(fc.det_terms, &cell.det_terms);
-            Append(fc.all_terms, &cell.all_terms);
+            AddTerms(f32, fc.terms, &cell.label_terms, &cell.det_terms, &cell.all_terms);
+            for (size_t s = 0; s < bins.size(); ++s) {
+              const FrameBin& fb = fc.bins[s];
+              BinData& bin = cell.bins[s];
+              if (fb.valid_labels != 0) bin.valid_labels.emplace_back(f32, fb.valid_labels);
+              if (fb.base_fn != 0) bin.base_fn.emplace_back(f32, fb.base_fn);
+              bin.steps.insert(bin.steps.end(), fb.steps.begin(), fb.steps.end());
+              AddTerms(f32, fb.terms, &bin.label_terms, &bin.det_terms, &bin.all_terms);
+            }
+            fc = FrameCell();  // its memory back, as the frames are gathered
           }
           std::stable_sort(tp.begin(), tp.end(),
                            [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -229,8 +370,8 @@ Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) 
             cell.tp_scores.push_back(score);
             cell.tp_frames.push_back(f);
           }
-          std::stable_sort(cell.steps.begin(), cell.steps.end(),
-                           [](const Step& a, const Step& b) { return a.score > b.score; });
+          SortByDescendingScore(&cell.steps);
+          for (BinData& bin : cell.bins) SortByDescendingScore(&bin.steps);
         }
         p.cells.push_back(std::move(cell));
       }
@@ -244,19 +385,21 @@ Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval) 
 double WeightedMean(const Terms& terms, const std::vector<int32_t>& w) {
   double sum = 0.0;
   int64_t count = 0;
-  for (size_t f = 0; f < w.size(); ++f) {
-    const int32_t b = terms.begin[f], e = terms.begin[f + 1];
-    if (b == e) continue;
-    for (int32_t k = 0; k < w[f]; ++k) {
+  for (size_t k = 0; k < terms.frame.size(); ++k) {
+    const int32_t m = w[terms.frame[k]];
+    if (m == 0) continue;
+    const int32_t b = terms.begin[k], e = terms.begin[k + 1];
+    for (int32_t r = 0; r < m; ++r) {
       for (int32_t t = b; t < e; ++t) sum += terms.values[t];
     }
-    count += static_cast<int64_t>(w[f]) * (e - b);
+    count += static_cast<int64_t>(m) * (e - b);
   }
   return count > 0 ? sum / static_cast<double>(count) : kNaN;
 }
 
-// AP_R40 and AP_R11 of the KITTI matcher on the resample (KittiPasses' arithmetic).
-void KittiAp(const Prepared& p, const CellData& cell, const std::vector<int32_t>& w, Values* v) {
+// The devkit's thresholds of the resample for a cell (getThresholds on its TP scores, each frame's
+// repeated w[f] times, and its n_gt), at most kKittiSamplePoints of them.
+std::vector<double> KittiResampleThresholds(const CellData& cell, const std::vector<int32_t>& w) {
   int64_t n_gt = 0;
   for (size_t f = 0; f < w.size(); ++f) n_gt += static_cast<int64_t>(w[f]) * cell.valid_labels[f];
   std::vector<double> scores;
@@ -266,18 +409,30 @@ void KittiAp(const Prepared& p, const CellData& cell, const std::vector<int32_t>
   }
   std::vector<double> thresholds = KittiThresholds(std::move(scores), static_cast<double>(n_gt));
   if (thresholds.size() > kKittiSamplePoints) thresholds.resize(kKittiSamplePoints);
+  return thresholds;
+}
+
+// AP_R40 and AP_R11 of the KITTI matcher on the resample from `steps` counted at `thresholds`: the
+// cell's (KittiPasses' arithmetic: 0 / 0 kept as NaN, the devkit's or with `openpcdet_envelope`
+// numpy's envelope), or with `empty_slots_zero` a breakdown bin's (StableKittiCurves': precision 0
+// where the bin holds no detection, the devkit's envelope).
+void KittiAp(const std::vector<Step>& steps, const std::vector<double>& thresholds,
+             const std::vector<int32_t>& w, bool openpcdet_envelope, bool empty_slots_zero,
+             Values* v) {
   std::array<double, kKittiSamplePoints> precision{};
   int64_t tp = 0, fp = 0;
   size_t k = 0;
   for (size_t t = 0; t < thresholds.size(); ++t) {
-    for (; k < cell.steps.size() && cell.steps[k].score >= thresholds[t]; ++k) {
-      const Step& s = cell.steps[k];
+    for (; k < steps.size() && steps[k].score >= thresholds[t]; ++k) {
+      const Step& s = steps[k];
       tp += static_cast<int64_t>(w[s.frame]) * s.tp;
       fp += static_cast<int64_t>(w[s.frame]) * s.fp;
     }
-    precision[t] = static_cast<double>(tp) / static_cast<double>(tp + fp);
+    precision[t] = empty_slots_zero && tp + fp == 0
+                       ? 0.0
+                       : static_cast<double>(tp) / static_cast<double>(tp + fp);
   }
-  if (p.compat == EvalCompat::kOpenPcdet) {
+  if (openpcdet_envelope) {
     precision = OpenPcdetEnvelope(precision);
   } else {
     for (size_t t = 0; t < thresholds.size(); ++t) {
@@ -288,17 +443,18 @@ void KittiAp(const Prepared& p, const CellData& cell, const std::vector<int32_t>
   (*v)[static_cast<int>(BootstrapMetric::kApR11)] = KittiApR11(precision);
 }
 
-// AP_R40, AP_R11 and every-point AP of the exact curve (BuildCurve on the resample's events).
-void ExactAp(const CellData& cell, const std::vector<int32_t>& w, Values* v) {
+// AP_R40, AP_R11 and every-point AP of the exact curve (BuildCurve on the resample's events),
+// starting from `base_fn` FN.
+void ExactAp(const std::vector<Step>& steps, int64_t base_fn, const std::vector<int32_t>& w,
+             Values* v) {
   CurvePoint current;
-  for (size_t f = 0; f < w.size(); ++f)
-    current.fn += static_cast<int64_t>(w[f]) * cell.valid_labels[f];
+  current.fn = base_fn;
   std::vector<CurvePoint> curve;
-  for (size_t i = 0; i < cell.steps.size();) {
-    const double score = cell.steps[i].score;
+  for (size_t i = 0; i < steps.size();) {
+    const double score = steps[i].score;
     bool present = false;
-    for (; i < cell.steps.size() && cell.steps[i].score == score; ++i) {
-      const Step& s = cell.steps[i];
+    for (; i < steps.size() && steps[i].score == score; ++i) {
+      const Step& s = steps[i];
       const int64_t m = w[s.frame];
       if (m == 0) continue;
       present = true;
@@ -316,7 +472,15 @@ void ExactAp(const CellData& cell, const std::vector<int32_t>& w, Values* v) {
   (*v)[static_cast<int>(BootstrapMetric::kApVoc)] = EveryPointAp(curve);
 }
 
-// Every cell's metrics on the resample with frame counts `w`.
+void WeightedBrier(const Terms& labels, const Terms& detections, const Terms& all,
+                   const std::vector<int32_t>& w, Values* v) {
+  (*v)[static_cast<int>(BootstrapMetric::kBrierLabels)] = WeightedMean(labels, w);
+  (*v)[static_cast<int>(BootstrapMetric::kBrierDetections)] = WeightedMean(detections, w);
+  (*v)[static_cast<int>(BootstrapMetric::kBrierAll)] = WeightedMean(all, w);
+}
+
+// Every cell's metrics on the resample with frame counts `w`, then every bin's: cell c's bin k at
+// p.cells.size() + p.cells[c].first_bin + k.
 std::vector<Values> CellValues(const Prepared& p, const std::vector<int32_t>& w) {
   const size_t n = w.size();
   std::vector<uint8_t> evaluated(p.evaluable.size(), 1);
@@ -331,20 +495,36 @@ std::vector<Values> CellValues(const Prepared& p, const std::vector<int32_t>& w)
     for (size_t f = 0; f < n && probabilities; ++f)
       probabilities = !(w[f] > 0 && p.outside_unit[f]);
   }
-  std::vector<Values> out(p.cells.size(), AllNaN());
+  const bool kitti = p.matcher == Matcher::kKitti;
+  std::vector<Values> out(p.cells.size() + p.num_bins, AllNaN());
   for (size_t c = 0; c < p.cells.size(); ++c) {
     const CellData& cell = p.cells[c];
     if (!p.headers[c].evaluated || !evaluated[cell.class_kind]) continue;
     Values& v = out[c];
-    if (p.matcher == Matcher::kKitti) {
-      KittiAp(p, cell, w, &v);
+    // KITTI: the cell's thresholds serve its bins too (Evaluate's ClassResult::kitti_thresholds).
+    std::vector<double> thresholds;
+    if (kitti) {
+      thresholds = KittiResampleThresholds(cell, w);
+      KittiAp(cell.steps, thresholds, w, p.compat == EvalCompat::kOpenPcdet,
+              /*empty_slots_zero=*/false, &v);
     } else {
-      ExactAp(cell, w, &v);
+      int64_t base_fn = 0;
+      for (size_t f = 0; f < n; ++f) base_fn += static_cast<int64_t>(w[f]) * cell.valid_labels[f];
+      ExactAp(cell.steps, base_fn, w, &v);
     }
-    if (probabilities) {
-      v[static_cast<int>(BootstrapMetric::kBrierLabels)] = WeightedMean(cell.label_terms, w);
-      v[static_cast<int>(BootstrapMetric::kBrierDetections)] = WeightedMean(cell.det_terms, w);
-      v[static_cast<int>(BootstrapMetric::kBrierAll)] = WeightedMean(cell.all_terms, w);
+    if (probabilities) WeightedBrier(cell.label_terms, cell.det_terms, cell.all_terms, w, &v);
+    for (size_t k = 0; k < cell.bins.size(); ++k) {
+      const BinData& bin = cell.bins[k];
+      Values& bv = out[p.cells.size() + cell.first_bin + k];
+      if (WeightedSum(bin.valid_labels, w) > 0) {  // else no recall: AP undefined, as Evaluate's
+        if (kitti) {
+          KittiAp(bin.steps, thresholds, w, /*openpcdet_envelope=*/false,
+                  /*empty_slots_zero=*/true, &bv);
+        } else {
+          ExactAp(bin.steps, WeightedSum(bin.base_fn, w), w, &bv);
+        }
+      }
+      if (probabilities) WeightedBrier(bin.label_terms, bin.det_terms, bin.all_terms, w, &bv);
     }
   }
   return out;
@@ -376,12 +556,20 @@ BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
   result.matcher = p.matcher;
   result.cells = p.headers;
   std::vector<double> samples(per_resample.size());
-  for (size_t c = 0; c < result.cells.size(); ++c) {
+  // The intervals of the values at `index` (CellValues' order).
+  auto fill = [&](size_t index, std::array<BootstrapInterval, kNumBootstrapMetrics>* intervals) {
     for (int m = 0; m < kNumBootstrapMetrics; ++m) {
-      BootstrapInterval& interval = result.cells[c].intervals[m];
-      interval.estimate = estimate[c][m];
-      for (size_t r = 0; r < per_resample.size(); ++r) samples[r] = per_resample[r][c][m];
+      BootstrapInterval& interval = (*intervals)[m];
+      interval.estimate = estimate[index][m];
+      for (size_t r = 0; r < per_resample.size(); ++r) samples[r] = per_resample[r][index][m];
       FillInterval(samples, options.confidence, options.keep_samples, &interval);
+    }
+  };
+  for (size_t c = 0; c < result.cells.size(); ++c) {
+    BootstrapCell& cell = result.cells[c];
+    fill(c, &cell.intervals);
+    for (size_t k = 0; k < cell.breakdown.size(); ++k) {
+      fill(p.cells.size() + p.cells[c].first_bin + k, &cell.breakdown[k].intervals);
     }
   }
   return result;
@@ -482,7 +670,7 @@ BootstrapResult Bootstrap(const std::vector<EvalFrame>& frames, const EvalOption
   eval.Check();
   bootstrap.Check();
   const Timer timer;
-  const Prepared p = Prepare(frames, eval);
+  const Prepared p = Prepare(frames, eval, /*with_breakdowns=*/true);
   const int64_t n = static_cast<int64_t>(frames.size());
   const std::vector<Values> estimate = CellValues(p, std::vector<int32_t>(n, 1));
   std::vector<std::vector<Values>> per_resample(bootstrap.num_resamples);
@@ -511,8 +699,8 @@ PairedBootstrapResult PairedBootstrap(const std::vector<EvalFrame>& a,
                                         << "' in A but '" << b[f].id << "' in B";
   }
   const Timer timer;
-  const Prepared pa = Prepare(a, eval);
-  const Prepared pb = Prepare(b, eval);
+  const Prepared pa = Prepare(a, eval, /*with_breakdowns=*/false);
+  const Prepared pb = Prepare(b, eval, /*with_breakdowns=*/false);
   const int64_t n = static_cast<int64_t>(a.size());
   const std::vector<int32_t> ones(n, 1);
   const std::vector<Values> estimate_a = CellValues(pa, ones), estimate_b = CellValues(pb, ones);

@@ -17,6 +17,14 @@
 // BootstrapTest.MatchesEvaluateOnEveryResample says so). AOS, calibration, localization and the
 // filtered statistics are not resampled.
 //
+// With EvalOptions::breakdowns, every bin of every cell (ClassResult::breakdown) gets the same
+// intervals, again exactly what Evaluate gives for the bin on the materialised frame list
+// (BootstrapTest.BreakdownBinsMatchEvaluateOnEveryResample*): the bin's counts are its
+// StableSelection's tally of the cell's association, stored per frame as above, at the same
+// thresholds as the cell's (KITTI: the resample's own, from the whole cell's TP scores), with a
+// bin's empty threshold slot at precision 0 and NaN AP for a bin without a valid label
+// (breakdown.h, evaluator.cc). PairedBootstrap resamples the cells only.
+//
 //   BootstrapOptions bootstrap;                   // 1000 resamples, seed 1, 95 %
 //   BootstrapResult b = Bootstrap(frames, eval_options, bootstrap);
 //   const BootstrapInterval& ap = b.Find("Car", OverlapKind::k3D, Difficulty::kModerate)
@@ -41,7 +49,7 @@
 namespace stereodet {
 
 // At most this many resamples: Bootstrap keeps every resample's values until the end, 48 bytes per
-// cell and resample (27 cells x 10^5 resamples: 130 MB).
+// cell or breakdown bin and resample (27 cells x 10^5 resamples: 130 MB; with 3 bins per cell, 4x).
 inline constexpr int kMaxBootstrapResamples = 100000;
 
 struct BootstrapOptions {
@@ -93,6 +101,17 @@ struct BootstrapInterval {
   std::vector<double> samples;
 };
 
+// One bin of a cell's breakdown (BreakdownBin), in ClassResult::breakdown's order.
+struct BootstrapBin {
+  BreakdownAxis axis = BreakdownAxis::kDistance;
+  double lower = 0.0, upper = 0.0;  // the bin [lower, upper), in the axis' unit
+  // By BootstrapMetric, as BreakdownBin's figures: AP NaN in a resample where the bin holds no
+  // valid label (or the cell is not evaluated), Brier NaN where it has no term.
+  std::array<BootstrapInterval, kNumBootstrapMetrics> intervals;
+
+  const BootstrapInterval& Get(BootstrapMetric m) const { return intervals[static_cast<int>(m)]; }
+};
+
 // One class x overlap kind x difficulty, in Evaluate's order.
 struct BootstrapCell {
   std::string class_name;
@@ -101,6 +120,10 @@ struct BootstrapCell {
   // As ClassResult::evaluated on the frames as given; false: every interval NaN.
   bool evaluated = true;
   std::array<BootstrapInterval, kNumBootstrapMetrics> intervals;  // by BootstrapMetric
+  // With EvalOptions::breakdowns (Bootstrap only; empty in PairedBootstrap's results): every
+  // breakdown's bins, in the options' order, bins ascending, as ClassResult::breakdown; empty for
+  // a cell that is not evaluated.
+  std::vector<BootstrapBin> breakdown;
 
   const BootstrapInterval& Get(BootstrapMetric m) const { return intervals[static_cast<int>(m)]; }
 };
@@ -131,7 +154,8 @@ BootstrapResult Bootstrap(const std::vector<EvalFrame>& frames, const EvalOption
                           const BootstrapOptions& bootstrap);
 
 // Two detection sets of the same frames (same ids, same order; the labels of `a` and `b` should be
-// the same), resampled with the same frame counts. `difference` holds, per cell and metric, the
+// the same), resampled with the same frame counts. eval.breakdowns are not resampled (the cells'
+// BootstrapCell::breakdown stay empty). `difference` holds, per cell and metric, the
 // estimate A - B and the percentile interval of the resamples' A - B (over the resamples where
 // both are numbers); `a` and `b` are Bootstrap's results for each. A cell evaluated in only one of
 // them has a NaN difference.

@@ -50,6 +50,25 @@ double Reported(const ClassResult& r, BootstrapMetric m) {
   return 0;
 }
 
+// The metric as Evaluate reports it for a breakdown bin.
+double Reported(const BreakdownBin& b, BootstrapMetric m) {
+  switch (m) {
+    case BootstrapMetric::kApR40:
+      return b.curve.ap_r40;
+    case BootstrapMetric::kApR11:
+      return b.curve.ap_r11;
+    case BootstrapMetric::kApVoc:
+      return b.curve.ap_voc;
+    case BootstrapMetric::kBrierLabels:
+      return b.brier.over_labels;
+    case BootstrapMetric::kBrierDetections:
+      return b.brier.over_detections;
+    case BootstrapMetric::kBrierAll:
+      return b.brier.over_all;
+  }
+  return 0;
+}
+
 std::vector<EvalFrame> SmallFrames(uint64_t seed, int num_frames = 24) {
   RandomFramesOptions o;
   o.num_frames = num_frames;
@@ -95,6 +114,223 @@ void ExpectExact(const std::vector<EvalFrame>& frames, const EvalOptions& eval, 
     }
   }
   EXPECT_GT(compared, resamples * 10);  // most cells have numbers
+}
+
+// What ExpectBinsExact compared: numbers, and NaN where Evaluate has NaN AP for lack of labels.
+struct BinComparison {
+  int numbers = 0;
+  int nan_ap_with_brier = 0;  // AP NaN (no valid label in the bin), Brier over detections defined
+};
+
+// ExpectExact for the breakdown bins: every bin of every cell, in every resample, against the bins
+// of Evaluate on the materialised frame list, bit for bit; the estimates against Evaluate's bins.
+BinComparison ExpectBinsExact(const std::vector<EvalFrame>& frames, const EvalOptions& eval,
+                              int resamples) {
+  BootstrapOptions b;
+  b.num_resamples = resamples;
+  b.seed = 11;
+  b.keep_samples = true;
+  b.num_threads = 2;
+  const BootstrapResult boot = Bootstrap(frames, eval, b);
+  const EvalResult whole = Evaluate(frames, eval);
+  BinComparison seen;
+  EXPECT_EQ(boot.cells.size(), whole.results.size());
+  if (boot.cells.size() != whole.results.size()) return seen;
+  // A bin's values against Evaluate's (`r`: the resample, -1 for the estimate).
+  auto compare = [&](const EvalResult& expected_result, int r) {
+    for (size_t c = 0; c < boot.cells.size(); ++c) {
+      const BootstrapCell& cell = boot.cells[c];
+      const ClassResult& expected = expected_result.results[c];
+      if (!cell.evaluated) {
+        EXPECT_TRUE(cell.breakdown.empty());
+        continue;
+      }
+      const size_t num_bins = whole.results[c].breakdown.size();
+      EXPECT_EQ(cell.breakdown.size(), num_bins);
+      if (cell.breakdown.size() != num_bins) continue;
+      for (size_t k = 0; k < num_bins; ++k) {
+        const BootstrapBin& bin = cell.breakdown[k];
+        EXPECT_EQ(bin.axis, whole.results[c].breakdown[k].axis);
+        EXPECT_EQ(bin.lower, whole.results[c].breakdown[k].lower);
+        EXPECT_EQ(bin.upper, whole.results[c].breakdown[k].upper);
+        // A resample where the cell is not evaluated has no bins: every value NaN.
+        const bool has_bins = expected.evaluated;
+        if (has_bins) {
+          EXPECT_EQ(expected.breakdown.size(), num_bins);
+          if (expected.breakdown.size() != num_bins) continue;
+        }
+        for (const BootstrapMetric m : BootstrapMetrics(eval.matcher)) {
+          const double got = r < 0 ? bin.Get(m).estimate : bin.Get(m).samples[r];
+          const double want = has_bins ? Reported(expected.breakdown[k], m) : std::nan("");
+          EXPECT_TRUE(Same(got, want))
+              << (r < 0 ? std::string("estimate") : "resample " + std::to_string(r)) << ", "
+              << expected.class_name << " " << OverlapKindName(expected.metric) << " "
+              << DifficultyName(expected.difficulty) << " " << BreakdownAxisName(bin.axis) << " "
+              << BreakdownBinName(bin.lower, bin.upper) << " " << BootstrapMetricName(m) << ": "
+              << got << " vs " << want;
+          seen.numbers += std::isnan(got) ? 0 : 1;
+        }
+        if (r >= 0 && has_bins && std::isnan(bin.Get(BootstrapMetric::kApR40).samples[r]) &&
+            !std::isnan(bin.Get(BootstrapMetric::kBrierDetections).samples[r])) {
+          ++seen.nan_ap_with_brier;
+        }
+      }
+    }
+  };
+  compare(whole, -1);
+  for (int r = 0; r < resamples; ++r) {
+    const std::vector<int32_t> counts =
+        BootstrapFrameCounts(static_cast<int64_t>(frames.size()), b.seed, r);
+    const EvalResult brute = Evaluate(Materialise(frames, counts), eval);
+    EXPECT_EQ(brute.results.size(), boot.cells.size());
+    if (brute.results.size() != boot.cells.size()) return seen;
+    compare(brute, r);
+  }
+  return seen;
+}
+
+// Random frames where every third detection is a 2D detector's (no 3D box, so no distance: it
+// counts in every distance bin), with the axes of every kind: distance with a bin that holds no
+// label ([-inf, 0): every label is in front of the camera) but the unplaced detections, height,
+// occlusion (labels only: every detection in every bin) and image columns.
+struct BinCase {
+  std::vector<EvalFrame> frames;
+  EvalOptions eval;
+};
+BinCase BreakdownCase(uint64_t seed, Matcher matcher, int num_frames = 20) {
+  RandomFramesOptions o;
+  o.num_frames = num_frames;
+  o.score_decimals = 2;
+  o.seed = seed;
+  BinCase c;
+  c.frames = RandomFrames(o);
+  int k = 0;
+  for (EvalFrame& f : c.frames) {
+    for (Object& d : f.detections) {
+      if (k++ % 3 == 0) d.SetNot3DEstimated();
+    }
+  }
+  c.eval.matcher = matcher;
+  c.eval.num_threads = 2;
+  c.eval.breakdowns = {ParseBreakdown("distance=-inf,0,20,40,inf"),
+                       ParseBreakdown("height=0,40,inf"), ParseBreakdown("occlusion=0,1,3"),
+                       ParseBreakdown("column=-inf,400,800,inf")};
+  return c;
+}
+
+void ExpectBinsExactAndSeen(const BinCase& c, int resamples) {
+  const BinComparison seen = ExpectBinsExact(c.frames, c.eval, resamples);
+  EXPECT_GT(seen.numbers, resamples * 50);  // most bins have numbers
+  // The label-free bin: NaN AP but a Brier over its (unplaced) detections, in every resample where
+  // its cell has any.
+  EXPECT_GT(seen.nan_ap_with_brier, resamples);
+}
+
+TEST(BootstrapTest, BreakdownBinsMatchEvaluateOnEveryResampleKitti) {
+  BinCase c = BreakdownCase(21, Matcher::kKitti);
+  c.eval.metrics = {OverlapKind::k2D, OverlapKind::k3D};
+  ExpectBinsExactAndSeen(c, 10);
+}
+
+TEST(BootstrapTest, BreakdownBinsMatchEvaluateOnEveryResampleOptimal) {
+  BinCase c = BreakdownCase(22, Matcher::kOptimal);
+  c.eval.metrics = {OverlapKind::k2D, OverlapKind::kBev};
+  ExpectBinsExactAndSeen(c, 10);
+}
+
+TEST(BootstrapTest, BreakdownBinsMatchEvaluateOnEveryResampleVocAndOperatingPoint) {
+  BinCase c = BreakdownCase(23, Matcher::kVoc);
+  c.eval.score_threshold = 0.3;
+  c.eval.metrics = {OverlapKind::k2D, OverlapKind::k3D};
+  ExpectBinsExactAndSeen(c, 10);
+}
+
+TEST(BootstrapTest, BreakdownBinsMatchEvaluateOnEveryResampleOpenPcdet) {
+  BinCase c = BreakdownCase(24, Matcher::kKitti, 16);
+  c.eval.compat = EvalCompat::kOpenPcdet;
+  c.eval.score_threshold = 0.4;
+  c.eval.metrics = {OverlapKind::k2D, OverlapKind::kBev};
+  ExpectBinsExactAndSeen(c, 6);
+}
+
+TEST(BootstrapTest, BreakdownBinsMatchEvaluateWithLogitScoresAndCrowdedScenes) {
+  RandomFramesOptions o;
+  o.num_frames = 14;
+  o.crowded = true;
+  o.seed = 25;
+  BinCase c;
+  c.frames = RandomFrames(o);
+  for (EvalFrame& f : c.frames) {
+    for (Object& d : f.detections) d.score = *d.score * 6 - 3;  // logits, outside [0, 1]
+  }
+  c.eval.num_threads = 2;
+  c.eval.matcher = Matcher::kOptimal;
+  c.eval.score_transform = ScoreTransform::kSigmoid;
+  c.eval.breakdowns = {ParseBreakdown("distance=0,5,10,inf"), ParseBreakdown("height=0,60,inf")};
+  EXPECT_GT(ExpectBinsExact(c.frames, c.eval, 5).numbers, 100);
+  c.eval.matcher = Matcher::kKitti;
+  EXPECT_GT(ExpectBinsExact(c.frames, c.eval, 5).numbers, 100);
+}
+
+// A bin (-inf, inf) is the whole cell: with the same draws its samples are the cell's, bit for bit
+// (Brier; and AP for the exact matchers, whose bin curve is the cell's curve, except in a resample
+// without a valid label, where the bin's AP is NaN and the cell's 0).
+TEST(BootstrapTest, BreakdownBinOfEverythingHasTheCellsIntervals) {
+  for (const Matcher matcher : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    EvalOptions eval;
+    eval.matcher = matcher;
+    eval.metrics = {OverlapKind::k2D};
+    eval.num_threads = 2;
+    eval.breakdowns = {ParseBreakdown("height=-inf,inf")};
+    BootstrapOptions b;
+    b.num_resamples = 40;
+    b.keep_samples = true;
+    const BootstrapResult boot = Bootstrap(SmallFrames(26), eval, b);
+    for (const BootstrapCell& cell : boot.cells) {
+      if (!cell.evaluated) continue;
+      ASSERT_EQ(cell.breakdown.size(), 1u);
+      std::vector<BootstrapMetric> same = {BootstrapMetric::kBrierLabels,
+                                           BootstrapMetric::kBrierDetections,
+                                           BootstrapMetric::kBrierAll};
+      if (matcher != Matcher::kKitti) {
+        same.insert(same.end(),
+                    {BootstrapMetric::kApR40, BootstrapMetric::kApR11, BootstrapMetric::kApVoc});
+      }
+      for (const BootstrapMetric m : same) {
+        for (int r = 0; r < b.num_resamples; ++r) {
+          const double bin = cell.breakdown[0].Get(m).samples[r], whole = cell.Get(m).samples[r];
+          // A resample without a valid label of the cell: the bin has no AP, the cell's curve 0.
+          const bool ap = m == BootstrapMetric::kApR40 || m == BootstrapMetric::kApR11 ||
+                          m == BootstrapMetric::kApVoc;
+          const bool no_labels = ap && std::isnan(bin) && whole == 0.0;
+          EXPECT_TRUE(Same(bin, whole) || no_labels)
+              << MatcherName(matcher) << " " << BootstrapMetricName(m) << " resample " << r << ": "
+              << bin << " vs " << whole;
+        }
+        if (cell.breakdown[0].Get(m).num_defined == cell.Get(m).num_defined) {
+          EXPECT_TRUE(Same(cell.breakdown[0].Get(m).lower, cell.Get(m).lower));
+          EXPECT_TRUE(Same(cell.breakdown[0].Get(m).upper, cell.Get(m).upper));
+        }
+      }
+    }
+  }
+}
+
+TEST(BootstrapTest, PairedLeavesTheBreakdownsOut) {
+  const std::vector<EvalFrame> frames = SmallFrames(27, 10);
+  EvalOptions eval;
+  eval.num_threads = 2;
+  eval.breakdowns = {ParseBreakdown("distance=0,30,inf")};
+  BootstrapOptions b;
+  b.num_resamples = 5;
+  const PairedBootstrapResult paired = PairedBootstrap(frames, frames, eval, b);
+  for (const BootstrapResult* r : {&paired.a, &paired.b, &paired.difference}) {
+    for (const BootstrapCell& cell : r->cells) EXPECT_TRUE(cell.breakdown.empty());
+  }
+  const BootstrapResult single = Bootstrap(frames, eval, b);
+  bool any = false;
+  for (const BootstrapCell& cell : single.cells) any |= cell.breakdown.size() == 2;
+  EXPECT_TRUE(any);
 }
 
 TEST(BootstrapTest, MatchesEvaluateOnEveryResampleKitti) {
