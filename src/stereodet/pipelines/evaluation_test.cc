@@ -281,6 +281,48 @@ TEST(RunEvaluationTest, BootstrapIntervalsInResultsJsonAndTheTable) {
   EXPECT_THROW(RunEvaluation(options), std::invalid_argument);
 }
 
+// --bootstrap with --breakdown: each bin of each cell's "breakdown" carries its intervals, whose
+// estimates are the bin's own figures (null where the bin has none); the table's bootstrap block
+// has a line per bin under its cell.
+TEST(RunEvaluationTest, BootstrapIntervalsOfBreakdownBins) {
+  TestTempDir dir;
+  EvaluationOptions options = SmallCar2d();
+  options.out = dir / "eval";
+  options.runs.front().breakdowns = {ParseBreakdown("height=0,40,inf")};
+  BootstrapOptions bootstrap;
+  bootstrap.num_resamples = 40;
+  bootstrap.seed = 5;
+  options.bootstrap = bootstrap;
+  const EvaluationResult result = RunEvaluation(options);
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  int checked = 0;
+  for (const nlohmann::json& cell : j["results"]) {
+    ASSERT_TRUE(cell.contains("breakdown")) << cell.dump();
+    ASSERT_EQ(cell["breakdown"].size(), 2u);
+    for (const nlohmann::json& bin : cell["breakdown"]) {
+      ASSERT_TRUE(bin.contains("bootstrap")) << bin.dump();
+      const nlohmann::json& b = bin["bootstrap"];
+      EXPECT_EQ(b["ap_r40"]["estimate"], bin["ap_r40"]);
+      EXPECT_EQ(b["ap_r11"]["estimate"], bin["ap_r11"]);
+      EXPECT_EQ(b["brier_labels"]["estimate"], bin["brier_over_labels"]);
+      EXPECT_EQ(b["brier_detections"]["estimate"], bin["brier_over_detections"]);
+      EXPECT_EQ(b["brier_all"]["estimate"], bin["brier_over_all"]);
+      EXPECT_FALSE(b.contains("ap_voc"));
+      if (!b["ap_r40"]["lower"].is_null()) {
+        EXPECT_LE(b["ap_r40"]["lower"].get<double>(), b["ap_r40"]["upper"].get<double>());
+        EXPECT_GT(b["ap_r40"]["resamples_defined"].get<int>(), 0);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GE(checked, 3);  // every cell has a bin with intervals
+  const std::string table = FormatEvalTable(result.runs);
+  EXPECT_THAT(table, ::testing::ContainsRegex(
+                         "\nCar +2d +Moderate +[|] [^\n]+\n +height [[]0, 40[)] +[|] "
+                         "[-0-9.]+ [[][-0-9.]+, [-0-9.]+[]] +[-0-9.]+ [[][^\n]+\n +height "
+                         "[[]40, inf[)] +[|] "));
+}
+
 // eval compare --bootstrap: the paired intervals in OUT/bootstrap.csv; A vs A is exactly zero.
 TEST(RunEvaluationCompareTest, PairedBootstrapCsv) {
   TestTempDir dir;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -78,16 +79,29 @@ json BootstrapSummaryJson(const BootstrapResult& result) {
               {"seconds", result.seconds}};
 }
 
-json BootstrapCellJson(const BootstrapCell& cell, Matcher matcher) {
+namespace {
+
+json IntervalsJson(const std::array<BootstrapInterval, kNumBootstrapMetrics>& intervals,
+                   Matcher matcher) {
   json j = json::object();
   for (const BootstrapMetric m : BootstrapMetrics(matcher)) {
-    const BootstrapInterval& i = cell.Get(m);
+    const BootstrapInterval& i = intervals[static_cast<int>(m)];
     j[BootstrapMetricName(m)] = {{"estimate", i.estimate},
                                  {"lower", i.lower},
                                  {"upper", i.upper},
                                  {"resamples_defined", i.num_defined}};
   }
   return j;
+}
+
+}  // namespace
+
+json BootstrapCellJson(const BootstrapCell& cell, Matcher matcher) {
+  return IntervalsJson(cell.intervals, matcher);
+}
+
+json BootstrapBinJson(const BootstrapBin& bin, Matcher matcher) {
+  return IntervalsJson(bin.intervals, matcher);
 }
 
 std::string FormatBootstrapTable(const BootstrapResult& result) {
@@ -107,6 +121,14 @@ std::string FormatBootstrapTable(const BootstrapResult& result) {
       out << fmt::format(" {:<26}", WithInterval(cell.Get(m), Decimals(m)));
     }
     out << "\n";
+    for (const BootstrapBin& bin : cell.breakdown) {
+      out << fmt::format("{:>26} |", std::string(BreakdownAxisName(bin.axis)) + " " +
+                                         BreakdownBinName(bin.lower, bin.upper));
+      for (const BootstrapMetric m : metrics) {
+        out << fmt::format(" {:<26}", WithInterval(bin.Get(m), Decimals(m)));
+      }
+      out << "\n";
+    }
   }
   return WithoutTrailingBlanks(out.str());
 }

@@ -19,10 +19,13 @@ nlohmann::json BootstrapSummaryJson(const BootstrapResult& result);
 // BootstrapMetrics(matcher) (BootstrapMetricName keys; NaN as null); each results.json cell's
 // "bootstrap".
 nlohmann::json BootstrapCellJson(const BootstrapCell& cell, Matcher matcher);
+// The same for one breakdown bin: each results.json cell's "breakdown" entry's "bootstrap".
+nlohmann::json BootstrapBinJson(const BootstrapBin& bin, Matcher matcher);
 
 // The printed block: a title line (resamples, frames, seed, confidence), a header, then one line
 // per evaluated cell: class, kind, difficulty, and per metric (AP_R40, AP_R11, AP_VOC for the
-// exact matchers, Brier over labels) "estimate [lower, upper]" (AP 2 decimals, Brier 4).
+// exact matchers, Brier over labels) "estimate [lower, upper]" (AP 2 decimals, Brier 4), each cell
+// followed by one line per breakdown bin ("distance [0, 30)", the same metrics).
 std::string FormatBootstrapTable(const BootstrapResult& result);
 
 // `eval compare --bootstrap` as CSV, one row per cell and metric (BootstrapMetrics order), cells

@@ -310,8 +310,16 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
     for (size_t c = 0; c < run.result.results.size(); ++c) {
       results.push_back(ClassResultJson(run.result.results[c], tag, RunSuffix(runs, run)));
       if (run.bootstrap && c < run.bootstrap->cells.size()) {
-        results.back()["bootstrap"] =
-            BootstrapCellJson(run.bootstrap->cells[c], run.options.matcher);
+        const BootstrapCell& cell = run.bootstrap->cells[c];
+        json& entry = results.back();
+        entry["bootstrap"] = BootstrapCellJson(cell, run.options.matcher);
+        // Each breakdown bin's intervals beside its figures (the same bins, in the same order).
+        if (entry.contains("breakdown") && entry["breakdown"].size() == cell.breakdown.size()) {
+          for (size_t k = 0; k < cell.breakdown.size(); ++k) {
+            entry["breakdown"][k]["bootstrap"] =
+                BootstrapBinJson(cell.breakdown[k], run.options.matcher);
+          }
+        }
       }
     }
   }
