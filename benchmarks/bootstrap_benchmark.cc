@@ -5,6 +5,8 @@
 //    resamples of all 27 cells). The time per resample is (t(R=101) - t(R=1)) / 100.
 //  - BM_BruteForceResample/MATCHER: what one resample costs without the per-frame statistics:
 //    materialise the resampled frame list and Evaluate() it (the test's reference).
+//  - BM_Bootstrap/MATCHER/R/1: the same with --breakdown distance=0,30,50,inf (3 bins per cell:
+//    81 bins beside the 27 cells get intervals too).
 // MATCHER: 0 kitti, 1 optimal.
 //   bootstrap_benchmark --benchmark_min_time=1
 #include <benchmark/benchmark.h>
@@ -36,6 +38,7 @@ void BM_Bootstrap(benchmark::State& state) {
   EvalOptions eval;
   eval.matcher = static_cast<Matcher>(state.range(0));
   eval.num_threads = 2;
+  if (state.range(2) != 0) eval.breakdowns = {ParseBreakdown("distance=0,30,50,inf")};
   BootstrapOptions options;
   options.num_resamples = static_cast<int>(state.range(1));
   options.num_threads = 2;
@@ -48,10 +51,11 @@ void BM_Bootstrap(benchmark::State& state) {
   }
   state.SetLabel(MatcherName(eval.matcher));
   state.counters["resamples"] = static_cast<double>(options.num_resamples);
+  state.counters["breakdown_bins"] = state.range(2) != 0 ? 3 : 0;
   state.counters["car_3d_mod_ap_r40_lower"] = lower;
 }
 BENCHMARK(BM_Bootstrap)
-    ->ArgsProduct({{0, 1}, {1, 101}})
+    ->ArgsProduct({{0, 1}, {1, 101}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime();
