@@ -20,6 +20,7 @@
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/eval_options.h"
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/filter.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/pipelines/evaluation.h"
@@ -641,6 +642,24 @@ void BindEvalOptions(py::module_& m) {
           "filters", [](const EvalOptions& o) { return ConditionsText(o.filter.conditions); },
           [](EvalOptions& o, py::handle v) { o.filter.conditions = ParseConditions(v); })
       .def_property(
+          "breakdowns",
+          [](const EvalOptions& o) {
+            std::vector<std::string> texts;
+            for (const BreakdownOptions& b : o.breakdowns) texts.push_back(BreakdownText(b));
+            return texts;
+          },
+          [](EvalOptions& o, py::handle v) {
+            std::vector<std::string> texts;
+            if (py::isinstance<py::str>(v)) {
+              texts.push_back(v.cast<std::string>());
+            } else {
+              texts = v.cast<std::vector<std::string>>();
+            }
+            o.breakdowns.clear();
+            for (const std::string& text : texts) o.breakdowns.push_back(ParseBreakdown(text));
+          },
+          "breakdowns as the CLI's --breakdown text, e.g. [\"distance=0,30,50,inf\"]")
+      .def_property(
           "filter_mode",
           [](const EvalOptions& o) { return std::string(FilterModeName(o.filter.mode)); },
           [](EvalOptions& o, const std::string& s) {
@@ -704,6 +723,28 @@ filled). docs/metrics.md defines every number.)")
                                d["stable_curve"] = FilteredCurveDict(c.filtered->stable_curve);
                                return d;
                              })
+      .def_property_readonly(
+          "breakdown",
+          [](const ClassResult& c) {
+            py::list bins;
+            for (const BreakdownBin& b : c.breakdown) {
+              py::dict d;
+              d["axis"] = BreakdownAxisName(b.axis);
+              d["bin"] = BreakdownBinName(b.lower, b.upper);
+              d["lower"] = b.lower;
+              d["upper"] = b.upper;
+              d["num_valid_labels"] = b.num_valid_labels;
+              d["at_threshold"] = OperatingPointDict(b.at_threshold);
+              d["curve"] = FilteredCurveDict(b.curve);
+              d["brier_over_labels"] = b.brier.over_labels;
+              d["brier_over_detections"] = b.brier.over_detections;
+              d["brier_over_all"] = b.brier.over_all;
+              bins.append(d);
+            }
+            return bins;
+          },
+          "with EvalOptions.breakdowns: one dict per bin (axis, bin, lower, upper, "
+          "num_valid_labels, at_threshold, curve, brier_*), breakdowns in order, bins ascending")
       .def_property_readonly("brier",
                              [](const ClassResult& c) {
                                py::dict d;

@@ -79,6 +79,7 @@ class EvalOptions:
     score_transform: str
     filters: Any  # set: str, dict or (bound, value) pairs; get: the CLI's text
     filter_mode: str
+    breakdowns: Any  # set: str or list of the CLI's --breakdown texts; get: list of str
     score_threshold: float
     require_detections: bool
     compute_aos: bool
@@ -112,6 +113,7 @@ class ClassResult:
     kitti_aos: np.ndarray
     kitti_thresholds: np.ndarray
     filtered: Optional[Dict[str, Any]]
+    breakdown: List[Dict[str, Any]]
     brier: Dict[str, float]
     ece: float
 

@@ -71,7 +71,7 @@ def _runs(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str],
           overlaps: Union[str, Iterable[str]], filters: Any, filter_mode: str,
           score_threshold: float, score_transform: str, all_classes: bool, calibration_bins: int,
           distance_bin_m: float, max_distance_m: float, records: bool,
-          num_threads: int) -> List[EvalOptions]:
+          num_threads: int, breakdowns: Union[str, Iterable[str]] = ()) -> List[EvalOptions]:
     """The evaluation runs of evaluate()'s keyword arguments, one per overlap set, as the CLI
     builds them (cli/eval_command.cc): the base options with the strict set's class specs
     (KittiClassSpec, or OpenPcdetClassSpec with compat="openpcdet"), then the library's
@@ -97,6 +97,7 @@ def _runs(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str],
     o.matcher = matcher
     o.filters = filters
     o.filter_mode = filter_mode
+    o.breakdowns = breakdowns if isinstance(breakdowns, str) else list(breakdowns)
     o.score_threshold = float(score_threshold)
     o.score_transform = score_transform
     o.require_detections = not all_classes
@@ -133,7 +134,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              score_transform: str = "none", all_classes: bool = False, calibration_bins: int = 10,
              distance_bin_m: float = 5.0, max_distance_m: float = 80.0, records: bool = False,
              lenient: bool = False, missing_as_empty: bool = False, num_threads: int = 0,
-             out: Optional[PathLike] = None) -> EvalResult:
+             out: Optional[PathLike] = None,
+             breakdowns: Union[str, Iterable[str]] = ()) -> EvalResult:
     """Evaluates detections against labels; `stereodet eval` with the same options.
 
     gt, det: folders (gt: a KITTI root with training/label_2, a folder with label_2/, or a folder
@@ -148,6 +150,9 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
       "strict,loose" or ["strict", "loose"] (the CLI's --overlaps): one run each (result.runs).
     filters: "min-area=100,max-distance=40" (the CLI's syntax), a dict {"min_area": 100}, or
       (bound, value) pairs; filter_mode "stable" (the paper's) or "naive".
+    breakdowns: the CLI's --breakdown texts, e.g. ["distance=0,30,50,inf", "occlusion=0,1,2,4"]:
+      every cell again per bin, from one matching (each ClassResult's .breakdown; docs/metrics.md,
+      "Breakdowns").
     score_threshold: the operating point (TP/FP/FN, Brier, calibration, filters).
     score_transform: "none" or "sigmoid" (logit scores; Brier and ECE only).
     all_classes: evaluate classes without any detection too (the devkit skips them).
@@ -172,7 +177,7 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
                  score_threshold=score_threshold, score_transform=score_transform,
                  all_classes=all_classes, calibration_bins=calibration_bins,
                  distance_bin_m=distance_bin_m, max_distance_m=max_distance_m, records=records,
-                 num_threads=num_threads)
+                 num_threads=num_threads, breakdowns=breakdowns)
     target = "" if out is None else os.fspath(out)
     if out is not None and not target:
         raise ValueError("out: an empty path")

@@ -397,6 +397,22 @@ def test_get_official_eval_result_without_alpha_has_no_aos(small):
         stereodet.get_official_eval_result(small[2], dt, 9)
 
 
+def test_breakdowns_are_the_clis(cli, small, tmp_path):
+    label_dir, det_dir = small[:2]
+    args = ("--gt", label_dir, "--det", det_dir, "--metrics", "2d", "--classes", "Car",
+            "--breakdown", "height=0,40,inf", "--breakdown", "occlusion=0,1,4")
+    expected = cli_results(cli, tmp_path, *args)
+    result = stereodet.evaluate(label_dir, det_dir, metrics=["2d"], classes=["Car"],
+                                breakdowns=["height=0,40,inf", "occlusion=0,1,4"])
+    same_as_cli(result, expected)
+    cell = result.find("Car", "2d")  # Moderate
+    assert [b["bin"] for b in cell.breakdown] == ["[0, 40)", "[40, inf)", "[0, 1)", "[1, 4)"]
+    # The height bins partition the cell's true positives (docs/metrics.md, "Breakdowns").
+    assert sum(b["at_threshold"]["tp"] for b in cell.breakdown[:2]) == cell.at_threshold["tp"]
+    with pytest.raises(ValueError, match="edges must increase"):
+        stereodet.evaluate(label_dir, det_dir, breakdowns="distance=30,0")
+
+
 # --- Sweep and compare, against the CLI's CSVs ---
 
 def test_filter_sweep_is_the_clis(cli, small):

@@ -315,6 +315,64 @@ Plot LocalizationFigure(const std::vector<ReportSource>& sources,
   return p;
 }
 
+// The breakdown axes of a cell's results.json entry ("breakdown": eval --breakdown), in order.
+std::vector<std::string> BreakdownAxes(const json* e) {
+  std::vector<std::string> axes;
+  if (e == nullptr || !e->contains("breakdown")) return axes;
+  for (const json& b : (*e)["breakdown"]) {
+    const std::string axis = b.value("axis", "");
+    if (std::find(axes.begin(), axes.end(), axis) == axes.end()) axes.push_back(axis);
+  }
+  return axes;
+}
+
+// AP_R40 per bin of one breakdown axis (eval --breakdown), one bar series per source: the bins are
+// the first source's; a source without them has no bars there.
+Plot BreakdownFigure(const std::vector<ReportSource>& sources,
+                     const std::vector<const json*>& entries, const CellKey& key,
+                     const std::string& axis, const std::string& stem, const Styler& st) {
+  Plot p;
+  p.id = "breakdown_" + axis + "_" + stem;
+  p.title = CellTitle(key, *entries.front()) + ": AP_R40 by " + axis;
+  p.x_label = axis + " bin";
+  p.y_label = "AP_R40 (%)";
+  p.y_min = 0, p.y_max = 100;
+  for (const json& b : (*entries.front())["breakdown"]) {
+    if (b.value("axis", "") == axis) p.categories.push_back(b.value("bin", ""));
+  }
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (entries[i] == nullptr || !entries[i]->contains("breakdown")) continue;
+    PlotSeries s;
+    s.style = SeriesStyle::kBars;
+    s.name = st.Name(sources[i], "AP_R40");
+    s.colour = st.Colour(i, 0);
+    std::vector<std::string> values;
+    for (size_t c = 0; c < p.categories.size(); ++c) {
+      double v = kNaN;
+      int64_t labels = 0;
+      for (const json& b : (*entries[i])["breakdown"]) {
+        if (b.value("axis", "") == axis && b.value("bin", "") == p.categories[c]) {
+          v = Num(b, "ap_r40");
+          labels = b.value("num_valid_labels", 0);
+        }
+      }
+      s.x.push_back(static_cast<double>(c));
+      s.y.push_back(v);
+      values.push_back(fmt::format("{} {} ({} labels)", p.categories[c], Fixed(v, 2), labels));
+    }
+    caption.push_back(fmt::format("{}{}", sources.size() > 1 ? sources[i].label + ": " : "",
+                                  fmt::join(values, ", ")));
+    p.series.push_back(std::move(s));
+  }
+  p.caption = fmt::format(
+      "{}. From the cell's one matching: a pair counts in its label's bin, a detection without a "
+      "value on the axis in every bin (docs/metrics.md, Breakdowns); a bin without labels has no "
+      "bar.",
+      fmt::join(caption, "; "));
+  return p;
+}
+
 Plot BrierFigure(const std::vector<ReportSource>& sources,
                  const std::vector<std::map<CellKey, const json*>>& cells, const CellKey& group,
                  const std::vector<std::string>& difficulties, const std::string& stem,
@@ -680,6 +738,9 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
     figures.push_back({section, ReliabilityFigure(sources, entries, key, stem, st)});
     if (std::any_of(entries.begin(), entries.end(), HasLocalization)) {
       figures.push_back({section, LocalizationFigure(sources, entries, key, stem, st)});
+    }
+    for (const std::string& axis : BreakdownAxes(entries.front())) {
+      figures.push_back({section, BreakdownFigure(sources, entries, key, axis, stem, st)});
     }
     // The group's Brier figure after its last difficulty.
     const json& results = sources.front().results["results"];

@@ -203,6 +203,31 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
   }
 }
 
+// eval --breakdown: one figure per cell and axis, a bar per bin holding results.json's AP_R40.
+TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
+  TestTempDir dir;
+  const fs::path out = dir.path() / "eval";
+  EvaluationOptions options;
+  options.input.gt = kData / "eval_small";
+  options.input.det = kData / "eval_small/det";
+  options.runs.front().classes = {KittiClassSpec("Car")};
+  options.runs.front().metrics = {OverlapKind::k2D};
+  options.runs.front().breakdowns = {ParseBreakdown("height=0,40,inf")};
+  options.out = out;
+  options.report = true;
+  RunEvaluation(options);
+  const json results = ReadReportSource(out, "kitti").results;
+  const json& e = Entry(results, "Car", "2d", "Moderate");
+  ASSERT_EQ(e["breakdown"].size(), 2u);
+  const json figure = SvgData(out / "report/figures/breakdown_height_car_2d_moderate.svg");
+  EXPECT_EQ(figure["categories"], json({"[0, 40)", "[40, inf)"}));
+  ASSERT_EQ(figure["series"].size(), 1u);
+  for (size_t b = 0; b < 2; ++b) {
+    EXPECT_EQ(figure["series"][0]["y"][b], e["breakdown"][b]["ap_r40"]) << b;
+  }
+  EXPECT_THAT(ReadFile(out / "report/index.html"), HasSubstr("AP_R40 by height"));
+}
+
 // The curves results.json names come back exactly, point for point and bit for bit, as the
 // evaluation computed them (the optimal matcher: one point per distinct score; NaN as null).
 TEST(ReportTest, ReadReportSourceLoadsTheExactCurvesOfTheCsvsResultsJsonNames) {
