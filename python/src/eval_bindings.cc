@@ -16,11 +16,11 @@
 
 #include "annos.h"
 #include "common.h"
+#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/eval_options.h"
 #include "stereodet/eval/evaluator.h"
-#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/filter.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/pipelines/evaluation.h"

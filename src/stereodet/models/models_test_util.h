@@ -96,8 +96,7 @@ DetectOptions TinyDetectOptions(const std::filesystem::path& model,
 inline std::vector<Object> TinyLabels(const std::filesystem::path& root, const std::string& id) {
   return ReadObjects(root / "training/label_2" / (id + ".txt")).objects;
 }
-inline std::vector<Object> TinyDetections(const std::filesystem::path& dir,
-                                          const std::string& id) {
+inline std::vector<Object> TinyDetections(const std::filesystem::path& dir, const std::string& id) {
   return ReadObjects(dir / (id + ".txt"), {.kind = ObjectFileKind::kDetection}).objects;
 }
 
