@@ -97,8 +97,8 @@ fuzz:
 	cmake --build build-fuzz -j $(JOBS) --target fuzzers
 	./scripts/run-fuzzers.sh build-fuzz $(FUZZ_SECONDS)
 
-# ASan + UBSan build of everything but LibTorch's models (their tests need an uninstrumented
-# LibTorch) in $(SANITIZE_DIR), then every test there; any report fails the test that caused it.
+# ASan + UBSan build of everything but LibTorch's half of the models (their tests need an
+# uninstrumented LibTorch; models_core, torch-free, is in) in $(SANITIZE_DIR), then every test there; any report fails the test that caused it.
 # About 14 minutes on one core. CONTRIBUTING.md says when to run it.
 SANITIZE_DIR ?= build-sanitize
 SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
