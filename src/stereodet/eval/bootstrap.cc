@@ -113,40 +113,18 @@ struct FrameTerms {
 FrameTerms BrierTerms(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                       Difficulty difficulty, ScoreTransform transform,
                       const StableSelection* selection) {
-  auto pair_kept = [&](int i, int j) {
-    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
-                                                        frame.detections[cf.det_object[j]]);
-  };
   FrameTerms out;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    double term = 0.0;
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const int j = a.label_det[i];
-      if (!pair_kept(i, j)) continue;
-      const double s = ApplyScoreTransform(transform, cf.det_score[j]);
-      term = (1 - s) * (1 - s);
-    } else if (cf.LabelValid(i, difficulty) &&
-               (selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]))) {
-      term = 1.0;
-    } else {
-      continue;
-    }
-    out.label_terms.push_back(term);
-    out.all_terms.push_back(term);
-  }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    const Outcome o = a.det_outcome[j];
-    if (o != Outcome::kTp && o != Outcome::kFp) continue;
-    if (o == Outcome::kTp ? !pair_kept(a.det_label[j], j)
-                          : selection != nullptr &&
-                                !selection->KeepsDetection(frame.detections[cf.det_object[j]])) {
-      continue;
-    }
-    const double s = ApplyScoreTransform(transform, cf.det_score[j]);
-    const double y = o == Outcome::kTp ? 1.0 : 0.0;
-    out.det_terms.push_back((s - y) * (s - y));
-    if (o == Outcome::kFp) out.all_terms.push_back(s * s);
-  }
+  ForEachBrierTerm(
+      frame, cf, a, difficulty, transform, selection,
+      [&](double term, int, int) {
+        out.label_terms.push_back(term);
+        out.all_terms.push_back(term);
+      },
+      [&](double s, Outcome o, int) {
+        const double y = o == Outcome::kTp ? 1.0 : 0.0;
+        out.det_terms.push_back((s - y) * (s - y));
+        if (o == Outcome::kFp) out.all_terms.push_back(s * s);
+      });
   return out;
 }
 

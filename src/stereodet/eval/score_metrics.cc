@@ -54,61 +54,39 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
                                   const FrameAssociation& a, Difficulty difficulty,
                                   const StableSelection* selection) {
   const int num_bins = static_cast<int>(bin_count_.size());
-  auto pair_kept = [&](int i, int j) {
-    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
-                                                        frame.detections[cf.det_object[j]]);
-  };
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const int j = a.label_det[i];
-      if (!pair_kept(i, j)) continue;
-      const double s = ApplyScoreTransform(transform_, cf.det_score[j]);
-      brier_sums_.over_labels += (1 - s) * (1 - s);
-      brier_sums_.over_all += (1 - s) * (1 - s);
-      ++brier_sums_.num_label_terms;
-      ++brier_sums_.num_all_terms;
-      const Object& label = frame.labels[cf.label_object[i]];
-      const Object& det = frame.detections[cf.det_object[j]];
-      const double z = label.box3d.location.z();
-      if (label.Has3D() && det.Has3D() && z >= 0 && z < max_distance_m_) {
-        const int bin = std::min(static_cast<int>(z / distance_bin_m_),
-                                 static_cast<int>(centre_errors_.size()) - 1);
-        centre_errors_[bin].push_back((det.box3d.Centre() - label.box3d.Centre()).norm());
-        depth_errors_[bin].push_back(det.box3d.location.z() - z);
-      }
-    } else if (cf.LabelValid(i, difficulty) &&
-               (selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]))) {
-      // FN, or excused by an ignored (too low) detection: the label's term is there all the same,
-      // so that every detector is scored over the same labels.
-      brier_sums_.over_labels += 1.0;
-      brier_sums_.over_all += 1.0;
-      ++brier_sums_.num_label_terms;
-      ++brier_sums_.num_all_terms;
-    }
-  }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    const Outcome o = a.det_outcome[j];
-    if (o != Outcome::kTp && o != Outcome::kFp) continue;
-    if (o == Outcome::kTp ? !pair_kept(a.det_label[j], j)
-                          : selection != nullptr &&
-                                !selection->KeepsDetection(frame.detections[cf.det_object[j]])) {
-      continue;
-    }
-    const double s = ApplyScoreTransform(transform_, cf.det_score[j]);
-    const double y = o == Outcome::kTp ? 1.0 : 0.0;
-    brier_sums_.over_detections += (s - y) * (s - y);
-    ++brier_sums_.num_detection_terms;
-    if (o == Outcome::kFp) {
-      brier_sums_.over_all += s * s;
-      ++brier_sums_.num_all_terms;
-    }
-    if (s < 0 || s > 1) ++out_of_range_;
-    const double clamped = std::clamp(s, 0.0, 1.0);
-    const int bin = std::min(static_cast<int>(clamped * num_bins), num_bins - 1);
-    ++bin_count_[bin];
-    bin_tp_[bin] += o == Outcome::kTp ? 1 : 0;
-    bin_score_sum_[bin] += s;
-  }
+  ForEachBrierTerm(
+      frame, cf, a, difficulty, transform_, selection,
+      [&](double term, int i, int j) {
+        brier_sums_.over_labels += term;
+        brier_sums_.over_all += term;
+        ++brier_sums_.num_label_terms;
+        ++brier_sums_.num_all_terms;
+        if (j < 0) return;  // a label alone: no localization error
+        const Object& label = frame.labels[cf.label_object[i]];
+        const Object& det = frame.detections[cf.det_object[j]];
+        const double z = label.box3d.location.z();
+        if (label.Has3D() && det.Has3D() && z >= 0 && z < max_distance_m_) {
+          const int bin = std::min(static_cast<int>(z / distance_bin_m_),
+                                   static_cast<int>(centre_errors_.size()) - 1);
+          centre_errors_[bin].push_back((det.box3d.Centre() - label.box3d.Centre()).norm());
+          depth_errors_[bin].push_back(det.box3d.location.z() - z);
+        }
+      },
+      [&](double s, Outcome o, int) {
+        const double y = o == Outcome::kTp ? 1.0 : 0.0;
+        brier_sums_.over_detections += (s - y) * (s - y);
+        ++brier_sums_.num_detection_terms;
+        if (o == Outcome::kFp) {
+          brier_sums_.over_all += s * s;
+          ++brier_sums_.num_all_terms;
+        }
+        if (s < 0 || s > 1) ++out_of_range_;
+        const double clamped = std::clamp(s, 0.0, 1.0);
+        const int bin = std::min(static_cast<int>(clamped * num_bins), num_bins - 1);
+        ++bin_count_[bin];
+        bin_tp_[bin] += o == Outcome::kTp ? 1 : 0;
+        bin_score_sum_[bin] += s;
+      });
 }
 
 BrierScores ScoreMetricsAccumulator::Brier() const {

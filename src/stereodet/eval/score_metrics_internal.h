@@ -19,6 +19,47 @@ namespace stereodet {
 BrierScores WithoutProbabilities(BrierScores brier);
 CalibrationResult WithoutProbabilities(CalibrationResult calibration);
 
+// The Brier terms of one frame's association `a` at the operating point, in the order Evaluate
+// sums them (ScoreMetricsAccumulator::Add and the bootstrap's per-frame terms both come from here):
+// first the labels in order, `on_label(term, i, j)`: a TP pair's label (1 - s)^2 with its detection
+// j, a valid label alone (FN, or excused by an ignored detection) 1 with j = -1; then the TP and FP
+// detections in order, `on_detection(s, outcome, j)` with s the transformed score. With
+// `selection`, only what it keeps: a pair by KeepsPair, a lone label by KeepsLabel, an FP by
+// KeepsDetection.
+template <typename OnLabel, typename OnDetection>
+void ForEachBrierTerm(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
+                      Difficulty difficulty, ScoreTransform transform,
+                      const StableSelection* selection, OnLabel on_label,
+                      OnDetection on_detection) {
+  auto pair_kept = [&](int i, int j) {
+    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
+                                                        frame.detections[cf.det_object[j]]);
+  };
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      if (!pair_kept(i, j)) continue;
+      const double s = ApplyScoreTransform(transform, cf.det_score[j]);
+      on_label((1 - s) * (1 - s), i, j);
+    } else if (cf.LabelValid(i, difficulty) &&
+               (selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]))) {
+      // FN, or excused by an ignored (too low) detection: the label's term is there all the same,
+      // so that every detector is scored over the same labels.
+      on_label(1.0, i, -1);
+    }
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    const Outcome o = a.det_outcome[j];
+    if (o != Outcome::kTp && o != Outcome::kFp) continue;
+    if (o == Outcome::kTp ? !pair_kept(a.det_label[j], j)
+                          : selection != nullptr &&
+                                !selection->KeepsDetection(frame.detections[cf.det_object[j]])) {
+      continue;
+    }
+    on_detection(ApplyScoreTransform(transform, cf.det_score[j]), o, j);
+  }
+}
+
 // Accumulates the operating-point metrics of many frames' associations; Brier(), Calibration() and
 // Localization() then give them.
 class ScoreMetricsAccumulator {
