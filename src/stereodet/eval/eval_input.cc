@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -201,7 +202,8 @@ struct ParsedFrame {
 };
 
 // The one place a frame's bytes become an EvalFrame (LoadEvalFrames and EvalInputFromSources).
-ParsedFrame ParseSource(const EvalFrameSource& source, bool lenient) {
+ParsedFrame ParseSource(const EvalFrameSource& source, bool lenient,
+                        std::optional<double> score_if_missing) {
   const std::string_view nul("\0", 1);
   ParsedFrame out;
   out.frame.id = source.id;
@@ -212,8 +214,16 @@ ParsedFrame ParseSource(const EvalFrameSource& source, bool lenient) {
   out.problems = std::move(labels.problems);
   out.hash = Fnv1a64(nul, Fnv1a64(source.label_text, Fnv1a64(nul, Fnv1a64(source.id))));
   if (source.has_detections) {
-    ObjectFile dets =
-        ParseObjects(source.det_text, source.det_path, {ObjectFileKind::kDetection, lenient});
+    // With a score for lines that lack one, a line may have 15 fields or 16 (kAny, each line on
+    // its own); the 15-field ones get that score.
+    const ObjectFileKind kind =
+        score_if_missing ? ObjectFileKind::kAny : ObjectFileKind::kDetection;
+    ObjectFile dets = ParseObjects(source.det_text, source.det_path, {kind, lenient});
+    if (score_if_missing) {
+      for (Object& object : dets.objects) {
+        if (!object.score) object.score = *score_if_missing;
+      }
+    }
     out.frame.detections = std::move(dets.objects);
     out.problems.insert(out.problems.end(), dets.problems.begin(), dets.problems.end());
     out.hash = Fnv1a64(source.det_text, out.hash);
@@ -260,6 +270,8 @@ void EvalInputOptions::Check() const {
   STEREODET_CHECK(!gt.empty()) << "--gt is required";
   STEREODET_CHECK(!det.empty()) << "--det is required";
   STEREODET_CHECK(num_threads >= 0) << "num_threads = " << num_threads << ", must be >= 0";
+  STEREODET_CHECK(!score_if_missing || std::isfinite(*score_if_missing))
+      << "--score must be a finite number, got " << *score_if_missing;
   shard.Check();
 }
 
@@ -366,7 +378,7 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options) {
           source.det_path.append(det_prefix).append(source.id).append(".txt");
           source.det_text = ReadFile(source.det_path);
         }
-        parsed[i] = ParseSource(source, options.lenient);
+        parsed[i] = ParseSource(source, options.lenient, options.score_if_missing);
         // Without keep_sources the bytes go now: one frame's at a time per thread.
         if (options.keep_sources) sources[i] = std::move(source);
       },
@@ -378,12 +390,14 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options) {
 }
 
 EvalInput EvalInputFromSources(std::vector<EvalFrameSource> sources, bool lenient, int num_threads,
-                               bool keep_sources) {
+                               bool keep_sources, std::optional<double> score_if_missing) {
   STEREODET_CHECK(num_threads >= 0) << "num_threads = " << num_threads << ", must be >= 0";
   EvalInput in;
   std::vector<ParsedFrame> parsed(sources.size());
   ParallelFor(
-      sources.size(), [&](size_t i) { parsed[i] = ParseSource(sources[i], lenient); }, num_threads);
+      sources.size(),
+      [&](size_t i) { parsed[i] = ParseSource(sources[i], lenient, score_if_missing); },
+      num_threads);
   FinishFrames(std::move(parsed), &in);
   if (keep_sources) in.sources = std::move(sources);
   return in;

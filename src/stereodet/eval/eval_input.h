@@ -11,6 +11,7 @@
 #define STEREODET_EVAL_EVAL_INPUT_H_
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,10 @@ struct EvalInputOptions {
   // refuses, unless this is set (`--missing-as-empty`). With a split, the split says which frames
   // count: a frame of it without a detection file is evaluated with no detections.
   bool missing_as_empty = false;
+  // A detection line must have 16 fields, the score last. Set: a line of 15 (a label line) is read
+  // as a detection of this score, so a folder of labels can stand in for detections in a sanity
+  // check (`--score 1`: every label a detection of score 1, AP 1 on the labels themselves).
+  std::optional<double> score_if_missing;
   int num_threads = 0;  // 0 = all hardware threads
   // Read only this shard of the frame list (util/shard.h: a contiguous range of the split's order,
   // or of the sorted label files). What is checked and reported about the folders (ignored files,
@@ -112,7 +117,8 @@ EvalInput LoadEvalFrames(const EvalInputOptions& options);
 // (label_dir, det_dir, ignored_files, det_run, det_not_from_run) are left empty; `sources` is
 // moved into EvalInput::sources when keep_sources. Throws ParseError as LoadEvalFrames does.
 EvalInput EvalInputFromSources(std::vector<EvalFrameSource> sources, bool lenient, int num_threads,
-                               bool keep_sources = false);
+                               bool keep_sources = false,
+                               std::optional<double> score_if_missing = std::nullopt);
 
 }  // namespace stereodet
 

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "stereodet/util/check.h"
@@ -337,6 +338,32 @@ TEST(EvalInputTest, DetectionsWithFloatsInEveryFieldAreRead) {
   const EvalInput in = LoadEvalFrames(f.Options());
   ASSERT_EQ(in.frames[0].detections.size(), 1u);
   EXPECT_EQ(*in.frames[0].detections[0].score, 0.9);
+}
+
+TEST(EvalInputTest, LabelLinesAsDetectionsNeedAScore) {
+  Folders f;
+  // A label line and a detection line in one detection file.
+  Write(f.det / "000000.txt", std::string(kLabel) + kDetection);
+  EXPECT_THAT(ErrorOf(f.Options()),
+              HasSubstr("det/000000.txt:1: field score: missing: the line has 15 fields, expected "
+                        "16 (a detection line, score last); a label line: to evaluate labels as "
+                        "detections, give them a score (`eval --score 1`)"));
+  EvalInputOptions options = f.Options();
+  options.score_if_missing = 0.25;
+  const EvalInput in = LoadEvalFrames(options);
+  ASSERT_EQ(in.frames[0].detections.size(), 2u);
+  EXPECT_EQ(*in.frames[0].detections[0].score, 0.25);  // the label line
+  EXPECT_EQ(*in.frames[0].detections[1].score, 0.9);   // its own score kept
+  EXPECT_EQ(in.frames[0].detections[0].box.right, 200.0);
+  // The same through the sources a shard keeps (eval merge's path).
+  options.keep_sources = true;
+  EvalInput kept = LoadEvalFrames(options);
+  const EvalInput merged = EvalInputFromSources(kept.sources, false, 1, false, 0.25);
+  ASSERT_EQ(merged.frames.size(), in.frames.size());
+  EXPECT_EQ(*merged.frames[0].detections[0].score, 0.25);
+  EXPECT_EQ(merged.input_hash, in.input_hash);
+  options.score_if_missing = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THAT(ErrorOf(options), HasSubstr("--score must be a finite number"));
 }
 
 TEST(EvalInputTest, MissingFoldersAndEmptyOptionsAreErrors) {

@@ -239,6 +239,11 @@ bool ParseLine(std::string_view line, ObjectFileKind kind, Object* object, LineE
     error->field = count < wanted ? count : (count == kDetectionFields ? kDetectionFields - 1 : -1);
     error->message = (count < wanted ? "missing: the line has " : "unexpected: the line has ") +
                      std::to_string(count) + " fields, expected " + ExpectedCount(kind);
+    if (kind == ObjectFileKind::kDetection && count == kLabelFields) {
+      error->message +=
+          "; a label line: to evaluate labels as detections, give them a score "
+          "(`eval --score 1`)";
+    }
     return false;
   }
 

@@ -148,10 +148,12 @@ void WriteEvalShardFiles(const fs::path& dir, const EvalInputOptions& options,
   j["frames_fnv1a64"] = HashHex(Fnv1a64(frames));
   j["shard"] = ShardName(options.shard);
   j["frames"] = input.frames.size();
-  j["input"] = {{"gt", options.gt.string()},
-                {"det", options.det.string()},
-                {"split", options.split},
-                {"lenient", options.lenient}};
+  j["input"] = {
+      {"gt", options.gt.string()},
+      {"det", options.det.string()},
+      {"split", options.split},
+      {"lenient", options.lenient},
+      {"score_if_missing", options.score_if_missing ? json(*options.score_if_missing) : json()}};
   j["ignored_files"] = input.ignored_files;
   j["det_run"] = input.det_run;
   j["det_not_from_run"] = input.det_not_from_run;
@@ -205,6 +207,11 @@ EvalShardInfo ReadEvalShard(const fs::path& dir) {
     info.input.split = in.at("split").get<std::string>();
     const json& lenient = at(in, "lenient", "input.lenient");
     info.input.lenient = expect(lenient, lenient.is_boolean(), "true or false").get<bool>();
+    // Absent in shards written before `--score` existed: unset.
+    if (const auto it = in.find("score_if_missing"); it != in.end() && !it->is_null()) {
+      field = "input.score_if_missing";
+      info.input.score_if_missing = expect(*it, it->is_number(), "a number or null").get<double>();
+    }
     info.input.shard = info.shard;
   } catch (const json::exception& e) {
     throw ParseError(file, 0, field, e.what());
@@ -243,7 +250,8 @@ EvalInput LoadEvalShards(const std::vector<fs::path>& dirs, int num_threads,
         << "eval shards: shard " << k << "/" << n << " is missing (the next given is "
         << ShardName(info.shard) << ", at " << dir.string() << ")";
     STEREODET_CHECK(info.input.gt == first.gt && info.input.det == first.det &&
-                    info.input.split == first.split && info.input.lenient == first.lenient)
+                    info.input.split == first.split && info.input.lenient == first.lenient &&
+                    info.input.score_if_missing == first.score_if_missing)
         << "eval shards: " << dir.string() << " evaluated other input (--gt " << info.input.gt
         << " --det " << info.input.det << " --split '" << info.input.split << "') than "
         << shards.front().second.string();
@@ -273,7 +281,8 @@ EvalInput LoadEvalShards(const std::vector<fs::path>& dirs, int num_threads,
     STEREODET_CHECK_IO(ids.insert(s.id).second)
         << "eval shards: frame " << s.id << " is in more than one shard";
   }
-  EvalInput input = EvalInputFromSources(std::move(sources), first.lenient, num_threads);
+  EvalInput input = EvalInputFromSources(std::move(sources), first.lenient, num_threads,
+                                         /*keep_sources=*/false, first.score_if_missing);
   const json j0 = ShardJson(shards.front().second);
   input.ignored_files = j0.at("ignored_files").get<std::vector<std::string>>();
   input.det_run = j0.at("det_run").get<std::string>();

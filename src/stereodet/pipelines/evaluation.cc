@@ -26,6 +26,7 @@ EvalRunInfo MakeRunInfo(const EvalInputOptions& options, const EvalInput& input)
   info.split_path = options.split;
   info.frames_without_detections = input.frames_without_detections;
   info.lenient = options.lenient;
+  info.score_if_missing = options.score_if_missing;
   info.ignored_files = input.ignored_files;
   info.skipped_lines = input.skipped_lines;
   info.input_hash = input.input_hash;
@@ -216,7 +217,8 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
     EvalInputOptions a, b;
     result.input_a = LoadEvalShards(options.shards, options.input.num_threads, &a);
     result.input_b = LoadEvalShards(options.shards_b, options.input.num_threads, &b);
-    STEREODET_CHECK(a.gt == b.gt && a.split == b.split && a.lenient == b.lenient)
+    STEREODET_CHECK(a.gt == b.gt && a.split == b.split && a.lenient == b.lenient &&
+                    a.score_if_missing == b.score_if_missing)
         << "compare: the shards of A read other labels (--gt " << a.gt.string() << " --split '"
         << a.split << "') than those of B (--gt " << b.gt.string() << " --split '" << b.split
         << "')";

@@ -278,6 +278,7 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
                 {"num_ignored_files", info.ignored_files.size()},
                 {"ignored_files", info.ignored_files},
                 {"lenient", info.lenient},
+                {"score_if_missing", info.score_if_missing ? json(*info.score_if_missing) : json()},
                 {"num_skipped_lines", info.skipped_lines.size()},
                 {"skipped_lines", info.skipped_lines},
                 {"det_run", info.det_run.empty() ? json() : json(info.det_run)},
@@ -749,13 +750,12 @@ std::string FormatCompareCsv(const std::vector<CompareRow>& rows) {
   for (const CompareRow& r : rows) {
     // difference_a_minus_b (the sign issue 13 words the figure in) is appended, so that readers of
     // the earlier columns, by name or by position, read what they read before.
-    csv += fmt::format(
-        "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name, OverlapKindName(r.metric),
-        DifficultyName(r.difficulty), r.lower_m, r.upper_m, r.count_a,
-        FormatNumber(r.abs_depth_error_mean_a_m, 6), r.count_b,
-        FormatNumber(r.abs_depth_error_mean_b_m, 6), FormatNumber(r.difference_b_minus_a_m, 6),
-        FormatNumber(r.centre_error_mean_a_m, 6), FormatNumber(r.centre_error_mean_b_m, 6),
-        r.model_depth_error_m, FormatNumber(0.0 - r.difference_b_minus_a_m, 6));
+    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.class_name,
+                       OverlapKindName(r.metric), DifficultyName(r.difficulty), r.lower_m,
+                       r.upper_m, r.count_a, Csv(r.abs_depth_error_mean_a_m), r.count_b,
+                       Csv(r.abs_depth_error_mean_b_m), Csv(r.difference_b_minus_a_m),
+                       Csv(r.centre_error_mean_a_m), Csv(r.centre_error_mean_b_m),
+                       Csv(r.model_depth_error_m), Csv(0.0 - r.difference_b_minus_a_m));
   }
   return csv;
 }

@@ -26,6 +26,7 @@ struct EvalRunInfo {
   // What was read, as 16 hex digits (empty if not computed): EvalInput::input_hash.
   std::string input_hash;
   bool lenient = false;
+  std::optional<double> score_if_missing;  // EvalInputOptions::score_if_missing (`--score`)
   std::vector<std::string> ignored_files;  // EvalInput::ignored_files
   std::vector<std::string> skipped_lines;  // EvalInput::skipped_lines ("FILE:LINE: field F: ...")
   std::string det_run;                     // EvalInput::det_run (empty: no DET/run.json)
@@ -103,7 +104,8 @@ std::string FormatSweepCsv(const std::vector<SweepRow>& rows, FilterBound bound)
 
 // `stereodet eval compare` as CSV: class, metric, difficulty, lower_m, upper_m, count_a,
 // abs_dz_mean_a, count_b, abs_dz_mean_b, difference_b_minus_a, centre_error_mean_a,
-// centre_error_mean_b, model_dz (metres, 6 decimals; "-" for an empty bin).
+// centre_error_mean_b, model_dz, difference_a_minus_b (metres, the shortest text that reads back
+// exactly, as the other CSVs; an empty cell where a bin has no pair).
 std::string FormatCompareCsv(const std::vector<CompareRow>& rows);
 
 // `stereodet eval compare` as text: per class x metric x difficulty an empty line, a title and a

@@ -465,6 +465,9 @@ Dataset ReadDataset(const json& results) {
   options.det = in.value("det", std::string());
   options.split = in.value("split", std::string());
   options.lenient = in.value("lenient", false);
+  if (in.contains("score_if_missing") && in["score_if_missing"].is_number()) {
+    options.score_if_missing = in["score_if_missing"].get<double>();
+  }
   Dataset d;
   d.input = LoadEvalFrames(options);
   d.root = d.input.label_dir.parent_path();

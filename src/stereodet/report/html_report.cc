@@ -460,9 +460,10 @@ std::vector<ReportSource::Row> ReadCsvRows(const fs::path& path,
   for (int line_number = 2; std::getline(in, line); ++line_number) {
     if (line.empty()) continue;
     ReportSource::Row row;
-    std::stringstream fields(line);
+    // Split keeps empty fields, a last one included ("...,0.3," ends in an empty cell).
     size_t i = 0;
-    for (std::string field; std::getline(fields, field, ','); ++i) {
+    for (const std::string_view field_view : Split(line, ',')) {
+      const std::string field(field_view);
       STEREODET_CHECK_IO(i < names.size()) << path.string() << ":" << line_number
                                            << ": more fields than the header's " << names.size();
       if (kTextColumns.count(names[i]) != 0) {
@@ -472,6 +473,7 @@ std::vector<ReportSource::Row> ReadCsvRows(const fs::path& path,
         const double v = std::strtod(field.c_str(), &end);
         row.number[names[i]] = field.empty() || field == "-" || *end != '\0' ? kNaN : v;
       }
+      ++i;
     }
     rows.push_back(std::move(row));
   }

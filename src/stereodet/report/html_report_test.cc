@@ -19,6 +19,7 @@
 #include "stereodet/pipelines/evaluation.h"
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/strings.h"
 #include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"
 
@@ -86,13 +87,13 @@ std::map<std::string, std::vector<double>> ReadCsv(const fs::path& path) {
   for (std::string name; std::getline(header, name, ',');) names.push_back(name);
   std::map<std::string, std::vector<double>> columns;
   while (std::getline(in, line)) {
-    std::stringstream row(line);
     size_t i = 0;
-    for (std::string cell; std::getline(row, cell, ','); ++i) {
+    for (const std::string_view cell_view : Split(line, ',')) {  // empty cells kept, a last one too
       // Text (a class name), "-" and empty cells are NaN here.
+      const std::string cell(cell_view);
       char* end = nullptr;
       const double v = std::strtod(cell.c_str(), &end);
-      columns[names.at(i)].push_back(cell.empty() || *end != '\0' ? NAN : v);
+      columns[names.at(i++)].push_back(cell.empty() || *end != '\0' ? NAN : v);
     }
   }
   return columns;
