@@ -32,18 +32,18 @@ void RegisterErrorTranslation(py::object parse_error) {
     } catch (const py::error_already_set&) {
       throw;
     } catch (const ParseError& e) {
-      py::object error = py::reinterpret_borrow<py::object>(parse_error_type)(e.what());
+      py::object error = py::reinterpret_borrow<py::object>(parse_error_type)(UserMessage(e));
       error.attr("file") = e.file();
       error.attr("line") = e.line();
       error.attr("field") = e.field();
-      error.attr("message") = e.message();
+      error.attr("message") = DebugMessages() ? e.message() : StripSourceTags(e.message());
       PyErr_SetObject(parse_error_type, error.ptr());
     } catch (const std::invalid_argument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, UserMessage(e).c_str());
     } catch (const std::filesystem::filesystem_error& e) {
-      PyErr_SetString(PyExc_OSError, e.what());
+      PyErr_SetString(PyExc_OSError, UserMessage(e).c_str());
     } catch (const std::runtime_error& e) {
-      PyErr_SetString(PyExc_OSError, e.what());
+      PyErr_SetString(PyExc_OSError, UserMessage(e).c_str());
     }
   });
 }

@@ -42,7 +42,7 @@ void ReadOrNote(SourceFrame& out, Read read) {
   try {
     read();
   } catch (const std::exception& e) {
-    out.error = e.what();
+    out.error = UserMessage(e);
   }
   out.read_s = timer.ElapsedSeconds();
 }
@@ -238,7 +238,7 @@ class VideoSource : public FrameSource {
         try {
           CheckStereoPairSize(left, right, options_.left_video, options_.right_video);
         } catch (const std::exception& e) {
-          out.error = e.what();
+          out.error = UserMessage(e);
         }
       }
     } else {

@@ -186,7 +186,8 @@ StreamSummary RunStream(Detector& detector, FrameSource& source, const StreamOpt
           try {
             f.prepared = detector.Prepare({f.frame.source.frame});
           } catch (const std::exception& e) {
-            f.frame.source.error = e.what();  // a frame the detector refuses; the stream goes on
+            f.frame.source.error =
+                UserMessage(e);  // a frame the detector refuses; the stream goes on
           }
         }
         f.prepare_done = Clock::now();
@@ -211,7 +212,7 @@ StreamSummary RunStream(Detector& detector, FrameSource& source, const StreamOpt
             std::vector<DetectResult> results = detector.Run(std::move(f.prepared));
             f.frame.result = std::move(results.at(0));
           } catch (const std::exception& e) {
-            f.frame.source.error = e.what();
+            f.frame.source.error = UserMessage(e);
           }
         }
         f.network_done = Clock::now();

@@ -16,9 +16,13 @@
 // ends, so the streamed operands are evaluated only when the check fails. The source location and
 // the failed condition are appended for developers. If evaluating a streamed operand itself throws,
 // that exception propagates and the check's own is dropped (never std::terminate).
+//
+// Users read messages without those tags: front ends print UserMessage(error), which strips them
+// unless debug messages are on (`--debug`, or the environment variable STEREODET_DEBUG).
 #ifndef STEREODET_UTIL_CHECK_H_
 #define STEREODET_UTIL_CHECK_H_
 
+#include <exception>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -44,6 +48,21 @@ class ParseError : public std::runtime_error {
   std::string field_;
   std::string message_;
 };
+
+// `message` without the developer tags that failed checks append: every " [NAME.cc:LINE]" and
+// " [NAME.cc:LINE, CONDITION]" (NAME a file name ending in .cc, .h or .cpp; CONDITION with its
+// brackets balanced) is removed, wherever it sits (messages nest: a caller may prefix or wrap a
+// check's message). Anything else in brackets, a tag whose brackets never close included, stays.
+std::string StripSourceTags(std::string_view message);
+
+// Whether users see the source tags: on after SetDebugMessages(true), or when the environment
+// variable STEREODET_DEBUG is set to anything but "" or "0" (read on every call). Off by default.
+// Thread-safe.
+bool DebugMessages();
+void SetDebugMessages(bool on);
+
+// error.what() as a user should read it: StripSourceTags unless DebugMessages().
+std::string UserMessage(const std::exception& error);
 
 namespace internal {
 

@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 namespace stereodet {
 namespace {
 
@@ -140,6 +142,65 @@ TEST(ParseErrorTest, NamesFileLineAndField) {
   EXPECT_EQ(error.field(), "dimensions.h");
   const ParseError whole_file("calib/000001.txt", 0, "", "empty file");
   EXPECT_STREQ(whole_file.what(), "calib/000001.txt: empty file");
+}
+
+TEST(StripSourceTagsTest, RemovesEveryTagAChecksAppends) {
+  EXPECT_EQ(StripSourceTags("bad flag [synth_command.cc:42]"), "bad flag");
+  EXPECT_EQ(StripSourceTags("x = 0, must be >= 1 [check_test.cc:7, x >= 1]"),
+            "x = 0, must be >= 1");
+  // Nested: a caller wrapped a check's message and threw its own.
+  EXPECT_EQ(StripSourceTags("frame 000007: boxes[2] is empty [a.h:3, boxes[i].size() > 0]; "
+                            "retrain [b-c_d.cpp:10]"),
+            "frame 000007: boxes[2] is empty; retrain");
+  EXPECT_EQ(StripSourceTags("no tag here"), "no tag here");
+  EXPECT_EQ(StripSourceTags(""), "");
+}
+
+TEST(StripSourceTagsTest, LeavesOtherBracketsAlone) {
+  // Not a source file, no line, no space before the bracket, a tag that never closes.
+  EXPECT_EQ(StripSourceTags("AP [0.5:1]"), "AP [0.5:1]");
+  EXPECT_EQ(StripSourceTags("bins [a.cc:]"), "bins [a.cc:]");
+  EXPECT_EQ(StripSourceTags("x[a.cc:3]"), "x[a.cc:3]");
+  EXPECT_EQ(StripSourceTags("x [a.cc:3, y[0]"), "x [a.cc:3, y[0]");
+  EXPECT_EQ(StripSourceTags("x [a.cc:3; y]"), "x [a.cc:3; y]");
+  EXPECT_EQ(StripSourceTags("range [0, 50) m"), "range [0, 50) m");
+}
+
+TEST(StripSourceTagsTest, StripsWhatEveryCheckMacroThrows) {
+  const auto message_of = [](const auto& throwing) {
+    try {
+      throwing();
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  const int size = 0;
+  EXPECT_EQ(StripSourceTags(message_of([&] { STEREODET_CHECK(size > 0) << "empty"; })), "empty");
+  EXPECT_EQ(StripSourceTags(message_of([&] { STEREODET_CHECK(size > 0); })),
+            "check failed: size > 0");
+  EXPECT_EQ(StripSourceTags(message_of([&] { STEREODET_CHECK_GE(size, 1) << " (--n)"; })),
+            "size = 0, must be >= 1 (--n)");
+  EXPECT_EQ(StripSourceTags(message_of([] { STEREODET_THROW_IO() << "cannot read a [x]"; })),
+            "cannot read a [x]");
+  const int values[2] = {1, 2};
+  EXPECT_EQ(StripSourceTags(message_of([&] { STEREODET_CHECK(values[size] > 1) << "v"; })), "v");
+}
+
+TEST(UserMessageTest, StripsUnlessDebugMessagesAreOn) {
+  const std::invalid_argument error("bad flag [synth_command.cc:42, n > 0]");
+  ::unsetenv("STEREODET_DEBUG");
+  EXPECT_EQ(UserMessage(error), "bad flag");
+  SetDebugMessages(true);
+  EXPECT_EQ(UserMessage(error), error.what());
+  SetDebugMessages(false);
+  ::setenv("STEREODET_DEBUG", "1", 1);
+  EXPECT_EQ(UserMessage(error), error.what());
+  ::setenv("STEREODET_DEBUG", "0", 1);
+  EXPECT_EQ(UserMessage(error), "bad flag");
+  ::setenv("STEREODET_DEBUG", "", 1);
+  EXPECT_EQ(UserMessage(error), "bad flag");
+  ::unsetenv("STEREODET_DEBUG");
 }
 
 }  // namespace
