@@ -112,6 +112,10 @@ inline CLI::Option* AddSeedOption(CLI::App* cmd, uint64_t* seed, const std::stri
 // RunCommandInProcess on this thread: that call's "stereodet ARGS...", quoted the same way.
 std::string ProcessCommandLine();
 
+// Whether the command line asks for debug messages: an argument "--debug" before any "--". RunCli
+// then keeps the source tags of failed checks in its error line (UserMessage, util/check.h).
+bool DebugRequested(int argc, char** argv);
+
 int RunCli(int argc, char** argv, Program self,
            std::span<const std::pair<std::string_view, AddCommandFn>> own);
 

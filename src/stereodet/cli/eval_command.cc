@@ -135,9 +135,11 @@ std::optional<BootstrapOptions> MakeBootstrapOptions(const EvalArgs& a) {
 // does not demand them of `eval`).
 void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--gt", a->input.gt,
-                  "labels: a KITTI root (with training/label_2) or a folder of .txt");
+                  "labels: a KITTI root (with training/label_2) or a folder of .txt (required, "
+                  "except with --shards or in COCO mode)");
   cmd->add_option("--det", a->input.det,
-                  "detections: a folder of .txt (or with data/ inside, devkit style)");
+                  "detections: a folder of .txt (or with data/ inside, devkit style) (required, "
+                  "except with --shards or in COCO mode)");
   cmd->add_option("--split", a->input.split,
                   "frame ids, one per line (or a name in ROOT/ImageSets)");
   cmd->add_option("--classes", a->classes, "classes, comma separated")->capture_default_str();
@@ -167,6 +169,11 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
                 "KITTI's loose BEV/3D thresholds (0.5/0.25/0.25): --overlaps loose");
   cmd->add_flag("--lenient", a->input.lenient,
                 "skip malformed label/detection lines, count and list them");
+  cmd->add_option_function<double>(
+      "--score", [a](const double& score) { a->input.score_if_missing = score; },
+      "read detection lines without a score (15 fields, as labels have) as detections of this "
+      "score: `--det LABELS --score 1` checks the evaluation on the labels themselves (refused "
+      "without it)");
   cmd->add_flag("--missing-as-empty", a->input.missing_as_empty,
                 fmt::format("without --split: evaluate labelled frames that have no detection file "
                             "as frames without detections, even when more than {:.0f}% lack one "
@@ -524,9 +531,13 @@ void AddEvalCommand(CLI::App& app) {
                                          "along a sweep of one filter bound");
   AddCommonOptions(sweep, sweep_common.get(), false);
   sweep->add_option("--filter", *sweep_bound, "the swept bound, e.g. min-area")->required();
-  sweep->add_option("--from", sweep_options->from)->capture_default_str();
-  sweep->add_option("--to", sweep_options->to)->capture_default_str();
-  sweep->add_option("--step", sweep_options->step)->capture_default_str();
+  sweep->add_option("--from", sweep_options->from, "the bound's first value")
+      ->capture_default_str();
+  sweep
+      ->add_option("--to", sweep_options->to,
+                   "the bound's largest value: from, from + step, ... up to this")
+      ->capture_default_str();
+  sweep->add_option("--step", sweep_options->step, "the bound's step, > 0")->capture_default_str();
   sweep->add_option("--where", sweep_common->filter, "fixed extra filter, e.g. max-distance=40");
   sweep->add_option("--out", sweep_common->out, "write sweep.csv here (default: stdout)");
   sweep->add_option("--shards", sweep_options->shards,
@@ -552,7 +563,10 @@ void AddEvalCommand(CLI::App& app) {
                       "read B's frames from these `eval --shard K/N` folders, instead of --det-b");
   compare->add_option("--calib", compare_options->calib,
                       "a KITTI calib file for b and f (default KITTI-like)");
-  compare->add_option("--disparity-error-px", compare_options->disparity_error_px)
+  compare
+      ->add_option("--disparity-error-px", compare_options->disparity_error_px,
+                   "dd, px: the disparity error of the stereo depth-error model "
+                   "dz = z^2 / (b f) x dd drawn beside the two sets")
       ->capture_default_str();
   compare->add_option("--out", compare_common->out, "write compare.csv here");
   AddBootstrapOptions(compare, compare_common.get(),

@@ -62,6 +62,7 @@ struct DetectArgs {
   StereoFlagText stereo_text;
   std::vector<CLI::Option*> stereo_flags;
   bool quiet = false;
+  bool verbose = false;  // --verbose: the stage times too
 };
 
 // The flags every `train` command shares (the model folder, the schedule, resume/force, seed,
@@ -130,12 +131,15 @@ void WarnIfTrainingUnfinished(const std::filesystem::path& model_dir) {
   if (!warning.empty()) std::fputs(warning.c_str(), stderr);
 }
 
-// The closing lines of `detect ssd|rpn|det3d` (stderr; nothing with --quiet).
-void PrintDetectSummary(const DetectSummary& s, const std::filesystem::path& out_dir, bool quiet) {
+// The closing line of `detect ssd|rpn|det3d` (stderr; nothing with --quiet), and the time of each
+// stage after it with --verbose.
+void PrintDetectSummary(const DetectSummary& s, const std::filesystem::path& out_dir, bool quiet,
+                        bool verbose) {
   if (quiet) return;
-  std::fprintf(stderr, "detected %lld objects in %d frames, %.1f frames/s; wrote %s\n%s",
-               static_cast<long long>(s.detections), s.frames, s.frames_per_second, out_dir.c_str(),
-               s.stage_times.c_str());
+  std::fprintf(stderr, "detected %lld objects in %d frames, %.1f frames/s; wrote %s\n",
+               static_cast<long long>(s.detections), s.frames, s.frames_per_second,
+               out_dir.c_str());
+  if (verbose) std::fputs(s.stage_times.c_str(), stderr);
 }
 
 void RunTrain(TrainArgs& a) {
@@ -201,7 +205,7 @@ void RunDetect(DetectArgs& a) {
   }
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
-  PrintDetectSummary(DetectSsd(options), options.out_dir, a.quiet);
+  PrintDetectSummary(DetectSsd(options), options.out_dir, a.quiet, a.verbose);
 }
 
 struct TrainDet3dArgs {
@@ -213,6 +217,7 @@ struct TrainDet3dArgs {
 struct DetectDet3dArgs {
   DetectDet3dOptions options;
   bool quiet = false;
+  bool verbose = false;  // --verbose: the stage times too
 };
 
 void RunTrainDet3d(TrainDet3dArgs& a) {
@@ -242,7 +247,7 @@ void RunDetectDet3d(DetectDet3dArgs& a) {
   WarnIfTrainingUnfinished(options.model_dir);
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
-  PrintDetectSummary(DetectDet3d(options), options.out_dir, a.quiet);
+  PrintDetectSummary(DetectDet3d(options), options.out_dir, a.quiet, a.verbose);
 }
 
 void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
@@ -297,6 +302,7 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
   AddDetectRunFlags(ds, d);
   AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
+  ds->add_flag("--verbose", dargs->verbose, "after the summary line, the time each stage took");
   ds->callback([dargs] { RunDetectDet3d(*dargs); });
 }
 
@@ -335,6 +341,7 @@ struct TrainRpnArgs {
 struct DetectRpnArgs {
   DetectRpnOptions options;
   bool quiet = false;
+  bool verbose = false;  // --verbose: the stage times too
 };
 
 void RunTrainRpn(TrainRpnArgs& a) {
@@ -369,7 +376,7 @@ void RunDetectRpn(DetectRpnArgs& a) {
   WarnIfTrainingUnfinished(options.model_dir);
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
-  PrintDetectSummary(DetectRpn(options), options.out_dir, a.quiet);
+  PrintDetectSummary(DetectRpn(options), options.out_dir, a.quiet, a.verbose);
 }
 
 void AddRpnCommands(CLI::App* train, CLI::App* detect) {
@@ -436,6 +443,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   AddDetectRunFlags(ds, d);
   AddShardOption(ds, &d.shard);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
+  ds->add_flag("--verbose", dargs->verbose, "after the summary line, the time each stage took");
   ds->callback([dargs] { RunDetectRpn(*dargs); });
 }
 
@@ -496,6 +504,7 @@ void AddModelsCommand(CLI::App& app) {
       "when its stereo.json's settings differ from the model's");
   for (CLI::Option* flag : dargs->stereo_flags) detect_stereo_dir->excludes(flag);
   ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
+  ds->add_flag("--verbose", dargs->verbose, "after the summary line, the time each stage took");
   ds->callback([dargs] { RunDetect(*dargs); });
 
   AddDet3dCommands(train, detect);

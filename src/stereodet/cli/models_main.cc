@@ -11,6 +11,7 @@
 
 #include "stereodet/cli/commands.h"
 #include "stereodet/models/detector.h"
+#include "stereodet/util/check.h"
 
 namespace {
 
@@ -35,7 +36,9 @@ std::vector<std::string> WithModelFamily(int argc, char** argv) {
     args.insert(args.begin() + static_cast<std::ptrdiff_t>(detect) + 1,
                 stereodet::ModelFamily(model));
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "stereodet: error: detect --model: %s\n", e.what());
+    if (stereodet::cli::DebugRequested(argc, argv)) stereodet::SetDebugMessages(true);
+    std::fprintf(stderr, "stereodet: error: detect --model: %s\n",
+                 stereodet::UserMessage(e).c_str());
     std::exit(1);
   }
   return args;

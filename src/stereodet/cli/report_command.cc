@@ -63,8 +63,8 @@ void RunView(const ViewArgs& a) {
   options.classes = CommaList(a.classes);
   const std::optional<Difficulty> difficulty = ParseDifficulty(a.difficulty);
   if (!difficulty) {
-    throw std::invalid_argument("--difficulty: unknown '" + a.difficulty +
-                                "' (easy, moderate, hard)");
+    throw std::invalid_argument("--difficulties: unknown '" + a.difficulty +
+                                "' (one of easy, moderate, hard)");
   }
   options.difficulty = *difficulty;
   options.png = !a.no_png;
@@ -98,9 +98,12 @@ void AddViewCommand(CLI::App& app) {
       ->capture_default_str();
   view->add_option("--classes", args->classes,
                    "classes, comma separated (default: every evaluated class)");
-  view->add_option("--metric", args->options.metric,
-                   "the cell's overlap kind: 2d, bev, 3d (default: the first evaluated)");
-  view->add_option("--difficulty", args->difficulty, "the cell's difficulty: easy, moderate, hard")
+  // Spelled as eval spells them (--metrics, --difficulties), one value each here: a view shows
+  // one cell. The singular spelling works too.
+  view->add_option("--metrics,--metric", args->options.metric,
+                   "the cell's overlap kind, one of 2d, bev, 3d (default: the first evaluated)");
+  view->add_option("--difficulties,--difficulty", args->difficulty,
+                   "the cell's difficulty, one of easy, moderate, hard")
       ->capture_default_str();
   view->add_option("--points", args->options.points,
                    "point clouds (.bin, velodyne frame) for the bird's-eye view instead of "

@@ -1,6 +1,7 @@
 // RunCli: the main() that the front end `stereodet` and its siblings share (see commands.h).
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -8,14 +9,17 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
 #include "stereodet/cli/commands.h"
+#include "stereodet/util/check.h"
 #include "stereodet/util/malloc_tuning.h"
 #include "stereodet/util/strings.h"
 #include "stereodet/util/version.h"
@@ -106,6 +110,88 @@ void AddStandIn(CLI::App& app, const Command& command, const char* argv0) {
   });
 }
 
+// CLI11's help with each exclusion listed once, on the side that names the most options: `--stereo`
+// says "Excludes: --block-size --num-disparities ...", and those options no longer each repeat
+// "Excludes: --stereo" (a pair of equals is listed on the option declared first).
+class HelpFormatter : public CLI::Formatter {
+ public:
+  std::string make_option_opts(const CLI::Option* option) const override {
+    std::string out = CLI::Formatter::make_option_opts(option);
+    const std::string label = " " + get_label("Excludes") + ":";
+    if (const size_t at = out.rfind(label); at != std::string::npos) out.erase(at);
+    std::string listed;
+    for (const CLI::Option* other : option->get_excludes()) {
+      if (ListsExclusion(option, other)) listed += " " + other->get_name();
+    }
+    if (!listed.empty()) out += label + listed;
+    return out;
+  }
+
+ private:
+  static bool ListsExclusion(const CLI::Option* option, const CLI::Option* other) {
+    const size_t mine = option->get_excludes().size();
+    const size_t theirs = other->get_excludes().size();
+    if (mine != theirs) return mine > theirs;
+    return option->get_name() < other->get_name();
+  }
+};
+
+// The Levenshtein distance between two option names (insertions, deletions, substitutions).
+size_t EditDistance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// "Did you mean --X?" lines for the unexpected long options of a failed parse: the nearest option
+// of the command the line named (the deepest parsed subcommand) or of the commands above it, when
+// it is within a third of the word's length (at least 2 edits). Empty when nothing is near.
+std::string NearestOptionHints(const CLI::App& app) {
+  const CLI::App* command = &app;
+  while (!command->get_subcommands().empty()) command = command->get_subcommands().front();
+  std::vector<std::string> names;
+  for (const CLI::App* level = command; level != nullptr; level = level->get_parent()) {
+    for (const CLI::Option* option : level->get_options()) {
+      for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+    }
+  }
+  std::string hints;
+  for (const std::string& arg : app.remaining(/*recurse=*/true)) {
+    if (!arg.starts_with("--") || arg.size() < 3) continue;
+    const std::string word = arg.substr(0, arg.find('='));
+    const std::string* best = nullptr;
+    size_t best_distance = std::max<size_t>(2, (word.size() - 2) / 3) + 1;
+    for (const std::string& name : names) {
+      const size_t distance = EditDistance(word, name);
+      if (distance < best_distance) best_distance = distance, best = &name;
+    }
+    if (best != nullptr && best_distance > 0) hints += word + ": did you mean " + *best + "?\n";
+  }
+  return hints;
+}
+
+// `--debug` on `app` and on each of its commands and their subcommands (not on the stand-ins, whose
+// arguments go to another executable that declares it itself). The flag only has to be accepted:
+// DebugRequested reads it from argv.
+void AddDebugFlags(CLI::App& app) {
+  static const std::string kHelp =
+      "error messages keep the source file, line and condition of the failed check (for bug "
+      "reports; the environment variable STEREODET_DEBUG=1 does the same)";
+  if (app.get_option_no_throw("--debug") == nullptr) app.add_flag("--debug", kHelp);
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    if (!sub->get_prefix_command()) AddDebugFlags(*sub);
+  }
+}
+
 // RunCli, and with !may_exec RunCommandInProcess: another executable's command is then refused
 // instead of execv()ed over the calling process.
 int RunCliIn(int argc, char** argv, Program self,
@@ -116,6 +202,15 @@ int RunCliIn(int argc, char** argv, Program self,
   app.set_version_flag("--version", std::string("stereodet ") + StereodetVersion());
   app.require_subcommand(1);
   app.fallthrough();
+  app.formatter(std::make_shared<HelpFormatter>());  // subcommands added below inherit it
+  // --debug is read from argv before parsing (errors can come before CLI11 would set a flag);
+  // every command declares it (AddDebugFlags) so that CLI11 accepts it and --help lists it.
+  const bool debug_before = DebugMessages();
+  struct RestoreDebug {
+    bool on;
+    ~RestoreDebug() { SetDebugMessages(on); }
+  } restore_debug{debug_before};
+  if (DebugRequested(argc, argv)) SetDebugMessages(true);
 
   try {
     // `stereodet [FLAGS] NAME ...` with NAME another executable's command: hand over the untouched
@@ -149,17 +244,31 @@ int RunCliIn(int argc, char** argv, Program self,
         add(app);
       }
     }
+    AddDebugFlags(app);
     app.parse(argc, argv);
+  } catch (const CLI::ExtrasError& e) {
+    // CLI11's message and exit code, with the nearest option of the command when one is close.
+    std::fprintf(stderr, "%s\n%sRun with --help for more information.\n", e.what(),
+                 NearestOptionHints(app).c_str());
+    return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);  // usage errors: message + hint, CLI11's exit codes (non-zero)
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "stereodet: error: %s\n", e.what());
+    std::fprintf(stderr, "stereodet: error: %s\n", UserMessage(e).c_str());
     return 1;
   }
   return 0;
 }
 
 }  // namespace
+
+bool DebugRequested(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--") == 0) return false;
+    if (std::strcmp(argv[i], "--debug") == 0) return true;
+  }
+  return false;
+}
 
 int RunCli(int argc, char** argv, Program self,
            std::span<const std::pair<std::string_view, AddCommandFn>> own) {

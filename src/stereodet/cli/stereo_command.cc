@@ -6,7 +6,10 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -28,18 +31,26 @@ struct StereoArgs {
   std::string subset = "training";
   std::string out;
   StereoFlagText stereo;
+  std::vector<CLI::Option*> stereo_flags;  // AddStereoFlags'
+  std::string stereo_settings;             // --stereo-settings FILE
   std::string blur_mode = BlurModeName(BlurOptions().mode);
   bool quiet = false;
+  bool verbose = false;  // --verbose: the stage times after the summary
 };
 
 // The flags `stereo` and `stereo frame` share, bound to `args` and to the fields of `options`.
 void AddSharedOptions(CLI::App* cmd, StereoArgs& args, StereoOptions& options) {
-  cmd->add_option("--data", args.data, "dataset root (holds training/, testing/, ImageSets/)");
+  cmd->add_option("--data", args.data,
+                  "dataset root (holds training/, testing/, ImageSets/) (required)");
   cmd->add_option("--subset", args.subset, "training or testing")
       ->check(CLI::IsMember({"training", "testing"}))
       ->capture_default_str();
-  cmd->add_option("--out", args.out, "output folder");
-  AddStereoFlags(cmd, options, args.stereo);
+  cmd->add_option("--out", args.out, "output folder (required)");
+  args.stereo_flags = AddStereoFlags(cmd, options, args.stereo);
+  cmd->add_option("--stereo-settings", args.stereo_settings,
+                  "take the matching, ground and height settings from this file: an RGB-H/RGB-D "
+                  "model's model.json or a stereo folder's stereo.json (stereo flags given as well "
+                  "apply over it), so the outputs fit that model or folder");
   cmd->add_option("--blur-sigma", options.blur.sigma_px,
                   "Gaussian blur sigma in px (0 = none), to model defocus")
       ->check(CLI::NonNegativeNumber)
@@ -56,15 +67,49 @@ void AddSharedOptions(CLI::App* cmd, StereoArgs& args, StereoOptions& options) {
                   "point clouds: drop points beyond this depth, m")
       ->capture_default_str();
   cmd->add_flag("--quiet", args.quiet, "no progress or summary output");
+  cmd->add_flag("--verbose", args.verbose, "after the summary, the time each stage took");
+}
+
+// `defaults` with the stereo settings of `path` over it: a model.json's "stereo" record (an RGB-H
+// or RGB-D model) or a stereo.json's disparity, ground and height_code (StereoOptionsFromJson).
+StereoOptions ReadStereoSettingsFile(const std::string& path, const StereoOptions& defaults) {
+  std::ifstream in(path, std::ios::binary);
+  STEREODET_CHECK_IO(in.good()) << "--stereo-settings: cannot read " << path;
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text.str());
+  } catch (const nlohmann::json::exception& e) {
+    throw ParseError(path, 0, "", std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw ParseError(path, 0, "", "expected a JSON object");
+  if (j.contains("stereo")) {
+    if (!j["stereo"].is_object()) throw ParseError(path, 0, "stereo", "expected an object");
+    return StereoOptionsFromJson(j["stereo"].dump(), path, defaults);
+  }
+  if (!j.contains("disparity")) {
+    throw ParseError(path, 0, "stereo",
+                     "holds no stereo settings (neither a model.json with a \"stereo\" record, "
+                     "as RGB-H and RGB-D models have, nor a stereo.json)");
+  }
+  return StereoOptionsFromJson(text.str(), path, defaults);
 }
 
 // The named settings into `options`, then its Check().
-void FinishOptions(const StereoArgs& args, StereoOptions& options) {
+void FinishOptions(StereoArgs& args, StereoOptions& options) {
   const auto blur_mode = ParseBlurMode(args.blur_mode);
   STEREODET_CHECK(blur_mode.has_value())
       << "blur mode must be 'image' or 'both', got '" << args.blur_mode << "'";
   options.blur.mode = *blur_mode;
-  FinishStereoFlags(args.stereo, options);
+  if (args.stereo_settings.empty()) {
+    FinishStereoFlags(args.stereo, options);
+    return;
+  }
+  // The file's settings over the flags' (blur and point settings stay the flags'), then the
+  // stereo flags the user gave over the file's.
+  const StereoOptions base = ReadStereoSettingsFile(args.stereo_settings, options);
+  ApplyGivenStereoFlags(args.stereo_flags, base, options, args.stereo);
 }
 
 struct RunArgs {
@@ -104,7 +149,7 @@ void RunStereo(RunArgs& args) {
     for (const auto& [reason, count] : result.ground_fallbacks) {
       fmt::print("  {}: {}\n", reason, count);
     }
-    fmt::print("stage times:\n{}", result.stage_times);
+    if (args.shared.verbose) fmt::print("stage times:\n{}", result.stage_times);
   }
   if (!result.ground_suspect.empty()) {
     const GroundPlaneOptions& ground = options.stereo.ground;
@@ -200,7 +245,7 @@ void AddStereoCommand(CLI::App& app) {
       "Write pictures of one frame: OUT/ID_disparity.png, _depth.png, _height.png (colourized, "
       "black = no stereo) and _bev.png (the stereo point cloud from above, 80 x 80 m).");
   AddSharedOptions(frame_cmd, frame->shared, frame->options);
-  frame_cmd->add_option("--id", frame->id, "frame id, e.g. 000123");
+  frame_cmd->add_option("--id", frame->id, "frame id, e.g. 000123 (required)");
   frame_cmd->callback([frame]() { RunFrame(*frame); });
 
   auto scene = std::make_shared<SceneArgs>();
@@ -209,7 +254,7 @@ void AddStereoCommand(CLI::App& app) {
       "Write a tiny KITTI-layout dataset of textured road-and-wall scenes with exact disparity "
       "(training/{image_2,image_3,calib,disp_noc_0}, ImageSets/all.txt), for trying the stereo "
       "command and for tests.");
-  scene_cmd->add_option("--out", scene->out, "dataset root to write");
+  scene_cmd->add_option("--out", scene->out, "dataset root to write (required)");
   scene_cmd->add_option("--frames", scene->options.frames, "number of frames")
       ->capture_default_str();
   scene_cmd->add_option("--width", scene->options.width_px, "image width, px")

@@ -14,6 +14,7 @@ namespace stereodet::cli {
 void AddSynthCommand(CLI::App& app) {
   auto options = std::make_shared<DatasetOptions>();
   auto quiet = std::make_shared<bool>(false);
+  auto verbose = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand("synth", CommandDescription("synth"));
   cmd->add_option("--out", options->out, "output folder (the data set root)")->required();
   cmd->add_option("--frames", options->frames, "number of frames")->capture_default_str();
@@ -37,14 +38,15 @@ void AddSynthCommand(CLI::App& app) {
       "straight, flat roads without side streets (the road model before settings version 4)");
   AddShardOption(cmd, &options->shard);
   cmd->add_flag("--quiet", *quiet, "no progress output");
-  cmd->callback([options, quiet] {
+  cmd->add_flag("--verbose", *verbose, "after the summary line, the time each stage took");
+  cmd->callback([options, quiet, verbose] {
     if (*quiet) options->progress.stream = nullptr;
     const DatasetSummaryLine s = GenerateDataset(*options);
     if (!*quiet) {
       fmt::print(
           "synth: {} frames written, {} already there, {} labels, train {} / val {}, {:.1f} s\n",
           s.generated, s.skipped, s.objects, s.train, s.val, s.seconds);
-      if (s.generated > 0) fmt::print("{}", s.stage_times);
+      if (*verbose && s.generated > 0) fmt::print("{}", s.stage_times);
     }
   });
 }

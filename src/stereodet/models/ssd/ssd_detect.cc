@@ -77,10 +77,19 @@ DetectSummary DetectSsd(const DetectSsdOptions& options) {
     for (size_t at; (at = differ.find("(requested: ")) != std::string::npos;) {
       differ.replace(at, 12, "(stereo.json: ");
     }
+    // The exact command that makes a folder this run can use: the model's settings file, with
+    // the stereo flags of this run repeated when it has any.
+    const std::string make_folder = fmt::format(
+        "stereodet stereo --data {} --subset {} --split {} --encode rgbh --stereo-settings {}{} "
+        "--out NEW_FOLDER",
+        options.data_root.string(), options.subset, options.split,
+        (options.model_dir / "model.json").string(),
+        options.stereo ? " plus this run's stereo flags" : "");
     STEREODET_CHECK(differ.empty())
         << "--stereo " << options.stereo_dir.string() << ": its stereo.json records other stereo "
         << "settings than " << (options.stereo ? "the stereo flags" : "the model's model.json")
-        << ": " << differ << "; use a stereo folder made with the model's settings, or no --stereo";
+        << ": " << differ << "; make a folder with them (`" << make_folder
+        << "`) and pass it to --stereo, or leave out --stereo";
   }
 
   run.DetectFrames(
