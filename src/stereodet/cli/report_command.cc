@@ -105,6 +105,11 @@ void AddViewCommand(CLI::App& app) {
   view->add_option("--difficulties,--difficulty", args->difficulty,
                    "the cell's difficulty, one of easy, moderate, hard")
       ->capture_default_str();
+  view->add_option("--min-score", args->options.view.min_score,
+                   "draw only detections scoring at least this (labels are always drawn)");
+  view->add_option("--top-k", args->options.view.top_k,
+                   "draw at most this many detections a view, the highest scores (0 = all)")
+      ->capture_default_str();
   view->add_option("--points", args->options.points,
                    "point clouds (.bin, velodyne frame) for the bird's-eye view instead of "
                    "DATASET/velodyne: a folder of scans, or the output folder of `stereodet "

@@ -100,9 +100,23 @@ struct Drawn {
   std::string text;
 };
 
-std::vector<Drawn> DrawnObjects(const FrameViewData& data) {
+std::vector<Drawn> DrawnObjects(const FrameViewData& data, const FrameViewOptions& options) {
+  // The records whose detection is drawn: at least min_score, then the top_k highest scores.
+  std::vector<size_t> candidates;
+  for (size_t i = 0; i < data.records.size(); ++i) {
+    const ViewRecord& r = data.records[i];
+    if (r.detection >= 0 && !(r.score < options.min_score)) candidates.push_back(i);
+  }
+  if (options.top_k > 0 && candidates.size() > static_cast<size_t>(options.top_k)) {
+    std::stable_sort(candidates.begin(), candidates.end(), [&](size_t a, size_t b) {
+      return data.records[a].score > data.records[b].score;
+    });
+    candidates.resize(static_cast<size_t>(options.top_k));
+  }
+  const std::set<size_t> with_detection(candidates.begin(), candidates.end());
   std::vector<Drawn> drawn;
-  for (const ViewRecord& r : data.records) {
+  for (size_t i = 0; i < data.records.size(); ++i) {
+    const ViewRecord& r = data.records[i];
     STEREODET_CHECK(r.detection < static_cast<int>(data.detections.size()) &&
                     r.label < static_cast<int>(data.labels.size()) &&
                     (r.detection >= 0 || r.label >= 0))
@@ -114,7 +128,7 @@ std::vector<Drawn> DrawnObjects(const FrameViewData& data) {
       if (r.outcome == Outcome::kFn) text = fmt::format("FN IoU {:.2f}", r.iou);
       drawn.push_back({&data.labels[r.label], false, r.outcome, r.label, text});
     }
-    if (r.detection >= 0) {
+    if (r.detection >= 0 && with_detection.count(i) != 0) {
       std::string text = fmt::format("{:.2f} IoU {:.2f}", r.score, r.iou);
       if (r.outcome == Outcome::kIgnored) text.clear();
       if (r.outcome == Outcome::kDontCare) text = "DontCare";
@@ -125,6 +139,49 @@ std::vector<Drawn> DrawnObjects(const FrameViewData& data) {
 }
 
 std::string Num(double v) { return fmt::format("{:.2f}", v); }
+
+// Baselines for the texts of one image view such that no two overlap: a text that would overlap one
+// placed before moves a line at a time in its direction (-1 up, +1 down), and the other way once
+// it would leave the canvas; after 12 tries it stays where it first wanted to be. A text's extent
+// is estimated from its length (13 px DejaVu Sans: about 7.5 px a character, 13 px tall).
+class TextPlacer {
+ public:
+  explicit TextPlacer(double canvas_height) : canvas_height_(canvas_height) {}
+
+  double Place(double x, double baseline, size_t chars, int direction) {
+    const double width = 7.5 * static_cast<double>(chars);
+    double y = baseline;
+    for (int tries = 0; tries < 12; ++tries) {
+      if (Free(x, y, width)) {
+        placed_.push_back({x, y, width});
+        return y;
+      }
+      y += direction * kLine;
+      if (y < kLine || y > canvas_height_ - 3) {
+        direction = -direction;
+        y = baseline + direction * kLine;
+      }
+    }
+    placed_.push_back({x, baseline, width});
+    return baseline;
+  }
+
+ private:
+  static constexpr double kLine = 15;  // px between baselines
+  struct Placed {
+    double x, baseline, width;
+  };
+  bool Free(double x, double baseline, double width) const {
+    for (const Placed& p : placed_) {
+      if (x < p.x + p.width && p.x < x + width && std::abs(baseline - p.baseline) < kLine - 1) {
+        return false;
+      }
+    }
+    return true;
+  }
+  double canvas_height_;
+  std::vector<Placed> placed_;
+};
 
 std::string Text(double x, double y, const std::string& colour, const std::string& text,
                  const char* anchor = "start") {
@@ -249,12 +306,14 @@ void FrameViewOptions::Check() const {
       << "view: the bird's-eye view would be larger than 16000 x 8000 px";
   STEREODET_CHECK(canvas_width_px > 0 && canvas_height_px > 0)
       << "view: canvas size " << canvas_width_px << " x " << canvas_height_px << " px";
+  STEREODET_CHECK_GE(top_k, 0) << " (--top-k)";
+  STEREODET_CHECK(!std::isnan(min_score)) << "view: --min-score is NaN";
 }
 
 FrameView DrawFrameView(const FrameViewData& data, const FrameViewOptions& options) {
   options.Check();
   FrameView view;
-  const std::vector<Drawn> drawn = DrawnObjects(data);
+  const std::vector<Drawn> drawn = DrawnObjects(data, options);
   for (const ViewRecord& r : data.records) {
     switch (r.outcome) {
       case Outcome::kTp:
@@ -310,6 +369,7 @@ FrameView DrawFrameView(const FrameViewData& data, const FrameViewOptions& optio
     return rank(a) < rank(b);
   });
   std::string texts;
+  TextPlacer placer(height);
   for (const Drawn* d : order) {
     const Box2D& b = d->object->box;
     const char* colour = OutcomeColour(d->outcome);
@@ -320,10 +380,11 @@ FrameView DrawFrameView(const FrameViewData& data, const FrameViewOptions& optio
         Num(b.Width()), Num(b.Height()), colour, d->detection ? "" : " stroke-dasharray=\"8 5\"");
     ++view.num_image_boxes;
     if (!d->text.empty()) {
-      // Detections' text above the box, labels' below it.
-      texts += d->detection
-                   ? Text(b.left, std::max(12.0, b.top - 4), colour, d->text)
-                   : Text(b.left, std::min<double>(height - 3, b.bottom + 14), colour, d->text);
+      // Detections' text above the box, labels' below it, moved on where another text is.
+      const double baseline =
+          d->detection ? std::max(12.0, b.top - 4) : std::min<double>(height - 3, b.bottom + 14);
+      texts += Text(b.left, placer.Place(b.left, baseline, d->text.size(), d->detection ? -1 : 1),
+                    colour, d->text);
     }
   }
   svg += texts;

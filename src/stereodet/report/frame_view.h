@@ -16,6 +16,7 @@
 #define STEREODET_REPORT_FRAME_VIEW_H_
 
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -93,17 +94,23 @@ struct FrameViewOptions {
   // Canvas size (px) when the frame has no readable image: KITTI's.
   int canvas_width_px = 1242;
   int canvas_height_px = 375;
-  void Check() const;  // throws std::invalid_argument for a non-positive size
+  // The detections drawn (`view --min-score`, `--top-k`): those scoring at least min_score, and of
+  // those the top_k highest (ties in record order; 0 = all). Labels are always drawn (a TP whose
+  // detection is left out shows its label alone); the counts below the image stay the frame's.
+  double min_score = -std::numeric_limits<double>::infinity();
+  int top_k = 0;
+  void Check() const;  // throws std::invalid_argument for a non-positive size or top_k < 0
 };
 
 // The two views as standalone SVG documents, and what they drew. In the image view every record
 // of the cell is one <rect class="box OUTCOME det|label" data-index="I"> at the object's 2D box
 // (px, left image, which is drawn at (0, 0) at its own size): a TP row draws its detection and its
 // label, every other row its one side; stroke 3 px. Detections are labelled with the score and the
-// IoU ("0.91 IoU 0.83"), FNs with "FN IoU 0.30". Below the image a line of counts. The BEV view
-// draws each drawn object that has 3D fields as a <polygon class="box OUTCOME det|label"> (its
-// footprint, BevCorners), the points as grey squares, range lines every 10 m, the camera at the
-// bottom centre.
+// IoU ("0.91 IoU 0.83"), FNs with "FN IoU 0.30"; a text that would overlap one drawn before it
+// moves away from its box (up for detections, down for labels) until it is clear, so that no two
+// overlap where the canvas leaves room. Below the image a line of counts. The BEV view draws each
+// drawn object that has 3D fields as a <polygon class="box OUTCOME det|label"> (its footprint,
+// BevCorners), the points as grey squares, range lines every 10 m, the camera at the bottom centre.
 struct FrameView {
   std::string image_svg, bev_svg;
   int num_tp = 0, num_fp = 0, num_fn = 0, num_ignored = 0;  // records drawn, by outcome

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <regex>
 #include <string>
@@ -169,6 +170,88 @@ TEST(FrameViewTest, DrawsOneBoxPerRecordSideInItsOutcomesColour) {
   EXPECT_EQ(image.At(static_cast<int>(tp.box.left) + 6,
                      static_cast<int>((tp.box.top + tp.box.bottom) / 2)),
             0x787878u);
+}
+
+// A crowded frame by hand: five FP detections on one box (scores 0.9 .. 0.5) and two FN labels on
+// another just below it, no image (a grey canvas).
+FrameViewData CrowdedFrame() {
+  FrameViewData data;
+  data.frame_id = "000000";
+  Object box;
+  box.type = "Car";
+  box.box = {100, 100, 200, 150};
+  for (int i = 0; i < 5; ++i) {
+    data.detections.push_back(box);
+    ViewRecord r;
+    r.frame_id = data.frame_id;
+    r.outcome = Outcome::kFp;
+    r.detection = i;
+    r.score = 0.9 - 0.1 * i;
+    r.iou = 0.1;
+    data.records.push_back(r);
+  }
+  box.box = {105, 160, 210, 200};
+  for (int i = 0; i < 2; ++i) {
+    data.labels.push_back(box);
+    ViewRecord r;
+    r.frame_id = data.frame_id;
+    r.outcome = Outcome::kFn;
+    r.label = i;
+    r.score = NAN;
+    data.records.push_back(r);
+  }
+  return data;
+}
+
+// The (x, baseline) of every box text of an image view (the legend's texts are below the image).
+std::vector<std::pair<double, double>> BoxTexts(const std::string& svg, double image_height) {
+  std::vector<std::pair<double, double>> out;
+  const std::regex text("<text x=\"([0-9.]+)\" y=\"([0-9.]+)\" fill=\"#[0-9A-Fa-f]+\" stroke");
+  for (std::sregex_iterator it(svg.begin(), svg.end(), text), end; it != end; ++it) {
+    const double y = std::stod((*it)[2]);
+    if (y <= image_height) out.emplace_back(std::stod((*it)[1]), y);
+  }
+  return out;
+}
+
+TEST(FrameViewTest, MinScoreAndTopKChooseTheDetectionsDrawnLabelsStay) {
+  const FrameViewData data = CrowdedFrame();
+  FrameViewOptions options;
+  EXPECT_EQ(DrawFrameView(data, options).num_image_boxes, 7);
+  options.min_score = 0.65;  // 0.9, 0.8, 0.7
+  FrameView view = DrawFrameView(data, options);
+  EXPECT_EQ(view.num_image_boxes, 3 + 2);
+  EXPECT_THAT(view.image_svg, HasSubstr(">0.70 IoU 0.10<"));
+  EXPECT_THAT(view.image_svg, ::testing::Not(HasSubstr(">0.60 IoU")));
+  EXPECT_EQ(view.num_fp, 5);  // the frame's counts, drawn or not
+  options.top_k = 2;          // of those, 0.9 and 0.8
+  view = DrawFrameView(data, options);
+  EXPECT_EQ(Count(view.image_svg, "<rect class=\"box fp det\""), 2);
+  EXPECT_THAT(view.image_svg, HasSubstr(">0.80 IoU 0.10<"));
+  EXPECT_THAT(view.image_svg, ::testing::Not(HasSubstr(">0.70 IoU")));
+  EXPECT_EQ(Count(view.image_svg, "<rect class=\"box fn label\""), 2);
+  options.min_score = -std::numeric_limits<double>::infinity();
+  options.top_k = 1;
+  EXPECT_EQ(Count(DrawFrameView(data, options).image_svg, "<rect class=\"box fp det\""), 1);
+  options.top_k = -1;
+  EXPECT_THROW(DrawFrameView(data, options), std::invalid_argument);
+}
+
+TEST(FrameViewTest, BoxTextsDoNotOverlap) {
+  const FrameViewData data = CrowdedFrame();
+  const FrameView view = DrawFrameView(data);
+  const auto texts = BoxTexts(view.image_svg, 375);
+  ASSERT_EQ(texts.size(), 7u);  // five detections' and two FNs'
+  for (size_t i = 0; i < texts.size(); ++i) {
+    for (size_t j = i + 1; j < texts.size(); ++j) {
+      // Every text starts at x 100 or 105 and is wider than 5 px: they must differ in height.
+      EXPECT_GE(std::abs(texts[i].second - texts[j].second), 14.0) << i << " " << j;
+    }
+  }
+  for (const auto& [x, y] : texts) {
+    EXPECT_GE(y, 12.0);
+    EXPECT_LE(y, 375.0);
+  }
 }
 
 // view_small evaluated into DIR/eval (with records), and views of its worst frame per outcome.

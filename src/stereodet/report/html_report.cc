@@ -82,6 +82,12 @@ std::string Fixed(double v, int decimals) {
   return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : std::string("-");
 }
 
+// An AP-like figure of a cell (ap_r40, aos_r11, ...) for the reader: "-" where the cell has no
+// valid label (the devkit reports 0 there, which reads as a detector that found nothing).
+std::string ApText(const json& e, const char* key) {
+  return e.value("num_valid_labels", 0) == 0 ? std::string("-") : Fixed(Num(e, key), 2);
+}
+
 std::string Str(const json& j, const char* key) {
   return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : "";
 }
@@ -160,11 +166,11 @@ Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const 
     const json& e = *entries[i];
     const std::string matcher = Str(sources[i].results["options"], "matcher");
     PlotSeries exact;
-    exact.name =
-        st.Name(sources[i], fmt::format("{}, exact curve: AP_R40 {}, AP_R11 {}", matcher,
-                                        Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2)));
+    exact.name = st.Name(sources[i], fmt::format("{}, exact curve: AP_R40 {}, AP_R11 {}", matcher,
+                                                 ApText(e, "ap_r40"), ApText(e, "ap_r11")));
     exact.x = Numbers(e["curve"], "recall");
     exact.y = Numbers(e["curve"], "precision");
+    exact.steps = true;  // precision holds until the next detection
     exact.colour = st.Colour(i, 0);
     exact.style = exact.x.size() <= 60 ? SeriesStyle::kLineMarkers : SeriesStyle::kLine;
     p.series.push_back(std::move(exact));
@@ -184,11 +190,54 @@ Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const 
         "{}{} valid labels, {} detections; AP_R40 {} / AP_R11 {}; best F1 {} (precision {}, "
         "recall {} at score {})",
         sources.size() > 1 ? sources[i].label + ": " : "", e.value("num_valid_labels", 0),
-        e.value("num_detections", 0), Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2),
+        e.value("num_detections", 0), ApText(e, "ap_r40"), ApText(e, "ap_r11"),
         Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(e["best_f1"], "precision"), 3),
         Fixed(Num(e["best_f1"], "recall"), 3), Fixed(Num(e["best_f1"], "threshold"), 3)));
   }
   p.caption = fmt::format("{}.", fmt::join(caption, "; "));
+  return p;
+}
+
+// Easy, Moderate and Hard in one precision-recall figure, as the devkit plots a class and metric:
+// the exact curves as steps. With one results folder a colour per difficulty; with several a
+// colour per folder and a line per difficulty (solid Easy, dashed Moderate, dotted Hard).
+Plot PrDifficultiesFigure(const std::vector<ReportSource>& sources,
+                          const std::vector<std::map<CellKey, const json*>>& cells,
+                          const CellKey& group, const std::vector<std::string>& difficulties,
+                          bool with_overlaps, const std::string& stem, const Styler& st) {
+  static constexpr const char* kDash[] = {"", "5,3", "1.5,2.5"};
+  Plot p;
+  p.id = "pr_difficulties_" + stem;
+  p.title = group.class_name + " " + group.metric +
+            (with_overlaps ? " (" + group.overlaps + " overlaps)" : "") +
+            ": precision vs recall by difficulty";
+  p.x_label = "recall";
+  p.y_label = "precision";
+  p.x_min = 0, p.x_max = 1, p.y_min = 0, p.y_max = 1;
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    for (size_t d = 0; d < difficulties.size(); ++d) {
+      CellKey key = group;
+      key.difficulty = difficulties[d];
+      const auto it = cells[i].find(key);
+      if (it == cells[i].end()) continue;
+      const json& e = *it->second;
+      PlotSeries s;
+      s.name =
+          st.Name(sources[i], fmt::format("{}: AP_R40 {}", difficulties[d], ApText(e, "ap_r40")));
+      s.x = Numbers(e["curve"], "recall");
+      s.y = Numbers(e["curve"], "precision");
+      s.steps = true;
+      s.colour = kPalette[(sources.size() > 1 ? i : d) % std::size(kPalette)];
+      if (sources.size() > 1) s.dash_array = kDash[d % std::size(kDash)];
+      p.series.push_back(std::move(s));
+      caption.push_back(fmt::format("{}{} {} valid labels",
+                                    sources.size() > 1 ? sources[i].label + ", " : "",
+                                    difficulties[d], e.value("num_valid_labels", 0)));
+    }
+  }
+  p.caption = fmt::format("The exact curves (every score) of each difficulty, drawn as steps; {}.",
+                          fmt::join(caption, "; "));
   return p;
 }
 
@@ -388,28 +437,58 @@ Plot BrierFigure(const std::vector<ReportSource>& sources,
                                               {"over_detections", "over detections"},
                                               {"over_all", "over all"}};
   std::vector<std::string> caption;
+  auto brier = [&](size_t i, size_t d, size_t k) {
+    CellKey key = group;
+    key.difficulty = difficulties[d];
+    auto it = cells[i].find(key);
+    return it == cells[i].end() ? kNaN : Num((*it->second)["brier"], kKinds[k][0]);
+  };
+  const bool several = sources.size() > 1;
+  if (several) {
+    // One colour per results folder, as in every other figure: the three kinds of each difficulty
+    // are categories of their own, one bar series per folder.
+    // Short names, so that nine fit under the bars: "E labels", "M dets", "H all".
+    static constexpr const char* kShort[] = {"labels", "dets", "all"};
+    p.categories.clear();
+    for (const std::string& difficulty : difficulties) {
+      for (const char* kind : kShort) p.categories.push_back(difficulty.substr(0, 1) + " " + kind);
+    }
+    p.x_label = "difficulty (E, M, H) and Brier score over labels, detections, all";
+  }
   for (size_t i = 0; i < sources.size(); ++i) {
+    for (size_t k = 0; k < 3; ++k) {
+      std::vector<std::string> values;
+      for (size_t d = 0; d < difficulties.size(); ++d) values.push_back(Fixed(brier(i, d, k), 4));
+      caption.push_back(fmt::format("{}Brier {} {}", several ? sources[i].label + " " : "",
+                                    kKinds[k][1], fmt::join(values, " / ")));
+    }
+    if (several) {
+      PlotSeries s;
+      s.style = SeriesStyle::kBars;
+      s.name = sources[i].label;
+      s.colour = st.Colour(i, 0);
+      for (size_t d = 0; d < difficulties.size(); ++d) {
+        for (size_t k = 0; k < 3; ++k) {
+          s.x.push_back(static_cast<double>(s.x.size()));
+          s.y.push_back(brier(i, d, k));
+        }
+      }
+      p.series.push_back(std::move(s));
+      continue;
+    }
     for (size_t k = 0; k < 3; ++k) {
       PlotSeries s;
       s.style = SeriesStyle::kBars;
-      s.name = st.Name(sources[i], std::string("Brier ") + kKinds[k][1]);
-      s.colour = kPalette[(i * 3 + k) % std::size(kPalette)];
-      std::vector<std::string> values;
+      s.name = std::string("Brier ") + kKinds[k][1];
+      s.colour = st.Colour(i, k);
       for (size_t d = 0; d < difficulties.size(); ++d) {
-        CellKey key = group;
-        key.difficulty = difficulties[d];
-        auto it = cells[i].find(key);
-        const double v = it == cells[i].end() ? kNaN : Num((*it->second)["brier"], kKinds[k][0]);
         s.x.push_back(static_cast<double>(d));
-        s.y.push_back(v);
-        values.push_back(Fixed(v, 4));
+        s.y.push_back(brier(i, d, k));
       }
-      caption.push_back(fmt::format("{}Brier {} {}",
-                                    sources.size() > 1 ? sources[i].label + " " : "", kKinds[k][1],
-                                    fmt::join(values, " / ")));
       p.series.push_back(std::move(s));
     }
   }
+  if (several) p.width_px = std::max(p.width_px, 80.0 * static_cast<double>(p.categories.size()));
   p.caption = fmt::format("{} ({}).", fmt::join(caption, "; "), fmt::join(difficulties, " / "));
   return p;
 }
@@ -724,12 +803,16 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
   const bool with_overlaps = SeveralOverlapSets(sources.front());
   // Groups (class x metric x overlaps) in the first source's result order, with their difficulties.
   std::vector<std::pair<CellKey, std::vector<std::string>>> groups;
+  size_t group_start = 0;  // the index of the group's first figure
   for (const json& e : sources.front().results["results"]) {
     if (!e.value("evaluated", false)) continue;
     CellKey key = KeyOf(e);
     CellKey group = key;
     group.difficulty.clear();
-    if (groups.empty() || groups.back().first != group) groups.push_back({group, {}});
+    if (groups.empty() || groups.back().first != group) {
+      groups.push_back({group, {}});
+      group_start = figures.size();
+    }
     groups.back().second.push_back(key.difficulty);
     const std::string stem = CellStem(key, with_overlaps);
     const std::string section = key.class_name + " " + key.metric +
@@ -756,8 +839,14 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
       break;
     }
     if (last) {
-      figures.push_back({section, BrierFigure(sources, cells, group, groups.back().second,
-                                              GroupStem(group, with_overlaps), st)});
+      // The group's figures open with its difficulties' curves in one figure and close with its
+      // Brier scores.
+      const std::string group_stem = GroupStem(group, with_overlaps);
+      figures.insert(figures.begin() + static_cast<std::ptrdiff_t>(group_start),
+                     {section, PrDifficultiesFigure(sources, cells, group, groups.back().second,
+                                                    with_overlaps, group_stem, st)});
+      figures.push_back(
+          {section, BrierFigure(sources, cells, group, groups.back().second, group_stem, st)});
     }
   }
   return figures;
@@ -813,9 +902,8 @@ std::string Table1Html(const std::vector<ReportSource>& sources) {
           "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}{}</td><td>{}</td><td>{}</td>"
           "<td>{}</td><td>{}</td></tr>\n",
           XmlEscape(s.label), XmlEscape(matcher), e->value("num_valid_labels", 0),
-          e->value("small_sample", false) ? "*" : "", Fixed(Num(*e, "ap_r40"), 2),
-          Fixed(Num(*e, "ap_r11"), 2), Fixed(Num(*e, "ap_voc"), 2),
-          Fixed(Num((*e)["brier"], "over_labels"), 4));
+          e->value("small_sample", false) ? "*" : "", ApText(*e, "ap_r40"), ApText(*e, "ap_r11"),
+          ApText(*e, "ap_voc"), Fixed(Num((*e)["brier"], "over_labels"), 4));
     }
     html += "</table>\n";
   }
@@ -938,9 +1026,23 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
       html += fmt::format("<th>{}</th>", h);
     }
     html += "</tr>\n";
+    // One cell's rows together, a row per results folder (the cells in the first folder's order,
+    // then any only later folders have).
+    std::vector<std::map<CellKey, const json*>> cells;
+    std::vector<CellKey> order;
+    std::set<CellKey> seen;
     for (const ReportSource& s : sources) {
+      cells.push_back(Cells(s));
       for (const json& e : s.results["results"]) {
-        if (!e.value("evaluated", false)) continue;
+        if (e.value("evaluated", false) && seen.insert(KeyOf(e)).second) order.push_back(KeyOf(e));
+      }
+    }
+    for (const CellKey& key : order) {
+      for (size_t i = 0; i < sources.size(); ++i) {
+        const auto it = cells[i].find(key);
+        if (it == cells[i].end()) continue;
+        const ReportSource& s = sources[i];
+        const json& e = *it->second;
         const json& b = e["brier"];
         html += fmt::format(
             "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
@@ -950,7 +1052,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
             XmlEscape(s.label), XmlEscape(Str(e, "class")), Str(e, "metric"), Str(e, "difficulty"),
             Str(e, "overlaps"), Fixed(Num(e, "min_overlap"), 2), e.value("num_valid_labels", 0),
             e.value("small_sample", false) ? "*" : "", e.value("num_detections", 0),
-            Fixed(Num(e, "ap_r40"), 2), Fixed(Num(e, "ap_r11"), 2), Fixed(Num(e, "aos_r40"), 2),
+            ApText(e, "ap_r40"), ApText(e, "ap_r11"), ApText(e, "aos_r40"),
             Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(b, "over_labels"), 4),
             Fixed(Num(b, "over_detections"), 4), Fixed(Num(b, "over_all"), 4),
             Fixed(Num(e["calibration"], "ece"), 4));

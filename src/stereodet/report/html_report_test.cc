@@ -121,7 +121,8 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
   EXPECT_EQ(evaluation.report_index, out / "report/index.html");
   // results.json names each cell's curve CSV; the report reads it as "curve".
   const json results = ReadReportSource(out, "kitti").results;
-  int checked_pr = 0, checked_devkit = 0, checked_reliability = 0, checked_localization = 0;
+  int checked_pr = 0, checked_devkit = 0, checked_reliability = 0, checked_localization = 0,
+      checked_no_labels = 0;
   for (const json& e : results["results"]) {
     if (!e["evaluated"].get<bool>()) continue;
     std::string stem = e["class"].get<std::string>() + "_" + e["metric"].get<std::string>() + "_" +
@@ -138,9 +139,12 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
     EXPECT_EQ(pr["series"][1]["x"][40], 1.0);
     EXPECT_EQ(pr["series"][1]["x"][10], 0.25);
     ++checked_devkit;
-    // The legend carries the APs of results.json.
+    // The legend carries the APs of results.json, "-" where the cell has no valid label (the
+    // devkit's 0 there is no detector's score).
+    const bool no_labels = e["num_valid_labels"].get<int>() == 0;
     EXPECT_THAT(pr["series"][0]["name"].get<std::string>(),
-                HasSubstr("AP_R40 " + Fixed(e["ap_r40"], 2)));
+                HasSubstr("AP_R40 " + (no_labels ? std::string("-") : Fixed(e["ap_r40"], 2))));
+    checked_no_labels += no_labels;
     // And the curve CSV has the same numbers (full precision in both).
     auto csv = ReadCsv(out / "curves" / ("pr_" + stem + ".csv"));  // no rows: no columns
     EXPECT_EQ(csv["recall"], Column(pr["series"][0]["x"])) << stem;
@@ -187,6 +191,7 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
     }
   }
   EXPECT_EQ(checked_pr, 27);  // 3 classes x 3 metrics x 3 difficulties, all evaluated here
+  EXPECT_GT(checked_no_labels, 0);
   EXPECT_EQ(checked_devkit, 27);
   EXPECT_EQ(checked_reliability, 27);
   EXPECT_GT(checked_localization, 0);
@@ -202,6 +207,24 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
     EXPECT_EQ(brier["series"][1]["y"][d], b["over_detections"]);
     EXPECT_EQ(brier["series"][2]["y"][d], b["over_all"]);
   }
+
+  // Easy, Moderate and Hard in one figure (the devkit's plot), each the cell's exact curve drawn
+  // as steps, a colour each; the cell's own PR figure draws its exact curve as steps too.
+  const json by_difficulty = SvgData(out / "report/figures/pr_difficulties_car_2d.svg");
+  ASSERT_EQ(by_difficulty["series"].size(), 3u);
+  for (size_t d = 0; d < 3; ++d) {
+    const json& e = Entry(results, "Car", "2d", difficulties[d]);
+    const json& s = by_difficulty["series"][d];
+    EXPECT_EQ(s["x"], e["curve"]["recall"]) << d;
+    EXPECT_EQ(s["y"], e["curve"]["precision"]) << d;
+    EXPECT_EQ(s["steps"], true);
+    EXPECT_THAT(s["name"].get<std::string>(), HasSubstr(difficulties[d] + ": AP_R40 "));
+  }
+  const std::string by_difficulty_svg = ReadFile(out / "report/figures/pr_difficulties_car_2d.svg");
+  for (const char* colour : {"#0072B2", "#D55E00", "#009E73"}) {
+    EXPECT_THAT(by_difficulty_svg, HasSubstr(std::string("stroke=\"") + colour + "\""));
+  }
+  EXPECT_EQ(SvgData(out / "report/figures/pr_car_2d_moderate.svg")["series"][0]["steps"], true);
 }
 
 // eval --breakdown: one figure per cell and axis, a bar per bin holding results.json's AP_R40.
@@ -315,16 +338,18 @@ TEST(ReportTest, PolylineVerticesMapBackToTheCurve) {
   size_t i = 0;
   const std::vector<double> recall = Column(e["curve"]["recall"]);
   const std::vector<double> precision = Column(e["curve"]["precision"]);
+  // Drawn as steps: vertex 2k is the curve's point k, vertex 2k - 1 the corner (recall k,
+  // precision k - 1) before it.
   for (std::sregex_iterator p(points.begin(), points.end(), pair), end; p != end; ++p, ++i) {
-    ASSERT_LT(i, recall.size());
+    ASSERT_LT(i, 2 * recall.size() - 1);
     const double x = frame.x_min + (std::stod((*p)[1]) - frame.left) / (frame.right - frame.left) *
                                        (frame.x_max - frame.x_min);
     const double y = frame.y_min + (frame.bottom - std::stod((*p)[2])) /
                                        (frame.bottom - frame.top) * (frame.y_max - frame.y_min);
-    EXPECT_NEAR(x, recall[i], 0.01 / 400) << i;
-    EXPECT_NEAR(y, precision[i], 0.01 / 264) << i;
+    EXPECT_NEAR(x, recall[(i + 1) / 2], 0.01 / 400) << i;
+    EXPECT_NEAR(y, precision[i / 2], 0.01 / 264) << i;
   }
-  EXPECT_EQ(i, recall.size());
+  EXPECT_EQ(i, 2 * recall.size() - 1);
 }
 
 // The page holds every figure inline, its data as JSON, and nothing it would fetch.
@@ -378,6 +403,39 @@ TEST(ReportTest, SeveralResultsAreOverlaidOneColourEach) {
   const std::string html = ReadFile(report.index);
   EXPECT_THAT(html, HasSubstr("<td class=\"t\">kitti</td>"));
   EXPECT_THAT(html, HasSubstr("<td class=\"t\">optimal</td>"));
+  // The summary table holds a cell's folders together: kitti's row, then optimal's, cell by cell.
+  const std::string table = html.substr(html.find("<table id=\"summary-table\">"));
+  const std::regex row(
+      "<tr><td class=\"t\">(kitti|optimal)</td><td class=\"t\">([A-Za-z]+)</td>"
+      "<td class=\"t\">([a-z0-9]+)</td><td class=\"t\">([A-Za-z]+)</td>");
+  std::vector<std::string> rows;
+  for (std::sregex_iterator it(
+           table.begin(), table.begin() + static_cast<std::ptrdiff_t>(table.find("</table>")), row),
+       end;
+       it != end; ++it) {
+    rows.push_back((*it)[1].str() + " " + (*it)[2].str() + " " + (*it)[3].str() + " " +
+                   (*it)[4].str());
+  }
+  ASSERT_GE(rows.size(), 4u);
+  ASSERT_EQ(rows.size() % 2, 0u);
+  for (size_t i = 0; i < rows.size(); i += 2) {
+    EXPECT_EQ(rows[i].substr(0, 6), "kitti ") << rows[i];
+    EXPECT_EQ("optimal" + rows[i].substr(5), rows[i + 1]);
+  }
+  // Brier: one colour per folder here too, the kinds of each difficulty as categories.
+  const json brier = SvgData(dir.path() / "both/figures/brier_car_2d.svg");
+  ASSERT_EQ(brier["series"].size(), 2u);
+  EXPECT_EQ(brier["categories"].size(), 9u);
+  EXPECT_EQ(brier["categories"][4], "M dets");
+  const std::string brier_svg = ReadFile(dir.path() / "both/figures/brier_car_2d.svg");
+  EXPECT_THAT(brier_svg, HasSubstr("fill=\"#0072B2\""));
+  EXPECT_THAT(brier_svg, HasSubstr("fill=\"#D55E00\""));
+  EXPECT_THAT(brier_svg, Not(HasSubstr("fill=\"#009E73\"")));
+  // Difficulties by line: solid, dashed, dotted, in each folder's colour.
+  const std::string by_difficulty =
+      ReadFile(dir.path() / "both/figures/pr_difficulties_car_2d.svg");
+  EXPECT_THAT(by_difficulty, HasSubstr("stroke-dasharray=\"5,3\""));
+  EXPECT_THAT(by_difficulty, HasSubstr("stroke-dasharray=\"1.5,2.5\""));
 
   // Several folders need an out; a folder without results.json is refused with its name.
   ReportOptions no_out = options;

@@ -30,6 +30,12 @@ std::string TickText(double v, double step) {
 
 std::string Px(double v) { return fmt::format("{:.2f}", v); }
 
+// ' stroke-dasharray="..."' for a dashed or dotted series, else nothing.
+std::string DashAttribute(const PlotSeries& s) {
+  const std::string dash = s.DashArray();
+  return dash.empty() ? std::string() : " stroke-dasharray=\"" + XmlEscape(dash) + "\"";
+}
+
 // A legend entry's lines: words joined up to `max_chars` a line (DejaVu Sans at 12 px is about 7 px
 // a character), so that a long entry wraps instead of running off the figure.
 std::vector<std::string> WrapLegend(const std::string& text, size_t max_chars) {
@@ -197,6 +203,7 @@ nlohmann::json PlotToJson(const Plot& plot) {
                         {"style", kStyles[static_cast<int>(s.style)]},
                         {"x", numbers(s.x)},
                         {"y", numbers(s.y)}};
+    if (s.steps) j["steps"] = true;
     if (!s.y_low.empty()) {
       j["y_low"] = numbers(s.y_low);
       j["y_high"] = numbers(s.y_high);
@@ -310,7 +317,7 @@ std::string RenderSvg(const Plot& plot) {
           svg += fmt::format(
               "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.8\"{} "
               "points=\"{}\"/>\n",
-              colour, s.dashed ? " stroke-dasharray=\"5,3\"" : "", points);
+              colour, DashAttribute(s), points);
         }
         points.clear();
       };
@@ -319,7 +326,11 @@ std::string RenderSvg(const Plot& plot) {
           flush();
           continue;
         }
-        if (!points.empty()) points += ' ';
+        if (!points.empty()) {
+          // A step: across at the previous point's y first.
+          if (s.steps) points += ' ' + Px(f.XPx(s.x[i])) + "," + Px(f.YPx(s.y[i - 1]));
+          points += ' ';
+        }
         points += Px(f.XPx(s.x[i])) + "," + Px(f.YPx(s.y[i]));
       }
       flush();
@@ -361,8 +372,7 @@ std::string RenderSvg(const Plot& plot) {
         svg += fmt::format(
             "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" "
             "stroke-width=\"1.8\"{4}/>",
-            Px(kLegendLeft), Px(mid), Px(kLegendLeft + 22), colour,
-            s.dashed ? " stroke-dasharray=\"5,3\"" : "");
+            Px(kLegendLeft), Px(mid), Px(kLegendLeft + 22), colour, DashAttribute(s));
       }
       if (s.style != SeriesStyle::kLine) {
         svg += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"2.6\" fill=\"{}\"/>",

@@ -29,6 +29,13 @@ struct PlotSeries {
   std::vector<double> y_low, y_high;
   std::string colour;  // any SVG colour; empty: the palette's colour for this series' index
   bool dashed = false;
+  // The line's SVG stroke-dasharray ("1.5,2.5": dotted); empty: solid, or "5,3" when dashed.
+  std::string dash_array;
+  // kLine / kLineMarkers: draw the line as steps, from (x[i], y[i]) across to (x[i+1], y[i]) and
+  // then up or down to (x[i+1], y[i+1]) (a precision-recall curve at every score: precision holds
+  // until the next detection). The data is unchanged.
+  bool steps = false;
+  std::string DashArray() const { return !dash_array.empty() ? dash_array : dashed ? "5,3" : ""; }
 };
 
 struct Plot {

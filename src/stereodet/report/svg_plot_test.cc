@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iterator>
 #include <regex>
 #include <stdexcept>
 #include <string>
@@ -87,6 +88,45 @@ TEST(RenderSvgTest, NanBreaksTheLineAndStaysNullInTheData) {
   EXPECT_TRUE(data["series"][0]["y"][2].is_null());
   EXPECT_EQ(data["series"][0]["y"][3], 0.75);
   EXPECT_EQ(data["series"][0]["x"].size(), 5u);
+}
+
+// Steps: across at the previous point's height, then up or down; a NaN still breaks the line. The
+// data keeps the points as given, with "steps": true. x 0..1 -> 64..464 px, y 0..1 -> 294..30 px.
+TEST(RenderSvgTest, StepsGoAcrossThenUpOrDown) {
+  Plot p = UnitPlot();
+  p.series[0].steps = true;
+  p.series[0].x = {0, 0.5, 0.5, 1, NAN, 0, 1};
+  p.series[0].y = {1, 1, 0.5, 0.25, 0, 0, 1};
+  const std::string svg = RenderSvg(p);
+  const auto lines = Polylines(svg);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_THAT(lines[0], ElementsAre(std::make_pair(64.0, 30.0), std::make_pair(264.0, 30.0),
+                                    std::make_pair(264.0, 30.0), std::make_pair(264.0, 30.0),
+                                    std::make_pair(264.0, 162.0), std::make_pair(464.0, 162.0),
+                                    std::make_pair(464.0, 228.0)));
+  EXPECT_THAT(lines[1], ElementsAre(std::make_pair(64.0, 294.0), std::make_pair(464.0, 294.0),
+                                    std::make_pair(464.0, 30.0)));
+  const nlohmann::json data = Metadata(svg);
+  EXPECT_EQ(data["series"][0]["steps"], true);
+  EXPECT_EQ(data["series"][0]["y"].size(), 7u);
+  EXPECT_FALSE(Metadata(RenderSvg(UnitPlot()))["series"][0].contains("steps"));
+}
+
+TEST(RenderSvgTest, DashArraysForDashedAndDottedLines) {
+  Plot p = UnitPlot();
+  p.series.push_back(p.series[0]);
+  p.series.push_back(p.series[0]);
+  p.series[1].dashed = true;
+  p.series[2].dash_array = "1.5,2.5";
+  const std::string svg = RenderSvg(p);
+  // Each series' polyline and its legend line.
+  const std::regex dashed("stroke-dasharray=\"5,3\""), dotted("stroke-dasharray=\"1.5,2.5\"");
+  EXPECT_EQ(
+      std::distance(std::sregex_iterator(svg.begin(), svg.end(), dashed), std::sregex_iterator()),
+      2);
+  EXPECT_EQ(
+      std::distance(std::sregex_iterator(svg.begin(), svg.end(), dotted), std::sregex_iterator()),
+      2);
 }
 
 TEST(RenderSvgTest, RangesFromTheDataWidenToNiceTicks) {
