@@ -70,10 +70,16 @@ class Task:
     in_process: bool = False
 
 
+def last_line(text: str) -> str:
+    """The last non-empty line of a command's stderr: its error line ("stereodet: error: ...")."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1] if lines else "(no message)"
+
+
 def find_bin_dir(given: Optional[str] = None) -> Path:
-    """The folder of the stereodet executables: --bin, $STEREODET_BIN, the build tree this
-    package was built in (build/python/stereodet -> build/bin), or the folder of `stereodet` on
-    PATH."""
+    """The folder of the stereodet executables: --bin, $STEREODET_BIN, the package's own bin/ (a
+    pip install carries them there), the build tree this package was built in
+    (build/python/stereodet -> build/bin), or the folder of `stereodet` on PATH."""
     candidates = []
     if given:
         candidates.append(Path(given))
@@ -81,6 +87,7 @@ def find_bin_dir(given: Optional[str] = None) -> Path:
         candidates.append(Path(os.environ["STEREODET_BIN"]))
     if os.environ.get("STEREODET_BUILD_DIR"):
         candidates.append(Path(os.environ["STEREODET_BUILD_DIR"]) / "bin")
+    candidates.append(Path(__file__).resolve().parent / "bin")
     candidates.append(Path(__file__).resolve().parents[2] / "bin")
     on_path = shutil.which("stereodet")
     if on_path:
@@ -143,7 +150,7 @@ def run_task(task: Task) -> dict:
                                 text=True, env=env)
         if result.returncode != 0:
             raise RuntimeError(f"task {task.index}/{task.count} failed (exit {result.returncode}): "
-                               f"{' '.join(task.argv)}\n{result.stderr.strip()}")
+                               f"{last_line(result.stderr)} (its command: {' '.join(task.argv)})")
     if not task.write_done:
         return {"index": task.index, "skipped": False, "seconds": time.monotonic() - start}
     Path(task.done).parent.mkdir(parents=True, exist_ok=True)
@@ -239,7 +246,8 @@ def eval_merge(bin_dir: Path, out: Path, n: int, extra: Sequence[str]) -> str:
             *extra]
     result = subprocess.run(argv, capture_output=True, text=True)
     if result.returncode != 0:
-        raise RuntimeError(f"eval merge failed (exit {result.returncode}):\n{result.stderr}")
+        raise RuntimeError(f"eval merge failed (exit {result.returncode}): "
+                           f"{last_line(result.stderr)}")
     return result.stdout
 
 
@@ -292,7 +300,8 @@ def detect_merge(bin_dir: Path, out: Path, n: int) -> str:
             *[str(detect_shard_dir(out, k, n)) for k in range(n)], "--out", str(out / "merged")]
     result = subprocess.run(argv, capture_output=True, text=True)
     if result.returncode != 0:
-        raise RuntimeError(f"detect merge failed (exit {result.returncode}):\n{result.stderr}")
+        raise RuntimeError(f"detect merge failed (exit {result.returncode}): "
+                           f"{last_line(result.stderr)}")
     return result.stderr
 
 
@@ -419,5 +428,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     return 0
 
 
+def run_main(argv: Optional[Sequence[str]] = None) -> int:
+    """main(), with an error as one line on stderr and exit 1 instead of a traceback (the
+    traceback too with STEREODET_DEBUG=1, as the CLI's --debug)."""
+    try:
+        return main(argv)
+    except KeyboardInterrupt:
+        print("stereodet.scale: interrupted", file=sys.stderr)
+        return 130
+    except Exception as error:  # noqa: BLE001 - every failure becomes one line for the user
+        if os.environ.get("STEREODET_DEBUG", "") not in ("", "0"):
+            raise
+        message = " ".join(str(error).split()) or type(error).__name__
+        print(f"stereodet.scale: error: {message}", file=sys.stderr)
+        return 1
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main())

@@ -30,3 +30,20 @@ def test_pip_installs_an_importable_package(tmp_path):
                          check=True, capture_output=True, text=True, cwd=tmp_path,
                          env=dict(env, PYTHONPATH=str(target))).stdout
     assert Path(out.strip()).resolve() == (target / "stereodet" / "__init__.py").resolve()
+    # The executables travel with the package: stereodet.scale finds them there, and the console
+    # script (stereodet._cli) runs the CLI itself.
+    for name in ("stereodet", "stereodet-vision"):
+        assert os.access(target / "stereodet" / "bin" / name, os.X_OK), name
+    env_installed = {k: v for k, v in env.items() if k not in ("STEREODET_BIN", "STEREODET_BUILD_DIR")}
+    env_installed["PYTHONPATH"] = str(target)
+    found = subprocess.run([sys.executable, "-c",
+                            "from stereodet import scale; print(scale.find_bin_dir())"],
+                           check=True, capture_output=True, text=True, cwd=tmp_path,
+                           env=env_installed).stdout
+    assert Path(found.strip()) == (target / "stereodet" / "bin").resolve()
+    version = subprocess.run([sys.executable, "-m", "stereodet._cli", "--version"], check=True,
+                             capture_output=True, text=True, cwd=tmp_path,
+                             env=env_installed).stdout
+    assert version.startswith("stereodet ")
+    # pip's own console script for it (with --target, in TARGET/bin).
+    assert (target / "bin" / "stereodet").exists()

@@ -257,3 +257,27 @@ def test_a_worker_killed_mid_detect_changes_nothing(client, bin_dir, tmp_path):
     one, merged = folder_bytes(tmp_path / "one"), folder_bytes(tmp_path / "sharded" / "merged")
     assert one.keys() == merged.keys() and len(one) == 5  # four frames and run.json
     assert [k for k in one if k != "run.json" and one[k] != merged[k]] == []
+
+
+# Errors are one line on stderr and exit 1, not a traceback (STEREODET_DEBUG=1 keeps it).
+def test_errors_are_one_line(build, tmp_path):
+    env = dict(os.environ, PYTHONPATH=str(build / "python"))
+    env.pop("STEREODET_DEBUG", None)
+
+    def scale_cli(*args, **extra_env):
+        return subprocess.run(["/usr/bin/python3", "-m", "stereodet.scale", *args],
+                              capture_output=True, text=True, cwd=tmp_path,
+                              env=dict(env, **extra_env))
+
+    done = scale_cli("--bin", str(build / "bin"), "eval", "--gt", str(tmp_path / "none"), "--det",
+                     "b", "--out", "c")
+    assert done.returncode == 1
+    assert done.stderr == f"stereodet.scale: error: --gt {tmp_path / 'none'}: no label folder\n"
+    done = scale_cli("--bin", str(build / "bin"), "eval", "--gt", str(tmp_path / "none"), "--det",
+                     "b", "--out", "c", STEREODET_DEBUG="1")
+    assert done.returncode == 1 and "Traceback" in done.stderr
+
+
+def test_last_line_is_the_commands_error_line():
+    assert scale.last_line("progress\nstereodet: error: no --det\n\n") == "stereodet: error: no --det"
+    assert scale.last_line("") == "(no message)"
