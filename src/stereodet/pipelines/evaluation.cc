@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <utility>
 
@@ -14,6 +15,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/output_folder.h"
+#include "stereodet/util/version.h"
 
 namespace stereodet {
 namespace fs = std::filesystem;
@@ -208,13 +210,15 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
   options.Check();
   if (!options.out.empty()) CheckOutputFolderOwner(options.out, "eval compare", {kMakerCompare});
   EvaluationCompareResult result;
+  // What A and B were, for compare.json (the report's legends name them).
+  EvalInputOptions a = options.input, b = options.input;
+  b.det = options.det_b;
   if (options.shards.empty()) {
     result.input_a = LoadEvalFrames(options.input);
     EvalInputOptions input_b = options.input;
     input_b.det = options.det_b;
     result.input_b = LoadEvalFrames(input_b);
   } else {
-    EvalInputOptions a, b;
     result.input_a = LoadEvalShards(options.shards, options.input.num_threads, &a);
     result.input_b = LoadEvalShards(options.shards_b, options.input.num_threads, &b);
     STEREODET_CHECK(a.gt == b.gt && a.split == b.split && a.lenient == b.lenient &&
@@ -232,6 +236,12 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
   result.compare.disparity_error_px = options.disparity_error_px;
   result.rows = CompareLocalization(result.result_a, result.result_b, result.compare);
   result.csv = FormatCompareCsv(result.rows);
+  if (!options.out.empty()) {
+    const nlohmann::json inputs = {{"tool", "eval compare"},  {"version", StereodetVersion()},
+                                   {"gt", a.gt.string()},     {"split", a.split},
+                                   {"det_a", a.det.string()}, {"det_b", b.det.string()}};
+    WriteFileAtomically(options.out / "compare.json", inputs.dump(2) + "\n");
+  }
   const CsvOutput written =
       WriteCsvAndReport(options.out, "compare.csv", result.csv, options.report);
   result.csv_path = written.csv_path;

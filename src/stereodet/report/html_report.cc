@@ -335,10 +335,15 @@ Plot LocalizationFigure(const std::vector<ReportSource>& sources,
     if (!HasLocalization(entries[i])) continue;
     PlotSeries centre, depth;
     int64_t pairs = 0;
+    std::vector<std::string> per_bin;  // "10-15 m: 4" for the bins with pairs
     for (const json& b : (*entries[i])["localization"]) {
       const double mid = (Num(b, "lower_m") + Num(b, "upper_m")) / 2;
       const bool filled = b.value("count", 0) > 0;
       pairs += b.value("count", 0);
+      if (filled) {
+        per_bin.push_back(fmt::format("{:g}-{:g} m: {}", Num(b, "lower_m"), Num(b, "upper_m"),
+                                      b.value("count", 0)));
+      }
       centre.x.push_back(mid);
       centre.y.push_back(filled ? Num(b, "centre_error_median_m") : kNaN);
       centre.y_low.push_back(filled ? Num(b, "centre_error_median_m") : kNaN);
@@ -354,8 +359,9 @@ Plot LocalizationFigure(const std::vector<ReportSource>& sources,
     depth.colour = st.Colour(i, 1);
     depth.dashed = true;
     centre.style = depth.style = SeriesStyle::kLineMarkers;
-    caption.push_back(fmt::format("{}{} TP pairs with 3D boxes",
-                                  sources.size() > 1 ? sources[i].label + ": " : "", pairs));
+    caption.push_back(fmt::format("{}{} TP pairs with 3D boxes ({})",
+                                  sources.size() > 1 ? sources[i].label + ": " : "", pairs,
+                                  fmt::join(per_bin, ", ")));
     p.series.push_back(std::move(centre));
     p.series.push_back(std::move(depth));
   }
@@ -648,6 +654,10 @@ Plot SweepFigure(const std::vector<ReportSource>& sources,
 Plot CompareFigure(const std::vector<ReportSource>& sources,
                    const std::vector<std::vector<const ReportSource::Row*>>& rows,
                    const CellKey& key, const Styler& st) {
+  const ReportSource& first = sources.front();
+  // "A (lidar)" where compare.json names the detection folders, else "A".
+  const std::string a = first.name_a.empty() ? "A" : "A (" + first.name_a + ")";
+  const std::string b = first.name_b.empty() ? "B" : "B (" + first.name_b + ")";
   Plot p;
   p.id = "compare_" + RowCellStem(key);
   p.title = fmt::format("{} {} {}: depth error of A and B vs distance", key.class_name, key.metric,
@@ -655,42 +665,73 @@ Plot CompareFigure(const std::vector<ReportSource>& sources,
   p.x_label = "label depth z (m), bin centre";
   p.y_label = "depth error (m)";
   p.x_min = 0;
-  static constexpr const char* kSeries[][2] = {{"abs_dz_mean_a", "A: mean |depth error|"},
-                                               {"abs_dz_mean_b", "B: mean |depth error|"},
-                                               {"difference_a_minus_b", "A - B"},
-                                               {"model_dz", "stereo model dz = z^2 / (b f) dd"}};
+  static constexpr const char* kColumns[] = {"abs_dz_mean_a", "abs_dz_mean_b",
+                                             "difference_a_minus_b", "model_dz"};
+  const std::string names[] = {a + ": mean |depth error|", b + ": mean |depth error|", "A - B",
+                               "stereo model dz = z^2 / (b f) dd"};
   std::vector<std::string> caption;
+  double measured_max = 0, measured_min = 0;  // of A, B and A - B: the axis is scaled to these
+  std::vector<std::string> model_beyond;
   for (size_t i = 0; i < sources.size(); ++i) {
     if (rows[i].empty()) continue;
     int64_t pairs_a = 0, pairs_b = 0;
     for (size_t k = 0; k < 4; ++k) {
       PlotSeries s;
-      s.name = st.Name(sources[i], kSeries[k][1]);
+      s.name = st.Name(sources[i], names[k]);
       for (const ReportSource::Row* row : rows[i]) {
         s.x.push_back((RowNumber(*row, "lower_m") + RowNumber(*row, "upper_m")) / 2);
-        double y = RowNumber(*row, kSeries[k][0]);
+        double y = RowNumber(*row, kColumns[k]);
         // compare.csv written before difference_a_minus_b existed: the negative of B - A.
-        if (k == 2 && !row->number.count(kSeries[k][0]))
-          y = -RowNumber(*row, "difference_b_minus_a");
+        if (k == 2 && !row->number.count(kColumns[k])) y = -RowNumber(*row, "difference_b_minus_a");
         s.y.push_back(y);
+        if (k < 3 && std::isfinite(y)) {
+          measured_max = std::max(measured_max, y);
+          measured_min = std::min(measured_min, y);
+        }
       }
       s.colour = k == 3 ? "#777777" : st.Colour(i, k);
       s.dashed = k >= 2;
       s.style = k == 3 ? SeriesStyle::kLine : SeriesStyle::kLineMarkers;
       p.series.push_back(std::move(s));
     }
+    std::vector<std::string> per_bin;  // "10-15 m: 1/1" for the bins with pairs
     for (const ReportSource::Row* row : rows[i]) {
-      pairs_a += static_cast<int64_t>(RowNumber(*row, "count_a"));
-      pairs_b += static_cast<int64_t>(RowNumber(*row, "count_b"));
+      const auto count_a = static_cast<int64_t>(RowNumber(*row, "count_a"));
+      const auto count_b = static_cast<int64_t>(RowNumber(*row, "count_b"));
+      pairs_a += count_a;
+      pairs_b += count_b;
+      if (count_a + count_b > 0) {
+        per_bin.push_back(fmt::format("{:g}-{:g} m: {}/{}", RowNumber(*row, "lower_m"),
+                                      RowNumber(*row, "upper_m"), count_a, count_b));
+      }
     }
-    caption.push_back(fmt::format("{}{} matched pairs of A, {} of B",
+    caption.push_back(fmt::format("{}{} matched pairs of A, {} of B (per bin, A/B: {})",
                                   sources.size() > 1 ? sources[i].label + ": " : "", pairs_a,
-                                  pairs_b));
+                                  pairs_b, fmt::join(per_bin, ", ")));
+  }
+  // The model grows as z^2 and would flatten the measured errors to the axis: the y axis is
+  // scaled to those, and the model's line leaves the plot where it is larger (said below).
+  if (measured_max > 0) {
+    p.y_max = 1.25 * measured_max;
+    p.y_min = 1.25 * measured_min;
+    for (const PlotSeries& s : p.series) {
+      if (s.colour != "#777777") continue;
+      for (size_t j = 0; j < s.y.size(); ++j) {
+        if (std::isfinite(s.y[j]) && s.y[j] > p.y_max) {
+          model_beyond.push_back(fmt::format("{:g} m ({:.2f} m)", s.x[j], s.y[j]));
+          break;
+        }
+      }
+    }
   }
   p.caption = fmt::format(
       "{}; A - B (compare.csv's difference_a_minus_b) is positive where A errs more; empty bins "
-      "are not drawn; the model at the bin centre.",
-      fmt::join(caption, "; "));
+      "are not drawn; the model at the bin centre{}.",
+      fmt::join(caption, "; "),
+      model_beyond.empty()
+          ? std::string()
+          : "; the axis is scaled to the measured errors, and the model leaves it from z = " +
+                model_beyond.front() + " on");
   return p;
 }
 
@@ -751,6 +792,22 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
       source.kind = kind;
       source.rows =
           ReadCsvRows(folder / name, kind == ReportKind::kSweep ? kSweepColumns : kCompareColumns);
+      if (kind == ReportKind::kCompare && fs::is_regular_file(folder / "compare.json")) {
+        const fs::path inputs_path = folder / "compare.json";
+        json inputs;
+        try {
+          inputs = json::parse(ReadFile(inputs_path));
+        } catch (const json::exception& e) {
+          STEREODET_THROW_IO() << inputs_path.string() << ": not JSON: " << e.what();
+        }
+        const auto name = [&](const char* key) {
+          return inputs.is_object() && inputs.contains(key) && inputs[key].is_string()
+                     ? FolderLabel(inputs[key].get<std::string>())
+                     : std::string();
+        };
+        source.name_a = name("det_a");
+        source.name_b = name("det_b");
+      }
       return source;
     }
     STEREODET_THROW_IO() << path.string() << " is not there: is " << folder.string()

@@ -42,6 +42,9 @@ struct ReportSource {
   };
   std::vector<Row> rows;
   std::filesystem::path folder;  // where it was read from (shown in the page; may be empty)
+  // kCompare: the last path components of the two detection folders compare.json names (A, B),
+  // for the legends; empty when the folder has no compare.json (written before it existed).
+  std::string name_a, name_b;
   // kEval: the per-detection records (matches.csv of `eval --records`, MatchRecordsFile) where
   // the folder has them, for the worst frames' views; empty otherwise.
   std::filesystem::path records;

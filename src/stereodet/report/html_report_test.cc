@@ -456,6 +456,15 @@ TEST(ReportTest, SeveralResultsAreOverlaidOneColourEach) {
 // `eval compare` (tests/data/eval_compare, README): A errs +0.5 m / +1.0 m, B +0.2 m / -2.0 m at
 // 12 m / 22 m, so A - B is +0.3 m in the 10-15 m bin and -1.0 m in the 20-25 m bin; the model's
 // line is compare.csv's model_dz at every bin centre.
+// The figure `id` of the report of one results folder.
+Plot CompareFigurePlot(const fs::path& folder, const std::string& id) {
+  for (const ReportFigure& f : ReportFigures({ReadReportSource(folder, "compare")})) {
+    if (f.plot.id == id) return f.plot;
+  }
+  ADD_FAILURE() << "no figure " << id;
+  return {};
+}
+
 TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   TestTempDir dir;
   EvaluationCompareOptions compare;
@@ -489,6 +498,26 @@ TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   ASSERT_LE(model.size(), csv["model_dz"].size());
   csv["model_dz"].resize(model.size());  // the Easy rows come first
   EXPECT_TRUE(SameNumbers(model, csv["model_dz"]));
+  // The legends name the two detection folders (compare.json), the axis is scaled to the
+  // measured errors (|B| 2.0 m at most, A - B -1.0 m at least) and the caption counts the pairs of
+  // each bin.
+  EXPECT_EQ(fig["series"][0]["name"], "A (det_a): mean |depth error|");
+  EXPECT_EQ(fig["series"][1]["name"], "B (det_b): mean |depth error|");
+  const std::string html = ReadFile(report.index);
+  EXPECT_THAT(html, HasSubstr("per bin, A/B: 10-15 m: 1/1, 20-25 m: 1/1"));
+  std::vector<double> measured;
+  for (int k = 0; k < 3; ++k) {
+    for (double v : Column(fig["series"][k]["y"])) {
+      if (std::isfinite(v)) measured.push_back(v);
+    }
+  }
+  const double top = *std::max_element(measured.begin(), measured.end());
+  EXPECT_EQ(top, 2.0);
+  const PlotFrame frame =
+      LayOutPlot(CompareFigurePlot(dir.path() / "compare", "compare_car_2d_easy"));
+  EXPECT_GE(frame.y_max, 2.5);
+  EXPECT_LT(frame.y_max, 4.0);  // not the model's z^2 growth (12 m at 77.5 m)
+  EXPECT_LE(frame.y_min, -1.25);
 }
 
 // With several results folders the page has the paper's Table 1: per class a table, one row per
