@@ -499,6 +499,24 @@ Plot BrierFigure(const std::vector<ReportSource>& sources,
   return p;
 }
 
+// The kind of a figure, from its id: "pr_difficulties", "pr", "roc", "reliability",
+// "localization", "breakdown", "brier", "sweep", "compare".
+std::string FigureKind(const std::string& id) {
+  if (id.rfind("pr_difficulties_", 0) == 0) return "pr_difficulties";
+  return id.substr(0, id.find('_'));
+}
+
+// The order of the kinds within a section: the difficulties' PR figure, then each kind's row.
+int FigureKindRank(const std::string& id) {
+  static const char* const kOrder[] = {"pr_difficulties", "pr",        "roc",  "reliability",
+                                       "localization",    "breakdown", "brier"};
+  const std::string kind = FigureKind(id);
+  for (int i = 0; i < static_cast<int>(std::size(kOrder)); ++i) {
+    if (kind == kOrder[i]) return i;
+  }
+  return static_cast<int>(std::size(kOrder));
+}
+
 // "Car 2d, loose overlaps" -> "car-2d-loose-overlaps": the section's anchor.
 std::string Slug(const std::string& text) {
   std::string slug;
@@ -904,6 +922,11 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
                                                     with_overlaps, group_stem, st)});
       figures.push_back(
           {section, BrierFigure(sources, cells, group, groups.back().second, group_stem, st)});
+      // Grouped by kind (each kind's difficulties in a row), difficulties in their order.
+      std::stable_sort(figures.begin() + static_cast<std::ptrdiff_t>(group_start), figures.end(),
+                       [](const ReportFigure& a, const ReportFigure& b) {
+                         return FigureKindRank(a.plot.id) < FigureKindRank(b.plot.id);
+                       });
     }
   }
   return figures;
@@ -1037,8 +1060,12 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
       "h1{font-size:22px}h2{font-size:18px;margin-top:32px;border-bottom:1px solid #ccc}\n"
       "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;"
       "text-align:right}th{background:#f2f2f2}td.t{text-align:left}\n"
-      ".figures{display:flex;flex-wrap:wrap;gap:12px}\n"
-      "figure.stereodet-figure{margin:0;width:480px}figcaption{font-size:12px;color:#333}\n"
+      // One row of figures per kind (PR, ROC, reliability, ...), each as wide as the page lets it
+      // be: the difficulties of a kind side by side.
+      ".figures{display:flex;flex-wrap:wrap;gap:12px;margin-bottom:12px}\n"
+      "figure.stereodet-figure{margin:0;flex:1 1 420px;max-width:640px;min-width:0}"
+      "figure.stereodet-figure svg{width:100%;height:auto}"
+      "figcaption{font-size:12px;color:#333}\n"
       "code{font-size:12px}dl{font-size:13px}dt{font-weight:bold;margin-top:8px}\n"
       "</style>\n</head>\n<body>\n<h1>stereodet evaluation report</h1>\n<dl>\n";
   for (const ReportSource& s : sources) {
@@ -1122,16 +1149,20 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
   if (eval) html += Table1Html(sources);
   html += WorstFramesHtml(views);
 
-  // Figures, one section per class x metric (x overlap set).
+  // Figures, one section per class x metric (x overlap set), a row per kind of figure.
   json data = json::array();
-  std::string section;
+  std::string section, kind;
   for (const ReportFigure& figure : figures) {
     const Plot& p = figure.plot;
     if (figure.section != section) {
       if (!section.empty()) html += "</div>\n";
       section = figure.section;
-      html += fmt::format("<h2 id=\"{}\">{}</h2>\n<div class=\"figures\">\n", Slug(section),
-                          XmlEscape(section));
+      kind = FigureKind(p.id);
+      html += fmt::format("<h2 id=\"{}\">{}</h2>\n<div class=\"figures\" data-kind=\"{}\">\n",
+                          Slug(section), XmlEscape(section), kind);
+    } else if (FigureKind(p.id) != kind) {
+      kind = FigureKind(p.id);
+      html += fmt::format("</div>\n<div class=\"figures\" data-kind=\"{}\">\n", kind);
     }
     html += fmt::format("<figure class=\"stereodet-figure\" id=\"fig-{}\">\n", p.id);
     html += RenderSvg(p);

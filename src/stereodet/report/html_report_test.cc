@@ -369,6 +369,22 @@ TEST(ReportTest, PageIsSelfContainedAndHoldsEveryFigure) {
   const size_t begin = html.find("id=\"stereodet-figures\">") + 23;
   const json data = json::parse(html.substr(begin, html.find("</script>", begin) - begin));
   EXPECT_EQ(data.size(), svg_files.size());
+  // A section's figures by kind, a row each (the difficulties of a kind side by side): the Car 2d
+  // section in page order.
+  std::vector<std::string> car_2d;
+  const std::regex figure_or_row(
+      "<div class=\"figures\" data-kind=\"([a-z_]+)\">|id=\"fig-([a-z_0-9]+_car_2d[a-z_]*)\"");
+  for (std::sregex_iterator it(html.begin(), html.end(), figure_or_row), end; it != end; ++it) {
+    if ((*it)[2].matched) car_2d.push_back((*it)[2]);
+    if ((*it)[1].matched && !car_2d.empty() && car_2d.size() < 12) car_2d.push_back("|");
+  }
+  car_2d.resize(std::min<size_t>(car_2d.size(), 12));
+  EXPECT_EQ(car_2d,
+            (std::vector<std::string>{
+                "pr_difficulties_car_2d", "|", "pr_car_2d_easy", "pr_car_2d_moderate",
+                "pr_car_2d_hard", "|", "roc_car_2d_easy", "roc_car_2d_moderate", "roc_car_2d_hard",
+                "|", "reliability_car_2d_easy", "reliability_car_2d_moderate"}));
+  EXPECT_THAT(html, HasSubstr("figure.stereodet-figure svg{width:100%;height:auto}"));
   // Nothing to fetch: no src= attribute, no stylesheet link, no URL but the SVG namespace.
   EXPECT_THAT(html, Not(HasSubstr("src=")));
   EXPECT_THAT(html, Not(HasSubstr("<link")));
