@@ -86,6 +86,7 @@ struct EvalArgs {
   std::string out;
   bool records = false;
   bool report = false;
+  bool devkit_files = false;  // --devkit-files (eval only)
   // --bootstrap N, --bootstrap-seed, --bootstrap-confidence (eval, compare, merge); used when
   // --bootstrap was given (bootstrap_given, set by the command's callback).
   BootstrapOptions bootstrap;
@@ -308,6 +309,8 @@ void RunEval(const EvalArgs& a) {
   STEREODET_CHECK(!a.records || !a.out.empty())
       << "--records needs --out (it writes OUT/matches.csv)";
   STEREODET_CHECK(!a.report || !a.out.empty()) << "--report needs --out (it writes OUT/report/)";
+  STEREODET_CHECK(!a.devkit_files || !a.out.empty())
+      << "--devkit-files needs --out (it writes OUT/stats_*.txt and OUT/plot/)";
   STEREODET_CHECK(a.breakdowns.empty() || !a.input.shard.Recorded())
       << "--breakdown with --shard: `eval merge` does not merge breakdowns yet; evaluate the "
          "whole set (one process is fast: docs/BENCHMARKS.md)";
@@ -318,6 +321,7 @@ void RunEval(const EvalArgs& a) {
   options.out = a.out;
   options.records = a.records;
   options.report = a.report;
+  options.devkit_files = a.devkit_files;
   options.bootstrap = MakeBootstrapOptions(a);
   options.tool_version = StereodetVersion();
   options.command_line = ProcessCommandLine();
@@ -344,7 +348,7 @@ void RunEval(const EvalArgs& a) {
 // The flags of `eval` that COCO mode takes; the others are for KITTI-layout data.
 bool IsCocoModeFlag(const std::string& name) {
   return name == "--coco-gt" || name == "--coco-det" || name == "--coco-honor-ignore" ||
-         name == "--out" || name == "--threads" || name == "--help";
+         name == "--out" || name == "--threads" || name == "--help" || name == "--debug";
 }
 
 // `eval --coco-gt FILE --coco-det FILE`: pycocotools' COCOeval for bbox, its summary printed in
@@ -503,6 +507,11 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--report", args->report,
                  "also write OUT/report/: index.html and figures/ as SVG and PNG, as `stereodet "
                  "report OUT` does (docs/report.md)");
+  eval->add_flag("--devkit-files", args->devkit_files,
+                 "also write the official KITTI devkit's result files into OUT: "
+                 "stats_CLASS_{detection,orientation,detection_ground,detection_3d}.txt and "
+                 "plot/CLASS_*.txt, in its layout and number format (KITTI matcher; "
+                 "docs/metrics.md)");
   AddBootstrapOptions(eval, args.get(),
                       "percentile intervals of every AP and Brier score in results.json and "
                       "the table");

@@ -11,6 +11,7 @@
 #include "stereodet/kitti/calib_io.h"
 #include "stereodet/pipelines/evaluation_internal.h"
 #include "stereodet/report/bootstrap_report.h"
+#include "stereodet/report/devkit_files.h"
 #include "stereodet/report/html_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -63,6 +64,11 @@ void EvaluationOptions::Check() const {
   }
   STEREODET_CHECK(!records || !out.empty()) << "records need an output folder (out)";
   STEREODET_CHECK(!report || !out.empty()) << "report needs an output folder (out)";
+  STEREODET_CHECK(!devkit_files || !out.empty())
+      << "--devkit-files needs an output folder (--out): the devkit's files go there";
+  STEREODET_CHECK(!devkit_files || runs.front().matcher == Matcher::kKitti)
+      << "--devkit-files: the devkit's files hold its 41 precision slots, which only the KITTI "
+         "matcher computes; evaluate with --matcher kitti";
   if (bootstrap) bootstrap->Check();
 }
 
@@ -119,6 +125,11 @@ EvaluationResult EvaluateAndWrite(
       const int64_t rows = WriteMatchRecordsCsv(staging / name, run.result, result.input.frames);
       result.files.push_back(options.out / name);
       result.records.push_back({name, rows});
+    }
+  }
+  if (options.devkit_files) {
+    for (const fs::path& path : WriteDevkitFiles(staging, result.runs.front().result)) {
+      result.files.push_back(options.out / path.lexically_relative(staging));
     }
   }
   if (options.report) {

@@ -48,6 +48,9 @@ struct EvaluationOptions {
   // written, as `stereodet report OUT` would). Requires out.
   bool report = false;
   bool report_png = true;  // the report's PNG figures too (where the build has librsvg)
+  // Also write the official devkit's result files into OUT (WriteDevkitFiles: stats_*.txt and
+  // plot/*.txt) from the first run (the strict overlap set). Requires out and the KITTI matcher.
+  bool devkit_files = false;
   // Bootstrap intervals over frames for every run (Bootstrap; EvalRun::bootstrap), in
   // results.json and the table. Unset: none. Its num_threads is replaced by input.num_threads.
   std::optional<BootstrapOptions> bootstrap;
