@@ -186,6 +186,13 @@ Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const 
       devkit.style = SeriesStyle::kLineMarkers;
       p.series.push_back(std::move(devkit));
     }
+    if (e.value("num_valid_labels", 0) == 0) {
+      // Nothing to recall: the plot stays empty and says why (the devkit's 0 is no score).
+      caption.push_back(fmt::format(
+          "{}no valid label in this cell, so no recall and no AP ({} detections)",
+          sources.size() > 1 ? sources[i].label + ": " : "", e.value("num_detections", 0)));
+      continue;
+    }
     caption.push_back(fmt::format(
         "{}{} valid labels, {} detections; AP_R40 {} / AP_R11 {}; best F1 {} (precision {}, "
         "recall {} at score {})",

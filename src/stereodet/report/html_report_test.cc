@@ -145,6 +145,10 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
     EXPECT_THAT(pr["series"][0]["name"].get<std::string>(),
                 HasSubstr("AP_R40 " + (no_labels ? std::string("-") : Fixed(e["ap_r40"], 2))));
     checked_no_labels += no_labels;
+    if (no_labels) {
+      EXPECT_THAT(SvgData(figures / ("pr_" + stem + ".svg"))["caption"].get<std::string>(),
+                  HasSubstr("no valid label in this cell, so no recall and no AP"));
+    }
     // And the curve CSV has the same numbers (full precision in both).
     auto csv = ReadCsv(out / "curves" / ("pr_" + stem + ".csv"));  // no rows: no columns
     EXPECT_EQ(csv["recall"], Column(pr["series"][0]["x"])) << stem;
