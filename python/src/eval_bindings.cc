@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -177,8 +178,10 @@ PyFrames FramesFromAnnos(py::handle gt_annos, py::handle dt_annos) {
 }
 
 EvalInputOptions InputOptions(const fs::path& gt, const fs::path& det, const std::string& split,
-                              bool lenient, int num_threads, bool missing_as_empty) {
+                              bool lenient, int num_threads, bool missing_as_empty,
+                              std::optional<double> score_if_missing = std::nullopt) {
   EvalInputOptions input;
+  input.score_if_missing = score_if_missing;
   input.gt = gt;
   input.det = det;
   input.split = split;
@@ -189,9 +192,10 @@ EvalInputOptions InputOptions(const fs::path& gt, const fs::path& det, const std
 }
 
 PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const std::string& split,
-                           bool lenient, int num_threads, bool missing_as_empty) {
+                           bool lenient, int num_threads, bool missing_as_empty,
+                           std::optional<double> score_if_missing) {
   const EvalInputOptions options =
-      InputOptions(gt, det, split, lenient, num_threads, missing_as_empty);
+      InputOptions(gt, det, split, lenient, num_threads, missing_as_empty, score_if_missing);
   EvalInput input;
   {
     ReleaseGil release;
@@ -246,9 +250,11 @@ std::vector<EvalOptions> OverlapRuns(const EvalOptions& base,
 // (and with `records` its matches*.csv). Records without out are kept in memory only.
 PyEvalResult RunFolders(const fs::path& gt, const fs::path& det, const std::string& split,
                         bool lenient, int num_threads, std::vector<EvalOptions> runs,
-                        const fs::path& out, bool records, bool missing_as_empty) {
+                        const fs::path& out, bool records, bool missing_as_empty,
+                        std::optional<double> score_if_missing) {
   EvaluationOptions options;
-  options.input = InputOptions(gt, det, split, lenient, num_threads, missing_as_empty);
+  options.input =
+      InputOptions(gt, det, split, lenient, num_threads, missing_as_empty, score_if_missing);
   if (records && out.empty()) {
     for (EvalOptions& run : runs) run.keep_records = true;
   }
@@ -908,7 +914,8 @@ void BindEval(py::module_& m) {
       });
   m.def("_frames_from_annos", &FramesFromAnnos, py::arg("gt_annos"), py::arg("dt_annos"));
   m.def("_frames_from_folders", &FramesFromFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
-        py::arg("lenient"), py::arg("num_threads"), py::arg("missing_as_empty") = false);
+        py::arg("lenient"), py::arg("num_threads"), py::arg("missing_as_empty") = false,
+        py::arg("score_if_missing") = std::nullopt);
   m.def("_evaluate", &EvaluateFrames, py::arg("frames"), py::arg("options"));
 
   // get_official_eval_result's two evaluations, strict and loose, and its printout. The same
@@ -942,7 +949,8 @@ void BindEval(py::module_& m) {
         "OverlapSetRuns: base once per overlap set (names), with that set's class specs.");
   m.def("_run_evaluation", &RunFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
         py::arg("lenient"), py::arg("num_threads"), py::arg("runs"), py::arg("out"),
-        py::arg("records"), py::arg("missing_as_empty") = false);
+        py::arg("records"), py::arg("missing_as_empty") = false,
+        py::arg("score_if_missing") = std::nullopt);
   m.def("_write_report", &WriteReport, py::arg("result"), py::arg("out"), py::arg("records"));
 
   m.def(

@@ -135,7 +135,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              distance_bin_m: float = 5.0, max_distance_m: float = 80.0, records: bool = False,
              lenient: bool = False, missing_as_empty: bool = False, num_threads: int = 0,
              out: Optional[PathLike] = None,
-             breakdowns: Union[str, Iterable[str]] = ()) -> EvalResult:
+             breakdowns: Union[str, Iterable[str]] = (),
+             score_if_missing: Optional[float] = None) -> EvalResult:
     """Evaluates detections against labels; `stereodet eval` with the same options.
 
     gt, det: folders (gt: a KITTI root with training/label_2, a folder with label_2/, or a folder
@@ -164,6 +165,9 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
       refused, OSError: a folder of detections for part of the frames would read as a weak
       detector; give `split` with the frames that were detected instead).
     num_threads: 0 = all hardware threads.
+    score_if_missing: folders only: read detection lines without a score (15 fields: labels used
+      as detections, for a sanity check) as detections of this score (the CLI's --score);
+      otherwise such a line is an error (stereodet.ParseError naming it).
     out: write the results folder there, `stereodet eval --out`'s (results.json, summary.csv,
       curves/; result.files lists them): for folders through the CLI's very call (RunEvaluation),
       for annotation dicts through the same report writer. An earlier results folder there is
@@ -185,7 +189,11 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
         return _core._run_evaluation(os.fspath(gt), os.fspath(det),
                                      "" if split is None else os.fspath(split), lenient,
                                      num_threads, runs, target, records,
-                                     missing_as_empty=missing_as_empty)
+                                     missing_as_empty=missing_as_empty,
+                                     score_if_missing=score_if_missing)
+    if score_if_missing is not None:
+        raise ValueError("score_if_missing is for detection folders; give annotation dicts a "
+                         "'score' array")
     result = _core._evaluate(_frames(gt, det, split, lenient, num_threads, missing_as_empty),
                              runs)
     if out is not None:
@@ -322,4 +330,5 @@ def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLik
 # evaluate()'s keyword options and their defaults, for filter_sweep() and compare().
 _EVALUATE_DEFAULTS = {name: p.default for name, p in inspect.signature(evaluate).parameters.items()
                       if p.kind == p.KEYWORD_ONLY
-                      and name not in ("lenient", "missing_as_empty", "out")}
+                      and name not in ("lenient", "missing_as_empty", "out",
+                                       "score_if_missing")}

@@ -493,3 +493,19 @@ def test_bad_input_raises_value_and_os_errors(small, data, tmp_path, cli):
     assert out.returncode != 0 and f"stereodet: error: {caught.value}" in out.stderr
     assert stereodet.evaluate(bad / "label_2", bad / "det", lenient=True).to_dict()[
         "input"]["num_skipped_lines"] == 1
+
+
+def test_labels_as_detections_with_score_if_missing(data, cli, tmp_path):
+    labels = data / "eval_compare" / "label_2"
+    with pytest.raises(stereodet.ParseError, match=r"a label line: to evaluate labels as"):
+        stereodet.evaluate(labels, labels, classes=["Car"], metrics=["2d"])
+    result = stereodet.evaluate(labels, labels, classes=["Car"], metrics=["2d"],
+                                matcher="optimal", score_if_missing=1.0, out=tmp_path / "py")
+    assert result.ap("Car", "2d", "moderate") == 100.0
+    assert result.to_dict()["input"]["score_if_missing"] == 1.0
+    cli("eval", "--gt", labels, "--det", labels, "--classes", "Car", "--metrics", "2d",
+        "--matcher", "optimal", "--score", "1", "--out", tmp_path / "cli")
+    with open(tmp_path / "cli" / "results.json") as f:
+        assert json.load(f)["input"] == result.to_dict()["input"]
+    with pytest.raises(ValueError, match="score_if_missing is for detection folders"):
+        stereodet.evaluate([], [], score_if_missing=1.0)
