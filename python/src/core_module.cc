@@ -13,6 +13,7 @@
 namespace stereodet::python {
 void BindKitti(py::module_& m);
 void BindEval(py::module_& m);
+void BindCoco(py::module_& m);
 }  // namespace stereodet::python
 
 PYBIND11_MODULE(_core, m) {
@@ -32,6 +33,7 @@ PYBIND11_MODULE(_core, m) {
   RegisterErrorTranslation(parse_error);
   BindKitti(m);
   BindEval(m);
+  BindCoco(m);
 
   m.def(
       "_run_cli",

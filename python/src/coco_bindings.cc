@@ -1,0 +1,80 @@
+// stereodet._core's COCO mode: the text of a COCO ground-truth file and of a results file in,
+// COCOeval's numbers out (eval/coco.h: EvaluateCoco, pycocotools-exact). stereodet.coco (the
+// pure-Python module) turns paths, dicts and pycocotools' COCO objects into that text.
+#include <pybind11/stl.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "common.h"
+#include "stereodet/eval/coco.h"
+
+namespace stereodet::python {
+namespace {
+
+// A numpy array of `shape` holding `values` (row-major, as EvaluateCoco lays its arrays out).
+py::array_t<double> Shaped(const std::vector<double>& values, std::vector<py::ssize_t> shape) {
+  py::array_t<double> out(shape);
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+
+py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
+                      const std::string& dt_text, const std::string& dt_source,
+                      bool honor_ignore_flag, std::vector<int> max_dets, int num_threads) {
+  CocoEvalResult result;
+  std::string summary;
+  {
+    ReleaseGil release;
+    const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, gt_source);
+    const std::vector<CocoDetection> dets = ParseCocoDetections(dt_text, dt_source, gt);
+    CocoEvalOptions options;
+    options.honor_ignore_flag = honor_ignore_flag;
+    options.max_dets = std::move(max_dets);
+    options.num_threads = num_threads;
+    options.Check();
+    result = EvaluateCoco(gt, dets, options);
+    summary = FormatCocoSummary(result);
+  }
+  const auto t = static_cast<py::ssize_t>(result.options.iou_thresholds.size());
+  const auto r = static_cast<py::ssize_t>(result.options.recall_thresholds.size());
+  const auto k = static_cast<py::ssize_t>(result.category_ids.size());
+  const auto a = static_cast<py::ssize_t>(result.options.area_ranges.size());
+  const auto m = static_cast<py::ssize_t>(result.options.max_dets.size());
+  py::dict out;
+  out["stats"] =
+      Shaped(std::vector<double>(result.stats.begin(), result.stats.end()), {kNumCocoStats});
+  out["precision"] = Shaped(result.precision, {t, r, k, a, m});
+  out["recall"] = Shaped(result.recall, {t, k, a, m});
+  out["scores"] = Shaped(result.scores, {t, r, k, a, m});
+  out["image_ids"] = result.image_ids;
+  out["category_ids"] = result.category_ids;
+  out["category_names"] = result.category_names;
+  out["iou_thresholds"] = result.options.iou_thresholds;
+  out["recall_thresholds"] = result.options.recall_thresholds;
+  out["max_dets"] = result.options.max_dets;
+  std::vector<std::string> area_labels;
+  for (const CocoAreaRange& range : result.options.area_ranges) area_labels.push_back(range.label);
+  out["area_ranges"] = area_labels;
+  out["summary"] = summary;
+  out["num_gt"] = result.num_gt;
+  out["num_gt_skipped"] = result.num_gt_skipped;
+  out["num_detections"] = result.num_detections;
+  out["num_detections_skipped"] = result.num_detections_skipped;
+  out["seconds"] = result.seconds;
+  return out;
+}
+
+}  // namespace
+
+void BindCoco(py::module_& m) {
+  m.def("_coco_evaluate", &CocoEvaluate, py::arg("gt_text"), py::arg("gt_source"),
+        py::arg("dt_text"), py::arg("dt_source"), py::arg("honor_ignore_flag") = false,
+        py::arg("max_dets") = std::vector<int>{1, 10, 100}, py::arg("num_threads") = 0,
+        "COCOeval(gt, loadRes(dt), 'bbox') on the JSON texts, the GIL released: a dict of stats "
+        "(12), precision (T, R, K, A, M), recall (T, K, A, M), scores, the ids and the summary "
+        "text.");
+}
+
+}  // namespace stereodet::python

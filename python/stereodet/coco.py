@@ -1,0 +1,148 @@
+"""COCO-format bbox evaluation equal to pycocotools' COCOeval, in C++ (`stereodet eval --coco-gt`).
+
+    import stereodet.coco
+    result = stereodet.coco.evaluate("instances_val2017.json", "detections.json")
+    result.stats          # summarize()'s 12 numbers, numpy float64
+    result.precision      # (T, R, K, A, M), as COCOeval.eval["precision"]
+    print(result)         # summarize()'s printout, line for line
+
+    # A drop-in for pycocotools in a training loop (torchvision's, detectron2's evaluators):
+    from stereodet.coco import COCOeval          # instead of pycocotools.cocoeval's
+    E = COCOeval(coco_gt, coco_dt, "bbox")       # pycocotools COCO objects, dicts or paths
+    E.evaluate(); E.accumulate(); E.summarize()
+    E.stats, E.eval["precision"]
+
+The numbers are pycocotools 2.0's to the last digit (docs/metrics.md, "COCO mode": which of its
+quirks are kept, and --coco-honor-ignore's fix of the iscrowd one); segm and keypoints are not
+evaluated.
+"""
+import json
+import os
+from typing import Any, Iterable, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _core
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _text(source: Any, what: str) -> "tuple[str, str]":
+    """(JSON text, name for messages) of a path, a loaded dict / list, or a pycocotools COCO."""
+    if isinstance(source, (str, os.PathLike)):
+        path = os.fspath(source)
+        with open(path, "rb") as f:
+            return f.read().decode("utf-8"), path
+    dataset = getattr(source, "dataset", None)  # pycocotools.coco.COCO
+    if isinstance(dataset, dict):
+        if what == "results":
+            # loadRes' COCO: its dataset holds the detections as "annotations".
+            return (json.dumps(dataset.get("annotations", []), default=_json_number),
+                    f"<{what}: COCO object>")
+        return json.dumps(dataset, default=_json_number), f"<{what}: COCO object>"
+    if isinstance(source, (dict, list)):
+        return json.dumps(source, default=_json_number), f"<{what}>"
+    raise TypeError(f"{what}: expected a path, a dict / list as json.load gives it, or a "
+                    f"pycocotools COCO object; got {type(source).__name__}")
+
+
+def _json_number(value: Any) -> Any:
+    """numpy numbers and arrays in loaded data (loadRes keeps numpy scalars) as JSON numbers."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"not JSON: {type(value).__name__}")
+
+
+class CocoResult:
+    """COCOeval's numbers for bbox: stats (12), precision (T, R, K, A, M), recall (T, K, A, M),
+    scores (T, R, K, A, M), the image and category ids, and summary (the printout)."""
+
+    def __init__(self, d: dict):
+        self.stats: np.ndarray = d["stats"]
+        self.precision: np.ndarray = d["precision"]
+        self.recall: np.ndarray = d["recall"]
+        self.scores: np.ndarray = d["scores"]
+        self.image_ids = list(d["image_ids"])
+        self.category_ids = list(d["category_ids"])
+        self.category_names = list(d["category_names"])
+        self.iou_thresholds = np.array(d["iou_thresholds"])
+        self.recall_thresholds = np.array(d["recall_thresholds"])
+        self.max_dets = list(d["max_dets"])
+        self.area_ranges = list(d["area_ranges"])
+        self.summary: str = d["summary"]
+        self.num_gt = d["num_gt"]
+        self.num_detections = d["num_detections"]
+        self.seconds = d["seconds"]
+
+    def __str__(self) -> str:
+        return self.summary
+
+    def __repr__(self) -> str:
+        return f"CocoResult(AP={self.stats[0]:.3f}, AP50={self.stats[1]:.3f}, " \
+               f"{len(self.image_ids)} images, {len(self.category_ids)} categories)"
+
+
+def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
+             max_dets: Sequence[int] = (1, 10, 100), num_threads: int = 0) -> CocoResult:
+    """COCOeval(gt, gt.loadRes(dt), "bbox").evaluate(); .accumulate(); .summarize().
+
+    gt: a COCO ground-truth file's path, its loaded dict, or a pycocotools COCO object.
+    dt: a results file's path, its loaded list of {image_id, category_id, bbox, score}, or the
+      COCO object of loadRes.
+    honor_ignore_flag: also ignore ground truths whose "ignore" is set (pycocotools overwrites it
+      with "iscrowd": the CLI's --coco-honor-ignore).
+    max_dets: Params.maxDets, three increasing numbers.
+
+    Raises stereodet.ParseError for a malformed file (naming the element and field), ValueError
+    for a bad option, OSError for a file that cannot be read.
+    """
+    gt_text, gt_source = _text(gt, "ground truth")
+    dt_text, dt_source = _text(dt, "results")
+    return CocoResult(_core._coco_evaluate(gt_text, gt_source, dt_text, dt_source,
+                                           honor_ignore_flag, list(max_dets), num_threads))
+
+
+class COCOeval:
+    """pycocotools.cocoeval.COCOeval's usage for iouType "bbox": construct, evaluate(),
+    accumulate(), summarize(), then .stats and .eval["precision" | "recall" | "scores"]. The work
+    is done once, in evaluate(); accumulate() only checks the order of the calls."""
+
+    def __init__(self, cocoGt: Any = None, cocoDt: Any = None, iouType: str = "bbox"):
+        if iouType != "bbox":
+            raise NotImplementedError(f"stereodet.coco.COCOeval evaluates bbox only, not {iouType}")
+        self.cocoGt, self.cocoDt = cocoGt, cocoDt
+        self.params = _Params()
+        self.stats = np.zeros(12)
+        self.eval: dict = {}
+        self.result: Optional[CocoResult] = None
+
+    def evaluate(self) -> None:
+        if self.cocoGt is None or self.cocoDt is None:
+            raise ValueError("COCOeval needs the ground truth and the detections")
+        self.result = evaluate(self.cocoGt, self.cocoDt, max_dets=self.params.maxDets)
+
+    def accumulate(self) -> None:
+        if self.result is None:
+            raise RuntimeError("call evaluate() first")
+        r = self.result
+        self.eval = {"params": self.params, "counts": list(r.precision.shape),
+                     "precision": r.precision, "recall": r.recall, "scores": r.scores}
+
+    def summarize(self) -> None:
+        if self.result is None:
+            raise RuntimeError("call evaluate() and accumulate() first")
+        print(self.result.summary, end="" if self.result.summary.endswith("\n") else "\n")
+        self.stats = self.result.stats.copy()
+
+
+class _Params:
+    """The parts of COCOeval.params that callers read or set: maxDets, iouThrs, recThrs."""
+
+    def __init__(self):
+        self.iouType = "bbox"
+        self.maxDets = [1, 10, 100]
+        self.iouThrs = np.linspace(.5, 0.95, int(np.round((0.95 - .5) / .05)) + 1, endpoint=True)
+        self.recThrs = np.linspace(.0, 1.00, int(np.round((1.00 - .0) / .01)) + 1, endpoint=True)
+        self.areaRngLbl = ["all", "small", "medium", "large"]

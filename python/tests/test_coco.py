@@ -1,0 +1,66 @@
+"""stereodet.coco: COCO-format bbox evaluation from Python, equal to the CLI's COCO mode (which
+equals pycocotools: tests/data/coco_small/pycocotools_expected.txt is pycocotools' printout)."""
+
+import json
+
+import numpy as np
+import pytest
+
+import stereodet
+import stereodet.coco as coco
+
+
+def expected_summary(data):
+    return (data / "coco_small" / "pycocotools_expected.txt").read_text()
+
+
+def test_paths_dicts_and_coco_objects_give_pycocotools_numbers(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    from_paths = coco.evaluate(gt_path, dt_path)
+    assert str(from_paths) == expected_summary(data)
+    # The loaded JSON, and pycocotools-like objects (a .dataset dict; loadRes' holds the
+    # detections as "annotations", with numpy numbers in them).
+    gt, dt = json.loads(gt_path.read_text()), json.loads(dt_path.read_text())
+    from_dicts = coco.evaluate(gt, dt)
+    assert np.array_equal(from_dicts.stats, from_paths.stats)
+
+    class FakeCoco:
+        def __init__(self, dataset):
+            self.dataset = dataset
+
+    dt_numpy = [dict(d, bbox=np.array(d["bbox"]), score=np.float32(d["score"]).item())
+                for d in dt]
+    from_objects = coco.evaluate(FakeCoco(gt), FakeCoco({"annotations": dt_numpy}))
+    assert np.array_equal(from_objects.precision, from_paths.precision)
+    # The CLI's arrays (its .npy files) are these.
+    cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--out", tmp_path / "cli")
+    assert np.array_equal(np.load(tmp_path / "cli" / "precision.npy"), from_paths.precision)
+    assert from_paths.precision.shape == (10, 101, 5, 4, 3)
+    assert from_paths.recall.shape == (10, 5, 4, 3)
+    assert from_paths.stats.shape == (12,)
+    assert from_paths.category_ids == sorted(from_paths.category_ids)
+
+
+def test_cocoeval_drop_in(data, capsys):
+    gt = json.loads((data / "coco_small" / "gt.json").read_text())
+    dt = json.loads((data / "coco_small" / "det.json").read_text())
+    E = coco.COCOeval(gt, dt, "bbox")
+    E.evaluate()
+    E.accumulate()
+    E.summarize()
+    assert capsys.readouterr().out == expected_summary(data)
+    assert E.stats[0] == pytest.approx(0.409, abs=5e-4)
+    assert E.eval["precision"].shape == (10, 101, 5, 4, 3)
+    with pytest.raises(NotImplementedError, match="bbox only"):
+        coco.COCOeval(gt, dt, "segm")
+    with pytest.raises(RuntimeError, match="evaluate"):
+        coco.COCOeval(gt, dt).accumulate()
+
+
+def test_bad_input_names_the_element(data):
+    gt = json.loads((data / "coco_small" / "gt.json").read_text())
+    with pytest.raises(stereodet.ParseError, match=r"image 999 is not in the ground truth"):
+        coco.evaluate(gt, [{"image_id": 999, "category_id": 1, "bbox": [0, 0, 1, 1],
+                            "score": 1.0}])
+    with pytest.raises(TypeError, match="expected a path"):
+        coco.evaluate(42, [])
