@@ -78,7 +78,7 @@ struct EvalArgs {
   std::string compat = EvalCompatName(EvalOptions().compat);
   std::string filter;
   std::string filter_mode = FilterModeName(EvalOptions().filter.mode);
-  std::vector<std::string> breakdowns;  // --breakdown AXIS=EDGES, repeatable (eval only)
+  std::vector<std::string> breakdowns;  // --breakdown AXIS=EDGES, repeatable (eval, eval merge)
   std::string score_transform = ScoreTransformName(EvalOptions().score_transform);
   bool loose = false;
   std::string overlaps;  // empty: strict, or loose with --loose
@@ -311,9 +311,6 @@ void RunEval(const EvalArgs& a) {
   STEREODET_CHECK(!a.report || !a.out.empty()) << "--report needs --out (it writes OUT/report/)";
   STEREODET_CHECK(!a.devkit_files || !a.out.empty())
       << "--devkit-files needs --out (it writes OUT/stats_*.txt and OUT/plot/)";
-  STEREODET_CHECK(a.breakdowns.empty() || !a.input.shard.Recorded())
-      << "--breakdown with --shard: `eval merge` does not merge breakdowns yet; evaluate the "
-         "whole set (one process is fast: docs/BENCHMARKS.md)";
   EvaluationOptions options;
   const std::vector<OverlapSet> sets = OverlapSets(a);
   options.runs = OverlapSetRuns(MakeOptions(a), sets);
@@ -597,6 +594,11 @@ void AddEvalCommand(CLI::App& app) {
   AddCommonOptions(merge, merge_common.get(), true);
   merge->add_option("shards", *merge_shards, "the shard folders, in any order")->required();
   merge->add_option("--out", merge_common->out, "the merged results folder")->required();
+  merge
+      ->add_option("--breakdown", merge_common->breakdowns,
+                   "as for eval: every figure again per bin, from the merged frames (as the "
+                   "shards' other options, the shards' own)")
+      ->allow_extra_args(false);
   merge->add_flag("--records", merge_common->records, "also write OUT/matches.csv");
   merge->add_flag("--report", merge_common->report, "also write OUT/report/");
   AddBootstrapOptions(merge, merge_common.get(), "as for eval, on the merged frames");

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/kitti/label_io.h"
@@ -76,6 +77,8 @@ EvaluationOptions Options(const RandomFolders& data, Matcher matcher, FilterMode
   run.filter.conditions = ParseFilterConditions("min-area=400,max-distance=45");
   run.filter.mode = mode;
   run.score_threshold = 0.3;
+  // Breakdowns merge as the rest does: every bin from the merged frames (issue 37).
+  run.breakdowns = {ParseBreakdown("distance=0,20,40,inf"), ParseBreakdown("occlusion=0,1,4")};
   options.runs = OverlapSetRuns(run, {OverlapSet::kStrict, OverlapSet::kLoose});
   options.records = true;
   options.out = out;
@@ -130,6 +133,8 @@ TEST_P(EvalShardByMatcherTest, MergedShardsAreOneRun) {
   ASSERT_FALSE(whole.runs.front().result.results.empty());
   EXPECT_FALSE(whole.runs.front().result.results.front().records.empty());
   EXPECT_GT(whole.runs.front().result.results.front().num_valid_labels, 0);
+  EXPECT_EQ(whole.runs.front().result.results.front().breakdown.size(), 3u + 2u);
+  EXPECT_TRUE(a.count("breakdown.csv"));
 }
 
 INSTANTIATE_TEST_SUITE_P(Matchers, EvalShardByMatcherTest,
