@@ -410,19 +410,32 @@ Plot BreakdownFigure(const std::vector<ReportSource>& sources,
     s.name = st.Name(sources[i], "AP_R40");
     s.colour = st.Colour(i, 0);
     std::vector<std::string> values;
+    bool intervals = false;  // `eval --bootstrap`: each bin's AP_R40 interval as a whisker
     for (size_t c = 0; c < p.categories.size(); ++c) {
-      double v = kNaN;
+      double v = kNaN, lower = kNaN, upper = kNaN;
       int64_t labels = 0;
       for (const json& b : (*entries[i])["breakdown"]) {
         if (b.value("axis", "") == axis && b.value("bin", "") == p.categories[c]) {
           v = Num(b, "ap_r40");
           labels = b.value("num_valid_labels", 0);
+          if (b.contains("bootstrap") && b["bootstrap"].contains("ap_r40")) {
+            lower = Num(b["bootstrap"]["ap_r40"], "lower");
+            upper = Num(b["bootstrap"]["ap_r40"], "upper");
+            intervals = true;
+          }
         }
       }
       s.x.push_back(static_cast<double>(c));
       s.y.push_back(v);
-      values.push_back(fmt::format("{} {} ({} labels)", p.categories[c], Fixed(v, 2), labels));
+      s.y_low.push_back(lower);
+      s.y_high.push_back(upper);
+      values.push_back(fmt::format("{} {}{} ({} labels)", p.categories[c], Fixed(v, 2),
+                                   std::isfinite(lower)
+                                       ? fmt::format(" [{}, {}]", Fixed(lower, 2), Fixed(upper, 2))
+                                       : std::string(),
+                                   labels));
     }
+    if (!intervals) s.y_low.clear(), s.y_high.clear();
     caption.push_back(fmt::format("{}{}", sources.size() > 1 ? sources[i].label + ": " : "",
                                   fmt::join(values, ", ")));
     p.series.push_back(std::move(s));
@@ -430,7 +443,7 @@ Plot BreakdownFigure(const std::vector<ReportSource>& sources,
   p.caption = fmt::format(
       "{}. From the cell's one matching: a pair counts in its label's bin, a detection without a "
       "value on the axis in every bin (docs/metrics.md, Breakdowns); a bin without labels has no "
-      "bar.",
+      "bar; with eval --bootstrap, whiskers and brackets give each bin's interval.",
       fmt::join(caption, "; "));
   return p;
 }

@@ -254,6 +254,28 @@ TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
     EXPECT_EQ(figure["series"][0]["y"][b], e["breakdown"][b]["ap_r40"]) << b;
   }
   EXPECT_THAT(ReadFile(out / "report/index.html"), HasSubstr("AP_R40 by height"));
+  EXPECT_FALSE(figure["series"][0].contains("y_low"));  // no bootstrap, no whiskers
+
+  // With --bootstrap each bar has its interval as a whisker, results.json's, on the bar.
+  options.bootstrap = BootstrapOptions{};
+  options.bootstrap->num_resamples = 50;
+  options.out = dir.path() / "bootstrap";
+  RunEvaluation(options);
+  const json with = ReadReportSource(options.out, "kitti").results;
+  const json& eb = Entry(with, "Car", "2d", "Moderate");
+  const json fb = SvgData(options.out / "report/figures/breakdown_height_car_2d_moderate.svg");
+  int whiskers = 0;
+  for (size_t b = 0; b < 2; ++b) {
+    const json& interval = eb["breakdown"][b]["bootstrap"]["ap_r40"];
+    EXPECT_EQ(fb["series"][0]["y_low"][b], interval["lower"]) << b;
+    EXPECT_EQ(fb["series"][0]["y_high"][b], interval["upper"]) << b;
+    whiskers += !interval["lower"].is_null();
+  }
+  EXPECT_GT(whiskers, 0);
+  const std::string svg =
+      ReadFile(options.out / "report/figures/breakdown_height_car_2d_moderate.svg");
+  EXPECT_THAT(svg, HasSubstr("<line class=\"whisker\""));
+  EXPECT_THAT(svg, HasSubstr("stroke=\"#222222\""));
 }
 
 // The curves results.json names come back exactly, point for point and bit for bit, as the

@@ -298,9 +298,15 @@ std::string RenderSvg(const Plot& plot) {
     svg += fmt::format(
         "<g class=\"series\" data-series=\"{}\" data-index=\"{}\" clip-path=\"url(#{}-area)\">\n",
         XmlEscape(s.name), si, plot.id);
+    // A bar series' bars sit side by side in their category's slot; whiskers go on the bar.
+    const double slot = (f.XPx(1) - f.XPx(0)) * 0.8;
+    const double bar_w = slot / static_cast<double>(std::max<size_t>(1, num_bar_series));
+    const size_t this_bar = bar_index;
+    auto bar_centre = [&](double x) {
+      return f.XPx(x) - slot / 2 + bar_w * (static_cast<double>(this_bar) + 0.46);
+    };
     if (s.style == SeriesStyle::kBars) {
-      const double slot = (f.XPx(1) - f.XPx(0)) * 0.8;
-      const double w = slot / static_cast<double>(std::max<size_t>(1, num_bar_series));
+      const double w = bar_w;
       for (size_t i = 0; i < s.x.size(); ++i) {
         if (!std::isfinite(s.y[i])) continue;
         const double x0 = f.XPx(s.x[i]) - slot / 2 + w * static_cast<double>(bar_index);
@@ -347,10 +353,13 @@ std::string RenderSvg(const Plot& plot) {
         if (!std::isfinite(s.x[i]) || !std::isfinite(s.y_low[i]) || !std::isfinite(s.y_high[i])) {
           continue;
         }
+        // On a bar the whisker is dark (the bar's own colour would hide it).
+        const bool bars = s.style == SeriesStyle::kBars;
         svg += fmt::format(
             "<line class=\"whisker\" x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{2}\" "
-            "stroke=\"{3}\" stroke-width=\"1.2\"/>\n",
-            Px(f.XPx(s.x[i])), Px(f.YPx(s.y_low[i])), Px(f.YPx(s.y_high[i])), colour);
+            "stroke=\"{3}\" stroke-width=\"{4}\"/>\n",
+            Px(bars ? bar_centre(s.x[i]) : f.XPx(s.x[i])), Px(f.YPx(s.y_low[i])),
+            Px(f.YPx(s.y_high[i])), bars ? std::string("#222222") : colour, bars ? "1.6" : "1.2");
       }
     }
     svg += "</g>\n";
