@@ -17,6 +17,7 @@
 
 #include "annos.h"
 #include "common.h"
+#include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/compare.h"
 #include "stereodet/eval/eval_input.h"
@@ -217,14 +218,41 @@ PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const 
 }
 
 // Every run on the frames, in order (the in-memory path of annotation dicts).
-PyEvalResult EvaluateFrames(const PyFrames& frames, const std::vector<EvalOptions>& options) {
+// evaluate()'s bootstrap=N (0: none), bootstrap_seed, bootstrap_confidence as the CLI's --bootstrap
+// flags: checked as the CLI checks them.
+std::optional<BootstrapOptions> BootstrapOf(int resamples, uint64_t seed, double confidence,
+                                            int num_threads) {
+  if (resamples == 0) return std::nullopt;
+  if (resamples < 1 || resamples > kMaxBootstrapResamples) {
+    ThrowValueError("bootstrap: resamples must be in [1, " +
+                    std::to_string(kMaxBootstrapResamples) + "], got " + std::to_string(resamples));
+  }
+  if (!(confidence > 0 && confidence < 1)) {
+    ThrowValueError("bootstrap_confidence: must be in (0, 1), got " + std::to_string(confidence));
+  }
+  BootstrapOptions b;
+  b.num_resamples = resamples;
+  b.seed = seed;
+  b.confidence = confidence;
+  b.num_threads = num_threads;
+  return b;
+}
+
+PyEvalResult EvaluateFrames(const PyFrames& frames, const std::vector<EvalOptions>& options,
+                            int bootstrap = 0, uint64_t bootstrap_seed = 1,
+                            double bootstrap_confidence = 0.95) {
   std::vector<EvalRun> runs;
+  const std::optional<BootstrapOptions> b =
+      BootstrapOf(bootstrap, bootstrap_seed, bootstrap_confidence,
+                  options.empty() ? 0 : options.front().num_threads);
   {
     ReleaseGil release;
     if (options.empty()) throw std::invalid_argument("no evaluation run");
     for (const EvalOptions& o : options) {
       o.Check();
       runs.push_back(EvalRun{o, Evaluate(*frames.frames, o)});
+      // As RunEvaluation does it: the same frames and options, resampled.
+      if (b) runs.back().bootstrap = Bootstrap(*frames.frames, o, *b);
     }
   }
   return MakeResult(std::move(runs), frames.info, frames.frames);
@@ -251,8 +279,10 @@ std::vector<EvalOptions> OverlapRuns(const EvalOptions& base,
 PyEvalResult RunFolders(const fs::path& gt, const fs::path& det, const std::string& split,
                         bool lenient, int num_threads, std::vector<EvalOptions> runs,
                         const fs::path& out, bool records, bool missing_as_empty,
-                        std::optional<double> score_if_missing) {
+                        std::optional<double> score_if_missing, int bootstrap,
+                        uint64_t bootstrap_seed, double bootstrap_confidence) {
   EvaluationOptions options;
+  options.bootstrap = BootstrapOf(bootstrap, bootstrap_seed, bootstrap_confidence, num_threads);
   options.input =
       InputOptions(gt, det, split, lenient, num_threads, missing_as_empty, score_if_missing);
   if (records && out.empty()) {
@@ -488,7 +518,8 @@ py::object ToDict(const PyEvalResult& r) {
   {
     ReleaseGil release;
     const std::span<const EvalRun> runs = r.Selected();
-    text = (runs.size() == 1 ? EvalResultToJson(runs[0].result, runs[0].options, r.info)
+    // The run(s) as EvalRun, so that bootstrap intervals come along (results.json's layout).
+    text = (runs.size() == 1 ? EvalResultToJson(std::vector<EvalRun>{runs[0]}, r.info)
                              : EvalResultToJson(*r.runs, r.info))
                .dump();
   }
@@ -916,7 +947,9 @@ void BindEval(py::module_& m) {
   m.def("_frames_from_folders", &FramesFromFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
         py::arg("lenient"), py::arg("num_threads"), py::arg("missing_as_empty") = false,
         py::arg("score_if_missing") = std::nullopt);
-  m.def("_evaluate", &EvaluateFrames, py::arg("frames"), py::arg("options"));
+  m.def("_evaluate", &EvaluateFrames, py::arg("frames"), py::arg("options"),
+        py::arg("bootstrap") = 0, py::arg("bootstrap_seed") = 1,
+        py::arg("bootstrap_confidence") = 0.95);
 
   // get_official_eval_result's two evaluations, strict and loose, and its printout. The same
   // options as OpenPcdetPrintout (openpcdet_compat.cc) builds, so the printout is `stereodet eval
@@ -950,7 +983,8 @@ void BindEval(py::module_& m) {
   m.def("_run_evaluation", &RunFolders, py::arg("gt"), py::arg("det"), py::arg("split"),
         py::arg("lenient"), py::arg("num_threads"), py::arg("runs"), py::arg("out"),
         py::arg("records"), py::arg("missing_as_empty") = false,
-        py::arg("score_if_missing") = std::nullopt);
+        py::arg("score_if_missing") = std::nullopt, py::arg("bootstrap") = 0,
+        py::arg("bootstrap_seed") = 1, py::arg("bootstrap_confidence") = 0.95);
   m.def("_write_report", &WriteReport, py::arg("result"), py::arg("out"), py::arg("records"));
 
   m.def(

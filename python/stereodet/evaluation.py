@@ -136,7 +136,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              lenient: bool = False, missing_as_empty: bool = False, num_threads: int = 0,
              out: Optional[PathLike] = None,
              breakdowns: Union[str, Iterable[str]] = (),
-             score_if_missing: Optional[float] = None) -> EvalResult:
+             score_if_missing: Optional[float] = None, bootstrap: int = 0,
+             bootstrap_seed: int = 1, bootstrap_confidence: float = 0.95) -> EvalResult:
     """Evaluates detections against labels; `stereodet eval` with the same options.
 
     gt, det: folders (gt: a KITTI root with training/label_2, a folder with label_2/, or a folder
@@ -165,6 +166,10 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
       refused, OSError: a folder of detections for part of the frames would read as a weak
       detector; give `split` with the frames that were detected instead).
     num_threads: 0 = all hardware threads.
+    bootstrap: N resamples of the frames (the CLI's --bootstrap N; 0 = none): percentile intervals
+      of every cell's AP and Brier scores and of every breakdown bin's, in to_dict() as
+      results.json has them (each cell's and bin's "bootstrap"), bootstrap_seed and
+      bootstrap_confidence as --bootstrap-seed and --bootstrap-confidence.
     score_if_missing: folders only: read detection lines without a score (15 fields: labels used
       as detections, for a sanity check) as detections of this score (the CLI's --score);
       otherwise such a line is an error (stereodet.ParseError naming it).
@@ -190,12 +195,15 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
                                      "" if split is None else os.fspath(split), lenient,
                                      num_threads, runs, target, records,
                                      missing_as_empty=missing_as_empty,
-                                     score_if_missing=score_if_missing)
+                                     score_if_missing=score_if_missing, bootstrap=bootstrap,
+                                     bootstrap_seed=bootstrap_seed,
+                                     bootstrap_confidence=bootstrap_confidence)
     if score_if_missing is not None:
         raise ValueError("score_if_missing is for detection folders; give annotation dicts a "
                          "'score' array")
     result = _core._evaluate(_frames(gt, det, split, lenient, num_threads, missing_as_empty),
-                             runs)
+                             runs, bootstrap=bootstrap, bootstrap_seed=bootstrap_seed,
+                             bootstrap_confidence=bootstrap_confidence)
     if out is not None:
         _core._write_report(result, target, records)
     return result
@@ -330,5 +338,5 @@ def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLik
 # evaluate()'s keyword options and their defaults, for filter_sweep() and compare().
 _EVALUATE_DEFAULTS = {name: p.default for name, p in inspect.signature(evaluate).parameters.items()
                       if p.kind == p.KEYWORD_ONLY
-                      and name not in ("lenient", "missing_as_empty", "out",
-                                       "score_if_missing")}
+                      and name not in ("lenient", "missing_as_empty", "out", "score_if_missing",
+                                       "bootstrap", "bootstrap_seed", "bootstrap_confidence")}

@@ -509,3 +509,32 @@ def test_labels_as_detections_with_score_if_missing(data, cli, tmp_path):
         assert json.load(f)["input"] == result.to_dict()["input"]
     with pytest.raises(ValueError, match="score_if_missing is for detection folders"):
         stereodet.evaluate([], [], score_if_missing=1.0)
+
+
+def test_bootstrap_intervals_are_the_clis(data, cli, tmp_path):
+    small = data / "eval_small"
+    cli("eval", "--gt", small, "--det", small / "det", "--classes", "Car", "--metrics", "2d,bev",
+        "--breakdown", "distance=0,30,inf", "--bootstrap", "40", "--bootstrap-seed", "3",
+        "--out", tmp_path / "cli")
+    with open(tmp_path / "cli" / "results.json") as f:
+        expected = json.load(f)
+    from_folders = stereodet.evaluate(small, small / "det", classes=["Car"], metrics=["2d", "bev"],
+                                      breakdowns=["distance=0,30,inf"], bootstrap=40,
+                                      bootstrap_seed=3).to_dict()
+    gt = [stereodet.kitti.read_objects(p) for p in sorted((small / "label_2").glob("*.txt"))]
+    dt = [stereodet.kitti.read_objects(small / "det" / p.name, "detection")
+          for p in sorted((small / "label_2").glob("*.txt"))]
+    from_annos = stereodet.evaluate(gt, dt, classes=["Car"], metrics=["2d", "bev"],
+                                    breakdowns=["distance=0,30,inf"], bootstrap=40,
+                                    bootstrap_seed=3).to_dict()
+    expected["bootstrap"].pop("seconds")
+    for got in (from_folders, from_annos):
+        got["bootstrap"].pop("seconds")  # the one field that is a clock's
+        assert got["bootstrap"] == expected["bootstrap"]
+        for a, b in zip(got["results"], expected["results"]):
+            assert a.get("bootstrap") == b.get("bootstrap")
+            for bin_a, bin_b in zip(a.get("breakdown", []), b.get("breakdown", [])):
+                assert bin_a["bootstrap"] == bin_b["bootstrap"]
+    assert "bootstrap" in expected["results"][0]
+    with pytest.raises(ValueError, match="bootstrap_confidence"):
+        stereodet.evaluate(gt, dt, bootstrap=10, bootstrap_confidence=1.5)
