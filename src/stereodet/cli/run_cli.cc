@@ -205,12 +205,15 @@ int RunCliIn(int argc, char** argv, Program self,
   app.formatter(std::make_shared<HelpFormatter>());  // subcommands added below inherit it
   // --debug is read from argv before parsing (errors can come before CLI11 would set a flag);
   // every command declares it (AddDebugFlags) so that CLI11 accepts it and --help lists it.
-  const bool debug_before = DebugMessages();
-  struct RestoreDebug {
-    bool on;
-    ~RestoreDebug() { SetDebugMessages(on); }
-  } restore_debug{debug_before};
-  if (DebugRequested(argc, argv)) SetDebugMessages(true);
+  // Set for this call only, and only when nothing else (the environment, an earlier setting) has
+  // debug messages on already: RunCommandInProcess's callers keep their own setting.
+  struct DebugForThisCall {
+    bool set_here;
+    ~DebugForThisCall() {
+      if (set_here) SetDebugMessages(false);
+    }
+  } debug_for_this_call{DebugRequested(argc, argv) && !DebugMessages()};
+  if (debug_for_this_call.set_here) SetDebugMessages(true);
 
   try {
     // `stereodet [FLAGS] NAME ...` with NAME another executable's command: hand over the untouched

@@ -6,10 +6,8 @@
 #include <fmt/format.h>
 
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,6 +18,7 @@
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/frame_pictures.h"
 #include "stereodet/stereo/planar_scene.h"
+#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet::cli {
@@ -73,13 +72,10 @@ void AddSharedOptions(CLI::App* cmd, StereoArgs& args, StereoOptions& options) {
 // `defaults` with the stereo settings of `path` over it: a model.json's "stereo" record (an RGB-H
 // or RGB-D model) or a stereo.json's disparity, ground and height_code (StereoOptionsFromJson).
 StereoOptions ReadStereoSettingsFile(const std::string& path, const StereoOptions& defaults) {
-  std::ifstream in(path, std::ios::binary);
-  STEREODET_CHECK_IO(in.good()) << "--stereo-settings: cannot read " << path;
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = ReadFile(path);  // regular files only, named in its errors
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text.str());
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw ParseError(path, 0, "", std::string("not valid JSON: ") + e.what());
   }
@@ -93,7 +89,7 @@ StereoOptions ReadStereoSettingsFile(const std::string& path, const StereoOption
                      "holds no stereo settings (neither a model.json with a \"stereo\" record, "
                      "as RGB-H and RGB-D models have, nor a stereo.json)");
   }
-  return StereoOptionsFromJson(text.str(), path, defaults);
+  return StereoOptionsFromJson(text, path, defaults);
 }
 
 // The named settings into `options`, then its Check().

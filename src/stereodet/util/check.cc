@@ -18,6 +18,7 @@ std::string FormatParseError(const std::string& file, int line, const std::strin
   if (!field.empty()) out.append("field ").append(field).append(": ");
   return out.append(message);
 }
+
 // The length of the source tag that starts at message[at] (" [NAME.cc:LINE" then "]" or
 // ", CONDITION]"), or 0 if none starts there. Must match what CheckFailure appends.
 size_t SourceTagLength(std::string_view message, size_t at) {
