@@ -2,7 +2,7 @@
 """Why a cell's AP_R40 can be lower with the optimal matcher than with the KITTI matcher (issue 36).
 
     scripts/kitti_vs_optimal_trace.py KITTI_RESULTS OPTIMAL_RESULTS [--class Car] [--metric 3d]
-                                      [--difficulty Moderate]
+                                      [--difficulty Moderate] [--overlaps strict|loose]
 
 KITTI_RESULTS and OPTIMAL_RESULTS are `stereodet eval --out` folders of the same detections and
 labels, one per matcher. For the cell, the KITTI matcher's AP_R40 (its 41 slots) is split into:
@@ -27,12 +27,12 @@ import os
 import sys
 
 
-def cell(folder, cls, metric, difficulty):
+def cell(folder, cls, metric, difficulty, overlaps):
     with open(os.path.join(folder, "results.json")) as f:
         results = json.load(f)["results"]
     for e in results:
         if (e["class"] == cls and e["metric"] == metric and e["difficulty"] == difficulty
-                and e.get("overlaps", "strict") == "strict" and e.get("evaluated", True)):
+                and e.get("overlaps", "strict") == overlaps and e.get("evaluated", True)):
             with open(os.path.join(folder, e["curve_csv"])) as f:
                 curve = [(float(r["recall"]), float(r["precision"])) for r in csv.DictReader(f)
                          if r["recall"] and r["precision"]]
@@ -52,9 +52,10 @@ def main():
     parser.add_argument("--class", dest="cls", default="Car")
     parser.add_argument("--metric", default="3d")
     parser.add_argument("--difficulty", default="Moderate")
+    parser.add_argument("--overlaps", default="strict", help="strict or loose (eval --overlaps)")
     args = parser.parse_args()
-    k, k_curve = cell(args.kitti, args.cls, args.metric, args.difficulty)
-    o, _ = cell(args.optimal, args.cls, args.metric, args.difficulty)
+    k, k_curve = cell(args.kitti, args.cls, args.metric, args.difficulty, args.overlaps)
+    o, _ = cell(args.optimal, args.cls, args.metric, args.difficulty, args.overlaps)
     if "kitti" not in k:
         sys.exit(f"{args.kitti}: not evaluated with the KITTI matcher (no 41-slot arrays)")
     slots = k["kitti"]["precision"]
@@ -66,7 +67,8 @@ def main():
     # The split must account for the whole figure (its slots are the ones results.json holds).
     if abs(own + beyond + below - k["ap_r40"]) > 1e-9:
         sys.exit(f"the split does not add up: {own} + {beyond} + {below} vs {k['ap_r40']}")
-    print(f"{args.cls} {args.metric} {args.difficulty}: {k['num_valid_labels']} labels, "
+    print(f"{args.cls} {args.metric} {args.difficulty} ({args.overlaps}): "
+          f"{k['num_valid_labels']} labels, "
           f"{len(k['kitti']['thresholds'])} devkit thresholds, highest recall {max_recall:.4f}")
     print(f"  KITTI matcher AP_R40 {k['ap_r40']:.2f} = own curve {own:.2f} + beyond {beyond:.2f} "
           f"+ below {below:.2f}")
