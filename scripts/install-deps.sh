@@ -17,6 +17,7 @@ packages=(
   libboost-dev            # eval: boost::geometry (header-only), the KITTI devkit's BEV/3D overlaps
   opencv-doc              # stereo tests: Middlebury "Aloe" pair with ground truth
   libtorch-dev            # models: LibTorch detectors (CPU)
+  libgloo-dev             # models: the headers of LibTorch's Gloo process group (train --world-size)
   libopenblas0-openmp     # models: BLAS for LibTorch (alternatives switch it in for the reference
                           # BLAS): a det3d training step 2.5x less CPU (docs/BENCHMARKS.md)
   nlohmann-json3-dev      # report: results.json

@@ -6,6 +6,8 @@
         eval   --gt DIR --det DIR --out DIR [--split val] [-- more `stereodet eval` flags]
         detect --model DIR --data DIR --out DIR [--split val] [--family ssd|det3d|rpn]
                [-- more `stereodet detect FAMILY` flags]
+        train  --family ssd|rpn|det3d --data DIR --out DIR [--ranks N] [--port P]
+               [-- more `stereodet train FAMILY` flags]
 
 The work is cut into tasks of about --task-frames frames: task K of N runs the command line's
 engine-agnostic contract, `stereodet CMD ... --shard K/N`, as a subprocess on a Dask worker (one
@@ -26,6 +28,13 @@ by the scheduler (same bytes: every shard's output is a function of its frames a
   OUT/merged/, byte for byte the detection folder of one `stereodet detect` run (run.json but
   its command line). Done marker OUT/.scale/detect-K-of-N.done, which holds the task's command
   line: a task whose command line changed (another model, other flags) runs again.
+
+- train: one data-parallel training (`stereodet train FAMILY --world-size N --rank R
+  --rendezvous tcp://HOST:PORT`, models/distributed.h), rank R a long task pinned to the R-th
+  worker, all N running at once; rank 0 runs on a worker of the scheduler's host when there is one,
+  and the rendezvous is on rank 0's host at a port free there (or --port). Rank 0 writes --out.
+  Not retried: a rank that fails stops the group (its error is reported); run it again with
+  `-- --resume` to continue from the last epoch.
 
 Without --scheduler a LocalCluster of --workers processes is started and closed; with it the
 driver joins a running scheduler (`dask scheduler` and `dask worker --nthreads 1` on each node,
@@ -305,6 +314,89 @@ def detect_merge(bin_dir: Path, out: Path, n: int) -> str:
     return result.stderr
 
 
+def _host(address: str) -> str:
+    """The host of a Dask address ("tcp://10.0.0.5:8786" -> "10.0.0.5", "tcp://[::1]:8786" ->
+    "::1")."""
+    rest = address.split("://", 1)[-1]
+    host = rest.rsplit(":", 1)[0]
+    return host[1:-1] if host.startswith("[") and host.endswith("]") else host
+
+
+def free_port() -> int:
+    """A TCP port free on this machine now (bound to port 0 and released); run on rank 0's worker
+    to choose the rendezvous port there."""
+    import socket  # noqa: PLC0415
+
+    with socket.socket() as s:
+        s.bind(("", 0))
+        return s.getsockname()[1]
+
+
+def train_rank_argv(bin_dir: Path, family: str, data: Path, out: Path, extra: Sequence[str],
+                    rank: int, world: int, rendezvous: str) -> List[str]:
+    """Rank `rank`'s command line of a training of `world` ranks."""
+    return [str(bin_dir / "stereodet-models"), "train", family, "--data", str(data), "--out",
+            str(out), *extra, "--world-size", str(world), "--rank", str(rank), "--rendezvous",
+            rendezvous]
+
+
+def run_training(client, bin_dir: Path, family: str, data: Path, out: Path,
+                 extra: Sequence[str], ranks: int = 0, port: int = 0,
+                 progress: Callable[[str], None] = print) -> str:
+    """Runs one training of `ranks` ranks (0: one per worker) on the client's workers, rank r on
+    the r-th worker (rank 0 on the scheduler's host when a worker is there). Returns rank 0's
+    stderr (its summary). Raises RuntimeError naming the first rank that failed, with its error
+    line; a failed rank makes the others stop (the group's timeout bounds the wait)."""
+    workers = sorted(client.scheduler_info()["workers"])
+    if not workers:
+        raise RuntimeError("the Dask cluster has no workers")
+    world = ranks or len(workers)
+    if world > len(workers):
+        raise RuntimeError(f"--ranks {world} needs as many workers, the cluster has "
+                           f"{len(workers)} (each rank is a long task of its own worker)")
+    scheduler_host = _host(client.scheduler.address)
+    workers.sort(key=lambda w: _host(w) != scheduler_host)  # stable: the scheduler's host first
+    chosen = workers[:world]
+    host = _host(chosen[0])
+    if not port:
+        port = client.submit(free_port, workers=[chosen[0]], allow_other_workers=False,
+                             pure=False).result()
+    rendezvous = f"tcp://{'[' + host + ']' if ':' in host else host}:{port}"
+    run = uuid.uuid4().hex[:8]
+    futures = []
+    for rank, worker in enumerate(chosen):
+        task = Task(index=rank, count=world, done="", write_done=False,
+                    argv=train_rank_argv(bin_dir, family, data, out, extra, rank, world,
+                                         rendezvous))
+        futures.append(client.submit(run_training_rank, task, workers=[worker],
+                                     allow_other_workers=False, pure=False,
+                                     key=f"stereodet-train-rank-{rank}-of-{world}-{run}"))
+    progress(f"train {family}: {world} ranks, rendezvous {rendezvous}, rank 0 on {chosen[0]}")
+    from distributed import wait  # noqa: PLC0415
+
+    wait(futures)
+    errors = []
+    for rank, future in enumerate(futures):
+        if future.status == "error":
+            errors.append(f"rank {rank}: {future.exception()}")
+    if errors:
+        # The first rank to fail is usually the cause; the others say the group stopped.
+        cause = next((e for e in errors if "training group" not in e), errors[0])
+        raise RuntimeError(f"the training failed: {cause}")
+    return futures[0].result()["stderr"]
+
+
+def run_training_rank(task: Task) -> dict:
+    """One rank of a training on this worker: its command as a subprocess; returns its stderr.
+    Raises RuntimeError with the command's error line when it fails."""
+    start = time.monotonic()
+    result = subprocess.run(_with_parent_death_signal(task.argv), capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"exit {result.returncode}: {last_line(result.stderr)} (its command: "
+                           f"{' '.join(task.argv)})")
+    return {"index": task.index, "seconds": time.monotonic() - start, "stderr": result.stderr}
+
+
 def run_tasks(client, tasks: Sequence[Task], progress: Callable[[str], None] = print,
               retries: int = 3) -> List[dict]:
     """Submits every task to the Dask client and waits; reports each finished task through
@@ -377,7 +469,15 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--split", default="val", help="split name or file; default val")
     d.add_argument("--family", default="ssd", choices=["ssd", "det3d", "rpn"],
                    help="the detector family; default ssd")
-    for parser in (s, st, e, d):
+    t = sub.add_parser("train", help="one data-parallel `stereodet train FAMILY`, a rank per worker")
+    t.add_argument("--family", required=True, choices=["ssd", "rpn", "det3d"])
+    t.add_argument("--data", required=True, type=Path)
+    t.add_argument("--out", required=True, type=Path)
+    t.add_argument("--ranks", type=int, default=0,
+                   help="ranks (processes); default: one per worker of the cluster")
+    t.add_argument("--port", type=int, default=0,
+                   help="rendezvous port on rank 0's host; default: one free there")
+    for parser in (s, st, e, d, t):
         parser.add_argument("extra", nargs=argparse.REMAINDER,
                             help="after --: more flags of the stereodet command")
     return p
@@ -387,6 +487,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = build_parser().parse_args(argv)
     extra = [a for a in args.extra if a != "--"] if args.extra else []
     bin_dir = find_bin_dir(args.bin)
+    if args.command == "train":
+        progress = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+        if args.in_process:
+            raise SystemExit("stereodet.scale: --in-process is for synth, stereo and eval; "
+                             "training ranks run as subprocesses (docs/scale.md)")
+        client, cluster = make_client(args.ranks or args.workers, args.scheduler)
+        try:
+            start = time.monotonic()
+            summary = run_training(client, bin_dir, args.family, args.data.resolve(),
+                                   args.out.resolve(), extra, args.ranks, args.port, progress)
+            progress(f"train {args.family}: done in {time.monotonic() - start:.1f} s")
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        if not args.quiet:
+            print(summary, end="")
+        return 0
     if args.command == "synth":
         tasks = synth_tasks(bin_dir, args.out.resolve(), args.frames, args.seed, args.task_frames,
                             extra, in_process=args.in_process)

@@ -260,6 +260,57 @@ def test_a_worker_killed_mid_detect_changes_nothing(client, bin_dir, tmp_path):
 
 
 # Errors are one line on stderr and exit 1, not a traceback (STEREODET_DEBUG=1 keeps it).
+def train_log(model: Path) -> list:
+    import csv  # noqa: PLC0415
+
+    with open(model / "train_log.csv") as f:
+        return list(csv.DictReader(f))
+
+
+def test_a_training_on_two_workers_follows_one_process(client, bin_dir, tmp_path):
+    """`stereodet.scale train`: one rank per worker, the rendezvous on rank 0's host; the losses
+    of every step are the one-process training's (issue 39)."""
+    if not (bin_dir / "stereodet-models").exists():
+        pytest.skip("stereodet-models is not built (STEREODET_BUILD_MODELS=OFF)")
+    data = tmp_path / "data"
+    one_process_synth(bin_dir, data, 10, 3)
+    flags = ["--input", "rgb", "--width", "128", "--height", "40", "--epochs", "2",
+             "--max-frames", "4", "--batch-size", "4", "--threads", "1", "--quiet"]
+    subprocess.run([str(bin_dir / "stereodet-models"), "train", "ssd", "--data", str(data),
+                    "--out", str(tmp_path / "one"), *flags], check=True)
+    lines = []
+    scale.run_training(client, bin_dir, "ssd", data, tmp_path / "two", flags,
+                       progress=lines.append)
+    assert lines and "2 ranks, rendezvous tcp://127.0.0.1:" in lines[0]
+    one, two = train_log(tmp_path / "one"), train_log(tmp_path / "two")
+    assert len(one) == len(two) == 2
+    for a, b in zip(one, two):
+        for key in ("loss", "localization_loss", "confidence_loss"):
+            assert float(b[key]) == pytest.approx(float(a[key]), rel=1e-4), key
+
+
+def test_a_failed_rank_is_named_with_its_cause(client, bin_dir, tmp_path, monkeypatch):
+    """Rank 1 alone is given a split that does not exist: the error names rank 1 and its cause,
+    not the other rank's "training group ... failed"."""
+    if not (bin_dir / "stereodet-models").exists():
+        pytest.skip("stereodet-models is not built (STEREODET_BUILD_MODELS=OFF)")
+    data = tmp_path / "data"
+    one_process_synth(bin_dir, data, 4, 3)
+    original = scale.train_rank_argv
+
+    def argv(bin_dir_, family, data_, out, extra, rank, world, rendezvous):
+        more = list(extra) + (["--split", "no_such_split"] if rank == 1 else [])
+        return original(bin_dir_, family, data_, out, more, rank, world, rendezvous)
+
+    monkeypatch.setattr(scale, "train_rank_argv", argv)
+    with pytest.raises(RuntimeError, match="rank 1: exit 1: .*no_such_split"):
+        scale.run_training(client, bin_dir, "ssd", data, tmp_path / "model",
+                           ["--input", "rgb", "--width", "128", "--height", "40", "--epochs", "1",
+                            "--batch-size", "2", "--threads", "1", "--quiet",
+                            "--group-timeout", "20"], progress=lambda line: None)
+    assert not (tmp_path / "model" / "model.pt").exists()
+
+
 def test_errors_are_one_line(build, tmp_path):
     env = dict(os.environ, PYTHONPATH=str(build / "python"))
     env.pop("STEREODET_DEBUG", None)

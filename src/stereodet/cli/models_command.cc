@@ -24,6 +24,7 @@
 #include "stereodet/models/det3d/det3d_train.h"
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/models/rpn/rpn_detect.h"
 #include "stereodet/models/rpn/rpn_train.h"
 #include "stereodet/models/ssd/ssd_detect.h"
@@ -85,6 +86,40 @@ void AddTrainingFlags(CLI::App* ts, TrainOptions& t) {
   ts->add_option("--device", t.device, "cpu or cuda")
       ->check(CLI::IsMember({"cpu", "cuda"}))
       ->capture_default_str();
+  // Data-parallel training (models/distributed.h, docs/scale.md); torchrun's variables fill what
+  // is not given (CompleteFromEnvironment).
+  ts->add_option("--world-size", t.distributed.world_size,
+                 "processes training together, each on batch-size / N frames of every step "
+                 "(WORLD_SIZE when not given)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  ts->add_option("--rank", t.distributed.rank,
+                 "this process's rank, 0 to world-size - 1; rank 0 writes the model folder (RANK "
+                 "when not given)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  ts->add_option(
+        "--rendezvous", t.distributed.rendezvous,
+        "where the ranks meet: tcp://HOST:PORT (rank 0's address) or file://PATH (a new "
+        "file on a filesystem all ranks share); MASTER_ADDR and MASTER_PORT when not given")
+      ->type_name("URL");
+  ts->add_option("--group-timeout", t.distributed.timeout_s,
+                 "seconds a rank waits for the others, at the rendezvous and in every exchange")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+}
+
+// A training's DistributedOptions completed from the environment torchrun sets.
+template <typename TrainOptions>
+void CompleteFromEnvironment(TrainOptions& t) {
+  t.distributed = DistributedOptionsFromEnvironment(t.distributed, DistributedEnvironment());
+}
+
+// Whether this process prints a training's summary: rank 0 (or the only process) does; the other
+// ranks of a group trained the same model and say nothing.
+template <typename TrainOptions>
+bool PrintsSummary(const TrainOptions& t) {
+  return t.distributed.rank == 0;
 }
 
 // The flags every `detect` command shares, bound to the fields of the same names in each family's
@@ -170,8 +205,9 @@ void RunTrain(TrainArgs& a) {
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
+  CompleteFromEnvironment(options);
   const TrainSsdSummary s = TrainSsd(options);
-  if (!a.quiet) {
+  if (!a.quiet && PrintsSummary(options)) {
     std::fprintf(
         stderr,
         "trained %s: %d frames, epochs %d/%d (%d this run), final loss %.4f, %.1f images/s,"
@@ -225,8 +261,9 @@ void RunTrainDet3d(TrainDet3dArgs& a) {
   options.model.input = *ParsePointSource(a.input);  // CLI::IsMember checked it
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
+  CompleteFromEnvironment(options);
   const TrainDet3dSummary s = TrainDet3d(options);
-  if (!a.quiet) {
+  if (!a.quiet && PrintsSummary(options)) {
     std::fprintf(stderr,
                  "trained det3d on %s: %d frames (%d objects, %lld in the GT database with %lld "
                  "points), epochs "
@@ -352,8 +389,9 @@ void RunTrainRpn(TrainRpnArgs& a) {
   options.data.threads = options.threads;
   if (a.quiet) options.progress.stream = nullptr;
   options.command_line = ProcessCommandLine();
+  CompleteFromEnvironment(options);
   const TrainRpnSummary s = TrainRpn(options);
-  if (!a.quiet) {
+  if (!a.quiet && PrintsSummary(options)) {
     std::fprintf(
         stderr,
         "trained rpn on %s: %d frames (%d objects), epochs %d/%d (%d this run), final "

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "stereodet/models/device.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -32,7 +33,8 @@ std::string WarmupWarning(int warmup_steps, int64_t steps_per_epoch, int epochs)
 // TrainDet3dOptions, TrainRpnOptions::Check call it before their own): --data and --out given,
 // epochs and batch size >= 1, a finite learning rate > 0, warm-up steps >= 0, the final rate's
 // fraction in [0, 1], threads, max frames and max epochs this run >= 0, a known device, not both
-// --resume and --force. Throws stereodet::Error naming the field.
+// --resume and --force, the training group's options (distributed.h) and a batch size that its
+// ranks divide. Throws stereodet::Error naming the field.
 template <typename TrainOptions>
 void CheckTrainingSchedule(const TrainOptions& o) {
   STEREODET_CHECK(!o.data_root.empty()) << "--data is required";
@@ -55,6 +57,10 @@ void CheckTrainingSchedule(const TrainOptions& o) {
   STEREODET_CHECK(ParseComputeDevice(o.device).has_value())
       << "unknown device '" << o.device << "' (expected cpu or cuda)";
   STEREODET_CHECK(!(o.resume && o.force)) << "--resume and --force exclude each other";
+  o.distributed.Check();
+  STEREODET_CHECK(o.batch_size % o.distributed.world_size == 0)
+      << "--batch-size " << o.batch_size << " must be a multiple of --world-size "
+      << o.distributed.world_size << " (each rank trains on batch-size / world-size frames)";
 }
 
 // A new training run's id: 16 hex digits that no other run draws (the random device, the clock).

@@ -16,11 +16,13 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/run_manifest.h"
@@ -53,14 +55,18 @@ struct TrainingLogColumns {
 class TrainingTask {
  public:
   virtual ~TrainingTask() = default;
-  // The epoch's frame order (every frame index once), before its first step.
-  virtual void BeginEpoch(int epoch, const std::vector<int>& order) {
+  // The frames of every step of the epoch that this process trains on, in step order (indices
+  // into the training data: consecutive slices of the epoch's order, or with a training group
+  // this rank's part of each, RankSlice), before its first step.
+  virtual void BeginEpoch(int epoch, const std::vector<std::vector<int>>& batches) {
     (void)epoch;
-    (void)order;
+    (void)batches;
   }
-  // One optimizer step at `learning_rate` on the frames `batch` (indices into the training data,
-  // the next slice of the epoch's order); `step` counts from the training's first step (epoch *
-  // steps per epoch + the step in the epoch). Returns the loss before the step.
+  // One optimizer step at `learning_rate` on the frames `batch` (the next of BeginEpoch's
+  // batches); `step` counts from the training's first step (epoch * steps per epoch + the step in
+  // the epoch). Returns the loss before the step; with a training group, this rank's share of the
+  // whole batch's loss (terms divided by whole-batch counts, the counts this rank's), which the
+  // loop sums over the group.
   virtual StepLoss Step(int epoch, int64_t step, const std::vector<int>& batch,
                         double learning_rate) = 0;
   // Writes the model folder's model.pt and model.json, then checkpoint.pt, after `epochs_done`
@@ -96,6 +102,10 @@ struct TrainingLoopOptions {
   RunManifest manifest;
   std::function<std::string(int epochs_done)> settings_json;
   ProgressOptions progress;
+  // Data-parallel training (distributed.h): each step's batch split over the group's ranks, the
+  // steps' losses summed over it; rank 0 alone prints progress and writes the log and run.json.
+  // Null: one process.
+  TrainingGroup* group = nullptr;
 
   // What every family fills the same way from its Train*Options `o`: the model folder (out_dir),
   // the schedule, run.json's fixed part (TrainingManifest of `tool`, e.g. "train rpn") and the
@@ -137,6 +147,10 @@ struct TrainingRunSummary {
 // task throws goes through.
 TrainingLoopSummary RunTrainingLoop(TrainingTask& task, const TrainingLoopOptions& options);
 
+// `progress` for this process of a training: rank 0's (or the only process's) unchanged, the other
+// ranks' silent (they would print what rank 0 prints).
+ProgressOptions RankProgress(ProgressOptions progress, const TrainingGroup* group);
+
 // The frames a training reads: the split's ids (ImageSets/SPLIT.txt or a split file), the first
 // `max_frames` of them when that is > 0. Throws std::invalid_argument for an empty split.
 std::vector<std::string> TrainingFrameIds(const KittiDataset& dataset, const std::string& split,
@@ -166,11 +180,14 @@ TrainingLoopOptions TrainingLoopOptions::Of(const TrainOptions& o, const std::st
 // PrepareModelFolder (train_common.h) decides whether it resumes. When it does, model.json's text
 // (the config the training continues with; the flags' config otherwise) and the training run that
 // model.json and checkpoint.pt record are read.
+// With a training group, rank 0 alone does all that; the other ranks never touch out_dir and
+// receive what rank 0 read (whether it resumes, model.json's text, the run's id), and in
+// StartEpoch the checkpoint's bytes.
 class TrainingFolder {
  public:
   TrainingFolder(const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
                  const std::vector<std::pair<std::string, std::filesystem::path>>& inputs,
-                 const std::string& tool, bool resume, bool force);
+                 const std::string& tool, bool resume, bool force, TrainingGroup* group = nullptr);
 
   bool resuming() const { return resuming_; }
   const std::filesystem::path& config_path() const { return config_path_; }  // out_dir/model.json
@@ -199,11 +216,14 @@ class TrainingFolder {
   // `load_checkpoint(checkpoint_path(), recorded_run())` returns (the family's trainer loads the
   // weights and optimizer state of checkpoint.pt and returns its epoch count). Throws
   // std::runtime_error naming checkpoint.pt for a negative count, what `load_checkpoint` throws.
+  // With a group, rank 0 loads checkpoint.pt and sends its bytes; the other ranks load them from a
+  // file of their temporary directory, removed when loaded.
   int StartEpoch(const std::function<int(const std::filesystem::path& checkpoint,
                                          const std::string& recorded_run)>& load_checkpoint) const;
 
  private:
-  OutputLock lock_;
+  std::optional<OutputLock> lock_;  // rank 0's (or the only process's)
+  TrainingGroup* group_ = nullptr;
   bool resuming_ = false;
   std::filesystem::path config_path_, checkpoint_path_;
   std::string config_text_, recorded_run_, training_run_;

@@ -31,7 +31,10 @@ class RecordingTask : public TrainingTask {
   int64_t diverge_at = -1;   // a NaN loss at this step
   int64_t overflow_at = -1;  // a non-finite network output at this step
 
-  void BeginEpoch(int /*epoch*/, const std::vector<int>& order) override {
+  // Each epoch's batches, joined: the order the loop visits frames in.
+  void BeginEpoch(int /*epoch*/, const std::vector<std::vector<int>>& epoch_batches) override {
+    std::vector<int> order;
+    for (const std::vector<int>& b : epoch_batches) order.insert(order.end(), b.begin(), b.end());
     orders.push_back(order);
   }
   StepLoss Step(int /*epoch*/, int64_t step, const std::vector<int>& batch,

@@ -13,6 +13,7 @@
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/det3d/det3d_net_internal.h"
 #include "stereodet/models/device_internal.h"
+#include "stereodet/models/distributed_internal.h"
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -67,7 +68,7 @@ torch::nn::Sequential ConvBlock(int in, int out, int stride, int layers) {
                                        .stride(i == 0 ? stride : 1)
                                        .padding(1)
                                        .bias(false)));
-    s->push_back(torch::nn::BatchNorm2d(out));
+    s->push_back(BatchNorm2dSync(out));
     s->push_back(torch::nn::ReLU());
   }
   return s;
@@ -81,7 +82,7 @@ torch::nn::Sequential UpBlock(int in, int out, int factor) {
     s->push_back(torch::nn::ConvTranspose2d(
         torch::nn::ConvTranspose2dOptions(in, out, factor).stride(factor).bias(false)));
   }
-  s->push_back(torch::nn::BatchNorm2d(out));
+  s->push_back(BatchNorm2dSync(out));
   s->push_back(torch::nn::ReLU());
   return s;
 }
@@ -96,7 +97,7 @@ struct Det3dNetImpl : torch::nn::Module {
     const int c = config.base_channels;
     pfn_linear = register_module(
         "pfn_linear", torch::nn::Linear(torch::nn::LinearOptions(kPillarFeatures, c).bias(false)));
-    pfn_bn = register_module("pfn_bn", torch::nn::BatchNorm1d(c));
+    pfn_bn = register_module("pfn_bn", BatchNorm1dSync(c));
     block1 = register_module("block1", ConvBlock(c, c, 2, 2));
     block2 = register_module("block2", ConvBlock(c, 2 * c, 2, 2));
     block3 = register_module("block3", ConvBlock(2 * c, 4 * c, 2, 2));
@@ -117,9 +118,9 @@ struct Det3dNetImpl : torch::nn::Module {
     cls_head->bias.fill_(prior);
     psw_head->bias.fill_(prior);
     // The auxiliary network (training only): 7c sampled features + height -> 64 -> seg, offset.
-    aux = register_module(
-        "aux", torch::nn::Sequential(torch::nn::Linear(7 * c + 1, 64), torch::nn::BatchNorm1d(64),
-                                     torch::nn::ReLU()));
+    aux_in_features = 7 * c + 1;
+    aux = register_module("aux", torch::nn::Sequential(torch::nn::Linear(7 * c + 1, 64),
+                                                       BatchNorm1dSync(64), torch::nn::ReLU()));
     aux_seg = register_module("aux_seg", torch::nn::Linear(64, 1));
     aux_offset = register_module("aux_offset", torch::nn::Linear(64, 3));
     aux_seg->bias.fill_(prior);
@@ -127,11 +128,12 @@ struct Det3dNetImpl : torch::nn::Module {
 
   int num_classes, anchors_per_cell, parts;
   torch::nn::Linear pfn_linear{nullptr};
-  torch::nn::BatchNorm1d pfn_bn{nullptr};
+  BatchNorm1dSync pfn_bn{nullptr};
   torch::nn::Sequential block1{nullptr}, block2{nullptr}, block3{nullptr};
   torch::nn::Sequential up1{nullptr}, up2{nullptr}, up3{nullptr};
   torch::nn::Conv2d cls_head{nullptr}, box_head{nullptr}, dir_head{nullptr}, psw_head{nullptr};
   torch::nn::Sequential aux{nullptr};
+  int64_t aux_in_features = 0;
   torch::nn::Linear aux_seg{nullptr}, aux_offset{nullptr};
 };
 TORCH_MODULE(Det3dNet);
@@ -329,9 +331,12 @@ struct Det3dModel::Impl {
   }
 
   // The auxiliary network on a batch: [N] segmentation logits and [N, 3] centre offsets for the
-  // samples' aux_xyz, in sample order.
+  // samples' aux_xyz, in sample order; undefined tensors when no sample has points. With a
+  // training group, "no sample" means none of the whole batch's (the synchronized batch norm
+  // needs every rank): a rank whose slice has none runs the network on zero rows.
   std::pair<torch::Tensor, torch::Tensor> Auxiliary(const std::vector<Det3dSample>& samples,
-                                                    const std::vector<torch::Tensor>& maps) const {
+                                                    const std::vector<torch::Tensor>& maps,
+                                                    TrainingGroup* group) const {
     namespace F = torch::nn::functional;
     const BevGridOptions& g = config.grid;
     std::vector<torch::Tensor> rows;
@@ -360,7 +365,10 @@ struct Det3dModel::Impl {
       parts.push_back(((p.select(1, 2) - g.min_z_m) / (g.max_z_m - g.min_z_m)).unsqueeze(1));
       rows.push_back(torch::cat(parts, 1));
     }
-    if (rows.empty()) return {};
+    if (internal::GlobalCount(group, static_cast<double>(rows.size())) == 0) return {};
+    if (rows.empty()) {
+      rows.push_back(torch::zeros({0, net->aux_in_features}, maps.front().options()));
+    }
     const torch::Tensor h = net->aux->forward(torch::cat(rows, 0));
     return {net->aux_seg->forward(h).squeeze(1), net->aux_offset->forward(h)};
   }
@@ -472,8 +480,12 @@ struct Det3dTrainer::Impl {
   Det3dModel::Impl& model;
   Det3dLossOptions options;
   torch::optim::AdamW optimizer;
+  TrainingGroup* group = nullptr;
 
-  std::pair<torch::Tensor, Det3dLossParts> Loss(const std::vector<Det3dSample>& batch) const {
+  // With `group`, this rank's share of the group's whole batch's loss: every term divided by the
+  // whole batch's positives or foreground points.
+  std::pair<torch::Tensor, Det3dLossParts> Loss(const std::vector<Det3dSample>& batch,
+                                                TrainingGroup* group) const {
     STEREODET_CHECK(!batch.empty()) << "empty training batch";
     const torch::Device& dev = model.torch_device;
     const int64_t num_anchors = static_cast<int64_t>(model.anchors.size());
@@ -502,7 +514,8 @@ struct Det3dTrainer::Impl {
     const torch::Tensor positive = label.gt(0);
     const torch::Tensor cared = label.ge(0).to(torch::kFloat32);
     const torch::Tensor target = positive.to(torch::kFloat32);
-    const double num_pos = std::max<int64_t>(1, positive.sum().item<int64_t>());
+    const double num_pos = std::max(
+        1.0, internal::GlobalCount(group, static_cast<double>(positive.sum().item<int64_t>())));
     Det3dLossParts parts;
     parts.num_positive = static_cast<int>(positive.sum().item<int64_t>());
     const torch::Tensor cls = FocalLoss(out.cls, target, cared) / num_pos;
@@ -533,7 +546,7 @@ struct Det3dTrainer::Impl {
     parts.direction = direction.item<double>();
     parts.part_warp = psw.item<double>();
     if (options.auxiliary) {
-      auto [seg, offset] = model.Auxiliary(batch, out.features);
+      auto [seg, offset] = model.Auxiliary(batch, out.features, group);
       if (seg.defined()) {
         std::vector<float> fg, off;
         for (const Det3dSample& s : batch) {
@@ -547,7 +560,8 @@ struct Det3dTrainer::Impl {
             torch::from_blob(fg.data(), {n}, torch::kFloat32).clone().to(dev);
         const torch::Tensor off_t =
             torch::from_blob(off.data(), {n, 3}, torch::kFloat32).clone().to(dev);
-        const double num_fg = std::max(1.0, fg_t.sum().item<double>());
+        const double num_fg =
+            std::max(1.0, internal::GlobalCount(group, fg_t.sum().item<double>()));
         const torch::Tensor segmentation = FocalLoss(seg, fg_t, torch::ones_like(fg_t)) / num_fg;
         const torch::Tensor centre =
             (torch::nn::functional::smooth_l1_loss(offset, off_t,
@@ -575,6 +589,12 @@ Det3dTrainer::Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss, doub
 
 Det3dTrainer::~Det3dTrainer() = default;
 
+void Det3dTrainer::SetGroup(TrainingGroup* group) {
+  impl_->group = group;
+  internal::AttachGroup(*impl_->model.net, group);
+  if (group != nullptr) internal::BroadcastModuleState(*group, *impl_->model.net);
+}
+
 Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double learning_rate) {
   STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
   for (auto& group : impl_->optimizer.param_groups()) {
@@ -582,8 +602,9 @@ Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double 
   }
   impl_->model.net->train();
   impl_->optimizer.zero_grad();
-  auto [total, parts] = impl_->Loss(batch);
+  auto [total, parts] = impl_->Loss(batch, impl_->group);
   total.backward();
+  internal::ReduceGradients(impl_->group, *impl_->model.net);
   impl_->optimizer.step();
   return parts;
 }
@@ -591,7 +612,7 @@ Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double 
 Det3dLossParts Det3dTrainer::Evaluate(const std::vector<Det3dSample>& batch) const {
   torch::NoGradGuard no_grad;
   impl_->model.net->eval();
-  return impl_->Loss(batch).second;
+  return impl_->Loss(batch, /*group=*/nullptr).second;
 }
 
 void Det3dTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,

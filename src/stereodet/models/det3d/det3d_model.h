@@ -25,6 +25,7 @@
 #include "stereodet/models/det3d/det3d_data.h"
 #include "stereodet/models/det3d/det3d_targets.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/models/model_json.h"
 
 namespace stereodet {
@@ -104,6 +105,9 @@ class Det3dTrainer {
  public:
   Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss = {}, double weight_decay = 1e-2);
   ~Det3dTrainer();
+  // Trains as one rank of `group` from now on (null: alone); SsdTrainer::SetGroup says how.
+  void SetGroup(TrainingGroup* group);
+  // One optimizer step; with a group, the loss returned is this rank's share of the whole batch's.
   Det3dLossParts Step(const std::vector<Det3dSample>& batch, double learning_rate);
   Det3dLossParts Evaluate(const std::vector<Det3dSample>& batch) const;
   // The checkpoint records the config, the parameter count and `training_run`

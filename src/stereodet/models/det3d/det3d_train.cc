@@ -93,16 +93,19 @@ void TrainDet3dOptions::Check() const {
   STEREODET_CHECK(max_aux_points >= 0) << "max_aux_points must be >= 0, got " << max_aux_points;
 }
 
-TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
-  options.Check();
-  const ComputeDevice device = ResolveComputeDevice(options.device);
+TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& given) {
+  given.Check();
+  const ComputeDevice device = ResolveComputeDevice(given.device);
   const Timer total_timer;
-  SetTorchThreads(options.threads);
+  SetTorchThreads(given.threads);
   TrainDet3dSummary summary;
 
+  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(given.distributed);
+  TrainDet3dOptions options = given;
+  options.progress = RankProgress(options.progress, group.get());
   const TrainingFolder folder(options.out_dir, options.data_root,
                               {{"--points", options.points_dir}}, "train det3d", options.resume,
-                              options.force);
+                              options.force, group.get());
   const Det3dConfig config = folder.ModelConfig(
       options.model, Det3dConfigFromJson,
       [](const Det3dConfig& c) { return std::string(PointSourceName(c.input)); });
@@ -118,6 +121,7 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
       folder.StartEpoch([&](const std::filesystem::path& path, const std::string& run) {
         return trainer.LoadCheckpoint(path, run);
       });
+  trainer.SetGroup(group.get());
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -178,6 +182,7 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& options) {
         options.gt_sampling.max_per_class, options.gt_database.min_points,
         options.gt_database.box_margin_m, gt_database.ObjectCount());
   };
+  loop.group = group.get();
   Det3dTrainingTask task(frames, gt_database, gt_sampling, model, trainer, options,
                          folder.training_run());
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);

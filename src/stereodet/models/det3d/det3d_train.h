@@ -39,6 +39,8 @@ struct TrainDet3dOptions {
   int max_epochs_this_run = 0;  // stop after N epochs in this call (0 = all); --resume continues
   int max_aux_points = 4096;    // points per frame the auxiliary network sees
   std::string device = "cpu";   // cpu | cuda
+  // Data-parallel training over several processes (distributed.h); one process by default.
+  DistributedOptions distributed;
   PointFilterOptions filter;
   Det3dAugmentOptions augment;
   // GT-database cut-and-paste (gt_database.h), before `augment`'s per-object and global steps;

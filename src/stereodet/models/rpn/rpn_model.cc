@@ -11,6 +11,7 @@
 #include "stereodet/models/device_internal.h"
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/rpn/rpn_net_internal.h"
+#include "stereodet/models/train_data.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -125,15 +126,15 @@ ResidualBlockImpl::ResidualBlockImpl(int in_channels, int out_channels, int stri
       "conv1",
       nn::Conv2d(
           nn::Conv2dOptions(in_channels, out_channels, 3).stride(stride).padding(1).bias(false)));
-  bn1 = register_module("bn1", nn::BatchNorm2d(out_channels));
+  bn1 = register_module("bn1", BatchNorm2dSync(out_channels));
   conv2 = register_module(
       "conv2", nn::Conv2d(nn::Conv2dOptions(out_channels, out_channels, 3).padding(1).bias(false)));
-  bn2 = register_module("bn2", nn::BatchNorm2d(out_channels));
+  bn2 = register_module("bn2", BatchNorm2dSync(out_channels));
   if (stride != 1 || in_channels != out_channels) {
     shortcut = register_module(
         "shortcut",
         nn::Conv2d(nn::Conv2dOptions(in_channels, out_channels, 1).stride(stride).bias(false)));
-    shortcut_bn = register_module("shortcut_bn", nn::BatchNorm2d(out_channels));
+    shortcut_bn = register_module("shortcut_bn", BatchNorm2dSync(out_channels));
   }
 }
 
@@ -148,7 +149,7 @@ TrunkImpl::TrunkImpl(int in_channels, int base, int blocks, int last_stride) {
   namespace nn = torch::nn;
   stem = register_module(
       "stem", nn::Conv2d(nn::Conv2dOptions(in_channels, base, 7).stride(2).padding(3).bias(false)));
-  stem_bn = register_module("stem_bn", nn::BatchNorm2d(base));
+  stem_bn = register_module("stem_bn", BatchNorm2dSync(base));
   stages = nn::Sequential();
   int channels = base;
   for (int stage = 0; stage < 3; ++stage) {
@@ -457,6 +458,7 @@ struct RpnTrainer::Impl {
   RpnModel& model;
   RpnTrainerOptions options;
   torch::optim::AdamW optimizer;
+  TrainingGroup* group = nullptr;
 };
 
 RpnTrainer::RpnTrainer(RpnModel& model, const RpnTrainerOptions& options) {
@@ -466,16 +468,33 @@ RpnTrainer::RpnTrainer(RpnModel& model, const RpnTrainerOptions& options) {
 
 RpnTrainer::~RpnTrainer() = default;
 
+void RpnTrainer::SetGroup(TrainingGroup* group) {
+  impl_->group = group;
+  internal::AttachGroup(*impl_->model.impl_->net, group);
+  if (group != nullptr) internal::BroadcastModuleState(*group, *impl_->model.impl_->net);
+}
+
 RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed) {
   STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
   STEREODET_CHECK(!batch.inputs.empty() && batch.inputs.size() == batch.objects.size())
       << "a batch needs inputs and one object list per input";
+  STEREODET_CHECK(batch.sampling_seeds.empty() ||
+                  batch.sampling_seeds.size() == batch.inputs.size())
+      << "a batch of " << batch.inputs.size() << " inputs has " << batch.sampling_seeds.size()
+      << " sampling seeds";
+  TrainingGroup* const group = impl_->group;
   namespace F = torch::nn::functional;
   for (auto& group : impl_->optimizer.param_groups()) {
     static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
   }
   torch::manual_seed(step_seed);
-  std::mt19937_64 rng(step_seed);
+  // One sampling stream per image, so that an image's anchors and RoIs are drawn alike whichever
+  // rank of a training group trains on it and whatever the images before it drew.
+  std::vector<std::mt19937_64> rngs;
+  for (size_t i = 0; i < batch.inputs.size(); ++i) {
+    rngs.emplace_back(batch.sampling_seeds.empty() ? SampleSeed(step_seed, 0, static_cast<int>(i))
+                                                   : batch.sampling_seeds[i]);
+  }
   RpnModel::Impl& m = *impl_->model.impl_;
   const RpnConfig& c = m.config;
   const torch::Device device = m.device;
@@ -493,7 +512,7 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
   RpnLossParts parts;
   for (int64_t i = 0; i < b; ++i) {
     const RpnAnchorTargets t =
-        SampleAnchors(m.anchors, batch.objects[i], impl_->options.anchors, rng);
+        SampleAnchors(m.anchors, batch.objects[i], impl_->options.anchors, rngs[i]);
     std::copy(t.labels.begin(), t.labels.end(), anchor_labels.begin() + i * n);
     std::copy(t.deltas.begin(), t.deltas.end(), anchor_deltas.begin() + i * n * 4);
     parts.positive_anchors += t.num_positive;
@@ -504,10 +523,15 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
       torch::from_blob(anchor_deltas.data(), {b * n, 4}, torch::kFloat32).clone().to(device);
   const torch::Tensor sampled = labels_t.ge(0);
   const torch::Tensor positive = labels_t.eq(1);
-  const torch::Tensor num_sampled = sampled.sum().clamp_min(1).to(torch::kFloat32);
+  // Sums over this rank's images divided by the whole batch's counts: the ranks' losses add up.
+  const double num_sampled = std::max(
+      1.0, internal::GlobalCount(group, static_cast<double>(sampled.sum().item<int64_t>())));
   const torch::Tensor obj_flat = objectness.reshape({b * n});
-  const torch::Tensor objectness_loss = F::binary_cross_entropy_with_logits(
-      obj_flat.masked_select(sampled), labels_t.masked_select(sampled).to(torch::kFloat32));
+  const torch::Tensor objectness_loss =
+      F::binary_cross_entropy_with_logits(
+          obj_flat.masked_select(sampled), labels_t.masked_select(sampled).to(torch::kFloat32),
+          F::BinaryCrossEntropyWithLogitsFuncOptions().reduction(torch::kSum)) /
+      num_sampled;
   const torch::Tensor pos_index = positive.nonzero().squeeze(1);
   const torch::Tensor rpn_box_loss =
       F::smooth_l1_loss(deltas.reshape({b * n, 4}).index_select(0, pos_index),
@@ -522,7 +546,7 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
   std::vector<int64_t> roi_labels;
   std::vector<float> roi_deltas;
   for (int64_t i = 0; i < b; ++i) {
-    RoiTargets t = SampleRois(proposals[i], batch.objects[i], impl_->options.rois, rng);
+    RoiTargets t = SampleRois(proposals[i], batch.objects[i], impl_->options.rois, rngs[i]);
     rois[i] = std::move(t.rois);
     roi_labels.insert(roi_labels.end(), t.labels.begin(), t.labels.end());
     roi_deltas.insert(roi_deltas.end(), t.deltas.begin(), t.deltas.end());
@@ -532,6 +556,7 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
   torch::Tensor head_class_loss = torch::zeros({}, features.options());
   torch::Tensor head_box_loss = torch::zeros({}, features.options());
   const int64_t r = static_cast<int64_t>(roi_labels.size());
+  const double rois_in_batch = internal::GlobalCount(group, static_cast<double>(r));
   if (r > 0) {
     const torch::Tensor pooled =
         internal::RoiAlign(features, rois, 1.0 / c.feature_stride, c.pooled_size, c.sampling_ratio);
@@ -540,7 +565,9 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
         torch::from_blob(roi_labels.data(), {r}, torch::kInt64).clone().to(device);
     const torch::Tensor roi_deltas_t =
         torch::from_blob(roi_deltas.data(), {r, 4}, torch::kFloat32).clone().to(device);
-    head_class_loss = F::cross_entropy(logits, roi_labels_t);
+    head_class_loss = F::cross_entropy(logits, roi_labels_t,
+                                       F::CrossEntropyFuncOptions().reduction(torch::kSum)) /
+                      rois_in_batch;
     const torch::Tensor fg = roi_labels_t.gt(0).nonzero().squeeze(1);
     if (fg.numel() > 0) {
       const torch::Tensor fg_labels = roi_labels_t.index_select(0, fg) - 1;
@@ -551,11 +578,12 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
       head_box_loss =
           F::smooth_l1_loss(predicted, roi_deltas_t.index_select(0, fg),
                             F::SmoothL1LossFuncOptions().reduction(torch::kSum).beta(1.0)) /
-          static_cast<double>(r);
+          rois_in_batch;
     }
     total = total + head_class_loss + head_box_loss;
   }
   total.backward();
+  internal::ReduceGradients(group, *m.net);
   impl_->optimizer.step();
   parts.total = total.item<double>();
   parts.objectness = objectness_loss.item<double>();

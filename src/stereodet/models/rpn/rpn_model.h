@@ -24,6 +24,7 @@
 
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/models/model_json.h"
 #include "stereodet/models/rpn/rpn_boxes.h"
 #include "stereodet/models/rpn/rpn_config.h"
@@ -52,6 +53,9 @@ struct RpnDetectOptions {
 struct RpnBatch {
   std::vector<PlanarImage> inputs;
   std::vector<std::vector<TargetBox>> objects;
+  // Each input's seed of its anchor and RoI sampling (train rpn: SampleSeed(step seed, 0, frame
+  // index)); empty: SampleSeed(step seed, 0, position in the batch).
+  std::vector<uint64_t> sampling_seeds;
 };
 
 // Not thread-safe: one thread at a time (LibTorch parallelises inside).
@@ -124,9 +128,13 @@ class RpnTrainer {
  public:
   RpnTrainer(RpnModel& model, const RpnTrainerOptions& options = {});
   ~RpnTrainer();
-  // One optimizer step at `learning_rate`. The anchor and RoI sampling draw from `step_seed`
-  // (and torch::manual_seed(step_seed) is set), so a step is a function of the weights, the
-  // optimizer state, the batch and the seed. Returns the loss before the step.
+  // Trains as one rank of `group` from now on (null: alone); SsdTrainer::SetGroup says how. The
+  // losses' counts (sampled anchors, sampled RoIs) are then the whole batch's.
+  void SetGroup(TrainingGroup* group);
+  // One optimizer step at `learning_rate`. Each image's anchor and RoI sampling draws from its own
+  // stream (RpnBatch::sampling_seeds) and torch::manual_seed(step_seed) is set, so a step is a
+  // function of the weights, the optimizer state, the batch and the seeds. Returns the loss before
+  // the step (with a group, this rank's share of the whole batch's).
   RpnLossParts Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed);
   // Weights, optimizer state, epochs_done and the config, atomically.
   void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;

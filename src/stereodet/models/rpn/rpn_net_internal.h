@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "stereodet/geometry/box.h"
+#include "stereodet/models/distributed_internal.h"
 #include "stereodet/models/rpn/rpn_model.h"
 
 namespace stereodet::internal {
@@ -31,7 +32,7 @@ struct ResidualBlockImpl : torch::nn::Module {
   ResidualBlockImpl(int in_channels, int out_channels, int stride);
   torch::Tensor forward(const torch::Tensor& x);
   torch::nn::Conv2d conv1{nullptr}, conv2{nullptr}, shortcut{nullptr};
-  torch::nn::BatchNorm2d bn1{nullptr}, bn2{nullptr}, shortcut_bn{nullptr};
+  BatchNorm2dSync bn1{nullptr}, bn2{nullptr}, shortcut_bn{nullptr};
 };
 TORCH_MODULE(ResidualBlock);
 
@@ -42,7 +43,7 @@ struct TrunkImpl : torch::nn::Module {
   TrunkImpl(int in_channels, int base, int blocks, int last_stride = 16);
   torch::Tensor forward(const torch::Tensor& x);
   torch::nn::Conv2d stem{nullptr};
-  torch::nn::BatchNorm2d stem_bn{nullptr};
+  BatchNorm2dSync stem_bn{nullptr};
   torch::nn::Sequential stages{nullptr};
 };
 TORCH_MODULE(Trunk);
@@ -59,7 +60,7 @@ struct RpnNetImpl : torch::nn::Module {
   RpnConfig config;
   Trunk image{nullptr}, geometry{nullptr};
   torch::nn::Conv2d fuse{nullptr};
-  torch::nn::BatchNorm2d fuse_bn{nullptr};
+  BatchNorm2dSync fuse_bn{nullptr};
   torch::nn::Conv2d rpn_conv{nullptr}, rpn_objectness{nullptr}, rpn_deltas{nullptr};
   torch::nn::Linear fc1{nullptr}, fc2{nullptr}, cls{nullptr}, box{nullptr};
 };

@@ -43,12 +43,14 @@ class RpnTrainingTask : public TrainingTask {
           samples[k] = data_.Sample(index, SampleSeed(options_.seed, epoch, index));
         },
         options_.threads);
+    const uint64_t step_seed = StepSeed(options_.seed, step);
     RpnBatch batch;
-    for (RpnSample& s : samples) {
-      batch.inputs.push_back(std::move(s.input));
-      batch.objects.push_back(std::move(s.objects));
+    for (size_t k = 0; k < samples.size(); ++k) {
+      batch.inputs.push_back(std::move(samples[k].input));
+      batch.objects.push_back(std::move(samples[k].objects));
+      batch.sampling_seeds.push_back(SampleSeed(step_seed, 0, batch_frames[k]));
     }
-    const RpnLossParts loss = trainer_.Step(batch, learning_rate, StepSeed(options_.seed, step));
+    const RpnLossParts loss = trainer_.Step(batch, learning_rate, step_seed);
     return {loss.total,
             {loss.objectness, loss.rpn_box, loss.head_class, loss.head_box},
             {loss.positive_anchors, loss.foreground_rois}};
@@ -76,17 +78,20 @@ void TrainRpnOptions::Check() const {
   STEREODET_CHECK(!init_geometry || !init_from.empty()) << "--init-geometry needs --init-from";
 }
 
-TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
-  options.Check();
-  const ComputeDevice device = ResolveComputeDevice(options.device);
+TrainRpnSummary TrainRpn(const TrainRpnOptions& given) {
+  given.Check();
+  const ComputeDevice device = ResolveComputeDevice(given.device);
   const Timer total_timer;
-  SetTorchThreads(options.threads);
+  SetTorchThreads(given.threads);
   TrainRpnSummary summary;
 
   namespace fs = std::filesystem;
+  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(given.distributed);
+  TrainRpnOptions options = given;
+  options.progress = RankProgress(options.progress, group.get());
   const TrainingFolder folder(options.out_dir, options.data_root,
                               {{"--init-from", options.init_from}}, "train rpn", options.resume,
-                              options.force);
+                              options.force, group.get());
   const bool resuming = folder.resuming();
   const fs::path& config_path = folder.config_path();
   const RpnConfig config =
@@ -103,7 +108,8 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
 
   RpnModel model(config, options.seed, device);
   model.set_stereo(data_options.stereo);
-  if (!resuming && !options.init_from.empty()) {
+  // In a training group, rank 0's initialization reaches the others (SetGroup below).
+  if (!resuming && !options.init_from.empty() && (group == nullptr || group->IsRoot())) {
     const RpnModel rgb = RpnModel::Load(options.init_from, device);
     summary.init_tensors = model.InitFrom(rgb, options.init_geometry);
   }
@@ -113,6 +119,7 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
   summary.geometry_branch_parameters = model.GeometryBranchParameterCount();
   const int start_epoch = folder.StartEpoch(
       [&](const fs::path& path, const std::string&) { return trainer.LoadCheckpoint(path); });
+  trainer.SetGroup(group.get());
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -148,6 +155,7 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& options) {
         config.geometry_width, options.threads, options.device, options.data.augment,
         options.init_from.string(), options.init_geometry, summary.parameters);
   };
+  loop.group = group.get();
   RpnTrainingTask task(data, model, trainer, options);
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
   summary.Finish(done, total_timer.ElapsedSeconds());

@@ -47,6 +47,8 @@ struct TrainRpnOptions {
   int max_frames = 0;           // only the first N frames of the split (0 = all)
   int max_epochs_this_run = 0;  // stop after N epochs in this call (0 = all); --resume continues
   std::string device = "cpu";   // cpu | cuda
+  // Data-parallel training over several processes (distributed.h); one process by default.
+  DistributedOptions distributed;
   RpnDataOptions data;
   RpnTrainerOptions trainer;
   ProgressOptions progress;

@@ -226,18 +226,36 @@ TrainBatch SsdTrainingData::MakeBatch(const std::vector<int>& indices,
 // --- BatchLoader
 // ------------------------------------------------------------------------------------
 
-BatchLoader::BatchLoader(const SsdTrainingData& data, std::vector<int> order, int batch_size,
+namespace {
+
+std::vector<std::vector<int>> ConsecutiveBatches(const std::vector<int>& order, int batch_size) {
+  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+  std::vector<std::vector<int>> batches;
+  for (size_t begin = 0; begin < order.size(); begin += batch_size) {
+    const size_t end = std::min(order.size(), begin + batch_size);
+    batches.emplace_back(order.begin() + begin, order.begin() + end);
+  }
+  return batches;
+}
+
+}  // namespace
+
+BatchLoader::BatchLoader(const SsdTrainingData& data, const std::vector<int>& order, int batch_size,
+                         uint64_t seed, int epoch, int capacity)
+    : BatchLoader(data, ConsecutiveBatches(order, batch_size), seed, epoch, capacity) {}
+
+BatchLoader::BatchLoader(const SsdTrainingData& data, std::vector<std::vector<int>> batches,
                          uint64_t seed, int epoch, int capacity)
     : data_(data),
-      order_(std::move(order)),
-      batch_size_(batch_size),
+      batches_(std::move(batches)),
       seed_(seed),
       epoch_(epoch),
       capacity_(capacity),
-      num_batches_(0) {
-  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+      num_batches_(static_cast<int>(batches_.size())) {
   STEREODET_CHECK(capacity >= 1) << "capacity must be >= 1, got " << capacity;
-  num_batches_ = static_cast<int>((order_.size() + batch_size - 1) / batch_size);
+  for (const std::vector<int>& batch : batches_) {
+    STEREODET_CHECK(!batch.empty()) << "an empty batch";
+  }
   thread_ = std::thread(&BatchLoader::Produce, this);
 }
 
@@ -253,9 +271,7 @@ BatchLoader::~BatchLoader() {
 void BatchLoader::Produce() {
   try {
     for (int b = 0; b < num_batches_; ++b) {
-      const size_t begin = static_cast<size_t>(b) * batch_size_;
-      const size_t end = std::min(order_.size(), begin + batch_size_);
-      std::vector<int> indices(order_.begin() + begin, order_.begin() + end);
+      const std::vector<int>& indices = batches_[b];
       std::vector<uint64_t> seeds;
       for (int index : indices) seeds.push_back(SampleSeed(seed_, epoch_, index));
       TrainBatch batch = data_.MakeBatch(indices, seeds);

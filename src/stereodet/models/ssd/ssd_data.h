@@ -111,10 +111,12 @@ class SsdTrainingData {
 // consumer (a bounded queue: memory stays small and the producer waits when training is slower).
 class BatchLoader {
  public:
-  // Batches are consecutive slices of `order` of `batch_size` frames (the last may be smaller).
-  // `data` must outlive the loader.
-  BatchLoader(const SsdTrainingData& data, std::vector<int> order, int batch_size, uint64_t seed,
+  // The batches of `batches` (indices into `data`), in order. `data` must outlive the loader.
+  BatchLoader(const SsdTrainingData& data, std::vector<std::vector<int>> batches, uint64_t seed,
               int epoch, int capacity = 3);
+  // Batches of consecutive slices of `order` of `batch_size` frames (the last may be smaller).
+  BatchLoader(const SsdTrainingData& data, const std::vector<int>& order, int batch_size,
+              uint64_t seed, int epoch, int capacity = 3);
   ~BatchLoader();  // stops the producer and joins it
   BatchLoader(const BatchLoader&) = delete;
   BatchLoader& operator=(const BatchLoader&) = delete;
@@ -128,8 +130,7 @@ class BatchLoader {
   void Produce();
 
   const SsdTrainingData& data_;
-  std::vector<int> order_;
-  int batch_size_;
+  std::vector<std::vector<int>> batches_;
   uint64_t seed_;
   int epoch_;
   int capacity_;

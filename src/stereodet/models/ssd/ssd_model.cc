@@ -7,6 +7,7 @@
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
+#include "stereodet/models/distributed_internal.h"
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/ssd/ssd_net.h"
 #include "stereodet/util/atomic_file.h"
@@ -153,9 +154,11 @@ struct SsdTrainer::Impl {
   SsdModel::Impl& model;
   SsdTrainerOptions options;
   torch::optim::AdamW optimizer;
+  TrainingGroup* group = nullptr;
 
-  // Tensors viewing the batch's arrays (no copy; the batch outlives them).
-  internal::MultiBoxLossTerms Loss(const TrainBatch& batch) const {
+  // Tensors viewing the batch's arrays (no copy; the batch outlives them). With `group`, this
+  // rank's share of the group's whole batch's loss.
+  internal::MultiBoxLossTerms Loss(const TrainBatch& batch, TrainingGroup* group) const {
     const int64_t boxes = static_cast<int64_t>(model.default_boxes.size());
     STEREODET_CHECK(
         batch.batch_size > 0 && batch.channels == NetworkInputChannels(model.config.encoding) &&
@@ -181,7 +184,8 @@ struct SsdTrainer::Impl {
     const torch::Tensor target_deltas =
         torch::from_blob(deltas, {batch.batch_size, boxes, 4}, torch::kFloat32).to(device);
     auto [pred_deltas, logits] = model.net->forward(x);
-    return internal::MultiBoxLoss(pred_deltas, logits, target_labels, target_deltas, options.loss);
+    return internal::MultiBoxLoss(pred_deltas, logits, target_labels, target_deltas, options.loss,
+                                  group);
   }
 
   static LossParts Parts(const internal::MultiBoxLossTerms& terms) {
@@ -197,6 +201,12 @@ SsdTrainer::SsdTrainer(SsdModel& model, const SsdTrainerOptions& options) {
 
 SsdTrainer::~SsdTrainer() = default;
 
+void SsdTrainer::SetGroup(TrainingGroup* group) {
+  impl_->group = group;
+  internal::AttachGroup(*impl_->model.net, group);
+  if (group != nullptr) internal::BroadcastModuleState(*group, *impl_->model.net);
+}
+
 LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
   STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
   for (auto& group : impl_->optimizer.param_groups()) {
@@ -204,8 +214,9 @@ LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
   }
   impl_->model.net->train();
   impl_->optimizer.zero_grad();
-  const internal::MultiBoxLossTerms terms = impl_->Loss(batch);
+  const internal::MultiBoxLossTerms terms = impl_->Loss(batch, impl_->group);
   terms.total.backward();
+  internal::ReduceGradients(impl_->group, *impl_->model.net);
   impl_->optimizer.step();
   return Impl::Parts(terms);
 }
@@ -213,7 +224,7 @@ LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
 LossParts SsdTrainer::Evaluate(const TrainBatch& batch) const {
   torch::NoGradGuard no_grad;
   impl_->model.net->eval();
-  return Impl::Parts(impl_->Loss(batch));
+  return Impl::Parts(impl_->Loss(batch, /*group=*/nullptr));
 }
 
 void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,

@@ -25,6 +25,7 @@
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/default_boxes.h"
 #include "stereodet/models/device.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/models/model_json.h"
 #include "stereodet/models/ssd/input_encoding.h"
 #include "stereodet/models/ssd/ssd_config.h"
@@ -134,7 +135,13 @@ class SsdTrainer {
   SsdTrainer(SsdModel& model, const SsdTrainerOptions& options = {});
   ~SsdTrainer();
 
-  // One optimizer step on `batch` at `learning_rate`. Returns the loss before the step.
+  // Trains as one rank of `group` from now on (null: alone): the batch norms synchronized over it,
+  // the loss's counts and the gradients summed over it (distributed.h), and the model's weights
+  // now those of rank 0. `group` must outlive the trainer or the next call.
+  void SetGroup(TrainingGroup* group);
+
+  // One optimizer step on `batch` at `learning_rate`. Returns the loss before the step (with a
+  // group, this rank's share of the whole batch's: its terms add up over the ranks).
   LossParts Step(const TrainBatch& batch, double learning_rate);
   // The loss on `batch` without changing anything (training-mode batch norm is not used: evaluation
   // mode, no gradients).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "stereodet/models/distributed_internal.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet::internal {
@@ -50,7 +51,7 @@ SsdNetImpl::SsdNetImpl(const SsdConfig& config)
     } else {
       stage->push_back(conv);
     }
-    stage->push_back(torch::nn::BatchNorm2d(spec.out_channels));
+    stage->push_back(BatchNorm2dSync(spec.out_channels));
     stage->push_back(torch::nn::ReLU(torch::nn::ReLUOptions().inplace(true)));
     if (spec.feature_map) {
       stages_->push_back(stage);
@@ -103,14 +104,14 @@ int64_t SsdNetImpl::CompressionParameterCount() const {
 
 MultiBoxLossTerms MultiBoxLoss(const torch::Tensor& pred_deltas, const torch::Tensor& logits,
                                const torch::Tensor& labels, const torch::Tensor& target_deltas,
-                               const MultiBoxLossOptions& options) {
+                               const MultiBoxLossOptions& options, TrainingGroup* group) {
   namespace F = torch::nn::functional;
   const int64_t num_classes = logits.size(2);
   const torch::Tensor positive = labels > 0;
   const torch::Tensor valid = labels >= 0;
   const torch::Tensor num_positive = positive.sum(1);  // [N]
   const int64_t total_positive = num_positive.sum().item<int64_t>();
-  const double normalizer = static_cast<double>(std::max<int64_t>(total_positive, 1));
+  const double normalizer = std::max(GlobalCount(group, static_cast<double>(total_positive)), 1.0);
 
   torch::Tensor localization = torch::zeros({}, pred_deltas.options());
   if (total_positive > 0) {

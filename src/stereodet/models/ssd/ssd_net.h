@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "stereodet/models/distributed.h"
 #include "stereodet/models/ssd/ssd_model.h"
 
 namespace stereodet::internal {
@@ -69,10 +70,11 @@ struct MultiBoxLossTerms {
 // positives and on the hard negatives (per image the highest-loss background boxes, negative_ratio
 // per positive, at least min_negatives_per_image, never ignored boxes), both divided by max(1,
 // positives). pred_deltas [N, B, 4], logits [N, B, C], labels [N, B] int64 (0 bg, >= 1 class, -1
-// ignore), target_deltas [N, B, 4].
+// ignore), target_deltas [N, B, 4]. With a training group, the positives are counted over the
+// group's whole batch (this rank's share of its loss); num_positive stays this rank's.
 MultiBoxLossTerms MultiBoxLoss(const torch::Tensor& pred_deltas, const torch::Tensor& logits,
                                const torch::Tensor& labels, const torch::Tensor& target_deltas,
-                               const MultiBoxLossOptions& options);
+                               const MultiBoxLossOptions& options, TrainingGroup* group = nullptr);
 
 // Multiply-accumulates of one forward pass on one image of the config's input size.
 int64_t CountMultiplyAccumulates(const SsdConfig& config);

@@ -39,15 +39,15 @@ class SsdTrainingTask : public TrainingTask {
         options_(options),
         training_run_(training_run) {}
 
-  void BeginEpoch(int epoch, const std::vector<int>& order) override {
+  void BeginEpoch(int epoch, const std::vector<std::vector<int>>& batches) override {
     loader_.reset();  // the previous epoch's thread first
-    loader_ = std::make_unique<BatchLoader>(data_, order, options_.batch_size, options_.seed, epoch,
+    loader_ = std::make_unique<BatchLoader>(data_, batches, options_.seed, epoch,
                                             options_.loader_capacity);
   }
 
   StepLoss Step(int /*epoch*/, int64_t /*step*/, const std::vector<int>& batch,
                 double learning_rate) override {
-    // The loader's batches are the same consecutive slices of the order as the loop's.
+    // The loader's batches are the loop's.
     const std::optional<TrainBatch> next = loader_->Next();
     STEREODET_CHECK(next && next->batch_size == static_cast<int>(batch.size()))
         << "the batch loader is out of step with the training loop";
@@ -106,9 +106,11 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   TrainSsdSummary summary;
 
   namespace fs = std::filesystem;
+  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(options.distributed);
+  options.progress = RankProgress(options.progress, group.get());
   const TrainingFolder folder(options.out_dir, options.data_root,
                               {{"--stereo", options.data.stereo_dir}}, "train ssd", options.resume,
-                              options.force);
+                              options.force, group.get());
   const bool resuming = folder.resuming();
   const fs::path& config_path = folder.config_path();
   // With --resume the model folder's settings win; asking for different ones is a mistake.
@@ -152,6 +154,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   const int start_epoch = folder.StartEpoch([&](const fs::path& path, const std::string& run) {
     return trainer.LoadCheckpoint(path, run);
   });
+  trainer.SetGroup(group.get());
   summary.epochs_done = start_epoch;
   if (start_epoch >= options.epochs) {
     summary.seconds = total_timer.ElapsedSeconds();
@@ -183,6 +186,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
         options.max_frames, ids.size(), config.InputWidth(), config.InputHeight(),
         config.base_channels);
   };
+  loop.group = group.get();
   SsdTrainingTask task(data, model, trainer, options, folder.training_run());
   const TrainingLoopSummary done = RunTrainingLoop(task, loop);
   summary.Finish(done, total_timer.ElapsedSeconds());

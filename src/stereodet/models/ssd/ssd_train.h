@@ -45,6 +45,8 @@ struct TrainSsdOptions {
   int max_epochs_this_run = 0;
   int loader_capacity = 3;     // batches prepared ahead
   std::string device = "cpu";  // cpu | cuda (device.h); bit-identical resume needs the same one
+  // Data-parallel training over several processes (distributed.h); one process by default.
+  DistributedOptions distributed;
   SsdDataOptions data;
   // A new RGB-H training that matches (no data.stereo_dir) uses DefaultRgbhMatchScale() as
   // data.stereo.disparity.match_scale, whatever that holds; model.json records it. `train ssd`

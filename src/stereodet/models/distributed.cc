@@ -1,0 +1,533 @@
+#include "stereodet/models/distributed.h"
+
+// LibTorch's Gloo process group is compiled into libtorch_cpu.so; its header needs the macro that
+// LibTorch's own build defines (Debian's cmake config does not) and Gloo's headers (libgloo-dev).
+#ifndef USE_C10D_GLOO
+#define USE_C10D_GLOO
+#endif
+#include <fmt/format.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <torch/csrc/distributed/c10d/FileStore.hpp>
+#include <torch/csrc/distributed/c10d/PrefixStore.hpp>
+#include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
+#include <torch/csrc/distributed/c10d/TCPStore.hpp>
+#include <utility>
+
+#include "stereodet/models/distributed_internal.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/strings.h"
+
+namespace stereodet {
+
+namespace {
+
+constexpr char kTcpScheme[] = "tcp://";
+constexpr char kFileScheme[] = "file://";
+
+struct TcpAddress {
+  std::string host;
+  int port = 0;
+};
+
+// "tcp://HOST:PORT" -> {HOST, PORT}; "[::1]:PORT" keeps the address without brackets.
+TcpAddress ParseTcpAddress(const std::string& url) {
+  const std::string rest = url.substr(std::char_traits<char>::length(kTcpScheme));
+  const size_t colon = rest.rfind(':');
+  STEREODET_CHECK(colon != std::string::npos && colon > 0)
+      << "--rendezvous " << url << ": expected tcp://HOST:PORT";
+  TcpAddress address;
+  address.host = rest.substr(0, colon);
+  if (address.host.size() > 2 && address.host.front() == '[' && address.host.back() == ']') {
+    address.host = address.host.substr(1, address.host.size() - 2);
+  }
+  const std::optional<long long> port = ParseInt(rest.substr(colon + 1));
+  STEREODET_CHECK(port && *port >= 1 && *port <= 65535)
+      << "--rendezvous " << url << ": the port must be a number in 1..65535";
+  address.port = static_cast<int>(*port);
+  return address;
+}
+
+bool IsLoopback(const std::string& host) {
+  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
+std::chrono::milliseconds Milliseconds(double seconds) {
+  return std::chrono::milliseconds(static_cast<int64_t>(std::ceil(seconds * 1000.0)));
+}
+
+}  // namespace
+
+void DistributedOptions::Check() const {
+  STEREODET_CHECK(world_size >= 1) << "--world-size must be >= 1, got " << world_size;
+  STEREODET_CHECK(rank >= 0 && rank < world_size)
+      << "--rank must be in [0, " << world_size << ") for --world-size " << world_size << ", got "
+      << rank;
+  STEREODET_CHECK(timeout_s > 0 && std::isfinite(timeout_s))
+      << "--group-timeout must be > 0 seconds, got " << timeout_s;
+  if (!Enabled()) return;
+  STEREODET_CHECK(!rendezvous.empty())
+      << "--world-size " << world_size
+      << " needs --rendezvous tcp://HOST:PORT or file://PATH (or MASTER_ADDR and MASTER_PORT)";
+  if (rendezvous.rfind(kTcpScheme, 0) == 0) {
+    ParseTcpAddress(rendezvous);
+  } else {
+    STEREODET_CHECK(rendezvous.rfind(kFileScheme, 0) == 0 &&
+                    rendezvous.size() > std::char_traits<char>::length(kFileScheme))
+        << "--rendezvous " << rendezvous << ": expected tcp://HOST:PORT or file://PATH";
+  }
+}
+
+DistributedOptions DistributedOptionsFromEnvironment(
+    DistributedOptions flags, const std::map<std::string, std::string>& environment) {
+  const DistributedOptions defaults;
+  auto number = [&](const char* name) -> std::optional<int> {
+    const auto it = environment.find(name);
+    if (it == environment.end() || it->second.empty()) return std::nullopt;
+    const std::optional<long long> value = ParseInt(it->second);
+    STEREODET_CHECK(value && *value >= 0 && *value <= 1 << 20)
+        << "environment variable " << name << "=" << it->second << " is not a rank count";
+    return static_cast<int>(*value);
+  };
+  if (flags.world_size == defaults.world_size) {
+    if (const std::optional<int> world = number("WORLD_SIZE")) flags.world_size = *world;
+  }
+  if (flags.rank == defaults.rank) {
+    if (const std::optional<int> rank = number("RANK")) flags.rank = *rank;
+  }
+  if (flags.rendezvous.empty()) {
+    const auto addr = environment.find("MASTER_ADDR");
+    const auto port = environment.find("MASTER_PORT");
+    if (addr != environment.end() && port != environment.end() && !addr->second.empty()) {
+      const bool ipv6 = addr->second.find(':') != std::string::npos;
+      flags.rendezvous = std::string(kTcpScheme) +
+                         (ipv6 ? "[" + addr->second + "]" : addr->second) + ":" + port->second;
+    }
+  }
+  return flags;
+}
+
+std::map<std::string, std::string> DistributedEnvironment() {
+  std::map<std::string, std::string> environment;
+  for (const char* name : {"WORLD_SIZE", "RANK", "MASTER_ADDR", "MASTER_PORT"}) {
+    if (const char* value = std::getenv(name)) environment[name] = value;
+  }
+  return environment;
+}
+
+struct TrainingGroup::Impl {
+  int rank = 0, world_size = 1;
+  double timeout_s = 300;
+  c10::intrusive_ptr<c10d::Store> store;
+  c10::intrusive_ptr<c10d::ProcessGroupGloo> group;
+
+  std::string Name() const { return fmt::format("rank {} of {}", rank, world_size); }
+
+  // Runs one collective and waits for it; a failure (a rank gone, a timeout) becomes an error that
+  // says where it happened and what it most likely means.
+  void Run(const char* what, const std::function<c10::intrusive_ptr<c10d::Work>()>& start) {
+    try {
+      c10::intrusive_ptr<c10d::Work> work = start();
+      work->wait(Milliseconds(timeout_s));
+    } catch (const std::exception& e) {
+      STEREODET_THROW_IO() << "training group (" << Name() << "): " << what
+                           << " failed; another rank has stopped (its own error says why) or "
+                              "did not answer within --group-timeout "
+                           << timeout_s << " s: " << FirstLine(e.what());
+    }
+  }
+
+  static std::string FirstLine(const std::string& text) {
+    const size_t end = text.find('\n');
+    return end == std::string::npos ? text : text.substr(0, end);
+  }
+};
+
+TrainingGroup::TrainingGroup(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+TrainingGroup::~TrainingGroup() = default;
+
+std::unique_ptr<TrainingGroup> TrainingGroup::Connect(const DistributedOptions& options) {
+  options.Check();
+  if (!options.Enabled()) return nullptr;
+  auto impl = std::make_unique<Impl>();
+  impl->rank = options.rank;
+  impl->world_size = options.world_size;
+  impl->timeout_s = options.timeout_s;
+  const std::chrono::milliseconds timeout = Milliseconds(options.timeout_s);
+  std::string device_host;
+  try {
+    if (options.rendezvous.rfind(kTcpScheme, 0) == 0) {
+      const TcpAddress address = ParseTcpAddress(options.rendezvous);
+      c10d::TCPStoreOptions store_options;
+      store_options.port = static_cast<uint16_t>(address.port);
+      store_options.isServer = options.rank == 0;
+      store_options.numWorkers = options.world_size;
+      store_options.waitWorkers = true;
+      store_options.timeout = timeout;
+      impl->store = c10::make_intrusive<c10d::TCPStore>(address.host, store_options);
+      // Ranks that meet on the loopback run on one machine: their traffic stays on it.
+      if (IsLoopback(address.host)) device_host = "127.0.0.1";
+    } else {
+      const std::string path =
+          options.rendezvous.substr(std::char_traits<char>::length(kFileScheme));
+      impl->store = c10::make_intrusive<c10d::FileStore>(path, options.world_size);
+      impl->store->setTimeout(timeout);
+    }
+    auto gloo_options = c10d::ProcessGroupGloo::Options::create(timeout);
+    // Without a loopback rendezvous, Gloo binds the address of this machine's hostname, or the
+    // interface GLOO_SOCKET_IFNAME names (docs/scale.md).
+    gloo_options->devices.push_back(
+        device_host.empty() ? c10d::ProcessGroupGloo::createDefaultDevice()
+                            : c10d::ProcessGroupGloo::createDeviceForHostname(device_host));
+    impl->group = c10::make_intrusive<c10d::ProcessGroupGloo>(
+        c10::make_intrusive<c10d::PrefixStore>("stereodet", impl->store), options.rank,
+        options.world_size, gloo_options);
+  } catch (const std::exception& e) {
+    STEREODET_THROW_IO() << "training group (rank " << options.rank << " of " << options.world_size
+                         << "): cannot meet the other ranks at " << options.rendezvous << " within "
+                         << options.timeout_s << " s: " << Impl::FirstLine(e.what());
+  }
+  return std::unique_ptr<TrainingGroup>(new TrainingGroup(std::move(impl)));
+}
+
+int TrainingGroup::rank() const { return impl_->rank; }
+int TrainingGroup::world_size() const { return impl_->world_size; }
+std::string TrainingGroup::Name() const { return impl_->Name(); }
+
+void TrainingGroup::AllReduceSum(std::vector<double>& values) {
+  if (values.empty()) return;
+  torch::Tensor t =
+      torch::from_blob(values.data(), {static_cast<int64_t>(values.size())}, torch::kFloat64);
+  std::vector<torch::Tensor> tensors{t};
+  internal::AllReduceSumInPlace(*this, tensors);
+}
+
+std::string TrainingGroup::Broadcast(const std::string& text) {
+  std::vector<torch::Tensor> size{
+      torch::tensor({static_cast<int64_t>(text.size())}, torch::kInt64)};
+  internal::BroadcastInPlace(*this, size);
+  const int64_t n = size[0].item<int64_t>();
+  std::vector<torch::Tensor> bytes{torch::empty({n}, torch::kUInt8)};
+  if (IsRoot() && n > 0) std::memcpy(bytes[0].data_ptr(), text.data(), n);
+  internal::BroadcastInPlace(*this, bytes);
+  return std::string(static_cast<const char*>(bytes[0].data_ptr()), n);
+}
+
+void TrainingGroup::CheckSame(const std::string& what, const std::string& value) {
+  // Every rank's hash in its own slot, summed: a gather with one collective.
+  std::vector<torch::Tensor> hashes{torch::zeros({world_size()}, torch::kInt64)};
+  hashes[0][rank()] = static_cast<int64_t>(Fnv1a64(value));
+  internal::AllReduceSumInPlace(*this, hashes);
+  const torch::Tensor h = hashes[0];
+  int differing = -1;
+  for (int r = 1; r < world_size() && differing < 0; ++r) {
+    if (h[r].item<int64_t>() != h[0].item<int64_t>()) differing = r;
+  }
+  if (differing < 0) return;
+  // Rank `differing`'s value to every rank (a broadcast rooted there), so that all fail alike.
+  std::vector<torch::Tensor> size{
+      torch::tensor({static_cast<int64_t>(value.size())}, torch::kInt64)};
+  impl_->Run("a broadcast", [&] {
+    c10d::BroadcastOptions o;
+    o.rootRank = differing;
+    return impl_->group->broadcast(size, o);
+  });
+  std::vector<torch::Tensor> bytes{torch::empty({size[0].item<int64_t>()}, torch::kUInt8)};
+  if (rank() == differing) std::memcpy(bytes[0].data_ptr(), value.data(), value.size());
+  impl_->Run("a broadcast", [&] {
+    c10d::BroadcastOptions o;
+    o.rootRank = differing;
+    return impl_->group->broadcast(bytes, o);
+  });
+  const std::string other(static_cast<const char*>(bytes[0].data_ptr()), bytes[0].numel());
+  const std::string root = Broadcast(value);
+  STEREODET_THROW_IO() << "training group: rank " << differing << " has " << what << " " << other
+                       << ", rank 0 has " << what << " " << root
+                       << "; every rank must train on the same data with the same options";
+}
+
+void TrainingGroup::Barrier() {
+  impl_->Run("a barrier", [&] { return impl_->group->barrier(); });
+}
+
+BatchSlice RankSlice(int batch_size, int rank, int world_size) {
+  STEREODET_CHECK(world_size >= 1 && rank >= 0 && rank < world_size && batch_size >= 0)
+      << "no slice " << rank << " of " << world_size << " for a batch of " << batch_size;
+  const int64_t b = batch_size;
+  return {static_cast<int>(b * rank / world_size), static_cast<int>(b * (rank + 1) / world_size)};
+}
+
+void CheckBatchesSplit(int num_frames, int batch_size, int world_size) {
+  if (world_size <= 1) return;
+  STEREODET_CHECK(batch_size % world_size == 0)
+      << "--batch-size " << batch_size << " must be a multiple of --world-size " << world_size
+      << " (each rank trains on batch-size / world-size frames of every step)";
+  const int last = num_frames % batch_size;
+  STEREODET_CHECK(last == 0 || last >= world_size)
+      << "the last batch of each epoch would hold " << last << " of " << num_frames
+      << " frames, fewer than --world-size " << world_size
+      << ": a rank would have none (use --max-frames " << num_frames - last
+      << " or another --batch-size)";
+}
+
+namespace internal {
+
+namespace {
+
+// Gloo reduces CPU tensors: others go through a contiguous CPU copy and back.
+template <typename Collective>
+void OnCpu(std::vector<torch::Tensor>& tensors, Collective collective) {
+  std::vector<torch::Tensor> cpu(tensors.size());
+  std::vector<bool> copied(tensors.size(), false);
+  for (size_t i = 0; i < tensors.size(); ++i) {
+    copied[i] = !tensors[i].device().is_cpu() || !tensors[i].is_contiguous();
+    cpu[i] = copied[i] ? tensors[i].to(torch::kCPU).contiguous() : tensors[i];
+  }
+  collective(cpu);
+  for (size_t i = 0; i < tensors.size(); ++i) {
+    if (copied[i]) tensors[i].copy_(cpu[i]);
+  }
+}
+
+}  // namespace
+
+void AllReduceSumInPlace(TrainingGroup& group, std::vector<torch::Tensor>& tensors) {
+  TrainingGroup::Impl& g = group.impl();
+  torch::NoGradGuard no_grad;
+  OnCpu(tensors, [&](std::vector<torch::Tensor>& cpu) {
+    // One collective per tensor: Gloo's allreduce of a list wants equal shapes.
+    for (torch::Tensor& t : cpu) {
+      std::vector<torch::Tensor> one{t};
+      g.Run("an all-reduce", [&] { return g.group->allreduce(one); });
+    }
+  });
+}
+
+void BroadcastInPlace(TrainingGroup& group, std::vector<torch::Tensor>& tensors) {
+  TrainingGroup::Impl& g = group.impl();
+  torch::NoGradGuard no_grad;
+  OnCpu(tensors, [&](std::vector<torch::Tensor>& cpu) {
+    for (torch::Tensor& t : cpu) {
+      std::vector<torch::Tensor> one{t};
+      g.Run("a broadcast", [&] { return g.group->broadcast(one); });
+    }
+  });
+}
+
+namespace {
+
+class AllReduceSumFunction : public torch::autograd::Function<AllReduceSumFunction> {
+ public:
+  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& local,
+                               TrainingGroup* group) {
+    ctx->saved_data["group"] = reinterpret_cast<int64_t>(group);
+    std::vector<torch::Tensor> sum{local.clone()};
+    AllReduceSumInPlace(*group, sum);
+    return sum[0];
+  }
+  static torch::autograd::variable_list backward(torch::autograd::AutogradContext* ctx,
+                                                 torch::autograd::variable_list grads) {
+    auto* group = reinterpret_cast<TrainingGroup*>(ctx->saved_data["group"].toInt());
+    std::vector<torch::Tensor> sum{grads[0].clone()};
+    AllReduceSumInPlace(*group, sum);
+    return {sum[0], torch::Tensor()};
+  }
+};
+
+}  // namespace
+
+torch::Tensor AllReduceSumWithGradient(TrainingGroup* group, const torch::Tensor& local) {
+  if (group == nullptr) return local;
+  return AllReduceSumFunction::apply(local, group);
+}
+
+double GlobalCount(TrainingGroup* group, double local) {
+  if (group == nullptr) return local;
+  std::vector<double> value{local};
+  group->AllReduceSum(value);
+  return value[0];
+}
+
+void AllReduceGradients(TrainingGroup& group, const std::vector<torch::Tensor>& parameters,
+                        int64_t bucket_bytes) {
+  torch::NoGradGuard no_grad;
+  std::vector<torch::Tensor> grads;
+  for (const torch::Tensor& p : parameters) {
+    if (!p.requires_grad()) continue;
+    // A parameter this rank's slice did not reach (a head without RoIs) adds zeros.
+    if (!p.grad().defined()) p.mutable_grad() = torch::zeros_like(p);
+    grads.push_back(p.grad());
+  }
+  // Buckets of consecutive gradients of one dtype and device, each flattened into one tensor.
+  std::vector<std::vector<torch::Tensor>> buckets;
+  int64_t bytes = 0;
+  for (const torch::Tensor& g : grads) {
+    const int64_t size = g.numel() * static_cast<int64_t>(g.element_size());
+    const bool fits = !buckets.empty() && bytes + size <= bucket_bytes &&
+                      buckets.back().front().scalar_type() == g.scalar_type() &&
+                      buckets.back().front().device() == g.device();
+    if (!fits) {
+      buckets.emplace_back();
+      bytes = 0;
+    }
+    buckets.back().push_back(g);
+    bytes += size;
+  }
+  TrainingGroup::Impl& impl = group.impl();
+  std::vector<torch::Tensor> flat;
+  flat.reserve(buckets.size());
+  for (const std::vector<torch::Tensor>& bucket : buckets) {
+    std::vector<torch::Tensor> pieces;
+    for (const torch::Tensor& g : bucket) pieces.push_back(g.reshape({-1}));
+    flat.push_back(torch::cat(pieces).to(torch::kCPU));
+  }
+  // Every bucket sent before any is awaited: Gloo works on them in the background.
+  std::vector<c10::intrusive_ptr<c10d::Work>> works;
+  impl.Run("the gradient all-reduce", [&] {
+    for (torch::Tensor& f : flat) {
+      std::vector<torch::Tensor> one{f};
+      works.push_back(impl.group->allreduce(one));
+    }
+    for (size_t i = 0; i + 1 < works.size(); ++i) works[i]->wait(Milliseconds(impl.timeout_s));
+    return works.back();
+  });
+  for (size_t b = 0; b < buckets.size(); ++b) {
+    int64_t offset = 0;
+    for (const torch::Tensor& g : buckets[b]) {
+      g.copy_(flat[b].narrow(0, offset, g.numel()).view_as(g));
+      offset += g.numel();
+    }
+  }
+}
+
+void BroadcastModuleState(TrainingGroup& group, torch::nn::Module& module) {
+  std::vector<torch::Tensor> state;
+  for (const auto& p : module.named_parameters()) state.push_back(p.value());
+  for (const auto& b : module.named_buffers()) state.push_back(b.value());
+  BroadcastInPlace(group, state);
+}
+
+torch::Tensor SynchronizedBatchNorm(const torch::Tensor& x, const torch::Tensor& weight,
+                                    const torch::Tensor& bias, torch::Tensor& running_mean,
+                                    torch::Tensor& running_var, torch::Tensor& num_batches_tracked,
+                                    const c10::optional<double>& momentum, double eps,
+                                    TrainingGroup& group) {
+  STEREODET_CHECK(x.dim() >= 2) << "batch norm of a " << x.dim() << "-d input";
+  const int64_t channels = x.size(1);
+  std::vector<int64_t> dims{0};
+  for (int64_t d = 2; d < x.dim(); ++d) dims.push_back(d);
+  std::vector<int64_t> shape(x.dim(), 1);
+  shape[1] = channels;
+  // Sums in double: the variance as E[x^2] - E[x]^2 would lose float digits on a large batch.
+  const torch::Tensor xd = x.to(torch::kFloat64);
+  const double local_count = channels > 0 ? static_cast<double>(x.numel() / channels) : 0.0;
+  const torch::Tensor local =
+      torch::cat({xd.sum(dims), (xd * xd).sum(dims),
+                  torch::full({1}, local_count, xd.options().requires_grad(false))});
+  const torch::Tensor total = AllReduceSumWithGradient(&group, local);
+  const double count = total[2 * channels].item<double>();
+  STEREODET_CHECK(count > 1) << "batch norm in training needs more than one value per channel "
+                                "over the group's batch, got "
+                             << count;
+  const torch::Tensor mean = total.narrow(0, 0, channels) / count;
+  const torch::Tensor var =
+      (total.narrow(0, channels, channels) / count - mean * mean).clamp_min(0);
+  const torch::Tensor invstd = torch::rsqrt(var + eps);
+  torch::Tensor y = ((xd - mean.view(shape)) * invstd.view(shape)).to(x.scalar_type());
+  if (weight.defined()) y = y * weight.view(shape);
+  if (bias.defined()) y = y + bias.view(shape);
+  if (running_mean.defined()) {
+    torch::NoGradGuard no_grad;
+    double factor = momentum.value_or(0.0);
+    if (num_batches_tracked.defined()) {
+      num_batches_tracked += 1;
+      if (!momentum) factor = 1.0 / num_batches_tracked.item<double>();
+    }
+    // LibTorch's update: running = (1 - factor) * running + factor * batch (the variance unbiased).
+    running_mean.mul_(1 - factor).add_(mean.detach().to(running_mean.scalar_type()) * factor);
+    running_var.mul_(1 - factor)
+        .add_((var.detach() * (count / (count - 1))).to(running_var.scalar_type()) * factor);
+  }
+  return y;
+}
+
+template <int D>
+BatchNormSyncImpl<D>::BatchNormSyncImpl(int64_t features) : num_features(features) {
+  reset();
+}
+
+template <int D>
+void BatchNormSyncImpl<D>::reset() {
+  // LibTorch's BatchNormImplBase::reset and reset_parameters, in their order.
+  weight = this->register_parameter("weight", torch::empty({num_features}));
+  bias = this->register_parameter("bias", torch::empty({num_features}));
+  running_mean = this->register_buffer("running_mean", torch::zeros({num_features}));
+  running_var = this->register_buffer("running_var", torch::ones({num_features}));
+  num_batches_tracked =
+      this->register_buffer("num_batches_tracked", torch::tensor(0, torch::dtype(torch::kLong)));
+  torch::NoGradGuard no_grad;
+  running_mean.zero_();
+  running_var.fill_(1);
+  num_batches_tracked.zero_();
+  torch::nn::init::ones_(weight);
+  torch::nn::init::zeros_(bias);
+}
+
+template <int D>
+torch::Tensor BatchNormSyncImpl<D>::forward(const torch::Tensor& x) {
+  if constexpr (D == 1) {
+    TORCH_CHECK(x.dim() == 2 || x.dim() == 3, "expected 2D or 3D input (got ", x.dim(), "D input)");
+  } else {
+    TORCH_CHECK(x.dim() == 4, "expected 4D input (got ", x.dim(), "D input)");
+  }
+  if (group_ != nullptr && this->is_training()) {
+    return SynchronizedBatchNorm(x, weight, bias, running_mean, running_var, num_batches_tracked,
+                                 momentum, eps, *group_);
+  }
+  // LibTorch's BatchNormImplBase::forward with momentum 0.1 and running statistics tracked.
+  if (this->is_training()) num_batches_tracked += 1;
+  return torch::nn::functional::detail::batch_norm(x, running_mean, running_var, weight, bias,
+                                                   this->is_training(), momentum, eps);
+}
+
+template <int D>
+void BatchNormSyncImpl<D>::pretty_print(std::ostream& stream) const {
+  stream << "stereodet::BatchNorm" << D << "dSync(" << num_features << ", eps=" << eps
+         << ", momentum=" << momentum << ")";
+}
+
+template class BatchNormSyncImpl<1>;
+template class BatchNormSyncImpl<2>;
+
+int AttachGroup(torch::nn::Module& module, TrainingGroup* group) {
+  int attached = 0;
+  for (const std::shared_ptr<torch::nn::Module>& m : module.modules(/*include_self=*/true)) {
+    if (auto* bn1 = dynamic_cast<BatchNorm1dSyncImpl*>(m.get())) {
+      bn1->set_group(group);
+      ++attached;
+    } else if (auto* bn2 = dynamic_cast<BatchNorm2dSyncImpl*>(m.get())) {
+      bn2->set_group(group);
+      ++attached;
+    } else if (dynamic_cast<torch::nn::BatchNorm1dImpl*>(m.get()) != nullptr ||
+               dynamic_cast<torch::nn::BatchNorm2dImpl*>(m.get()) != nullptr) {
+      throw std::logic_error("a plain BatchNorm in " + module.name() +
+                             ": its statistics would be one rank's (use BatchNorm1dSync / "
+                             "BatchNorm2dSync, distributed_internal.h)");
+    }
+  }
+  return attached;
+}
+
+}  // namespace internal
+
+}  // namespace stereodet
