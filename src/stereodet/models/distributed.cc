@@ -428,12 +428,25 @@ torch::Tensor SynchronizedBatchNorm(const torch::Tensor& x, const torch::Tensor&
   for (int64_t d = 2; d < x.dim(); ++d) dims.push_back(d);
   std::vector<int64_t> shape(x.dim(), 1);
   shape[1] = channels;
-  // Sums in double: the variance as E[x^2] - E[x]^2 would lose float digits on a large batch.
-  const torch::Tensor xd = x.to(torch::kFloat64);
-  const double local_count = channels > 0 ? static_cast<double>(x.numel() / channels) : 0.0;
-  const torch::Tensor local =
-      torch::cat({xd.sum(dims), (xd * xd).sum(dims),
-                  torch::full({1}, local_count, xd.options().requires_grad(false))});
+  // Each rank's mean and variance by LibTorch's fused reduction in x's type, turned into sums in
+  // double (n mean, n (var + mean^2)) for the all-reduce: the whole batch's E[x^2] - E[x]^2 is
+  // then taken in double, and the activations are never copied to double.
+  const int64_t local_count = channels > 0 ? x.numel() / channels : 0;
+  torch::Tensor local_sums;
+  if (local_count > 0) {
+    const auto [local_var, local_mean] = torch::var_mean(x, dims, /*unbiased=*/false);
+    const torch::Tensor m = local_mean.to(torch::kFloat64);
+    const double n = static_cast<double>(local_count);
+    local_sums = torch::cat({m * n, (local_var.to(torch::kFloat64) + m * m) * n});
+  } else {
+    // Zeros that still hang on x's graph: every rank's backward must reach the all-reduce below,
+    // or the ranks' collectives would pair up wrongly.
+    const torch::Tensor zero = x.sum(dims).to(torch::kFloat64);
+    local_sums = torch::cat({zero, zero});
+  }
+  const torch::Tensor local = torch::cat(
+      {local_sums, torch::full({1}, static_cast<double>(local_count),
+                               x.options().dtype(torch::kFloat64).requires_grad(false))});
   const torch::Tensor total = AllReduceSumWithGradient(&group, local);
   const double count = total[2 * channels].item<double>();
   STEREODET_CHECK(count > 1) << "batch norm in training needs more than one value per channel "
@@ -442,10 +455,16 @@ torch::Tensor SynchronizedBatchNorm(const torch::Tensor& x, const torch::Tensor&
   const torch::Tensor mean = total.narrow(0, 0, channels) / count;
   const torch::Tensor var =
       (total.narrow(0, channels, channels) / count - mean * mean).clamp_min(0);
-  const torch::Tensor invstd = torch::rsqrt(var + eps);
-  torch::Tensor y = ((xd - mean.view(shape)) * invstd.view(shape)).to(x.scalar_type());
-  if (weight.defined()) y = y * weight.view(shape);
-  if (bias.defined()) y = y + bias.view(shape);
+  // y = (x - mean) scale + bias, scale = weight / sqrt(var + eps): two passes over the
+  // activations (and their backward), the per-channel arithmetic in double. The difference first,
+  // as LibTorch's kernel, so a mean far from zero costs no digits.
+  torch::Tensor scale = torch::rsqrt(var + eps);
+  if (weight.defined()) scale = scale * weight.to(torch::kFloat64);
+  const torch::ScalarType type = x.scalar_type();
+  const torch::Tensor centred = x - mean.to(type).view(shape);
+  const torch::Tensor y = bias.defined() ? torch::addcmul(bias.to(type).view(shape), centred,
+                                                          scale.to(type).view(shape))
+                                         : centred * scale.to(type).view(shape);
   if (running_mean.defined()) {
     torch::NoGradGuard no_grad;
     double factor = momentum.value_or(0.0);
