@@ -7,15 +7,22 @@
 // Counters: images_per_s, frames_per_s. Threads: STEREODET_BENCH_THREADS (default 2, the target
 // machine's cores). The input encoding (EncodeNetworkInput, from a decoded BGR image and a
 // height-code image) is measured separately from the network.
+#include <arpa/inet.h>
 #include <benchmark/benchmark.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include "stereodet/kitti/calib_io.h"
@@ -23,6 +30,7 @@
 #include "stereodet/models/det3d/det3d_model.h"
 #include "stereodet/models/det3d/gt_database.h"
 #include "stereodet/models/detector.h"
+#include "stereodet/models/distributed.h"
 #include "stereodet/models/rpn/rpn_model.h"
 #include "stereodet/models/ssd/input_encoding.h"
 #include "stereodet/models/ssd/ssd_model.h"
@@ -387,6 +395,50 @@ BENCHMARK(BM_Det3dSample)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);
+
+// One all-reduce of a training group of 2 ranks on the loopback (models/distributed.h): this
+// thread is rank 0, a second thread rank 1 making the same calls. range(0) doubles: 129 is a
+// synchronized batch norm of 64 channels (sums, squared sums, count), 232766 the det3d network's
+// float gradients (465,532 parameters, 1.86 MB). What the scaling model of docs/BENCHMARKS.md
+// ("train --world-size") reads: the latency of a small collective and the bandwidth of a large.
+void BM_GroupAllReduce(benchmark::State& state) {
+  const int64_t doubles = state.range(0);
+  const int64_t iterations = static_cast<int64_t>(state.max_iterations);
+  int port = 0;
+  {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address));
+    socklen_t length = sizeof(address);
+    getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+    port = ntohs(address.sin_port);
+    close(fd);
+  }
+  DistributedOptions options;
+  options.world_size = 2;
+  options.rendezvous = "tcp://127.0.0.1:" + std::to_string(port);
+  std::thread peer([&] {
+    DistributedOptions o = options;
+    o.rank = 1;
+    const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(o);
+    std::vector<double> v(doubles, 1.0);
+    for (int64_t i = 0; i < iterations; ++i) group->AllReduceSum(v);
+  });
+  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(options);
+  std::vector<double> v(doubles, 1.0);
+  for (auto _ : state) group->AllReduceSum(v);
+  peer.join();
+  state.SetBytesProcessed(state.iterations() * doubles * static_cast<int64_t>(sizeof(double)));
+}
+
+BENCHMARK(BM_GroupAllReduce)
+    ->Arg(129)
+    ->Arg(232766)
+    ->Iterations(400)
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace stereodet
