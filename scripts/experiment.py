@@ -88,7 +88,10 @@ def _need(obj, key, kind, where):
     return value
 
 
-def load_config(path, train=False):
+KITTI_PLACEHOLDER = "{KITTI}"
+
+
+def load_config(path, train=False, kitti=None, kitti_splits=None, max_epochs=None):
     """Reads and checks the config (`train`: as --train); errors name the file and the field. A
     model with "seeds" becomes one model per seed when training, or without training when it names
     its seeds' checkpoints ("seed_model"): NAME-seedS, "group" NAME; a pair of such groups becomes
@@ -111,7 +114,16 @@ def load_config(path, train=False):
             if not 0 < vf < 1:
                 raise ConfigError(f"{w}.val_fraction: in (0, 1), got {vf}")
         elif source == "kitti":
-            _need(d, "root", str, w)
+            if _need(d, "root", str, w) == KITTI_PLACEHOLDER:
+                if not kitti:
+                    raise ConfigError(f"{w}.root: {KITTI_PLACEHOLDER} needs --kitti ROOT (a KITTI "
+                                      "object download: ROOT/training/{image_2,image_3,calib,"
+                                      "label_2,velodyne})")
+                d["root"] = str(pathlib.Path(kitti).resolve())
+            if kitti_splits:
+                d["splits"] = str(pathlib.Path(kitti_splits).resolve())
+            if "splits" in d and not isinstance(d["splits"], str):
+                raise ConfigError(f"{w}.splits: a folder of SPLIT.txt files, got {d['splits']!r}")
         else:
             raise ConfigError(f"{w}.source: 'synth' or 'kitti', got {source!r}")
     _need(config, "split", str, where)
@@ -157,6 +169,13 @@ def load_config(path, train=False):
             flags = t.setdefault("flags", [])
             if not isinstance(flags, list) or not all(isinstance(x, str) for x in flags):
                 raise ConfigError(f"{w}.train.flags: a list of strings, got {flags!r}")
+            if max_epochs is not None:
+                # --max-epochs N: at most N epochs per training (the recipe's miniature test).
+                if "--epochs" in flags and flags.index("--epochs") + 1 < len(flags):
+                    i = flags.index("--epochs") + 1
+                    flags[i] = str(min(int(flags[i]), max_epochs))
+                else:
+                    flags += ["--epochs", str(max_epochs)]
         seeds = m.get("seeds", [])
         if not isinstance(seeds, list) or not all(isinstance(x, int) and not isinstance(x, bool)
                                                   for x in seeds) or len(set(seeds)) != len(seeds):
@@ -405,6 +424,13 @@ class Pipeline:
         # so that `make models`' data/synth serves both; without one, under OUT/data/.
         return repo_path(d["root"]) if "root" in d else self.out / "data" / name
 
+    def split_arg(self, name, split):
+        """What a command's --split gets for data set `name`: the split's name (ROOT/ImageSets/
+        SPLIT.txt), or with the data set's "splits" folder (a KITTI download has no ImageSets/;
+        the recipe ships Chen et al.'s lists) the path of SPLIT.txt there."""
+        d = self.config["datasets"][name]
+        return str(repo_path(d["splits"]) / f"{split}.txt") if "splits" in d else split
+
     def points_dir(self, name):
         return self.out / "stereo_points" / name
 
@@ -456,12 +482,17 @@ class Pipeline:
                                                    self.config["models"] if self.trains(m)
                                                    and m["data"] == name][:1]
                 for split in splits:
-                    if not (root / "ImageSets" / f"{split}.txt").is_file():
+                    if "splits" in d:
+                        if not pathlib.Path(self.split_arg(name, split)).is_file():
+                            raise RuntimeError(f"datasets.{name}.splits: no {split}.txt in "
+                                               f"{d['splits']}")
+                    elif not (root / "ImageSets" / f"{split}.txt").is_file():
                         raise RuntimeError(f"datasets.{name}.root: {root} has no ImageSets/"
                                            f"{split}.txt (the split's frame ids, docs/kitti.md)")
             for split in self.stereo_splits(name):
                 self.step(f"stereo-{name}-{split}", self.points_dir(name),
-                          [self.bin, "stereo", "--data", root, "--split", split, "--encode",
+                          [self.bin, "stereo", "--data", root, "--split",
+                           self.split_arg(name, split), "--encode",
                            "points", "--out", self.points_dir(name), "--threads",
                            self.config["threads"], "--quiet"],
                           deps=[f"data-{name}"] if d["source"] == "synth" else [])
@@ -493,7 +524,8 @@ class Pipeline:
 
     def run_train(self, model):
         cmd = [self.bin, "train", model["family"], "--data", self.dataset_root(model["data"]),
-               "--split", self.config["train_split"], "--input", model["train"]["input"],
+               "--split", self.split_arg(model["data"], self.config["train_split"]),
+               "--input", model["train"]["input"],
                "--out", self.model_dir(model), "--threads", self.config["threads"], "--resume",
                "--quiet"]
         if model["stereo_points"]:
@@ -514,7 +546,8 @@ class Pipeline:
         for sigma in self.blurs(model):
             det = self.run_dir(model, sigma) / "detections"
             cmd = [self.bin, "detect", model["family"], "--model", self.model_dir(model),
-                   "--data", data, "--split", self.config["split"], "--out", det, "--threads",
+                   "--data", data, "--split", self.split_arg(model["data"], self.config["split"]),
+                   "--out", det, "--threads",
                    self.config["threads"], "--quiet"]
             if model["family"] != "det3d":
                 cmd += ["--blur-sigma", sigma]
@@ -534,7 +567,8 @@ class Pipeline:
             for matcher in self.config["matchers"]:
                 ev = run / f"eval-{matcher}"
                 cmd = [self.bin, "eval", "--gt", data, "--det", run / "detections", "--split",
-                       self.config["split"], "--metrics", EVAL_METRICS[model["family"]],
+                       self.split_arg(model["data"], self.config["split"]),
+                       "--metrics", EVAL_METRICS[model["family"]],
                        "--matcher", matcher, "--threads", self.config["threads"], "--out", ev]
                 if boot["resamples"] > 0:
                     cmd += ["--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"]]
@@ -555,7 +589,8 @@ class Pipeline:
                 cmd = [self.bin, "eval", "compare", "--gt", data,
                        "--det", self.run_dir(a, sigma) / "detections",
                        "--det-b", self.run_dir(b, sigma) / "detections",
-                       "--split", self.config["split"], "--metrics", TABLE_METRIC[a["family"]],
+                       "--split", self.split_arg(a["data"], self.config["split"]),
+                       "--metrics", TABLE_METRIC[a["family"]],
                        "--matcher", matcher, "--threads", self.config["threads"],
                        "--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"],
                        "--out", cmp]
@@ -626,7 +661,8 @@ class Pipeline:
                 out = self.figures_dir(f"sweep-{name}")
                 cmd = [self.bin, "eval", "sweep", "--gt", self.dataset_root(m["data"]),
                        "--det", self.run_dir(m, 0) / "detections", "--split",
-                       self.config["split"], "--metrics", TABLE_METRIC[m["family"]],
+                       self.split_arg(m["data"], self.config["split"]),
+                       "--metrics", TABLE_METRIC[m["family"]],
                        "--difficulties", self.config["difficulty"].lower(), "--matcher",
                        "optimal", "--filter", sweep["filter"], "--from", sweep["from"], "--to",
                        sweep["to"], "--step", sweep["step"], "--threads",
@@ -1178,6 +1214,14 @@ def main(argv):
                         help="train the models with a 'train' block into OUT/models/ first")
     parser.add_argument("--table-only", action="store_true",
                         help="run nothing; build the table from the outputs already there")
+    parser.add_argument("--kitti", metavar="ROOT",
+                        help="the KITTI object download that a data set's root \"{KITTI}\" "
+                        "stands for (experiments/kitti.json, `make kitti-experiment`)")
+    parser.add_argument("--kitti-splits", metavar="DIR",
+                        help="every kitti data set's split files from DIR/SPLIT.txt instead of its "
+                        "\"splits\" or ROOT/ImageSets/")
+    parser.add_argument("--max-epochs", type=int, metavar="N",
+                        help="at most N epochs per training (the recipe's miniature test)")
     dask = parser.add_mutually_exclusive_group()
     dask.add_argument("--workers", type=int, metavar="N",
                       help="run the steps on a local Dask cluster of N worker processes, those "
@@ -1190,7 +1234,8 @@ def main(argv):
     if args.workers is not None and args.workers < 1:
         parser.error(f"--workers: at least 1, got {args.workers}")
     try:
-        config = load_config(args.config, train=args.train)
+        config = load_config(args.config, train=args.train, kitti=args.kitti,
+                             kitti_splits=args.kitti_splits, max_epochs=args.max_epochs)
     except (ConfigError, OSError) as e:
         print(f"experiment: error: {e}", file=sys.stderr)
         return 1
