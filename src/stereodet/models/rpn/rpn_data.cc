@@ -119,13 +119,20 @@ RpnSample RpnTrainingData::Sample(int index, uint64_t seed) const {
   cv::Mat bgr;
   cv::resize(full, bgr, cv::Size(net_w, net_h), 0, 0, cv::INTER_AREA);
   const bool flip = options_.augment && uniform(rng) < options_.flip_probability;
-  cv::Mat depth = frame.depth_code, height = frame.height_code;
+  // The stored codes are shared, never written: a flip goes into new matrices. (cv::flip into a
+  // header of the frame's own buffer flipped the stored codes in place, so every later sample of
+  // the frame had its geometry mirrored against its image until the next flip; a resumed
+  // training, which recomputes the codes, then saw other inputs than an uninterrupted one.)
+  cv::Mat depth, height;
   if (flip) {
     cv::flip(bgr, bgr, 1);
     if (geometry) {
       cv::flip(frame.depth_code, depth, 1);
       cv::flip(frame.height_code, height, 1);
     }
+  } else {
+    depth = frame.depth_code;
+    height = frame.height_code;
   }
   if (options_.augment) JitterColour(bgr, options_.colour, rng);
   RpnSample sample;

@@ -108,6 +108,62 @@ TEST(RpnTrainTest, OverfitsAFewFramesAndDetectsItsOwnBoxes) {
   EXPECT_EQ(found, 3);  // recall 1 on the training frames
 }
 
+// A sample is a function of its frame and seed only: the same twice, whatever was sampled between,
+// and a flipped sample mirrors the image and the geometry together. (A flip once mirrored the
+// frame's stored depth and height codes in place: every later sample of the frame had its
+// geometry mirrored against its image until the next flip.)
+TEST(RpnTrainTest, SamplesNeverChangeTheStoredGeometry) {
+  const std::filesystem::path dir = ModelsTestDir("rpn_sample_geometry");
+  RpnConfig config;
+  config.input = RpnInput::kRgbd;
+  config.input_width = 64;
+  config.input_height = 32;
+  RpnFrame frame;
+  frame.id = "000000";
+  frame.image_path = dir / "000000.png";
+  cv::Mat image(32, 64, CV_8UC3);
+  for (int v = 0; v < 32; ++v) {
+    for (int u = 0; u < 64; ++u) image.at<cv::Vec3b>(v, u) = cv::Vec3b(4 * u, 2 * v, 100);
+  }
+  ASSERT_TRUE(cv::imwrite(frame.image_path.string(), image));
+  // Codes that grow to the right: a mirrored one is told apart at once.
+  frame.depth_code.create(32, 64, CV_16UC1);
+  frame.height_code.create(32, 64, CV_16UC1);
+  for (int v = 0; v < 32; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      frame.depth_code.at<uint16_t>(v, u) = static_cast<uint16_t>(1000 * (u + 1));
+      frame.height_code.at<uint16_t>(v, u) = static_cast<uint16_t>(5 * (u + 1));
+    }
+  }
+  const cv::Mat stored_depth = frame.depth_code.clone();
+  RpnDataOptions options;
+  options.colour.brightness = options.colour.contrast = options.colour.saturation = 0;
+  const RpnTrainingData data({frame}, config, options);
+  // Whether a channel range of a sample grows to the left (the stored frame grows to the right).
+  auto mirrored = [](const RpnSample& s, int first, int last) {
+    float left = 0, right = 0;
+    for (int c = first; c <= last; ++c) {
+      left += s.input.At(c, 10, 0);
+      right += s.input.At(c, 10, 63);
+    }
+    return left > right;
+  };
+  int flipped = 0, kept = 0;
+  for (uint64_t seed = 1; seed <= 16; ++seed) {
+    const RpnSample a = data.Sample(0, seed);
+    const RpnSample b = data.Sample(0, seed);
+    EXPECT_EQ(a.input.data, b.input.data) << "seed " << seed;
+    // Colour (channels 0-2) and depth and height (3, 4) mirrored together, or neither.
+    const bool image_flipped = mirrored(a, 0, 2);
+    EXPECT_EQ(image_flipped, mirrored(a, 3, 3)) << "seed " << seed;
+    EXPECT_EQ(image_flipped, mirrored(a, 4, 4)) << "seed " << seed;
+    (image_flipped ? flipped : kept) += 1;
+  }
+  EXPECT_GT(flipped, 0);
+  EXPECT_GT(kept, 0);
+  EXPECT_EQ(cv::countNonZero(frame.depth_code != stored_depth), 0);
+}
+
 TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
   const fs::path root = WriteTinyDataset("rpn_resume_data", 2);
   const fs::path out = ModelsTestDir("rpn_resume");
