@@ -129,7 +129,10 @@ struct TrainingGroup::Impl {
   int rank = 0, world_size = 1;
   double timeout_s = 300;
   c10::intrusive_ptr<c10d::Store> store;
-  c10::intrusive_ptr<c10d::ProcessGroupGloo> group;
+  // Two channels: `group` for everything in program order (batch norms, counts, losses,
+  // broadcasts), `gradients` for GradientReducer's buckets, whose place among the batch norms'
+  // backward collectives may differ between ranks.
+  c10::intrusive_ptr<c10d::ProcessGroupGloo> group, gradients;
 
   std::string Name() const { return fmt::format("rank {} of {}", rank, world_size); }
 
@@ -140,11 +143,15 @@ struct TrainingGroup::Impl {
       c10::intrusive_ptr<c10d::Work> work = start();
       work->wait(Milliseconds(timeout_s));
     } catch (const std::exception& e) {
-      STEREODET_THROW_IO() << "training group (" << Name() << "): " << what
-                           << " failed; another rank has stopped (its own error says why) or "
-                              "did not answer within --group-timeout "
-                           << timeout_s << " s: " << FirstLine(e.what());
+      Fail(what, e);
     }
+  }
+
+  [[noreturn]] void Fail(const char* what, const std::exception& e) const {
+    STEREODET_THROW_IO() << "training group (" << Name() << "): " << what
+                         << " failed; another rank has stopped (its own error says why) or "
+                            "did not answer within --group-timeout "
+                         << timeout_s << " s: " << FirstLine(e.what());
   }
 
   static std::string FirstLine(const std::string& text) {
@@ -191,6 +198,9 @@ std::unique_ptr<TrainingGroup> TrainingGroup::Connect(const DistributedOptions& 
                             : c10d::ProcessGroupGloo::createDeviceForHostname(device_host));
     impl->group = c10::make_intrusive<c10d::ProcessGroupGloo>(
         c10::make_intrusive<c10d::PrefixStore>("stereodet", impl->store), options.rank,
+        options.world_size, gloo_options);
+    impl->gradients = c10::make_intrusive<c10d::ProcessGroupGloo>(
+        c10::make_intrusive<c10d::PrefixStore>("stereodet-gradients", impl->store), options.rank,
         options.world_size, gloo_options);
   } catch (const std::exception& e) {
     STEREODET_THROW_IO() << "training group (rank " << options.rank << " of " << options.world_size
@@ -358,55 +368,121 @@ double GlobalCount(TrainingGroup* group, double local) {
   return value[0];
 }
 
-void AllReduceGradients(TrainingGroup& group, const std::vector<torch::Tensor>& parameters,
-                        int64_t bucket_bytes) {
-  torch::NoGradGuard no_grad;
-  std::vector<torch::Tensor> grads;
-  for (const torch::Tensor& p : parameters) {
-    if (!p.requires_grad()) continue;
-    // A parameter this rank's slice did not reach (a head without RoIs) adds zeros.
-    if (!p.grad().defined()) p.mutable_grad() = torch::zeros_like(p);
-    grads.push_back(p.grad());
+GradientReducer::GradientReducer(TrainingGroup& group, std::vector<torch::Tensor> parameters,
+                                 int64_t bucket_bytes)
+    : group_(group) {
+  for (torch::Tensor& p : parameters) {
+    if (p.requires_grad()) parameters_.push_back(p);
   }
-  // Buckets of consecutive gradients of one dtype and device, each flattened into one tensor.
-  std::vector<std::vector<torch::Tensor>> buckets;
-  int64_t bytes = 0;
-  for (const torch::Tensor& g : grads) {
-    const int64_t size = g.numel() * static_cast<int64_t>(g.element_size());
-    const bool fits = !buckets.empty() && bytes + size <= bucket_bytes &&
-                      buckets.back().front().scalar_type() == g.scalar_type() &&
-                      buckets.back().front().device() == g.device();
+  const size_t n = parameters_.size();
+  bucket_of_.assign(n, 0);
+  offset_of_.assign(n, 0);
+  arrived_.assign(n, false);
+  // Reverse order: autograd reaches the last layers' parameters first.
+  int64_t bytes = 0, elements = 0;
+  for (size_t k = n; k-- > 0;) {
+    const torch::Tensor& p = parameters_[k];
+    const int64_t size = p.numel() * static_cast<int64_t>(p.element_size());
+    const bool fits = !buckets_.empty() && bytes + size <= bucket_bytes &&
+                      parameters_[buckets_.back().members.front()].scalar_type() == p.scalar_type();
     if (!fits) {
-      buckets.emplace_back();
-      bytes = 0;
+      if (!buckets_.empty()) {
+        buckets_.back().flat = torch::zeros(
+            {elements}, torch::TensorOptions().dtype(
+                            parameters_[buckets_.back().members.front()].scalar_type()));
+      }
+      buckets_.emplace_back();
+      bytes = elements = 0;
     }
-    buckets.back().push_back(g);
+    bucket_of_[k] = buckets_.size() - 1;
+    offset_of_[k] = static_cast<size_t>(elements);
+    buckets_.back().members.push_back(k);
     bytes += size;
+    elements += p.numel();
   }
-  TrainingGroup::Impl& impl = group.impl();
-  std::vector<torch::Tensor> flat;
-  flat.reserve(buckets.size());
-  for (const std::vector<torch::Tensor>& bucket : buckets) {
-    std::vector<torch::Tensor> pieces;
-    for (const torch::Tensor& g : bucket) pieces.push_back(g.reshape({-1}));
-    flat.push_back(torch::cat(pieces).to(torch::kCPU));
+  if (!buckets_.empty()) {
+    buckets_.back().flat = torch::zeros(
+        {elements},
+        torch::TensorOptions().dtype(parameters_[buckets_.back().members.front()].scalar_type()));
   }
-  // Every bucket sent before any is awaited: Gloo works on them in the background.
-  std::vector<c10::intrusive_ptr<c10d::Work>> works;
-  impl.Run("the gradient all-reduce", [&] {
-    for (torch::Tensor& f : flat) {
-      std::vector<torch::Tensor> one{f};
-      works.push_back(impl.group->allreduce(one));
+  for (size_t k = 0; k < n; ++k) {
+    hooks_.push_back(
+        parameters_[k].register_hook([this, k](const torch::Tensor& grad) { Ready(k, grad); }));
+  }
+}
+
+GradientReducer::~GradientReducer() {
+  for (size_t k = 0; k < hooks_.size(); ++k) parameters_[k].remove_hook(hooks_[k]);
+}
+
+void GradientReducer::Ready(size_t k, const torch::Tensor& grad) {
+  if (!active_ || arrived_[k]) return;
+  torch::NoGradGuard no_grad;
+  Bucket& bucket = buckets_[bucket_of_[k]];
+  bucket.flat.narrow(0, static_cast<int64_t>(offset_of_[k]), parameters_[k].numel())
+      .copy_(grad.reshape({-1}));
+  arrived_[k] = true;
+  ++bucket.ready;
+  SendReadyBuckets();
+}
+
+void GradientReducer::SendReadyBuckets() {
+  TrainingGroup::Impl& impl = group_.impl();
+  while (next_to_send_ < buckets_.size() &&
+         buckets_[next_to_send_].ready ==
+             static_cast<int>(buckets_[next_to_send_].members.size())) {
+    Bucket& bucket = buckets_[next_to_send_++];
+    std::vector<torch::Tensor> one{bucket.flat};
+    c10::intrusive_ptr<c10d::Work> work;
+    try {
+      work = impl.gradients->allreduce(one);
+    } catch (const std::exception& e) {
+      impl.Fail("the gradient all-reduce", e);
     }
-    for (size_t i = 0; i + 1 < works.size(); ++i) works[i]->wait(Milliseconds(impl.timeout_s));
-    return works.back();
-  });
-  for (size_t b = 0; b < buckets.size(); ++b) {
-    int64_t offset = 0;
-    for (const torch::Tensor& g : buckets[b]) {
-      g.copy_(flat[b].narrow(0, offset, g.numel()).view_as(g));
-      offset += g.numel();
-    }
+    bucket.sent = true;
+    const double timeout_s = impl.timeout_s;
+    waits_.push_back([work, timeout_s, &impl] {
+      try {
+        work->wait(Milliseconds(timeout_s));
+      } catch (const std::exception& e) {
+        impl.Fail("the gradient all-reduce", e);
+      }
+    });
+  }
+}
+
+void GradientReducer::Backward(const torch::Tensor& loss) {
+  std::fill(arrived_.begin(), arrived_.end(), false);
+  for (Bucket& b : buckets_) {
+    b.ready = 0;
+    b.sent = false;
+  }
+  next_to_send_ = 0;
+  waits_.clear();
+  active_ = true;
+  try {
+    loss.backward();
+  } catch (...) {
+    active_ = false;
+    throw;
+  }
+  active_ = false;
+  torch::NoGradGuard no_grad;
+  // What this rank's graph did not reach adds zeros; then the rest is sent, in bucket order.
+  for (size_t k = 0; k < parameters_.size(); ++k) {
+    if (arrived_[k]) continue;
+    Bucket& bucket = buckets_[bucket_of_[k]];
+    bucket.flat.narrow(0, static_cast<int64_t>(offset_of_[k]), parameters_[k].numel()).zero_();
+    ++bucket.ready;
+  }
+  SendReadyBuckets();
+  for (const std::function<void()>& wait : waits_) wait();
+  for (size_t k = 0; k < parameters_.size(); ++k) {
+    torch::Tensor& p = parameters_[k];
+    if (!p.grad().defined()) p.mutable_grad() = torch::zeros_like(p);
+    p.mutable_grad().copy_(buckets_[bucket_of_[k]]
+                               .flat.narrow(0, static_cast<int64_t>(offset_of_[k]), p.numel())
+                               .view_as(p));
   }
 }
 

@@ -7,6 +7,7 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "stereodet/models/distributed.h"
@@ -25,13 +26,6 @@ torch::Tensor AllReduceSumWithGradient(TrainingGroup* group, const torch::Tensor
 
 // A count of the whole batch: `local` summed over the group, or `local` when `group` is null.
 double GlobalCount(TrainingGroup* group, double local);
-
-// Sums the gradients of `parameters` (those that require one; a missing gradient counts as zeros
-// and is then defined) over the group: flattened into buckets of at most `bucket_bytes` of one
-// dtype and device, all buckets sent before the first is awaited, copied back. Each rank's loss is
-// its share of the whole batch's, so the sum is the whole batch's gradient.
-void AllReduceGradients(TrainingGroup& group, const std::vector<torch::Tensor>& parameters,
-                        int64_t bucket_bytes = 16 << 20);
 
 // Rank 0's parameters and buffers into every rank's `module` (in named order): a new training
 // starts every rank from the same weights whatever their initializations drew.
@@ -82,10 +76,57 @@ TORCH_MODULE_IMPL(BatchNorm2dSync, BatchNorm2dSyncImpl);
 // one rank's, silently.
 int AttachGroup(torch::nn::Module& module, TrainingGroup* group);
 
-// What each family's trainer does between backward() and the optimizer's step: with a group, the
-// gradients of `module` summed over it (AllReduceGradients); nothing without.
-inline void ReduceGradients(TrainingGroup* group, torch::nn::Module& module) {
-  if (group != nullptr) AllReduceGradients(*group, module.parameters());
+// The gradients of `parameters` summed over the group, the all-reduces overlapped with the
+// backward pass: a hook on every parameter copies its gradient into its bucket as autograd makes
+// it, and each bucket (parameters in reverse order, at most `bucket_bytes`, so the first bucket
+// fills first) is sent as soon as it is full and every bucket before it was sent; Backward()
+// sends the rest (a parameter this rank's graph did not reach counts as zeros), waits, and writes
+// the sums into the parameters' gradients. The buckets travel on the group's own gradient
+// channel, in bucket order on every rank, apart from the batch norms' collectives, whose place
+// among them may differ between ranks. The parameters must outlive the reducer; one backward at a
+// time.
+class GradientReducer {
+ public:
+  GradientReducer(TrainingGroup& group, std::vector<torch::Tensor> parameters,
+                  int64_t bucket_bytes = 16 << 20);
+  ~GradientReducer();
+  GradientReducer(const GradientReducer&) = delete;
+  GradientReducer& operator=(const GradientReducer&) = delete;
+
+  // loss.backward() with the all-reduces overlapped; afterwards every parameter's gradient is the
+  // group's sum.
+  void Backward(const torch::Tensor& loss);
+  int num_buckets() const { return static_cast<int>(buckets_.size()); }
+
+ private:
+  struct Bucket {
+    std::vector<size_t> members;  // indices into parameters_
+    torch::Tensor flat;           // float/double CPU, the members' gradients end to end
+    int ready = 0;
+    bool sent = false;
+  };
+  void Ready(size_t parameter, const torch::Tensor& grad);
+  void SendReadyBuckets();
+
+  TrainingGroup& group_;
+  std::vector<torch::Tensor> parameters_;
+  std::vector<size_t> bucket_of_, offset_of_;  // per parameter
+  std::vector<bool> arrived_;                  // per parameter, this backward
+  std::vector<Bucket> buckets_;
+  size_t next_to_send_ = 0;
+  bool active_ = false;
+  std::vector<unsigned> hooks_;
+  std::vector<std::function<void()>> waits_;  // one per sent bucket, in order
+};
+
+// What each family's trainer calls instead of loss.backward(): with a reducer, the backward with
+// the group's gradient sums overlapped (GradientReducer::Backward); without, loss.backward().
+inline void Backward(const torch::Tensor& loss, GradientReducer* reducer) {
+  if (reducer != nullptr) {
+    reducer->Backward(loss);
+  } else {
+    loss.backward();
+  }
 }
 
 }  // namespace stereodet::internal

@@ -197,10 +197,11 @@ struct BatchNormRun {
 };
 
 template <typename Module>
-BatchNormRun RunBatchNorm(Module& bn, const torch::Tensor& x, const torch::Tensor& w) {
+BatchNormRun RunBatchNorm(Module& bn, const torch::Tensor& x, const torch::Tensor& w,
+                          internal::GradientReducer* reducer = nullptr) {
   const torch::Tensor input = x.clone().requires_grad_(true);
   const torch::Tensor y = bn->forward(input);
-  (y * w).sum().backward();
+  internal::Backward((y * w).sum(), reducer);
   return {y.detach(),
           input.grad(),
           bn->weight.grad().clone(),
@@ -237,10 +238,9 @@ void ExpectSynchronizedEqualsWholeBatch(const torch::Tensor& x, int split) {
         EXPECT_EQ(internal::AttachGroup(*bn, &g), 1);
         const int64_t begin = g.rank() == 0 ? 0 : split;
         const int64_t end = g.rank() == 0 ? split : x.size(0);
-        ranks[g.rank()] = RunBatchNorm(bn, x.slice(0, begin, end), w.slice(0, begin, end));
-        internal::AllReduceGradients(g, bn->parameters());
-        ranks[g.rank()].dweight = bn->weight.grad().clone();
-        ranks[g.rank()].dbias = bn->bias.grad().clone();
+        internal::GradientReducer reducer(g, bn->parameters());
+        ranks[g.rank()] =
+            RunBatchNorm(bn, x.slice(0, begin, end), w.slice(0, begin, end), &reducer);
       });
   ExpectNoErrors(errors);
   const torch::Tensor y = torch::cat({ranks[0].y, ranks[1].y});
@@ -293,33 +293,64 @@ TEST(DistributedTest, WithoutAGroupTheBatchNormIsLibTorchsBitForBit) {
   EXPECT_THROW(internal::AttachGroup(*net, nullptr), std::logic_error);
 }
 
-TEST(DistributedTest, GradientsAreSummedInBucketsAndMissingOnesCountAsZero) {
+// Three layers with weights set by hand (the rank threads share LibTorch's generator).
+struct ThreeLayers {
+  torch::nn::Linear a{3, 4}, b{4, 4}, c{4, 2};
+  ThreeLayers() {
+    torch::NoGradGuard no_grad;
+    double k = 0;
+    for (torch::Tensor& p : Parameters()) {
+      p.copy_(torch::arange(p.numel(), torch::kFloat32).reshape(p.sizes()) * 0.01 + 0.1 * ++k);
+    }
+  }
+  std::vector<torch::Tensor> Parameters() {
+    std::vector<torch::Tensor> params;
+    for (auto* m : {&a, &b, &c}) {
+      for (const torch::Tensor& p : (*m)->parameters()) params.push_back(p);
+    }
+    return params;
+  }
+  // Rank 1's graph never reaches c.
+  torch::Tensor Loss(int rank) {
+    const double r = rank + 1;
+    const torch::Tensor h = b(torch::tanh(a(torch::full({2, 3}, r))));
+    return rank == 0 ? h.sum() + c(h).pow(2).sum() * r : h.sum() * r;
+  }
+};
+
+TEST(DistributedTest, GradientsAreSummedOverlappedInBucketOrderAndUnreachedOnesAddZeros) {
   const TestTempDir dir("distributed");
   const auto errors =
       RunRanks(2, "file://" + (dir.path() / "store").string(), [](TrainingGroup& g) {
-        torch::nn::Linear a(3, 4), b(4, 2);
-        const double r = g.rank() + 1;
-        std::vector<torch::Tensor> params = a->parameters();
-        for (const torch::Tensor& p : b->parameters()) params.push_back(p);
-        for (size_t i = 0; i < params.size(); ++i) {
-          // Rank 1 leaves b's bias without a gradient.
-          if (g.rank() == 1 && i + 1 == params.size()) continue;
-          params[i].mutable_grad() = torch::full_like(params[i], r * (i + 1));
+        // Expected: each rank's own gradients (zeros where its graph did not reach), summed.
+        ThreeLayers plain;
+        plain.Loss(g.rank()).backward();
+        std::vector<torch::Tensor> expected;
+        for (const torch::Tensor& p : plain.Parameters()) {
+          expected.push_back(p.grad().defined() ? p.grad().clone() : torch::zeros_like(p));
         }
-        internal::AllReduceGradients(g, params, /*bucket_bytes=*/40);  // several buckets
-        for (size_t i = 0; i < params.size(); ++i) {
-          const double expected = i + 1 == params.size() ? 1.0 * (i + 1) : 3.0 * (i + 1);
-          EXPECT_TRUE(torch::allclose(params[i].grad(), torch::full_like(params[i], expected)))
-              << "parameter " << i;
+        internal::AllReduceSumInPlace(g, expected);
+
+        ThreeLayers net;
+        internal::GradientReducer reducer(g, net.Parameters(), /*bucket_bytes=*/40);
+        EXPECT_EQ(reducer.num_buckets(), 5);    // c's weight and bias share one (40 bytes)
+        for (int step = 0; step < 2; ++step) {  // a second backward starts from scratch
+          for (torch::Tensor& p : net.Parameters()) p.mutable_grad() = torch::Tensor();
+          reducer.Backward(net.Loss(g.rank()));
+          const std::vector<torch::Tensor> params = net.Parameters();
+          for (size_t i = 0; i < params.size(); ++i) {
+            EXPECT_TRUE(torch::allclose(params[i].grad(), expected[i], 1e-6, 1e-6))
+                << "step " << step << ", parameter " << i;
+          }
         }
         // Rank 0's weights everywhere.
-        torch::nn::Linear c(2, 2);
+        torch::nn::Linear d(2, 2);
         {
           torch::NoGradGuard no_grad;
-          c->weight.fill_(g.rank());
+          d->weight.fill_(g.rank());
         }
-        internal::BroadcastModuleState(g, *c);
-        EXPECT_TRUE(torch::equal(c->weight, torch::zeros({2, 2})));
+        internal::BroadcastModuleState(g, *d);
+        EXPECT_TRUE(torch::equal(d->weight, torch::zeros({2, 2})));
       });
   ExpectNoErrors(errors);
 }

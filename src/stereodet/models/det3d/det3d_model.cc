@@ -481,6 +481,7 @@ struct Det3dTrainer::Impl {
   Det3dLossOptions options;
   torch::optim::AdamW optimizer;
   TrainingGroup* group = nullptr;
+  std::unique_ptr<internal::GradientReducer> reducer;  // with a group
 
   // With `group`, this rank's share of the group's whole batch's loss: every term divided by the
   // whole batch's positives or foreground points.
@@ -591,8 +592,13 @@ Det3dTrainer::~Det3dTrainer() = default;
 
 void Det3dTrainer::SetGroup(TrainingGroup* group) {
   impl_->group = group;
+  impl_->reducer.reset();
   internal::AttachGroup(*impl_->model.net, group);
-  if (group != nullptr) internal::BroadcastModuleState(*group, *impl_->model.net);
+  if (group != nullptr) {
+    internal::BroadcastModuleState(*group, *impl_->model.net);
+    impl_->reducer =
+        std::make_unique<internal::GradientReducer>(*group, impl_->model.net->parameters());
+  }
 }
 
 Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double learning_rate) {
@@ -603,8 +609,7 @@ Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double 
   impl_->model.net->train();
   impl_->optimizer.zero_grad();
   auto [total, parts] = impl_->Loss(batch, impl_->group);
-  total.backward();
-  internal::ReduceGradients(impl_->group, *impl_->model.net);
+  internal::Backward(total, impl_->reducer.get());
   impl_->optimizer.step();
   return parts;
 }

@@ -459,6 +459,7 @@ struct RpnTrainer::Impl {
   RpnTrainerOptions options;
   torch::optim::AdamW optimizer;
   TrainingGroup* group = nullptr;
+  std::unique_ptr<internal::GradientReducer> reducer;  // with a group
 };
 
 RpnTrainer::RpnTrainer(RpnModel& model, const RpnTrainerOptions& options) {
@@ -470,8 +471,13 @@ RpnTrainer::~RpnTrainer() = default;
 
 void RpnTrainer::SetGroup(TrainingGroup* group) {
   impl_->group = group;
+  impl_->reducer.reset();
   internal::AttachGroup(*impl_->model.impl_->net, group);
-  if (group != nullptr) internal::BroadcastModuleState(*group, *impl_->model.impl_->net);
+  if (group != nullptr) {
+    internal::BroadcastModuleState(*group, *impl_->model.impl_->net);
+    impl_->reducer =
+        std::make_unique<internal::GradientReducer>(*group, impl_->model.impl_->net->parameters());
+  }
 }
 
 RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed) {
@@ -582,8 +588,7 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
     }
     total = total + head_class_loss + head_box_loss;
   }
-  total.backward();
-  internal::ReduceGradients(group, *m.net);
+  internal::Backward(total, impl_->reducer.get());
   impl_->optimizer.step();
   parts.total = total.item<double>();
   parts.objectness = objectness_loss.item<double>();

@@ -155,6 +155,7 @@ struct SsdTrainer::Impl {
   SsdTrainerOptions options;
   torch::optim::AdamW optimizer;
   TrainingGroup* group = nullptr;
+  std::unique_ptr<internal::GradientReducer> reducer;  // with a group
 
   // Tensors viewing the batch's arrays (no copy; the batch outlives them). With `group`, this
   // rank's share of the group's whole batch's loss.
@@ -203,8 +204,13 @@ SsdTrainer::~SsdTrainer() = default;
 
 void SsdTrainer::SetGroup(TrainingGroup* group) {
   impl_->group = group;
+  impl_->reducer.reset();
   internal::AttachGroup(*impl_->model.net, group);
-  if (group != nullptr) internal::BroadcastModuleState(*group, *impl_->model.net);
+  if (group != nullptr) {
+    internal::BroadcastModuleState(*group, *impl_->model.net);
+    impl_->reducer =
+        std::make_unique<internal::GradientReducer>(*group, impl_->model.net->parameters());
+  }
 }
 
 LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
@@ -215,8 +221,7 @@ LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
   impl_->model.net->train();
   impl_->optimizer.zero_grad();
   const internal::MultiBoxLossTerms terms = impl_->Loss(batch, impl_->group);
-  terms.total.backward();
-  internal::ReduceGradients(impl_->group, *impl_->model.net);
+  internal::Backward(terms.total, impl_->reducer.get());
   impl_->optimizer.step();
   return Impl::Parts(terms);
 }
