@@ -191,11 +191,23 @@ std::unique_ptr<TrainingGroup> TrainingGroup::Connect(const DistributedOptions& 
       impl->store->setTimeout(timeout);
     }
     auto gloo_options = c10d::ProcessGroupGloo::Options::create(timeout);
-    // Without a loopback rendezvous, Gloo binds the address of this machine's hostname, or the
-    // interface GLOO_SOCKET_IFNAME names (docs/scale.md).
-    gloo_options->devices.push_back(
-        device_host.empty() ? c10d::ProcessGroupGloo::createDefaultDevice()
-                            : c10d::ProcessGroupGloo::createDeviceForHostname(device_host));
+    // Without a loopback rendezvous, Gloo binds the interfaces GLOO_SOCKET_IFNAME names ("eth0",
+    // or "eth0,eth1"), as PyTorch reads it, else the address of this machine's hostname
+    // (docs/scale.md).
+    const char* interfaces = std::getenv("GLOO_SOCKET_IFNAME");
+    if (!device_host.empty()) {
+      gloo_options->devices.push_back(c10d::ProcessGroupGloo::createDeviceForHostname(device_host));
+    } else if (interfaces != nullptr && *interfaces != '\0') {
+      for (const std::string_view name : Split(interfaces, ',')) {
+        if (!name.empty()) {
+          gloo_options->devices.push_back(
+              c10d::ProcessGroupGloo::createDeviceForInterface(std::string(name)));
+        }
+      }
+    }
+    if (gloo_options->devices.empty()) {
+      gloo_options->devices.push_back(c10d::ProcessGroupGloo::createDefaultDevice());
+    }
     impl->group = c10::make_intrusive<c10d::ProcessGroupGloo>(
         c10::make_intrusive<c10d::PrefixStore>("stereodet", impl->store), options.rank,
         options.world_size, gloo_options);

@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <string>
@@ -172,6 +173,30 @@ TEST(DistributedTest, TcpRendezvousOnTheLoopback) {
     EXPECT_EQ(g.Name(), "rank " + std::to_string(g.rank()) + " of 2");
   });
   ExpectNoErrors(errors);
+}
+
+TEST(DistributedTest, TheInterfacesOfGlooSocketIfnameAreBound) {
+  const TestTempDir dir("distributed");
+  setenv("GLOO_SOCKET_IFNAME", "lo", 1);
+  auto errors = RunRanks(2, "file://" + (dir.path() / "store").string(), [](TrainingGroup& g) {
+    std::vector<double> v{1.0};
+    g.AllReduceSum(v);
+    EXPECT_EQ(v[0], 2.0);
+  });
+  ExpectNoErrors(errors);
+  // An interface this machine lacks: the group cannot form, and says where it was to meet.
+  setenv("GLOO_SOCKET_IFNAME", "no_such_interface0", 1);
+  DistributedOptions o;
+  o.world_size = 2;
+  o.rendezvous = "file://" + (dir.path() / "store2").string();
+  o.timeout_s = 2;
+  try {
+    TrainingGroup::Connect(o);
+    ADD_FAILURE() << "connected through an interface that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cannot meet the other ranks at file://"));
+  }
+  unsetenv("GLOO_SOCKET_IFNAME");
 }
 
 TEST(DistributedTest, ARankThatStopsStopsTheOthersWithAnError) {
