@@ -372,15 +372,27 @@ def run_training(client, bin_dir: Path, family: str, data: Path, out: Path,
                                      allow_other_workers=False, pure=False,
                                      key=f"stereodet-train-rank-{rank}-of-{world}-{run}"))
     progress(f"train {family}: {world} ranks, rendezvous {rendezvous}, rank 0 on {chosen[0]}")
-    from distributed import wait  # noqa: PLC0415
+    from distributed import as_completed, wait  # noqa: PLC0415
 
-    wait(futures)
+    # Until every rank is done or one has failed: a rank whose worker died is not rerun elsewhere
+    # (it is pinned, and could not rejoin the group), so waiting for all could wait forever.
+    for future in as_completed(futures):
+        if future.status == "error":
+            # The other ranks stop on their own within the group's timeout; give them a little
+            # while to say so, so that the rank with its own error (the cause) is the one named.
+            try:
+                wait(futures, timeout=10)
+            except Exception:  # noqa: BLE001 - a TimeoutError: report what is known now
+                pass
+            break
     errors = []
     for rank, future in enumerate(futures):
         if future.status == "error":
             errors.append(f"rank {rank}: {future.exception()}")
     if errors:
-        # The first rank to fail is usually the cause; the others say the group stopped.
+        for future in futures:
+            future.cancel()
+        # The ranks that only saw the group stop say "training group"; the cause says more.
         cause = next((e for e in errors if "training group" not in e), errors[0])
         raise RuntimeError(f"the training failed: {cause}")
     return futures[0].result()["stderr"]

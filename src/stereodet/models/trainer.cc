@@ -62,10 +62,6 @@ struct EpochLoss {
   }
 };
 
-}  // namespace
-
-namespace {
-
 // The steps of an epoch: consecutive slices of `order` of batch_size frames (the last may be
 // smaller), each cut to this rank's part (RankSlice) with a group. Also the whole batches' sizes.
 std::vector<std::vector<int>> EpochBatches(const std::vector<int>& order, int batch_size,
