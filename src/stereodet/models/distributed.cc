@@ -1,8 +1,10 @@
 #include "stereodet/models/distributed.h"
 
 // LibTorch's Gloo process group is compiled into libtorch_cpu.so; its header needs the macro that
-// LibTorch's own build defines (Debian's cmake config does not) and Gloo's headers (libgloo-dev).
-#ifndef USE_C10D_GLOO
+// LibTorch's own build defines (Debian's cmake config does not) and Gloo's headers (libgloo-dev):
+// CMake defines STEREODET_HAVE_GLOO where it finds them. Without them everything here builds
+// against c10d's ProcessGroup interface and only Connect refuses a world of more than one.
+#if STEREODET_HAVE_GLOO && !defined(USE_C10D_GLOO)
 #define USE_C10D_GLOO
 #endif
 #include <fmt/format.h>
@@ -19,8 +21,11 @@
 #include <string>
 #include <torch/csrc/distributed/c10d/FileStore.hpp>
 #include <torch/csrc/distributed/c10d/PrefixStore.hpp>
-#include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
+#include <torch/csrc/distributed/c10d/ProcessGroup.hpp>
 #include <torch/csrc/distributed/c10d/TCPStore.hpp>
+#if STEREODET_HAVE_GLOO
+#include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
+#endif
 #include <utility>
 
 #include "stereodet/models/distributed_internal.h"
@@ -132,7 +137,7 @@ struct TrainingGroup::Impl {
   // Two channels: `group` for everything in program order (batch norms, counts, losses,
   // broadcasts), `gradients` for GradientReducer's buckets, whose place among the batch norms'
   // backward collectives may differ between ranks.
-  c10::intrusive_ptr<c10d::ProcessGroupGloo> group, gradients;
+  c10::intrusive_ptr<c10d::ProcessGroup> group, gradients;
 
   std::string Name() const { return fmt::format("rank {} of {}", rank, world_size); }
 
@@ -163,9 +168,16 @@ struct TrainingGroup::Impl {
 TrainingGroup::TrainingGroup(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 TrainingGroup::~TrainingGroup() = default;
 
+bool TrainingGroup::Available() { return STEREODET_HAVE_GLOO != 0; }
+
 std::unique_ptr<TrainingGroup> TrainingGroup::Connect(const DistributedOptions& options) {
   options.Check();
   if (!options.Enabled()) return nullptr;
+  STEREODET_CHECK(Available())
+      << "--world-size " << options.world_size
+      << ": this build has no Gloo process group (LibTorch's Gloo headers, Debian libgloo-dev, "
+         "were not found when it was configured); install them and rebuild, or train with one "
+         "process";
   auto impl = std::make_unique<Impl>();
   impl->rank = options.rank;
   impl->world_size = options.world_size;
@@ -190,6 +202,7 @@ std::unique_ptr<TrainingGroup> TrainingGroup::Connect(const DistributedOptions& 
       impl->store = c10::make_intrusive<c10d::FileStore>(path, options.world_size);
       impl->store->setTimeout(timeout);
     }
+#if STEREODET_HAVE_GLOO
     auto gloo_options = c10d::ProcessGroupGloo::Options::create(timeout);
     // Without a loopback rendezvous, Gloo binds the interfaces GLOO_SOCKET_IFNAME names ("eth0",
     // or "eth0,eth1"), as PyTorch reads it, else the address of this machine's hostname
@@ -214,6 +227,9 @@ std::unique_ptr<TrainingGroup> TrainingGroup::Connect(const DistributedOptions& 
     impl->gradients = c10::make_intrusive<c10d::ProcessGroupGloo>(
         c10::make_intrusive<c10d::PrefixStore>("stereodet-gradients", impl->store), options.rank,
         options.world_size, gloo_options);
+#else
+    (void)device_host;
+#endif
   } catch (const std::exception& e) {
     STEREODET_THROW_IO() << "training group (rank " << options.rank << " of " << options.world_size
                          << "): cannot meet the other ranks at " << options.rendezvous << " within "

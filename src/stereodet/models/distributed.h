@@ -62,6 +62,9 @@ class TrainingGroup {
   // for a world of one (nothing to meet). Throws std::invalid_argument for bad options (Check),
   // std::runtime_error when the group cannot form.
   static std::unique_ptr<TrainingGroup> Connect(const DistributedOptions& options);
+  // Whether this build can form a group (LibTorch's Gloo process group; CMake found libgloo-dev's
+  // headers). Without it Connect throws std::invalid_argument for a world of more than one.
+  static bool Available();
   ~TrainingGroup();
   TrainingGroup(const TrainingGroup&) = delete;
   TrainingGroup& operator=(const TrainingGroup&) = delete;
