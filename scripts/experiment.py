@@ -1233,6 +1233,8 @@ def main(argv):
     args = parser.parse_args(argv)
     if args.workers is not None and args.workers < 1:
         parser.error(f"--workers: at least 1, got {args.workers}")
+    if args.max_epochs is not None and args.max_epochs < 1:
+        parser.error(f"--max-epochs: at least 1, got {args.max_epochs}")
     try:
         config = load_config(args.config, train=args.train, kitti=args.kitti,
                              kitti_splits=args.kitti_splits, max_epochs=args.max_epochs)
