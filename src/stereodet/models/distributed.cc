@@ -152,7 +152,8 @@ struct TrainingGroup::Impl {
     }
   }
 
-  [[noreturn]] void Fail(const char* what, const std::exception& e) const {
+  // Throws std::runtime_error (STEREODET_THROW_IO); never returns.
+  void Fail(const char* what, const std::exception& e) const {
     STEREODET_THROW_IO() << "training group (" << Name() << "): " << what
                          << " failed; another rank has stopped (its own error says why) or "
                             "did not answer within --group-timeout "
