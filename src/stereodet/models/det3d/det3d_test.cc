@@ -263,7 +263,9 @@ TEST(Det3dBoxesTest, RotatedNmsAgainstItsDefinitionOnRandomBoxes) {
       return false;
     };
     for (size_t i = 0; i < kept.size(); ++i) {
-      if (i > 0) EXPECT_GE(kept[i - 1].score, kept[i].score);
+      if (i > 0) {
+        EXPECT_GE(kept[i - 1].score, kept[i].score);
+      }
       for (size_t j = i + 1; j < kept.size(); ++j) {
         if (kept[i].box.label != kept[j].box.label) continue;
         EXPECT_LE(BevIou(BevProxy(kept[i].box), BevProxy(kept[j].box)), 0.2);
