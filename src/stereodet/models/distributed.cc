@@ -338,29 +338,34 @@ void OnCpu(std::vector<torch::Tensor>& tensors, Collective collective) {
   }
 }
 
-}  // namespace
-
-void AllReduceSumInPlace(TrainingGroup& group, std::vector<torch::Tensor>& tensors) {
+// `start` (one collective of the group's program-order channel on one tensor) on each of
+// `tensors` in turn, through the CPU: one collective per tensor, as Gloo's collectives of a list
+// want equal shapes.
+void EachTensor(TrainingGroup& group, std::vector<torch::Tensor>& tensors, const char* what,
+                const std::function<c10::intrusive_ptr<c10d::Work>(
+                    c10d::ProcessGroup&, std::vector<torch::Tensor>&)>& start) {
   TrainingGroup::Impl& g = group.impl();
   torch::NoGradGuard no_grad;
   OnCpu(tensors, [&](std::vector<torch::Tensor>& cpu) {
-    // One collective per tensor: Gloo's allreduce of a list wants equal shapes.
     for (torch::Tensor& t : cpu) {
       std::vector<torch::Tensor> one{t};
-      g.Run("an all-reduce", [&] { return g.group->allreduce(one); });
+      g.Run(what, [&] { return start(*g.group, one); });
     }
   });
 }
 
+}  // namespace
+
+void AllReduceSumInPlace(TrainingGroup& group, std::vector<torch::Tensor>& tensors) {
+  EachTensor(
+      group, tensors, "an all-reduce",
+      [](c10d::ProcessGroup& pg, std::vector<torch::Tensor>& one) { return pg.allreduce(one); });
+}
+
 void BroadcastInPlace(TrainingGroup& group, std::vector<torch::Tensor>& tensors) {
-  TrainingGroup::Impl& g = group.impl();
-  torch::NoGradGuard no_grad;
-  OnCpu(tensors, [&](std::vector<torch::Tensor>& cpu) {
-    for (torch::Tensor& t : cpu) {
-      std::vector<torch::Tensor> one{t};
-      g.Run("a broadcast", [&] { return g.group->broadcast(one); });
-    }
-  });
+  EachTensor(
+      group, tensors, "a broadcast",
+      [](c10d::ProcessGroup& pg, std::vector<torch::Tensor>& one) { return pg.broadcast(one); });
 }
 
 namespace {
@@ -468,7 +473,6 @@ void GradientReducer::SendReadyBuckets() {
     } catch (const std::exception& e) {
       impl.Fail("the gradient all-reduce", e);
     }
-    bucket.sent = true;
     const double timeout_s = impl.timeout_s;
     waits_.push_back([work, timeout_s, &impl] {
       try {
@@ -482,10 +486,7 @@ void GradientReducer::SendReadyBuckets() {
 
 void GradientReducer::Backward(const torch::Tensor& loss) {
   std::fill(arrived_.begin(), arrived_.end(), false);
-  for (Bucket& b : buckets_) {
-    b.ready = 0;
-    b.sent = false;
-  }
+  for (Bucket& b : buckets_) b.ready = 0;
   next_to_send_ = 0;
   waits_.clear();
   active_ = true;
@@ -513,6 +514,13 @@ void GradientReducer::Backward(const torch::Tensor& loss) {
                                .flat.narrow(0, static_cast<int64_t>(offset_of_[k]), p.numel())
                                .view_as(p));
   }
+}
+
+std::unique_ptr<GradientReducer> JoinGroup(TrainingGroup* group, torch::nn::Module& module) {
+  AttachGroup(module, group);
+  if (group == nullptr) return nullptr;
+  BroadcastModuleState(*group, module);
+  return std::make_unique<GradientReducer>(*group, module.parameters());
 }
 
 void BroadcastModuleState(TrainingGroup& group, torch::nn::Module& module) {

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "stereodet/models/distributed.h"
@@ -103,7 +104,6 @@ class GradientReducer {
     std::vector<size_t> members;  // indices into parameters_
     torch::Tensor flat;           // float/double CPU, the members' gradients end to end
     int ready = 0;
-    bool sent = false;
   };
   void Ready(size_t parameter, const torch::Tensor& grad);
   void SendReadyBuckets();
@@ -118,6 +118,12 @@ class GradientReducer {
   std::vector<unsigned> hooks_;
   std::vector<std::function<void()>> waits_;  // one per sent bucket, in order
 };
+
+// What each family's trainer's SetGroup does to its network: `module` trains as one rank of
+// `group` from now on (null: alone): its batch norms synchronized over the group (AttachGroup), its
+// weights rank 0's (BroadcastModuleState). Returns the reducer of its gradients, null without a
+// group.
+std::unique_ptr<GradientReducer> JoinGroup(TrainingGroup* group, torch::nn::Module& module);
 
 // What each family's trainer calls instead of loss.backward(): with a reducer, the backward with
 // the group's gradient sums overlapped (GradientReducer::Backward); without, loss.backward().

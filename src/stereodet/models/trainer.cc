@@ -115,8 +115,7 @@ TrainingLoopSummary RunTrainingLoop(TrainingTask& task, const TrainingLoopOption
   }
   // Rank 0 owns the folder and the terminal; the others train silently.
   const bool writes = group == nullptr || group->IsRoot();
-  ProgressOptions progress_options = options.progress;
-  if (!writes) progress_options.stream = nullptr;
+  const ProgressOptions progress_options = RankProgress(options.progress, group);
   TrainingLoopSummary summary;
   summary.epochs_done = options.start_epoch;
 

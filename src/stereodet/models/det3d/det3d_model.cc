@@ -592,13 +592,8 @@ Det3dTrainer::~Det3dTrainer() = default;
 
 void Det3dTrainer::SetGroup(TrainingGroup* group) {
   impl_->group = group;
-  impl_->reducer.reset();
-  internal::AttachGroup(*impl_->model.net, group);
-  if (group != nullptr) {
-    internal::BroadcastModuleState(*group, *impl_->model.net);
-    impl_->reducer =
-        std::make_unique<internal::GradientReducer>(*group, impl_->model.net->parameters());
-  }
+  impl_->reducer.reset();  // its hooks off before the network changes hands
+  impl_->reducer = internal::JoinGroup(group, *impl_->model.net);
 }
 
 Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double learning_rate) {

@@ -471,13 +471,8 @@ RpnTrainer::~RpnTrainer() = default;
 
 void RpnTrainer::SetGroup(TrainingGroup* group) {
   impl_->group = group;
-  impl_->reducer.reset();
-  internal::AttachGroup(*impl_->model.impl_->net, group);
-  if (group != nullptr) {
-    internal::BroadcastModuleState(*group, *impl_->model.impl_->net);
-    impl_->reducer =
-        std::make_unique<internal::GradientReducer>(*group, impl_->model.impl_->net->parameters());
-  }
+  impl_->reducer.reset();  // its hooks off before the network changes hands
+  impl_->reducer = internal::JoinGroup(group, *impl_->model.impl_->net);
 }
 
 RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed) {

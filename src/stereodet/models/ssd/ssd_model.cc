@@ -204,13 +204,8 @@ SsdTrainer::~SsdTrainer() = default;
 
 void SsdTrainer::SetGroup(TrainingGroup* group) {
   impl_->group = group;
-  impl_->reducer.reset();
-  internal::AttachGroup(*impl_->model.net, group);
-  if (group != nullptr) {
-    internal::BroadcastModuleState(*group, *impl_->model.net);
-    impl_->reducer =
-        std::make_unique<internal::GradientReducer>(*group, impl_->model.net->parameters());
-  }
+  impl_->reducer.reset();  // its hooks off before the network changes hands
+  impl_->reducer = internal::JoinGroup(group, *impl_->model.net);
 }
 
 LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
