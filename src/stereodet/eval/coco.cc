@@ -11,6 +11,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "stereodet/eval/coco_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
@@ -491,6 +492,16 @@ std::vector<CocoDetection> ReadCocoDetections(const std::filesystem::path& path,
 // -----------------------------------------------------------------------------------------------
 // Options.
 
+const char* CocoMatcherName(CocoMatcher matcher) {
+  return matcher == CocoMatcher::kOptimal ? "optimal" : "coco";
+}
+
+std::optional<CocoMatcher> ParseCocoMatcher(std::string_view text) {
+  if (text == "coco" || text == "greedy") return CocoMatcher::kCoco;
+  if (text == "optimal") return CocoMatcher::kOptimal;
+  return std::nullopt;
+}
+
 std::vector<double> CocoIouThresholds() {
   // numpy's linspace: start + i * step, with the end point set exactly.
   constexpr int kNum = 10;
@@ -564,6 +575,73 @@ size_t CocoEvalResult::RecallIndex(int t, int k, int a, int m) const {
 }
 
 // -----------------------------------------------------------------------------------------------
+// The optimal matcher (coco_internal.h).
+
+void CocoOptimalMatcher::BuildGraph(const CocoImageCell& cell, double tau, int num_present) {
+  const int G = cell.num_gts;
+  adjacency_.num_labels = G;
+  adjacency_.begin.assign(1, 0);
+  adjacency_.labels.clear();
+  excusable_.assign(num_present, 0);
+  for (int d = 0; d < num_present; ++d) {
+    excusable_[d] = cell.det_outside[d];
+    for (int g = 0; g < G; ++g) {
+      if (cell.iou[static_cast<size_t>(d) * G + g] < tau) continue;
+      if (cell.gt_valid[g]) {
+        adjacency_.labels.push_back(g);
+      } else {
+        excusable_[d] = 1;
+      }
+    }
+    adjacency_.begin.push_back(static_cast<int32_t>(adjacency_.labels.size()));
+  }
+}
+
+void CocoOptimalMatcher::Outcomes(const CocoImageCell& cell, double tau,
+                                  std::vector<uint8_t>* flags) {
+  BuildGraph(cell, tau, cell.num_dets);
+  all_.Reset(&adjacency_);
+  unexcusable_.Reset(&adjacency_);
+  flags->assign(cell.num_dets, kCocoIgnored);
+  for (int d = 0; d < cell.num_dets; ++d) {
+    // TP(s) = rank of all detections above s; FP(s) = unexcusable ones above s minus their rank
+    // (a maximum matching can be extended to cover a largest matchable set of them).
+    if (all_.AddDet(d)) {
+      (*flags)[d] = kCocoMatched;
+      if (!excusable_[d]) unexcusable_.AddDet(d);  // grows too
+    } else if (!excusable_[d] && !unexcusable_.AddDet(d)) {
+      (*flags)[d] = 0;  // one more false positive
+    }
+  }
+}
+
+void CocoOptimalMatcher::Associate(const CocoImageCell& cell, double tau, int num_present,
+                                   std::vector<int32_t>* det_gt) {
+  BuildGraph(cell, tau, num_present);
+  det_gt->assign(cell.num_dets, -1);
+  // Weight of a pair: K (one TP) + 1 (a detection nothing else would excuse), then the IoU. With K
+  // above any count of pairs the integer part orders matchings by (TPs, FPs avoided) exactly.
+  const int64_t big_k = num_present + 1;
+  edges_.clear();
+  for (int d = 0; d < num_present; ++d) {
+    for (int e = adjacency_.begin[d]; e < adjacency_.begin[d + 1]; ++e) {
+      const int g = adjacency_.labels[e];
+      WeightedEdge edge;
+      edge.label = g;
+      edge.det = d;
+      edge.weight.major = big_k + (excusable_[d] ? 0 : 1);
+      edge.weight.minor = cell.iou[static_cast<size_t>(d) * cell.num_gts + g];
+      edges_.push_back(edge);
+    }
+  }
+  if (edges_.empty()) return;
+  const std::vector<int32_t> gt_det = MaxWeightAssignment(cell.num_gts, num_present, edges_);
+  for (int g = 0; g < cell.num_gts; ++g) {
+    if (gt_det[g] >= 0) (*det_gt)[gt_det[g]] = g;
+  }
+}
+
+// -----------------------------------------------------------------------------------------------
 // Evaluation.
 
 namespace {
@@ -588,9 +666,11 @@ bool OutsideRange(double area, const CocoAreaRange& range) {
   return area < range.min_area || area > range.max_area;
 }
 
-// Per detection and (area range, IoU threshold): evaluateImg's dtMatches != 0 and dtIgnore.
-constexpr uint8_t kMatched = 1;  // matched to a ground truth whose id is not 0
-constexpr uint8_t kIgnored = 2;
+// Per detection and (area range, IoU threshold): evaluateImg's dtMatches != 0 (kCocoMatched:
+// matched to a ground truth whose id is not 0) and dtIgnore (kCocoIgnored); the optimal matcher's
+// outcomes in the same flags (coco_internal.h).
+constexpr uint8_t kMatched = kCocoMatched;
+constexpr uint8_t kIgnored = kCocoIgnored;
 
 // One category's detections over all images, as accumulate() concatenates them.
 struct CategoryDetections {
@@ -749,6 +829,7 @@ class CocoEvaluator {
 
   // evaluate() for one category: evaluateImg on every image with a ground truth or a detection
   // of it, for every area range, at the largest max_dets; the results in accumulate()'s order.
+  // With the optimal matcher, its outcomes in evaluateImg's place.
   CategoryDetections EvaluateCategory(size_t k) const {
     const size_t T = options_.iou_thresholds.size(), A = options_.area_ranges.size();
     const int max_det = options_.max_dets.back();
@@ -756,8 +837,9 @@ class CocoEvaluator {
     out.num_valid_gt.assign(A, 0);
     std::vector<uint32_t> gts, dts, gt_sorted;
     std::vector<double> iou;
-    std::vector<uint8_t> gt_ignore, det_outside;
+    std::vector<uint8_t> gt_ignore, det_outside, gt_valid, det_flags;
     std::vector<char> gt_matched;
+    CocoOptimalMatcher optimal;
     size_t g_at = gt_start_[k], d_at = det_start_[k];
     while (g_at < gt_start_[k + 1] || d_at < det_start_[k + 1]) {
       // The next image of the category, and its ground truths and detections in file order.
@@ -813,6 +895,21 @@ class CocoEvaluator {
         for (size_t d = 0; d < D; ++d) {
           const CocoBox& box = dets_[dts[d]].bbox;
           det_outside[d] = OutsideRange(box.width * box.height, range);
+        }
+        if (options_.matcher == CocoMatcher::kOptimal) {
+          gt_valid.assign(G, 0);
+          for (size_t j = 0; j < G; ++j) gt_valid[gt_sorted[j]] = !gt_ignore[j];
+          CocoImageCell cell;
+          cell.num_dets = static_cast<int>(D);
+          cell.num_gts = static_cast<int>(G);
+          cell.iou = iou.data();
+          cell.gt_valid = gt_valid.data();
+          cell.det_outside = det_outside.data();
+          for (size_t t = 0; t < T; ++t) {
+            optimal.Outcomes(cell, std::min(options_.iou_thresholds[t], 1 - 1e-10), &det_flags);
+            for (size_t d = 0; d < D; ++d) out.flags[((first + d) * A + a) * T + t] = det_flags[d];
+          }
+          continue;
         }
         for (size_t t = 0; t < T; ++t) {
           gt_matched.assign(G, 0);

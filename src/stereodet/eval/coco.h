@@ -28,6 +28,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -111,7 +112,23 @@ std::vector<double> CocoRecallThresholds();
 // all [0, 1e10], small [0, 32^2], medium [32^2, 96^2], large [96^2, 1e10].
 std::vector<CocoAreaRange> CocoAreaRanges();
 
+// How COCO mode associates detections with ground truths.
+enum class CocoMatcher {
+  kCoco,     // pycocotools' greedy matching, quirks included (the default: equal to COCOeval)
+  kOptimal,  // the paper's: the most true positives at every score threshold (coco_internal.h)
+};
+const char* CocoMatcherName(CocoMatcher matcher);  // "coco", "optimal"
+// Also reads "greedy" as kCoco.
+std::optional<CocoMatcher> ParseCocoMatcher(std::string_view text);
+
 struct CocoEvalOptions {
+  // kOptimal: per image, category, area range and IoU threshold, the association of the most TPs
+  // at every score threshold, then the fewest FPs; a detection is excused (neither TP nor FP) by an
+  // ignored ground truth or crowd it overlaps with IoU >= the threshold (any number of them) or by
+  // lying outside the area range. Its precision, recall and summary are then read as pycocotools
+  // reads its own (101 recall points, max_dets, area ranges). pycocotools' ground-truth-id-0 quirk
+  // is not reproduced there.
+  CocoMatcher matcher = CocoMatcher::kCoco;
   // T IoU thresholds; a detection matches a box when IoU >= threshold (a threshold of 1 acts as
   // 1 - 1e-10, as in pycocotools). Each in [0, 1].
   std::vector<double> iou_thresholds = CocoIouThresholds();

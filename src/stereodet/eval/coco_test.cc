@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/coco_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/fuzz_corpus.h"
@@ -294,6 +295,214 @@ TEST(CocoTest, ThreadsDoNotChangeTheResult) {
   EXPECT_EQ(a.stats, b.stats);
   EXPECT_GT(a.stats[kAp], 0.1);
   EXPECT_LT(a.stats[kAp], 1.0);
+}
+
+// The case greedy matching loses: d1 (highest score) overlaps gt 1 and, more, gt 2; d2 overlaps
+// gt 2 only. pycocotools gives d1 its best, gt 2, and d2 is a FP: recall 1/2 at
+// IoU 0.5. The optimal matcher pairs d1 with gt 1 and d2 with gt 2: recall 1, precision 1.
+TEST(CocoTest, OptimalMatcherFindsBothBoxesGreedyFindsOne) {
+  // Boxes of full height that overlap in x only: gt 1 = [0, 10], gt 2 = [4, 14].
+  const CocoGroundTruth gt =
+      OneCategory({1}, {Box(1, 1, {0, 0, 10, 10}), Box(2, 1, {4, 0, 10, 10})});
+  // d1 = [3, 13]: with gt 1 7/13 = 0.538, with gt 2 9/11 = 0.818. d2 = [5, 15]: with gt 1 5/15,
+  // with gt 2 9/11.
+  const std::vector<CocoDetection> dets = {Det(1, {3, 0, 10, 10}, 0.9),
+                                           Det(1, {5, 0, 10, 10}, 0.8)};
+  CocoEvalOptions greedy, optimal;
+  greedy.iou_thresholds = optimal.iou_thresholds = {0.5};
+  optimal.matcher = CocoMatcher::kOptimal;
+  const CocoEvalResult g = EvaluateCoco(gt, dets, greedy);
+  const CocoEvalResult o = EvaluateCoco(gt, dets, optimal);
+  EXPECT_EQ(g.recall[g.RecallIndex(0, 0, kAll, 2)], 0.5);
+  EXPECT_EQ(o.recall[o.RecallIndex(0, 0, kAll, 2)], 1.0);
+  // Greedy: TP then FP; the 51 points up to recall 1/2 read precision 1, the rest 0.
+  EXPECT_NEAR(g.stats[kAp], 51.0 / 101, 1e-15);
+  // Optimal: after d1 alone one TP (d1 with either box), after d2 two, whose precision 2 / (2 +
+  // 2^-52) rounds to 1 and lifts the envelope: 1 everywhere.
+  EXPECT_EQ(o.precision[o.PrecisionIndex(0, 0, 0, kAll, 2)], 1.0);
+  EXPECT_EQ(o.precision[o.PrecisionIndex(0, 100, 0, kAll, 2)], 1.0);
+  EXPECT_EQ(o.scores[o.PrecisionIndex(0, 100, 0, kAll, 2)], 0.8);
+  EXPECT_EQ(o.stats[kAp], 1.0);
+}
+
+// A box outside the area range excuses any number of detections under the optimal matcher, as a
+// crowd does in both; pycocotools lets it excuse one, and the next is a FP. A small box (31 x 32 =
+// 992 px^2) and two detections on it just inside "medium" (33 x 32 = 1056, IoU 0.94), scored above
+// the detection of a medium box: in "medium" pycocotools counts ignored, FP, TP (precision 1/2 at
+// recall 1), the optimal matcher ignored, ignored, TP.
+TEST(CocoTest, OptimalMatcherIgnoredBoxesExcuseAnyNumber) {
+  const CocoGroundTruth gt =
+      OneCategory({1}, {Box(1, 1, {0, 0, 31, 32}), Box(2, 1, {100, 100, 40, 40})});
+  const std::vector<CocoDetection> dets = {Det(1, {0, 0, 33, 32}, 0.95),
+                                           Det(1, {0, 0, 33, 32}, 0.9),
+                                           Det(1, {100, 100, 40, 40}, 0.8)};
+  CocoEvalOptions greedy, optimal;
+  optimal.matcher = CocoMatcher::kOptimal;
+  const CocoEvalResult g = EvaluateCoco(gt, dets, greedy);
+  const CocoEvalResult o = EvaluateCoco(gt, dets, optimal);
+  EXPECT_EQ(g.precision[g.PrecisionIndex(0, 100, 0, kMedium, 2)], 0.5);
+  EXPECT_EQ(o.precision[o.PrecisionIndex(0, 100, 0, kMedium, 2)], kPerfect);
+  EXPECT_EQ(g.recall[g.RecallIndex(0, 0, kMedium, 2)], 1.0);
+  EXPECT_EQ(o.recall[o.RecallIndex(0, 0, kMedium, 2)], 1.0);
+  // In "all" the second detection on the small box is a duplicate, a FP for both matchers.
+  EXPECT_EQ(g.precision[g.PrecisionIndex(0, 100, 0, kAll, 2)], 2.0 / 3.0);
+  EXPECT_EQ(o.precision[o.PrecisionIndex(0, 100, 0, kAll, 2)], 2.0 / 3.0);
+}
+
+// Brute force over every matching of the first p detections of a small random cell: the most TPs,
+// then the fewest FPs (detections in no pair that nothing excuses), then the largest IoU sum.
+struct BruteBest {
+  int tp = -1, fp = 0;
+  double iou_sum = 0;
+};
+
+void BruteForce(const CocoImageCell& c, double tau, int p, int d, std::vector<char>* used, int tp,
+                int fp, double iou_sum, const std::vector<char>& excusable, BruteBest* best) {
+  if (d == p) {
+    if (tp > best->tp || (tp == best->tp && fp < best->fp) ||
+        (tp == best->tp && fp == best->fp && iou_sum > best->iou_sum + 1e-12)) {
+      *best = {tp, fp, iou_sum};
+    }
+    return;
+  }
+  BruteForce(c, tau, p, d + 1, used, tp, fp + (excusable[d] ? 0 : 1), iou_sum, excusable, best);
+  for (int g = 0; g < c.num_gts; ++g) {
+    const double iou = c.iou[d * c.num_gts + g];
+    if (!c.gt_valid[g] || (*used)[g] || iou < tau) continue;
+    (*used)[g] = 1;
+    BruteForce(c, tau, p, d + 1, used, tp + 1, fp, iou_sum + iou, excusable, best);
+    (*used)[g] = 0;
+  }
+}
+
+TEST(CocoTest, OptimalMatcherAgainstBruteForceOnEveryPrefix) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  CocoOptimalMatcher matcher;
+  std::vector<uint8_t> flags;
+  std::vector<int32_t> det_gt;
+  int cells_with_conflict = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int D = 1 + static_cast<int>(rng() % 6), G = static_cast<int>(rng() % 5);
+    std::vector<double> iou(D * G);
+    for (double& v : iou) v = unit(rng) < 0.5 ? 0.0 : 0.3 + 0.7 * unit(rng);
+    std::vector<uint8_t> gt_valid(G), det_outside(D);
+    for (uint8_t& v : gt_valid) v = unit(rng) < 0.75;
+    for (uint8_t& v : det_outside) v = unit(rng) < 0.2;
+    const CocoImageCell cell{D, G, iou.data(), gt_valid.data(), det_outside.data()};
+    const double tau = 0.5;
+    std::vector<char> excusable(D);
+    for (int d = 0; d < D; ++d) {
+      excusable[d] = det_outside[d];
+      for (int g = 0; g < G; ++g) excusable[d] |= !gt_valid[g] && iou[d * G + g] >= tau;
+    }
+    matcher.Outcomes(cell, tau, &flags);
+    ASSERT_EQ(flags.size(), static_cast<size_t>(D));
+    int tp = 0, fp = 0;
+    for (int p = 1; p <= D; ++p) {
+      tp += flags[p - 1] == kCocoMatched;
+      fp += flags[p - 1] == 0;
+      BruteBest best;
+      std::vector<char> used(G, 0);
+      BruteForce(cell, tau, p, 0, &used, 0, 0, 0.0, excusable, &best);
+      ASSERT_EQ(tp, best.tp) << "trial " << trial << " prefix " << p;
+      ASSERT_EQ(fp, best.fp) << "trial " << trial << " prefix " << p;
+      // The association of the prefix: the same counts, and the largest IoU sum among them.
+      matcher.Associate(cell, tau, p, &det_gt);
+      int a_tp = 0, a_fp = 0;
+      double a_iou = 0;
+      std::vector<char> gt_used(G, 0);
+      for (int d = 0; d < D; ++d) {
+        if (d >= p) {
+          ASSERT_EQ(det_gt[d], -1);
+          continue;
+        }
+        if (det_gt[d] >= 0) {
+          const int g = det_gt[d];
+          ASSERT_TRUE(gt_valid[g]);
+          ASSERT_GE(iou[d * G + g], tau);
+          ASSERT_FALSE(gt_used[g]);
+          gt_used[g] = 1;
+          ++a_tp;
+          a_iou += iou[d * G + g];
+        } else if (!excusable[d]) {
+          ++a_fp;
+        }
+      }
+      ASSERT_EQ(a_tp, best.tp);
+      ASSERT_EQ(a_fp, best.fp);
+      ASSERT_NEAR(a_iou, best.iou_sum, 1e-12);
+    }
+    // Count the cells where the greedy choice could go wrong (a detection with two candidates).
+    for (int d = 0; d < D; ++d) {
+      int candidates = 0;
+      for (int g = 0; g < G; ++g) candidates += gt_valid[g] && iou[d * G + g] >= tau;
+      cells_with_conflict += candidates > 1;
+    }
+  }
+  EXPECT_GT(cells_with_conflict, 50);
+}
+
+// On random sets the optimal matcher's recall is never below pycocotools' (each prefix of each
+// image has at least the greedy TPs), and where every detection overlaps at most one ground truth
+// and every ground truth at most one detection, the two agree on every array.
+TEST(CocoTest, OptimalMatcherNeverFindsLessAndAgreesWithoutConflicts) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> coord(0, 200), size(20, 100), score(0, 1);
+  CocoGroundTruth gt;
+  gt.source = "random";
+  for (int64_t i = 1; i <= 20; ++i) gt.image_ids.push_back(i);
+  for (int64_t k = 1; k <= 2; ++k) gt.categories.push_back({k, ""});
+  std::vector<CocoDetection> crowded, separate;
+  for (int i = 0; i < 600; ++i) {
+    CocoAnnotation a = Box(i + 1, 1 + i % 20, {coord(rng), coord(rng), size(rng), size(rng)});
+    a.category_id = 1 + i % 2;
+    gt.annotations.push_back(a);
+    const CocoBox shifted = {a.bbox.x + a.bbox.width * 0.4 * score(rng), a.bbox.y, a.bbox.width,
+                             a.bbox.height};
+    crowded.push_back(Det(a.image_id, shifted, score(rng), a.category_id));
+    crowded.push_back(Det(a.image_id, {coord(rng), coord(rng), size(rng), size(rng)}, score(rng),
+                          a.category_id));
+  }
+  CocoEvalOptions greedy, optimal;
+  optimal.matcher = CocoMatcher::kOptimal;
+  const CocoEvalResult g = EvaluateCoco(gt, crowded, greedy);
+  const CocoEvalResult o = EvaluateCoco(gt, crowded, optimal);
+  int larger = 0;
+  for (size_t i = 0; i < g.recall.size(); ++i) {
+    ASSERT_GE(o.recall[i], g.recall[i]) << i;
+    larger += o.recall[i] > g.recall[i];
+  }
+  EXPECT_GT(larger, 0);
+  EXPECT_GE(o.stats[kAr100], g.stats[kAr100]);
+
+  // One box per image, far apart from the others, and detections on it or far away.
+  CocoGroundTruth sparse;
+  sparse.source = "sparse";
+  sparse.categories = {{1, ""}};
+  for (int64_t i = 1; i <= 50; ++i) {
+    sparse.image_ids.push_back(i);
+    sparse.annotations.push_back(Box(i, i, {10, 10, size(rng), size(rng)}));
+    const CocoBox& b = sparse.annotations.back().bbox;
+    separate.push_back(Det(i, {b.x + b.width * 0.3 * score(rng), b.y, b.width, b.height},
+                           score(rng)));
+    separate.push_back(Det(i, {1000, 1000, size(rng), size(rng)}, score(rng)));
+  }
+  const CocoEvalResult gs = EvaluateCoco(sparse, separate, greedy);
+  const CocoEvalResult os = EvaluateCoco(sparse, separate, optimal);
+  EXPECT_EQ(gs.precision, os.precision);
+  EXPECT_EQ(gs.recall, os.recall);
+  EXPECT_EQ(gs.scores, os.scores);
+  EXPECT_EQ(gs.stats, os.stats);
+}
+
+TEST(CocoTest, MatcherNames) {
+  EXPECT_STREQ(CocoMatcherName(CocoMatcher::kCoco), "coco");
+  EXPECT_STREQ(CocoMatcherName(CocoMatcher::kOptimal), "optimal");
+  EXPECT_EQ(ParseCocoMatcher("optimal"), CocoMatcher::kOptimal);
+  EXPECT_EQ(ParseCocoMatcher("greedy"), CocoMatcher::kCoco);
+  EXPECT_EQ(ParseCocoMatcher("coco"), CocoMatcher::kCoco);
+  EXPECT_FALSE(ParseCocoMatcher("kitti").has_value());
 }
 
 TEST(CocoTest, SummaryInPycocotoolsLayout) {

@@ -1,0 +1,68 @@
+// Internal to the eval module (used by EvaluateCoco and its tests): COCO mode's optimal matcher on
+// one image, category, area range and IoU threshold.
+//
+// The paper's matcher in COCO terms (docs/metrics.md, "COCO mode: the optimal matcher"):
+//  - a ground truth is valid unless it is a crowd, outside the area range or (with
+//    CocoEvalOptions::honor_ignore_flag) marked "ignore"; the others are ignored;
+//  - TP: a pair (valid ground truth, detection) with IoU >= tau in a matching of the most pairs;
+//  - a detection in no pair is excused (neither TP nor FP) when its own area is outside the range
+//    (as in pycocotools) or when it overlaps an ignored ground truth with IoU >= tau (a crowd by
+//    the intersection over the detection's area, as KITTI's DontCare): an ignored ground truth
+//    excuses any number of detections;
+//  - among the matchings with the most pairs, one leaving the fewest false positives.
+// With the detections taken in descending score, TP(s) and FP(s) at every score threshold s are
+// the ranks of the transversal matroids of (all detections) and (detections nothing excuses): one
+// augmenting-path search per detection in each of two incremental matchings gives both, and each
+// detection's own outcome (a TP, a FP, or neither) is the step its arrival makes. A detection that
+// grows the first matching grows the second (submodularity), so no detection is both.
+#ifndef STEREODET_EVAL_COCO_INTERNAL_H_
+#define STEREODET_EVAL_COCO_INTERNAL_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "stereodet/eval/bipartite_internal.h"
+
+namespace stereodet {
+
+// Per detection, what accumulate() counts: a match (TP), ignored (neither), or neither flag (FP).
+inline constexpr uint8_t kCocoMatched = 1;
+inline constexpr uint8_t kCocoIgnored = 2;
+
+// One image and category in one area range.
+struct CocoImageCell {
+  int num_dets = 0;  // detections by descending score (ties in file order), at most max_dets
+  int num_gts = 0;
+  const double* iou = nullptr;          // num_dets x num_gts, detection-major (BoxIou's values)
+  const uint8_t* gt_valid = nullptr;    // per ground truth: 1 valid, 0 ignored
+  const uint8_t* det_outside = nullptr;  // per detection: 1 if its area is outside the range
+};
+
+// Reusable memory for one thread; the results do not depend on what it held.
+class CocoOptimalMatcher {
+ public:
+  // Each detection's flags at IoU threshold `tau` (a match needs IoU >= tau) as the detections
+  // arrive in order: kCocoMatched if it raised the most TPs, 0 if it raised the fewest FPs, else
+  // kCocoIgnored. `flags` gets num_dets values.
+  void Outcomes(const CocoImageCell& cell, double tau, std::vector<uint8_t>* flags);
+
+  // The association of the first `num_present` detections (those at or above the operating
+  // point): the most TPs, then the fewest FPs, then the largest total IoU of the pairs.
+  // det_gt[d]: the ground truth of detection d's pair, or -1 (num_dets values; -1 beyond
+  // num_present).
+  void Associate(const CocoImageCell& cell, double tau, int num_present,
+                 std::vector<int32_t>* det_gt);
+
+ private:
+  // The edges (valid ground truths with IoU >= tau) and which detections could be excused.
+  void BuildGraph(const CocoImageCell& cell, double tau, int num_present);
+
+  DetAdjacency adjacency_;
+  std::vector<uint8_t> excusable_;
+  IncrementalMatching all_, unexcusable_;
+  std::vector<WeightedEdge> edges_;
+};
+
+}  // namespace stereodet
+
+#endif  // STEREODET_EVAL_COCO_INTERNAL_H_
