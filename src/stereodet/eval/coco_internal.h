@@ -33,8 +33,8 @@ inline constexpr uint8_t kCocoIgnored = 2;
 struct CocoImageCell {
   int num_dets = 0;  // detections by descending score (ties in file order), at most max_dets
   int num_gts = 0;
-  const double* iou = nullptr;          // num_dets x num_gts, detection-major (BoxIou's values)
-  const uint8_t* gt_valid = nullptr;    // per ground truth: 1 valid, 0 ignored
+  const double* iou = nullptr;           // num_dets x num_gts, detection-major (BoxIou's values)
+  const uint8_t* gt_valid = nullptr;     // per ground truth: 1 valid, 0 ignored
   const uint8_t* det_outside = nullptr;  // per detection: 1 if its area is outside the range
 };
 

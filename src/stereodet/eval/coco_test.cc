@@ -333,9 +333,8 @@ TEST(CocoTest, OptimalMatcherFindsBothBoxesGreedyFindsOne) {
 TEST(CocoTest, OptimalMatcherIgnoredBoxesExcuseAnyNumber) {
   const CocoGroundTruth gt =
       OneCategory({1}, {Box(1, 1, {0, 0, 31, 32}), Box(2, 1, {100, 100, 40, 40})});
-  const std::vector<CocoDetection> dets = {Det(1, {0, 0, 33, 32}, 0.95),
-                                           Det(1, {0, 0, 33, 32}, 0.9),
-                                           Det(1, {100, 100, 40, 40}, 0.8)};
+  const std::vector<CocoDetection> dets = {
+      Det(1, {0, 0, 33, 32}, 0.95), Det(1, {0, 0, 33, 32}, 0.9), Det(1, {100, 100, 40, 40}, 0.8)};
   CocoEvalOptions greedy, optimal;
   optimal.matcher = CocoMatcher::kOptimal;
   const CocoEvalResult g = EvaluateCoco(gt, dets, greedy);
@@ -461,8 +460,8 @@ TEST(CocoTest, OptimalMatcherNeverFindsLessAndAgreesWithoutConflicts) {
     const CocoBox shifted = {a.bbox.x + a.bbox.width * 0.4 * score(rng), a.bbox.y, a.bbox.width,
                              a.bbox.height};
     crowded.push_back(Det(a.image_id, shifted, score(rng), a.category_id));
-    crowded.push_back(Det(a.image_id, {coord(rng), coord(rng), size(rng), size(rng)}, score(rng),
-                          a.category_id));
+    crowded.push_back(
+        Det(a.image_id, {coord(rng), coord(rng), size(rng), size(rng)}, score(rng), a.category_id));
   }
   CocoEvalOptions greedy, optimal;
   optimal.matcher = CocoMatcher::kOptimal;
@@ -484,8 +483,8 @@ TEST(CocoTest, OptimalMatcherNeverFindsLessAndAgreesWithoutConflicts) {
     sparse.image_ids.push_back(i);
     sparse.annotations.push_back(Box(i, i, {10, 10, size(rng), size(rng)}));
     const CocoBox& b = sparse.annotations.back().bbox;
-    separate.push_back(Det(i, {b.x + b.width * 0.3 * score(rng), b.y, b.width, b.height},
-                           score(rng)));
+    separate.push_back(
+        Det(i, {b.x + b.width * 0.3 * score(rng), b.y, b.width, b.height}, score(rng)));
     separate.push_back(Det(i, {1000, 1000, size(rng), size(rng)}, score(rng)));
   }
   const CocoEvalResult gs = EvaluateCoco(sparse, separate, greedy);
