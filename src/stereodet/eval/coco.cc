@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numeric>
@@ -12,6 +13,7 @@
 #include <utility>
 
 #include "stereodet/eval/coco_internal.h"
+#include "stereodet/eval/score_metrics_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
@@ -560,6 +562,8 @@ void CocoEvalOptions::Check() const {
           << "COCO evaluation: area range label '" << range.label << "' given twice";
     }
   }
+  STEREODET_CHECK_GE(calibration_bins, 1) << "(COCO evaluation's calibration_bins)";
+  STEREODET_CHECK(!std::isnan(score_threshold)) << "COCO evaluation: score_threshold is NaN";
   STEREODET_CHECK_GE(num_threads, 0) << "(COCO evaluation's num_threads)";
 }
 
@@ -572,6 +576,17 @@ size_t CocoEvalResult::PrecisionIndex(int t, int r, int k, int a, int m) const {
 size_t CocoEvalResult::RecallIndex(int t, int k, int a, int m) const {
   const size_t K = category_ids.size(), A = options.area_ranges.size(), M = options.max_dets.size();
   return ((t * K + k) * A + a) * M + m;
+}
+
+size_t CocoEvalResult::CellIndex(int t, int k, int a) const {
+  const size_t K = category_ids.size(), A = options.area_ranges.size();
+  return (t * K + k) * A + a;
+}
+
+const std::array<const char*, kNumCocoScoreStats>& CocoScoreStatNames() {
+  static const std::array<const char*, kNumCocoScoreStats> kNames = {
+      "BL", "BL50", "BL75", "BD", "BD50", "BD75", "BA", "BA50", "BA75", "ECE", "ECE50", "ECE75"};
+  return kNames;
 }
 
 // -----------------------------------------------------------------------------------------------
@@ -616,9 +631,10 @@ void CocoOptimalMatcher::Outcomes(const CocoImageCell& cell, double tau,
 }
 
 void CocoOptimalMatcher::Associate(const CocoImageCell& cell, double tau, int num_present,
-                                   std::vector<int32_t>* det_gt) {
+                                   std::vector<int32_t>* det_gt, std::vector<uint8_t>* flags) {
   BuildGraph(cell, tau, num_present);
   det_gt->assign(cell.num_dets, -1);
+  flags->assign(cell.num_dets, kCocoIgnored);
   // Weight of a pair: K (one TP) + 1 (a detection nothing else would excuse), then the IoU. With K
   // above any count of pairs the integer part orders matchings by (TPs, FPs avoided) exactly.
   const int64_t big_k = num_present + 1;
@@ -634,10 +650,18 @@ void CocoOptimalMatcher::Associate(const CocoImageCell& cell, double tau, int nu
       edges_.push_back(edge);
     }
   }
-  if (edges_.empty()) return;
-  const std::vector<int32_t> gt_det = MaxWeightAssignment(cell.num_gts, num_present, edges_);
-  for (int g = 0; g < cell.num_gts; ++g) {
-    if (gt_det[g] >= 0) (*det_gt)[gt_det[g]] = g;
+  if (!edges_.empty()) {
+    const std::vector<int32_t> gt_det = MaxWeightAssignment(cell.num_gts, num_present, edges_);
+    for (int g = 0; g < cell.num_gts; ++g) {
+      if (gt_det[g] >= 0) (*det_gt)[gt_det[g]] = g;
+    }
+  }
+  for (int d = 0; d < num_present; ++d) {
+    if ((*det_gt)[d] >= 0) {
+      (*flags)[d] = kCocoMatched;
+    } else if (!excusable_[d]) {
+      (*flags)[d] = 0;
+    }
   }
 }
 
@@ -678,6 +702,11 @@ struct CategoryDetections {
   std::vector<int32_t> rank;          // the detection's position in its image's score order
   std::vector<uint8_t> flags;         // [detection][area range][threshold]
   std::vector<int64_t> num_valid_gt;  // per area range: ground truths not ignored (npig)
+  // With CocoEvalOptions::score_metrics, per (threshold, area range), t * A + a: the operating
+  // point's counts and Brier / calibration terms.
+  std::vector<int64_t> cell_tp, cell_fp, cell_fn;
+  std::vector<ScoreMetricsAccumulator> cell_terms;
+  std::vector<int32_t> gt_tp_det;  // AddCellTerms' memory
 };
 
 // The indices of `items` grouped by (category index, image index), each group in file order:
@@ -770,10 +799,25 @@ class CocoEvaluator {
     result_.precision.assign(T * R * K * A * M, -1.0);
     result_.scores.assign(T * R * K * A * M, -1.0);
     result_.recall.assign(T * K * A * M, -1.0);
+    if (options_.score_metrics) {
+      result_.cells.assign(T * K * A, CocoCell());
+      if (options_.score_transform == ScoreTransform::kNone) {
+        for (const uint32_t i : det_order_) {
+          if (!(dets_[i].score >= 0 && dets_[i].score <= 1)) result_.probability_metrics = false;
+        }
+      }
+    }
     ParallelFor(
-        K, [&](size_t k) { Accumulate(static_cast<int>(k), EvaluateCategory(k)); },
+        K,
+        [&](size_t k) {
+          const CategoryDetections category = EvaluateCategory(k);
+          Accumulate(static_cast<int>(k), category);
+          if (options_.score_metrics) FinishCells(static_cast<int>(k), category);
+        },
         options_.num_threads);
     Summarize();
+    result_.score_stats.fill(-1.0);
+    if (options_.score_metrics && result_.probability_metrics) SummarizeCells();
   }
 
  private:
@@ -839,7 +883,15 @@ class CocoEvaluator {
     std::vector<double> iou;
     std::vector<uint8_t> gt_ignore, det_outside, gt_valid, det_flags;
     std::vector<char> gt_matched;
+    std::vector<int32_t> det_gt;
     CocoOptimalMatcher optimal;
+    if (options_.score_metrics) {
+      out.cell_tp.assign(T * A, 0);
+      out.cell_fp.assign(T * A, 0);
+      out.cell_fn.assign(T * A, 0);
+      out.cell_terms.assign(T * A, ScoreMetricsAccumulator(options_.calibration_bins, 1.0, 1.0,
+                                                           options_.score_transform));
+    }
     size_t g_at = gt_start_[k], d_at = det_start_[k];
     while (g_at < gt_start_[k + 1] || d_at < det_start_[k + 1]) {
       // The next image of the category, and its ground truths and detections in file order.
@@ -869,6 +921,11 @@ class CocoEvaluator {
         }
       }
 
+      // The detections at the operating point: a prefix, as they are sorted by score.
+      size_t num_present = 0;
+      while (num_present < D && dets_[dts[num_present]].score >= options_.score_threshold) {
+        ++num_present;
+      }
       const size_t first = out.score.size();
       for (size_t d = 0; d < D; ++d) {
         out.score.push_back(dets_[dts[d]].score);
@@ -896,9 +953,13 @@ class CocoEvaluator {
           const CocoBox& box = dets_[dts[d]].bbox;
           det_outside[d] = OutsideRange(box.width * box.height, range);
         }
+        gt_valid.assign(G, 0);
+        for (size_t j = 0; j < G; ++j) gt_valid[gt_sorted[j]] = !gt_ignore[j];
+        if (options_.score_metrics) {
+          det_flags.assign(D, 0);
+          det_gt.assign(D, -1);
+        }
         if (options_.matcher == CocoMatcher::kOptimal) {
-          gt_valid.assign(G, 0);
-          for (size_t j = 0; j < G; ++j) gt_valid[gt_sorted[j]] = !gt_ignore[j];
           CocoImageCell cell;
           cell.num_dets = static_cast<int>(D);
           cell.num_gts = static_cast<int>(G);
@@ -906,8 +967,13 @@ class CocoEvaluator {
           cell.gt_valid = gt_valid.data();
           cell.det_outside = det_outside.data();
           for (size_t t = 0; t < T; ++t) {
-            optimal.Outcomes(cell, std::min(options_.iou_thresholds[t], 1 - 1e-10), &det_flags);
+            const double tau = std::min(options_.iou_thresholds[t], 1 - 1e-10);
+            optimal.Outcomes(cell, tau, &det_flags);
             for (size_t d = 0; d < D; ++d) out.flags[((first + d) * A + a) * T + t] = det_flags[d];
+            if (options_.score_metrics) {
+              optimal.Associate(cell, tau, static_cast<int>(num_present), &det_gt, &det_flags);
+              AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, t * A + a, &out);
+            }
           }
           continue;
         }
@@ -940,11 +1006,74 @@ class CocoEvaluator {
             if (matched) flags |= kMatched;
             if (!matched && det_outside[d]) flags |= kIgnored;
             out.flags[((first + d) * A + a) * T + t] = flags;
+            if (options_.score_metrics) {
+              det_flags[d] = flags;
+              det_gt[d] = matched ? static_cast<int32_t>(gt_sorted[match]) : -1;
+            }
+          }
+          if (options_.score_metrics) {
+            // Greedy in score order: the association of the detections at the operating point
+            // is the whole one's restricted to them.
+            AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, t * A + a, &out);
           }
         }
       }
     }
     return out;
+  }
+
+  // One image's share of cell `cell` (t * A + a) at the operating point: `flags` and `det_gt` are
+  // the association of the first num_present detections of `dts` (kMatched alone: a TP with
+  // ground truth det_gt[d], an index into the image's ground truths; 0: a FP; else neither).
+  // Label terms first, in file order, then the detections' in score order.
+  void AddCellTerms(const std::vector<uint32_t>& dts, const std::vector<uint8_t>& gt_valid,
+                    const std::vector<uint8_t>& flags, const std::vector<int32_t>& det_gt,
+                    size_t num_present, size_t cell, CategoryDetections* out) const {
+    ScoreMetricsAccumulator& terms = out->cell_terms[cell];
+    std::vector<int32_t>& gt_tp_det = out->gt_tp_det;
+    gt_tp_det.assign(gt_valid.size(), -1);
+    for (size_t d = 0; d < num_present; ++d) {
+      if (flags[d] == kMatched) gt_tp_det[det_gt[d]] = static_cast<int32_t>(d);
+    }
+    auto probability = [&](size_t d) {
+      return ApplyScoreTransform(options_.score_transform, dets_[dts[d]].score);
+    };
+    for (size_t g = 0; g < gt_valid.size(); ++g) {
+      if (!gt_valid[g]) continue;
+      if (gt_tp_det[g] >= 0) {
+        const double s = probability(gt_tp_det[g]);
+        terms.AddLabelTerm((1 - s) * (1 - s));
+      } else {
+        terms.AddLabelTerm(1.0);
+        ++out->cell_fn[cell];
+      }
+    }
+    for (size_t d = 0; d < num_present; ++d) {
+      if (flags[d] != kMatched && flags[d] != 0) continue;
+      terms.AddDetectionTerm(probability(d), flags[d] == kMatched);
+      ++(flags[d] == kMatched ? out->cell_tp : out->cell_fp)[cell];
+    }
+  }
+
+  // The cells of category k from its operating-point terms.
+  void FinishCells(int k, const CategoryDetections& in) {
+    const size_t T = options_.iou_thresholds.size(), A = options_.area_ranges.size();
+    for (size_t t = 0; t < T; ++t) {
+      for (size_t a = 0; a < A; ++a) {
+        const size_t i = t * A + a;
+        CocoCell& cell =
+            result_.cells[result_.CellIndex(static_cast<int>(t), k, static_cast<int>(a))];
+        cell.num_valid_gt = in.num_valid_gt[a];
+        cell.at_threshold = MakeOperatingPoint(options_.score_threshold, in.cell_tp[i],
+                                               in.cell_fp[i], in.cell_fn[i]);
+        cell.brier = in.cell_terms[i].Brier();
+        cell.calibration = in.cell_terms[i].Calibration();
+        if (!result_.probability_metrics) {
+          cell.brier = WithoutProbabilities(cell.brier);
+          cell.calibration = WithoutProbabilities(cell.calibration);
+        }
+      }
+    }
   }
 
   // accumulate() for one category: precision, recall and scores at every threshold, area range
@@ -1055,6 +1184,39 @@ class CocoEvaluator {
     }
   }
 
+  // score_stats: per metric, the mean over categories (area "all") and the thresholds of each
+  // summary line of the cells' values that are numbers.
+  void SummarizeCells() {
+    const int T = static_cast<int>(options_.iou_thresholds.size()),
+              K = static_cast<int>(result_.category_ids.size());
+    int a = -1;
+    for (size_t i = 0; i < options_.area_ranges.size(); ++i) {
+      if (options_.area_ranges[i].label == "all") a = static_cast<int>(i);
+    }
+    if (a < 0) return;
+    const std::array<std::optional<double>, 3> ious = {std::nullopt, 0.5, 0.75};
+    for (int metric = 0; metric < 4; ++metric) {
+      for (int v = 0; v < 3; ++v) {
+        double sum = 0;
+        int64_t n = 0;
+        for (int t = 0; t < T; ++t) {
+          if (ious[v] && options_.iou_thresholds[t] != *ious[v]) continue;
+          for (int k = 0; k < K; ++k) {
+            const CocoCell& cell = result_.cells[result_.CellIndex(t, k, a)];
+            const double value = metric == 0   ? cell.brier.over_labels
+                                 : metric == 1 ? cell.brier.over_detections
+                                 : metric == 2 ? cell.brier.over_all
+                                               : cell.calibration.ece;
+            if (std::isnan(value)) continue;
+            sum += value;
+            ++n;
+          }
+        }
+        result_.score_stats[metric * 3 + v] = n > 0 ? sum / static_cast<double>(n) : -1.0;
+      }
+    }
+  }
+
   const CocoGroundTruth& gt_;
   const std::vector<CocoDetection>& dets_;
   CocoEvalResult& result_;
@@ -1091,6 +1253,24 @@ std::string FormatCocoSummary(const CocoEvalResult& result) {
     out += fmt::format(" {:<18} {} @[ IoU={:<9} | area={:>6s} | maxDets={:>3d} ] = {:0.3f}\n",
                        line.ap ? "Average Precision" : "Average Recall", line.ap ? "(AP)" : "(AR)",
                        iou, line.area, line.max_dets, result.stats[s]);
+  }
+  if (!o.score_metrics) return out;
+  // The operating-point lines, in the same layout: each metric at [.50:.95], .50 and .75.
+  constexpr std::array<std::pair<const char*, const char*>, 4> kMetrics = {
+      {{"Brier over labels", "(BL)"},
+       {"Brier over dets", "(BD)"},
+       {"Brier over all", "(BA)"},
+       {"Calibration error", "(ECE)"}}};
+  for (int s = 0; s < kNumCocoScoreStats; ++s) {
+    const std::string iou = s % 3 == 1   ? "0.50"
+                            : s % 3 == 2 ? "0.75"
+                                         : fmt::format("{:0.2f}:{:0.2f}", o.iou_thresholds.front(),
+                                                       o.iou_thresholds.back());
+    const auto& [name, tag] = kMetrics[s / 3];
+    // Name and tag fill the 23 characters "Average Precision  (AP)" does.
+    out += fmt::format(" {:<{}} {} @[ IoU={:<9} | area={:>6s} | maxDets={:>3d} ] = {:0.3f}\n", name,
+                       22 - std::strlen(tag), tag, iou, "all", o.max_dets.back(),
+                       result.score_stats[s]);
   }
   return out;
 }

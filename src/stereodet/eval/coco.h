@@ -28,10 +28,15 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "stereodet/eval/curves.h"
+#include "stereodet/eval/eval_options.h"
+#include "stereodet/eval/score_metrics.h"
 
 namespace stereodet {
 
@@ -142,7 +147,18 @@ struct CocoEvalOptions {
   // false (pycocotools): a ground truth is ignored when it is a crowd or outside the area range;
   // its "ignore" field is not read. true: also when its "ignore" is set (COCO's documented intent).
   bool honor_ignore_flag = false;
-  int num_threads = 0;  // threads over categories (0 = all); the result does not depend on it
+  // The operating-point metrics (CocoEvalResult::cells and score_stats): off by default, as
+  // pycocotools has none. With the optimal matcher they cost one more association per image,
+  // category, area range and IoU threshold.
+  bool score_metrics = false;
+  // The operating point of the cells: the detections with score >= this (of the max_dets.back()
+  // kept per image and category) are associated; the arrays and stats always use every detection.
+  double score_threshold = -std::numeric_limits<double>::infinity();
+  // How scores become the probabilities of the Brier scores and calibration (as in KITTI mode:
+  // with kNone and a score outside [0, 1] they are left out, CocoEvalResult::probability_metrics).
+  ScoreTransform score_transform = ScoreTransform::kNone;
+  int calibration_bins = 10;  // reliability bins over [0, 1], >= 1
+  int num_threads = 0;        // threads over categories (0 = all); the result does not depend on it
 
   // Throws std::invalid_argument naming the field for a setting outside the ranges above.
   void Check() const;
@@ -150,6 +166,24 @@ struct CocoEvalOptions {
 
 // The number of summary numbers of COCOeval.summarize() for bbox.
 inline constexpr int kNumCocoStats = 12;
+
+// The number of operating-point summary numbers (CocoEvalResult::score_stats).
+inline constexpr int kNumCocoScoreStats = 12;
+
+// One IoU threshold x category x area range at the operating point (CocoEvalOptions::
+// score_threshold), with max_dets.back() detections per image: the association of the matcher
+// (pycocotools' greedy one restricted to the detections at or above the threshold; the optimal
+// matcher's of the most TPs, then fewest FPs, then largest total IoU) counted as docs/metrics.md
+// defines it for KITTI mode: a valid ground truth is a TP or a FN, a detection a TP, a FP or
+// neither (ignored as the arrays ignore it).
+struct CocoCell {
+  int64_t num_valid_gt = 0;  // ground truths not ignored in the area range
+  OperatingPoint at_threshold;
+  // Over labels: one term per valid ground truth; over detections: per TP or FP; over all: both.
+  // NaN means as in KITTI mode (no term, or scores that are not probabilities).
+  BrierScores brier;
+  CalibrationResult calibration;  // over the TP and FP detections
+};
 
 // COCOeval.accumulate()'s arrays and summarize()'s numbers. The arrays are row-major in the order
 // of their names, as numpy holds them: precision[t][r][k][a][m] is at
@@ -175,6 +209,17 @@ struct CocoEvalResult {
   // none.
   std::array<double, kNumCocoStats> stats{};
 
+  // With options.score_metrics: T x K x A cells, (t * K + k) * A + a (CellIndex); else empty.
+  std::vector<CocoCell> cells;
+  // False when a score is outside [0, 1] and options.score_transform is kNone: the cells' Brier
+  // scores and calibration are NaN and score_stats -1.
+  bool probability_metrics = true;
+  // With options.score_metrics, in FormatCocoSummary's order: the Brier score over labels at IoU
+  // [.50:.95], .50, .75; the same three over detections, over all, and of the ECE. Each the mean of
+  // the cells' values (area "all") over the categories and the thresholds named, leaving out the
+  // NaN ones; -1 when none is left (or without score_metrics).
+  std::array<double, kNumCocoScoreStats> score_stats{};
+
   int64_t num_gt = 0;          // ground truths evaluated (on an evaluated image and category)
   int64_t num_gt_skipped = 0;  // ground truths of an image or category the file does not list
   int64_t num_detections = 0;  // detections evaluated (before max_dets)
@@ -183,6 +228,7 @@ struct CocoEvalResult {
 
   size_t PrecisionIndex(int t, int r, int k, int a, int m) const;
   size_t RecallIndex(int t, int k, int a, int m) const;
+  size_t CellIndex(int t, int k, int a) const;
 };
 
 // COCOeval(gt, loadRes(dets), 'bbox'): evaluate(), accumulate(), summarize(). Every image and
@@ -194,8 +240,13 @@ CocoEvalResult EvaluateCoco(const CocoGroundTruth& gt, const std::vector<CocoDet
                             const CocoEvalOptions& options);
 
 // The summary as COCOeval.summarize() prints it, 12 lines:
-//  " Average Precision  (AP) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ] = 0.370".
+//  " Average Precision  (AP) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ] = 0.370",
+// then, with options.score_metrics, 12 more in the same layout:
+//  " Brier over labels  (BL) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ] = 0.512".
 std::string FormatCocoSummary(const CocoEvalResult& result);
+
+// The names of score_stats: BL, BL50, BL75, BD, BD50, BD75, BA, BA50, BA75, ECE, ECE50, ECE75.
+const std::array<const char*, kNumCocoScoreStats>& CocoScoreStatNames();
 
 }  // namespace stereodet
 

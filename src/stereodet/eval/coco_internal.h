@@ -48,10 +48,11 @@ class CocoOptimalMatcher {
 
   // The association of the first `num_present` detections (those at or above the operating
   // point): the most TPs, then the fewest FPs, then the largest total IoU of the pairs.
-  // det_gt[d]: the ground truth of detection d's pair, or -1 (num_dets values; -1 beyond
-  // num_present).
+  // det_gt[d]: the ground truth of detection d's pair, or -1; flags[d]: kCocoMatched for a TP, 0
+  // for a FP, kCocoIgnored for an excused detection (num_dets values each; -1 and kCocoIgnored
+  // beyond num_present).
   void Associate(const CocoImageCell& cell, double tau, int num_present,
-                 std::vector<int32_t>* det_gt);
+                 std::vector<int32_t>* det_gt, std::vector<uint8_t>* flags);
 
  private:
   // The edges (valid ground truths with IoU >= tau) and which detections could be excused.

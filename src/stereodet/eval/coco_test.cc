@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <random>
@@ -380,6 +381,7 @@ TEST(CocoTest, OptimalMatcherAgainstBruteForceOnEveryPrefix) {
   CocoOptimalMatcher matcher;
   std::vector<uint8_t> flags;
   std::vector<int32_t> det_gt;
+  std::vector<uint8_t> assoc_flags;
   int cells_with_conflict = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const int D = 1 + static_cast<int>(rng() % 6), G = static_cast<int>(rng() % 5);
@@ -407,15 +409,17 @@ TEST(CocoTest, OptimalMatcherAgainstBruteForceOnEveryPrefix) {
       ASSERT_EQ(tp, best.tp) << "trial " << trial << " prefix " << p;
       ASSERT_EQ(fp, best.fp) << "trial " << trial << " prefix " << p;
       // The association of the prefix: the same counts, and the largest IoU sum among them.
-      matcher.Associate(cell, tau, p, &det_gt);
+      matcher.Associate(cell, tau, p, &det_gt, &assoc_flags);
       int a_tp = 0, a_fp = 0;
       double a_iou = 0;
       std::vector<char> gt_used(G, 0);
       for (int d = 0; d < D; ++d) {
         if (d >= p) {
           ASSERT_EQ(det_gt[d], -1);
+          ASSERT_EQ(assoc_flags[d], kCocoIgnored);
           continue;
         }
+        ASSERT_EQ(assoc_flags[d], det_gt[d] >= 0 ? kCocoMatched : excusable[d] ? kCocoIgnored : 0);
         if (det_gt[d] >= 0) {
           const int g = det_gt[d];
           ASSERT_TRUE(gt_valid[g]);
@@ -495,6 +499,143 @@ TEST(CocoTest, OptimalMatcherNeverFindsLessAndAgreesWithoutConflicts) {
   EXPECT_EQ(gs.stats, os.stats);
 }
 
+// The operating-point cells of TwoBoxesThreeDetectionsByHand: d1 (0.9) TP, d2 (0.8) FP, d3 (0.7) TP
+// at IoU <= 0.8; d3 a FP above.
+TEST(CocoTest, ScoreMetricsByHand) {
+  const CocoGroundTruth gt =
+      OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {
+      Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+  for (const CocoMatcher matcher : {CocoMatcher::kCoco, CocoMatcher::kOptimal}) {
+    SCOPED_TRACE(CocoMatcherName(matcher));
+    CocoEvalOptions options;
+    options.matcher = matcher;
+    options.score_metrics = true;
+    const CocoEvalResult r = EvaluateCoco(gt, dets, options);
+    ASSERT_EQ(r.cells.size(), 10u * 1 * 4);
+    const CocoCell& low = r.cells[r.CellIndex(0, 0, kAll)];
+    EXPECT_EQ(low.num_valid_gt, 2);
+    EXPECT_EQ(low.at_threshold.tp, 2);
+    EXPECT_EQ(low.at_threshold.fp, 1);
+    EXPECT_EQ(low.at_threshold.fn, 0);
+    EXPECT_NEAR(low.brier.over_labels, (0.01 + 0.09) / 2, 1e-15);
+    EXPECT_NEAR(low.brier.over_detections, (0.01 + 0.64 + 0.09) / 3, 1e-15);
+    EXPECT_NEAR(low.brier.over_all, (0.01 + 0.09 + 0.64) / 3, 1e-15);
+    EXPECT_EQ(low.brier.num_label_terms, 2);
+    EXPECT_EQ(low.brier.num_all_terms, 3);
+    // Bins 9 (a TP at 0.9), 8 (a FP at 0.8) and 7 (a TP at 0.7).
+    EXPECT_NEAR(low.calibration.ece, (0.1 + 0.8 + 0.3) / 3, 1e-15);
+    EXPECT_EQ(low.calibration.bins[8].count, 1);
+    EXPECT_EQ(low.calibration.bins[8].tp_fraction, 0.0);
+    const CocoCell& high = r.cells[r.CellIndex(9, 0, kAll)];  // IoU 0.95: d3 a FP
+    EXPECT_EQ(high.at_threshold.tp, 1);
+    EXPECT_EQ(high.at_threshold.fp, 2);
+    EXPECT_EQ(high.at_threshold.fn, 1);
+    EXPECT_NEAR(high.brier.over_labels, (0.01 + 1) / 2, 1e-15);
+    EXPECT_NEAR(high.brier.over_all, (0.01 + 1 + 0.64 + 0.49) / 4, 1e-15);
+    // No ground truth in "medium": no label term, and the detections are all outside the range.
+    const CocoCell& medium = r.cells[r.CellIndex(0, 0, kMedium)];
+    EXPECT_EQ(medium.num_valid_gt, 0);
+    EXPECT_TRUE(std::isnan(medium.brier.over_labels));
+    EXPECT_EQ(medium.at_threshold.fp, 0);
+    // The summary: the mean over the thresholds (7 low, 3 high) and the one category.
+    EXPECT_NEAR(r.score_stats[0], (7 * 0.05 + 3 * 0.505) / 10, 1e-15);  // BL
+    EXPECT_NEAR(r.score_stats[1], 0.05, 1e-15);                         // BL50
+    EXPECT_NEAR(r.score_stats[2], 0.05, 1e-15);                         // BL75
+    EXPECT_NEAR(r.score_stats[10], 0.4, 1e-15);                         // ECE50
+    // The AP arrays do not depend on the cells.
+    CocoEvalOptions plain;
+    plain.matcher = matcher;
+    const CocoEvalResult p = EvaluateCoco(gt, dets, plain);
+    EXPECT_EQ(p.precision, r.precision);
+    EXPECT_EQ(p.stats, r.stats);
+    EXPECT_TRUE(p.cells.empty());
+    EXPECT_EQ(p.score_stats[0], -1);
+
+    // At the operating point 0.75 d3 takes no part: gt 2 is a FN.
+    options.score_threshold = 0.75;
+    const CocoEvalResult t = EvaluateCoco(gt, dets, options);
+    const CocoCell& cut = t.cells[t.CellIndex(0, 0, kAll)];
+    EXPECT_EQ(cut.at_threshold.tp, 1);
+    EXPECT_EQ(cut.at_threshold.fp, 1);
+    EXPECT_EQ(cut.at_threshold.fn, 1);
+    EXPECT_NEAR(cut.brier.over_labels, (0.01 + 1) / 2, 1e-15);
+    EXPECT_EQ(t.stats, r.stats);
+  }
+}
+
+// Scores that are not probabilities leave the Brier scores out unless a transform makes them so.
+TEST(CocoTest, ScoreMetricsNeedProbabilities) {
+  const CocoGroundTruth gt = OneCategory({1}, {Box(1, 1, {0, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {Det(1, {0, 0, 10, 10}, 2.0)};
+  CocoEvalOptions options;
+  options.score_metrics = true;
+  const CocoEvalResult raw = EvaluateCoco(gt, dets, options);
+  EXPECT_FALSE(raw.probability_metrics);
+  EXPECT_TRUE(std::isnan(raw.cells[raw.CellIndex(0, 0, kAll)].brier.over_labels));
+  EXPECT_EQ(raw.cells[raw.CellIndex(0, 0, kAll)].at_threshold.tp, 1);  // counts stay
+  EXPECT_EQ(raw.score_stats[0], -1);
+  options.score_transform = ScoreTransform::kSigmoid;
+  const CocoEvalResult logits = EvaluateCoco(gt, dets, options);
+  EXPECT_TRUE(logits.probability_metrics);
+  const double p = 1 / (1 + std::exp(-2.0));
+  EXPECT_NEAR(logits.score_stats[0], (1 - p) * (1 - p), 1e-15);
+}
+
+// On random sets, for both matchers: at the lowest operating point a cell's TPs are the recall
+// array's (with max_dets.back()) times its valid ground truths, TP + FN is that count, and the
+// FPs are the precision's complement at the last detection.
+TEST(CocoTest, ScoreMetricsAgreeWithTheArrays) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> coord(0, 200), size(4, 120), score(0, 1);
+  CocoGroundTruth gt;
+  gt.source = "random";
+  for (int64_t i = 1; i <= 15; ++i) gt.image_ids.push_back(i);
+  for (int64_t k = 1; k <= 3; ++k) gt.categories.push_back({k, ""});
+  std::vector<CocoDetection> dets;
+  for (int i = 0; i < 300; ++i) {
+    CocoAnnotation a =
+        Box(i + 1, 1 + i % 15, {coord(rng), coord(rng), size(rng), size(rng)}, i % 23 == 0);
+    a.category_id = 1 + i % 3;
+    gt.annotations.push_back(a);
+    dets.push_back(Det(a.image_id,
+                       {a.bbox.x + size(rng) / 10, a.bbox.y, a.bbox.width, a.bbox.height},
+                       score(rng), a.category_id));
+    dets.push_back(
+        Det(a.image_id, {coord(rng), coord(rng), size(rng), size(rng)}, score(rng), a.category_id));
+  }
+  for (const CocoMatcher matcher : {CocoMatcher::kCoco, CocoMatcher::kOptimal}) {
+    SCOPED_TRACE(CocoMatcherName(matcher));
+    CocoEvalOptions options;
+    options.matcher = matcher;
+    options.score_metrics = true;
+    const CocoEvalResult r = EvaluateCoco(gt, dets, options);
+    int checked = 0;
+    for (int t = 0; t < 10; ++t) {
+      for (int k = 0; k < 3; ++k) {
+        for (int a = 0; a < 4; ++a) {
+          const CocoCell& cell = r.cells[r.CellIndex(t, k, a)];
+          if (cell.num_valid_gt == 0) continue;
+          const double recall = r.recall[r.RecallIndex(t, k, a, 2)];
+          EXPECT_EQ(cell.at_threshold.tp,
+                    std::llround(recall * static_cast<double>(cell.num_valid_gt)));
+          EXPECT_EQ(cell.at_threshold.tp + cell.at_threshold.fn, cell.num_valid_gt);
+          EXPECT_EQ(cell.brier.num_label_terms, cell.num_valid_gt);
+          EXPECT_EQ(cell.brier.num_detection_terms, cell.at_threshold.tp + cell.at_threshold.fp);
+          ++checked;
+        }
+      }
+    }
+    EXPECT_GT(checked, 100);
+    EXPECT_GT(r.score_stats[0], 0);
+    EXPECT_LT(r.score_stats[0], 1);
+    // The threads do not change the cells.
+    options.num_threads = 1;
+    const CocoEvalResult one = EvaluateCoco(gt, dets, options);
+    EXPECT_EQ(one.score_stats, r.score_stats);
+  }
+}
+
 TEST(CocoTest, MatcherNames) {
   EXPECT_STREQ(CocoMatcherName(CocoMatcher::kCoco), "coco");
   EXPECT_STREQ(CocoMatcherName(CocoMatcher::kOptimal), "optimal");
@@ -517,6 +658,21 @@ TEST(CocoTest, SummaryInPycocotoolsLayout) {
                          " = -1.000\n"),
             std::string::npos);
   EXPECT_EQ(std::count(summary.begin(), summary.end(), '\n'), kNumCocoStats);
+
+  // With the operating-point metrics, 12 more lines in the same columns: a detection of score 0.9
+  // on its box gives Brier over labels 0.01.
+  CocoEvalOptions options;
+  options.score_metrics = true;
+  const std::string more =
+      FormatCocoSummary(EvaluateCoco(gt, {Det(1, {0, 0, 10, 10}, 0.9)}, options));
+  EXPECT_EQ(std::count(more.begin(), more.end(), '\n'), kNumCocoStats + kNumCocoScoreStats);
+  EXPECT_EQ(more.substr(0, summary.size()), summary);
+  EXPECT_NE(more.find(" Brier over labels  (BL) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ]"
+                      " = 0.010\n"),
+            std::string::npos);
+  EXPECT_NE(more.find(" Calibration error (ECE) @[ IoU=0.75      | area=   all | maxDets=100 ]"
+                      " = 0.100\n"),
+            std::string::npos);
 }
 
 TEST(CocoTest, ParsesGroundTruthAndResults) {

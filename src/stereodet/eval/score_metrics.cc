@@ -53,14 +53,10 @@ ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double di
 void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
                                   const FrameAssociation& a, Difficulty difficulty,
                                   const StableSelection* selection) {
-  const int num_bins = static_cast<int>(bin_count_.size());
   ForEachBrierTerm(
       frame, cf, a, difficulty, transform_, selection,
       [&](double term, int i, int j) {
-        brier_sums_.over_labels += term;
-        brier_sums_.over_all += term;
-        ++brier_sums_.num_label_terms;
-        ++brier_sums_.num_all_terms;
+        AddLabelTerm(term);
         if (j < 0) return;  // a label alone: no localization error
         const Object& label = frame.labels[cf.label_object[i]];
         const Object& det = frame.detections[cf.det_object[j]];
@@ -72,21 +68,31 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
           depth_errors_[bin].push_back(det.box3d.location.z() - z);
         }
       },
-      [&](double s, Outcome o, int) {
-        const double y = o == Outcome::kTp ? 1.0 : 0.0;
-        brier_sums_.over_detections += (s - y) * (s - y);
-        ++brier_sums_.num_detection_terms;
-        if (o == Outcome::kFp) {
-          brier_sums_.over_all += s * s;
-          ++brier_sums_.num_all_terms;
-        }
-        if (s < 0 || s > 1) ++out_of_range_;
-        const double clamped = std::clamp(s, 0.0, 1.0);
-        const int bin = std::min(static_cast<int>(clamped * num_bins), num_bins - 1);
-        ++bin_count_[bin];
-        bin_tp_[bin] += o == Outcome::kTp ? 1 : 0;
-        bin_score_sum_[bin] += s;
-      });
+      [&](double s, Outcome o, int) { AddDetectionTerm(s, o == Outcome::kTp); });
+}
+
+void ScoreMetricsAccumulator::AddLabelTerm(double term) {
+  brier_sums_.over_labels += term;
+  brier_sums_.over_all += term;
+  ++brier_sums_.num_label_terms;
+  ++brier_sums_.num_all_terms;
+}
+
+void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp) {
+  const int num_bins = static_cast<int>(bin_count_.size());
+  const double y = tp ? 1.0 : 0.0;
+  brier_sums_.over_detections += (s - y) * (s - y);
+  ++brier_sums_.num_detection_terms;
+  if (!tp) {
+    brier_sums_.over_all += s * s;
+    ++brier_sums_.num_all_terms;
+  }
+  if (s < 0 || s > 1) ++out_of_range_;
+  const double clamped = std::clamp(s, 0.0, 1.0);
+  const int bin = std::min(static_cast<int>(clamped * num_bins), num_bins - 1);
+  ++bin_count_[bin];
+  bin_tp_[bin] += tp ? 1 : 0;
+  bin_score_sum_[bin] += s;
 }
 
 BrierScores ScoreMetricsAccumulator::Brier() const {

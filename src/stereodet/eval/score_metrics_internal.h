@@ -74,6 +74,12 @@ class ScoreMetricsAccumulator {
            const FrameAssociation& association, Difficulty difficulty,
            const StableSelection* selection = nullptr);
 
+  // One term of each kind, for callers with their own association (COCO mode): a valid label's
+  // (1 - s)^2 for its TP detection's transformed score s, or 1 without one; a counted detection
+  // (TP or FP) with its transformed score. Add() is made of these.
+  void AddLabelTerm(double term);
+  void AddDetectionTerm(double s, bool tp);
+
   BrierScores Brier() const;  // means
   CalibrationResult Calibration() const;
   std::vector<DistanceBin> Localization() const;  // bins [0, w), [w, 2w), ... up to max_distance_m
