@@ -8,7 +8,9 @@
 //                  [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
 //                  [--disparity-error-px 1] [--bootstrap N ...] [--out DIR]
-//   stereodet eval --coco-gt FILE --coco-det FILE [--coco-honor-ignore] [--out DIR] [--threads N]
+//   stereodet eval --coco-gt FILE --coco-det FILE [--coco-honor-ignore] [--matcher coco|optimal]
+//                  [--coco-brier [--score-threshold S] [--score-transform T]
+//                  [--calibration-bins N]] [--out DIR] [--threads N]
 //                  (COCO mode: pycocotools' COCOeval for bbox, docs/metrics.md)
 //   stereodet eval --shard K/N --gt DIR --det DIR --out SHARD_DIR ...   (docs/scale.md)
 //   stereodet eval merge SHARD_DIR... --out DIR ...  (the shards' evaluation flags)
@@ -146,7 +148,8 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--classes", a->classes, "classes, comma separated")->capture_default_str();
   cmd->add_option("--metrics", a->metrics, "overlap kinds: 2d,bev,3d")->capture_default_str();
   cmd->add_option("--difficulties", a->difficulties, "easy,moderate,hard")->capture_default_str();
-  cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc")->capture_default_str();
+  cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc (COCO mode: coco | optimal)")
+      ->capture_default_str();
   cmd->add_option(
          "--compat", a->compat,
          "devkit | openpcdet (kitti matcher: OpenPCDet's kitti_object_eval_python numbers, "
@@ -345,7 +348,14 @@ void RunEval(const EvalArgs& a) {
 // The flags of `eval` that COCO mode takes; the others are for KITTI-layout data.
 bool IsCocoModeFlag(const std::string& name) {
   return name == "--coco-gt" || name == "--coco-det" || name == "--coco-honor-ignore" ||
-         name == "--out" || name == "--threads" || name == "--help" || name == "--debug";
+         name == "--coco-brier" || name == "--matcher" || name == "--score-threshold" ||
+         name == "--score-transform" || name == "--calibration-bins" || name == "--out" ||
+         name == "--threads" || name == "--help" || name == "--debug";
+}
+
+// The flags that set the operating-point metrics' options: each turns them on.
+bool IsCocoOperatingPointFlag(const std::string& name) {
+  return name == "--score-threshold" || name == "--score-transform" || name == "--calibration-bins";
 }
 
 // `eval --coco-gt FILE --coco-det FILE`: pycocotools' COCOeval for bbox, its summary printed in
@@ -355,11 +365,33 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
     STEREODET_CHECK(option->count() == 0 || IsCocoModeFlag(option->get_name()))
         << option->get_name()
         << " is a flag of KITTI-layout evaluation; COCO mode (--coco-gt, --coco-det) takes "
-           "--out, --threads and --coco-honor-ignore";
+           "--out, --threads, --coco-honor-ignore, --matcher coco|optimal, --coco-brier, "
+           "--score-threshold, --score-transform and --calibration-bins";
   }
   STEREODET_CHECK(!a.coco.gt.empty() && !a.coco.det.empty())
       << "COCO mode needs both --coco-gt FILE and --coco-det FILE";
   CocoEvaluationOptions options = a.coco;
+  if (eval->count("--matcher") > 0) {
+    const auto matcher = ParseCocoMatcher(a.matcher);
+    STEREODET_CHECK(matcher.has_value())
+        << "--matcher: COCO mode has the matchers coco (pycocotools' greedy one, the default) "
+           "and optimal; got '"
+        << a.matcher << "'";
+    options.eval.matcher = *matcher;
+  }
+  for (const CLI::Option* option : eval->get_options()) {
+    if (option->count() > 0 && IsCocoOperatingPointFlag(option->get_name())) {
+      options.eval.score_metrics = true;
+    }
+  }
+  if (options.eval.score_metrics) {
+    const auto transform = ParseScoreTransform(a.score_transform);
+    STEREODET_CHECK(transform.has_value())
+        << "--score-transform: unknown '" << a.score_transform << "' (none, sigmoid)";
+    options.eval.score_transform = *transform;
+    options.eval.score_threshold = a.eval.score_threshold;
+    options.eval.calibration_bins = a.eval.calibration_bins;
+  }
   options.eval.num_threads = a.eval.num_threads;
   options.out = a.out;
   options.tool_version = StereodetVersion();
@@ -374,6 +406,11 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
   if (r.num_detections_skipped > 0) {
     fmt::print("detections of a category the ground truth does not list, left out: {}\n",
                r.num_detections_skipped);
+  }
+  if (r.options.score_metrics && !r.probability_metrics) {
+    fmt::print(
+        "note: scores outside [0, 1] are not probabilities: the Brier scores and calibration are "
+        "left out (-1); --score-transform sigmoid reads them as logits\n");
   }
   fmt::print("{}", FormatCocoSummary(r));
   fmt::print(
@@ -525,6 +562,11 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--coco-honor-ignore", args->coco.eval.honor_ignore_flag,
                  "COCO mode: also ignore ground truths whose \"ignore\" is set (pycocotools "
                  "overwrites it with \"iscrowd\")");
+  eval->add_flag("--coco-brier", args->coco.eval.score_metrics,
+                 "COCO mode: also the operating point's TP/FP/FN, Brier scores (over labels, "
+                 "detections, all) and calibration per IoU threshold, category and area range: 12 "
+                 "more summary lines, OUT/cells.csv and OUT/reliability.csv (--score-threshold, "
+                 "--score-transform and --calibration-bins imply it)");
   eval->require_subcommand(0, 1);
   // Options of eval itself must come before a sub-subcommand; the sub-subcommands have their own.
   eval->fallthrough(false);

@@ -70,7 +70,15 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
                   {"recall_thresholds", o.recall_thresholds},
                   {"max_dets", o.max_dets},
                   {"area_ranges", areas},
-                  {"honor_ignore_flag", o.honor_ignore_flag}};
+                  {"honor_ignore_flag", o.honor_ignore_flag},
+                  {"matcher", CocoMatcherName(o.matcher)},
+                  {"score_metrics", o.score_metrics}};
+  if (o.score_metrics) {
+    // -inf (every detection) is written as null, as JSON has no infinity.
+    j["options"]["score_threshold"] = o.score_threshold;
+    j["options"]["score_transform"] = ScoreTransformName(o.score_transform);
+    j["options"]["calibration_bins"] = o.calibration_bins;
+  }
   j["seconds"] = r.seconds;
   j["read_seconds"] = run.read_seconds;
   ordered_json stats = ordered_json::object();
@@ -85,7 +93,59 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
   j["arrays"] = {{"precision", {{"file", "precision.npy"}, {"shape", {T, R, K, A, M}}}},
                  {"recall", {{"file", "recall.npy"}, {"shape", {T, K, A, M}}}},
                  {"scores", {{"file", "scores.npy"}, {"shape", {T, R, K, A, M}}}}};
+  if (o.score_metrics) {
+    j["probability_metrics"] = r.probability_metrics;
+    ordered_json score_stats = ordered_json::object();
+    for (int s = 0; s < kNumCocoScoreStats; ++s) {
+      score_stats[CocoScoreStatNames()[s]] = r.score_stats[s];
+    }
+    j["score_stats"] = score_stats;
+    j["cells"] = {{"file", "cells.csv"}, {"reliability", "reliability.csv"}};
+  }
   return j;
+}
+
+// One row per IoU threshold x category x area range, in CellIndex order. NaN is written "nan".
+std::string CellsCsv(const CocoEvalResult& r) {
+  const CocoEvalOptions& o = r.options;
+  std::string csv =
+      "iou,category_id,area,num_valid_gt,tp,fp,fn,precision,recall,f1,brier_labels,"
+      "brier_detections,brier_all,ece,num_detections\n";
+  for (size_t t = 0; t < o.iou_thresholds.size(); ++t) {
+    for (size_t k = 0; k < r.category_ids.size(); ++k) {
+      for (size_t a = 0; a < o.area_ranges.size(); ++a) {
+        const CocoCell& c =
+            r.cells[r.CellIndex(static_cast<int>(t), static_cast<int>(k), static_cast<int>(a))];
+        const OperatingPoint& p = c.at_threshold;
+        csv +=
+            fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", o.iou_thresholds[t],
+                        r.category_ids[k], o.area_ranges[a].label, c.num_valid_gt, p.tp, p.fp, p.fn,
+                        p.precision, p.recall, p.f1, c.brier.over_labels, c.brier.over_detections,
+                        c.brier.over_all, c.calibration.ece, c.calibration.num_detections);
+      }
+    }
+  }
+  return csv;
+}
+
+// The reliability bins of every cell, cells in CellIndex order, bins ascending.
+std::string ReliabilityCsv(const CocoEvalResult& r) {
+  const CocoEvalOptions& o = r.options;
+  std::string csv = "iou,category_id,area,lower,upper,count,mean_score,tp_fraction\n";
+  for (size_t t = 0; t < o.iou_thresholds.size(); ++t) {
+    for (size_t k = 0; k < r.category_ids.size(); ++k) {
+      for (size_t a = 0; a < o.area_ranges.size(); ++a) {
+        const CocoCell& c =
+            r.cells[r.CellIndex(static_cast<int>(t), static_cast<int>(k), static_cast<int>(a))];
+        for (const ReliabilityBin& b : c.calibration.bins) {
+          csv += fmt::format("{},{},{},{},{},{},{},{}\n", o.iou_thresholds[t], r.category_ids[k],
+                             o.area_ranges[a].label, b.lower, b.upper, b.count, b.mean_score,
+                             b.tp_fraction);
+        }
+      }
+    }
+  }
+  return csv;
 }
 
 }  // namespace
@@ -129,11 +189,16 @@ CocoEvaluationResult RunCocoEvaluation(const CocoEvaluationOptions& options) {
   WriteFileAtomically(staging / "precision.npy", NpyFloat64({T, R, K, A, M}, r.precision));
   WriteFileAtomically(staging / "recall.npy", NpyFloat64({T, K, A, M}, r.recall));
   WriteFileAtomically(staging / "scores.npy", NpyFloat64({T, R, K, A, M}, r.scores));
+  std::vector<std::string> names = {"precision.npy", "recall.npy", "scores.npy"};
+  if (o.score_metrics) {
+    WriteFileAtomically(staging / "cells.csv", CellsCsv(r));
+    WriteFileAtomically(staging / "reliability.csv", ReliabilityCsv(r));
+    names.insert(names.end(), {"cells.csv", "reliability.csv"});
+  }
   // results.json last: the folder's marker.
   WriteFileAtomically(staging / "results.json", ResultsJson(options, run).dump(2) + "\n");
-  for (const char* name : {"precision.npy", "recall.npy", "scores.npy", "results.json"}) {
-    run.files.push_back(options.out / name);
-  }
+  names.push_back("results.json");
+  for (const std::string& name : names) run.files.push_back(options.out / name);
   out->Commit();
   return run;
 }

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -106,6 +107,38 @@ TEST(CocoEvaluationTest, WritesResultsJsonAndNumpyArrays) {
   } catch (const std::invalid_argument& e) {
     EXPECT_THAT(e.what(), HasSubstr("holds the input --coco-gt"));
   }
+}
+
+// With the operating-point metrics: the 12 numbers by name, cells.csv (one row per IoU threshold,
+// category and area range) and reliability.csv (calibration_bins rows per cell).
+TEST(CocoEvaluationTest, ScoreMetricsWriteCellsAndReliability) {
+  Inputs in;
+  CocoEvaluationOptions options;
+  options.gt = in.gt;
+  options.det = in.det;
+  options.out = in.dir.path() / "eval";
+  options.eval.matcher = CocoMatcher::kOptimal;
+  options.eval.score_metrics = true;
+  options.eval.calibration_bins = 5;
+  const CocoEvaluationResult run = RunCocoEvaluation(options);
+  EXPECT_EQ(run.files.size(), 6u);
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  EXPECT_EQ(j["options"]["matcher"], "optimal");
+  EXPECT_TRUE(j["options"]["score_threshold"].is_null());  // -inf: every detection
+  EXPECT_EQ(j["options"]["calibration_bins"], 5);
+  EXPECT_TRUE(j["probability_metrics"].get<bool>());
+  // Category 1: scores 0.9 and 0.8 on their boxes at every threshold; category 2 has no ground
+  // truth (no label term) and one FP at 0.3, which only the detection terms see.
+  EXPECT_NEAR(j["score_stats"]["BL"].get<double>(), (0.01 + 0.04) / 2, 1e-15);
+  EXPECT_EQ(j["score_stats"]["BL"].get<double>(), run.result.score_stats[0]);
+  EXPECT_NEAR(j["score_stats"]["BD"].get<double>(), ((0.01 + 0.04) / 2 + 0.09) / 2, 1e-15);
+  const std::string cells = ReadFile(options.out / "cells.csv");
+  EXPECT_EQ(std::count(cells.begin(), cells.end(), '\n'), 1 + 10 * 2 * 4);
+  EXPECT_THAT(cells, HasSubstr("0.5,1,all,2,2,0,0,1,1,1,0.0249999"));  // (0.01 + 0.04) / 2
+  EXPECT_THAT(cells, HasSubstr("0.5,2,all,0,0,1,0,0,0,0,nan,0.09,0.09,"));
+  const std::string reliability = ReadFile(options.out / "reliability.csv");
+  EXPECT_EQ(std::count(reliability.begin(), reliability.end(), '\n'), 1 + 10 * 2 * 4 * 5);
+  EXPECT_THAT(reliability, HasSubstr("0.5,2,all,0.2,0.4,1,0.3,0\n"));
 }
 
 TEST(CocoEvaluationTest, WithoutOutWritesNothingAndReportsBadFiles) {
