@@ -4,11 +4,13 @@
 #include <pybind11/stl.h>
 
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "common.h"
 #include "stereodet/eval/coco.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet::python {
 namespace {
@@ -22,7 +24,9 @@ py::array_t<double> Shaped(const std::vector<double>& values, std::vector<py::ss
 
 py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
                       const std::string& dt_text, const std::string& dt_source,
-                      bool honor_ignore_flag, std::vector<int> max_dets, int num_threads) {
+                      bool honor_ignore_flag, std::vector<int> max_dets, int num_threads,
+                      const std::string& matcher, bool score_metrics, double score_threshold,
+                      const std::string& score_transform, int calibration_bins) {
   CocoEvalResult result;
   std::string summary;
   {
@@ -33,6 +37,18 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
     options.honor_ignore_flag = honor_ignore_flag;
     options.max_dets = std::move(max_dets);
     options.num_threads = num_threads;
+    const auto parsed_matcher = ParseCocoMatcher(matcher);
+    STEREODET_CHECK(parsed_matcher.has_value())
+        << "matcher: COCO mode has 'coco' (pycocotools' greedy one) and 'optimal', got '" << matcher
+        << "'";
+    options.matcher = *parsed_matcher;
+    const auto transform = ParseScoreTransform(score_transform);
+    STEREODET_CHECK(transform.has_value())
+        << "score_transform: 'none' or 'sigmoid', got '" << score_transform << "'";
+    options.score_metrics = score_metrics;
+    options.score_threshold = score_threshold;
+    options.score_transform = *transform;
+    options.calibration_bins = calibration_bins;
     options.Check();
     result = EvaluateCoco(gt, dets, options);
     summary = FormatCocoSummary(result);
@@ -63,6 +79,40 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
   out["num_detections"] = result.num_detections;
   out["num_detections_skipped"] = result.num_detections_skipped;
   out["seconds"] = result.seconds;
+  out["matcher"] = CocoMatcherName(result.options.matcher);
+  if (result.options.score_metrics) {
+    out["score_stats"] =
+        Shaped(std::vector<double>(result.score_stats.begin(), result.score_stats.end()),
+               {kNumCocoScoreStats});
+    out["score_stat_names"] =
+        std::vector<std::string>(CocoScoreStatNames().begin(), CocoScoreStatNames().end());
+    out["probability_metrics"] = result.probability_metrics;
+    // The cells as (T, K, A) arrays, one per figure.
+    const size_t n = result.cells.size();
+    std::vector<double> num_valid_gt(n), tp(n), fp(n), fn(n), brier_labels(n), brier_detections(n),
+        brier_all(n), ece(n);
+    for (size_t i = 0; i < n; ++i) {
+      const CocoCell& c = result.cells[i];
+      num_valid_gt[i] = static_cast<double>(c.num_valid_gt);
+      tp[i] = static_cast<double>(c.at_threshold.tp);
+      fp[i] = static_cast<double>(c.at_threshold.fp);
+      fn[i] = static_cast<double>(c.at_threshold.fn);
+      brier_labels[i] = c.brier.over_labels;
+      brier_detections[i] = c.brier.over_detections;
+      brier_all[i] = c.brier.over_all;
+      ece[i] = c.calibration.ece;
+    }
+    py::dict cells;
+    cells["num_valid_gt"] = Shaped(num_valid_gt, {t, k, a});
+    cells["tp"] = Shaped(tp, {t, k, a});
+    cells["fp"] = Shaped(fp, {t, k, a});
+    cells["fn"] = Shaped(fn, {t, k, a});
+    cells["brier_labels"] = Shaped(brier_labels, {t, k, a});
+    cells["brier_detections"] = Shaped(brier_detections, {t, k, a});
+    cells["brier_all"] = Shaped(brier_all, {t, k, a});
+    cells["ece"] = Shaped(ece, {t, k, a});
+    out["cells"] = cells;
+  }
   return out;
 }
 
@@ -72,9 +122,12 @@ void BindCoco(py::module_& m) {
   m.def("_coco_evaluate", &CocoEvaluate, py::arg("gt_text"), py::arg("gt_source"),
         py::arg("dt_text"), py::arg("dt_source"), py::arg("honor_ignore_flag") = false,
         py::arg("max_dets") = std::vector<int>{1, 10, 100}, py::arg("num_threads") = 0,
+        py::arg("matcher") = "coco", py::arg("score_metrics") = false,
+        py::arg("score_threshold") = -std::numeric_limits<double>::infinity(),
+        py::arg("score_transform") = "none", py::arg("calibration_bins") = 10,
         "COCOeval(gt, loadRes(dt), 'bbox') on the JSON texts, the GIL released: a dict of stats "
         "(12), precision (T, R, K, A, M), recall (T, K, A, M), scores, the ids and the summary "
-        "text.");
+        "text; with score_metrics, score_stats (12) and the cells' (T, K, A) arrays.");
 }
 
 }  // namespace stereodet::python

@@ -17,8 +17,9 @@ quirks are kept, and --coco-honor-ignore's fix of the iscrowd one); segm and key
 evaluated.
 """
 import json
+import math
 import os
-from typing import Any, Iterable, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Union
 
 import numpy as np
 
@@ -75,6 +76,15 @@ class CocoResult:
         self.num_gt = d["num_gt"]
         self.num_detections = d["num_detections"]
         self.seconds = d["seconds"]
+        self.matcher: str = d["matcher"]
+        # With brier=True: the 12 operating-point numbers (score_stat_names: BL, BL50, BL75, BD,
+        # ..., ECE75; -1 where undefined), whether the scores were probabilities, and the cells:
+        # a dict of (T, K, A) arrays num_valid_gt, tp, fp, fn, brier_labels, brier_detections,
+        # brier_all, ece (NaN where undefined).
+        self.score_stats: Optional[np.ndarray] = d.get("score_stats")
+        self.score_stat_names: List[str] = list(d.get("score_stat_names", []))
+        self.probability_metrics: Optional[bool] = d.get("probability_metrics")
+        self.cells: Dict[str, np.ndarray] = dict(d.get("cells", {}))
 
     def __str__(self) -> str:
         return self.summary
@@ -85,7 +95,10 @@ class CocoResult:
 
 
 def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
-             max_dets: Sequence[int] = (1, 10, 100), num_threads: int = 0) -> CocoResult:
+             max_dets: Sequence[int] = (1, 10, 100), num_threads: int = 0,
+             matcher: str = "coco", brier: bool = False,
+             score_threshold: Optional[float] = None, score_transform: str = "none",
+             calibration_bins: int = 10) -> CocoResult:
     """COCOeval(gt, gt.loadRes(dt), "bbox").evaluate(); .accumulate(); .summarize().
 
     gt: a COCO ground-truth file's path, its loaded dict, or a pycocotools COCO object.
@@ -94,14 +107,23 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
     honor_ignore_flag: also ignore ground truths whose "ignore" is set (pycocotools overwrites it
       with "iscrowd": the CLI's --coco-honor-ignore).
     max_dets: Params.maxDets, three increasing numbers.
+    matcher: "coco" (pycocotools' greedy matching, the default) or "optimal" (the most true
+      positives at every score threshold; docs/metrics.md, the CLI's --matcher optimal).
+    brier: also the operating point's counts, Brier scores and calibration per IoU threshold,
+      category and area range (result.cells, result.score_stats; the CLI's --coco-brier), at
+      score_threshold (None: every detection), with score_transform ("none" or "sigmoid", for
+      logits) and calibration_bins reliability bins.
 
     Raises stereodet.ParseError for a malformed file (naming the element and field), ValueError
     for a bad option, OSError for a file that cannot be read.
     """
     gt_text, gt_source = _text(gt, "ground truth")
     dt_text, dt_source = _text(dt, "results")
+    threshold = -math.inf if score_threshold is None else float(score_threshold)
     return CocoResult(_core._coco_evaluate(gt_text, gt_source, dt_text, dt_source,
-                                           honor_ignore_flag, list(max_dets), num_threads))
+                                           honor_ignore_flag, list(max_dets), num_threads,
+                                           matcher, brier, threshold, score_transform,
+                                           calibration_bins))
 
 
 class COCOeval:
@@ -109,10 +131,14 @@ class COCOeval:
     accumulate(), summarize(), then .stats and .eval["precision" | "recall" | "scores"]. The work
     is done once, in evaluate(); accumulate() only checks the order of the calls."""
 
-    def __init__(self, cocoGt: Any = None, cocoDt: Any = None, iouType: str = "bbox"):
+    def __init__(self, cocoGt: Any = None, cocoDt: Any = None, iouType: str = "bbox", *,
+                 matcher: str = "coco"):
+        """matcher: "coco" (pycocotools' numbers) or "optimal" (the paper's matcher: the same
+        arrays and stats read from the association of the most true positives)."""
         if iouType != "bbox":
             raise NotImplementedError(f"stereodet.coco.COCOeval evaluates bbox only, not {iouType}")
         self.cocoGt, self.cocoDt = cocoGt, cocoDt
+        self.matcher = matcher
         self.params = _Params()
         self.stats = np.zeros(12)
         self.eval: dict = {}
@@ -121,7 +147,8 @@ class COCOeval:
     def evaluate(self) -> None:
         if self.cocoGt is None or self.cocoDt is None:
             raise ValueError("COCOeval needs the ground truth and the detections")
-        self.result = evaluate(self.cocoGt, self.cocoDt, max_dets=self.params.maxDets)
+        self.result = evaluate(self.cocoGt, self.cocoDt, max_dets=self.params.maxDets,
+                               matcher=self.matcher)
 
     def accumulate(self) -> None:
         if self.result is None:

@@ -64,3 +64,31 @@ def test_bad_input_names_the_element(data):
                             "score": 1.0}])
     with pytest.raises(TypeError, match="expected a path"):
         coco.evaluate(42, [])
+
+
+def test_optimal_matcher_and_brier_equal_the_cli(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    greedy = coco.evaluate(gt_path, dt_path)
+    assert greedy.matcher == "coco" and greedy.score_stats is None and greedy.cells == {}
+    optimal = coco.evaluate(gt_path, dt_path, matcher="optimal", brier=True, score_threshold=0.1)
+    assert optimal.matcher == "optimal"
+    # Never fewer true positives than the greedy matching, at any threshold, range or max_dets.
+    assert np.all(optimal.recall >= greedy.recall)
+    cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--matcher", "optimal",
+        "--score-threshold", "0.1", "--out", tmp_path / "cli")
+    assert np.array_equal(np.load(tmp_path / "cli" / "precision.npy"), optimal.precision)
+    results = json.loads((tmp_path / "cli" / "results.json").read_text())
+    assert optimal.score_stat_names[0] == "BL" and len(optimal.score_stats) == 12
+    for name, value in zip(optimal.score_stat_names, optimal.score_stats):
+        assert results["score_stats"][name] == value
+    assert optimal.probability_metrics is True
+    cells = optimal.cells
+    assert cells["tp"].shape == (10, 5, 4)
+    assert np.array_equal(cells["tp"] + cells["fn"], cells["num_valid_gt"])
+    # The drop-in takes the matcher too.
+    E = coco.COCOeval(json.loads(gt_path.read_text()), json.loads(dt_path.read_text()),
+                      matcher="optimal")
+    E.evaluate()
+    assert np.array_equal(E.result.precision, optimal.precision)
+    with pytest.raises(ValueError, match="matcher"):
+        coco.evaluate(gt_path, dt_path, matcher="kitti")
