@@ -8,7 +8,9 @@ detections that are jittered copies of the boxes, duplicates and false positives
 higher for the better ones. Both programs run in their own process, one after the other, on the
 same files; the script reports each one's CPU time (user + system) and peak resident memory from
 wait4(), the time each spends reading and evaluating, and checks that the 12 printed numbers are
-identical. Writes the markdown rows for docs/BENCHMARKS.md.
+identical. Also times the optimal matcher (`--matcher optimal`) and the operating-point metrics
+(`--coco-brier`) against the greedy evaluation, one thread each. Writes the markdown rows for
+docs/BENCHMARKS.md.
 
     STEREODET_PYCOCOTOOLS=/tmp/coco-ref/PythonAPI /usr/bin/python3 benchmarks/coco_speed.py \
         --stereodet build/bin/stereodet --work /tmp/coco-speed
@@ -142,6 +144,24 @@ def main():
         ours[threads] = (out, wall, cpu, rss, tail)
         label = "stereodet, 1 thread" if threads == 1 else "stereodet, all threads"
         rows.append((label, wall, cpu, rss, tail.split("; ")[1]))
+    # The optimal matcher against the greedy one (target: within 2x), and what the operating-point
+    # metrics (--coco-brier) add to each; one thread, the evaluation's own wall time compared.
+    evaluated = {}
+    for label, extra in (("greedy", []), ("optimal", ["--matcher", "optimal"]),
+                         ("greedy --coco-brier", ["--coco-brier"]),
+                         ("optimal --coco-brier", ["--matcher", "optimal", "--coco-brier"])):
+        out, wall, cpu, rss = run_with_rusage(
+            [args.stereodet, "eval", "--coco-gt", gt_path, "--coco-det", det_path,
+             "--threads", "1"] + extra)
+        tail = [l for l in out.splitlines() if "evaluated in" in l][0]
+        evaluated[label] = float(tail.split("evaluated in ")[1].split(" s")[0])
+        if extra:
+            rows.append((f"stereodet {' '.join(extra)}, 1 thread", wall, cpu, rss,
+                         tail.split("; ")[1]))
+    print("evaluation alone, 1 thread (s): " +
+          ", ".join(f"{k} {v:.3f}" for k, v in evaluated.items()))
+    print(f"optimal / greedy: {evaluated['optimal'] / evaluated['greedy']:.2f}x; with --coco-brier "
+          f"{evaluated['optimal --coco-brier'] / evaluated['greedy --coco-brier']:.2f}x")
     reference = None
     try:
         out, wall, cpu, rss = run_with_rusage(
