@@ -696,18 +696,7 @@ bool OutsideRange(double area, const CocoAreaRange& range) {
 constexpr uint8_t kMatched = kCocoMatched;
 constexpr uint8_t kIgnored = kCocoIgnored;
 
-// One category's detections over all images, as accumulate() concatenates them.
-struct CategoryDetections {
-  std::vector<double> score;          // in concatenation order: image by image, each by score
-  std::vector<int32_t> rank;          // the detection's position in its image's score order
-  std::vector<uint8_t> flags;         // [detection][area range][threshold]
-  std::vector<int64_t> num_valid_gt;  // per area range: ground truths not ignored (npig)
-  // With CocoEvalOptions::score_metrics, per (threshold, area range), t * A + a: the operating
-  // point's counts and Brier / calibration terms.
-  std::vector<int64_t> cell_tp, cell_fp, cell_fn;
-  std::vector<ScoreMetricsAccumulator> cell_terms;
-  std::vector<int32_t> gt_tp_det;  // AddCellTerms' memory
-};
+using CategoryDetections = CocoCategoryDetections;
 
 // The indices of `items` grouped by (category index, image index), each group in file order:
 // sorted with a stable sort on the pair.
@@ -785,11 +774,111 @@ std::array<SummaryLine, kNumCocoStats> SummaryLines(const std::vector<int>& max_
            {false, std::nullopt, "large", m2}}};
 }
 
+}  // namespace
+
+void CocoAccumulateCurve(const std::vector<uint8_t>& flags, const std::vector<double>& scores,
+                         int64_t npig, const std::vector<double>& recall_thresholds,
+                         CocoCurveScratch* scratch, double* recall, double* precision,
+                         double* score_at, size_t stride) {
+  const size_t nd = flags.size(), R = recall_thresholds.size();
+  std::vector<double>& rc = scratch->rc;
+  std::vector<double>& pr = scratch->pr;
+  rc.resize(nd);
+  pr.resize(nd);
+  double tp = 0, fp = 0;
+  for (size_t j = 0; j < nd; ++j) {
+    if (!(flags[j] & kIgnored)) {
+      if (flags[j] & kMatched) {
+        tp += 1;
+      } else {
+        fp += 1;
+      }
+    }
+    rc[j] = tp / static_cast<double>(npig);
+    pr[j] = tp / (fp + tp + kNumpySpacingOfOne);
+  }
+  *recall = nd > 0 ? rc.back() : 0.0;
+  // The precision envelope: from the right, each precision raised to the best after it.
+  for (size_t j = nd; j-- > 1;) {
+    if (pr[j] > pr[j - 1]) pr[j - 1] = pr[j];
+  }
+  // np.searchsorted(rc, recall_thresholds, side='left'): the first detection whose recall reaches
+  // the threshold; none for the rest once one is out of range.
+  for (size_t r = 0; r < R; ++r) {
+    const size_t at = static_cast<size_t>(
+        std::lower_bound(rc.begin(), rc.end(), recall_thresholds[r]) - rc.begin());
+    if (at >= nd) {
+      for (size_t rest = r; rest < R; ++rest) {
+        precision[rest * stride] = 0.0;
+        score_at[rest * stride] = 0.0;
+      }
+      break;
+    }
+    precision[r * stride] = pr[at];
+    score_at[r * stride] = scores[at];
+  }
+}
+
+std::vector<CocoSummarySlice> CocoSummarySlices(const CocoEvalOptions& options) {
+  std::vector<CocoSummarySlice> slices;
+  for (const SummaryLine& line : SummaryLines(options.max_dets)) {
+    CocoSummarySlice slice;
+    slice.ap = line.ap;
+    for (size_t i = 0; i < options.area_ranges.size(); ++i) {
+      if (options.area_ranges[i].label == line.area) slice.area = static_cast<int>(i);
+    }
+    for (size_t i = 0; i < options.max_dets.size(); ++i) {
+      if (options.max_dets[i] == line.max_dets) slice.max_dets = static_cast<int>(i);
+    }
+    if (slice.area < 0 || slice.max_dets < 0) slice.area = slice.max_dets = -1;
+    slices.push_back(slice);
+  }
+  return slices;
+}
+
+void SummarizeCoco(CocoEvalResult* result) {
+  const CocoEvalOptions& options = result->options;
+  const int T = static_cast<int>(options.iou_thresholds.size()),
+            R = static_cast<int>(options.recall_thresholds.size()),
+            K = static_cast<int>(result->category_ids.size());
+  const std::array<SummaryLine, kNumCocoStats> lines = SummaryLines(options.max_dets);
+  const std::vector<CocoSummarySlice> slices = CocoSummarySlices(options);
+  std::vector<double> values;
+  for (int s = 0; s < kNumCocoStats; ++s) {
+    const SummaryLine& line = lines[s];
+    const int a = slices[s].area, m = slices[s].max_dets;
+    values.clear();
+    if (a >= 0) {
+      for (int t = 0; t < T; ++t) {
+        // np.where(iouThr == p.iouThrs): exact equality.
+        if (line.iou && options.iou_thresholds[t] != *line.iou) continue;
+        if (line.ap) {
+          for (int r = 0; r < R; ++r) {
+            for (int k = 0; k < K; ++k) {
+              const double v = result->precision[result->PrecisionIndex(t, r, k, a, m)];
+              if (v > -1) values.push_back(v);
+            }
+          }
+        } else {
+          for (int k = 0; k < K; ++k) {
+            const double v = result->recall[result->RecallIndex(t, k, a, m)];
+            if (v > -1) values.push_back(v);
+          }
+        }
+      }
+    }
+    result->stats[s] = values.empty() ? -1.0 : NumpyMean(values);
+  }
+}
+
+namespace {
+
 class CocoEvaluator {
  public:
+  // With `keep`, every category's detections are handed over there.
   CocoEvaluator(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
-                CocoEvalResult* result)
-      : gt_(gt), dets_(dets), result_(*result), options_(result->options) {}
+                CocoEvalResult* result, std::vector<CocoCategoryDetections>* keep = nullptr)
+      : gt_(gt), dets_(dets), result_(*result), options_(result->options), keep_(keep) {}
 
   void Run() {
     Index();
@@ -799,6 +888,7 @@ class CocoEvaluator {
     result_.precision.assign(T * R * K * A * M, -1.0);
     result_.scores.assign(T * R * K * A * M, -1.0);
     result_.recall.assign(T * K * A * M, -1.0);
+    if (keep_ != nullptr) keep_->assign(K, CocoCategoryDetections());
     if (options_.score_metrics) {
       result_.cells.assign(T * K * A, CocoCell());
       if (options_.score_transform == ScoreTransform::kNone) {
@@ -810,12 +900,13 @@ class CocoEvaluator {
     ParallelFor(
         K,
         [&](size_t k) {
-          const CategoryDetections category = EvaluateCategory(k);
+          CategoryDetections category = EvaluateCategory(k);
           Accumulate(static_cast<int>(k), category);
           if (options_.score_metrics) FinishCells(static_cast<int>(k), category);
+          if (keep_ != nullptr) (*keep_)[k] = std::move(category);
         },
         options_.num_threads);
-    Summarize();
+    SummarizeCoco(&result_);
     result_.score_stats.fill(-1.0);
     if (options_.score_metrics && result_.probability_metrics) SummarizeCells();
   }
@@ -929,6 +1020,7 @@ class CocoEvaluator {
       const size_t first = out.score.size();
       for (size_t d = 0; d < D; ++d) {
         out.score.push_back(dets_[dts[d]].score);
+        out.image.push_back(image);
         out.rank.push_back(static_cast<int32_t>(d));
       }
       out.flags.resize(out.score.size() * A * T, 0);
@@ -947,7 +1039,16 @@ class CocoEvaluator {
             gt_ignore.push_back(ignored);
           }
         }
-        out.num_valid_gt[a] += std::count(gt_ignore.begin(), gt_ignore.end(), 0);
+        const int32_t valid =
+            static_cast<int32_t>(std::count(gt_ignore.begin(), gt_ignore.end(), 0));
+        out.num_valid_gt[a] += valid;
+        if (G > 0) {
+          if (a == 0) {
+            out.valid_image.push_back(image);
+            out.valid_count.resize(out.valid_count.size() + A, 0);
+          }
+          out.valid_count[out.valid_count.size() - A + a] = valid;
+        }
         det_outside.resize(D);
         for (size_t d = 0; d < D; ++d) {
           const CocoBox& box = dets_[dts[d]].bbox;
@@ -1079,8 +1180,8 @@ class CocoEvaluator {
   // accumulate() for one category: precision, recall and scores at every threshold, area range
   // and max_dets.
   void Accumulate(int k, const CategoryDetections& in) {
-    const size_t T = options_.iou_thresholds.size(), R = options_.recall_thresholds.size(),
-                 A = options_.area_ranges.size(), M = options_.max_dets.size();
+    const size_t T = options_.iou_thresholds.size(), A = options_.area_ranges.size(),
+                 M = options_.max_dets.size();
     // All of the category's detections by score, ties in concatenation order (numpy's stable
     // mergesort). Keeping those of rank < max_dets[m] gives the order of each smaller max_dets.
     std::vector<uint32_t> order(in.score.size());
@@ -1088,7 +1189,9 @@ class CocoEvaluator {
     std::stable_sort(order.begin(), order.end(),
                      [&](uint32_t a, uint32_t b) { return in.score[a] > in.score[b]; });
     std::vector<uint32_t> kept;
-    std::vector<double> rc, pr;
+    std::vector<uint8_t> kept_flags;
+    std::vector<double> kept_scores;
+    CocoCurveScratch scratch;
     for (size_t a = 0; a < A; ++a) {
       const int64_t npig = in.num_valid_gt[a];
       if (npig == 0) continue;  // -1 stays: no ground truth to find
@@ -1098,89 +1201,18 @@ class CocoEvaluator {
           if (in.rank[i] < options_.max_dets[m]) kept.push_back(i);
         }
         const size_t nd = kept.size();
+        kept_scores.resize(nd);
+        for (size_t j = 0; j < nd; ++j) kept_scores[j] = in.score[kept[j]];
         for (size_t t = 0; t < T; ++t) {
-          rc.resize(nd);
-          pr.resize(nd);
-          double tp = 0, fp = 0;
-          for (size_t j = 0; j < nd; ++j) {
-            const uint8_t flags = in.flags[(kept[j] * A + a) * T + t];
-            if (!(flags & kIgnored)) {
-              if (flags & kMatched) {
-                tp += 1;
-              } else {
-                fp += 1;
-              }
-            }
-            rc[j] = tp / static_cast<double>(npig);
-            pr[j] = tp / (fp + tp + kNumpySpacingOfOne);
-          }
-          result_.recall[result_.RecallIndex(t, k, a, m)] = nd > 0 ? rc.back() : 0.0;
-          // The precision envelope: from the right, each precision raised to the best after it.
-          for (size_t j = nd; j-- > 1;) {
-            if (pr[j] > pr[j - 1]) pr[j - 1] = pr[j];
-          }
-          // np.searchsorted(rc, recall_thresholds, side='left'): the first detection whose
-          // recall reaches the threshold; none for the rest once one is out of range.
-          for (size_t r = 0; r < R; ++r) {
-            const size_t at = static_cast<size_t>(
-                std::lower_bound(rc.begin(), rc.end(), options_.recall_thresholds[r]) - rc.begin());
-            const size_t index = result_.PrecisionIndex(t, r, k, a, m);
-            if (at >= nd) {
-              for (size_t rest = r; rest < R; ++rest) {
-                result_.precision[result_.PrecisionIndex(t, rest, k, a, m)] = 0.0;
-                result_.scores[result_.PrecisionIndex(t, rest, k, a, m)] = 0.0;
-              }
-              break;
-            }
-            result_.precision[index] = pr[at];
-            result_.scores[index] = in.score[kept[at]];
-          }
+          kept_flags.resize(nd);
+          for (size_t j = 0; j < nd; ++j) kept_flags[j] = in.flags[(kept[j] * A + a) * T + t];
+          const size_t at = result_.PrecisionIndex(t, 0, k, a, m);
+          CocoAccumulateCurve(kept_flags, kept_scores, npig, options_.recall_thresholds, &scratch,
+                              &result_.recall[result_.RecallIndex(t, k, a, m)],
+                              &result_.precision[at], &result_.scores[at],
+                              result_.PrecisionIndex(t, 1, k, a, m) - at);
         }
       }
-    }
-  }
-
-  // summarize(): each number the mean of its slice's entries other than -1, in numpy's order.
-  void Summarize() {
-    const int T = static_cast<int>(options_.iou_thresholds.size()),
-              R = static_cast<int>(options_.recall_thresholds.size()),
-              K = static_cast<int>(result_.category_ids.size());
-    const std::vector<int>& md = options_.max_dets;
-    const std::array<SummaryLine, kNumCocoStats> lines = SummaryLines(md);
-    std::vector<double> values;
-    for (int s = 0; s < kNumCocoStats; ++s) {
-      const SummaryLine& line = lines[s];
-      std::vector<int> ts;
-      for (int t = 0; t < T; ++t) {
-        // np.where(iouThr == p.iouThrs): exact equality.
-        if (!line.iou || options_.iou_thresholds[t] == *line.iou) ts.push_back(t);
-      }
-      int a = -1, m = -1;
-      for (size_t i = 0; i < options_.area_ranges.size(); ++i) {
-        if (options_.area_ranges[i].label == line.area) a = static_cast<int>(i);
-      }
-      for (size_t i = 0; i < md.size(); ++i) {
-        if (md[i] == line.max_dets) m = static_cast<int>(i);
-      }
-      values.clear();
-      if (a >= 0 && m >= 0) {
-        for (const int t : ts) {
-          if (line.ap) {
-            for (int r = 0; r < R; ++r) {
-              for (int k = 0; k < K; ++k) {
-                const double v = result_.precision[result_.PrecisionIndex(t, r, k, a, m)];
-                if (v > -1) values.push_back(v);
-              }
-            }
-          } else {
-            for (int k = 0; k < K; ++k) {
-              const double v = result_.recall[result_.RecallIndex(t, k, a, m)];
-              if (v > -1) values.push_back(v);
-            }
-          }
-        }
-      }
-      result_.stats[s] = values.empty() ? -1.0 : NumpyMean(values);
     }
   }
 
@@ -1221,6 +1253,7 @@ class CocoEvaluator {
   const std::vector<CocoDetection>& dets_;
   CocoEvalResult& result_;
   const CocoEvalOptions& options_;
+  std::vector<CocoCategoryDetections>* keep_;
   // Ground truths and detections grouped by category then image, file order within; category
   // k's are [start_[k], start_[k + 1]). The image index of every annotation and detection.
   std::vector<uint32_t> gt_order_, det_order_;
@@ -1230,15 +1263,22 @@ class CocoEvaluator {
 
 }  // namespace
 
-CocoEvalResult EvaluateCoco(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
-                            const CocoEvalOptions& options) {
+CocoEvalResult EvaluateCocoKeepingDetections(const CocoGroundTruth& gt,
+                                             const std::vector<CocoDetection>& dets,
+                                             const CocoEvalOptions& options,
+                                             std::vector<CocoCategoryDetections>* categories) {
   options.Check();
   const Timer timer;
   CocoEvalResult result;
   result.options = options;
-  CocoEvaluator(gt, dets, &result).Run();
+  CocoEvaluator(gt, dets, &result, categories).Run();
   result.seconds = timer.ElapsedSeconds();
   return result;
+}
+
+CocoEvalResult EvaluateCoco(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
+                            const CocoEvalOptions& options) {
+  return EvaluateCocoKeepingDetections(gt, dets, options, nullptr);
 }
 
 std::string FormatCocoSummary(const CocoEvalResult& result) {

@@ -1,5 +1,6 @@
-// Internal to the eval module (used by EvaluateCoco and its tests): COCO mode's optimal matcher on
-// one image, category, area range and IoU threshold.
+// Internal to the eval module (used by EvaluateCoco, BootstrapCoco and their tests): the pieces of
+// COCO mode's evaluation the bootstrap reuses, and the optimal matcher on one image, category,
+// area range and IoU threshold.
 //
 // The paper's matcher in COCO terms (docs/metrics.md, "COCO mode: the optimal matcher"):
 //  - a ground truth is valid unless it is a crowd, outside the area range or (with
@@ -22,6 +23,8 @@
 #include <vector>
 
 #include "stereodet/eval/bipartite_internal.h"
+#include "stereodet/eval/coco.h"
+#include "stereodet/eval/score_metrics_internal.h"
 
 namespace stereodet {
 
@@ -37,6 +40,55 @@ struct CocoImageCell {
   const uint8_t* gt_valid = nullptr;     // per ground truth: 1 valid, 0 ignored
   const uint8_t* det_outside = nullptr;  // per detection: 1 if its area is outside the range
 };
+
+// One category's detections over all images, as accumulate() concatenates them (image by image in
+// image order, each image's by score), with what the matcher made of each.
+struct CocoCategoryDetections {
+  std::vector<double> score;
+  std::vector<int32_t> rank;   // the detection's position in its image's score order
+  std::vector<int32_t> image;  // the image's index (CocoEvalResult::image_ids)
+  std::vector<uint8_t> flags;  // [detection][area range][threshold]: kCocoMatched, kCocoIgnored
+  std::vector<int64_t> num_valid_gt;  // per area range: ground truths not ignored (npig)
+  // Per image with a ground truth of the category, in image order: the image, and its valid
+  // ground truths per area range (valid_count[entry * A + a]).
+  std::vector<int32_t> valid_image;
+  std::vector<int32_t> valid_count;
+  // With CocoEvalOptions::score_metrics, per (threshold, area range), t * A + a: the operating
+  // point's counts and Brier / calibration terms.
+  std::vector<int64_t> cell_tp, cell_fp, cell_fn;
+  std::vector<ScoreMetricsAccumulator> cell_terms;
+  std::vector<int32_t> gt_tp_det;  // memory of the evaluator
+};
+
+// EvaluateCoco, also handing over every category's detections (in category order).
+CocoEvalResult EvaluateCocoKeepingDetections(const CocoGroundTruth& gt,
+                                             const std::vector<CocoDetection>& dets,
+                                             const CocoEvalOptions& options,
+                                             std::vector<CocoCategoryDetections>* categories);
+
+// accumulate()'s arithmetic for one category, area range, max_dets and IoU threshold: the kept
+// detections' flags and scores in score order (ignored ones included: they make points of the
+// curve too) and npig > 0 in; the recall, and the R interpolated precisions and their scores,
+// written at precision[r * stride] and score_at[r * stride].
+struct CocoCurveScratch {
+  std::vector<double> rc, pr;
+};
+void CocoAccumulateCurve(const std::vector<uint8_t>& flags, const std::vector<double>& scores,
+                         int64_t npig, const std::vector<double>& recall_thresholds,
+                         CocoCurveScratch* scratch, double* recall, double* precision,
+                         double* score_at, size_t stride);
+
+// summarize(): result->stats from result->precision and result->recall (options and categories
+// set), each number numpy's mean of its slice's entries other than -1.
+void SummarizeCoco(CocoEvalResult* result);
+
+// The (area range, max_dets) indices summarize() reads, AP lines' and AR lines' ((-1, -1) for a
+// line whose area label or max_dets the options do not have).
+struct CocoSummarySlice {
+  bool ap = true;
+  int area = -1, max_dets = -1;
+};
+std::vector<CocoSummarySlice> CocoSummarySlices(const CocoEvalOptions& options);
 
 // Reusable memory for one thread; the results do not depend on what it held.
 class CocoOptimalMatcher {
