@@ -508,21 +508,6 @@ std::vector<Values> CellValues(const Prepared& p, const std::vector<int32_t>& w)
   return out;
 }
 
-// The percentile interval of the numbers among `samples`.
-void FillInterval(const std::vector<double>& samples, double confidence, bool keep,
-                  BootstrapInterval* interval) {
-  std::vector<double> defined;
-  defined.reserve(samples.size());
-  for (const double s : samples) {
-    if (!std::isnan(s)) defined.push_back(s);
-  }
-  interval->num_defined = static_cast<int64_t>(defined.size());
-  std::sort(defined.begin(), defined.end());
-  interval->lower = Quantile(defined, (1 - confidence) / 2);
-  interval->upper = Quantile(defined, (1 + confidence) / 2);
-  if (keep) interval->samples = samples;
-}
-
 // The result of the estimates and the resamples' values (per_resample[r][cell][metric]).
 BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
                            const std::vector<Values>& estimate,
@@ -540,7 +525,7 @@ BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
       BootstrapInterval& interval = (*intervals)[m];
       interval.estimate = estimate[index][m];
       for (size_t r = 0; r < per_resample.size(); ++r) samples[r] = per_resample[r][index][m];
-      FillInterval(samples, options.confidence, options.keep_samples, &interval);
+      FillBootstrapInterval(samples, options.confidence, options.keep_samples, &interval);
     }
   };
   for (size_t c = 0; c < result.cells.size(); ++c) {
@@ -616,6 +601,20 @@ const BootstrapCell* BootstrapResult::Find(const std::string& class_name, Overla
     }
   }
   return nullptr;
+}
+
+void FillBootstrapInterval(const std::vector<double>& samples, double confidence, bool keep,
+                           BootstrapInterval* interval) {
+  std::vector<double> defined;
+  defined.reserve(samples.size());
+  for (const double s : samples) {
+    if (!std::isnan(s)) defined.push_back(s);
+  }
+  interval->num_defined = static_cast<int64_t>(defined.size());
+  std::sort(defined.begin(), defined.end());
+  interval->lower = Quantile(defined, (1 - confidence) / 2);
+  interval->upper = Quantile(defined, (1 + confidence) / 2);
+  if (keep) interval->samples = samples;
 }
 
 std::vector<int32_t> BootstrapFrameCounts(int64_t num_frames, uint64_t seed, int64_t resample) {

@@ -147,6 +147,12 @@ struct BootstrapResult {
 // repeated when it falls in the incomplete last block of 2^64 mod N values). Sums to num_frames.
 std::vector<int32_t> BootstrapFrameCounts(int64_t num_frames, uint64_t seed, int64_t resample);
 
+// interval->lower / upper: the percentile interval (`confidence`, NumPy's linear quantiles) of the
+// numbers among `samples` (NaN are left out; num_defined counts the others); with keep_samples,
+// interval->samples = samples. The estimate is left as it is.
+void FillBootstrapInterval(const std::vector<double>& samples, double confidence, bool keep_samples,
+                           BootstrapInterval* interval);
+
 // Intervals of every cell of Evaluate(frames, eval) (see the file comment). eval.filter is not
 // applied to the resampled metrics (they are the unfiltered ones). Requires: eval.Check() and
 // bootstrap.Check() pass; every detection has a score.

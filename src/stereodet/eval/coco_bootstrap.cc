@@ -1,0 +1,251 @@
+#include "stereodet/eval/coco_bootstrap.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <utility>
+
+#include "stereodet/eval/coco_internal.h"
+#include "stereodet/util/check.h"
+#include "stereodet/util/parallel.h"
+#include "stereodet/util/timer.h"
+
+namespace stereodet {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// One category's detections in accumulate()'s score order, cut into blocks: maximal runs of one
+// image's detections of one score. A resample repeats each block w_image times in place, which is
+// the order a stable sort by score gives the materialised data set (its copies of an image lie
+// next to each other, so their equal scores follow one another).
+struct PreparedCategory {
+  const CocoCategoryDetections* detections = nullptr;
+  std::vector<uint32_t> order;        // by score, ties in concatenation order
+  std::vector<uint32_t> block_begin;  // into order; one past the last block's end appended
+};
+
+// An evaluation made ready for resampling: its categories, and the (area range, max_dets) slices
+// the summary reads.
+struct Prepared {
+  CocoEvalResult result;  // on the images as given
+  std::vector<CocoCategoryDetections> categories;
+  std::vector<PreparedCategory> prepared;
+  std::vector<std::pair<int, int>> slices;  // (area range, max_dets), each once
+};
+
+Prepared Prepare(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
+                 const CocoEvalOptions& options) {
+  Prepared p;
+  CocoEvalOptions evaluated = options;
+  evaluated.score_metrics = false;  // not resampled
+  p.result = EvaluateCocoKeepingDetections(gt, dets, evaluated, &p.categories);
+  p.prepared.resize(p.categories.size());
+  for (size_t k = 0; k < p.categories.size(); ++k) {
+    const CocoCategoryDetections& in = p.categories[k];
+    PreparedCategory& c = p.prepared[k];
+    c.detections = &in;
+    c.order.resize(in.score.size());
+    std::iota(c.order.begin(), c.order.end(), 0u);
+    std::stable_sort(c.order.begin(), c.order.end(),
+                     [&](uint32_t a, uint32_t b) { return in.score[a] > in.score[b]; });
+    for (size_t j = 0; j < c.order.size(); ++j) {
+      if (j == 0 || in.image[c.order[j]] != in.image[c.order[j - 1]] ||
+          in.score[c.order[j]] != in.score[c.order[j - 1]]) {
+        c.block_begin.push_back(static_cast<uint32_t>(j));
+      }
+    }
+    c.block_begin.push_back(static_cast<uint32_t>(c.order.size()));
+  }
+  for (const CocoSummarySlice& slice : CocoSummarySlices(options)) {
+    const std::pair<int, int> key = {slice.area, slice.max_dets};
+    if (slice.area >= 0 && std::find(p.slices.begin(), p.slices.end(), key) == p.slices.end()) {
+      p.slices.push_back(key);
+    }
+  }
+  return p;
+}
+
+// One thread's memory: a CocoEvalResult whose arrays hold the summary's slices of the resample
+// being computed (the other entries are never read).
+struct ResampleScratch {
+  CocoEvalResult replicate;
+  std::vector<uint32_t> sequence;
+  std::vector<uint8_t> flags;
+  std::vector<double> scores;
+  CocoCurveScratch curve;
+};
+
+ResampleScratch MakeScratch(const Prepared& p) {
+  ResampleScratch s;
+  CocoEvalResult& r = s.replicate;
+  r.options = p.result.options;
+  r.image_ids = p.result.image_ids;
+  r.category_ids = p.result.category_ids;
+  const size_t T = r.options.iou_thresholds.size(), R = r.options.recall_thresholds.size(),
+               K = r.category_ids.size(), A = r.options.area_ranges.size(),
+               M = r.options.max_dets.size();
+  r.precision.assign(T * R * K * A * M, -1.0);
+  r.scores.assign(T * R * K * A * M, -1.0);
+  r.recall.assign(T * K * A * M, -1.0);
+  return s;
+}
+
+// The 12 numbers of the resample with image counts `w` (NaN where summarize() gives -1).
+std::array<double, kNumCocoStats> ResampleStats(const Prepared& p, const std::vector<int32_t>& w,
+                                                ResampleScratch* s) {
+  CocoEvalResult& r = s->replicate;
+  const CocoEvalOptions& o = r.options;
+  const int T = static_cast<int>(o.iou_thresholds.size()),
+            R = static_cast<int>(o.recall_thresholds.size()),
+            A = static_cast<int>(o.area_ranges.size());
+  for (size_t k = 0; k < p.prepared.size(); ++k) {
+    const PreparedCategory& c = p.prepared[k];
+    const CocoCategoryDetections& in = *c.detections;
+    const int ki = static_cast<int>(k);
+    for (const auto& [a, m] : p.slices) {
+      int64_t npig = 0;
+      for (size_t e = 0; e < in.valid_image.size(); ++e) {
+        npig += static_cast<int64_t>(w[in.valid_image[e]]) * in.valid_count[e * A + a];
+      }
+      if (npig == 0) {
+        // -1: no ground truth to find (as accumulate() leaves it).
+        for (int t = 0; t < T; ++t) {
+          r.recall[r.RecallIndex(t, ki, a, m)] = -1.0;
+          for (int ri = 0; ri < R; ++ri) r.precision[r.PrecisionIndex(t, ri, ki, a, m)] = -1.0;
+        }
+        continue;
+      }
+      // The resample's kept detections in score order: each block w times.
+      const int max_det = o.max_dets[m];
+      s->sequence.clear();
+      for (size_t b = 0; b + 1 < c.block_begin.size(); ++b) {
+        const uint32_t first = c.block_begin[b], last = c.block_begin[b + 1];
+        const int32_t copies = w[in.image[c.order[first]]];
+        for (int32_t copy = 0; copy < copies; ++copy) {
+          for (uint32_t j = first; j < last; ++j) {
+            if (in.rank[c.order[j]] < max_det) s->sequence.push_back(c.order[j]);
+          }
+        }
+      }
+      const size_t nd = s->sequence.size();
+      s->scores.resize(nd);
+      for (size_t j = 0; j < nd; ++j) s->scores[j] = in.score[s->sequence[j]];
+      s->flags.resize(nd);
+      for (int t = 0; t < T; ++t) {
+        for (size_t j = 0; j < nd; ++j) s->flags[j] = in.flags[(s->sequence[j] * A + a) * T + t];
+        const size_t at = r.PrecisionIndex(t, 0, ki, a, m);
+        CocoAccumulateCurve(s->flags, s->scores, npig, o.recall_thresholds, &s->curve,
+                            &r.recall[r.RecallIndex(t, ki, a, m)], &r.precision[at], &r.scores[at],
+                            r.PrecisionIndex(t, 1, ki, a, m) - at);
+      }
+    }
+  }
+  SummarizeCoco(&r);
+  std::array<double, kNumCocoStats> stats;
+  for (int i = 0; i < kNumCocoStats; ++i) stats[i] = r.stats[i] == -1.0 ? kNaN : r.stats[i];
+  return stats;
+}
+
+// Every resample's numbers of each prepared evaluation, resample r at [r]; resamples are handed
+// to the threads in chunks, each chunk with one scratch per evaluation.
+std::vector<std::vector<std::array<double, kNumCocoStats>>> Resample(
+    const std::vector<const Prepared*>& evaluations, const BootstrapOptions& bootstrap) {
+  const size_t num = bootstrap.num_resamples;
+  const int64_t num_images = static_cast<int64_t>(evaluations.front()->result.image_ids.size());
+  std::vector<std::vector<std::array<double, kNumCocoStats>>> out(
+      evaluations.size(), std::vector<std::array<double, kNumCocoStats>>(num));
+  const size_t chunks =
+      std::min(num, static_cast<size_t>(EffectiveThreads(bootstrap.num_threads)) * 4);
+  ParallelFor(
+      chunks,
+      [&](size_t chunk) {
+        std::vector<ResampleScratch> scratch;
+        for (const Prepared* p : evaluations) scratch.push_back(MakeScratch(*p));
+        for (size_t r = chunk; r < num; r += chunks) {
+          const std::vector<int32_t> w =
+              BootstrapFrameCounts(num_images, bootstrap.seed, static_cast<int64_t>(r));
+          for (size_t e = 0; e < evaluations.size(); ++e) {
+            out[e][r] = ResampleStats(*evaluations[e], w, &scratch[e]);
+          }
+        }
+      },
+      bootstrap.num_threads);
+  return out;
+}
+
+CocoBootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& bootstrap,
+                               const std::array<double, kNumCocoStats>& estimate,
+                               const std::vector<std::array<double, kNumCocoStats>>& samples) {
+  CocoBootstrapResult result;
+  result.num_resamples = bootstrap.num_resamples;
+  result.seed = bootstrap.seed;
+  result.confidence = bootstrap.confidence;
+  result.matcher = p.result.options.matcher;
+  result.num_images = static_cast<int64_t>(p.result.image_ids.size());
+  std::vector<double> values(samples.size());
+  for (int i = 0; i < kNumCocoStats; ++i) {
+    for (size_t r = 0; r < samples.size(); ++r) values[r] = samples[r][i];
+    BootstrapInterval& interval = result.stats[i];
+    interval.estimate = estimate[i];
+    FillBootstrapInterval(values, bootstrap.confidence, bootstrap.keep_samples, &interval);
+  }
+  return result;
+}
+
+}  // namespace
+
+CocoBootstrapResult BootstrapCoco(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
+                                  const CocoEvalOptions& options, const BootstrapOptions& bootstrap,
+                                  CocoEvalResult* result) {
+  options.Check();
+  bootstrap.Check();
+  const Timer timer;
+  const Prepared p = Prepare(gt, dets, options);
+  const auto samples = Resample({&p}, bootstrap);
+  CocoBootstrapResult out = MakeResult(p, bootstrap, p.result.stats, samples[0]);
+  if (result != nullptr) {
+    *result = options.score_metrics ? EvaluateCoco(gt, dets, options) : p.result;
+  }
+  out.seconds = timer.ElapsedSeconds();
+  return out;
+}
+
+CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
+                                              const std::vector<CocoDetection>& dets_a,
+                                              const std::vector<CocoDetection>& dets_b,
+                                              const CocoEvalOptions& options,
+                                              const BootstrapOptions& bootstrap) {
+  options.Check();
+  bootstrap.Check();
+  const Timer timer;
+  const Prepared pa = Prepare(gt, dets_a, options);
+  const Prepared pb = Prepare(gt, dets_b, options);
+  const auto samples = Resample({&pa, &pb}, bootstrap);
+  auto minus = [](const std::array<double, kNumCocoStats>& a,
+                  const std::array<double, kNumCocoStats>& b, double undefined) {
+    std::array<double, kNumCocoStats> d;
+    for (int i = 0; i < kNumCocoStats; ++i) {
+      const bool defined =
+          a[i] != undefined && b[i] != undefined && !std::isnan(a[i]) && !std::isnan(b[i]);
+      d[i] = defined ? a[i] - b[i] : kNaN;
+    }
+    return d;
+  };
+  std::vector<std::array<double, kNumCocoStats>> difference(samples[0].size());
+  for (size_t r = 0; r < difference.size(); ++r) {
+    difference[r] = minus(samples[0][r], samples[1][r], kNaN);
+  }
+  CocoPairedBootstrapResult out;
+  out.a = MakeResult(pa, bootstrap, pa.result.stats, samples[0]);
+  out.b = MakeResult(pb, bootstrap, pb.result.stats, samples[1]);
+  out.difference =
+      MakeResult(pa, bootstrap, minus(pa.result.stats, pb.result.stats, -1.0), difference);
+  const double seconds = timer.ElapsedSeconds();
+  for (CocoBootstrapResult* r : {&out.a, &out.b, &out.difference}) r->seconds = seconds;
+  return out;
+}
+
+}  // namespace stereodet
