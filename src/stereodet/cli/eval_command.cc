@@ -8,7 +8,8 @@
 //                  [--out DIR]
 //   stereodet eval compare --gt DIR --det DIR --det-b DIR [--calib FILE]
 //                  [--disparity-error-px 1] [--bootstrap N ...] [--out DIR]
-//   stereodet eval --coco-gt FILE --coco-det FILE [--coco-honor-ignore] [--matcher coco|optimal]
+//   stereodet eval --coco-gt FILE --coco-det FILE [--coco-det-b FILE] [--coco-honor-ignore]
+//                  [--matcher coco|optimal] [--bootstrap N ...]
 //                  [--coco-brier [--score-threshold S] [--score-transform T]
 //                  [--calibration-bins N]] [--out DIR] [--threads N]
 //                  (COCO mode: pycocotools' COCOeval for bbox, docs/metrics.md)
@@ -350,7 +351,8 @@ bool IsCocoModeFlag(const std::string& name) {
   return name == "--coco-gt" || name == "--coco-det" || name == "--coco-honor-ignore" ||
          name == "--coco-brier" || name == "--matcher" || name == "--score-threshold" ||
          name == "--score-transform" || name == "--calibration-bins" || name == "--out" ||
-         name == "--threads" || name == "--help" || name == "--debug";
+         name == "--threads" || name == "--help" || name == "--debug" || name == "--coco-det-b" ||
+         name == "--bootstrap" || name == "--bootstrap-seed" || name == "--bootstrap-confidence";
 }
 
 // The flags that set the operating-point metrics' options: each turns them on.
@@ -365,8 +367,9 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
     STEREODET_CHECK(option->count() == 0 || IsCocoModeFlag(option->get_name()))
         << option->get_name()
         << " is a flag of KITTI-layout evaluation; COCO mode (--coco-gt, --coco-det) takes "
-           "--out, --threads, --coco-honor-ignore, --matcher coco|optimal, --coco-brier, "
-           "--score-threshold, --score-transform and --calibration-bins";
+           "--out, --threads, --coco-honor-ignore, --coco-det-b, --matcher coco|optimal, "
+           "--coco-brier, --score-threshold, --score-transform, --calibration-bins and "
+           "--bootstrap N (--bootstrap-seed, --bootstrap-confidence)";
   }
   STEREODET_CHECK(!a.coco.gt.empty() && !a.coco.det.empty())
       << "COCO mode needs both --coco-gt FILE and --coco-det FILE";
@@ -384,6 +387,8 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
       options.eval.score_metrics = true;
     }
   }
+  options.bootstrap = MakeBootstrapOptions(a);
+  if (options.bootstrap) options.bootstrap->num_threads = a.eval.num_threads;
   if (options.eval.score_metrics) {
     const auto transform = ParseScoreTransform(a.score_transform);
     STEREODET_CHECK(transform.has_value())
@@ -413,6 +418,11 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
         "left out (-1); --score-transform sigmoid reads them as logits\n");
   }
   fmt::print("{}", FormatCocoSummary(r));
+  if (run.result_b) {
+    fmt::print("{}", FormatCocoCompare(r, *run.result_b, run.paired ? &*run.paired : nullptr));
+  } else if (run.bootstrap) {
+    fmt::print("{}", FormatCocoBootstrap(*run.bootstrap));
+  }
   fmt::print(
       "{} images, {} categories, {} ground truths, {} detections; read in {:.3f} s, "
       "evaluated in {:.3f} s\n",
@@ -548,7 +558,7 @@ void AddEvalCommand(CLI::App& app) {
                  "docs/metrics.md)");
   AddBootstrapOptions(eval, args.get(),
                       "percentile intervals of every AP and Brier score in results.json and "
-                      "the table");
+                      "the table (COCO mode: of the 12 numbers, over the images)");
   AddShardOption(eval, &args->input.shard)
       ->description(
           "only shard K/N (K = 0..N-1) of the frames, a contiguous range of the frame list; with "
@@ -562,6 +572,10 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--coco-honor-ignore", args->coco.eval.honor_ignore_flag,
                  "COCO mode: also ignore ground truths whose \"ignore\" is set (pycocotools "
                  "overwrites it with \"iscrowd\")");
+  eval->add_option("--coco-det-b", args->coco.det_b,
+                   "COCO mode: a second results file of the same ground truth, compared with "
+                   "--coco-det number by number (A - B; with --bootstrap N, paired intervals over "
+                   "the images)");
   eval->add_flag("--coco-brier", args->coco.eval.score_metrics,
                  "COCO mode: also the operating point's TP/FP/FN, Brier scores (over labels, "
                  "detections, all) and calibration per IoU threshold, category and area range: 12 "
@@ -655,6 +669,7 @@ void AddEvalCommand(CLI::App& app) {
       return;
     }
     if (eval->count("--coco-gt") > 0 || eval->count("--coco-det") > 0) {
+      NoteBootstrapFlags(eval, args.get());
       RunCocoEval(eval, *args);
       return;
     }

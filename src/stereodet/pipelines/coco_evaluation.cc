@@ -4,6 +4,7 @@
 
 #include <bit>
 #include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -55,6 +56,7 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
   j["input_hash"] = run.input_hash;
   j["input"] = {{"coco_gt", options.gt.string()},
                 {"coco_det", options.det.string()},
+                {"coco_det_b", options.det_b.string()},
                 {"num_images", r.image_ids.size()},
                 {"num_categories", r.category_ids.size()},
                 {"num_gt", r.num_gt},
@@ -101,6 +103,39 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
     }
     j["score_stats"] = score_stats;
     j["cells"] = {{"file", "cells.csv"}, {"reliability", "reliability.csv"}};
+  }
+  auto intervals = [](const CocoBootstrapResult& b) {
+    ordered_json j = {{"num_resamples", b.num_resamples},
+                      {"seed", b.seed},
+                      {"confidence", b.confidence},
+                      {"num_images", b.num_images},
+                      {"seconds", b.seconds}};
+    ordered_json stats = ordered_json::object();
+    for (int s = 0; s < kNumCocoStats; ++s) {
+      const BootstrapInterval& i = b.stats[s];
+      // NaN (an undefined bound) is written as null.
+      stats[CocoStatNames()[s]] = {{"estimate", i.estimate},
+                                   {"lower", i.lower},
+                                   {"upper", i.upper},
+                                   {"num_defined", i.num_defined}};
+    }
+    j["stats"] = stats;
+    return j;
+  };
+  if (run.bootstrap) j["bootstrap"] = intervals(*run.bootstrap);
+  if (run.result_b) {
+    ordered_json compare = {{"coco_det_b", options.det_b.string()}};
+    ordered_json stats_b = ordered_json::object(), difference = ordered_json::object();
+    for (int s = 0; s < kNumCocoStats; ++s) {
+      const double a = r.stats[s], b = run.result_b->stats[s];
+      stats_b[CocoStatNames()[s]] = b;
+      difference[CocoStatNames()[s]] =
+          a < 0 || b < 0 ? std::numeric_limits<double>::quiet_NaN() : a - b;
+    }
+    compare["stats_b"] = stats_b;
+    compare["difference"] = difference;  // A - B; null where either is -1
+    if (run.paired) compare["paired_bootstrap"] = intervals(run.paired->difference);
+    j["compare"] = compare;
   }
   return j;
 }
@@ -160,14 +195,58 @@ void CocoEvaluationOptions::Check() const {
   STEREODET_CHECK(!gt.empty()) << "COCO evaluation: no ground-truth file (--coco-gt)";
   STEREODET_CHECK(!det.empty()) << "COCO evaluation: no results file (--coco-det)";
   eval.Check();
+  if (bootstrap) bootstrap->Check();
+}
+
+std::string FormatCocoBootstrap(const CocoBootstrapResult& b) {
+  std::string out = fmt::format(
+      "bootstrap: {} resamples of the {} images (seed {}), {:g}% percentile intervals\n",
+      b.num_resamples, b.num_images, b.seed, 100 * b.confidence);
+  for (int s = 0; s < kNumCocoStats; ++s) {
+    const BootstrapInterval& i = b.stats[s];
+    out += i.estimate < 0 ? fmt::format("{:<6} -1 (no ground truth)\n", CocoStatNames()[s])
+                          : fmt::format("{:<6} {:.3f} [{:.3f}, {:.3f}]\n", CocoStatNames()[s],
+                                        i.estimate, i.lower, i.upper);
+  }
+  return out;
+}
+
+std::string FormatCocoCompare(const CocoEvalResult& a, const CocoEvalResult& b,
+                              const CocoPairedBootstrapResult* paired) {
+  std::string out =
+      paired == nullptr
+          ? std::string("A - B:\n")
+          : fmt::format(
+                "A - B, paired bootstrap: {} resamples of the {} images (seed {}), {:g}% "
+                "percentile intervals\n",
+                paired->difference.num_resamples, paired->difference.num_images,
+                paired->difference.seed, 100 * paired->difference.confidence);
+  for (int s = 0; s < kNumCocoStats; ++s) {
+    const double sa = a.stats[s], sb = b.stats[s];
+    out += fmt::format("{:<6} A {:6.3f}  B {:6.3f}", CocoStatNames()[s], sa, sb);
+    if (sa < 0 || sb < 0) {
+      out += "  A - B undefined (no ground truth)\n";
+      continue;
+    }
+    out += fmt::format("  A - B {:+.3f}", sa - sb);
+    if (paired != nullptr) {
+      const BootstrapInterval& d = paired->difference.stats[s];
+      out += fmt::format(" [{:+.3f}, {:+.3f}]", d.lower, d.upper);
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 CocoEvaluationResult RunCocoEvaluation(const CocoEvaluationOptions& options) {
   options.Check();
   std::optional<StagedFolder> out;
   if (!options.out.empty()) {
-    CheckOutputDoesNotOverlapInputs("--out", options.out,
-                                    {{"--coco-gt", options.gt}, {"--coco-det", options.det}});
+    CheckOutputDoesNotOverlapInputs(
+        "--out", options.out,
+        {{"--coco-gt", options.gt},
+         {"--coco-det", options.det},
+         {"--coco-det-b", options.det_b.empty() ? options.det : options.det_b}});
     out.emplace(options.out, "eval", std::vector<std::string>{kMakerEval});
   }
   CocoEvaluationResult run;
@@ -176,9 +255,25 @@ CocoEvaluationResult RunCocoEvaluation(const CocoEvaluationOptions& options) {
   const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, options.gt.string());
   const std::string det_text = ReadFile(options.det, kMaxReadFileBytes, "COCO results");
   const std::vector<CocoDetection> dets = ParseCocoDetections(det_text, options.det.string(), gt);
-  run.input_hash = HashHex(Fnv1a64(det_text, Fnv1a64(gt_text)));
+  uint64_t hash = Fnv1a64(det_text, Fnv1a64(gt_text));
+  std::vector<CocoDetection> dets_b;
+  if (!options.det_b.empty()) {
+    const std::string text = ReadFile(options.det_b, kMaxReadFileBytes, "COCO results");
+    dets_b = ParseCocoDetections(text, options.det_b.string(), gt);
+    hash = Fnv1a64(text, hash);
+  }
+  run.input_hash = HashHex(hash);
   run.read_seconds = read_timer.ElapsedSeconds();
-  run.result = EvaluateCoco(gt, dets, options.eval);
+  if (options.bootstrap && !options.det_b.empty()) {
+    run.paired = PairedBootstrapCoco(gt, dets, dets_b, options.eval, *options.bootstrap);
+    run.bootstrap = run.paired->a;
+  }
+  if (options.bootstrap && options.det_b.empty()) {
+    run.bootstrap = BootstrapCoco(gt, dets, options.eval, *options.bootstrap, &run.result);
+  } else {
+    run.result = EvaluateCoco(gt, dets, options.eval);
+  }
+  if (!options.det_b.empty()) run.result_b = EvaluateCoco(gt, dets_b, options.eval);
   if (!out) return run;
 
   const CocoEvalResult& r = run.result;

@@ -141,6 +141,44 @@ TEST(CocoEvaluationTest, ScoreMetricsWriteCellsAndReliability) {
   EXPECT_THAT(reliability, HasSubstr("0.5,2,all,0.2,0.4,1,0.3,0\n"));
 }
 
+// --bootstrap: intervals in results.json; --coco-det-b: B's numbers, A - B and the paired
+// intervals (A against itself: exactly 0).
+TEST(CocoEvaluationTest, BootstrapAndCompare) {
+  Inputs in;
+  CocoEvaluationOptions options;
+  options.gt = in.gt;
+  options.det = in.det;
+  options.out = in.dir.path() / "eval";
+  BootstrapOptions bootstrap;
+  bootstrap.num_resamples = 50;
+  options.bootstrap = bootstrap;
+  const CocoEvaluationResult run = RunCocoEvaluation(options);
+  ASSERT_TRUE(run.bootstrap.has_value());
+  EXPECT_FALSE(run.paired.has_value());
+  nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  EXPECT_EQ(j["bootstrap"]["num_resamples"], 50);
+  EXPECT_EQ(j["bootstrap"]["num_images"], 2);
+  EXPECT_EQ(j["bootstrap"]["stats"]["AP"]["estimate"].get<double>(), run.result.stats[0]);
+  EXPECT_EQ(j["bootstrap"]["stats"]["AP"]["num_defined"], 50);  // every resample has a box
+  EXPECT_THAT(FormatCocoBootstrap(*run.bootstrap),
+              HasSubstr("bootstrap: 50 resamples of the 2 images (seed 1), 95% percentile"));
+  EXPECT_THAT(FormatCocoBootstrap(*run.bootstrap), HasSubstr("\nAPl    -1 (no ground truth)\n"));
+
+  options.det_b = in.det;
+  const CocoEvaluationResult paired = RunCocoEvaluation(options);
+  ASSERT_TRUE(paired.paired.has_value() && paired.result_b.has_value());
+  j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  EXPECT_EQ(j["compare"]["stats_b"]["AP"].get<double>(), run.result.stats[0]);
+  EXPECT_EQ(j["compare"]["difference"]["AP"].get<double>(), 0.0);
+  EXPECT_TRUE(j["compare"]["difference"]["APl"].is_null());
+  EXPECT_EQ(j["compare"]["paired_bootstrap"]["stats"]["AP"]["lower"].get<double>(), 0.0);
+  EXPECT_EQ(j["compare"]["paired_bootstrap"]["stats"]["AP"]["upper"].get<double>(), 0.0);
+  EXPECT_THAT(FormatCocoCompare(paired.result, *paired.result_b, &*paired.paired),
+              HasSubstr("AP     A  1.000  B  1.000  A - B +0.000 [+0.000, +0.000]\n"));
+  EXPECT_THAT(FormatCocoCompare(paired.result, *paired.result_b, nullptr),
+              HasSubstr("APl    A -1.000  B -1.000  A - B undefined (no ground truth)\n"));
+}
+
 TEST(CocoEvaluationTest, WithoutOutWritesNothingAndReportsBadFiles) {
   Inputs in;
   CocoEvaluationOptions options;
