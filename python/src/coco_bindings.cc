@@ -5,11 +5,14 @@
 
 #include <array>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "common.h"
 #include "stereodet/eval/coco.h"
+#include "stereodet/eval/coco_bootstrap.h"
+#include "stereodet/pipelines/coco_evaluation.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet::python {
@@ -26,13 +29,20 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
                       const std::string& dt_text, const std::string& dt_source,
                       bool honor_ignore_flag, std::vector<int> max_dets, int num_threads,
                       const std::string& matcher, bool score_metrics, double score_threshold,
-                      const std::string& score_transform, int calibration_bins) {
+                      const std::string& score_transform, int calibration_bins, int bootstrap,
+                      uint64_t bootstrap_seed, double bootstrap_confidence,
+                      const std::optional<std::string>& dt_b_text, const std::string& dt_b_source) {
   CocoEvalResult result;
+  std::optional<CocoEvalResult> result_b;
+  std::optional<CocoBootstrapResult> intervals;
+  std::optional<CocoPairedBootstrapResult> paired;
   std::string summary;
   {
     ReleaseGil release;
     const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, gt_source);
     const std::vector<CocoDetection> dets = ParseCocoDetections(dt_text, dt_source, gt);
+    std::vector<CocoDetection> dets_b;
+    if (dt_b_text) dets_b = ParseCocoDetections(*dt_b_text, dt_b_source, gt);
     CocoEvalOptions options;
     options.honor_ignore_flag = honor_ignore_flag;
     options.max_dets = std::move(max_dets);
@@ -50,7 +60,20 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
     options.score_transform = *transform;
     options.calibration_bins = calibration_bins;
     options.Check();
+    BootstrapOptions resampling;
+    resampling.num_resamples = bootstrap;
+    resampling.seed = bootstrap_seed;
+    resampling.confidence = bootstrap_confidence;
+    resampling.keep_samples = true;
+    resampling.num_threads = num_threads;
+    if (bootstrap > 0) resampling.Check();
+    if (bootstrap > 0 && dt_b_text) {
+      paired = PairedBootstrapCoco(gt, dets, dets_b, options, resampling);
+    } else if (bootstrap > 0) {
+      intervals = BootstrapCoco(gt, dets, options, resampling);
+    }
     result = EvaluateCoco(gt, dets, options);
+    if (dt_b_text) result_b = EvaluateCoco(gt, dets_b, options);
     summary = FormatCocoSummary(result);
   }
   const auto t = static_cast<py::ssize_t>(result.options.iou_thresholds.size());
@@ -80,6 +103,35 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
   out["num_detections_skipped"] = result.num_detections_skipped;
   out["seconds"] = result.seconds;
   out["matcher"] = CocoMatcherName(result.options.matcher);
+  // Intervals by summary name: {"AP": (estimate, lower, upper), ...} and every resample's values
+  // ((num_resamples, 12), NaN where undefined).
+  auto interval_dict = [](const CocoBootstrapResult& b) {
+    py::dict d;
+    std::vector<double> samples(static_cast<size_t>(b.num_resamples) * kNumCocoStats);
+    for (int s = 0; s < kNumCocoStats; ++s) {
+      const BootstrapInterval& i = b.stats[s];
+      d[CocoStatNames()[s]] = py::make_tuple(i.estimate, i.lower, i.upper);
+      for (int r = 0; r < b.num_resamples; ++r) samples[r * kNumCocoStats + s] = i.samples[r];
+    }
+    py::dict out;
+    out["intervals"] = d;
+    out["samples"] = Shaped(samples, {b.num_resamples, kNumCocoStats});
+    out["num_resamples"] = b.num_resamples;
+    out["seed"] = b.seed;
+    out["confidence"] = b.confidence;
+    out["seconds"] = b.seconds;
+    return out;
+  };
+  if (intervals) out["bootstrap"] = interval_dict(*intervals);
+  if (paired) {
+    out["bootstrap"] = interval_dict(paired->a);
+    out["bootstrap_b"] = interval_dict(paired->b);
+    out["bootstrap_difference"] = interval_dict(paired->difference);
+  }
+  if (result_b) {
+    out["stats_b"] = Shaped(std::vector<double>(result_b->stats.begin(), result_b->stats.end()),
+                            {kNumCocoStats});
+  }
   if (result.options.score_metrics) {
     out["score_stats"] =
         Shaped(std::vector<double>(result.score_stats.begin(), result.score_stats.end()),
@@ -119,15 +171,20 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
 }  // namespace
 
 void BindCoco(py::module_& m) {
-  m.def("_coco_evaluate", &CocoEvaluate, py::arg("gt_text"), py::arg("gt_source"),
-        py::arg("dt_text"), py::arg("dt_source"), py::arg("honor_ignore_flag") = false,
-        py::arg("max_dets") = std::vector<int>{1, 10, 100}, py::arg("num_threads") = 0,
-        py::arg("matcher") = "coco", py::arg("score_metrics") = false,
-        py::arg("score_threshold") = -std::numeric_limits<double>::infinity(),
-        py::arg("score_transform") = "none", py::arg("calibration_bins") = 10,
-        "COCOeval(gt, loadRes(dt), 'bbox') on the JSON texts, the GIL released: a dict of stats "
-        "(12), precision (T, R, K, A, M), recall (T, K, A, M), scores, the ids and the summary "
-        "text; with score_metrics, score_stats (12) and the cells' (T, K, A) arrays.");
+  m.def(
+      "_coco_evaluate", &CocoEvaluate, py::arg("gt_text"), py::arg("gt_source"), py::arg("dt_text"),
+      py::arg("dt_source"), py::arg("honor_ignore_flag") = false,
+      py::arg("max_dets") = std::vector<int>{1, 10, 100}, py::arg("num_threads") = 0,
+      py::arg("matcher") = "coco", py::arg("score_metrics") = false,
+      py::arg("score_threshold") = -std::numeric_limits<double>::infinity(),
+      py::arg("score_transform") = "none", py::arg("calibration_bins") = 10,
+      py::arg("bootstrap") = 0, py::arg("bootstrap_seed") = 1,
+      py::arg("bootstrap_confidence") = 0.95, py::arg("dt_b_text") = std::nullopt,
+      py::arg("dt_b_source") = "",
+      "COCOeval(gt, loadRes(dt), 'bbox') on the JSON texts, the GIL released: a dict of stats "
+      "(12), precision (T, R, K, A, M), recall (T, K, A, M), scores, the ids and the summary "
+      "text; with score_metrics, score_stats (12) and the cells' (T, K, A) arrays; with bootstrap "
+      "> 0, the intervals (and with dt_b_text B's stats and the paired A - B intervals).");
 }
 
 }  // namespace stereodet::python

@@ -168,4 +168,6 @@ def _coco_evaluate(gt_text: str, gt_source: str, dt_text: str, dt_source: str,
                    honor_ignore_flag: bool = ..., max_dets: List[int] = ...,
                    num_threads: int = ..., matcher: str = ..., score_metrics: bool = ...,
                    score_threshold: float = ..., score_transform: str = ...,
-                   calibration_bins: int = ...) -> Dict[str, Any]: ...
+                   calibration_bins: int = ..., bootstrap: int = ..., bootstrap_seed: int = ...,
+                   bootstrap_confidence: float = ..., dt_b_text: Optional[str] = ...,
+                   dt_b_source: str = ...) -> Dict[str, Any]: ...

@@ -85,6 +85,11 @@ class CocoResult:
         self.score_stat_names: List[str] = list(d.get("score_stat_names", []))
         self.probability_metrics: Optional[bool] = d.get("probability_metrics")
         self.cells: Dict[str, np.ndarray] = dict(d.get("cells", {}))
+        # With bootstrap=N: {"AP": (estimate, lower, upper), ...} over images, and every
+        # resample's 12 numbers ((N, 12), NaN where a slice has no ground truth).
+        boot = d.get("bootstrap")
+        self.intervals: Dict[str, tuple] = dict(boot["intervals"]) if boot else {}
+        self.bootstrap_samples: Optional[np.ndarray] = boot["samples"] if boot else None
 
     def __str__(self) -> str:
         return self.summary
@@ -94,11 +99,29 @@ class CocoResult:
                f"{len(self.image_ids)} images, {len(self.category_ids)} categories)"
 
 
+class CocoComparison:
+    """compare()'s result: a and b (CocoResult each), difference = a.stats - b.stats (NaN where
+    either is -1), and with bootstrap the paired intervals of A - B ({"AP": (estimate, lower,
+    upper), ...}) and their resamples."""
+
+    def __init__(self, a: CocoResult, b_stats: np.ndarray, d: dict):
+        self.a = a
+        self.b_stats: np.ndarray = b_stats
+        self.difference = np.where((a.stats < 0) | (b_stats < 0), np.nan, a.stats - b_stats)
+        boot = d.get("bootstrap_difference")
+        self.intervals: Dict[str, tuple] = dict(boot["intervals"]) if boot else {}
+        self.bootstrap_samples: Optional[np.ndarray] = boot["samples"] if boot else None
+
+    def __repr__(self) -> str:
+        return f"CocoComparison(AP A={self.a.stats[0]:.3f}, B={self.b_stats[0]:.3f})"
+
+
 def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
              max_dets: Sequence[int] = (1, 10, 100), num_threads: int = 0,
              matcher: str = "coco", brier: bool = False,
              score_threshold: Optional[float] = None, score_transform: str = "none",
-             calibration_bins: int = 10) -> CocoResult:
+             calibration_bins: int = 10, bootstrap: int = 0, bootstrap_seed: int = 1,
+             confidence: float = 0.95) -> CocoResult:
     """COCOeval(gt, gt.loadRes(dt), "bbox").evaluate(); .accumulate(); .summarize().
 
     gt: a COCO ground-truth file's path, its loaded dict, or a pycocotools COCO object.
@@ -113,6 +136,9 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
       category and area range (result.cells, result.score_stats; the CLI's --coco-brier), at
       score_threshold (None: every detection), with score_transform ("none" or "sigmoid", for
       logits) and calibration_bins reliability bins.
+    bootstrap: N > 0 resamples of the images (seed bootstrap_seed): result.intervals holds each
+      of the 12 numbers' percentile interval at `confidence` (the CLI's --bootstrap N), each
+      resample exactly COCOeval on the resampled image list (docs/metrics.md).
 
     Raises stereodet.ParseError for a malformed file (naming the element and field), ValueError
     for a bad option, OSError for a file that cannot be read.
@@ -123,7 +149,22 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
     return CocoResult(_core._coco_evaluate(gt_text, gt_source, dt_text, dt_source,
                                            honor_ignore_flag, list(max_dets), num_threads,
                                            matcher, brier, threshold, score_transform,
-                                           calibration_bins))
+                                           calibration_bins, bootstrap, bootstrap_seed,
+                                           confidence))
+
+
+def compare(gt: Any, dt_a: Any, dt_b: Any, *, bootstrap: int = 0, bootstrap_seed: int = 1,
+            confidence: float = 0.95, matcher: str = "coco", honor_ignore_flag: bool = False,
+            max_dets: Sequence[int] = (1, 10, 100), num_threads: int = 0) -> CocoComparison:
+    """Two detection sets of one ground truth, number by number (the CLI's --coco-det-b): with
+    bootstrap=N, the paired intervals of A - B over the same resampled images."""
+    gt_text, gt_source = _text(gt, "ground truth")
+    a_text, a_source = _text(dt_a, "results A")
+    b_text, b_source = _text(dt_b, "results B")
+    d = _core._coco_evaluate(gt_text, gt_source, a_text, a_source, honor_ignore_flag,
+                             list(max_dets), num_threads, matcher, False, -math.inf, "none", 10,
+                             bootstrap, bootstrap_seed, confidence, b_text, b_source)
+    return CocoComparison(CocoResult(d), d["stats_b"], d)
 
 
 class COCOeval:

@@ -92,3 +92,21 @@ def test_optimal_matcher_and_brier_equal_the_cli(data, cli, tmp_path):
     assert np.array_equal(E.result.precision, optimal.precision)
     with pytest.raises(ValueError, match="matcher"):
         coco.evaluate(gt_path, dt_path, matcher="kitti")
+
+
+def test_bootstrap_and_compare_equal_the_cli(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    r = coco.evaluate(gt_path, dt_path, bootstrap=40, bootstrap_seed=3)
+    cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--bootstrap", "40",
+        "--bootstrap-seed", "3", "--out", tmp_path / "cli")
+    results = json.loads((tmp_path / "cli" / "results.json").read_text())
+    estimate, lower, upper = r.intervals["AP"]
+    assert estimate == r.stats[0]
+    assert results["bootstrap"]["stats"]["AP"]["lower"] == lower
+    assert results["bootstrap"]["stats"]["AP"]["upper"] == upper
+    assert r.bootstrap_samples.shape == (40, 12)
+    # A against itself: every difference exactly 0.
+    c = coco.compare(gt_path, dt_path, dt_path, bootstrap=20)
+    assert c.intervals["AP"] == (0.0, 0.0, 0.0)
+    assert np.array_equal(c.b_stats, c.a.stats)
+    assert c.difference[0] == 0.0 and np.isnan(c.difference[5]) == (c.a.stats[5] < 0)
