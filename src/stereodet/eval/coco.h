@@ -97,6 +97,15 @@ CocoGroundTruth ReadCocoGroundTruth(const std::filesystem::path& path);
 std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
                                                const CocoGroundTruth& gt);
 
+// ParseCocoDetections, reading `text` in place, without the padded copy simdjson needs otherwise,
+// when text.capacity() >= text.size() + kCocoReadPadding (ReadFile(..., kCocoReadPadding) reads a
+// file so; a string without that room is copied). On a COCO-sized results file on this project's
+// VMs the copy cost a sixth of the reading (docs/BENCHMARKS.md).
+inline constexpr size_t kCocoReadPadding = 64;
+std::vector<CocoDetection> ParseCocoDetectionsInPlace(const std::string& text,
+                                                      const std::string& source,
+                                                      const CocoGroundTruth& gt);
+
 // ReadFile + ParseCocoDetections.
 std::vector<CocoDetection> ReadCocoDetections(const std::filesystem::path& path,
                                               const CocoGroundTruth& gt);

@@ -20,6 +20,8 @@
 #define STEREODET_EVAL_COCO_INTERNAL_H_
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/eval/bipartite_internal.h"
@@ -59,6 +61,13 @@ struct CocoCategoryDetections {
   std::vector<ScoreMetricsAccumulator> cell_terms;
   std::vector<int32_t> gt_tp_det;  // memory of the evaluator
 };
+
+// ParseCocoDetections' second reader: nlohmann's SAX parser, which names the element and field of
+// any error. ParseCocoDetections reads with simdjson first and comes here when that fails; tests
+// compare the two.
+std::vector<CocoDetection> ParseCocoDetectionsNamingErrors(std::string_view text,
+                                                           const std::string& source,
+                                                           const CocoGroundTruth& gt);
 
 // EvaluateCoco, also handing over every category's detections (in category order).
 CocoEvalResult EvaluateCocoKeepingDetections(const CocoGroundTruth& gt,

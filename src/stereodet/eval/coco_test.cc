@@ -1,5 +1,6 @@
 #include "stereodet/eval/coco.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -812,6 +813,97 @@ TEST(CocoTest, FuzzCorpusInputsParseOrThrowParseError) {
   }
   EXPECT_GT(parsed, 0);
   EXPECT_GT(rejected, 0);
+}
+
+// The simdjson reader and the nlohmann one read the same detections from every file the first
+// accepts, and where it does not the second decides: random results files with numbers in every
+// JSON form (integers, fractions, exponents, negative, large), extra keys holding anything, keys
+// in any order, and now and then a defect (a missing or repeated field, a float id, a bbox of 3).
+TEST(CocoTest, FastAndNamingReadersAgree) {
+  CocoGroundTruth gt;
+  gt.source = "gt";
+  gt.image_ids = {1, 2, 3, 900719925474099};
+  std::mt19937 rng(21);
+  std::uniform_int_distribution<int> pick(0, 99);
+  auto number = [&]() -> std::string {
+    switch (pick(rng) % 7) {
+      case 0:
+        return std::to_string(pick(rng));
+      case 1:
+        return fmt::format("{}", pick(rng) / 7.0);
+      case 2:
+        return fmt::format("{:.17g}", std::uniform_real_distribution<double>(0, 1e4)(rng));
+      case 3:
+        return fmt::format("{}e-{}", pick(rng), pick(rng) % 9);
+      case 4:
+        return fmt::format("-{}.{}E+{}", pick(rng), pick(rng), pick(rng) % 3);
+      case 5:
+        return "0.1000000000000000055511151231257827021181583404541015625";
+      default:
+        return "18446744073709551615";  // above int64: a double in both readers
+    }
+  };
+  int fast = 0, defects = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string text = "[";
+    bool defect = false;
+    const int n = pick(rng) % 6;
+    for (int i = 0; i < n; ++i) {
+      std::vector<std::string> fields = {
+          fmt::format("\"image_id\": {}", gt.image_ids[pick(rng) % 4]),
+          fmt::format("\"category_id\": {}", pick(rng) % 5),
+          fmt::format("\"bbox\": [{}, {}, {}, {}]", number(), number(), number(), number()),
+          fmt::format("\"score\": {}", number()),
+          "\"segmentation\": {\"counts\": [1, 2, {\"x\": null}], \"size\": \"\\u00e9\"}",
+          "\"id\": 7"};
+      if (pick(rng) < 8) {
+        defect = true;
+        switch (pick(rng) % 4) {
+          case 0:
+            fields.erase(fields.begin() + pick(rng) % 4);
+            break;
+          case 1:
+            fields.push_back(fields[pick(rng) % 4]);
+            break;
+          case 2:
+            fields[0] = "\"image_id\": 1.0";
+            break;
+          default:
+            fields[2] = "\"bbox\": [0, 0, 1]";
+        }
+      }
+      std::shuffle(fields.begin(), fields.end(), rng);
+      text += fmt::format("{}{{{}}}", i ? ", " : "", fmt::join(fields, ", "));
+    }
+    text += "]";
+    defects += defect;
+    std::vector<CocoDetection> a, b;
+    bool a_threw = false, b_threw = false;
+    try {
+      a = ParseCocoDetections(text, "det", gt);
+    } catch (const ParseError&) {
+      a_threw = true;
+    }
+    try {
+      b = ParseCocoDetectionsNamingErrors(text, "det", gt);
+    } catch (const ParseError&) {
+      b_threw = true;
+    }
+    ASSERT_EQ(a_threw, b_threw) << text;
+    ASSERT_EQ(a.size(), b.size()) << text;
+    for (size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].image_id, b[i].image_id) << text;
+      ASSERT_EQ(a[i].category_id, b[i].category_id) << text;
+      ASSERT_EQ(a[i].bbox.x, b[i].bbox.x) << text;
+      ASSERT_EQ(a[i].bbox.y, b[i].bbox.y) << text;
+      ASSERT_EQ(a[i].bbox.width, b[i].bbox.width) << text;
+      ASSERT_EQ(a[i].bbox.height, b[i].bbox.height) << text;
+      ASSERT_EQ(a[i].score, b[i].score) << text;
+    }
+    fast += !defect && !a_threw;
+  }
+  EXPECT_GT(fast, 100);
+  EXPECT_GT(defects, 20);
 }
 
 TEST(CocoTest, OptionsCheck) {

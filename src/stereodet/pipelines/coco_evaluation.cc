@@ -253,13 +253,16 @@ CocoEvaluationResult RunCocoEvaluation(const CocoEvaluationOptions& options) {
   const Timer read_timer;
   const std::string gt_text = ReadFile(options.gt, kMaxReadFileBytes, "COCO ground truth");
   const CocoGroundTruth gt = ParseCocoGroundTruth(gt_text, options.gt.string());
-  const std::string det_text = ReadFile(options.det, kMaxReadFileBytes, "COCO results");
-  const std::vector<CocoDetection> dets = ParseCocoDetections(det_text, options.det.string(), gt);
+  const std::string det_text =
+      ReadFile(options.det, kMaxReadFileBytes, "COCO results", kCocoReadPadding);
+  const std::vector<CocoDetection> dets =
+      ParseCocoDetectionsInPlace(det_text, options.det.string(), gt);
   uint64_t hash = Fnv1a64(det_text, Fnv1a64(gt_text));
   std::vector<CocoDetection> dets_b;
   if (!options.det_b.empty()) {
-    const std::string text = ReadFile(options.det_b, kMaxReadFileBytes, "COCO results");
-    dets_b = ParseCocoDetections(text, options.det_b.string(), gt);
+    const std::string text =
+        ReadFile(options.det_b, kMaxReadFileBytes, "COCO results", kCocoReadPadding);
+    dets_b = ParseCocoDetectionsInPlace(text, options.det_b.string(), gt);
     hash = Fnv1a64(text, hash);
   }
   run.input_hash = HashHex(hash);

@@ -102,8 +102,8 @@ std::string HumanBytes(uint64_t bytes) {
 // or a folder is refused instead of blocking (O_NONBLOCK: opening a FIFO without a writer would
 // block; it does nothing to a regular file); the read loop also grows past st_size, so /proc files
 // (size 0) read whole. A file of the size fstat reports takes one read().
-std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole,
-                            const char* what) {
+std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole, const char* what,
+                            size_t padding = 0) {
   const std::string name =
       what == nullptr ? path.string() : std::string(what) + " " + path.string();
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
@@ -122,6 +122,8 @@ std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole
       << HumanBytes(max_bytes) << " read of one file";
   const uint64_t wanted = std::min(size, max_bytes);
   std::string contents;
+  // The padding's capacity first: resizing down keeps it.
+  if (padding > 0) contents.reserve(static_cast<size_t>(wanted) + 1 + padding);
   // One byte more than the size, so a single read() both fills the file and sees its end.
   contents.resize(static_cast<size_t>(wanted) + (whole ? 1 : 0));
   size_t used = 0;
@@ -150,8 +152,8 @@ std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole
 
 }  // namespace
 
-std::string ReadFile(const fs::path& path, uint64_t max_bytes, const char* what) {
-  return ReadRegularFile(path, max_bytes, /*whole=*/true, what);
+std::string ReadFile(const fs::path& path, uint64_t max_bytes, const char* what, size_t padding) {
+  return ReadRegularFile(path, max_bytes, /*whole=*/true, what, padding);
 }
 
 std::string ReadFileHead(const fs::path& path, size_t bytes) {
