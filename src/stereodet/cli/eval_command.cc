@@ -94,7 +94,8 @@ struct EvalArgs {
   // --bootstrap was given (bootstrap_given, set by the command's callback).
   BootstrapOptions bootstrap;
   bool bootstrap_given = false;
-  bool bootstrap_settings_given = false;  // --bootstrap-seed or --bootstrap-confidence
+  bool bootstrap_settings_given = false;  // --bootstrap-seed, -confidence or -method
+  std::string bootstrap_method = BootstrapMethodName(BootstrapOptions().method);
   // COCO mode (eval only): --coco-gt, --coco-det, --coco-honor-ignore; out and num_threads come
   // from --out and --threads.
   CocoEvaluationOptions coco;
@@ -109,20 +110,25 @@ void AddBootstrapOptions(CLI::App* cmd, EvalArgs* a, const char* what) {
   cmd->add_option("--bootstrap-confidence", a->bootstrap.confidence,
                   "the intervals' confidence level, in (0, 1)")
       ->capture_default_str();
+  cmd->add_option("--bootstrap-method", a->bootstrap_method,
+                  "percentile | bca (bias-corrected and accelerated; its acceleration from a "
+                  "jackknife over 100 groups of frames or images; docs/metrics.md)")
+      ->capture_default_str();
 }
 
 // Records in `a` which bootstrap flags `cmd` got (called from the command's callback).
 void NoteBootstrapFlags(const CLI::App* cmd, EvalArgs* a) {
   a->bootstrap_given = cmd->count("--bootstrap") > 0;
-  a->bootstrap_settings_given =
-      cmd->count("--bootstrap-seed") > 0 || cmd->count("--bootstrap-confidence") > 0;
+  a->bootstrap_settings_given = cmd->count("--bootstrap-seed") > 0 ||
+                                cmd->count("--bootstrap-confidence") > 0 ||
+                                cmd->count("--bootstrap-method") > 0;
 }
 
 // The bootstrap options of the flags: unset without --bootstrap.
 std::optional<BootstrapOptions> MakeBootstrapOptions(const EvalArgs& a) {
   if (!a.bootstrap_given) {
     STEREODET_CHECK(!a.bootstrap_settings_given)
-        << "--bootstrap-seed and --bootstrap-confidence need --bootstrap N";
+        << "--bootstrap-seed, --bootstrap-confidence and --bootstrap-method need --bootstrap N";
     return std::nullopt;
   }
   STEREODET_CHECK(a.bootstrap.num_resamples >= 1 &&
@@ -131,7 +137,12 @@ std::optional<BootstrapOptions> MakeBootstrapOptions(const EvalArgs& a) {
       << a.bootstrap.num_resamples;
   STEREODET_CHECK(a.bootstrap.confidence > 0 && a.bootstrap.confidence < 1)
       << "--bootstrap-confidence: must be in (0, 1), got " << a.bootstrap.confidence;
-  return a.bootstrap;
+  const auto method = ParseBootstrapMethod(a.bootstrap_method);
+  STEREODET_CHECK(method.has_value())
+      << "--bootstrap-method: unknown '" << a.bootstrap_method << "' (percentile, bca)";
+  BootstrapOptions options = a.bootstrap;
+  options.method = *method;
+  return options;
 }
 
 // The common options of eval, eval sweep and eval compare.
@@ -352,7 +363,8 @@ bool IsCocoModeFlag(const std::string& name) {
          name == "--coco-brier" || name == "--matcher" || name == "--score-threshold" ||
          name == "--score-transform" || name == "--calibration-bins" || name == "--out" ||
          name == "--threads" || name == "--help" || name == "--debug" || name == "--coco-det-b" ||
-         name == "--bootstrap" || name == "--bootstrap-seed" || name == "--bootstrap-confidence";
+         name == "--bootstrap" || name == "--bootstrap-seed" || name == "--bootstrap-confidence" ||
+         name == "--bootstrap-method";
 }
 
 // The flags that set the operating-point metrics' options: each turns them on.

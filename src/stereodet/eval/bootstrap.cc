@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <boost/math/distributions/normal.hpp>
 #include <cmath>
 #include <functional>
+#include <numeric>
 #include <utility>
 
 #include "stereodet/eval/associate_internal.h"
@@ -509,23 +511,31 @@ std::vector<Values> CellValues(const Prepared& p, const std::vector<int32_t>& w)
 }
 
 // The result of the estimates and the resamples' values (per_resample[r][cell][metric]).
+// With BootstrapMethod::kBca, `jackknife[g][cell][metric]` holds the leave-group-out values.
 BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
                            const std::vector<Values>& estimate,
-                           const std::vector<std::vector<Values>>& per_resample) {
+                           const std::vector<std::vector<Values>>& per_resample,
+                           const std::vector<std::vector<Values>>& jackknife) {
   BootstrapResult result;
   result.num_resamples = options.num_resamples;
   result.seed = options.seed;
   result.confidence = options.confidence;
   result.matcher = p.matcher;
+  result.method = options.method;
   result.cells = p.headers;
-  std::vector<double> samples(per_resample.size());
+  std::vector<double> samples(per_resample.size()), jack(jackknife.size());
   // The intervals of the values at `index` (CellValues' order).
   auto fill = [&](size_t index, std::array<BootstrapInterval, kNumBootstrapMetrics>* intervals) {
     for (int m = 0; m < kNumBootstrapMetrics; ++m) {
       BootstrapInterval& interval = (*intervals)[m];
       interval.estimate = estimate[index][m];
       for (size_t r = 0; r < per_resample.size(); ++r) samples[r] = per_resample[r][index][m];
-      FillBootstrapInterval(samples, options.confidence, options.keep_samples, &interval);
+      if (options.method == BootstrapMethod::kBca) {
+        for (size_t g = 0; g < jackknife.size(); ++g) jack[g] = jackknife[g][index][m];
+        FillBcaInterval(samples, jack, options.confidence, options.keep_samples, &interval);
+      } else {
+        FillBootstrapInterval(samples, options.confidence, options.keep_samples, &interval);
+      }
     }
   };
   for (size_t c = 0; c < result.cells.size(); ++c) {
@@ -554,6 +564,8 @@ void BootstrapOptions::Check() const {
       << num_resamples;
   STEREODET_CHECK(confidence > 0 && confidence < 1)
       << "bootstrap: confidence must be in (0, 1), got " << confidence;
+  STEREODET_CHECK(jackknife_groups >= 2)
+      << "bootstrap: jackknife_groups must be at least 2, got " << jackknife_groups;
 }
 
 const char* BootstrapMetricName(BootstrapMetric metric) {
@@ -617,6 +629,79 @@ void FillBootstrapInterval(const std::vector<double>& samples, double confidence
   if (keep) interval->samples = samples;
 }
 
+void FillBcaInterval(const std::vector<double>& samples, const std::vector<double>& jackknife,
+                     double confidence, bool keep, BootstrapInterval* interval) {
+  std::vector<double> defined;
+  defined.reserve(samples.size());
+  for (const double s : samples) {
+    if (!std::isnan(s)) defined.push_back(s);
+  }
+  interval->num_defined = static_cast<int64_t>(defined.size());
+  if (keep) interval->samples = samples;
+  interval->lower = interval->upper = kNaN;
+  interval->bias_correction = interval->acceleration = kNaN;
+  const double estimate = interval->estimate;
+  if (std::isnan(estimate) || defined.empty()) return;
+  double below = 0;
+  for (const double s : defined) below += s < estimate ? 1.0 : s == estimate ? 0.5 : 0.0;
+  const double share = below / static_cast<double>(defined.size());
+  if (share <= 0 || share >= 1) return;  // z0 infinite: every resample on one side
+  std::vector<double> jack;
+  for (const double j : jackknife) {
+    if (!std::isnan(j)) jack.push_back(j);
+  }
+  if (jack.size() < 2) return;
+  const boost::math::normal normal;
+  const double z0 = boost::math::quantile(normal, share);
+  const double mean = std::accumulate(jack.begin(), jack.end(), 0.0) / jack.size();
+  double num = 0, den = 0;
+  for (const double j : jack) {
+    const double d = mean - j;
+    num += d * d * d;
+    den += d * d;
+  }
+  const double a = den > 0 ? num / (6 * std::pow(den, 1.5)) : 0.0;
+  // The bound's quantile level; NaN where the acceleration folds the correction over.
+  auto bound = [&](double z) {
+    const double shifted = z0 + z;
+    const double denominator = 1 - a * shifted;
+    if (!(denominator > 0)) return kNaN;
+    return Quantile(defined, boost::math::cdf(normal, z0 + shifted / denominator));
+  };
+  const double alpha = (1 - confidence) / 2;
+  interval->lower = bound(boost::math::quantile(normal, alpha));
+  interval->upper = bound(boost::math::quantile(normal, 1 - alpha));
+  interval->bias_correction = z0;
+  interval->acceleration = a;
+}
+
+int JackknifeGroupCount(int64_t num_frames, int groups) {
+  return static_cast<int>(std::min<int64_t>(groups, num_frames));
+}
+
+std::vector<int32_t> JackknifeFrameCounts(int64_t num_frames, int groups, int g) {
+  const int count = JackknifeGroupCount(num_frames, groups);
+  STEREODET_CHECK(g >= 0 && g < count) << "jackknife group " << g << " of " << count;
+  std::vector<int32_t> w(num_frames, 1);
+  const int64_t begin = num_frames * g / count, end = num_frames * (g + 1) / count;
+  for (int64_t f = begin; f < end; ++f) w[f] = 0;
+  return w;
+}
+
+const char* BootstrapMethodName(BootstrapMethod method) {
+  return method == BootstrapMethod::kBca ? "bca" : "percentile";
+}
+
+const char* BootstrapMethodTitle(BootstrapMethod method) {
+  return method == BootstrapMethod::kBca ? "BCa" : "percentile";
+}
+
+std::optional<BootstrapMethod> ParseBootstrapMethod(std::string_view text) {
+  if (text == "percentile") return BootstrapMethod::kPercentile;
+  if (text == "bca") return BootstrapMethod::kBca;
+  return std::nullopt;
+}
+
 std::vector<int32_t> BootstrapFrameCounts(int64_t num_frames, uint64_t seed, int64_t resample) {
   STEREODET_CHECK(num_frames >= 0 && num_frames <= std::numeric_limits<int32_t>::max())
       << "bootstrap: bad frame count " << num_frames;
@@ -642,6 +727,26 @@ std::vector<int32_t> BootstrapFrameCounts(int64_t num_frames, uint64_t seed, int
   return counts;
 }
 
+namespace {
+
+// BCa's leave-one-group-out values (JackknifeFrameCounts), [group][cell][metric]; empty for the
+// percentile method.
+std::vector<std::vector<Values>> Jackknife(const Prepared& p, int64_t n,
+                                           const BootstrapOptions& bootstrap) {
+  if (bootstrap.method != BootstrapMethod::kBca) return {};
+  std::vector<std::vector<Values>> out(JackknifeGroupCount(n, bootstrap.jackknife_groups));
+  ParallelFor(
+      out.size(),
+      [&](size_t g) {
+        out[g] =
+            CellValues(p, JackknifeFrameCounts(n, bootstrap.jackknife_groups, static_cast<int>(g)));
+      },
+      bootstrap.num_threads);
+  return out;
+}
+
+}  // namespace
+
 BootstrapResult Bootstrap(const std::vector<EvalFrame>& frames, const EvalOptions& eval,
                           const BootstrapOptions& bootstrap) {
   eval.Check();
@@ -658,7 +763,8 @@ BootstrapResult Bootstrap(const std::vector<EvalFrame>& frames, const EvalOption
             CellValues(p, BootstrapFrameCounts(n, bootstrap.seed, static_cast<int64_t>(r)));
       },
       bootstrap.num_threads);
-  BootstrapResult result = MakeResult(p, bootstrap, estimate, per_resample);
+  const std::vector<std::vector<Values>> jackknife = Jackknife(p, n, bootstrap);
+  BootstrapResult result = MakeResult(p, bootstrap, estimate, per_resample, jackknife);
   result.num_frames = n;
   result.seconds = timer.ElapsedSeconds();
   return result;
@@ -693,10 +799,15 @@ PairedBootstrapResult PairedBootstrap(const std::vector<EvalFrame>& a,
         values_d[r] = Difference(values_a[r], values_b[r]);
       },
       bootstrap.num_threads);
+  const std::vector<std::vector<Values>> jack_a = Jackknife(pa, n, bootstrap),
+                                         jack_b = Jackknife(pb, n, bootstrap);
+  std::vector<std::vector<Values>> jack_d(jack_a.size());
+  for (size_t g = 0; g < jack_a.size(); ++g) jack_d[g] = Difference(jack_a[g], jack_b[g]);
   PairedBootstrapResult result;
-  result.a = MakeResult(pa, bootstrap, estimate_a, values_a);
-  result.b = MakeResult(pb, bootstrap, estimate_b, values_b);
-  result.difference = MakeResult(pa, bootstrap, Difference(estimate_a, estimate_b), values_d);
+  result.a = MakeResult(pa, bootstrap, estimate_a, values_a, jack_a);
+  result.b = MakeResult(pb, bootstrap, estimate_b, values_b, jack_b);
+  result.difference =
+      MakeResult(pa, bootstrap, Difference(estimate_a, estimate_b), values_d, jack_d);
   for (size_t c = 0; c < result.difference.cells.size(); ++c) {
     result.difference.cells[c].evaluated = pa.headers[c].evaluated && pb.headers[c].evaluated;
   }

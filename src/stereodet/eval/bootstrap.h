@@ -52,6 +52,19 @@ namespace stereodet {
 // cell or breakdown bin and resample (27 cells x 10^5 resamples: 130 MB; with 3 bins per cell, 4x).
 inline constexpr int kMaxBootstrapResamples = 100000;
 
+// How an interval is read from the resamples.
+enum class BootstrapMethod {
+  kPercentile,  // the (1 - c) / 2 and (1 + c) / 2 quantiles of the resamples
+  // Efron's bias-corrected and accelerated interval: quantiles moved by the bias correction z0 =
+  // Phi^-1(share of resamples below the estimate, ties counting half) and the acceleration a
+  // from a grouped jackknife (BootstrapOptions::jackknife_groups). Corrects the percentile
+  // interval of a statistic whose resamples are biased (AP's are: docs/metrics.md).
+  kBca,
+};
+const char* BootstrapMethodName(BootstrapMethod method);   // "percentile", "bca"
+const char* BootstrapMethodTitle(BootstrapMethod method);  // "percentile", "BCa" (printouts)
+std::optional<BootstrapMethod> ParseBootstrapMethod(std::string_view text);
+
 struct BootstrapOptions {
   // Resamples, in [1, kMaxBootstrapResamples]; 1000 is the usual choice for 95 % intervals.
   int num_resamples = 1000;
@@ -61,6 +74,11 @@ struct BootstrapOptions {
   // Two-sided percentile interval: the (1 - c) / 2 and (1 + c) / 2 quantiles (linear
   // interpolation, NumPy's default) of the resamples' values. In (0, 1).
   double confidence = 0.95;
+  BootstrapMethod method = BootstrapMethod::kPercentile;
+  // kBca's acceleration: the frames (images) cut into this many contiguous groups, each left out
+  // once (a grouped jackknife: G more evaluations, not N); at least 2. With N frames or fewer, one
+  // frame per group (the ordinary jackknife).
+  int jackknife_groups = 100;
   // Keep every resample's value (BootstrapInterval::samples), for tests and plots.
   bool keep_samples = false;
   int num_threads = 0;  // 0 = all hardware threads; the result does not depend on it
@@ -99,6 +117,10 @@ struct BootstrapInterval {
   int64_t num_defined = 0;
   // With BootstrapOptions::keep_samples: resample r's value, NaN where undefined.
   std::vector<double> samples;
+  // kBca: the bias correction z0 and the acceleration a the bounds were read with (NaN otherwise,
+  // or where the interval is NaN).
+  double bias_correction = kNaN;
+  double acceleration = kNaN;
 };
 
 // One bin of a cell's breakdown (BreakdownBin), in ClassResult::breakdown's order.
@@ -133,6 +155,7 @@ struct BootstrapResult {
   uint64_t seed = 0;
   double confidence = 0.0;
   Matcher matcher = Matcher::kKitti;
+  BootstrapMethod method = BootstrapMethod::kPercentile;  // how the bounds were read
   int64_t num_frames = 0;
   std::vector<BootstrapCell> cells;  // class-major, then overlap kind, then difficulty
   double seconds = 0.0;              // wall time
@@ -152,6 +175,22 @@ std::vector<int32_t> BootstrapFrameCounts(int64_t num_frames, uint64_t seed, int
 // interval->samples = samples. The estimate is left as it is.
 void FillBootstrapInterval(const std::vector<double>& samples, double confidence, bool keep_samples,
                            BootstrapInterval* interval);
+
+// The BCa interval instead (BootstrapMethod::kBca), from interval->estimate (set it first), the
+// resamples and the jackknife's leave-one-group-out values (NaN ones left out): with alpha =
+// (1 - confidence) / 2, z0 = Phi^-1((#{s < estimate} + #{s == estimate} / 2) / n), a =
+// sum(d^3) / (6 (sum(d^2))^1.5) with d = mean(jackknife) - jackknife, the bounds are the
+// quantiles at Phi(z0 + (z0 + z) / (1 - a (z0 + z))) for z = Phi^-1(alpha), Phi^-1(1 - alpha).
+// NaN bounds when the estimate is NaN, no resample is defined, every resample lies on one side of
+// the estimate (z0 infinite), or fewer than 2 jackknife values are (a = 0 when they are all equal).
+void FillBcaInterval(const std::vector<double>& samples, const std::vector<double>& jackknife,
+                     double confidence, bool keep_samples, BootstrapInterval* interval);
+
+// Frame f's multiplicity in the jackknife's group g: 1, or 0 for the frames of group g, the
+// groups being min(groups, num_frames) contiguous runs of floor or ceil(num_frames / groups)
+// frames. Requires 0 <= g < min(groups, num_frames).
+std::vector<int32_t> JackknifeFrameCounts(int64_t num_frames, int groups, int g);
+int JackknifeGroupCount(int64_t num_frames, int groups);  // min(groups, num_frames)
 
 // Intervals of every cell of Evaluate(frames, eval) (see the file comment). eval.filter is not
 // applied to the resampled metrics (they are the unfiltered ones). Requires: eval.Check() and

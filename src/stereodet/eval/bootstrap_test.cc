@@ -515,6 +515,87 @@ TEST(BootstrapTest, DeterministicWithTheSeedAndThreadCountIndependent) {
   EXPECT_TRUE(any_differs);  // another seed, other resamples
 }
 
+// BCa by hand on the resamples 0, 1, ..., 99 (quantile level q reads 99 q).
+TEST(BootstrapTest, BcaIntervalByHand) {
+  std::vector<double> samples(100);
+  for (int i = 0; i < 100; ++i) samples[i] = i;
+  BootstrapInterval centred;
+  centred.estimate = 49.5;  // half below: z0 = 0; a symmetric jackknife: a = 0
+  FillBcaInterval(samples, {1.0, -1.0}, 0.95, false, &centred);
+  EXPECT_EQ(centred.bias_correction, 0.0);
+  EXPECT_EQ(centred.acceleration, 0.0);
+  BootstrapInterval percentile;
+  FillBootstrapInterval(samples, 0.95, false, &percentile);
+  EXPECT_NEAR(centred.lower, percentile.lower, 1e-9);  // 2.475
+  EXPECT_NEAR(centred.upper, percentile.upper, 1e-9);  // 96.525
+  // 30 % below the estimate: z0 = Phi^-1(0.3) = -0.52440; the levels Phi(2 z0 -+ 1.95996) =
+  // 0.0013116 and 0.81889 (Python's statistics.NormalDist).
+  BootstrapInterval shifted;
+  shifted.estimate = 29.5;
+  FillBcaInterval(samples, {1.0, -1.0}, 0.95, true, &shifted);
+  EXPECT_NEAR(shifted.bias_correction, -0.5244005127080407, 1e-12);
+  EXPECT_NEAR(shifted.lower, 0.1298443998515399, 1e-9);
+  EXPECT_NEAR(shifted.upper, 81.07062888311859, 1e-9);
+  EXPECT_EQ(shifted.num_defined, 100);
+  EXPECT_EQ(shifted.samples.size(), 100u);
+  // The acceleration: jackknife 0, 0, 3: d = 1, 1, -2, a = -6 / (6 * 6^1.5).
+  BootstrapInterval accelerated;
+  accelerated.estimate = 49.5;
+  FillBcaInterval(samples, {0.0, 0.0, 3.0, std::nan("")}, 0.95, false, &accelerated);
+  EXPECT_NEAR(accelerated.acceleration, -1.0 / std::pow(6.0, 1.5), 1e-15);
+  EXPECT_LT(accelerated.upper, percentile.upper);  // a < 0 pulls both bounds down
+  // No interval: every resample above the estimate, or a NaN estimate, or no jackknife.
+  BootstrapInterval none;
+  none.estimate = -1;
+  FillBcaInterval(samples, {1.0, -1.0}, 0.95, false, &none);
+  EXPECT_TRUE(std::isnan(none.lower) && std::isnan(none.upper));
+  none.estimate = 10;
+  FillBcaInterval(samples, {1.0}, 0.95, false, &none);
+  EXPECT_TRUE(std::isnan(none.lower));
+}
+
+TEST(BootstrapTest, JackknifeGroupsCoverEveryFrameOnce) {
+  EXPECT_EQ(JackknifeGroupCount(10, 3), 3);
+  EXPECT_EQ(JackknifeGroupCount(2, 100), 2);
+  std::vector<int> left_out(10, 0);
+  for (int g = 0; g < 3; ++g) {
+    const std::vector<int32_t> w = JackknifeFrameCounts(10, 3, g);
+    for (int f = 0; f < 10; ++f) left_out[f] += w[f] == 0;
+  }
+  EXPECT_EQ(left_out, std::vector<int>(10, 1));
+  EXPECT_EQ(JackknifeFrameCounts(10, 3, 0), (std::vector<int32_t>{0, 0, 0, 1, 1, 1, 1, 1, 1, 1}));
+  EXPECT_THROW(JackknifeFrameCounts(10, 3, 3), std::invalid_argument);
+}
+
+// BCa through Bootstrap: the same resamples as the percentile method, other bounds, with the
+// correction and acceleration recorded; the paired difference of A against itself stays 0 or NaN.
+TEST(BootstrapTest, BcaUsesTheSameResamples) {
+  const std::vector<EvalFrame> frames = SmallFrames(12, 30);
+  EvalOptions eval;
+  eval.matcher = Matcher::kOptimal;
+  BootstrapOptions b;
+  b.num_resamples = 60;
+  b.keep_samples = true;
+  const BootstrapResult percentile = Bootstrap(frames, eval, b);
+  b.method = BootstrapMethod::kBca;
+  b.jackknife_groups = 6;
+  const BootstrapResult bca = Bootstrap(frames, eval, b);
+  EXPECT_EQ(bca.method, BootstrapMethod::kBca);
+  int with_bounds = 0;
+  for (size_t c = 0; c < bca.cells.size(); ++c) {
+    const BootstrapInterval& x = percentile.cells[c].Get(BootstrapMetric::kApR40);
+    const BootstrapInterval& y = bca.cells[c].Get(BootstrapMetric::kApR40);
+    ASSERT_EQ(x.samples.size(), y.samples.size());
+    for (size_t r = 0; r < x.samples.size(); ++r) EXPECT_TRUE(Same(x.samples[r], y.samples[r]));
+    if (std::isnan(y.lower)) continue;
+    EXPECT_LE(y.lower, y.upper);
+    EXPECT_FALSE(std::isnan(y.bias_correction));
+    EXPECT_FALSE(std::isnan(y.acceleration));
+    ++with_bounds;
+  }
+  EXPECT_GT(with_bounds, 0);
+}
+
 TEST(BootstrapTest, PairedAVersusAIsExactlyZero) {
   const std::vector<EvalFrame> frames = SmallFrames(13, 30);
   EvalOptions eval;

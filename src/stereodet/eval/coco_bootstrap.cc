@@ -176,21 +176,53 @@ std::vector<std::vector<std::array<double, kNumCocoStats>>> Resample(
   return out;
 }
 
+// BCa's leave-one-group-out numbers of each evaluation ([evaluation][group]); empty vectors for
+// the percentile method.
+std::vector<std::vector<std::array<double, kNumCocoStats>>> Jackknife(
+    const std::vector<const Prepared*>& evaluations, const BootstrapOptions& bootstrap) {
+  std::vector<std::vector<std::array<double, kNumCocoStats>>> out(evaluations.size());
+  if (bootstrap.method != BootstrapMethod::kBca) return out;
+  const int64_t n = static_cast<int64_t>(evaluations.front()->result.image_ids.size());
+  const int groups = JackknifeGroupCount(n, bootstrap.jackknife_groups);
+  for (auto& values : out) values.resize(groups);
+  ParallelFor(
+      groups,
+      [&](size_t g) {
+        const std::vector<int32_t> w =
+            JackknifeFrameCounts(n, bootstrap.jackknife_groups, static_cast<int>(g));
+        for (size_t e = 0; e < evaluations.size(); ++e) {
+          ResampleScratch scratch = MakeScratch(*evaluations[e]);
+          out[e][g] = ResampleStats(*evaluations[e], w, &scratch);
+        }
+      },
+      bootstrap.num_threads);
+  return out;
+}
+
 CocoBootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& bootstrap,
                                const std::array<double, kNumCocoStats>& estimate,
-                               const std::vector<std::array<double, kNumCocoStats>>& samples) {
+                               const std::vector<std::array<double, kNumCocoStats>>& samples,
+                               const std::vector<std::array<double, kNumCocoStats>>& jackknife) {
   CocoBootstrapResult result;
   result.num_resamples = bootstrap.num_resamples;
   result.seed = bootstrap.seed;
   result.confidence = bootstrap.confidence;
   result.matcher = p.result.options.matcher;
   result.num_images = static_cast<int64_t>(p.result.image_ids.size());
-  std::vector<double> values(samples.size());
+  result.method = bootstrap.method;
+  std::vector<double> values(samples.size()), jack(jackknife.size());
   for (int i = 0; i < kNumCocoStats; ++i) {
     for (size_t r = 0; r < samples.size(); ++r) values[r] = samples[r][i];
     BootstrapInterval& interval = result.stats[i];
+    if (bootstrap.method == BootstrapMethod::kBca) {
+      // An estimate of -1 (no ground truth) has no interval.
+      interval.estimate = estimate[i] == -1.0 ? kNaN : estimate[i];
+      for (size_t g = 0; g < jackknife.size(); ++g) jack[g] = jackknife[g][i];
+      FillBcaInterval(values, jack, bootstrap.confidence, bootstrap.keep_samples, &interval);
+    } else {
+      FillBootstrapInterval(values, bootstrap.confidence, bootstrap.keep_samples, &interval);
+    }
     interval.estimate = estimate[i];
-    FillBootstrapInterval(values, bootstrap.confidence, bootstrap.keep_samples, &interval);
   }
   return result;
 }
@@ -205,7 +237,8 @@ CocoBootstrapResult BootstrapCoco(const CocoGroundTruth& gt, const std::vector<C
   const Timer timer;
   const Prepared p = Prepare(gt, dets, options);
   const auto samples = Resample({&p}, bootstrap);
-  CocoBootstrapResult out = MakeResult(p, bootstrap, p.result.stats, samples[0]);
+  const auto jackknife = Jackknife({&p}, bootstrap);
+  CocoBootstrapResult out = MakeResult(p, bootstrap, p.result.stats, samples[0], jackknife[0]);
   if (result != nullptr) {
     *result = options.score_metrics ? EvaluateCoco(gt, dets, options) : p.result;
   }
@@ -238,11 +271,16 @@ CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
   for (size_t r = 0; r < difference.size(); ++r) {
     difference[r] = minus(samples[0][r], samples[1][r], kNaN);
   }
+  const auto jackknife = Jackknife({&pa, &pb}, bootstrap);
+  std::vector<std::array<double, kNumCocoStats>> jack_d(jackknife[0].size());
+  for (size_t g = 0; g < jack_d.size(); ++g) {
+    jack_d[g] = minus(jackknife[0][g], jackknife[1][g], kNaN);
+  }
   CocoPairedBootstrapResult out;
-  out.a = MakeResult(pa, bootstrap, pa.result.stats, samples[0]);
-  out.b = MakeResult(pb, bootstrap, pb.result.stats, samples[1]);
+  out.a = MakeResult(pa, bootstrap, pa.result.stats, samples[0], jackknife[0]);
+  out.b = MakeResult(pb, bootstrap, pb.result.stats, samples[1], jackknife[1]);
   out.difference =
-      MakeResult(pa, bootstrap, minus(pa.result.stats, pb.result.stats, -1.0), difference);
+      MakeResult(pa, bootstrap, minus(pa.result.stats, pb.result.stats, -1.0), difference, jack_d);
   const double seconds = timer.ElapsedSeconds();
   for (CocoBootstrapResult* r : {&out.a, &out.b, &out.difference}) r->seconds = seconds;
   return out;

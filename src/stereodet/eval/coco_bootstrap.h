@@ -30,6 +30,7 @@ struct CocoBootstrapResult {
   uint64_t seed = 0;
   double confidence = 0.0;
   CocoMatcher matcher = CocoMatcher::kCoco;
+  BootstrapMethod method = BootstrapMethod::kPercentile;  // how the bounds were read
   int64_t num_images = 0;
   // By CocoEvalResult::stats' order. estimate: EvaluateCoco's number (-1 where it has none, as
   // there); a resample where a number is -1 (no ground truth in its slice) leaves it out (NaN in

@@ -172,5 +172,37 @@ TEST(CocoBootstrapTest, PairedDifferences) {
   EXPECT_EQ(alone.stats[0].samples, p.b.stats[0].samples);
 }
 
+// BCa: the same resamples as the percentile method, other bounds around the estimate; A against
+// itself still exactly 0 (every resample ties the estimate: z0 = 0, a = 0).
+TEST(CocoBootstrapTest, BcaIntervals) {
+  const RandomSet s = MakeSet(5);
+  BootstrapOptions bootstrap;
+  bootstrap.num_resamples = 80;
+  bootstrap.keep_samples = true;
+  const CocoBootstrapResult percentile = BootstrapCoco(s.gt, s.dets, CocoEvalOptions(), bootstrap);
+  bootstrap.method = BootstrapMethod::kBca;
+  bootstrap.jackknife_groups = 6;
+  const CocoBootstrapResult bca = BootstrapCoco(s.gt, s.dets, CocoEvalOptions(), bootstrap);
+  EXPECT_EQ(bca.method, BootstrapMethod::kBca);
+  for (int i = 0; i < kNumCocoStats; ++i) {
+    EXPECT_EQ(bca.stats[i].estimate, percentile.stats[i].estimate);
+    ASSERT_EQ(bca.stats[i].samples.size(), percentile.stats[i].samples.size());
+    for (size_t r = 0; r < bca.stats[i].samples.size(); ++r) {
+      const double a = bca.stats[i].samples[r], b = percentile.stats[i].samples[r];
+      EXPECT_TRUE(a == b || (std::isnan(a) && std::isnan(b)));
+    }
+  }
+  const BootstrapInterval& ap = bca.stats[0];
+  ASSERT_FALSE(std::isnan(ap.lower));
+  EXPECT_LE(ap.lower, ap.estimate);
+  EXPECT_GE(ap.upper, ap.estimate);
+  EXPECT_FALSE(std::isnan(ap.acceleration));
+  const CocoPairedBootstrapResult same =
+      PairedBootstrapCoco(s.gt, s.dets, s.dets, CocoEvalOptions(), bootstrap);
+  EXPECT_EQ(same.difference.stats[0].lower, 0.0);
+  EXPECT_EQ(same.difference.stats[0].upper, 0.0);
+  EXPECT_EQ(same.difference.stats[0].bias_correction, 0.0);
+}
+
 }  // namespace
 }  // namespace stereodet

@@ -105,11 +105,9 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
     j["cells"] = {{"file", "cells.csv"}, {"reliability", "reliability.csv"}};
   }
   auto intervals = [](const CocoBootstrapResult& b) {
-    ordered_json j = {{"num_resamples", b.num_resamples},
-                      {"seed", b.seed},
-                      {"confidence", b.confidence},
-                      {"num_images", b.num_images},
-                      {"seconds", b.seconds}};
+    ordered_json j = {{"num_resamples", b.num_resamples}, {"seed", b.seed},
+                      {"confidence", b.confidence},       {"method", BootstrapMethodName(b.method)},
+                      {"num_images", b.num_images},       {"seconds", b.seconds}};
     ordered_json stats = ordered_json::object();
     for (int s = 0; s < kNumCocoStats; ++s) {
       const BootstrapInterval& i = b.stats[s];
@@ -200,8 +198,8 @@ void CocoEvaluationOptions::Check() const {
 
 std::string FormatCocoBootstrap(const CocoBootstrapResult& b) {
   std::string out = fmt::format(
-      "bootstrap: {} resamples of the {} images (seed {}), {:g}% percentile intervals\n",
-      b.num_resamples, b.num_images, b.seed, 100 * b.confidence);
+      "bootstrap: {} resamples of the {} images (seed {}), {:g}% {} intervals\n", b.num_resamples,
+      b.num_images, b.seed, 100 * b.confidence, BootstrapMethodTitle(b.method));
   for (int s = 0; s < kNumCocoStats; ++s) {
     const BootstrapInterval& i = b.stats[s];
     out += i.estimate < 0 ? fmt::format("{:<6} -1 (no ground truth)\n", CocoStatNames()[s])
@@ -217,10 +215,11 @@ std::string FormatCocoCompare(const CocoEvalResult& a, const CocoEvalResult& b,
       paired == nullptr
           ? std::string("A - B:\n")
           : fmt::format(
-                "A - B, paired bootstrap: {} resamples of the {} images (seed {}), {:g}% "
-                "percentile intervals\n",
+                "A - B, paired bootstrap: {} resamples of the {} images (seed {}), {:g}% {} "
+                "intervals\n",
                 paired->difference.num_resamples, paired->difference.num_images,
-                paired->difference.seed, 100 * paired->difference.confidence);
+                paired->difference.seed, 100 * paired->difference.confidence,
+                BootstrapMethodTitle(paired->difference.method));
   for (int s = 0; s < kNumCocoStats; ++s) {
     const double sa = a.stats[s], sb = b.stats[s];
     out += fmt::format("{:<6} A {:6.3f}  B {:6.3f}", CocoStatNames()[s], sa, sb);

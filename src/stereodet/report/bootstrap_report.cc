@@ -74,7 +74,7 @@ json BootstrapSummaryJson(const BootstrapResult& result) {
   return json{{"resamples", result.num_resamples},
               {"seed", result.seed},
               {"confidence", result.confidence},
-              {"method", "percentile"},
+              {"method", BootstrapMethodName(result.method)},
               {"resampled", "frames"},
               {"seconds", result.seconds}};
 }
@@ -106,9 +106,9 @@ json BootstrapBinJson(const BootstrapBin& bin, Matcher matcher) {
 
 std::string FormatBootstrapTable(const BootstrapResult& result) {
   std::ostringstream out;
-  out << fmt::format(
-      "bootstrap: {} resamples of the {} frames (seed {}), {} percentile intervals\n",
-      result.num_resamples, result.num_frames, result.seed, PercentText(result.confidence));
+  out << fmt::format("bootstrap: {} resamples of the {} frames (seed {}), {} {} intervals\n",
+                     result.num_resamples, result.num_frames, result.seed,
+                     PercentText(result.confidence), BootstrapMethodTitle(result.method));
   const std::vector<BootstrapMetric> metrics = TableMetrics(result.matcher);
   out << fmt::format("{:<12} {:<4} {:<8} |", "class", "kind", "diff.");
   for (const BootstrapMetric m : metrics) out << fmt::format(" {:<26}", Title(m));
@@ -158,9 +158,9 @@ std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result) {
   const BootstrapResult& d = result.difference;
   std::ostringstream out;
   out << fmt::format(
-      "paired bootstrap A - B: {} resamples of the {} frames (seed {}), {} percentile "
-      "intervals\n",
-      d.num_resamples, d.num_frames, d.seed, PercentText(d.confidence));
+      "paired bootstrap A - B: {} resamples of the {} frames (seed {}), {} {} intervals\n",
+      d.num_resamples, d.num_frames, d.seed, PercentText(d.confidence),
+      BootstrapMethodTitle(d.method));
   const std::vector<BootstrapMetric> metrics = {BootstrapMetric::kApR40,
                                                 BootstrapMetric::kBrierLabels};
   out << fmt::format("{:<12} {:<4} {:<8} |", "class", "kind", "diff.");
