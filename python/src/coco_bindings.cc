@@ -31,6 +31,7 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
                       const std::string& matcher, bool score_metrics, double score_threshold,
                       const std::string& score_transform, int calibration_bins, int bootstrap,
                       uint64_t bootstrap_seed, double bootstrap_confidence,
+                      const std::string& bootstrap_method,
                       const std::optional<std::string>& dt_b_text, const std::string& dt_b_source) {
   CocoEvalResult result;
   std::optional<CocoEvalResult> result_b;
@@ -64,6 +65,10 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
     resampling.num_resamples = bootstrap;
     resampling.seed = bootstrap_seed;
     resampling.confidence = bootstrap_confidence;
+    const auto method = ParseBootstrapMethod(bootstrap_method);
+    STEREODET_CHECK(method.has_value())
+        << "bootstrap_method: 'percentile' or 'bca', got '" << bootstrap_method << "'";
+    resampling.method = *method;
     resampling.keep_samples = true;
     resampling.num_threads = num_threads;
     if (bootstrap > 0) resampling.Check();
@@ -119,6 +124,7 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
     out["num_resamples"] = b.num_resamples;
     out["seed"] = b.seed;
     out["confidence"] = b.confidence;
+    out["method"] = BootstrapMethodName(b.method);
     out["seconds"] = b.seconds;
     return out;
   };
@@ -179,8 +185,8 @@ void BindCoco(py::module_& m) {
       py::arg("score_threshold") = -std::numeric_limits<double>::infinity(),
       py::arg("score_transform") = "none", py::arg("calibration_bins") = 10,
       py::arg("bootstrap") = 0, py::arg("bootstrap_seed") = 1,
-      py::arg("bootstrap_confidence") = 0.95, py::arg("dt_b_text") = std::nullopt,
-      py::arg("dt_b_source") = "",
+      py::arg("bootstrap_confidence") = 0.95, py::arg("bootstrap_method") = "percentile",
+      py::arg("dt_b_text") = std::nullopt, py::arg("dt_b_source") = "",
       "COCOeval(gt, loadRes(dt), 'bbox') on the JSON texts, the GIL released: a dict of stats "
       "(12), precision (T, R, K, A, M), recall (T, K, A, M), scores, the ids and the summary "
       "text; with score_metrics, score_stats (12) and the cells' (T, K, A) arrays; with bootstrap "

@@ -169,5 +169,6 @@ def _coco_evaluate(gt_text: str, gt_source: str, dt_text: str, dt_source: str,
                    num_threads: int = ..., matcher: str = ..., score_metrics: bool = ...,
                    score_threshold: float = ..., score_transform: str = ...,
                    calibration_bins: int = ..., bootstrap: int = ..., bootstrap_seed: int = ...,
-                   bootstrap_confidence: float = ..., dt_b_text: Optional[str] = ...,
+                   bootstrap_confidence: float = ..., bootstrap_method: str = ...,
+                   dt_b_text: Optional[str] = ...,
                    dt_b_source: str = ...) -> Dict[str, Any]: ...

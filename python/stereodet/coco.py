@@ -121,7 +121,7 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
              matcher: str = "coco", brier: bool = False,
              score_threshold: Optional[float] = None, score_transform: str = "none",
              calibration_bins: int = 10, bootstrap: int = 0, bootstrap_seed: int = 1,
-             confidence: float = 0.95) -> CocoResult:
+             confidence: float = 0.95, bootstrap_method: str = "percentile") -> CocoResult:
     """COCOeval(gt, gt.loadRes(dt), "bbox").evaluate(); .accumulate(); .summarize().
 
     gt: a COCO ground-truth file's path, its loaded dict, or a pycocotools COCO object.
@@ -138,7 +138,9 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
       logits) and calibration_bins reliability bins.
     bootstrap: N > 0 resamples of the images (seed bootstrap_seed): result.intervals holds each
       of the 12 numbers' percentile interval at `confidence` (the CLI's --bootstrap N), each
-      resample exactly COCOeval on the resampled image list (docs/metrics.md).
+      resample exactly COCOeval on the resampled image list (docs/metrics.md);
+      bootstrap_method "bca" reads bias-corrected and accelerated intervals from the same
+      resamples (--bootstrap-method bca).
 
     Raises stereodet.ParseError for a malformed file (naming the element and field), ValueError
     for a bad option, OSError for a file that cannot be read.
@@ -150,11 +152,12 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
                                            honor_ignore_flag, list(max_dets), num_threads,
                                            matcher, brier, threshold, score_transform,
                                            calibration_bins, bootstrap, bootstrap_seed,
-                                           confidence))
+                                           confidence, bootstrap_method))
 
 
 def compare(gt: Any, dt_a: Any, dt_b: Any, *, bootstrap: int = 0, bootstrap_seed: int = 1,
-            confidence: float = 0.95, matcher: str = "coco", honor_ignore_flag: bool = False,
+            confidence: float = 0.95, bootstrap_method: str = "percentile",
+            matcher: str = "coco", honor_ignore_flag: bool = False,
             max_dets: Sequence[int] = (1, 10, 100), num_threads: int = 0) -> CocoComparison:
     """Two detection sets of one ground truth, number by number (the CLI's --coco-det-b): with
     bootstrap=N, the paired intervals of A - B over the same resampled images."""
@@ -163,7 +166,8 @@ def compare(gt: Any, dt_a: Any, dt_b: Any, *, bootstrap: int = 0, bootstrap_seed
     b_text, b_source = _text(dt_b, "results B")
     d = _core._coco_evaluate(gt_text, gt_source, a_text, a_source, honor_ignore_flag,
                              list(max_dets), num_threads, matcher, False, -math.inf, "none", 10,
-                             bootstrap, bootstrap_seed, confidence, b_text, b_source)
+                             bootstrap, bootstrap_seed, confidence, bootstrap_method, b_text,
+                             b_source)
     return CocoComparison(CocoResult(d), d["stats_b"], d)
 
 

@@ -110,3 +110,17 @@ def test_bootstrap_and_compare_equal_the_cli(data, cli, tmp_path):
     assert c.intervals["AP"] == (0.0, 0.0, 0.0)
     assert np.array_equal(c.b_stats, c.a.stats)
     assert c.difference[0] == 0.0 and np.isnan(c.difference[5]) == (c.a.stats[5] < 0)
+
+
+def test_bca_intervals_equal_the_cli(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    r = coco.evaluate(gt_path, dt_path, bootstrap=60, bootstrap_method="bca")
+    cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--bootstrap", "60",
+        "--bootstrap-method", "bca", "--out", tmp_path / "cli")
+    results = json.loads((tmp_path / "cli" / "results.json").read_text())
+    assert results["bootstrap"]["method"] == "bca"
+    _, lower, upper = r.intervals["AP"]
+    assert results["bootstrap"]["stats"]["AP"]["lower"] == lower
+    assert results["bootstrap"]["stats"]["AP"]["upper"] == upper
+    with pytest.raises(ValueError, match="bootstrap_method"):
+        coco.evaluate(gt_path, dt_path, bootstrap=5, bootstrap_method="basic")
