@@ -221,7 +221,7 @@ PyFrames FramesFromFolders(const std::string& gt, const std::string& det, const 
 // evaluate()'s bootstrap=N (0: none), bootstrap_seed, bootstrap_confidence as the CLI's --bootstrap
 // flags: checked as the CLI checks them.
 std::optional<BootstrapOptions> BootstrapOf(int resamples, uint64_t seed, double confidence,
-                                            int num_threads) {
+                                            const std::string& method, int num_threads) {
   if (resamples == 0) return std::nullopt;
   if (resamples < 1 || resamples > kMaxBootstrapResamples) {
     ThrowValueError("bootstrap: resamples must be in [1, " +
@@ -230,7 +230,10 @@ std::optional<BootstrapOptions> BootstrapOf(int resamples, uint64_t seed, double
   if (!(confidence > 0 && confidence < 1)) {
     ThrowValueError("bootstrap_confidence: must be in (0, 1), got " + std::to_string(confidence));
   }
+  const std::optional<BootstrapMethod> parsed = ParseBootstrapMethod(method);
+  if (!parsed) ThrowValueError("bootstrap_method: 'percentile' or 'bca', got '" + method + "'");
   BootstrapOptions b;
+  b.method = *parsed;
   b.num_resamples = resamples;
   b.seed = seed;
   b.confidence = confidence;
@@ -240,10 +243,11 @@ std::optional<BootstrapOptions> BootstrapOf(int resamples, uint64_t seed, double
 
 PyEvalResult EvaluateFrames(const PyFrames& frames, const std::vector<EvalOptions>& options,
                             int bootstrap = 0, uint64_t bootstrap_seed = 1,
-                            double bootstrap_confidence = 0.95) {
+                            double bootstrap_confidence = 0.95,
+                            const std::string& bootstrap_method = "percentile") {
   std::vector<EvalRun> runs;
   const std::optional<BootstrapOptions> b =
-      BootstrapOf(bootstrap, bootstrap_seed, bootstrap_confidence,
+      BootstrapOf(bootstrap, bootstrap_seed, bootstrap_confidence, bootstrap_method,
                   options.empty() ? 0 : options.front().num_threads);
   {
     ReleaseGil release;
@@ -280,9 +284,11 @@ PyEvalResult RunFolders(const fs::path& gt, const fs::path& det, const std::stri
                         bool lenient, int num_threads, std::vector<EvalOptions> runs,
                         const fs::path& out, bool records, bool missing_as_empty,
                         std::optional<double> score_if_missing, int bootstrap,
-                        uint64_t bootstrap_seed, double bootstrap_confidence) {
+                        uint64_t bootstrap_seed, double bootstrap_confidence,
+                        const std::string& bootstrap_method) {
   EvaluationOptions options;
-  options.bootstrap = BootstrapOf(bootstrap, bootstrap_seed, bootstrap_confidence, num_threads);
+  options.bootstrap =
+      BootstrapOf(bootstrap, bootstrap_seed, bootstrap_confidence, bootstrap_method, num_threads);
   options.input =
       InputOptions(gt, det, split, lenient, num_threads, missing_as_empty, score_if_missing);
   if (records && out.empty()) {
@@ -949,7 +955,7 @@ void BindEval(py::module_& m) {
         py::arg("score_if_missing") = std::nullopt);
   m.def("_evaluate", &EvaluateFrames, py::arg("frames"), py::arg("options"),
         py::arg("bootstrap") = 0, py::arg("bootstrap_seed") = 1,
-        py::arg("bootstrap_confidence") = 0.95);
+        py::arg("bootstrap_confidence") = 0.95, py::arg("bootstrap_method") = "percentile");
 
   // get_official_eval_result's two evaluations, strict and loose, and its printout. The same
   // options as OpenPcdetPrintout (openpcdet_compat.cc) builds, so the printout is `stereodet eval
@@ -984,7 +990,8 @@ void BindEval(py::module_& m) {
         py::arg("lenient"), py::arg("num_threads"), py::arg("runs"), py::arg("out"),
         py::arg("records"), py::arg("missing_as_empty") = false,
         py::arg("score_if_missing") = std::nullopt, py::arg("bootstrap") = 0,
-        py::arg("bootstrap_seed") = 1, py::arg("bootstrap_confidence") = 0.95);
+        py::arg("bootstrap_seed") = 1, py::arg("bootstrap_confidence") = 0.95,
+        py::arg("bootstrap_method") = "percentile");
   m.def("_write_report", &WriteReport, py::arg("result"), py::arg("out"), py::arg("records"));
 
   m.def(

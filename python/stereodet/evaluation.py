@@ -137,7 +137,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              out: Optional[PathLike] = None,
              breakdowns: Union[str, Iterable[str]] = (),
              score_if_missing: Optional[float] = None, bootstrap: int = 0,
-             bootstrap_seed: int = 1, bootstrap_confidence: float = 0.95) -> EvalResult:
+             bootstrap_seed: int = 1, bootstrap_confidence: float = 0.95,
+             bootstrap_method: str = "percentile") -> EvalResult:
     """Evaluates detections against labels; `stereodet eval` with the same options.
 
     gt, det: folders (gt: a KITTI root with training/label_2, a folder with label_2/, or a folder
@@ -169,7 +170,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
     bootstrap: N resamples of the frames (the CLI's --bootstrap N; 0 = none): percentile intervals
       of every cell's AP and Brier scores and of every breakdown bin's, in to_dict() as
       results.json has them (each cell's and bin's "bootstrap"), bootstrap_seed and
-      bootstrap_confidence as --bootstrap-seed and --bootstrap-confidence.
+      bootstrap_confidence as --bootstrap-seed and --bootstrap-confidence; bootstrap_method
+      "bca" as --bootstrap-method bca (bias-corrected and accelerated, the same resamples).
     score_if_missing: folders only: read detection lines without a score (15 fields: labels used
       as detections, for a sanity check) as detections of this score (the CLI's --score);
       otherwise such a line is an error (stereodet.ParseError naming it).
@@ -197,13 +199,15 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
                                      missing_as_empty=missing_as_empty,
                                      score_if_missing=score_if_missing, bootstrap=bootstrap,
                                      bootstrap_seed=bootstrap_seed,
-                                     bootstrap_confidence=bootstrap_confidence)
+                                     bootstrap_confidence=bootstrap_confidence,
+                                     bootstrap_method=bootstrap_method)
     if score_if_missing is not None:
         raise ValueError("score_if_missing is for detection folders; give annotation dicts a "
                          "'score' array")
     result = _core._evaluate(_frames(gt, det, split, lenient, num_threads, missing_as_empty),
                              runs, bootstrap=bootstrap, bootstrap_seed=bootstrap_seed,
-                             bootstrap_confidence=bootstrap_confidence)
+                             bootstrap_confidence=bootstrap_confidence,
+                             bootstrap_method=bootstrap_method)
     if out is not None:
         _core._write_report(result, target, records)
     return result
@@ -339,4 +343,5 @@ def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLik
 _EVALUATE_DEFAULTS = {name: p.default for name, p in inspect.signature(evaluate).parameters.items()
                       if p.kind == p.KEYWORD_ONLY
                       and name not in ("lenient", "missing_as_empty", "out", "score_if_missing",
-                                       "bootstrap", "bootstrap_seed", "bootstrap_confidence")}
+                                       "bootstrap", "bootstrap_seed", "bootstrap_confidence",
+                                       "bootstrap_method")}

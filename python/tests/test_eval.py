@@ -538,3 +538,18 @@ def test_bootstrap_intervals_are_the_clis(data, cli, tmp_path):
     assert "bootstrap" in expected["results"][0]
     with pytest.raises(ValueError, match="bootstrap_confidence"):
         stereodet.evaluate(gt, dt, bootstrap=10, bootstrap_confidence=1.5)
+
+
+def test_bca_intervals_are_the_clis(data, cli, tmp_path):
+    small = data / "eval_small"
+    cli("eval", "--gt", small, "--det", small / "det", "--classes", "Car", "--metrics", "2d",
+        "--bootstrap", "40", "--bootstrap-method", "bca", "--out", tmp_path / "cli")
+    with open(tmp_path / "cli" / "results.json") as f:
+        expected = json.load(f)
+    got = stereodet.evaluate(small, small / "det", classes=["Car"], metrics=["2d"], bootstrap=40,
+                             bootstrap_method="bca").to_dict()
+    assert expected["bootstrap"]["method"] == got["bootstrap"]["method"] == "bca"
+    for a, b in zip(got["results"], expected["results"]):
+        assert a.get("bootstrap") == b.get("bootstrap")
+    with pytest.raises(ValueError, match="bootstrap_method"):
+        stereodet.evaluate(small, small / "det", bootstrap=10, bootstrap_method="basic")
