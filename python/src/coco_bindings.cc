@@ -90,6 +90,11 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
   out["stats"] =
       Shaped(std::vector<double>(result.stats.begin(), result.stats.end()), {kNumCocoStats});
   out["precision"] = Shaped(result.precision, {t, r, k, a, m});
+  std::vector<double> category_stats;
+  for (const auto& stats : result.category_stats) {
+    category_stats.insert(category_stats.end(), stats.begin(), stats.end());
+  }
+  out["category_stats"] = Shaped(category_stats, {k, kNumCocoStats});
   out["recall"] = Shaped(result.recall, {t, k, a, m});
   out["scores"] = Shaped(result.scores, {t, r, k, a, m});
   out["image_ids"] = result.image_ids;

@@ -63,6 +63,9 @@ class CocoResult:
     def __init__(self, d: dict):
         self.stats: np.ndarray = d["stats"]
         self.precision: np.ndarray = d["precision"]
+        # (K, 12): each category's own 12 numbers (COCOeval with params.catIds = [id]), in
+        # category_ids' order; [:, 0] is detectron2's per-category AP.
+        self.category_stats: np.ndarray = d["category_stats"]
         self.recall: np.ndarray = d["recall"]
         self.scores: np.ndarray = d["scores"]
         self.image_ids = list(d["image_ids"])

@@ -124,3 +124,18 @@ def test_bca_intervals_equal_the_cli(data, cli, tmp_path):
     assert results["bootstrap"]["stats"]["AP"]["upper"] == upper
     with pytest.raises(ValueError, match="bootstrap_method"):
         coco.evaluate(gt_path, dt_path, bootstrap=5, bootstrap_method="basic")
+
+
+def test_category_stats_equal_the_cli(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    r = coco.evaluate(gt_path, dt_path)
+    out = cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--coco-per-category",
+              "--out", tmp_path / "cli")
+    results = json.loads((tmp_path / "cli" / "results.json").read_text())
+    assert r.category_stats.shape == (5, 12)
+    for k, category in enumerate(results["categories"]):
+        assert category["stats"]["AP"] == r.category_stats[k, 0]
+    # The mean of the categories that have ground truth is the AP here (same-sized slices).
+    defined = r.category_stats[:, 0][r.category_stats[:, 0] >= 0]
+    assert defined.mean() == pytest.approx(r.stats[0], abs=1e-12)
+    assert "category" in out.stdout and "AR100" in out.stdout

@@ -99,6 +99,7 @@ struct EvalArgs {
   // COCO mode (eval only): --coco-gt, --coco-det, --coco-honor-ignore; out and num_threads come
   // from --out and --threads.
   CocoEvaluationOptions coco;
+  bool coco_per_category = false;  // --coco-per-category
 };
 
 // The bootstrap flags (docs/metrics.md, "Bootstrap intervals").
@@ -362,8 +363,9 @@ bool IsCocoModeFlag(const std::string& name) {
   return name == "--coco-gt" || name == "--coco-det" || name == "--coco-honor-ignore" ||
          name == "--coco-brier" || name == "--matcher" || name == "--score-threshold" ||
          name == "--score-transform" || name == "--calibration-bins" || name == "--out" ||
-         name == "--threads" || name == "--help" || name == "--debug" || name == "--coco-det-b" ||
-         name == "--bootstrap" || name == "--bootstrap-seed" || name == "--bootstrap-confidence" ||
+         name == "--coco-per-category" || name == "--threads" || name == "--help" ||
+         name == "--debug" || name == "--coco-det-b" || name == "--bootstrap" ||
+         name == "--bootstrap-seed" || name == "--bootstrap-confidence" ||
          name == "--bootstrap-method";
 }
 
@@ -430,6 +432,7 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
         "left out (-1); --score-transform sigmoid reads them as logits\n");
   }
   fmt::print("{}", FormatCocoSummary(r));
+  if (a.coco_per_category) fmt::print("{}", FormatCocoCategories(r));
   if (run.result_b) {
     fmt::print("{}", FormatCocoCompare(r, *run.result_b, run.paired ? &*run.paired : nullptr));
   } else if (run.bootstrap) {
@@ -588,6 +591,9 @@ void AddEvalCommand(CLI::App& app) {
                    "COCO mode: a second results file of the same ground truth, compared with "
                    "--coco-det number by number (A - B; with --bootstrap N, paired intervals over "
                    "the images)");
+  eval->add_flag("--coco-per-category", args->coco_per_category,
+                 "COCO mode: also print each category's AP, AP50, AP75, APs, APm, APl and AR "
+                 "(results.json has them always: categories[].stats)");
   eval->add_flag("--coco-brier", args->coco.eval.score_metrics,
                  "COCO mode: also the operating point's TP/FP/FN, Brier scores (over labels, "
                  "detections, all) and calibration per IoU threshold, category and area range: 12 "

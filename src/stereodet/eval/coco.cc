@@ -715,6 +715,29 @@ size_t CocoEvalResult::CellIndex(int t, int k, int a) const {
   return (t * K + k) * A + a;
 }
 
+std::string FormatCocoCategories(const CocoEvalResult& result) {
+  constexpr std::array<int, 7> kColumns = {0, 1, 2, 3, 4, 5, 8};
+  constexpr std::array<const char*, 7> kTitles = {"AP", "AP50", "AP75", "APs", "APm", "APl", "AR"};
+  std::string out = fmt::format("{:<20} {:>8}", "category", "id");
+  for (size_t c = 0; c < kColumns.size(); ++c) {
+    out += fmt::format(" {:>6}", c + 1 == kColumns.size()
+                                     ? fmt::format("AR{}", result.options.max_dets.back())
+                                     : std::string(kTitles[c]));
+  }
+  out += "\n";
+  for (size_t k = 0; k < result.category_ids.size(); ++k) {
+    std::string name = result.category_names[k].empty() ? "-" : result.category_names[k];
+    if (name.size() > 20) name = name.substr(0, 19) + "~";
+    out += fmt::format("{:<20} {:>8}", name, result.category_ids[k]);
+    for (const int s : kColumns) {
+      const double v = result.category_stats[k][s];
+      out += v < 0 ? fmt::format(" {:>6}", "-") : fmt::format(" {:6.3f}", v);
+    }
+    out += "\n";
+  }
+  return out;
+}
+
 const std::array<const char*, kNumCocoScoreStats>& CocoScoreStatNames() {
   static const std::array<const char*, kNumCocoScoreStats> kNames = {
       "BL", "BL50", "BL75", "BD", "BD50", "BD75", "BA", "BA50", "BA75", "ECE", "ECE50", "ECE75"};
@@ -968,11 +991,14 @@ std::vector<CocoSummarySlice> CocoSummarySlices(const CocoEvalOptions& options) 
   return slices;
 }
 
-void SummarizeCoco(CocoEvalResult* result) {
+namespace {
+
+// summarize()'s 12 numbers over the categories [k_begin, k_end).
+std::array<double, kNumCocoStats> SummaryOf(const CocoEvalResult* result, int k_begin, int k_end) {
   const CocoEvalOptions& options = result->options;
   const int T = static_cast<int>(options.iou_thresholds.size()),
-            R = static_cast<int>(options.recall_thresholds.size()),
-            K = static_cast<int>(result->category_ids.size());
+            R = static_cast<int>(options.recall_thresholds.size());
+  std::array<double, kNumCocoStats> stats;
   const std::array<SummaryLine, kNumCocoStats> lines = SummaryLines(options.max_dets);
   const std::vector<CocoSummarySlice> slices = CocoSummarySlices(options);
   std::vector<double> values;
@@ -986,21 +1012,34 @@ void SummarizeCoco(CocoEvalResult* result) {
         if (line.iou && options.iou_thresholds[t] != *line.iou) continue;
         if (line.ap) {
           for (int r = 0; r < R; ++r) {
-            for (int k = 0; k < K; ++k) {
+            for (int k = k_begin; k < k_end; ++k) {
               const double v = result->precision[result->PrecisionIndex(t, r, k, a, m)];
               if (v > -1) values.push_back(v);
             }
           }
         } else {
-          for (int k = 0; k < K; ++k) {
+          for (int k = k_begin; k < k_end; ++k) {
             const double v = result->recall[result->RecallIndex(t, k, a, m)];
             if (v > -1) values.push_back(v);
           }
         }
       }
     }
-    result->stats[s] = values.empty() ? -1.0 : NumpyMean(values);
+    stats[s] = values.empty() ? -1.0 : NumpyMean(values);
   }
+  return stats;
+}
+
+}  // namespace
+
+void SummarizeCoco(CocoEvalResult* result) {
+  result->stats = SummaryOf(result, 0, static_cast<int>(result->category_ids.size()));
+}
+
+void SummarizeCocoCategories(CocoEvalResult* result) {
+  const int K = static_cast<int>(result->category_ids.size());
+  result->category_stats.resize(K);
+  for (int k = 0; k < K; ++k) result->category_stats[k] = SummaryOf(result, k, k + 1);
 }
 
 namespace {
@@ -1039,6 +1078,7 @@ class CocoEvaluator {
         },
         options_.num_threads);
     SummarizeCoco(&result_);
+    SummarizeCocoCategories(&result_);
     result_.score_stats.fill(-1.0);
     if (options_.score_metrics && result_.probability_metrics) SummarizeCells();
   }

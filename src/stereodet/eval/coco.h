@@ -217,6 +217,9 @@ struct CocoEvalResult {
   // large (at max_dets[2]). Each the mean of its array entries that are not -1; -1 when there is
   // none.
   std::array<double, kNumCocoStats> stats{};
+  // Per category (category_ids' order), the same 12 numbers over that category alone: what
+  // COCOeval prints with params.catIds = [that id] (detectron2's per-category AP is [k][0]).
+  std::vector<std::array<double, kNumCocoStats>> category_stats;
 
   // With options.score_metrics: T x K x A cells, (t * K + k) * A + a (CellIndex); else empty.
   std::vector<CocoCell> cells;
@@ -253,6 +256,11 @@ CocoEvalResult EvaluateCoco(const CocoGroundTruth& gt, const std::vector<CocoDet
 // then, with options.score_metrics, 12 more in the same layout:
 //  " Brier over labels  (BL) @[ IoU=0.50:0.95 | area=   all | maxDets=100 ] = 0.512".
 std::string FormatCocoSummary(const CocoEvalResult& result);
+
+// Each category's AP, AP50, AP75, APs, APm, APl and AR@max_dets[2] as a table, one line per
+// category in category_ids' order (-1 printed as "-"):
+//   "category         id     AP   AP50   AP75    APs    APm    APl  AR100"
+std::string FormatCocoCategories(const CocoEvalResult& result);
 
 // The names of score_stats: BL, BL50, BL75, BD, BD50, BD75, BA, BA50, BA75, ECE, ECE50, ECE75.
 const std::array<const char*, kNumCocoScoreStats>& CocoScoreStatNames();

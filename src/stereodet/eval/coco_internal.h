@@ -90,6 +90,8 @@ void CocoAccumulateCurve(const std::vector<uint8_t>& flags, const std::vector<do
 // summarize(): result->stats from result->precision and result->recall (options and categories
 // set), each number numpy's mean of its slice's entries other than -1.
 void SummarizeCoco(CocoEvalResult* result);
+// result->category_stats: each category's 12 numbers, summarize() over that category alone.
+void SummarizeCocoCategories(CocoEvalResult* result);
 
 // The (area range, max_dets) indices summarize() reads, AP lines' and AR lines' ((-1, -1) for a
 // line whose area label or max_dets the options do not have).

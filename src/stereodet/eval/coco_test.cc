@@ -637,6 +637,41 @@ TEST(CocoTest, ScoreMetricsAgreeWithTheArrays) {
   }
 }
 
+// Each category's 12 numbers are summarize() over that category alone: equal to the whole
+// evaluation's with one category, and the whole AP is the mean of the categories' where the
+// categories' slices are the same size.
+TEST(CocoTest, CategoryStatsAreEachCategorysSummary) {
+  const CocoGroundTruth one =
+      OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
+  const std::vector<CocoDetection> dets = {
+      Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+  const CocoEvalResult r = EvaluateCoco(one, dets, CocoEvalOptions());
+  ASSERT_EQ(r.category_stats.size(), 1u);
+  EXPECT_EQ(r.category_stats[0], r.stats);
+  // Two categories, the second found perfectly: its AP 1, the first's as above.
+  CocoGroundTruth two = one;
+  two.categories.push_back({2, "other"});
+  CocoAnnotation b = Box(3, 7, {100, 100, 20, 20});
+  b.category_id = 2;
+  two.annotations.push_back(b);
+  std::vector<CocoDetection> more = dets;
+  more.push_back(Det(7, {100, 100, 20, 20}, 0.5, 2));
+  const CocoEvalResult t = EvaluateCoco(two, more, CocoEvalOptions());
+  ASSERT_EQ(t.category_stats.size(), 2u);
+  EXPECT_EQ(t.category_stats[0], r.stats);
+  EXPECT_NEAR(t.category_stats[1][kAp], kPerfect, 1e-15);
+  EXPECT_NEAR(t.stats[kAp], (r.stats[kAp] + t.category_stats[1][kAp]) / 2, 1e-15);
+  const std::string table = FormatCocoCategories(t);
+  EXPECT_NE(table.find("category                   id     AP   AP50   AP75    APs    APm    APl"
+                       "  AR100\n"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("\nother                       2  1.000  1.000  1.000  1.000      -      -"
+                       "  1.000\n"),
+            std::string::npos)
+      << table;
+}
+
 TEST(CocoTest, MatcherNames) {
   EXPECT_STREQ(CocoMatcherName(CocoMatcher::kCoco), "coco");
   EXPECT_STREQ(CocoMatcherName(CocoMatcher::kOptimal), "optimal");

@@ -88,7 +88,11 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
   j["stats"] = stats;
   j["categories"] = ordered_json::array();
   for (size_t k = 0; k < r.category_ids.size(); ++k) {
-    j["categories"].push_back({{"id", r.category_ids[k]}, {"name", r.category_names[k]}});
+    // The category's own 12 numbers (COCOeval with params.catIds = [id]).
+    ordered_json stats_k = ordered_json::object();
+    for (int s = 0; s < kNumCocoStats; ++s) stats_k[CocoStatNames()[s]] = r.category_stats[k][s];
+    j["categories"].push_back(
+        {{"id", r.category_ids[k]}, {"name", r.category_names[k]}, {"stats", stats_k}});
   }
   const size_t T = o.iou_thresholds.size(), R = o.recall_thresholds.size(),
                K = r.category_ids.size(), A = o.area_ranges.size(), M = o.max_dets.size();

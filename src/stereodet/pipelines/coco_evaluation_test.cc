@@ -86,6 +86,8 @@ TEST(CocoEvaluationTest, WritesResultsJsonAndNumpyArrays) {
   EXPECT_EQ(j["stats"]["APs"].get<double>(), run.result.stats[3]);  // the 36 px^2 box
   EXPECT_EQ(j["stats"]["APl"].get<double>(), -1.0);
   EXPECT_EQ(j["categories"][1]["name"], "bicycle");
+  EXPECT_EQ(j["categories"][0]["stats"]["AP"].get<double>(), run.result.stats[0]);
+  EXPECT_EQ(j["categories"][1]["stats"]["AP"].get<double>(), -1.0);  // no ground truth
   EXPECT_EQ(j["options"]["iou_thresholds"][8].get<double>(), 0.8999999999999999);
   EXPECT_EQ(j["arrays"]["precision"]["shape"], nlohmann::json({10, 101, 2, 4, 3}));
 
