@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
@@ -118,6 +119,12 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
   auto interval_dict = [](const CocoBootstrapResult& b) {
     py::dict d;
     std::vector<double> samples(static_cast<size_t>(b.num_resamples) * kNumCocoStats);
+    for (int s = 0; s < kNumCocoScoreStats; ++s) {
+      const BootstrapInterval& i = b.score_stats[s];
+      if (!std::isnan(i.estimate)) {
+        d[CocoScoreStatNames()[s]] = py::make_tuple(i.estimate, i.lower, i.upper);
+      }
+    }
     for (int s = 0; s < kNumCocoStats; ++s) {
       const BootstrapInterval& i = b.stats[s];
       d[CocoStatNames()[s]] = py::make_tuple(i.estimate, i.lower, i.upper);

@@ -139,3 +139,16 @@ def test_category_stats_equal_the_cli(data, cli, tmp_path):
     defined = r.category_stats[:, 0][r.category_stats[:, 0] >= 0]
     assert defined.mean() == pytest.approx(r.stats[0], abs=1e-12)
     assert "category" in out.stdout and "AR100" in out.stdout
+
+
+def test_brier_intervals_with_bootstrap(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    r = coco.evaluate(gt_path, dt_path, brier=True, bootstrap=30)
+    cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--coco-brier", "--bootstrap", "30",
+        "--out", tmp_path / "cli")
+    results = json.loads((tmp_path / "cli" / "results.json").read_text())
+    estimate, lower, upper = r.intervals["BL"]
+    assert estimate == r.score_stats[0]
+    assert results["bootstrap"]["score_stats"]["BL"]["lower"] == lower
+    assert results["bootstrap"]["score_stats"]["BL"]["upper"] == upper
+    assert results["bootstrap"]["score_stats"]["ECE"]["lower"] is None  # not resampled

@@ -1060,6 +1060,9 @@ class CocoEvaluator {
     result_.scores.assign(T * R * K * A * M, -1.0);
     result_.recall.assign(T * K * A * M, -1.0);
     if (keep_ != nullptr) keep_->assign(K, CocoCategoryDetections());
+    for (size_t a = 0; a < A; ++a) {
+      if (options_.area_ranges[a].label == "all") area_all_ = static_cast<int>(a);
+    }
     if (options_.score_metrics) {
       result_.cells.assign(T * K * A, CocoCell());
       if (options_.score_transform == ScoreTransform::kNone) {
@@ -1245,7 +1248,7 @@ class CocoEvaluator {
             for (size_t d = 0; d < D; ++d) out.flags[((first + d) * A + a) * T + t] = det_flags[d];
             if (options_.score_metrics) {
               optimal.Associate(cell, tau, static_cast<int>(num_present), &det_gt, &det_flags);
-              AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, t * A + a, &out);
+              AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, image, t, a, &out);
             }
           }
           continue;
@@ -1287,7 +1290,7 @@ class CocoEvaluator {
           if (options_.score_metrics) {
             // Greedy in score order: the association of the detections at the operating point
             // is the whole one's restricted to them.
-            AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, t * A + a, &out);
+            AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, image, t, a, &out);
           }
         }
       }
@@ -1301,8 +1304,15 @@ class CocoEvaluator {
   // Label terms first, in file order, then the detections' in score order.
   void AddCellTerms(const std::vector<uint32_t>& dts, const std::vector<uint8_t>& gt_valid,
                     const std::vector<uint8_t>& flags, const std::vector<int32_t>& det_gt,
-                    size_t num_present, size_t cell, CategoryDetections* out) const {
+                    size_t num_present, int32_t image, size_t t, size_t a,
+                    CategoryDetections* out) const {
+    const size_t cell = t * options_.area_ranges.size() + a;
     ScoreMetricsAccumulator& terms = out->cell_terms[cell];
+    // The image's own terms, kept for the bootstrap (area "all" only: the summary's).
+    const bool keep = keep_ != nullptr && static_cast<int>(a) == area_all_;
+    CocoImageBrierTerms own;
+    own.image = image;
+    own.t = static_cast<int32_t>(t);
     std::vector<int32_t>& gt_tp_det = out->gt_tp_det;
     gt_tp_det.assign(gt_valid.size(), -1);
     for (size_t d = 0; d < num_present; ++d) {
@@ -1313,19 +1323,31 @@ class CocoEvaluator {
     };
     for (size_t g = 0; g < gt_valid.size(); ++g) {
       if (!gt_valid[g]) continue;
+      double term = 1.0;
       if (gt_tp_det[g] >= 0) {
         const double s = probability(gt_tp_det[g]);
-        terms.AddLabelTerm((1 - s) * (1 - s));
+        term = (1 - s) * (1 - s);
       } else {
-        terms.AddLabelTerm(1.0);
         ++out->cell_fn[cell];
       }
+      terms.AddLabelTerm(term);
+      own.label_sum += term;
+      ++own.labels;
     }
     for (size_t d = 0; d < num_present; ++d) {
       if (flags[d] != kMatched && flags[d] != 0) continue;
-      terms.AddDetectionTerm(probability(d), flags[d] == kMatched);
-      ++(flags[d] == kMatched ? out->cell_tp : out->cell_fp)[cell];
+      const bool tp = flags[d] == kMatched;
+      const double s = probability(d);
+      terms.AddDetectionTerm(s, tp);
+      ++(tp ? out->cell_tp : out->cell_fp)[cell];
+      own.detection_sum += (s - (tp ? 1.0 : 0.0)) * (s - (tp ? 1.0 : 0.0));
+      ++own.detections;
+      if (!tp) {
+        own.fp_square_sum += s * s;
+        ++own.fps;
+      }
     }
+    if (keep && (own.labels > 0 || own.detections > 0)) out->brier_terms.push_back(own);
   }
 
   // The cells of category k from its operating-point terms.
@@ -1426,6 +1448,7 @@ class CocoEvaluator {
   CocoEvalResult& result_;
   const CocoEvalOptions& options_;
   std::vector<CocoCategoryDetections>* keep_;
+  int area_all_ = -1;  // the index of area range "all", or -1
   // Ground truths and detections grouped by category then image, file order within; category
   // k's are [start_[k], start_[k + 1]). The image index of every annotation and detection.
   std::vector<uint32_t> gt_order_, det_order_;

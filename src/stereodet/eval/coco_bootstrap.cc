@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <utility>
 
 #include "stereodet/eval/coco_internal.h"
@@ -16,6 +17,24 @@ namespace stereodet {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A resample's numbers: the 12 of summarize(), then the 12 operating-point ones (score_stats; NaN
+// without score_metrics, and the ECE ones always: calibration is not resampled).
+constexpr int kNumNumbers = kNumCocoStats + kNumCocoScoreStats;
+using Numbers = std::array<double, kNumNumbers>;
+
+// The estimate's numbers, -1 (undefined) as NaN where `undefined_as_nan`.
+Numbers EstimateNumbers(const CocoEvalResult& r, bool undefined_as_nan) {
+  Numbers n;
+  for (int i = 0; i < kNumCocoStats; ++i) n[i] = r.stats[i];
+  for (int i = 0; i < kNumCocoScoreStats; ++i) {
+    n[kNumCocoStats + i] = r.options.score_metrics ? r.score_stats[i] : kNaN;
+  }
+  if (undefined_as_nan) {
+    for (double& v : n) v = v == -1.0 ? kNaN : v;
+  }
+  return n;
+}
 
 // One category's detections in accumulate()'s score order, cut into blocks: maximal runs of one
 // image's detections of one score. A resample repeats each block w_image times in place, which is
@@ -39,9 +58,7 @@ struct Prepared {
 Prepared Prepare(const CocoGroundTruth& gt, const std::vector<CocoDetection>& dets,
                  const CocoEvalOptions& options) {
   Prepared p;
-  CocoEvalOptions evaluated = options;
-  evaluated.score_metrics = false;  // not resampled
-  p.result = EvaluateCocoKeepingDetections(gt, dets, evaluated, &p.categories);
+  p.result = EvaluateCocoKeepingDetections(gt, dets, options, &p.categories);
   p.prepared.resize(p.categories.size());
   for (size_t k = 0; k < p.categories.size(); ++k) {
     const CocoCategoryDetections& in = p.categories[k];
@@ -93,9 +110,60 @@ ResampleScratch MakeScratch(const Prepared& p) {
   return s;
 }
 
-// The 12 numbers of the resample with image counts `w` (NaN where summarize() gives -1).
-std::array<double, kNumCocoStats> ResampleStats(const Prepared& p, const std::vector<int32_t>& w,
-                                                ResampleScratch* s) {
+// The Brier numbers of score_stats (BL, BD, BA at [.50:.95], .50, .75) of the resample with image
+// counts `w`, into numbers[kNumCocoStats + ...]: each cell's sums weighted by the images' counts,
+// then the summary's means over the categories (and thresholds) whose cell has a term, in
+// SummarizeCells' order. Equal to EvaluateCoco's on the materialised image list up to rounding
+// (the weighted sums add in another order).
+void ResampleBrier(const Prepared& p, const std::vector<int32_t>& w, Numbers* numbers) {
+  const CocoEvalOptions& o = p.result.options;
+  const int T = static_cast<int>(o.iou_thresholds.size());
+  const int K = static_cast<int>(p.categories.size());
+  // Per (t, k): label sum / count, detection sum / count, FP square sum / count.
+  struct Sums {
+    double label = 0, detection = 0, fp = 0;
+    int64_t labels = 0, detections = 0, fps = 0;
+  };
+  std::vector<Sums> sums(static_cast<size_t>(T) * K);
+  for (int k = 0; k < K; ++k) {
+    for (const CocoImageBrierTerms& e : p.categories[k].brier_terms) {
+      const int32_t copies = w[e.image];
+      if (copies == 0) continue;
+      Sums& c = sums[static_cast<size_t>(e.t) * K + k];
+      c.label += copies * e.label_sum;
+      c.detection += copies * e.detection_sum;
+      c.fp += copies * e.fp_square_sum;
+      c.labels += static_cast<int64_t>(copies) * e.labels;
+      c.detections += static_cast<int64_t>(copies) * e.detections;
+      c.fps += static_cast<int64_t>(copies) * e.fps;
+    }
+  }
+  const std::array<std::optional<double>, 3> ious = {std::nullopt, 0.5, 0.75};
+  for (int metric = 0; metric < 3; ++metric) {
+    for (int v = 0; v < 3; ++v) {
+      double total = 0;
+      int64_t n = 0;
+      for (int t = 0; t < T; ++t) {
+        if (ious[v] && o.iou_thresholds[t] != *ious[v]) continue;
+        for (int k = 0; k < K; ++k) {
+          const Sums& c = sums[static_cast<size_t>(t) * K + k];
+          double value = kNaN;
+          if (metric == 0 && c.labels > 0) value = c.label / c.labels;
+          if (metric == 1 && c.detections > 0) value = c.detection / c.detections;
+          if (metric == 2 && c.labels + c.fps > 0) value = (c.label + c.fp) / (c.labels + c.fps);
+          if (std::isnan(value)) continue;
+          total += value;
+          ++n;
+        }
+      }
+      (*numbers)[kNumCocoStats + metric * 3 + v] = n > 0 ? total / static_cast<double>(n) : kNaN;
+    }
+  }
+}
+
+// The 12 numbers of the resample with image counts `w` (NaN where summarize() gives -1), and with
+// score_metrics the Brier ones (ResampleBrier).
+Numbers ResampleStats(const Prepared& p, const std::vector<int32_t>& w, ResampleScratch* s) {
   CocoEvalResult& r = s->replicate;
   const CocoEvalOptions& o = r.options;
   const int T = static_cast<int>(o.iou_thresholds.size()),
@@ -144,19 +212,20 @@ std::array<double, kNumCocoStats> ResampleStats(const Prepared& p, const std::ve
     }
   }
   SummarizeCoco(&r);
-  std::array<double, kNumCocoStats> stats;
-  for (int i = 0; i < kNumCocoStats; ++i) stats[i] = r.stats[i] == -1.0 ? kNaN : r.stats[i];
-  return stats;
+  Numbers numbers;
+  numbers.fill(kNaN);
+  for (int i = 0; i < kNumCocoStats; ++i) numbers[i] = r.stats[i] == -1.0 ? kNaN : r.stats[i];
+  if (o.score_metrics && p.result.probability_metrics) ResampleBrier(p, w, &numbers);
+  return numbers;
 }
 
 // Every resample's numbers of each prepared evaluation, resample r at [r]; resamples are handed
 // to the threads in chunks, each chunk with one scratch per evaluation.
-std::vector<std::vector<std::array<double, kNumCocoStats>>> Resample(
-    const std::vector<const Prepared*>& evaluations, const BootstrapOptions& bootstrap) {
+std::vector<std::vector<Numbers>> Resample(const std::vector<const Prepared*>& evaluations,
+                                           const BootstrapOptions& bootstrap) {
   const size_t num = bootstrap.num_resamples;
   const int64_t num_images = static_cast<int64_t>(evaluations.front()->result.image_ids.size());
-  std::vector<std::vector<std::array<double, kNumCocoStats>>> out(
-      evaluations.size(), std::vector<std::array<double, kNumCocoStats>>(num));
+  std::vector<std::vector<Numbers>> out(evaluations.size(), std::vector<Numbers>(num));
   const size_t chunks =
       std::min(num, static_cast<size_t>(EffectiveThreads(bootstrap.num_threads)) * 4);
   ParallelFor(
@@ -178,9 +247,9 @@ std::vector<std::vector<std::array<double, kNumCocoStats>>> Resample(
 
 // BCa's leave-one-group-out numbers of each evaluation ([evaluation][group]); empty vectors for
 // the percentile method.
-std::vector<std::vector<std::array<double, kNumCocoStats>>> Jackknife(
-    const std::vector<const Prepared*>& evaluations, const BootstrapOptions& bootstrap) {
-  std::vector<std::vector<std::array<double, kNumCocoStats>>> out(evaluations.size());
+std::vector<std::vector<Numbers>> Jackknife(const std::vector<const Prepared*>& evaluations,
+                                            const BootstrapOptions& bootstrap) {
+  std::vector<std::vector<Numbers>> out(evaluations.size());
   if (bootstrap.method != BootstrapMethod::kBca) return out;
   const int64_t n = static_cast<int64_t>(evaluations.front()->result.image_ids.size());
   const int groups = JackknifeGroupCount(n, bootstrap.jackknife_groups);
@@ -200,9 +269,8 @@ std::vector<std::vector<std::array<double, kNumCocoStats>>> Jackknife(
 }
 
 CocoBootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& bootstrap,
-                               const std::array<double, kNumCocoStats>& estimate,
-                               const std::vector<std::array<double, kNumCocoStats>>& samples,
-                               const std::vector<std::array<double, kNumCocoStats>>& jackknife) {
+                               const Numbers& estimate, const std::vector<Numbers>& samples,
+                               const std::vector<Numbers>& jackknife) {
   CocoBootstrapResult result;
   result.num_resamples = bootstrap.num_resamples;
   result.seed = bootstrap.seed;
@@ -211,9 +279,11 @@ CocoBootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& bootst
   result.num_images = static_cast<int64_t>(p.result.image_ids.size());
   result.method = bootstrap.method;
   std::vector<double> values(samples.size()), jack(jackknife.size());
-  for (int i = 0; i < kNumCocoStats; ++i) {
+  const int count = p.result.options.score_metrics ? kNumNumbers : kNumCocoStats;
+  for (int i = 0; i < count; ++i) {
     for (size_t r = 0; r < samples.size(); ++r) values[r] = samples[r][i];
-    BootstrapInterval& interval = result.stats[i];
+    BootstrapInterval& interval =
+        i < kNumCocoStats ? result.stats[i] : result.score_stats[i - kNumCocoStats];
     if (bootstrap.method == BootstrapMethod::kBca) {
       // An estimate of -1 (no ground truth) has no interval.
       interval.estimate = estimate[i] == -1.0 ? kNaN : estimate[i];
@@ -238,7 +308,8 @@ CocoBootstrapResult BootstrapCoco(const CocoGroundTruth& gt, const std::vector<C
   const Prepared p = Prepare(gt, dets, options);
   const auto samples = Resample({&p}, bootstrap);
   const auto jackknife = Jackknife({&p}, bootstrap);
-  CocoBootstrapResult out = MakeResult(p, bootstrap, p.result.stats, samples[0], jackknife[0]);
+  CocoBootstrapResult out =
+      MakeResult(p, bootstrap, EstimateNumbers(p.result, false), samples[0], jackknife[0]);
   if (result != nullptr) {
     *result = options.score_metrics ? EvaluateCoco(gt, dets, options) : p.result;
   }
@@ -257,30 +328,31 @@ CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
   const Prepared pa = Prepare(gt, dets_a, options);
   const Prepared pb = Prepare(gt, dets_b, options);
   const auto samples = Resample({&pa, &pb}, bootstrap);
-  auto minus = [](const std::array<double, kNumCocoStats>& a,
-                  const std::array<double, kNumCocoStats>& b, double undefined) {
-    std::array<double, kNumCocoStats> d;
-    for (int i = 0; i < kNumCocoStats; ++i) {
+  auto minus = [](const Numbers& a, const Numbers& b, double undefined) {
+    Numbers d;
+    for (int i = 0; i < kNumNumbers; ++i) {
       const bool defined =
           a[i] != undefined && b[i] != undefined && !std::isnan(a[i]) && !std::isnan(b[i]);
       d[i] = defined ? a[i] - b[i] : kNaN;
     }
     return d;
   };
-  std::vector<std::array<double, kNumCocoStats>> difference(samples[0].size());
+  std::vector<Numbers> difference(samples[0].size());
   for (size_t r = 0; r < difference.size(); ++r) {
     difference[r] = minus(samples[0][r], samples[1][r], kNaN);
   }
   const auto jackknife = Jackknife({&pa, &pb}, bootstrap);
-  std::vector<std::array<double, kNumCocoStats>> jack_d(jackknife[0].size());
+  std::vector<Numbers> jack_d(jackknife[0].size());
   for (size_t g = 0; g < jack_d.size(); ++g) {
     jack_d[g] = minus(jackknife[0][g], jackknife[1][g], kNaN);
   }
   CocoPairedBootstrapResult out;
-  out.a = MakeResult(pa, bootstrap, pa.result.stats, samples[0], jackknife[0]);
-  out.b = MakeResult(pb, bootstrap, pb.result.stats, samples[1], jackknife[1]);
+  const Numbers estimate_a = EstimateNumbers(pa.result, false),
+                estimate_b = EstimateNumbers(pb.result, false);
+  out.a = MakeResult(pa, bootstrap, estimate_a, samples[0], jackknife[0]);
+  out.b = MakeResult(pb, bootstrap, estimate_b, samples[1], jackknife[1]);
   out.difference =
-      MakeResult(pa, bootstrap, minus(pa.result.stats, pb.result.stats, -1.0), difference, jack_d);
+      MakeResult(pa, bootstrap, minus(estimate_a, estimate_b, -1.0), difference, jack_d);
   const double seconds = timer.ElapsedSeconds();
   for (CocoBootstrapResult* r : {&out.a, &out.b, &out.difference}) r->seconds = seconds;
   return out;

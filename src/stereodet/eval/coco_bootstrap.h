@@ -11,8 +11,8 @@
 // order (CocoBootstrapTest.EqualsEvaluateCocoOnMaterialisedResamples), computed without matching
 // anything again: matching is per image, so every detection keeps what the matcher made of it,
 // and only the accumulation (the recall counts, the precision envelope at the 101 recall points)
-// and the summary are redone per resample. Either matcher (CocoEvalOptions::matcher). The
-// operating-point numbers (score_metrics) are not resampled.
+// and the summary are redone per resample. Either matcher (CocoEvalOptions::matcher). With
+// score_metrics the Brier numbers of the summary are resampled too (score_stats below).
 #ifndef STEREODET_EVAL_COCO_BOOTSTRAP_H_
 #define STEREODET_EVAL_COCO_BOOTSTRAP_H_
 
@@ -36,6 +36,11 @@ struct CocoBootstrapResult {
   // there); a resample where a number is -1 (no ground truth in its slice) leaves it out (NaN in
   // samples).
   std::array<BootstrapInterval, kNumCocoStats> stats;
+  // With CocoEvalOptions::score_metrics: the operating-point numbers' intervals, in score_stats'
+  // order (BL, BL50, BL75, BD, ..., BA75); the ECE ones are not resampled (NaN), as calibration is
+  // not in KITTI mode. A resample's Brier numbers are its cells' sums weighted by the images'
+  // counts: EvaluateCoco's on the materialised image list up to rounding (1e-12), not bit for bit.
+  std::array<BootstrapInterval, kNumCocoScoreStats> score_stats;
   double seconds = 0.0;  // wall time, the evaluation included
 };
 

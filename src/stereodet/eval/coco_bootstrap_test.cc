@@ -122,6 +122,46 @@ TEST(CocoBootstrapTest, EqualsEvaluateCocoOnMaterialisedResamples) {
   }
 }
 
+// With score_metrics, the Brier numbers of each resample are EvaluateCoco's on the materialised
+// image list (up to rounding: weighted sums), for both matchers; the ECE ones are not resampled.
+TEST(CocoBootstrapTest, BrierNumbersEqualEvaluateCocoOnMaterialisedResamples) {
+  for (const CocoMatcher matcher : {CocoMatcher::kCoco, CocoMatcher::kOptimal}) {
+    SCOPED_TRACE(CocoMatcherName(matcher));
+    const RandomSet s = MakeSet(6);
+    CocoEvalOptions options;
+    options.matcher = matcher;
+    options.score_metrics = true;
+    options.score_threshold = 0.2;
+    BootstrapOptions bootstrap;
+    bootstrap.num_resamples = 15;
+    bootstrap.keep_samples = true;
+    const CocoBootstrapResult b = BootstrapCoco(s.gt, s.dets, options, bootstrap);
+    const CocoEvalResult direct = EvaluateCoco(s.gt, s.dets, options);
+    int compared = 0;
+    for (int i = 0; i < kNumCocoScoreStats; ++i) {
+      EXPECT_EQ(b.score_stats[i].estimate, direct.score_stats[i]) << i;
+    }
+    for (int r = 0; r < bootstrap.num_resamples; ++r) {
+      const RandomSet m = Materialise(s, BootstrapFrameCounts(12, bootstrap.seed, r));
+      const CocoEvalResult e = EvaluateCoco(m.gt, m.dets, options);
+      for (int i = 0; i < 9; ++i) {  // BL, BD, BA at [.50:.95], .50, .75
+        const double sample = b.score_stats[i].samples[r];
+        if (e.score_stats[i] == -1) {
+          EXPECT_TRUE(std::isnan(sample)) << "resample " << r << " number " << i;
+        } else {
+          EXPECT_NEAR(sample, e.score_stats[i], 1e-12) << "resample " << r << " number " << i;
+          ++compared;
+        }
+      }
+      for (int i = 9; i < kNumCocoScoreStats; ++i) {
+        EXPECT_TRUE(std::isnan(b.score_stats[i].samples[r]));
+      }
+    }
+    EXPECT_GT(compared, 100);
+    EXPECT_LE(b.score_stats[0].lower, b.score_stats[0].upper);
+  }
+}
+
 TEST(CocoBootstrapTest, ThreadsDoNotChangeTheIntervals) {
   const RandomSet s = MakeSet(3);
   BootstrapOptions one, many;

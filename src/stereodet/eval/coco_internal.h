@@ -43,6 +43,16 @@ struct CocoImageCell {
   const uint8_t* det_outside = nullptr;  // per detection: 1 if its area is outside the range
 };
 
+// One image's Brier terms (transformed scores s) in one IoU threshold's cell of area range "all":
+// over labels, sum of (1 - s)^2 or 1 per valid ground truth; over detections, sum of (s - y)^2 per
+// TP or FP; the FPs' s^2 (over all adds them to the label terms).
+struct CocoImageBrierTerms {
+  int32_t image = 0;
+  int32_t t = 0;
+  double label_sum = 0, detection_sum = 0, fp_square_sum = 0;
+  int32_t labels = 0, detections = 0, fps = 0;
+};
+
 // One category's detections over all images, as accumulate() concatenates them (image by image in
 // image order, each image's by score), with what the matcher made of each.
 struct CocoCategoryDetections {
@@ -60,6 +70,9 @@ struct CocoCategoryDetections {
   std::vector<int64_t> cell_tp, cell_fp, cell_fn;
   std::vector<ScoreMetricsAccumulator> cell_terms;
   std::vector<int32_t> gt_tp_det;  // memory of the evaluator
+  // With score_metrics, when handed over (EvaluateCocoKeepingDetections): each image's Brier terms
+  // in the cells of area range "all", image by image, thresholds ascending (for the bootstrap).
+  std::vector<CocoImageBrierTerms> brier_terms;
 };
 
 // ParseCocoDetections' second reader: nlohmann's SAX parser, which names the element and field of

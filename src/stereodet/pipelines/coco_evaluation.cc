@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -122,6 +123,17 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
                                    {"num_defined", i.num_defined}};
     }
     j["stats"] = stats;
+    if (!std::isnan(b.score_stats[0].estimate)) {
+      ordered_json score_stats = ordered_json::object();
+      for (int s = 0; s < kNumCocoScoreStats; ++s) {
+        const BootstrapInterval& i = b.score_stats[s];
+        score_stats[CocoScoreStatNames()[s]] = {{"estimate", i.estimate},
+                                                {"lower", i.lower},
+                                                {"upper", i.upper},
+                                                {"num_defined", i.num_defined}};
+      }
+      j["score_stats"] = score_stats;  // the ECE ones are not resampled: null bounds
+    }
     return j;
   };
   if (run.bootstrap) j["bootstrap"] = intervals(*run.bootstrap);
@@ -209,6 +221,15 @@ std::string FormatCocoBootstrap(const CocoBootstrapResult& b) {
     out += i.estimate < 0 ? fmt::format("{:<6} -1 (no ground truth)\n", CocoStatNames()[s])
                           : fmt::format("{:<6} {:.3f} [{:.3f}, {:.3f}]\n", CocoStatNames()[s],
                                         i.estimate, i.lower, i.upper);
+  }
+  // With --coco-brier: the Brier numbers (the ECE ones are not resampled).
+  if (!std::isnan(b.score_stats[0].estimate)) {
+    for (int s = 0; s < 9; ++s) {
+      const BootstrapInterval& i = b.score_stats[s];
+      out += i.estimate < 0 ? fmt::format("{:<6} -1 (undefined)\n", CocoScoreStatNames()[s])
+                            : fmt::format("{:<6} {:.3f} [{:.3f}, {:.3f}]\n",
+                                          CocoScoreStatNames()[s], i.estimate, i.lower, i.upper);
+    }
   }
   return out;
 }
