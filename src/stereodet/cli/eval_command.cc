@@ -381,9 +381,10 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
     STEREODET_CHECK(option->count() == 0 || IsCocoModeFlag(option->get_name()))
         << option->get_name()
         << " is a flag of KITTI-layout evaluation; COCO mode (--coco-gt, --coco-det) takes "
-           "--out, --threads, --coco-honor-ignore, --coco-det-b, --matcher coco|optimal, "
-           "--coco-brier, --score-threshold, --score-transform, --calibration-bins and "
-           "--bootstrap N (--bootstrap-seed, --bootstrap-confidence)";
+           "--out, --threads, --coco-honor-ignore, --coco-det-b, --coco-per-category, "
+           "--matcher coco|optimal, --coco-brier, --score-threshold, --score-transform, "
+           "--calibration-bins and --bootstrap N (--bootstrap-seed, --bootstrap-confidence, "
+           "--bootstrap-method)";
   }
   STEREODET_CHECK(!a.coco.gt.empty() && !a.coco.det.empty())
       << "COCO mode needs both --coco-gt FILE and --coco-det FILE";

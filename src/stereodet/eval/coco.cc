@@ -581,10 +581,7 @@ bool FastParseCocoDetections(std::string_view text, size_t capacity, const CocoG
   return doc.current_location().get(rest) == simdjson::OUT_OF_BOUNDS;
 }
 
-}  // namespace
-
-namespace {
-
+// The fast path where it reads the file, CocoReader where it does not.
 std::vector<CocoDetection> ParseCocoDetectionsIn(std::string_view text, size_t capacity,
                                                  const std::string& source,
                                                  const CocoGroundTruth& gt) {
