@@ -23,15 +23,12 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kNumNumbers = kNumCocoStats + kNumCocoScoreStats;
 using Numbers = std::array<double, kNumNumbers>;
 
-// The estimate's numbers, -1 (undefined) as NaN where `undefined_as_nan`.
-Numbers EstimateNumbers(const CocoEvalResult& r, bool undefined_as_nan) {
+// The evaluation's own numbers (-1 where undefined, as EvaluateCoco gives them).
+Numbers EstimateNumbers(const CocoEvalResult& r) {
   Numbers n;
   for (int i = 0; i < kNumCocoStats; ++i) n[i] = r.stats[i];
   for (int i = 0; i < kNumCocoScoreStats; ++i) {
     n[kNumCocoStats + i] = r.options.score_metrics ? r.score_stats[i] : kNaN;
-  }
-  if (undefined_as_nan) {
-    for (double& v : n) v = v == -1.0 ? kNaN : v;
   }
   return n;
 }
@@ -309,9 +306,9 @@ CocoBootstrapResult BootstrapCoco(const CocoGroundTruth& gt, const std::vector<C
   const auto samples = Resample({&p}, bootstrap);
   const auto jackknife = Jackknife({&p}, bootstrap);
   CocoBootstrapResult out =
-      MakeResult(p, bootstrap, EstimateNumbers(p.result, false), samples[0], jackknife[0]);
+      MakeResult(p, bootstrap, EstimateNumbers(p.result), samples[0], jackknife[0]);
   if (result != nullptr) {
-    *result = options.score_metrics ? EvaluateCoco(gt, dets, options) : p.result;
+    *result = p.result;
   }
   out.seconds = timer.ElapsedSeconds();
   return out;
@@ -347,8 +344,7 @@ CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
     jack_d[g] = minus(jackknife[0][g], jackknife[1][g], kNaN);
   }
   CocoPairedBootstrapResult out;
-  const Numbers estimate_a = EstimateNumbers(pa.result, false),
-                estimate_b = EstimateNumbers(pb.result, false);
+  const Numbers estimate_a = EstimateNumbers(pa.result), estimate_b = EstimateNumbers(pb.result);
   out.a = MakeResult(pa, bootstrap, estimate_a, samples[0], jackknife[0]);
   out.b = MakeResult(pb, bootstrap, estimate_b, samples[1], jackknife[1]);
   out.difference =
