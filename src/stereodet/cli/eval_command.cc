@@ -541,6 +541,9 @@ void RunCompare(const EvalArgs& given, EvaluationCompareOptions options) {
   if (result.bootstrap) {
     fmt::print("\n{}", FormatPairedBootstrapTable(*result.bootstrap));
     if (!a.out.empty()) fmt::print("wrote {}\n", result.bootstrap_csv_path.string());
+    if (!result.bootstrap_samples_path.empty()) {
+      fmt::print("wrote {}\n", result.bootstrap_samples_path.string());
+    }
   }
   if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
 }
@@ -652,6 +655,9 @@ void AddEvalCommand(CLI::App& app) {
   compare->add_option("--out", compare_common->out, "write compare.csv here");
   AddBootstrapOptions(compare, compare_common.get(),
                       "paired intervals of A - B, printed and in OUT/bootstrap.csv");
+  compare->add_flag("--bootstrap-samples", compare_options->bootstrap_samples,
+                    "with --bootstrap N and --out: also OUT/bootstrap_samples.csv, every "
+                    "resample's A, B and A - B of AP_R40 and Brier over labels (docs/metrics.md)");
   compare->add_flag("--report", compare_options->report,
                     "also write OUT/report/: the comparison's figures and index.html "
                     "(docs/report.md)");

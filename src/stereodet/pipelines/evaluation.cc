@@ -215,6 +215,8 @@ void EvaluationCompareOptions::Check() const {
   eval.Check();
   STEREODET_CHECK(!report || !out.empty()) << "compare: report needs an output folder (out)";
   if (bootstrap) bootstrap->Check();
+  STEREODET_CHECK(!bootstrap_samples || (bootstrap && !out.empty()))
+      << "compare: bootstrap_samples needs a bootstrap and an output folder (out)";
 }
 
 EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& options) {
@@ -260,12 +262,18 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
   if (options.bootstrap) {
     BootstrapOptions bootstrap = *options.bootstrap;
     bootstrap.num_threads = options.input.num_threads;
+    bootstrap.keep_samples = bootstrap.keep_samples || options.bootstrap_samples;
     result.bootstrap =
         PairedBootstrap(result.input_a.frames, result.input_b.frames, options.eval, bootstrap);
     result.bootstrap_csv = FormatPairedBootstrapCsv(*result.bootstrap);
     if (!options.out.empty()) {
       result.bootstrap_csv_path = options.out / "bootstrap.csv";
       WriteFileAtomically(result.bootstrap_csv_path, result.bootstrap_csv);
+    }
+    if (options.bootstrap_samples) {
+      result.bootstrap_samples_path = options.out / "bootstrap_samples.csv";
+      WriteFileAtomically(result.bootstrap_samples_path,
+                          FormatPairedBootstrapSamplesCsv(*result.bootstrap));
     }
   }
   return result;

@@ -197,6 +197,10 @@ struct EvaluationCompareOptions {
   // of each metric's A - B, in OUT/bootstrap.csv (FormatPairedBootstrapCsv). Unset: none. Its
   // num_threads is replaced by input.num_threads.
   std::optional<BootstrapOptions> bootstrap;
+  // With bootstrap and out: also OUT/bootstrap_samples.csv, every resample's A, B and A - B of
+  // AP_R40 and Brier over labels in every evaluated cell (FormatPairedBootstrapSamplesCsv): what a
+  // rule over several seed pairs averages resample by resample (docs/experiment.md).
+  bool bootstrap_samples = false;
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -212,6 +216,7 @@ struct EvaluationCompareResult {
   std::optional<PairedBootstrapResult> bootstrap;
   std::string bootstrap_csv;
   std::filesystem::path bootstrap_csv_path;
+  std::filesystem::path bootstrap_samples_path;  // with bootstrap_samples and out
 };
 
 // Reads A then B, evaluates both, then reads the calibration and compares.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "stereodet/report/eval_report.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 
@@ -152,6 +153,31 @@ std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result) {
     }
   }
   return out.str();
+}
+
+std::string FormatPairedBootstrapSamplesCsv(const PairedBootstrapResult& result) {
+  const BootstrapResult& d = result.difference;
+  std::string out = "resample,class,metric,difficulty,measure,a,b,a_minus_b\n";
+  const std::array<BootstrapMetric, 2> measures = {BootstrapMetric::kApR40,
+                                                   BootstrapMetric::kBrierLabels};
+  for (int r = 0; r < d.num_resamples; ++r) {
+    for (size_t c = 0; c < d.cells.size(); ++c) {
+      const BootstrapCell& cell = d.cells[c];
+      if (!cell.evaluated) continue;
+      for (const BootstrapMetric m : measures) {
+        const BootstrapInterval& a = result.a.cells[c].Get(m);
+        const BootstrapInterval& b = result.b.cells[c].Get(m);
+        const BootstrapInterval& x = cell.Get(m);
+        STEREODET_CHECK(x.samples.size() == static_cast<size_t>(d.num_resamples))
+            << "paired bootstrap samples: made without keep_samples";
+        out += fmt::format("{},{},{},{},{},{},{},{}\n", r, cell.class_name,
+                           OverlapKindName(cell.metric), DifficultyName(cell.difficulty),
+                           BootstrapMetricName(m), Csv(a.samples[r]), Csv(b.samples[r]),
+                           Csv(x.samples[r]));
+      }
+    }
+  }
+  return out;
 }
 
 std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result) {

@@ -33,6 +33,12 @@ std::string FormatBootstrapTable(const BootstrapResult& result);
 // a_minus_b, a_minus_b_lower, a_minus_b_upper, resamples, resamples_defined (of the difference),
 // confidence, seed. Numbers at full precision (shortest round trip); empty for NaN.
 std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result);
+// Every resample's values (the result must have been made with keep_samples): one row per
+// resample, evaluated cell and measure (ap_r40, brier_labels), resample-major:
+//   resample,class,metric,difficulty,measure,a,b,a_minus_b
+// (full precision, empty for NaN). Resample r's frame counts depend on (frames, seed, r) only,
+// so two compares with the same seed on the same frames resampled the same frames in row r.
+std::string FormatPairedBootstrapSamplesCsv(const PairedBootstrapResult& result);
 
 // The printed block of the paired difference: title, then per evaluated cell its A - B with its
 // interval for AP_R40 and Brier over labels, and whether the interval excludes 0.
