@@ -32,6 +32,9 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import verdict_rule  # noqa: E402  (scripts/verdict_rule.py, beside this file)
+
 REPO = pathlib.Path(__file__).resolve().parent.parent
 FAMILIES = ("ssd", "rpn", "det3d")
 # The overlap kind each family's Table 1 rows report, and what its evaluation computes.
@@ -593,7 +596,7 @@ class Pipeline:
                        "--metrics", TABLE_METRIC[a["family"]],
                        "--matcher", matcher, "--threads", self.config["threads"],
                        "--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"],
-                       "--out", cmp]
+                       "--bootstrap-samples", "--out", cmp]
                 self.step(self.compare_step(a, b, sigma, matcher),
                           cmp / "bootstrap.csv", cmd,
                           deps=[self.detect_step(a, sigma), self.detect_step(b, sigma)])
@@ -887,6 +890,49 @@ def read_claims(path):
     return claims
 
 
+def read_bootstrap_samples(path, cls, metric, difficulty, measure):
+    """A compare's resampled A - B of one cell and measure (bootstrap_samples.csv), by resample;
+    None where undefined."""
+    out = []
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            if r["class"] == cls and r["metric"] == metric and r["measure"] == measure and \
+                    r["difficulty"].lower() == difficulty.lower():
+                out.append(None if r["a_minus_b"] == "" else float(r["a_minus_b"]))
+    return out
+
+
+def seeds_cell(pipeline, seed_pairs, c, measure):
+    """The combined rule's interval of A - B over the claim's seed pairs (scripts/verdict_rule.py):
+    a bootstrap.csv-shaped row (a_minus_b, a_minus_b_lower, a_minus_b_upper as text) plus the seed
+    pairs' own differences, or None where a seed pair's difference is undefined."""
+    config = pipeline.config
+    by_name = {m["name"]: m for m in config["models"]}
+    estimates, resampled = [], []
+    for a, b in seed_pairs:
+        folder = pipeline.compare_dir(by_name[a], by_name[b], float(c["blur_sigma_px"]),
+                                      c["matcher"])
+        metric = TABLE_METRIC[by_name[a]["family"]]
+        cell = read_bootstrap_csv(folder / "bootstrap.csv", c["class"], metric,
+                                  config["difficulty"]).get(measure)
+        if cell is None or cell["a_minus_b"] == "":
+            return None
+        estimates.append(float(cell["a_minus_b"]))
+        resampled.append(read_bootstrap_samples(folder / "bootstrap_samples.csv", c["class"],
+                                                metric, config["difficulty"], measure))
+    # The seed-averaged difference of each resample (the same frames for every seed pair: the same
+    # --bootstrap-seed), where every seed pair's is defined; its variance is the frame term.
+    averaged = [sum(v) / len(v) for v in zip(*resampled) if None not in v]
+    if len(averaged) < 2:
+        return None
+    mean = sum(averaged) / len(averaged)
+    frame_variance = sum((x - mean) ** 2 for x in averaged) / (len(averaged) - 1)
+    centre, lower, upper, _ = verdict_rule.combined_interval(estimates, frame_variance,
+                                                             len(averaged) - 1)
+    return {"a_minus_b": repr(centre), "a_minus_b_lower": repr(lower),
+            "a_minus_b_upper": repr(upper), "seeds": estimates}
+
+
 def flip_verdict(cells, terms):
     """A 'flip' claim: the two Brier terms rank A and B oppositely. Confirmed when both paired
     intervals of A - B lie off 0 on opposite sides, refuted when both lie off 0 on the same side
@@ -919,11 +965,17 @@ def verdict_rows(pipeline):
     claims = []
     for c in read_claims(config["claims"]):
         ga, gb = groups.get(c["a"], [c["a"]]), groups.get(c["b"], [c["b"]])
-        if len(ga) == len(gb):
+        if len(ga) == len(gb) and len(ga) > 1:
+            # Seeds: one row, decided by the rule over seeds and frames.
+            claims.append(dict(c, seed_pairs=list(zip(ga, gb))))
+        elif len(ga) == len(gb):
             claims += [dict(c, a=a, b=b) for a, b in zip(ga, gb)]
         else:
             claims.append(c)
     for c in claims:
+        if "seed_pairs" in c and c["measure"] not in SWEEP_MEASURES:
+            rows.append(seeds_verdict(pipeline, c))
+            continue
         a, b, sigma = c["a"], c["b"], float(c["blur_sigma_px"])
         if c["measure"] in SWEEP_MEASURES:
             rows.append(sweep_verdict(pipeline, c))
@@ -947,23 +999,58 @@ def verdict_rows(pipeline):
         if c["expect"] == "flip":
             rows.append(head + list(flip_verdict(cells, c["measure"].split("/"))))
             continue
-        cell = cells.get(c["measure"])
         scale = 0.01 if c["measure"] == "ap_r40" else 1.0
-        if cell is None or "" in (cell["a_minus_b"], cell["a_minus_b_lower"],
-                                  cell["a_minus_b_upper"]):
-            rows.append(head + ["n/a", "inconclusive (undefined on these frames)",
-                                "detections of the class in both models"])
-            continue
-        lo, hi = float(cell["a_minus_b_lower"]) * scale, float(cell["a_minus_b_upper"]) * scale
-        interval = fmt_difference(cell, scale)
-        if (lo > 0 and c["expect"] == ">0") or (hi < 0 and c["expect"] == "<0"):
-            verdict, change = "confirmed", "an interval reaching 0 (other data, other training seeds)"
-        elif lo > 0 or hi < 0:
-            verdict, change = "refuted", "an interval reaching 0 (other data, other training seeds)"
-        else:
-            verdict, change = "inconclusive", "a narrower interval (more frames) off 0"
-        rows.append(head + [interval, verdict, change])
+        rows.append(head + list(decide(cells.get(c["measure"]), c["expect"], scale)))
     return rows
+
+
+def decide(cell, expect, scale):
+    """(interval text, verdict, what would change it) of one bootstrap.csv-shaped row."""
+    if cell is None or "" in (cell["a_minus_b"], cell["a_minus_b_lower"], cell["a_minus_b_upper"]):
+        return ("n/a", "inconclusive (undefined on these frames)",
+                "detections of the class in both models")
+    lo, hi = float(cell["a_minus_b_lower"]) * scale, float(cell["a_minus_b_upper"]) * scale
+    interval = fmt_difference(cell, scale)
+    if (lo > 0 and expect == ">0") or (hi < 0 and expect == "<0"):
+        return interval, "confirmed", "an interval reaching 0 (other data, other training seeds)"
+    if lo > 0 or hi < 0:
+        return interval, "refuted", "an interval reaching 0 (other data, other training seeds)"
+    return interval, "inconclusive", "a narrower interval (more frames, more seeds) off 0"
+
+
+def seeds_verdict(pipeline, c):
+    """A claim on models with training seeds: one row, the interval of the combined rule over the
+    seed pairs (docs/experiment.md, "The verdict rule over seeds and frames"), the seed pairs' own
+    differences after it."""
+    config = pipeline.config
+    by_name = {m["name"]: m for m in config["models"]}
+    pairs = {tuple(p) for p in config["pairs"]}
+    sigma = float(c["blur_sigma_px"])
+    head = [c["claim"], f"{c['a']} - {c['b']}, blur {sigma:g}, {c['class']}, {c['matcher']}, "
+            f"{c['measure']} {c['expect']}"]
+    names = [n for pair in c["seed_pairs"] for n in pair]
+    missing = [n for n in names if n in pipeline.missing]
+    if any(p not in pairs for p in c["seed_pairs"]) or any(n not in by_name for n in names):
+        return head + ["", "not measured (the pair is not in this config)", ""]
+    if missing:
+        return head + ["", f"not measured (missing: {', '.join(missing)})", ""]
+    a = by_name[c["seed_pairs"][0][0]]
+    if config["bootstrap"]["resamples"] == 0 or sigma not in pipeline.blurs(a) or \
+            c["matcher"] not in config["matchers"]:
+        return head + ["", "not measured (no such compare in this config)", ""]
+    seeds = f"{len(c['seed_pairs'])} seed pairs"
+    if c["expect"] == "flip":
+        terms = c["measure"].split("/")
+        cells = {t: seeds_cell(pipeline, c["seed_pairs"], c, t) for t in terms}
+        interval, verdict, change = flip_verdict(cells, terms)
+        return head + [f"{interval} ({seeds})", verdict, change]
+    scale = 0.01 if c["measure"] == "ap_r40" else 1.0
+    cell = seeds_cell(pipeline, c["seed_pairs"], c, c["measure"])
+    interval, verdict, change = decide(cell, c["expect"], scale)
+    if cell is not None:
+        own = ", ".join(f"{d * scale:+.3f}" for d in cell["seeds"])
+        interval += f" ({seeds}: {own})"
+    return head + [interval, verdict, change]
 
 
 def sweep_counts(values, measure):

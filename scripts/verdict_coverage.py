@@ -37,6 +37,8 @@ import math
 
 import numpy as np
 
+from verdict_rule import _normal_quantile, combined_interval, t_quantile
+
 # (name, sigma_seed, sigma_frame, sigma_noise): the effect's spread over training seeds, over
 # frames shared by the seed pairs, and the rest, in units of the difference per frame (the seed
 # pair's frame-mean then has sd about sqrt(2) / sqrt(N) = 0.045 from the frames with N = 1000).
@@ -48,67 +50,6 @@ SCENARIOS = [
     ("seed variance dominates", 0.2, 1.0, 1.0),
     ("shared frame variance dominates", 0.0, 3.0, 1.0),
 ]
-
-
-def t_quantile(p, df):
-    """The Student t quantile (the normal one above 200 degrees of freedom), by bisection on the
-    regularized incomplete beta function's continued fraction (no SciPy on the machines)."""
-    if df > 200:
-        return _normal_quantile(p)
-
-    def cdf(t):
-        x = df / (df + t * t)
-        ib = _betainc(df / 2, 0.5, x)
-        return 1 - 0.5 * ib if t > 0 else 0.5 * ib
-
-    lo, hi = -50.0, 50.0
-    for _ in range(200):
-        mid = (lo + hi) / 2
-        if cdf(mid) < p:
-            lo = mid
-        else:
-            hi = mid
-    return (lo + hi) / 2
-
-
-def _normal_quantile(p):
-    # Bisection on the normal CDF (erfc): slow, exact enough, no SciPy needed.
-    lo, hi = -10.0, 10.0
-    for _ in range(200):
-        mid = (lo + hi) / 2
-        if 0.5 * math.erfc(-mid / math.sqrt(2)) < p:
-            lo = mid
-        else:
-            hi = mid
-    return (lo + hi) / 2
-
-
-def _betainc(a, b, x):
-    """The regularized incomplete beta function I_x(a, b) (Numerical Recipes' continued fraction)."""
-    if x <= 0:
-        return 0.0
-    if x >= 1:
-        return 1.0
-    lbeta = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b)
-    front = math.exp(lbeta + a * math.log(x) + b * math.log(1 - x))
-    if x > (a + 1) / (a + b + 2):
-        return 1 - _betainc(b, a, 1 - x)
-    f, c, d = 1.0, 1.0, 0.0
-    for i in range(400):
-        m = i // 2
-        if i == 0:
-            num = 1.0
-        elif i % 2 == 0:
-            num = (m * (b - m) * x) / ((a + 2 * m - 1) * (a + 2 * m))
-        else:
-            num = -((a + m) * (a + b + m) * x) / ((a + 2 * m) * (a + 2 * m + 1))
-        d = 1 + num * d
-        d = 1 / (d if abs(d) > 1e-300 else 1e-300)
-        c = 1 + num / (c if abs(c) > 1e-300 else 1e-300)
-        f *= c * d
-        if abs(1 - c * d) < 1e-12:
-            break
-    return front * (f - 1) / a
 
 
 def simulate(rng, sigma_seed, sigma_frame, sigma_noise, seeds, frames, reps, boot):
@@ -142,13 +83,11 @@ def simulate(rng, sigma_seed, sigma_frame, sigma_noise, seeds, frames, reps, boo
         half = t_seeds * math.sqrt(seed_var)
         intervals["seeds-t"] = (centre - half, centre + half)
 
-        # combined: seed term + the frame term of the seed-averaged difference.
+        # combined (scripts/verdict_rule.py, as the experiment decides with it): the seed term +
+        # the frame term of the seed-averaged difference, frames - 1 degrees of freedom.
         frame_var = d.mean(axis=0).var(ddof=1) / frames
-        total = seed_var + frame_var
-        # Welch-Satterthwaite: the frame term has frames - 1 degrees of freedom.
-        df = total ** 2 / (seed_var ** 2 / (seeds - 1) + frame_var ** 2 / (frames - 1))
-        half = t_quantile(0.975, df) * math.sqrt(total)
-        intervals["combined"] = (centre - half, centre + half)
+        _, lo, hi, _ = combined_interval(list(per_seed), frame_var, frames - 1)
+        intervals["combined"] = (lo, hi)
 
         for k, (lo, hi) in intervals.items():
             hits[k] += lo <= mu <= hi
