@@ -41,6 +41,14 @@ repo, bin_dir, work = (pathlib.Path(a).resolve() for a in sys.argv[1:4])
 script = repo / "scripts" / "experiment.py"
 sys.path.insert(0, str(repo / "scripts"))
 import verdict_rule  # noqa: E402  (the rule over seeds the verdicts are checked against)
+
+# The rule by hand: seed differences 1 and 3, no frame variance: centre 2, variance var(1, 3) / 2 =
+# 1, 1 degree of freedom, t(0.975, 1) = 12.7062 (tables); with frame variance 1 and 99 frame
+# degrees of freedom, variance 2 and df = 4 / (1 + 1 / 99) = 3.96.
+_c, _lo, _hi, _df = verdict_rule.combined_interval([1.0, 3.0], 0.0, 99)
+assert _c == 2.0 and abs(_lo - (2 - 12.7062)) < 1e-3 and abs(_hi - (2 + 12.7062)) < 1e-3 and _df == 1
+_c, _lo, _hi, _df = verdict_rule.combined_interval([1.0, 3.0], 1.0, 99)
+assert abs(_df - 4 / (1 + 1 / 99)) < 1e-12 and _lo < 2 - 2.77 * 2 ** 0.5 < _lo + 0.1
 config_path = repo / "experiments" / "miniature.json"
 out = work / "out"
 failures = []
