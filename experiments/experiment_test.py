@@ -534,6 +534,21 @@ check(new.split(begin)[0] == original.split(begin)[0] and
       new.split(end)[1] == original.split(end)[1], "--update-docs keeps the rest of the file")
 check(table_text in new.split(begin)[1].split(end)[0], "--update-docs puts the table between")
 
+# A compare made before bootstrap_samples.csv existed: --table-only says so in the claim's row
+# (rerun the compares) instead of failing or deciding on the frames alone.
+rpn_claim = [c for c in claims.values() if len(groups.get(c["a"], [])) > 1][0]
+samples_file = (out / "compare" / f"{groups[rpn_claim['a']][0]}-vs-{groups[rpn_claim['b']][0]}" /
+                f"blur{rpn_claim['blur_sigma_px']}" / rpn_claim["matcher"] / "bootstrap_samples.csv")
+check(samples_file.exists(), f"the seed pairs' compares wrote {samples_file}")
+moved = samples_file.with_suffix(".moved")
+samples_file.rename(moved)
+run("--table-only")
+stale = (out / "table1.md").read_text()
+moved.rename(samples_file)
+check("not measured (no bootstrap_samples.csv: rerun the compares without --table-only)" in stale,
+      "a claim on seeds without bootstrap_samples.csv is not measured, saying why")
+run("--table-only")
+
 # A config error names the file and the field.
 bad = json.loads(config_path.read_text())
 bad["models"][1]["family"] = "yolo"

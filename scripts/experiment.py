@@ -918,8 +918,11 @@ def seeds_cell(pipeline, seed_pairs, c, measure):
         if cell is None or cell["a_minus_b"] == "":
             return None
         estimates.append(float(cell["a_minus_b"]))
-        resampled.append(read_bootstrap_samples(folder / "bootstrap_samples.csv", c["class"],
-                                                metric, config["difficulty"], measure))
+        samples = folder / "bootstrap_samples.csv"
+        if not samples.exists():  # a compare made before the rule (2026-12-07)
+            raise FileNotFoundError(samples)
+        resampled.append(read_bootstrap_samples(samples, c["class"], metric, config["difficulty"],
+                                                measure))
     # The seed-averaged difference of each resample (the same frames for every seed pair: the same
     # --bootstrap-seed), where every seed pair's is defined; its variance is the frame term.
     averaged = [sum(v) / len(v) for v in zip(*resampled) if None not in v]
@@ -1039,13 +1042,17 @@ def seeds_verdict(pipeline, c):
             c["matcher"] not in config["matchers"]:
         return head + ["", "not measured (no such compare in this config)", ""]
     seeds = f"{len(c['seed_pairs'])} seed pairs"
-    if c["expect"] == "flip":
-        terms = c["measure"].split("/")
-        cells = {t: seeds_cell(pipeline, c["seed_pairs"], c, t) for t in terms}
-        interval, verdict, change = flip_verdict(cells, terms)
-        return head + [f"{interval} ({seeds})", verdict, change]
+    try:
+        if c["expect"] == "flip":
+            terms = c["measure"].split("/")
+            cells = {t: seeds_cell(pipeline, c["seed_pairs"], c, t) for t in terms}
+            interval, verdict, change = flip_verdict(cells, terms)
+            return head + [f"{interval} ({seeds})", verdict, change]
+        cell = seeds_cell(pipeline, c["seed_pairs"], c, c["measure"])
+    except FileNotFoundError as e:
+        return head + ["", f"not measured (no {pathlib.Path(e.args[0]).name}: rerun the compares "
+                           "without --table-only)", ""]
     scale = 0.01 if c["measure"] == "ap_r40" else 1.0
-    cell = seeds_cell(pipeline, c["seed_pairs"], c, c["measure"])
     interval, verdict, change = decide(cell, c["expect"], scale)
     if cell is not None:
         own = ", ".join(f"{d * scale:+.3f}" for d in cell["seeds"])
