@@ -530,12 +530,8 @@ BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
       BootstrapInterval& interval = (*intervals)[m];
       interval.estimate = estimate[index][m];
       for (size_t r = 0; r < per_resample.size(); ++r) samples[r] = per_resample[r][index][m];
-      if (options.method == BootstrapMethod::kBca) {
-        for (size_t g = 0; g < jackknife.size(); ++g) jack[g] = jackknife[g][index][m];
-        FillBcaInterval(samples, jack, options.confidence, options.keep_samples, &interval);
-      } else {
-        FillBootstrapInterval(samples, options.confidence, options.keep_samples, &interval);
-      }
+      for (size_t g = 0; g < jackknife.size(); ++g) jack[g] = jackknife[g][index][m];
+      FillInterval(options, samples, jack, &interval);
     }
   };
   for (size_t c = 0; c < result.cells.size(); ++c) {
@@ -615,13 +611,23 @@ const BootstrapCell* BootstrapResult::Find(const std::string& class_name, Overla
   return nullptr;
 }
 
+namespace {
+
+// The numbers among `values` (NaN left out), in their order.
+std::vector<double> Defined(const std::vector<double>& values) {
+  std::vector<double> defined;
+  defined.reserve(values.size());
+  for (const double v : values) {
+    if (!std::isnan(v)) defined.push_back(v);
+  }
+  return defined;
+}
+
+}  // namespace
+
 void FillBootstrapInterval(const std::vector<double>& samples, double confidence, bool keep,
                            BootstrapInterval* interval) {
-  std::vector<double> defined;
-  defined.reserve(samples.size());
-  for (const double s : samples) {
-    if (!std::isnan(s)) defined.push_back(s);
-  }
+  std::vector<double> defined = Defined(samples);
   interval->num_defined = static_cast<int64_t>(defined.size());
   std::sort(defined.begin(), defined.end());
   interval->lower = Quantile(defined, (1 - confidence) / 2);
@@ -631,11 +637,7 @@ void FillBootstrapInterval(const std::vector<double>& samples, double confidence
 
 void FillBcaInterval(const std::vector<double>& samples, const std::vector<double>& jackknife,
                      double confidence, bool keep, BootstrapInterval* interval) {
-  std::vector<double> defined;
-  defined.reserve(samples.size());
-  for (const double s : samples) {
-    if (!std::isnan(s)) defined.push_back(s);
-  }
+  const std::vector<double> defined = Defined(samples);
   interval->num_defined = static_cast<int64_t>(defined.size());
   if (keep) interval->samples = samples;
   interval->lower = interval->upper = kNaN;
@@ -646,10 +648,7 @@ void FillBcaInterval(const std::vector<double>& samples, const std::vector<doubl
   for (const double s : defined) below += s < estimate ? 1.0 : s == estimate ? 0.5 : 0.0;
   const double share = below / static_cast<double>(defined.size());
   if (share <= 0 || share >= 1) return;  // z0 infinite: every resample on one side
-  std::vector<double> jack;
-  for (const double j : jackknife) {
-    if (!std::isnan(j)) jack.push_back(j);
-  }
+  const std::vector<double> jack = Defined(jackknife);
   if (jack.size() < 2) return;
   const boost::math::normal normal;
   const double z0 = boost::math::quantile(normal, share);
@@ -673,6 +672,15 @@ void FillBcaInterval(const std::vector<double>& samples, const std::vector<doubl
   interval->upper = bound(boost::math::quantile(normal, 1 - alpha));
   interval->bias_correction = z0;
   interval->acceleration = a;
+}
+
+void FillInterval(const BootstrapOptions& options, const std::vector<double>& samples,
+                  const std::vector<double>& jackknife, BootstrapInterval* interval) {
+  if (options.method == BootstrapMethod::kBca) {
+    FillBcaInterval(samples, jackknife, options.confidence, options.keep_samples, interval);
+  } else {
+    FillBootstrapInterval(samples, options.confidence, options.keep_samples, interval);
+  }
 }
 
 int JackknifeGroupCount(int64_t num_frames, int groups) {

@@ -186,6 +186,11 @@ void FillBootstrapInterval(const std::vector<double>& samples, double confidence
 void FillBcaInterval(const std::vector<double>& samples, const std::vector<double>& jackknife,
                      double confidence, bool keep_samples, BootstrapInterval* interval);
 
+// The interval of options.method from the resamples (and, for kBca, the jackknife's values):
+// FillBootstrapInterval or FillBcaInterval with options.confidence and options.keep_samples.
+void FillInterval(const BootstrapOptions& options, const std::vector<double>& samples,
+                  const std::vector<double>& jackknife, BootstrapInterval* interval);
+
 // Frame f's multiplicity in the jackknife's group g: 1, or 0 for the frames of group g, the
 // groups being min(groups, num_frames) contiguous runs of floor or ceil(num_frames / groups)
 // frames. Requires 0 <= g < min(groups, num_frames).

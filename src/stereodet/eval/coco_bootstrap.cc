@@ -281,14 +281,10 @@ CocoBootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& bootst
     for (size_t r = 0; r < samples.size(); ++r) values[r] = samples[r][i];
     BootstrapInterval& interval =
         i < kNumCocoStats ? result.stats[i] : result.score_stats[i - kNumCocoStats];
-    if (bootstrap.method == BootstrapMethod::kBca) {
-      // An estimate of -1 (no ground truth) has no interval.
-      interval.estimate = estimate[i] == -1.0 ? kNaN : estimate[i];
-      for (size_t g = 0; g < jackknife.size(); ++g) jack[g] = jackknife[g][i];
-      FillBcaInterval(values, jack, bootstrap.confidence, bootstrap.keep_samples, &interval);
-    } else {
-      FillBootstrapInterval(values, bootstrap.confidence, bootstrap.keep_samples, &interval);
-    }
+    for (size_t g = 0; g < jackknife.size(); ++g) jack[g] = jackknife[g][i];
+    // An estimate of -1 (no ground truth) has no BCa interval: NaN while the bounds are read.
+    interval.estimate = estimate[i] == -1.0 ? kNaN : estimate[i];
+    FillInterval(bootstrap, values, jack, &interval);
     interval.estimate = estimate[i];
   }
   return result;
