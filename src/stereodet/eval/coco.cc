@@ -1410,34 +1410,17 @@ class CocoEvaluator {
   // score_stats: per metric, the mean over categories (area "all") and the thresholds of each
   // summary line of the cells' values that are numbers.
   void SummarizeCells() {
-    const int T = static_cast<int>(options_.iou_thresholds.size()),
-              K = static_cast<int>(result_.category_ids.size());
-    int a = -1;
-    for (size_t i = 0; i < options_.area_ranges.size(); ++i) {
-      if (options_.area_ranges[i].label == "all") a = static_cast<int>(i);
-    }
-    if (a < 0) return;
-    const std::array<std::optional<double>, 3> ious = {std::nullopt, 0.5, 0.75};
-    for (int metric = 0; metric < 4; ++metric) {
-      for (int v = 0; v < 3; ++v) {
-        double sum = 0;
-        int64_t n = 0;
-        for (int t = 0; t < T; ++t) {
-          if (ious[v] && options_.iou_thresholds[t] != *ious[v]) continue;
-          for (int k = 0; k < K; ++k) {
-            const CocoCell& cell = result_.cells[result_.CellIndex(t, k, a)];
-            const double value = metric == 0   ? cell.brier.over_labels
-                                 : metric == 1 ? cell.brier.over_detections
-                                 : metric == 2 ? cell.brier.over_all
-                                               : cell.calibration.ece;
-            if (std::isnan(value)) continue;
-            sum += value;
-            ++n;
-          }
-        }
-        result_.score_stats[metric * 3 + v] = n > 0 ? sum / static_cast<double>(n) : -1.0;
-      }
-    }
+    if (area_all_ < 0) return;
+    AverageScoreStats(
+        options_.iou_thresholds, static_cast<int>(result_.category_ids.size()), 4,
+        [&](int metric, int t, int k) {
+          const CocoCell& cell = result_.cells[result_.CellIndex(t, k, area_all_)];
+          return metric == 0   ? cell.brier.over_labels
+                 : metric == 1 ? cell.brier.over_detections
+                 : metric == 2 ? cell.brier.over_all
+                               : cell.calibration.ece;
+        },
+        -1.0, result_.score_stats.data());
   }
 
   const CocoGroundTruth& gt_;

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <optional>
 #include <utility>
 
 #include "stereodet/eval/coco_internal.h"
@@ -135,27 +134,15 @@ void ResampleBrier(const Prepared& p, const std::vector<int32_t>& w, Numbers* nu
       c.fps += static_cast<int64_t>(copies) * e.fps;
     }
   }
-  const std::array<std::optional<double>, 3> ious = {std::nullopt, 0.5, 0.75};
-  for (int metric = 0; metric < 3; ++metric) {
-    for (int v = 0; v < 3; ++v) {
-      double total = 0;
-      int64_t n = 0;
-      for (int t = 0; t < T; ++t) {
-        if (ious[v] && o.iou_thresholds[t] != *ious[v]) continue;
-        for (int k = 0; k < K; ++k) {
-          const Sums& c = sums[static_cast<size_t>(t) * K + k];
-          double value = kNaN;
-          if (metric == 0 && c.labels > 0) value = c.label / c.labels;
-          if (metric == 1 && c.detections > 0) value = c.detection / c.detections;
-          if (metric == 2 && c.labels + c.fps > 0) value = (c.label + c.fp) / (c.labels + c.fps);
-          if (std::isnan(value)) continue;
-          total += value;
-          ++n;
-        }
-      }
-      (*numbers)[kNumCocoStats + metric * 3 + v] = n > 0 ? total / static_cast<double>(n) : kNaN;
-    }
-  }
+  AverageScoreStats(
+      o.iou_thresholds, K, 3,
+      [&](int metric, int t, int k) {
+        const Sums& c = sums[static_cast<size_t>(t) * K + k];
+        if (metric == 0) return c.labels > 0 ? c.label / c.labels : kNaN;
+        if (metric == 1) return c.detections > 0 ? c.detection / c.detections : kNaN;
+        return c.labels + c.fps > 0 ? (c.label + c.fp) / (c.labels + c.fps) : kNaN;
+      },
+      kNaN, numbers->data() + kNumCocoStats);
 }
 
 // The 12 numbers of the resample with image counts `w` (NaN where summarize() gives -1), and with

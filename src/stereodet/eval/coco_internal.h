@@ -19,7 +19,10 @@
 #ifndef STEREODET_EVAL_COCO_INTERNAL_H_
 #define STEREODET_EVAL_COCO_INTERNAL_H_
 
+#include <array>
+#include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -105,6 +108,34 @@ void CocoAccumulateCurve(const std::vector<uint8_t>& flags, const std::vector<do
 void SummarizeCoco(CocoEvalResult* result);
 // result->category_stats: each category's 12 numbers, summarize() over that category alone.
 void SummarizeCocoCategories(CocoEvalResult* result);
+
+// score_stats' averaging, shared by the evaluation and its bootstrap: for each of `num_metrics`
+// metrics and each of the three IoU lines (every threshold, then 0.5, then 0.75, each threshold
+// taken where it equals the line's exactly), the mean over those thresholds t (outer loop) and
+// the `num_categories` categories k (inner) of value(metric, t, k), leaving out the NaN ones;
+// written to out[metric * 3 + line], `none` where no value is left.
+template <typename Value>
+void AverageScoreStats(const std::vector<double>& iou_thresholds, int num_categories,
+                       int num_metrics, Value value, double none, double* out) {
+  const std::array<std::optional<double>, 3> lines = {std::nullopt, 0.5, 0.75};
+  const int T = static_cast<int>(iou_thresholds.size());
+  for (int metric = 0; metric < num_metrics; ++metric) {
+    for (int line = 0; line < 3; ++line) {
+      double sum = 0;
+      int64_t n = 0;
+      for (int t = 0; t < T; ++t) {
+        if (lines[line] && iou_thresholds[t] != *lines[line]) continue;
+        for (int k = 0; k < num_categories; ++k) {
+          const double v = value(metric, t, k);
+          if (std::isnan(v)) continue;
+          sum += v;
+          ++n;
+        }
+      }
+      out[metric * 3 + line] = n > 0 ? sum / static_cast<double>(n) : none;
+    }
+  }
+}
 
 // The (area range, max_dets) indices summarize() reads, AP lines' and AR lines' ((-1, -1) for a
 // line whose area label or max_dets the options do not have).
