@@ -109,28 +109,24 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
     j["score_stats"] = score_stats;
     j["cells"] = {{"file", "cells.csv"}, {"reliability", "reliability.csv"}};
   }
-  auto intervals = [](const CocoBootstrapResult& b) {
+  // One number's interval; NaN (an undefined bound) is written as null.
+  auto interval = [](const BootstrapInterval& i) {
+    return ordered_json{{"estimate", i.estimate},
+                        {"lower", i.lower},
+                        {"upper", i.upper},
+                        {"num_defined", i.num_defined}};
+  };
+  auto intervals = [&](const CocoBootstrapResult& b) {
     ordered_json j = {{"num_resamples", b.num_resamples}, {"seed", b.seed},
                       {"confidence", b.confidence},       {"method", BootstrapMethodName(b.method)},
                       {"num_images", b.num_images},       {"seconds", b.seconds}};
     ordered_json stats = ordered_json::object();
-    for (int s = 0; s < kNumCocoStats; ++s) {
-      const BootstrapInterval& i = b.stats[s];
-      // NaN (an undefined bound) is written as null.
-      stats[CocoStatNames()[s]] = {{"estimate", i.estimate},
-                                   {"lower", i.lower},
-                                   {"upper", i.upper},
-                                   {"num_defined", i.num_defined}};
-    }
+    for (int s = 0; s < kNumCocoStats; ++s) stats[CocoStatNames()[s]] = interval(b.stats[s]);
     j["stats"] = stats;
     if (!std::isnan(b.score_stats[0].estimate)) {
       ordered_json score_stats = ordered_json::object();
       for (int s = 0; s < kNumCocoScoreStats; ++s) {
-        const BootstrapInterval& i = b.score_stats[s];
-        score_stats[CocoScoreStatNames()[s]] = {{"estimate", i.estimate},
-                                                {"lower", i.lower},
-                                                {"upper", i.upper},
-                                                {"num_defined", i.num_defined}};
+        score_stats[CocoScoreStatNames()[s]] = interval(b.score_stats[s]);
       }
       j["score_stats"] = score_stats;  // the ECE ones are not resampled: null bounds
     }
@@ -216,20 +212,18 @@ std::string FormatCocoBootstrap(const CocoBootstrapResult& b) {
   std::string out = fmt::format(
       "bootstrap: {} resamples of the {} images (seed {}), {:g}% {} intervals\n", b.num_resamples,
       b.num_images, b.seed, 100 * b.confidence, BootstrapMethodTitle(b.method));
+  // One number's line; an estimate of -1 has no interval, `why` says why.
+  auto line = [](const char* name, const BootstrapInterval& i, const char* why) {
+    return i.estimate < 0
+               ? fmt::format("{:<6} -1 ({})\n", name, why)
+               : fmt::format("{:<6} {:.3f} [{:.3f}, {:.3f}]\n", name, i.estimate, i.lower, i.upper);
+  };
   for (int s = 0; s < kNumCocoStats; ++s) {
-    const BootstrapInterval& i = b.stats[s];
-    out += i.estimate < 0 ? fmt::format("{:<6} -1 (no ground truth)\n", CocoStatNames()[s])
-                          : fmt::format("{:<6} {:.3f} [{:.3f}, {:.3f}]\n", CocoStatNames()[s],
-                                        i.estimate, i.lower, i.upper);
+    out += line(CocoStatNames()[s], b.stats[s], "no ground truth");
   }
   // With --coco-brier: the Brier numbers (the ECE ones are not resampled).
   if (!std::isnan(b.score_stats[0].estimate)) {
-    for (int s = 0; s < 9; ++s) {
-      const BootstrapInterval& i = b.score_stats[s];
-      out += i.estimate < 0 ? fmt::format("{:<6} -1 (undefined)\n", CocoScoreStatNames()[s])
-                            : fmt::format("{:<6} {:.3f} [{:.3f}, {:.3f}]\n",
-                                          CocoScoreStatNames()[s], i.estimate, i.lower, i.upper);
-    }
+    for (int s = 0; s < 9; ++s) out += line(CocoScoreStatNames()[s], b.score_stats[s], "undefined");
   }
   return out;
 }
