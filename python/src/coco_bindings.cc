@@ -73,13 +73,16 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
     resampling.keep_samples = true;
     resampling.num_threads = num_threads;
     if (bootstrap > 0) resampling.Check();
+    // Each evaluation once: the bootstraps hand over the evaluations they resample.
     if (bootstrap > 0 && dt_b_text) {
-      paired = PairedBootstrapCoco(gt, dets, dets_b, options, resampling);
+      result_b.emplace();
+      paired = PairedBootstrapCoco(gt, dets, dets_b, options, resampling, &result, &*result_b);
     } else if (bootstrap > 0) {
-      intervals = BootstrapCoco(gt, dets, options, resampling);
+      intervals = BootstrapCoco(gt, dets, options, resampling, &result);
+    } else {
+      result = EvaluateCoco(gt, dets, options);
+      if (dt_b_text) result_b = EvaluateCoco(gt, dets_b, options);
     }
-    result = EvaluateCoco(gt, dets, options);
-    if (dt_b_text) result_b = EvaluateCoco(gt, dets_b, options);
     summary = FormatCocoSummary(result);
   }
   const auto t = static_cast<py::ssize_t>(result.options.iou_thresholds.size());

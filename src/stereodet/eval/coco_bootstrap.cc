@@ -301,7 +301,8 @@ CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
                                               const std::vector<CocoDetection>& dets_a,
                                               const std::vector<CocoDetection>& dets_b,
                                               const CocoEvalOptions& options,
-                                              const BootstrapOptions& bootstrap) {
+                                              const BootstrapOptions& bootstrap,
+                                              CocoEvalResult* result_a, CocoEvalResult* result_b) {
   options.Check();
   bootstrap.Check();
   const Timer timer;
@@ -332,6 +333,8 @@ CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
   out.b = MakeResult(pb, bootstrap, estimate_b, samples[1], jackknife[1]);
   out.difference =
       MakeResult(pa, bootstrap, minus(estimate_a, estimate_b, -1.0), difference, jack_d);
+  if (result_a != nullptr) *result_a = pa.result;
+  if (result_b != nullptr) *result_b = pb.result;
   const double seconds = timer.ElapsedSeconds();
   for (CocoBootstrapResult* r : {&out.a, &out.b, &out.difference}) r->seconds = seconds;
   return out;

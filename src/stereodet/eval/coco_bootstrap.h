@@ -53,7 +53,8 @@ CocoBootstrapResult BootstrapCoco(const CocoGroundTruth& gt, const std::vector<C
 // Two detection sets of the same ground truth, resampled with the same image counts: a and b are
 // BootstrapCoco's results for each; difference holds, per number, the estimate A - B and the
 // percentile interval of the resamples' A - B (over the resamples where both are defined; NaN
-// estimate where either has none).
+// estimate where either has none). `result_a` and `result_b`, when given, receive the two
+// evaluations (EvaluateCoco's of each set).
 struct CocoPairedBootstrapResult {
   CocoBootstrapResult a, b, difference;
 };
@@ -61,7 +62,9 @@ CocoPairedBootstrapResult PairedBootstrapCoco(const CocoGroundTruth& gt,
                                               const std::vector<CocoDetection>& dets_a,
                                               const std::vector<CocoDetection>& dets_b,
                                               const CocoEvalOptions& options,
-                                              const BootstrapOptions& bootstrap);
+                                              const BootstrapOptions& bootstrap,
+                                              CocoEvalResult* result_a = nullptr,
+                                              CocoEvalResult* result_b = nullptr);
 
 }  // namespace stereodet
 

@@ -197,8 +197,12 @@ TEST(CocoBootstrapTest, PairedDifferences) {
   for (size_t j = 0; j < weaker.size(); ++j) {
     if (j % 2 == 0) weaker[j].score *= 0.1;  // even positions: mostly the jittered true boxes
   }
+  CocoEvalResult result_a, result_b;
   const CocoPairedBootstrapResult p =
-      PairedBootstrapCoco(s.gt, s.dets, weaker, CocoEvalOptions(), bootstrap);
+      PairedBootstrapCoco(s.gt, s.dets, weaker, CocoEvalOptions(), bootstrap, &result_a, &result_b);
+  // The evaluations handed over are EvaluateCoco's.
+  EXPECT_EQ(result_a.stats, EvaluateCoco(s.gt, s.dets, CocoEvalOptions()).stats);
+  EXPECT_EQ(result_b.precision, EvaluateCoco(s.gt, weaker, CocoEvalOptions()).precision);
   const BootstrapInterval& ap = p.difference.stats[0];
   EXPECT_EQ(ap.estimate, p.a.stats[0].estimate - p.b.stats[0].estimate);
   EXPECT_GT(ap.estimate, 0);

@@ -285,16 +285,18 @@ CocoEvaluationResult RunCocoEvaluation(const CocoEvaluationOptions& options) {
   }
   run.input_hash = HashHex(hash);
   run.read_seconds = read_timer.ElapsedSeconds();
+  // Each evaluation once: the bootstraps hand over the evaluations they resample.
   if (options.bootstrap && !options.det_b.empty()) {
-    run.paired = PairedBootstrapCoco(gt, dets, dets_b, options.eval, *options.bootstrap);
+    run.result_b.emplace();
+    run.paired = PairedBootstrapCoco(gt, dets, dets_b, options.eval, *options.bootstrap,
+                                     &run.result, &*run.result_b);
     run.bootstrap = run.paired->a;
-  }
-  if (options.bootstrap && options.det_b.empty()) {
+  } else if (options.bootstrap) {
     run.bootstrap = BootstrapCoco(gt, dets, options.eval, *options.bootstrap, &run.result);
   } else {
     run.result = EvaluateCoco(gt, dets, options.eval);
+    if (!options.det_b.empty()) run.result_b = EvaluateCoco(gt, dets_b, options.eval);
   }
-  if (!options.det_b.empty()) run.result_b = EvaluateCoco(gt, dets_b, options.eval);
   if (!out) return run;
 
   const CocoEvalResult& r = run.result;
