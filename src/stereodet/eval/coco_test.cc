@@ -85,16 +85,23 @@ TEST(CocoTest, ThresholdsAreNumpysLinspace) {
   EXPECT_EQ(recall[100], 1.0);
 }
 
+// The fixture of TwoBoxesThreeDetectionsByHand (below), which other tests reuse: two boxes on
+// image 7 and three detections.
+CocoGroundTruth TwoBoxes() {
+  return OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
+}
+std::vector<CocoDetection> ThreeDetections() {
+  return {Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+}
+
 // Two boxes of one image and three detections, by hand. Highest score first: d1 covers gt 1
 // (IoU 1), d2 covers nothing, d3 overlaps gt 2 with IoU 90 / 110 = 0.818. At thresholds <= 0.8
 // the sequence is TP FP TP: recall 1/2, 1/2, 1, precision 1, 1/2, 2/3, whose envelope is 1, 2/3,
 // 2/3; the 51 recall points 0.00..0.50 read 1, the 50 above read 2/3. At 0.85, 0.9 and 0.95 d3 is
 // a FP: recall stops at 1/2 and the 50 points above read 0.
 TEST(CocoTest, TwoBoxesThreeDetectionsByHand) {
-  const CocoGroundTruth gt =
-      OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
-  const std::vector<CocoDetection> dets = {
-      Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+  const CocoGroundTruth gt = TwoBoxes();
+  const std::vector<CocoDetection> dets = ThreeDetections();
   const CocoEvalResult r = EvaluateCoco(gt, dets, CocoEvalOptions());
   const double ap_low = (51 * 1.0 + 50 * (2.0 / 3.0)) / 101;  // thresholds 0.5 .. 0.8
   const double ap_high = 51.0 / 101;                          // 0.85 .. 0.95
@@ -518,10 +525,8 @@ TEST(CocoTest, OptimalMatcherNeverFindsLessAndAgreesWithoutConflicts) {
 // The operating-point cells of TwoBoxesThreeDetectionsByHand: d1 (0.9) TP, d2 (0.8) FP, d3 (0.7) TP
 // at IoU <= 0.8; d3 a FP above.
 TEST(CocoTest, ScoreMetricsByHand) {
-  const CocoGroundTruth gt =
-      OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
-  const std::vector<CocoDetection> dets = {
-      Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+  const CocoGroundTruth gt = TwoBoxes();
+  const std::vector<CocoDetection> dets = ThreeDetections();
   for (const CocoMatcher matcher : {CocoMatcher::kCoco, CocoMatcher::kOptimal}) {
     SCOPED_TRACE(CocoMatcherName(matcher));
     CocoEvalOptions options;
@@ -641,10 +646,8 @@ TEST(CocoTest, ScoreMetricsAgreeWithTheArrays) {
 // evaluation's with one category, and the whole AP is the mean of the categories' where the
 // categories' slices are the same size.
 TEST(CocoTest, CategoryStatsAreEachCategorysSummary) {
-  const CocoGroundTruth one =
-      OneCategory({7}, {Box(1, 7, {0, 0, 10, 10}), Box(2, 7, {20, 0, 10, 10})});
-  const std::vector<CocoDetection> dets = {
-      Det(7, {0, 0, 10, 10}, 0.9), Det(7, {50, 50, 10, 10}, 0.8), Det(7, {21, 0, 10, 10}, 0.7)};
+  const CocoGroundTruth one = TwoBoxes();
+  const std::vector<CocoDetection> dets = ThreeDetections();
   const CocoEvalResult r = EvaluateCoco(one, dets, CocoEvalOptions());
   ASSERT_EQ(r.category_stats.size(), 1u);
   EXPECT_EQ(r.category_stats[0], r.stats);
