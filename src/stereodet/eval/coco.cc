@@ -17,6 +17,8 @@
 #include "stereodet/eval/score_metrics_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/malloc_tuning.h"
 #include "stereodet/util/parallel.h"
 #include "stereodet/util/timer.h"
 
@@ -489,23 +491,12 @@ namespace {
 // not. Every value this path accepts it has parsed, so it accepts only valid JSON, and the values
 // are CocoReader's (numbers are correctly rounded doubles in both, ids int64).
 //
-// On-Demand with its compile-time kernel (the scalar fallback without -march flags) and not the
-// DOM parser with its run-time one: on a COCO-sized file both spend most of their time touching
+// On-Demand and not the DOM parser: on a COCO-sized file both spent most of their time touching
 // fresh memory (the DOM's tape too), and On-Demand touches the least (docs/BENCHMARKS.md).
-bool FastParseCocoDetections(std::string_view text, size_t capacity, const CocoGroundTruth& gt,
-                             std::vector<CocoDetection>* dets) {
+// `view` is the array's text with simdjson's padding after it; the detections are appended.
+bool FastParseCocoArray(simdjson::ondemand::parser& parser, simdjson::padded_string_view view,
+                        const CocoGroundTruth& gt, std::vector<CocoDetection>* dets) {
   namespace od = simdjson::ondemand;
-  static_assert(kCocoReadPadding >= simdjson::SIMDJSON_PADDING);
-  // In place where the buffer has simdjson's padding after the text, else a padded copy.
-  simdjson::padded_string copy;
-  simdjson::padded_string_view view;
-  if (capacity >= text.size() + simdjson::SIMDJSON_PADDING) {
-    view = simdjson::padded_string_view(text.data(), text.size(), capacity);
-  } else {
-    copy = simdjson::padded_string(text);
-    view = copy;
-  }
-  od::parser parser;
   od::document doc;
   if (parser.iterate(view).get(doc)) return false;
   od::array array;
@@ -581,28 +572,169 @@ bool FastParseCocoDetections(std::string_view text, size_t capacity, const CocoG
   return doc.current_location().get(rest) == simdjson::OUT_OF_BOUNDS;
 }
 
-// The fast path where it reads the file, CocoReader where it does not.
-std::vector<CocoDetection> ParseCocoDetectionsIn(std::string_view text, size_t capacity,
-                                                 const std::string& source,
+// The fast path where it reads the text, CocoReader where it does not.
+std::vector<CocoDetection> ParseCocoDetectionsIn(std::string_view text, const std::string& source,
                                                  const CocoGroundTruth& gt) {
   std::vector<CocoDetection> dets;
   // About 90 bytes a detection ({"image_id": 1, "category_id": 1, "bbox": [...], "score": ...}).
   dets.reserve(text.size() / 90);
-  if (FastParseCocoDetections(text, capacity, gt, &dets)) return dets;
+  const simdjson::padded_string copy(text);
+  simdjson::ondemand::parser parser;
+  if (FastParseCocoArray(parser, copy, gt, &dets)) return dets;
   return ParseCocoDetectionsNamingErrors(text, source, gt);
+}
+
+constexpr bool IsJsonWhitespace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
+
+bool AllJsonWhitespace(const char* begin, const char* end) {
+  return std::all_of(begin, end, IsJsonWhitespace);
 }
 
 }  // namespace
 
-std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
-                                               const CocoGroundTruth& gt) {
-  return ParseCocoDetectionsIn(text, text.size(), source, gt);
+size_t CocoArrayScanner::Scan(const char* text, size_t from, size_t to, size_t* last_cut) {
+  for (size_t i = from; i < to; ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    switch (c) {
+      case '"':
+        in_string = true;
+        break;
+      case '[':
+      case '{':
+        ++depth;
+        break;
+      case ']':
+      case '}':
+        if (--depth == 0) return i;
+        break;
+      case ',':
+        if (depth == 1) *last_cut = i;
+        break;
+      default:
+        break;
+    }
+  }
+  return kNoClose;
 }
 
-std::vector<CocoDetection> ParseCocoDetectionsInPlace(const std::string& text,
-                                                      const std::string& source,
-                                                      const CocoGroundTruth& gt) {
-  return ParseCocoDetectionsIn(text, text.capacity(), source, gt);
+namespace {
+
+// The buffer holds '[' then the text not parsed yet; each time a read brings a comma between two
+// elements of the top array, everything before the last such comma is parsed as one array (the
+// comma overwritten by ']') and the rest moved to the front. Splitting the array so is sound
+// whatever the scanner decides: every piece is checked by simdjson as an array of at least one
+// element (an empty piece means ",," or a comma next to a bracket: refused), and arrays of
+// elements joined by commas are the array of all of them; a wrong split can only refuse a file,
+// never accept a wrong one. An element longer than the block doubles the buffer.
+bool StreamCocoDetections(RegularFileReader& reader, const CocoGroundTruth& gt, size_t block_bytes,
+                          std::vector<CocoDetection>* dets, uint64_t* fnv1a64) {
+  constexpr size_t kPadding = simdjson::SIMDJSON_PADDING;
+  std::string buffer(1 + std::max<size_t>(block_bytes, 1) + kPadding, ' ');
+  buffer[0] = '[';
+  size_t end = 1;       // buffer[0, end): '[' and the text not parsed yet, of which
+  size_t scanned = 1;   // [1, scanned) is scanned
+  size_t last_cut = 0;  // the last comma between elements in [1, scanned); 0: none
+  bool opened = false;  // the file's '[' read
+  bool closed = false;  // its ']' read and the array parsed
+  size_t pieces = 0;    // parsed
+  CocoArrayScanner scanner;
+  simdjson::ondemand::parser parser;
+  // Parses buffer[0, length), "[...]"; false if it is not an array of valid detections or, unless
+  // `may_be_empty`, holds none.
+  auto parse = [&](size_t length, bool may_be_empty) {
+    const size_t before = dets->size();
+    const simdjson::padded_string_view view(buffer.data(), length, buffer.size());
+    if (!FastParseCocoArray(parser, view, gt, dets)) return false;
+    ++pieces;
+    return may_be_empty || dets->size() > before;
+  };
+  while (true) {
+    if (end + kPadding == buffer.size()) buffer.resize(2 * buffer.size(), ' ');
+    const size_t got = reader.Read(buffer.data() + end, buffer.size() - kPadding - end);
+    if (got == 0) break;
+    if (fnv1a64 != nullptr)
+      *fnv1a64 = Fnv1a64(std::string_view(buffer.data() + end, got), *fnv1a64);
+    size_t from = end;
+    end += got;
+    if (closed) {
+      // After the array: whitespace only, and nothing kept.
+      if (!AllJsonWhitespace(buffer.data() + from, buffer.data() + end)) return false;
+      end = 1;
+      continue;
+    }
+    if (!opened) {
+      while (from < end && IsJsonWhitespace(buffer[from])) ++from;
+      if (from == end) {
+        end = 1;
+        continue;
+      }
+      if (buffer[from] != '[') return false;
+      opened = true;
+      std::memmove(buffer.data() + 1, buffer.data() + from + 1, end - from - 1);
+      end -= from;
+      scanned = 1;
+    }
+    const size_t close = scanner.Scan(buffer.data(), scanned, end, &last_cut);
+    scanned = end;
+    if (close != CocoArrayScanner::kNoClose) {
+      if (!AllJsonWhitespace(buffer.data() + close + 1, buffer.data() + end)) return false;
+      // "[]" is the one array that may be empty; a last piece without elements was "...,]".
+      if (!parse(close + 1, /*may_be_empty=*/pieces == 0)) return false;
+      closed = true;
+      end = 1;
+      continue;
+    }
+    if (last_cut > 0) {
+      buffer[last_cut] = ']';
+      if (!parse(last_cut + 1, /*may_be_empty=*/false)) return false;
+      const size_t rest = end - last_cut - 1;
+      std::memmove(buffer.data() + 1, buffer.data() + last_cut + 1, rest);
+      end = 1 + rest;
+      scanned = end;
+      last_cut = 0;
+    }
+  }
+  return closed;
+}
+
+}  // namespace
+
+std::vector<CocoDetection> ReadCocoDetectionsInBlocks(const std::filesystem::path& path,
+                                                      const CocoGroundTruth& gt, size_t block_bytes,
+                                                      uint64_t* fnv1a64, bool* streamed) {
+  std::vector<CocoDetection> dets;
+  const uint64_t seed = fnv1a64 != nullptr ? *fnv1a64 : 0;
+  {
+    RegularFileReader reader(path, "COCO results");
+    // At least 56 bytes a detection ({"image_id":1,"category_id":1,"bbox":[1,1,1,1],"score":1},):
+    // room for all of them, untouched beyond what is filled.
+    ReserveOnHugePages(dets, static_cast<size_t>(reader.size() / 56) + 1);
+    if (StreamCocoDetections(reader, gt, block_bytes, &dets, fnv1a64)) {
+      if (streamed != nullptr) *streamed = true;
+      return dets;
+    }
+  }
+  // Refused: read whole by the reader that names what is wrong (or accepts what the fast path
+  // does not, such as a detection with a nested field).
+  if (streamed != nullptr) *streamed = false;
+  const std::string text = ReadFile(path, kMaxReadFileBytes, "COCO results");
+  if (fnv1a64 != nullptr) *fnv1a64 = Fnv1a64(text, seed);
+  return ParseCocoDetectionsNamingErrors(text, path.string(), gt);
+}
+
+std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
+                                               const CocoGroundTruth& gt) {
+  return ParseCocoDetectionsIn(text, source, gt);
 }
 
 std::vector<CocoDetection> ParseCocoDetectionsNamingErrors(std::string_view text,
@@ -615,9 +747,8 @@ std::vector<CocoDetection> ParseCocoDetectionsNamingErrors(std::string_view text
 }
 
 std::vector<CocoDetection> ReadCocoDetections(const std::filesystem::path& path,
-                                              const CocoGroundTruth& gt) {
-  return ParseCocoDetectionsInPlace(
-      ReadFile(path, kMaxReadFileBytes, "COCO results", kCocoReadPadding), path.string(), gt);
+                                              const CocoGroundTruth& gt, uint64_t* fnv1a64) {
+  return ReadCocoDetectionsInBlocks(path, gt, kCocoReadBlockBytes, fnv1a64, nullptr);
 }
 
 // -----------------------------------------------------------------------------------------------

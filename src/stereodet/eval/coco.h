@@ -97,18 +97,15 @@ CocoGroundTruth ReadCocoGroundTruth(const std::filesystem::path& path);
 std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
                                                const CocoGroundTruth& gt);
 
-// ParseCocoDetections, reading `text` in place, without the padded copy simdjson needs otherwise,
-// when text.capacity() >= text.size() + kCocoReadPadding (ReadFile(..., kCocoReadPadding) reads a
-// file so; a string without that room is copied). On a COCO-sized results file on this project's
-// VMs the copy cost a sixth of the reading (docs/BENCHMARKS.md).
-inline constexpr size_t kCocoReadPadding = 64;
-std::vector<CocoDetection> ParseCocoDetectionsInPlace(const std::string& text,
-                                                      const std::string& source,
-                                                      const CocoGroundTruth& gt);
-
-// ReadFile + ParseCocoDetections.
+// Reads and parses a results file as ParseCocoDetections does, in blocks: simdjson parses each
+// block's whole elements as soon as they are read, so neither the file nor simdjson's index of it
+// is held whole (on a COCO-sized file that halved the reading's CPU, docs/BENCHMARKS.md). A file
+// the fast path refuses is read whole by the reader that names the error. With `fnv1a64`, the
+// file's FNV-1a 64 hash continues from *fnv1a64 (Fnv1a64(bytes, *fnv1a64)). Throws
+// std::runtime_error if the file cannot be read, ParseError as ParseCocoDetections.
 std::vector<CocoDetection> ReadCocoDetections(const std::filesystem::path& path,
-                                              const CocoGroundTruth& gt);
+                                              const CocoGroundTruth& gt,
+                                              uint64_t* fnv1a64 = nullptr);
 
 // An object area range: an annotation is inside when min_area <= area <= max_area.
 struct CocoAreaRange {

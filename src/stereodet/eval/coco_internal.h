@@ -85,6 +85,31 @@ std::vector<CocoDetection> ParseCocoDetectionsNamingErrors(std::string_view text
                                                            const std::string& source,
                                                            const CocoGroundTruth& gt);
 
+// Where the text of a results file splits into the elements of its top array: a byte scan that
+// follows strings (with their escapes) and the nesting of brackets and braces, from just inside
+// the top array's '['.
+struct CocoArrayScanner {
+  static constexpr size_t kNoClose = static_cast<size_t>(-1);
+  // Scans text[from, to) on from where the last scan stopped. Returns the offset of the bracket
+  // that closes the top array, or kNoClose if not reached; *last_cut becomes the offset of the
+  // last comma between two elements of the top array, where one is scanned.
+  size_t Scan(const char* text, size_t from, size_t to, size_t* last_cut);
+
+  int depth = 1;
+  bool in_string = false;
+  bool escaped = false;  // the string's last byte was an unescaped backslash
+};
+
+// ReadCocoDetections' block size, bytes: the buffer, and simdjson's index of it, stay in the
+// cache of a core and are reused block after block.
+inline constexpr size_t kCocoReadBlockBytes = size_t{1} << 20;
+
+// ReadCocoDetections with a block size (tests use a few bytes, to cut every element);
+// *streamed: whether the fast path read the file (false: the whole-file reader did).
+std::vector<CocoDetection> ReadCocoDetectionsInBlocks(const std::filesystem::path& path,
+                                                      const CocoGroundTruth& gt, size_t block_bytes,
+                                                      uint64_t* fnv1a64, bool* streamed);
+
 // EvaluateCoco, also handing over every category's detections (in category order).
 CocoEvalResult EvaluateCocoKeepingDetections(const CocoGroundTruth& gt,
                                              const std::vector<CocoDetection>& dets,

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -16,6 +17,8 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/fuzz_corpus.h"
+#include "stereodet/util/hash.h"
+#include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
 namespace {
@@ -942,6 +945,133 @@ TEST(CocoTest, FastAndNamingReadersAgree) {
   }
   EXPECT_GT(fast, 100);
   EXPECT_GT(defects, 20);
+}
+
+// ReadCocoDetections reads a results file in blocks, cutting the top array between elements. At
+// every block size (1 byte: every element cut everywhere), its detections, its refusals and its
+// hash are those of the whole-file reader: random files with whitespace anywhere, strings in
+// extra keys holding commas, brackets, braces, quotes and backslashes, and now and then a defect
+// of the array itself (a comma too many or missing, text after it, no closing bracket).
+TEST(CocoTest, BlockReaderAgreesWithTheWholeFileReader) {
+  TestTempDir dir;
+  CocoGroundTruth gt;
+  gt.source = "gt";
+  gt.image_ids = {1, 2, 3};
+  std::mt19937 rng(38);
+  std::uniform_int_distribution<int> pick(0, 99);
+  auto space = [&]() -> std::string {
+    constexpr std::array<const char*, 5> kSpaces = {"", "", " ", "\n  ", "\t\r\n"};
+    return kSpaces[pick(rng) % kSpaces.size()];
+  };
+  auto tricky_string = [&]() -> std::string {
+    constexpr std::array<const char*, 7> kStrings = {
+        R"("a,b")",     R"("]}{[")", R"("say \"hi\", ok")", R"("back\\")", R"("q\"],[{\"")",
+        R"("\u005d,")", R"("")"};
+    return kStrings[pick(rng) % kStrings.size()];
+  };
+  int streamed_count = 0, refused_count = 0, defects = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string text = space() + "[" + space();
+    const int n = pick(rng) % 5;
+    for (int i = 0; i < n; ++i) {
+      std::vector<std::string> fields = {
+          fmt::format("\"image_id\":{}{}", space(), 1 + pick(rng) % 3),
+          fmt::format("\"category_id\": {}", pick(rng) % 4),
+          fmt::format("\"bbox\": [{}, {},{}{}, {}]", pick(rng), pick(rng) / 8.0, space(), pick(rng),
+                      pick(rng) + 0.5),
+          fmt::format("\"score\" :{}", pick(rng) / 100.0),
+          fmt::format("\"note\": {}", tricky_string())};
+      std::shuffle(fields.begin(), fields.end(), rng);
+      if (i > 0) text += space() + "," + space();
+      text += fmt::format("{{{}{}}}", space(), fmt::join(fields, fmt::format(",{}", space())));
+    }
+    text += space() + "]" + space();
+    bool defect = false;
+    if (pick(rng) < 15) {
+      defect = true;
+      switch (pick(rng) % 6) {
+        case 0:  // a trailing comma
+          text.insert(text.rfind(']'), ",");
+          break;
+        case 1:  // a leading comma
+          text.insert(text.find('[') + 1, ",");
+          break;
+        case 2:  // two commas, or one where none belongs
+          text.insert(text.find('}') == std::string::npos ? text.size() - 1 : text.find('}') + 1,
+                      ",,");
+          break;
+        case 3:  // text after the array
+          text += "x";
+          break;
+        case 4:  // no closing bracket
+          text.erase(text.rfind(']'));
+          break;
+        default:  // nothing at all, or whitespace only
+          text = space();
+      }
+    }
+    defects += defect;
+    const std::filesystem::path path = dir.path() / "det.json";
+    WriteFileAtomically(path, text);
+    std::vector<CocoDetection> want;
+    bool want_threw = false;
+    try {
+      want = ParseCocoDetectionsNamingErrors(text, path.string(), gt);
+    } catch (const ParseError&) {
+      want_threw = true;
+    }
+    for (const size_t block :
+         {size_t{1}, size_t{2}, size_t{5}, size_t{16}, size_t{64}, kCocoReadBlockBytes}) {
+      SCOPED_TRACE(fmt::format("block {}, text {}", block, text));
+      std::vector<CocoDetection> got;
+      bool got_threw = false, streamed = false;
+      uint64_t hash = 12345;
+      try {
+        got = ReadCocoDetectionsInBlocks(path, gt, block, &hash, &streamed);
+      } catch (const ParseError&) {
+        got_threw = true;
+      }
+      ASSERT_EQ(got_threw, want_threw);
+      // Every file without a defect is read by the fast path; a defect never is.
+      EXPECT_EQ(streamed, !defect);
+      ASSERT_EQ(got.size(), want.size());
+      for (size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].image_id, want[i].image_id);
+        EXPECT_EQ(got[i].category_id, want[i].category_id);
+        EXPECT_EQ(got[i].bbox.x, want[i].bbox.x);
+        EXPECT_EQ(got[i].bbox.width, want[i].bbox.width);
+        EXPECT_EQ(got[i].bbox.height, want[i].bbox.height);
+        EXPECT_EQ(got[i].score, want[i].score);
+      }
+      if (!got_threw) {
+        EXPECT_EQ(hash, Fnv1a64(text, 12345));
+      }
+      streamed_count += streamed;
+      refused_count += !streamed;
+    }
+  }
+  EXPECT_GT(streamed_count, 600);
+  EXPECT_GT(defects, 15);
+  EXPECT_GT(refused_count, 6 * 15);
+}
+
+// The scanner by hand: cuts only between the top array's elements, never inside strings (escaped
+// quotes included) or nested values; the top array's closing bracket ends it.
+TEST(CocoTest, ArrayScannerByHand) {
+  const std::string text = R"([{"a":"x,\"]"},[1,2],"\\",3] ,)";
+  CocoArrayScanner scanner;
+  size_t cut = 0;
+  const size_t close = scanner.Scan(text.data(), 1, text.size(), &cut);
+  EXPECT_EQ(close, text.rfind(']'));
+  EXPECT_EQ(cut, text.rfind(",3"));
+  // Fed byte by byte, the same.
+  CocoArrayScanner bytes;
+  size_t bytes_cut = 0, bytes_close = CocoArrayScanner::kNoClose;
+  for (size_t i = 1; i < text.size() && bytes_close == CocoArrayScanner::kNoClose; ++i) {
+    bytes_close = bytes.Scan(text.data(), i, i + 1, &bytes_cut);
+  }
+  EXPECT_EQ(bytes_close, close);
+  EXPECT_EQ(bytes_cut, cut);
 }
 
 TEST(CocoTest, OptionsCheck) {

@@ -70,7 +70,8 @@ struct CocoEvaluationResult {
   // `bootstrap`'s content then too).
   std::optional<CocoBootstrapResult> bootstrap;
   std::optional<CocoPairedBootstrapResult> paired;
-  std::string input_hash;   // FNV-1a 64 of the ground truth's bytes then the results' bytes
+  std::string input_hash;   // FNV-1a 64 of the ground truth's bytes then the results' bytes; with
+                            // `out` only (empty without)
   double read_seconds = 0;  // reading and parsing both files, s (result.seconds: evaluating)
   std::vector<std::filesystem::path> files;  // with out: the files written, as paths under out
 };

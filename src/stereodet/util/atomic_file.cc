@@ -97,26 +97,15 @@ std::string HumanBytes(uint64_t bytes) {
 }
 
 // Reads up to `max_bytes` of a regular file; with `whole`, a longer file is an error. POSIX
-// open/fstat/read rather than an ifstream: a KITTI split is thousands of small files and the
-// stream set-up (and its seeks) would cost more than the parsing. fstat before reading, so a FIFO
-// or a folder is refused instead of blocking (O_NONBLOCK: opening a FIFO without a writer would
-// block; it does nothing to a regular file); the read loop also grows past st_size, so /proc files
-// (size 0) read whole. A file of the size fstat reports takes one read().
+// open/fstat/read (RegularFileReader) rather than an ifstream: a KITTI split is thousands of small
+// files and the stream set-up (and its seeks) would cost more than the parsing. The read loop also
+// grows past st_size, so /proc files (size 0) read whole. A file of the size fstat reports takes
+// one read().
 std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole, const char* what,
                             size_t padding = 0) {
-  const std::string name =
-      what == nullptr ? path.string() : std::string(what) + " " + path.string();
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  STEREODET_CHECK_IO(fd >= 0) << "cannot read " << name << ": " << std::strerror(errno);
-  struct FdCloser {
-    int fd;
-    ~FdCloser() { ::close(fd); }
-  } closer{fd};
-  struct stat info {};
-  STEREODET_CHECK_IO(::fstat(fd, &info) == 0)
-      << "cannot read " << name << ": " << std::strerror(errno);
-  STEREODET_CHECK_IO(S_ISREG(info.st_mode)) << "cannot read " << name << ": not a regular file";
-  const uint64_t size = static_cast<uint64_t>(info.st_size);
+  RegularFileReader reader(path, what);
+  const std::string& name = reader.name();
+  const uint64_t size = reader.size();
   STEREODET_CHECK_IO(!whole || size <= max_bytes)
       << "cannot read " << name << ": it is " << HumanBytes(size) << ", more than the "
       << HumanBytes(max_bytes) << " read of one file";
@@ -134,11 +123,9 @@ std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole
                                             << HumanBytes(max_bytes) << " read of one file";
       contents.resize(std::min<uint64_t>(contents.size() * 2, max_bytes + 1));
     }
-    const ssize_t got = ::read(fd, contents.data() + used, contents.size() - used);
-    if (got < 0 && errno == EINTR) continue;
-    STEREODET_CHECK_IO(got >= 0) << "cannot read " << name << ": " << std::strerror(errno);
+    const size_t got = reader.Read(contents.data() + used, contents.size() - used);
     if (got == 0) break;
-    used += static_cast<size_t>(got);
+    used += got;
     // Exactly the size fstat reported: that is the whole file (one more byte was asked for, so a
     // file that grew since would have filled the buffer). No second read() just to see the end:
     // reading thousands of small files, that was a fifth of the system calls.
@@ -151,6 +138,34 @@ std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole
 }
 
 }  // namespace
+
+// fstat before reading, so a FIFO or a folder is refused instead of blocking (O_NONBLOCK: opening
+// a FIFO without a writer would block; it does nothing to a regular file).
+RegularFileReader::RegularFileReader(const fs::path& path, const char* what)
+    : name_(what == nullptr ? path.string() : std::string(what) + " " + path.string()) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  STEREODET_CHECK_IO(fd_ >= 0) << "cannot read " << name_ << ": " << std::strerror(errno);
+  struct stat info {};
+  const bool stat_ok = ::fstat(fd_, &info) == 0;
+  const int stat_errno = errno;
+  if (!stat_ok || !S_ISREG(info.st_mode)) {
+    ::close(fd_);
+    STEREODET_CHECK_IO(stat_ok) << "cannot read " << name_ << ": " << std::strerror(stat_errno);
+    STEREODET_CHECK_IO(false) << "cannot read " << name_ << ": not a regular file";
+  }
+  size_ = static_cast<uint64_t>(info.st_size);
+}
+
+RegularFileReader::~RegularFileReader() { ::close(fd_); }
+
+size_t RegularFileReader::Read(char* into, size_t bytes) {
+  while (true) {
+    const ssize_t got = ::read(fd_, into, bytes);
+    if (got < 0 && errno == EINTR) continue;
+    STEREODET_CHECK_IO(got >= 0) << "cannot read " << name_ << ": " << std::strerror(errno);
+    return static_cast<size_t>(got);
+  }
+}
 
 std::string ReadFile(const fs::path& path, uint64_t max_bytes, const char* what, size_t padding) {
   return ReadRegularFile(path, max_bytes, /*whole=*/true, what, padding);

@@ -61,6 +61,35 @@ std::string ReadFile(const std::filesystem::path& path, uint64_t max_bytes = kMa
 // The first `bytes` bytes of a regular file (fewer if it is shorter), with ReadFile's checks.
 std::string ReadFileHead(const std::filesystem::path& path, size_t bytes);
 
+// A regular file read front to back in pieces the caller sizes, for a reader that parses as it
+// reads instead of holding the whole file (ReadFile's checks and messages; `what` as there):
+//
+//   RegularFileReader reader(path, "COCO results");
+//   while (const size_t got = reader.Read(block.data(), block.size())) Parse(block, got);
+class RegularFileReader {
+ public:
+  // Opens the file. Throws std::runtime_error naming it if it cannot be opened or is not a
+  // regular file.
+  explicit RegularFileReader(const std::filesystem::path& path, const char* what = nullptr);
+  RegularFileReader(const RegularFileReader&) = delete;
+  RegularFileReader& operator=(const RegularFileReader&) = delete;
+  ~RegularFileReader();
+
+  // The size fstat reported when the file was opened, in bytes.
+  uint64_t size() const { return size_; }
+  // The file named as in the messages ("COCO results PATH").
+  const std::string& name() const { return name_; }
+
+  // Reads up to `bytes` bytes into `into`; returns how many, 0 only at the end of the file.
+  // Throws std::runtime_error naming the file on a read error.
+  size_t Read(char* into, size_t bytes);
+
+ private:
+  std::string name_;
+  int fd_ = -1;
+  uint64_t size_ = 0;
+};
+
 }  // namespace stereodet
 
 #endif  // STEREODET_UTIL_ATOMIC_FILE_H_

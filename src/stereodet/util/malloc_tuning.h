@@ -23,6 +23,23 @@ inline constexpr size_t kHeapTrimBytes = size_t{128} << 20;
 // 24 frames; docs/BENCHMARKS.md). The resident size grows by at most the trim limit.
 bool KeepLargeBuffersInHeap();
 
+// Asks the kernel to back [data, data + bytes) with transparent huge pages where the machine
+// allows them only on request (Linux's THP setting "madvise", Debian's default): the 2 MiB-aligned
+// part of the range, nothing for a range under 4 MiB; a no-op elsewhere. Call it on memory not
+// yet touched (a reserve()'d vector), so that its first touch faults 2 MiB at a time. Returns
+// whether the advice was taken; either way the memory works the same.
+//
+// Why: on this project's VMs a 4 KiB page fault costs about 11 us; filling a 28 MB vector of
+// detections took 77 ms, 29 ms with the advice (docs/BENCHMARKS.md, COCO mode).
+bool AdviseHugePages(void* data, size_t bytes);
+
+// reserve() then AdviseHugePages on the vector's storage.
+template <typename Vector>
+void ReserveOnHugePages(Vector& v, size_t n) {
+  v.reserve(n);
+  AdviseHugePages(v.data(), v.capacity() * sizeof(typename Vector::value_type));
+}
+
 }  // namespace stereodet
 
 #endif  // STEREODET_UTIL_MALLOC_TUNING_H_

@@ -61,5 +61,22 @@ TEST(MallocTuningTest, LimitsCoverAFullResolutionFrame) {
   EXPECT_GE(kHeapTrimBytes, kHeapBlockLimitBytes);
 }
 
+TEST(MallocTuningTest, HugePageAdviceCoversOnlyWholeHugePages) {
+  // Under two huge pages there is no aligned 2 MiB page that the range surely holds: no advice.
+  std::vector<char> small(size_t{3} << 20);
+  EXPECT_FALSE(AdviseHugePages(small.data(), small.size()));
+  EXPECT_FALSE(AdviseHugePages(nullptr, size_t{64} << 20));
+  // A large reserved vector: the advice is taken where the kernel has transparent huge pages (a
+  // kernel without them refuses it), and the memory works the same either way.
+  std::vector<int64_t> values;
+  ReserveOnHugePages(values, size_t{3} << 20);
+  EXPECT_GE(values.capacity(), size_t{3} << 20);
+  for (int64_t i = 0; i < (int64_t{3} << 20); ++i) values.push_back(i * 7);
+  int64_t sum = 0;
+  for (const int64_t v : values) sum += v;
+  const int64_t n = int64_t{3} << 20;
+  EXPECT_EQ(sum, 7 * n * (n - 1) / 2);
+}
+
 }  // namespace
 }  // namespace stereodet
