@@ -1059,46 +1059,86 @@ std::array<SummaryLine, kNumCocoStats> SummaryLines(const std::vector<int>& max_
 
 }  // namespace
 
-void CocoAccumulateCurve(const std::vector<uint8_t>& flags, const std::vector<double>& scores,
-                         int64_t npig, const std::vector<double>& recall_thresholds,
-                         CocoCurveScratch* scratch, double* recall, double* precision,
-                         double* score_at, size_t stride) {
-  const size_t nd = flags.size(), R = recall_thresholds.size();
-  std::vector<double>& rc = scratch->rc;
-  std::vector<double>& pr = scratch->pr;
-  rc.resize(nd);
-  pr.resize(nd);
-  double tp = 0, fp = 0;
+// numpy computes, for every detection j, rc[j] = tp[j] / npig and pr[j] = tp[j] / (fp[j] + tp[j]
+// + eps) from the cumulative counts, raises each pr[j] to the largest after it, and reads, for
+// each recall threshold, pr and the score at the first j with rc[j] >= the threshold. The same
+// numbers from the true positives alone:
+// - rc[j] is a function of tp[j] (one division, monotone in it), so the first j with rc[j] >= x
+//   is where the c-th true positive is, c the least count with c / npig >= x (or j = 0, c = 0);
+// - after a true positive, pr only falls (a false positive) or stays (an ignored detection)
+//   until the next one, so the largest pr[j] at or after a true positive is the largest at the
+//   true positives from there on, and before the first one pr is 0.
+// Each pr at a true positive is the division numpy makes there (tp and fp are exact integers in
+// a double); the counting pass is branch-free, and there are npig divisions at most instead of
+// two per detection.
+void CocoAccumulateCurve(const uint8_t* flags, const double* scores, size_t nd, int64_t npig,
+                         const std::vector<double>& recall_thresholds, CocoCurveScratch* scratch,
+                         double* recall, double* precision, double* score_at, size_t stride) {
+  const size_t R = recall_thresholds.size();
+  std::vector<uint32_t>& tp_at = scratch->tp_at;          // where the c-th true positive is
+  std::vector<uint32_t>& fp_before = scratch->fp_before;  // the false positives before it
+  tp_at.resize(nd + 1);
+  fp_before.resize(nd + 1);
+  size_t num_tp = 0;
+  uint32_t num_fp = 0;
   for (size_t j = 0; j < nd; ++j) {
-    if (!(flags[j] & kIgnored)) {
-      if (flags[j] & kMatched) {
-        tp += 1;
-      } else {
-        fp += 1;
-      }
-    }
-    rc[j] = tp / static_cast<double>(npig);
-    pr[j] = tp / (fp + tp + kNumpySpacingOfOne);
+    const bool counted = !(flags[j] & kIgnored);
+    const bool tp = counted && (flags[j] & kMatched);
+    tp_at[num_tp] = static_cast<uint32_t>(j);
+    fp_before[num_tp] = num_fp;
+    num_tp += tp;
+    num_fp += counted && !tp;
   }
-  *recall = nd > 0 ? rc.back() : 0.0;
-  // The precision envelope: from the right, each precision raised to the best after it.
-  for (size_t j = nd; j-- > 1;) {
-    if (pr[j] > pr[j - 1]) pr[j - 1] = pr[j];
+  const double n = static_cast<double>(npig);
+  *recall = nd > 0 ? static_cast<double>(num_tp) / n : 0.0;
+  // pr at each true positive, then the envelope from the right.
+  std::vector<double>& pr = scratch->tp_precision;
+  pr.resize(num_tp);
+  for (size_t c = 0; c < num_tp; ++c) {
+    const double tp = static_cast<double>(c + 1);
+    pr[c] = tp / (static_cast<double>(fp_before[c]) + tp + kNumpySpacingOfOne);
   }
-  // np.searchsorted(rc, recall_thresholds, side='left'): the first detection whose recall reaches
-  // the threshold; none for the rest once one is out of range.
+  for (size_t c = num_tp; c-- > 1;) {
+    if (pr[c] > pr[c - 1]) pr[c - 1] = pr[c];
+  }
+  // The thresholds ascend, so the least count reaching each only grows.
+  size_t count = 0;
   for (size_t r = 0; r < R; ++r) {
-    const size_t at = static_cast<size_t>(
-        std::lower_bound(rc.begin(), rc.end(), recall_thresholds[r]) - rc.begin());
-    if (at >= nd) {
+    while (count <= num_tp && static_cast<double>(count) / n < recall_thresholds[r]) ++count;
+    if (nd == 0 || count > num_tp) {
+      // np.searchsorted past the end: this threshold and the rest keep their zeros.
       for (size_t rest = r; rest < R; ++rest) {
         precision[rest * stride] = 0.0;
         score_at[rest * stride] = 0.0;
       }
       break;
     }
-    precision[r * stride] = pr[at];
+    const size_t at = count == 0 ? 0 : tp_at[count - 1];
+    precision[r * stride] = count == 0 ? (num_tp > 0 ? pr[0] : 0.0) : pr[count - 1];
     score_at[r * stride] = scores[at];
+  }
+}
+
+void CocoAccumulateCurves(const CocoCategoryDetections& in, const std::vector<uint32_t>& sequence,
+                          int k, int a, int m, int64_t npig, CocoCurveScratch* scratch,
+                          CocoEvalResult* result) {
+  const CocoEvalOptions& o = result->options;
+  const size_t T = o.iou_thresholds.size(), A = o.area_ranges.size(), nd = sequence.size();
+  // Each detection's T flags are adjacent in `in`: gathered once, threshold-major.
+  scratch->scores.resize(nd);
+  scratch->flags.resize(T * nd);
+  for (size_t j = 0; j < nd; ++j) {
+    scratch->scores[j] = in.score[sequence[j]];
+    const uint8_t* flags = &in.flags[(sequence[j] * A + a) * T];
+    for (size_t t = 0; t < T; ++t) scratch->flags[t * nd + j] = flags[t];
+  }
+  for (size_t t = 0; t < T; ++t) {
+    const int ti = static_cast<int>(t);
+    const size_t at = result->PrecisionIndex(ti, 0, k, a, m);
+    CocoAccumulateCurve(scratch->flags.data() + t * nd, scratch->scores.data(), nd, npig,
+                        o.recall_thresholds, scratch,
+                        &result->recall[result->RecallIndex(ti, k, a, m)], &result->precision[at],
+                        &result->scores[at], result->PrecisionIndex(ti, 1, k, a, m) - at);
   }
 }
 
@@ -1511,29 +1551,36 @@ class CocoEvaluator {
     std::stable_sort(order.begin(), order.end(),
                      [&](uint32_t a, uint32_t b) { return in.score[a] > in.score[b]; });
     std::vector<uint32_t> kept;
-    std::vector<uint8_t> kept_flags;
-    std::vector<double> kept_scores;
     CocoCurveScratch scratch;
+    const int ki = k;
     for (size_t a = 0; a < A; ++a) {
       const int64_t npig = in.num_valid_gt[a];
       if (npig == 0) continue;  // -1 stays: no ground truth to find
+      const int ai = static_cast<int>(a);
+      size_t previous_nd = 0;
       for (size_t m = 0; m < M; ++m) {
+        const int mi = static_cast<int>(m);
         kept.clear();
         for (const uint32_t i : order) {
           if (in.rank[i] < options_.max_dets[m]) kept.push_back(i);
         }
-        const size_t nd = kept.size();
-        kept_scores.resize(nd);
-        for (size_t j = 0; j < nd; ++j) kept_scores[j] = in.score[kept[j]];
-        for (size_t t = 0; t < T; ++t) {
-          kept_flags.resize(nd);
-          for (size_t j = 0; j < nd; ++j) kept_flags[j] = in.flags[(kept[j] * A + a) * T + t];
-          const size_t at = result_.PrecisionIndex(t, 0, k, a, m);
-          CocoAccumulateCurve(kept_flags, kept_scores, npig, options_.recall_thresholds, &scratch,
-                              &result_.recall[result_.RecallIndex(t, k, a, m)],
-                              &result_.precision[at], &result_.scores[at],
-                              result_.PrecisionIndex(t, 1, k, a, m) - at);
+        // max_dets ascend, so each kept set holds the one before: as many means the same curves.
+        if (m > 0 && kept.size() == previous_nd) {
+          for (size_t t = 0; t < T; ++t) {
+            const int ti = static_cast<int>(t);
+            result_.recall[result_.RecallIndex(ti, ki, ai, mi)] =
+                result_.recall[result_.RecallIndex(ti, ki, ai, mi - 1)];
+            for (int r = 0; r < static_cast<int>(options_.recall_thresholds.size()); ++r) {
+              result_.precision[result_.PrecisionIndex(ti, r, ki, ai, mi)] =
+                  result_.precision[result_.PrecisionIndex(ti, r, ki, ai, mi - 1)];
+              result_.scores[result_.PrecisionIndex(ti, r, ki, ai, mi)] =
+                  result_.scores[result_.PrecisionIndex(ti, r, ki, ai, mi - 1)];
+            }
+          }
+          continue;
         }
+        previous_nd = kept.size();
+        CocoAccumulateCurves(in, kept, ki, ai, mi, npig, &scratch, &result_);
       }
     }
   }

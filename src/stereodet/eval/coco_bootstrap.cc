@@ -86,8 +86,6 @@ Prepared Prepare(const CocoGroundTruth& gt, const std::vector<CocoDetection>& de
 struct ResampleScratch {
   CocoEvalResult replicate;
   std::vector<uint32_t> sequence;
-  std::vector<uint8_t> flags;
-  std::vector<double> scores;
   CocoCurveScratch curve;
 };
 
@@ -182,17 +180,7 @@ Numbers ResampleStats(const Prepared& p, const std::vector<int32_t>& w, Resample
           }
         }
       }
-      const size_t nd = s->sequence.size();
-      s->scores.resize(nd);
-      for (size_t j = 0; j < nd; ++j) s->scores[j] = in.score[s->sequence[j]];
-      s->flags.resize(nd);
-      for (int t = 0; t < T; ++t) {
-        for (size_t j = 0; j < nd; ++j) s->flags[j] = in.flags[(s->sequence[j] * A + a) * T + t];
-        const size_t at = r.PrecisionIndex(t, 0, ki, a, m);
-        CocoAccumulateCurve(s->flags, s->scores, npig, o.recall_thresholds, &s->curve,
-                            &r.recall[r.RecallIndex(t, ki, a, m)], &r.precision[at], &r.scores[at],
-                            r.PrecisionIndex(t, 1, ki, a, m) - at);
-      }
+      CocoAccumulateCurves(in, s->sequence, ki, a, m, npig, &s->curve, &r);
     }
   }
   SummarizeCoco(&r);

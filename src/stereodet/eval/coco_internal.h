@@ -116,17 +116,28 @@ CocoEvalResult EvaluateCocoKeepingDetections(const CocoGroundTruth& gt,
                                              const CocoEvalOptions& options,
                                              std::vector<CocoCategoryDetections>* categories);
 
-// accumulate()'s arithmetic for one category, area range, max_dets and IoU threshold: the kept
-// detections' flags and scores in score order (ignored ones included: they make points of the
-// curve too) and npig > 0 in; the recall, and the R interpolated precisions and their scores,
-// written at precision[r * stride] and score_at[r * stride].
+// accumulate()'s arithmetic for one category, area range, max_dets and IoU threshold: the flags
+// and scores of the `nd` kept detections in score order (ignored ones included: they make points
+// of the curve too) and npig > 0 in; the recall, and the R interpolated precisions and their
+// scores, written at precision[r * stride] and score_at[r * stride]. The same numbers, bit for
+// bit, as numpy's cumsum, division, envelope and searchsorted over every detection, computed at
+// the true positives alone (coco.cc says why that is exact).
 struct CocoCurveScratch {
-  std::vector<double> rc, pr;
+  std::vector<uint8_t> flags;  // threshold-major: flags[t * nd + j]
+  std::vector<double> scores;
+  std::vector<double> tp_precision;
+  std::vector<uint32_t> tp_at, fp_before;
 };
-void CocoAccumulateCurve(const std::vector<uint8_t>& flags, const std::vector<double>& scores,
-                         int64_t npig, const std::vector<double>& recall_thresholds,
-                         CocoCurveScratch* scratch, double* recall, double* precision,
-                         double* score_at, size_t stride);
+void CocoAccumulateCurve(const uint8_t* flags, const double* scores, size_t nd, int64_t npig,
+                         const std::vector<double>& recall_thresholds, CocoCurveScratch* scratch,
+                         double* recall, double* precision, double* score_at, size_t stride);
+
+// CocoAccumulateCurve at every IoU threshold of result->options: the detections `sequence` of
+// `in` (indices into its arrays, in score order) in area range a, into result's recall, precision
+// and scores at (t, k, a, m).
+void CocoAccumulateCurves(const CocoCategoryDetections& in, const std::vector<uint32_t>& sequence,
+                          int k, int a, int m, int64_t npig, CocoCurveScratch* scratch,
+                          CocoEvalResult* result);
 
 // summarize(): result->stats from result->precision and result->recall (options and categories
 // set), each number numpy's mean of its slice's entries other than -1.

@@ -1074,6 +1074,78 @@ TEST(CocoTest, ArrayScannerByHand) {
   EXPECT_EQ(bytes_cut, cut);
 }
 
+// accumulate()'s arithmetic, transcribed from pycocotools line by line: cumulative counts,
+// rc and pr at every detection, the envelope, searchsorted (side 'left').
+void NumpyCurve(const std::vector<uint8_t>& flags, const std::vector<double>& scores, int64_t npig,
+                const std::vector<double>& thresholds, double* recall,
+                std::vector<double>* precision, std::vector<double>* score_at) {
+  const size_t nd = flags.size();
+  std::vector<double> rc(nd), pr(nd);
+  double tp = 0, fp = 0;
+  for (size_t j = 0; j < nd; ++j) {
+    const bool ignored = flags[j] & kCocoIgnored, matched = flags[j] & kCocoMatched;
+    tp += !ignored && matched;
+    fp += !ignored && !matched;
+    rc[j] = tp / static_cast<double>(npig);
+    pr[j] = tp / (fp + tp + std::numeric_limits<double>::epsilon());
+  }
+  *recall = nd > 0 ? rc.back() : 0.0;
+  for (size_t j = nd; j-- > 1;) pr[j - 1] = std::max(pr[j - 1], pr[j]);
+  precision->assign(thresholds.size(), 0.0);
+  score_at->assign(thresholds.size(), 0.0);
+  for (size_t r = 0; r < thresholds.size(); ++r) {
+    const size_t at = std::lower_bound(rc.begin(), rc.end(), thresholds[r]) - rc.begin();
+    if (at >= nd) break;
+    (*precision)[r] = pr[at];
+    (*score_at)[r] = scores[at];
+  }
+}
+
+// The curve read at the true positives alone equals numpy's over every detection, bit for bit:
+// random sequences of true positives, false positives and ignored detections (matched ones too),
+// npig from below to above the true positives' count, empty sequences, COCO's 101 thresholds
+// and uneven ones.
+TEST(CocoTest, CurveAtTruePositivesEqualsNumpysOverEveryDetection) {
+  std::mt19937 rng(101);
+  std::uniform_int_distribution<int> pick(0, 99);
+  const std::vector<double> coco = CocoRecallThresholds();
+  const std::vector<double> uneven = {0.0, 1e-9, 0.3333333333333333, 0.5, 0.999, 1.0};
+  CocoCurveScratch scratch;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const size_t nd = trial % 50 == 0 ? 0 : pick(rng) % 40;
+    std::vector<uint8_t> flags(nd);
+    std::vector<double> scores(nd);
+    int64_t tps = 0;
+    for (size_t j = 0; j < nd; ++j) {
+      const int roll = pick(rng);
+      flags[j] = roll < 40   ? kCocoMatched
+                 : roll < 80 ? 0
+                 : roll < 90 ? kCocoIgnored
+                             : kCocoIgnored | kCocoMatched;
+      tps += flags[j] == kCocoMatched;
+      scores[j] = 1.0 - static_cast<double>(j) / 64;
+    }
+    const int64_t npig = std::max<int64_t>(1, tps + pick(rng) % 7 - 2);
+    for (const std::vector<double>* thresholds : {&coco, &uneven}) {
+      SCOPED_TRACE(fmt::format("trial {}, nd {}, npig {}", trial, nd, npig));
+      double want_recall = 0;
+      std::vector<double> want_precision, want_scores;
+      NumpyCurve(flags, scores, npig, *thresholds, &want_recall, &want_precision, &want_scores);
+      const size_t R = thresholds->size();
+      std::vector<double> precision(2 * R, -7), score_at(2 * R, -7);
+      double recall = -7;
+      CocoAccumulateCurve(flags.data(), scores.data(), nd, npig, *thresholds, &scratch, &recall,
+                          precision.data(), score_at.data(), 2);
+      ASSERT_EQ(recall, want_recall);
+      for (size_t r = 0; r < R; ++r) {
+        ASSERT_EQ(precision[2 * r], want_precision[r]) << "threshold " << r;
+        ASSERT_EQ(score_at[2 * r], want_scores[r]) << "threshold " << r;
+        ASSERT_EQ(precision[2 * r + 1], -7);  // the stride's gaps untouched
+      }
+    }
+  }
+}
+
 TEST(CocoTest, OptionsCheck) {
   EXPECT_NO_THROW(CocoEvalOptions().Check());
   CocoEvalOptions o;
