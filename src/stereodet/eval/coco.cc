@@ -586,10 +586,6 @@ std::vector<CocoDetection> ParseCocoDetectionsIn(std::string_view text, const st
 
 constexpr bool IsJsonWhitespace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
 
-bool AllJsonWhitespace(const char* begin, const char* end) {
-  return std::all_of(begin, end, IsJsonWhitespace);
-}
-
 }  // namespace
 
 size_t CocoArrayScanner::Scan(const char* text, size_t from, size_t to, size_t* last_cut) {
@@ -629,49 +625,72 @@ size_t CocoArrayScanner::Scan(const char* text, size_t from, size_t to, size_t* 
 
 namespace {
 
-// The buffer holds '[' then the text not parsed yet; each time a read brings a comma between two
-// elements of the top array, everything before the last such comma is parsed as one array (the
-// comma overwritten by ']') and the rest moved to the front. Splitting the array so is sound
-// whatever the scanner decides: every piece is checked by simdjson as an array of at least one
-// element (an empty piece means ",," or a comma next to a bracket: refused), and arrays of
-// elements joined by commas are the array of all of them; a wrong split can only refuse a file,
-// never accept a wrong one. An element longer than the block doubles the buffer.
+// The offset of the last comma in text[begin, end) that follows a '}' (whitespace between), or 0.
+size_t LastCommaAfterBrace(std::string_view text, size_t begin, size_t end) {
+  size_t comma = end;
+  while (comma > begin) {
+    comma = text.rfind(',', comma - 1);
+    if (comma == std::string_view::npos || comma < begin) return 0;
+    size_t before = comma;
+    while (before > begin && IsJsonWhitespace(text[before - 1])) --before;
+    if (before > begin && text[before - 1] == '}') return comma;
+  }
+  return 0;
+}
+
+// The buffer holds '[' then the text not parsed yet. After each read, everything before the last
+// comma between two elements of the top array is parsed as one array (the comma overwritten by
+// ']') and the rest moved to the front; at the end of the file, the rest with its ']'. That comma
+// is guessed first, as the last one after a '}' (the elements are objects; the guess is wrong only
+// where a string holds "},"), and found by CocoArrayScanner where the guessed piece does not parse.
+// Splitting the array so is sound whatever the guess or the scanner decide: every piece is checked
+// by simdjson as an array of at least one element (an empty piece means ",," or a comma next to a
+// bracket: refused), and arrays of elements joined by commas are the array of all of them; a wrong
+// split can only refuse a file, never accept a wrong one. An element longer than the block doubles
+// the buffer.
 bool StreamCocoDetections(RegularFileReader& reader, const CocoGroundTruth& gt, size_t block_bytes,
                           std::vector<CocoDetection>* dets, uint64_t* fnv1a64) {
   constexpr size_t kPadding = simdjson::SIMDJSON_PADDING;
   std::string buffer(1 + std::max<size_t>(block_bytes, 1) + kPadding, ' ');
   buffer[0] = '[';
-  size_t end = 1;       // buffer[0, end): '[' and the text not parsed yet, of which
-  size_t scanned = 1;   // [1, scanned) is scanned
-  size_t last_cut = 0;  // the last comma between elements in [1, scanned); 0: none
+  size_t end = 1;       // buffer[0, end): '[' and the text not parsed yet
   bool opened = false;  // the file's '[' read
-  bool closed = false;  // its ']' read and the array parsed
   size_t pieces = 0;    // parsed
-  CocoArrayScanner scanner;
   simdjson::ondemand::parser parser;
-  // Parses buffer[0, length), "[...]"; false if it is not an array of valid detections or, unless
-  // `may_be_empty`, holds none.
+  // Parses buffer[0, length), "[...]"; false, with *dets as it was, if it is not an array of
+  // valid detections or, unless `may_be_empty`, holds none.
   auto parse = [&](size_t length, bool may_be_empty) {
     const size_t before = dets->size();
     const simdjson::padded_string_view view(buffer.data(), length, buffer.size());
-    if (!FastParseCocoArray(parser, view, gt, dets)) return false;
+    if (!FastParseCocoArray(parser, view, gt, dets) || (!may_be_empty && dets->size() == before)) {
+      dets->resize(before);
+      return false;
+    }
     ++pieces;
-    return may_be_empty || dets->size() > before;
+    return true;
+  };
+  // Parses the elements before the comma at `cut` and keeps the text after it; false (the buffer
+  // as it was) if they are not an array of detections.
+  auto parse_before = [&](size_t cut) {
+    buffer[cut] = ']';
+    if (!parse(cut + 1, /*may_be_empty=*/false)) {
+      buffer[cut] = ',';
+      return false;
+    }
+    const size_t rest = end - cut - 1;
+    std::memmove(buffer.data() + 1, buffer.data() + cut + 1, rest);
+    end = 1 + rest;
+    return true;
   };
   while (true) {
     if (end + kPadding == buffer.size()) buffer.resize(2 * buffer.size(), ' ');
     const size_t got = reader.Read(buffer.data() + end, buffer.size() - kPadding - end);
     if (got == 0) break;
-    if (fnv1a64 != nullptr)
+    if (fnv1a64 != nullptr) {
       *fnv1a64 = Fnv1a64(std::string_view(buffer.data() + end, got), *fnv1a64);
+    }
     size_t from = end;
     end += got;
-    if (closed) {
-      // After the array: whitespace only, and nothing kept.
-      if (!AllJsonWhitespace(buffer.data() + from, buffer.data() + end)) return false;
-      end = 1;
-      continue;
-    }
     if (!opened) {
       while (from < end && IsJsonWhitespace(buffer[from])) ++from;
       if (from == end) {
@@ -682,29 +701,23 @@ bool StreamCocoDetections(RegularFileReader& reader, const CocoGroundTruth& gt, 
       opened = true;
       std::memmove(buffer.data() + 1, buffer.data() + from + 1, end - from - 1);
       end -= from;
-      scanned = 1;
     }
-    const size_t close = scanner.Scan(buffer.data(), scanned, end, &last_cut);
-    scanned = end;
-    if (close != CocoArrayScanner::kNoClose) {
-      if (!AllJsonWhitespace(buffer.data() + close + 1, buffer.data() + end)) return false;
-      // "[]" is the one array that may be empty; a last piece without elements was "...,]".
-      if (!parse(close + 1, /*may_be_empty=*/pieces == 0)) return false;
-      closed = true;
-      end = 1;
-      continue;
-    }
-    if (last_cut > 0) {
-      buffer[last_cut] = ']';
-      if (!parse(last_cut + 1, /*may_be_empty=*/false)) return false;
-      const size_t rest = end - last_cut - 1;
-      std::memmove(buffer.data() + 1, buffer.data() + last_cut + 1, rest);
-      end = 1 + rest;
-      scanned = end;
-      last_cut = 0;
-    }
+    const size_t guess = LastCommaAfterBrace(std::string_view(buffer.data(), end), 1, end);
+    if (guess > 0 && parse_before(guess)) continue;
+    // No guess, or a wrong one, or a malformed file: the scanner decides (a comma after the top
+    // array's end is never one between its elements: it stops there).
+    CocoArrayScanner scanner;
+    size_t cut = 0;
+    scanner.Scan(buffer.data(), 1, end, &cut);
+    if (cut > 0 && !parse_before(cut)) return false;
   }
-  return closed;
+  if (!opened) return false;
+  // The last piece: the rest up to the file's ']', whitespace after it. "[]" is the one array
+  // that may be empty; a last piece without elements after others was "...,]".
+  size_t last = end;
+  while (last > 1 && IsJsonWhitespace(buffer[last - 1])) --last;
+  if (last <= 1 || buffer[last - 1] != ']') return false;
+  return parse(last, /*may_be_empty=*/pieces == 0);
 }
 
 }  // namespace

@@ -87,7 +87,7 @@ std::vector<CocoDetection> ParseCocoDetectionsNamingErrors(std::string_view text
 
 // Where the text of a results file splits into the elements of its top array: a byte scan that
 // follows strings (with their escapes) and the nesting of brackets and braces, from just inside
-// the top array's '['.
+// the top array's '['. ReadCocoDetections' fallback where its guess of the split fails.
 struct CocoArrayScanner {
   static constexpr size_t kNoClose = static_cast<size_t>(-1);
   // Scans text[from, to) on from where the last scan stopped. Returns the offset of the bracket
