@@ -1388,10 +1388,21 @@ class CocoEvaluator {
       for (; d_at < det_start_[k + 1] && det_sorted_image_[d_at] == image; ++d_at) {
         dts.push_back(static_cast<uint32_t>(d_at));
       }
-      // Highest score first, ties in file order (numpy's stable mergesort), at most max_det.
-      std::stable_sort(dts.begin(), dts.end(), [&](uint32_t a, uint32_t b) {
+      // Highest score first, ties in file order (numpy's stable mergesort), at most max_det. A
+      // cell holds a detection or two: insertion sort (stable, no buffer to allocate) there.
+      auto higher = [&](uint32_t a, uint32_t b) {
         return sorted_dets_[a].score > sorted_dets_[b].score;
-      });
+      };
+      if (dts.size() <= 16) {
+        for (size_t i = 1; i < dts.size(); ++i) {
+          const uint32_t moving = dts[i];
+          size_t j = i;
+          for (; j > 0 && higher(moving, dts[j - 1]); --j) dts[j] = dts[j - 1];
+          dts[j] = moving;
+        }
+      } else {
+        std::stable_sort(dts.begin(), dts.end(), higher);
+      }
       if (dts.size() > static_cast<size_t>(max_det)) dts.resize(max_det);
       const size_t G = gts.size(), D = dts.size();
 
