@@ -1492,6 +1492,14 @@ class CocoEvaluator {
           det_flags.assign(D, 0);
           det_gt.assign(D, -1);
         }
+        if (G == 0 && !options_.score_metrics) {
+          // Nothing to match, under either matcher: a detection outside the range is ignored,
+          // any other a FP.
+          for (size_t d = 0; d < D; ++d) {
+            if (det_outside[d]) std::fill_n(&out.flags[((first + d) * A + a) * T], T, kIgnored);
+          }
+          continue;
+        }
         if (options_.matcher == CocoMatcher::kOptimal) {
           CocoImageCell cell;
           cell.num_dets = static_cast<int>(D);
@@ -1507,13 +1515,6 @@ class CocoEvaluator {
               optimal.Associate(cell, tau, static_cast<int>(num_present), &det_gt, &det_flags);
               AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, image, t, a, &out);
             }
-          }
-          continue;
-        }
-        if (G == 0 && !options_.score_metrics) {
-          // Nothing to match: a detection outside the range is ignored, any other a FP.
-          for (size_t d = 0; d < D; ++d) {
-            if (det_outside[d]) std::fill_n(&out.flags[((first + d) * A + a) * T], T, kIgnored);
           }
           continue;
         }
