@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "stereodet/report/coco_report.h"
 #include "stereodet/report/raster.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
@@ -140,6 +141,12 @@ struct Styler {
     return num_sources > 1 ? s.label + ": " + name : name;
   }
 };
+
+std::vector<CocoReportSource> CocoSources(const std::vector<ReportSource>& sources) {
+  std::vector<CocoReportSource> out;
+  for (const ReportSource& s : sources) out.push_back({s.label, &s.results});
+  return out;
+}
 
 // The sources' entries for `key` (nullptr where a source lacks the cell).
 std::vector<const json*> EntriesFor(const std::vector<std::map<CellKey, const json*>>& cells,
@@ -857,9 +864,11 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
   } catch (const json::exception& e) {
     STEREODET_THROW_IO() << path.string() << ": not JSON: " << e.what();
   }
-  STEREODET_CHECK_IO(!source.results.is_object() || source.results.value("mode", "") != "coco")
-      << path.string()
-      << " holds COCO-mode results (eval --coco-gt): the report does not draw them yet";
+  if (source.results.is_object() && source.results.value("mode", "") == "coco") {
+    source.kind = ReportKind::kCoco;
+    LoadCocoReportData(folder, &source.results);
+    return source;
+  }
   STEREODET_CHECK_IO(source.results.is_object() && source.results.contains("results") &&
                      source.results["results"].is_array())
       << path.string() << " is not a stereodet results.json (it has no \"results\" array)";
@@ -884,6 +893,12 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
   }
   const Styler st{sources.size()};
   std::vector<ReportFigure> figures;
+  if (sources.front().kind == ReportKind::kCoco) {
+    for (CocoReportFigure& f : CocoReportFigures(CocoSources(sources))) {
+      figures.push_back({std::move(f.section), std::move(f.plot)});
+    }
+    return figures;
+  }
   if (sources.front().kind != ReportKind::kEval) {
     for (const auto& [key, rows] : RowCells(sources)) {
       const std::string section = key.class_name + " " + key.metric;
@@ -1089,6 +1104,10 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
       "code{font-size:12px}dl{font-size:13px}dt{font-weight:bold;margin-top:8px}\n"
       "</style>\n</head>\n<body>\n<h1>stereodet evaluation report</h1>\n<dl>\n";
   for (const ReportSource& s : sources) {
+    if (s.kind == ReportKind::kCoco) {
+      html += CocoHeaderHtml(s.label, s.folder, s.results);
+      continue;
+    }
     if (s.kind != ReportKind::kEval) {
       html += fmt::format(
           "<dt>{}</dt><dd>folder <code>{}</code>; {} ({} rows)</dd>\n", XmlEscape(s.label),
@@ -1167,6 +1186,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
         "(docs/metrics.md, small samples).</p>\n";
   }
   if (eval) html += Table1Html(sources);
+  if (sources.front().kind == ReportKind::kCoco) html += CocoSummaryHtml(CocoSources(sources));
   html += WorstFramesHtml(views);
 
   // Figures, one section per class x metric (x overlap set), a row per kind of figure.

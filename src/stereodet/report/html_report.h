@@ -22,14 +22,16 @@
 
 namespace stereodet {
 
-// What a results folder holds: `eval --out` (results.json), `eval sweep --out` (sweep.csv) or
-// `eval compare --out` (compare.csv).
-enum class ReportKind { kEval, kSweep, kCompare };
+// What a results folder holds: `eval --out` (results.json), `eval sweep --out` (sweep.csv),
+// `eval compare --out` (compare.csv) or `eval --coco-gt --coco-det --out` (results.json with
+// "mode": "coco"; its figures and tables are coco_report.h's).
+enum class ReportKind { kEval, kSweep, kCompare, kCoco };
 
 // One results folder and the name its series carry in legends and tables.
 struct ReportSource {
   std::string label;
   ReportKind kind = ReportKind::kEval;
+  // kCoco: results.json with LoadCocoReportData's additions (coco_report.h).
   // kEval: results.json as written by WriteEvalReport, with each cell's exact curve read from the
   // CSV its "curve_csv" names into "curve" (an object of columns: threshold, tp, fp, fn,
   // precision, recall, fp_per_frame and, with AOS, orientation; null for an empty field).
