@@ -33,7 +33,8 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
                       const std::string& score_transform, int calibration_bins, int bootstrap,
                       uint64_t bootstrap_seed, double bootstrap_confidence,
                       const std::string& bootstrap_method,
-                      const std::optional<std::string>& dt_b_text, const std::string& dt_b_source) {
+                      const std::optional<std::string>& dt_b_text, const std::string& dt_b_source,
+                      const std::string& area_ranges) {
   CocoEvalResult result;
   std::optional<CocoEvalResult> result_b;
   std::optional<CocoBootstrapResult> intervals;
@@ -57,6 +58,11 @@ py::dict CocoEvaluate(const std::string& gt_text, const std::string& gt_source,
     const auto transform = ParseScoreTransform(score_transform);
     STEREODET_CHECK(transform.has_value())
         << "score_transform: 'none' or 'sigmoid', got '" << score_transform << "'";
+    STEREODET_CHECK(area_ranges == "pycocotools" || area_ranges == "stable")
+        << "area_ranges: 'pycocotools' (each range matched on its own) or 'stable' (every range "
+           "counted from the matching of range all), got '"
+        << area_ranges << "'";
+    options.stable_area_ranges = area_ranges == "stable";
     options.score_metrics = score_metrics;
     options.score_threshold = score_threshold;
     options.score_transform = *transform;
@@ -202,6 +208,7 @@ void BindCoco(py::module_& m) {
       py::arg("bootstrap") = 0, py::arg("bootstrap_seed") = 1,
       py::arg("bootstrap_confidence") = 0.95, py::arg("bootstrap_method") = "percentile",
       py::arg("dt_b_text") = std::nullopt, py::arg("dt_b_source") = "",
+      py::arg("area_ranges") = "pycocotools",
       "COCOeval(gt, loadRes(dt), 'bbox') on the JSON texts, the GIL released: a dict of stats "
       "(12), precision (T, R, K, A, M), recall (T, K, A, M), scores, the ids and the summary "
       "text; with score_metrics, score_stats (12) and the cells' (T, K, A) arrays; with bootstrap "

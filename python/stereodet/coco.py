@@ -124,7 +124,8 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
              matcher: str = "coco", brier: bool = False,
              score_threshold: Optional[float] = None, score_transform: str = "none",
              calibration_bins: int = 10, bootstrap: int = 0, bootstrap_seed: int = 1,
-             confidence: float = 0.95, bootstrap_method: str = "percentile") -> CocoResult:
+             confidence: float = 0.95, bootstrap_method: str = "percentile",
+             area_ranges: str = "pycocotools") -> CocoResult:
     """COCOeval(gt, gt.loadRes(dt), "bbox").evaluate(); .accumulate(); .summarize().
 
     gt: a COCO ground-truth file's path, its loaded dict, or a pycocotools COCO object.
@@ -144,6 +145,9 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
       resample exactly COCOeval on the resampled image list (docs/metrics.md);
       bootstrap_method "bca" reads bias-corrected and accelerated intervals from the same
       resamples (--bootstrap-method bca).
+    area_ranges: "pycocotools" (each area range matched on its own) or "stable" (every range
+      counted from the one matching of range "all", the paper's stable filter; the coco matcher
+      only; the CLI's --coco-area-ranges stable).
 
     Raises stereodet.ParseError for a malformed file (naming the element and field), ValueError
     for a bad option, OSError for a file that cannot be read.
@@ -155,7 +159,8 @@ def evaluate(gt: Any, dt: Any, *, honor_ignore_flag: bool = False,
                                            honor_ignore_flag, list(max_dets), num_threads,
                                            matcher, brier, threshold, score_transform,
                                            calibration_bins, bootstrap, bootstrap_seed,
-                                           confidence, bootstrap_method))
+                                           confidence, bootstrap_method, None, "",
+                                           area_ranges))
 
 
 def compare(gt: Any, dt_a: Any, dt_b: Any, *, bootstrap: int = 0, bootstrap_seed: int = 1,

@@ -152,3 +152,21 @@ def test_brier_intervals_with_bootstrap(data, cli, tmp_path):
     assert results["bootstrap"]["score_stats"]["BL"]["lower"] == lower
     assert results["bootstrap"]["score_stats"]["BL"]["upper"] == upper
     assert results["bootstrap"]["score_stats"]["ECE"]["lower"] is None  # not resampled
+
+
+def test_stable_area_ranges_equal_the_cli(data, cli, tmp_path):
+    gt_path, dt_path = data / "coco_small" / "gt.json", data / "coco_small" / "det.json"
+    r = coco.evaluate(gt_path, dt_path, area_ranges="stable")
+    cli("eval", "--coco-gt", gt_path, "--coco-det", dt_path, "--coco-area-ranges", "stable",
+        "--out", tmp_path / "cli")
+    results = json.loads((tmp_path / "cli" / "results.json").read_text())
+    assert results["options"]["area_ranges_mode"] == "stable"
+    assert list(r.stats) == list(results["stats"].values())
+    assert np.array_equal(r.precision, np.load(tmp_path / "cli" / "precision.npy"))
+    # Range "all" is pycocotools' own under both.
+    p = coco.evaluate(gt_path, dt_path)
+    assert r.stats[0] == p.stats[0] and r.stats[8] == p.stats[8]
+    with pytest.raises(ValueError, match="optimal matcher"):
+        coco.evaluate(gt_path, dt_path, area_ranges="stable", matcher="optimal")
+    with pytest.raises(ValueError, match="area_ranges"):
+        coco.evaluate(gt_path, dt_path, area_ranges="naive")

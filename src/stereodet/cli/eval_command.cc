@@ -99,7 +99,8 @@ struct EvalArgs {
   // COCO mode (eval only): --coco-gt, --coco-det, --coco-honor-ignore; out and num_threads come
   // from --out and --threads.
   CocoEvaluationOptions coco;
-  bool coco_per_category = false;  // --coco-per-category
+  bool coco_per_category = false;                // --coco-per-category
+  std::string coco_area_ranges = "pycocotools";  // --coco-area-ranges
 };
 
 // The bootstrap flags (docs/metrics.md, "Bootstrap intervals").
@@ -366,7 +367,7 @@ bool IsCocoModeFlag(const std::string& name) {
          name == "--coco-per-category" || name == "--threads" || name == "--help" ||
          name == "--debug" || name == "--coco-det-b" || name == "--bootstrap" ||
          name == "--bootstrap-seed" || name == "--bootstrap-confidence" ||
-         name == "--bootstrap-method";
+         name == "--bootstrap-method" || name == "--coco-area-ranges";
 }
 
 // The flags that set the operating-point metrics' options: each turns them on.
@@ -381,7 +382,8 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
     STEREODET_CHECK(option->count() == 0 || IsCocoModeFlag(option->get_name()))
         << option->get_name()
         << " is a flag of KITTI-layout evaluation; COCO mode (--coco-gt, --coco-det) takes "
-           "--out, --threads, --coco-honor-ignore, --coco-det-b, --coco-per-category, "
+           "--out, --threads, --coco-honor-ignore, --coco-area-ranges, --coco-det-b, "
+           "--coco-per-category, "
            "--matcher coco|optimal, --coco-brier, --score-threshold, --score-transform, "
            "--calibration-bins and --bootstrap N (--bootstrap-seed, --bootstrap-confidence, "
            "--bootstrap-method)";
@@ -397,6 +399,11 @@ void RunCocoEval(const CLI::App* eval, const EvalArgs& a) {
         << a.matcher << "'";
     options.eval.matcher = *matcher;
   }
+  STEREODET_CHECK(a.coco_area_ranges == "pycocotools" || a.coco_area_ranges == "stable")
+      << "--coco-area-ranges: pycocotools (each range matched on its own, the default) or stable "
+         "(every range counted from the matching of range all); got '"
+      << a.coco_area_ranges << "'";
+  options.eval.stable_area_ranges = a.coco_area_ranges == "stable";
   for (const CLI::Option* option : eval->get_options()) {
     if (option->count() > 0 && IsCocoOperatingPointFlag(option->get_name())) {
       options.eval.score_metrics = true;
@@ -591,6 +598,12 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--coco-honor-ignore", args->coco.eval.honor_ignore_flag,
                  "COCO mode: also ignore ground truths whose \"ignore\" is set (pycocotools "
                  "overwrites it with \"iscrowd\")");
+  eval->add_option("--coco-area-ranges", args->coco_area_ranges,
+                   "COCO mode: pycocotools (default: each area range matched on its own, the "
+                   "boxes outside it ignored) or stable (every range counted from the one "
+                   "matching of range all: a pair belongs to its ground truth's range, so no "
+                   "range has an error that all has not; coco matcher only; docs/metrics.md)")
+      ->default_val("pycocotools");
   eval->add_option("--coco-det-b", args->coco.det_b,
                    "COCO mode: a second results file of the same ground truth, compared with "
                    "--coco-det number by number (A - B; with --bootstrap N, paired intervals over "

@@ -838,6 +838,14 @@ void CocoEvalOptions::Check() const {
           << "COCO evaluation: area range label '" << range.label << "' given twice";
     }
   }
+  if (stable_area_ranges) {
+    STEREODET_CHECK(matcher == CocoMatcher::kCoco)
+        << "COCO evaluation: stable area ranges are counted from the greedy matching of range "
+           "\"all\"; with the optimal matcher they are not there yet";
+    STEREODET_CHECK(std::any_of(area_ranges.begin(), area_ranges.end(), [](const CocoAreaRange& r) {
+      return r.label == "all";
+    })) << "COCO evaluation: stable area ranges need an area range labelled \"all\"";
+  }
   STEREODET_CHECK_GE(calibration_bins, 1) << "(COCO evaluation's calibration_bins)";
   STEREODET_CHECK(!std::isnan(score_threshold)) << "COCO evaluation: score_threshold is NaN";
   STEREODET_CHECK_GE(num_threads, 0) << "(COCO evaluation's num_threads)";
@@ -1298,6 +1306,11 @@ class CocoEvaluator {
     for (size_t a = 0; a < A; ++a) {
       if (options_.area_ranges[a].label == "all") area_all_ = static_cast<int>(a);
     }
+    // Range "all" first: with stable area ranges the others are counted from its matching.
+    if (area_all_ >= 0) area_order_.push_back(static_cast<size_t>(area_all_));
+    for (size_t a = 0; a < A; ++a) {
+      if (static_cast<int>(a) != area_all_) area_order_.push_back(a);
+    }
     if (options_.score_metrics) {
       result_.cells.assign(T * K * A, CocoCell());
       if (options_.score_transform == ScoreTransform::kNone) {
@@ -1383,6 +1396,7 @@ class CocoEvaluator {
     std::vector<uint32_t> gts, dts, gt_sorted;
     std::vector<double> iou, iou_sorted;
     std::vector<int> candidate_begin, candidates;
+    std::vector<int32_t> all_gt;
     // The loop's starting bar at the lowest threshold: below it nothing ever matches.
     const double lowest_threshold =
         std::min(*std::min_element(options_.iou_thresholds.begin(), options_.iou_thresholds.end()),
@@ -1456,7 +1470,10 @@ class CocoEvaluator {
         out.rank.push_back(static_cast<int32_t>(d));
       }
       out.flags.resize(out.score.size() * A * T, 0);
-      for (size_t a = 0; a < A; ++a) {
+      // With stable area ranges: range "all"'s matched ground truth of each detection and
+      // threshold (an index into gts), or -1.
+      if (options_.stable_area_ranges) all_gt.assign(D * T, -1);
+      for (const size_t a : area_order_) {
         const CocoAreaRange& range = options_.area_ranges[a];
         // Ground truths not ignored first, each part in file order (a stable sort on _ignore).
         gt_sorted.clear();
@@ -1475,7 +1492,7 @@ class CocoEvaluator {
             static_cast<int32_t>(std::count(gt_ignore.begin(), gt_ignore.end(), 0));
         out.num_valid_gt[a] += valid;
         if (G > 0) {
-          if (a == 0) {
+          if (a == area_order_.front()) {
             out.valid_image.push_back(image);
             out.valid_count.resize(out.valid_count.size() + A, 0);
           }
@@ -1498,6 +1515,11 @@ class CocoEvaluator {
           for (size_t d = 0; d < D; ++d) {
             if (det_outside[d]) std::fill_n(&out.flags[((first + d) * A + a) * T], T, kIgnored);
           }
+          continue;
+        }
+        if (options_.stable_area_ranges && static_cast<int>(a) != area_all_) {
+          StableRange(dts, gt_valid, det_outside, all_gt, first, num_present, image, a, &det_flags,
+                      &det_gt, &out);
           continue;
         }
         if (options_.matcher == CocoMatcher::kOptimal) {
@@ -1572,6 +1594,9 @@ class CocoEvaluator {
             if (matched) flags |= kMatched;
             if (!matched && det_outside[d]) flags |= kIgnored;
             out.flags[((first + d) * A + a) * T + t] = flags;
+            if (options_.stable_area_ranges) {
+              all_gt[d * T + t] = matched ? static_cast<int32_t>(gt_sorted[match]) : -1;
+            }
             if (options_.score_metrics) {
               det_flags[d] = flags;
               det_gt[d] = matched ? static_cast<int32_t>(gt_sorted[match]) : -1;
@@ -1586,6 +1611,42 @@ class CocoEvaluator {
       }
     }
     return out;
+  }
+
+  // Area range a (not "all") of one image and category counted from range "all"'s matching,
+  // already in out->flags (CocoEvalOptions::stable_area_ranges): a pair is a TP where its ground
+  // truth is valid in the range and drops out (ignored) where not; a detection "all" excused stays
+  // excused; one matched to nothing (or to ground-truth id 0, pycocotools' quirk) is a FP where
+  // its own area is in the range.
+  void StableRange(const std::vector<uint32_t>& dts, const std::vector<uint8_t>& gt_valid,
+                   const std::vector<uint8_t>& det_outside, const std::vector<int32_t>& all_gt,
+                   size_t first, size_t num_present, int32_t image, size_t a,
+                   std::vector<uint8_t>* det_flags, std::vector<int32_t>* det_gt,
+                   CategoryDetections* out) const {
+    const size_t T = options_.iou_thresholds.size(), A = options_.area_ranges.size(),
+                 D = dts.size();
+    for (size_t t = 0; t < T; ++t) {
+      for (size_t d = 0; d < D; ++d) {
+        const uint8_t in_all = out->flags[((first + d) * A + area_all_) * T + t];
+        const int32_t g = all_gt[d * T + t];
+        uint8_t flags = 0;
+        if (in_all & kIgnored) {
+          flags = kIgnored;
+        } else if (in_all & kMatched) {
+          flags = gt_valid[g] ? kMatched : kIgnored;
+        } else if (det_outside[d]) {
+          flags = kIgnored;
+        }
+        out->flags[((first + d) * A + a) * T + t] = flags;
+        if (options_.score_metrics) {
+          (*det_flags)[d] = flags;
+          (*det_gt)[d] = flags == kMatched ? g : -1;
+        }
+      }
+      if (options_.score_metrics) {
+        AddCellTerms(dts, gt_valid, *det_flags, *det_gt, num_present, image, t, a, out);
+      }
+    }
   }
 
   // One image's share of cell `cell` (t * A + a) at the operating point: `flags` and `det_gt` are
@@ -1733,7 +1794,8 @@ class CocoEvaluator {
   CocoEvalResult& result_;
   const CocoEvalOptions& options_;
   std::vector<CocoCategoryDetections>* keep_;
-  int area_all_ = -1;  // the index of area range "all", or -1
+  int area_all_ = -1;               // the index of area range "all", or -1
+  std::vector<size_t> area_order_;  // the area ranges, "all" first
   // Ground truths and detections grouped by category then image, file order within; category
   // k's are [start_[k], start_[k + 1]). The image index of every annotation and detection.
   std::vector<uint32_t> gt_order_, det_order_;

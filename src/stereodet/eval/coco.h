@@ -153,6 +153,14 @@ struct CocoEvalOptions {
   // false (pycocotools): a ground truth is ignored when it is a crowd or outside the area range;
   // its "ignore" field is not read. true: also when its "ignore" is set (COCO's documented intent).
   bool honor_ignore_flag = false;
+  // false (pycocotools): each area range is matched on its own, the ground truths outside it
+  // ignored, so a detection may find another ground truth there than in range "all" (a range can
+  // hold a TP that "all" does not). true (the paper's stable filter, `--coco-area-ranges stable`):
+  // every range is counted from the one matching of range "all": a pair is a TP of the range of
+  // its ground truth (and drops out of the others), a detection matched to nothing is a FP of the
+  // ranges its own area is in, a ground truth in the range that nothing matched a FN; so no range
+  // holds a TP, FP or FN that "all" does not. Needs the coco matcher and an area range "all".
+  bool stable_area_ranges = false;
   // The operating-point metrics (CocoEvalResult::cells and score_stats): off by default, as
   // pycocotools has none. With the optimal matcher they cost one more association per image,
   // category, area range and IoU threshold.

@@ -1149,6 +1149,101 @@ TEST(CocoTest, CurveAtTruePositivesEqualsNumpysOverEveryDetection) {
   }
 }
 
+// Stable area ranges by hand: one detection (36 x 36 at the origin) overlaps a small box A (30 x
+// 30: IoU 0.694) and, more, a medium one B (40 x 40: IoU 0.81). Range "all" matches it
+// to B. pycocotools matches range "small" on its own, B ignored there, and finds A with it: a TP
+// that "all" does not have. Counted from "all"'s matching, the pair belongs to medium; in small it
+// drops out and A is missed. Medium and all are the same under both.
+TEST(CocoTest, StableAreaRangesCountFromTheMatchingOfAll) {
+  const CocoGroundTruth gt =
+      OneCategory({1}, {Box(1, 1, {0, 0, 30, 30}), Box(2, 1, {0, 0, 40, 40})});
+  const std::vector<CocoDetection> dets = {Det(1, {0, 0, 36, 36}, 0.9)};
+  CocoEvalOptions pycocotools, stable;
+  stable.stable_area_ranges = true;
+  const CocoEvalResult p = EvaluateCoco(gt, dets, pycocotools);
+  const CocoEvalResult s = EvaluateCoco(gt, dets, stable);
+  constexpr int kAll = 0, kSmall = 1, kMedium = 2, kLast = 2;
+  // IoU 0.5 (t 0): small's recall 1 under pycocotools, 0 stable.
+  EXPECT_EQ(p.recall[p.RecallIndex(0, 0, kSmall, kLast)], 1.0);
+  EXPECT_EQ(s.recall[s.RecallIndex(0, 0, kSmall, kLast)], 0.0);
+  EXPECT_DOUBLE_EQ(p.precision[p.PrecisionIndex(0, 0, 0, kSmall, kLast)], 1.0);  // 1 / (1 + eps)
+  EXPECT_EQ(s.precision[s.PrecisionIndex(0, 0, 0, kSmall, kLast)], 0.0);
+  for (const int a : {kAll, kMedium}) {
+    for (size_t t = 0; t < p.options.iou_thresholds.size(); ++t) {
+      const int ti = static_cast<int>(t);
+      EXPECT_EQ(p.recall[p.RecallIndex(ti, 0, a, kLast)], s.recall[s.RecallIndex(ti, 0, a, kLast)])
+          << "area " << a << " threshold " << t;
+    }
+  }
+  // all: B found up to IoU 0.80 (t 0..6), A never: recall 1/2 there.
+  EXPECT_EQ(s.recall[s.RecallIndex(0, 0, kAll, kLast)], 0.5);
+  EXPECT_EQ(s.recall[s.RecallIndex(0, 0, kMedium, kLast)], 1.0);
+  EXPECT_LT(s.stats[kApSmall], p.stats[kApSmall]);
+  EXPECT_EQ(s.stats[kApMedium], p.stats[kApMedium]);
+  EXPECT_EQ(s.stats[kAp], p.stats[kAp]);
+  // Only with the greedy matcher, and only with a range "all".
+  stable.matcher = CocoMatcher::kOptimal;
+  EXPECT_THROW(stable.Check(), std::invalid_argument);
+  stable = CocoEvalOptions();
+  stable.stable_area_ranges = true;
+  stable.area_ranges.erase(stable.area_ranges.begin());
+  EXPECT_THROW(stable.Check(), std::invalid_argument);
+}
+
+// The stable property on a random set with crowds, duplicates and every area range: in every
+// range, a detection is a TP only where it is one in "all", a FP only where it is one in "all";
+// the ranges' TPs at each threshold add up to all's (every valid box is in one of small, medium,
+// large, and its pair goes with it); the cells' counts agree with the flags; and range "all" is
+// pycocotools' own.
+TEST(CocoTest, StableAreaRangesHoldNoErrorThatAllHasNot) {
+  const RandomCocoSet set = MakeRandomCocoSet();
+  CocoEvalOptions stable, pycocotools;
+  stable.stable_area_ranges = true;
+  stable.score_metrics = pycocotools.score_metrics = true;
+  std::vector<CocoCategoryDetections> categories;
+  const CocoEvalResult s = EvaluateCocoKeepingDetections(set.gt, set.dets, stable, &categories);
+  const CocoEvalResult p = EvaluateCoco(set.gt, set.dets, pycocotools);
+  const size_t T = s.options.iou_thresholds.size(), A = s.options.area_ranges.size();
+  int differ = 0;
+  for (size_t k = 0; k < categories.size(); ++k) {
+    const CocoCategoryDetections& c = categories[k];
+    for (size_t t = 0; t < T; ++t) {
+      int tp_all = 0, tp_ranges = 0;
+      for (size_t d = 0; d < c.score.size(); ++d) {
+        const uint8_t all = c.flags[(d * A + 0) * T + t];
+        tp_all += all == kCocoMatched;
+        for (size_t a = 1; a < A; ++a) {
+          const uint8_t f = c.flags[(d * A + a) * T + t];
+          if (f == kCocoMatched) {
+            EXPECT_EQ(all, kCocoMatched);
+          }
+          if (f == 0) {
+            EXPECT_EQ(all, 0);
+          }
+          tp_ranges += f == kCocoMatched;
+        }
+      }
+      EXPECT_EQ(tp_ranges, tp_all) << "category " << k << " threshold " << t;
+      for (size_t a = 0; a < A; ++a) {
+        const CocoCell& cell =
+            s.cells[s.CellIndex(static_cast<int>(t), static_cast<int>(k), static_cast<int>(a))];
+        const CocoCell& whole = s.cells[s.CellIndex(static_cast<int>(t), static_cast<int>(k), 0)];
+        EXPECT_LE(cell.at_threshold.fp, whole.at_threshold.fp);
+        EXPECT_LE(cell.at_threshold.tp, whole.at_threshold.tp);
+        EXPECT_LE(cell.at_threshold.fn, whole.at_threshold.fn);
+      }
+    }
+  }
+  for (size_t i = 0; i < s.recall.size(); ++i) differ += s.recall[i] != p.recall[i];
+  EXPECT_GT(differ, 0);  // the random set has pairs that cross a range's edge
+  for (size_t t = 0; t < T; ++t) {
+    for (size_t k = 0; k < categories.size(); ++k) {
+      const int ti = static_cast<int>(t), ki = static_cast<int>(k);
+      EXPECT_EQ(s.recall[s.RecallIndex(ti, ki, 0, 2)], p.recall[p.RecallIndex(ti, ki, 0, 2)]);
+    }
+  }
+}
+
 TEST(CocoTest, OptionsCheck) {
   EXPECT_NO_THROW(CocoEvalOptions().Check());
   CocoEvalOptions o;

@@ -74,6 +74,7 @@ ordered_json ResultsJson(const CocoEvaluationOptions& options, const CocoEvaluat
                   {"max_dets", o.max_dets},
                   {"area_ranges", areas},
                   {"honor_ignore_flag", o.honor_ignore_flag},
+                  {"area_ranges_mode", o.stable_area_ranges ? "stable" : "pycocotools"},
                   {"matcher", CocoMatcherName(o.matcher)},
                   {"score_metrics", o.score_metrics}};
   if (o.score_metrics) {
