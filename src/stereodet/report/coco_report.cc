@@ -10,6 +10,7 @@
 #include <optional>
 #include <string_view>
 
+#include "stereodet/report/report_json_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/strings.h"
@@ -20,11 +21,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using report_internal::Fixed;
+using report_internal::kNaN;
+using report_internal::Num;
+using report_internal::Numbers;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// The HTML report's palette (html_report.cc), so that a folder has one colour on every page.
-constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
 // summarize()'s 12 numbers, in results.json's names and order.
 constexpr const char* kStats[] = {"AP",  "AP50", "AP75",  "APs", "APm", "APl",
                                   "AR1", "AR10", "AR100", "ARs", "ARm", "ARl"};
@@ -40,14 +41,6 @@ const json& Array(const json& j, const char* key) {
   static const json kEmpty = json::array();
   const json& f = Field(j, key);
   return f.is_array() ? f : kEmpty;
-}
-
-double Num(const json& j, const char* key) {
-  return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : kNaN;
-}
-
-std::string Fixed(double v, int decimals) {
-  return std::isnan(v) ? "-" : fmt::format("{:.{}f}", v, decimals);
 }
 
 // A float64 array in numpy's .npy format (version 1 or 2, little-endian '<f8', C order) of the
@@ -101,15 +94,27 @@ double MeanOfDefined(const std::vector<double>& values) {
   return n == 0 ? -1.0 : sum / n;
 }
 
-std::vector<double> Doubles(const json& j) {
-  std::vector<double> out;
-  if (!j.is_array()) return out;
-  for (const json& v : j) out.push_back(v.is_number() ? v.get<double>() : kNaN);
-  return out;
-}
+// Each source's colour, as in the KITTI-mode figures.
+std::string Colour(size_t source) { return PaletteColour(source); }
 
-// Each source's colour; one source's series take the palette in order.
-std::string Colour(size_t source) { return kPalette[source % std::size(kPalette)]; }
+// A figure's frame: axes from 0 to 1 where `unit_x` / `unit_y` (precision, recall, AP, scores).
+Plot MakePlot(const std::string& id, const std::string& title, const std::string& x_label,
+              const std::string& y_label, bool unit_x, bool unit_y) {
+  Plot p;
+  p.id = id;
+  p.title = title;
+  p.x_label = x_label;
+  p.y_label = y_label;
+  if (unit_x) {
+    p.x_min = 0;
+    p.x_max = 1;
+  }
+  if (unit_y) {
+    p.y_min = 0;
+    p.y_max = 1;
+  }
+  return p;
+}
 
 // The stat's value and, where the folder has a bootstrap, its interval.
 struct StatValue {
@@ -131,22 +136,14 @@ StatValue Stat(const json& r, const char* group, const char* name) {
 
 Plot PrFigure(const std::vector<CocoReportSource>& sources, const char* curve, const char* title,
               const std::string& id) {
-  Plot p;
-  p.id = id;
-  p.title = title;
-  p.x_label = "recall";
-  p.y_label = "precision";
-  p.x_min = 0;
-  p.x_max = 1;
-  p.y_min = 0;
-  p.y_max = 1;
+  Plot p = MakePlot(id, title, "recall", "precision", true, true);
   std::vector<std::string> caption;
   for (size_t i = 0; i < sources.size(); ++i) {
     const json& r = *sources[i].results;
     const json& pr = Field(r, "report_pr");
     PlotSeries s;
-    s.x = Doubles(Array(pr, "recall"));
-    s.y = Doubles(Array(pr, curve));
+    s.x = Numbers(pr, "recall");
+    s.y = Numbers(pr, curve);
     if (s.x.size() != s.y.size()) continue;
     for (double& y : s.y) {
       if (y < 0) y = kNaN;  // no category with ground truth
@@ -159,7 +156,7 @@ Plot PrFigure(const std::vector<CocoReportSource>& sources, const char* curve, c
     p.series.push_back(std::move(s));
   }
   const std::vector<double> max_dets =
-      Doubles(Array(Field(*sources.front().results, "options"), "max_dets"));
+      Numbers(Field(*sources.front().results, "options"), "max_dets");
   p.caption = fmt::format(
       "Precision at COCO's 101 recall thresholds, mean over the categories with ground truth "
       "(area all, maxDets {}); {}.",
@@ -168,13 +165,8 @@ Plot PrFigure(const std::vector<CocoReportSource>& sources, const char* curve, c
 }
 
 Plot StatsFigure(const std::vector<CocoReportSource>& sources) {
-  Plot p;
-  p.id = "coco_stats";
-  p.title = "The 12 numbers of COCOeval.summarize()";
-  p.x_label = "summary number";
-  p.y_label = "AP or AR";
-  p.y_min = 0;
-  p.y_max = 1;
+  Plot p = MakePlot("coco_stats", "The 12 numbers of COCOeval.summarize()", "summary number",
+                    "AP or AR", false, true);
   for (const char* name : kStats) p.categories.push_back(name);
   bool intervals = false;
   for (size_t i = 0; i < sources.size(); ++i) {
@@ -201,13 +193,7 @@ Plot StatsFigure(const std::vector<CocoReportSource>& sources) {
 }
 
 Plot CategoriesFigure(const std::vector<CocoReportSource>& sources) {
-  Plot p;
-  p.id = "coco_categories";
-  p.title = "AP per category";
-  p.x_label = "category";
-  p.y_label = "AP@[.50:.95]";
-  p.y_min = 0;
-  p.y_max = 1;
+  Plot p = MakePlot("coco_categories", "AP per category", "category", "AP@[.50:.95]", false, true);
   const json& first = Array(*sources.front().results, "categories");
   std::vector<int64_t> ids;
   // Names under the bars of a few categories; ids under many (COCO's 80 names would overlap),
@@ -246,15 +232,8 @@ Plot CategoriesFigure(const std::vector<CocoReportSource>& sources) {
 }
 
 Plot ReliabilityFigure(const std::vector<CocoReportSource>& sources) {
-  Plot p;
-  p.id = "coco_reliability";
-  p.title = "Reliability at IoU 0.5 (all categories, area all)";
-  p.x_label = "mean score of the bin";
-  p.y_label = "fraction of TPs";
-  p.x_min = 0;
-  p.x_max = 1;
-  p.y_min = 0;
-  p.y_max = 1;
+  Plot p = MakePlot("coco_reliability", "Reliability at IoU 0.5 (all categories, area all)",
+                    "mean score of the bin", "fraction of TPs", true, true);
   PlotSeries diagonal;
   diagonal.x = {0, 1};
   diagonal.y = {0, 1};
@@ -269,8 +248,8 @@ Plot ReliabilityFigure(const std::vector<CocoReportSource>& sources) {
     PlotSeries s;
     s.style = SeriesStyle::kLineMarkers;
     s.colour = Colour(i);
-    const std::vector<double> score = Doubles(Array(rel, "mean_score"));
-    const std::vector<double> tp = Doubles(Array(rel, "tp_fraction"));
+    const std::vector<double> score = Numbers(rel, "mean_score");
+    const std::vector<double> tp = Numbers(rel, "tp_fraction");
     for (size_t b = 0; b < score.size() && b < tp.size(); ++b) {
       if (std::isnan(score[b]) || std::isnan(tp[b])) continue;
       s.x.push_back(score[b]);
@@ -301,8 +280,8 @@ std::string IntervalCell(const StatValue& v) {
 void LoadCocoReportData(const fs::path& folder, json* results) {
   json& r = *results;
   const json& options = Field(r, "options");
-  const std::vector<double> ious = Doubles(Array(options, "iou_thresholds"));
-  const std::vector<double> recalls = Doubles(Array(options, "recall_thresholds"));
+  const std::vector<double> ious = Numbers(options, "iou_thresholds");
+  const std::vector<double> recalls = Numbers(options, "recall_thresholds");
   const json& arrays = Field(r, "arrays");
   STEREODET_CHECK_IO(arrays.is_object() && arrays.contains("precision") &&
                      Array(arrays["precision"], "shape").size() == 5)

@@ -11,6 +11,7 @@
 
 #include "stereodet/report/coco_report.h"
 #include "stereodet/report/raster.h"
+#include "stereodet/report/report_json_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/output_folder.h"
@@ -22,17 +23,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// Okabe-Ito, all 8 (yellow last: the weakest on white), so that up to 8 overlaid folders (the
-// experiment's models, docs/experiment.md) each get a colour of their own.
-constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
-
-double Num(const json& j) { return j.is_number() ? j.get<double>() : kNaN; }
-double Num(const json& j, const char* key) {
-  return j.is_object() && j.contains(key) ? Num(j[key]) : kNaN;
-}
+using report_internal::Fixed;
+using report_internal::kNaN;
+using report_internal::Num;
+using report_internal::Numbers;
+using report_internal::Str;
 
 // The numbers the report reads from results.json must be numbers (or null: not computed). A
 // string or an object there (an edited or damaged file) would show as an empty cell or a missing
@@ -67,30 +62,15 @@ void CheckResultNumbers(const json& results, const std::filesystem::path& path) 
   }
 }
 
-std::vector<double> Numbers(const json& j, const char* key) {
-  std::vector<double> out;
-  if (!j.is_object() || !j.contains(key) || !j[key].is_array()) return out;
-  for (const json& v : j[key]) out.push_back(Num(v));
-  return out;
-}
-
 std::string Lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
-}
-
-std::string Fixed(double v, int decimals) {
-  return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : std::string("-");
 }
 
 // An AP-like figure of a cell (ap_r40, aos_r11, ...) for the reader: "-" where the cell has no
 // valid label (the devkit reports 0 there, which reads as a detector that found nothing).
 std::string ApText(const json& e, const char* key) {
   return e.value("num_valid_labels", 0) == 0 ? std::string("-") : Fixed(Num(e, key), 2);
-}
-
-std::string Str(const json& j, const char* key) {
-  return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : "";
 }
 
 // A cell of the results: class x metric x difficulty x overlap set.
@@ -135,7 +115,9 @@ std::string CellTitle(const CellKey& k, const json& e) {
 struct Styler {
   size_t num_sources;
   std::string Colour(size_t source, size_t role) const {
-    return kPalette[(num_sources > 1 ? source : role) % std::size(kPalette)];
+    // All 8 palette colours, so that up to 8 overlaid folders (the experiment's models,
+    // docs/experiment.md) each get a colour of their own.
+    return PaletteColour(num_sources > 1 ? source : role);
   }
   std::string Name(const ReportSource& s, const std::string& name) const {
     return num_sources > 1 ? s.label + ": " + name : name;
@@ -242,7 +224,7 @@ Plot PrDifficultiesFigure(const std::vector<ReportSource>& sources,
       s.x = Numbers(e["curve"], "recall");
       s.y = Numbers(e["curve"], "precision");
       s.steps = true;
-      s.colour = kPalette[(sources.size() > 1 ? i : d) % std::size(kPalette)];
+      s.colour = PaletteColour(sources.size() > 1 ? i : d);
       if (sources.size() > 1) s.dash_array = kDash[d % std::size(kDash)];
       p.series.push_back(std::move(s));
       caption.push_back(fmt::format("{}{} {} valid labels",

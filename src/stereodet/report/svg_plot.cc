@@ -11,15 +11,12 @@ namespace stereodet {
 
 namespace {
 
-// Colour-blind-safe (Okabe-Ito), in the order series take them.
-constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
 constexpr double kLeft = 64, kRight = 16, kTop = 30, kBottom = 46;
 constexpr double kLegendRow = 17;
 constexpr const char* kFont = "DejaVu Sans, Arial, Helvetica, sans-serif";
 
 std::string Colour(const PlotSeries& s, size_t index) {
-  return s.colour.empty() ? kPalette[index % std::size(kPalette)] : s.colour;
+  return s.colour.empty() ? PaletteColour(index) : s.colour;
 }
 
 // Shortest text of a tick value: "0.25", "40", "1e-05".
@@ -131,6 +128,12 @@ std::vector<double> NiceTicks(double lo, double hi, int target) {
     if (t >= hi - step * 1e-9) break;
   }
   return ticks;
+}
+
+std::string PaletteColour(size_t index) {
+  static constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                             "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+  return kPalette[index % std::size(kPalette)];
 }
 
 std::string XmlEscape(const std::string& text) {

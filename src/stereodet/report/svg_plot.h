@@ -80,6 +80,11 @@ nlohmann::json PlotToJson(const Plot& plot);
 // covering [lo, hi]. Requires lo < hi.
 std::vector<double> NiceTicks(double lo, double hi, int target = 5);
 
+// The series palette: colour-blind-safe (Okabe-Ito, all 8, yellow last: the weakest on white), in
+// the order series take them; index i gets colour i mod 8. Reports give each overlaid results
+// folder its index, so that a folder has one colour in every figure.
+std::string PaletteColour(size_t index);
+
 // Text for SVG / HTML content and attribute values: & < > " ' escaped.
 std::string XmlEscape(const std::string& text);
 
