@@ -80,7 +80,7 @@ class RegularFileReader {
   // The file named as in the messages ("COCO results PATH").
   const std::string& name() const { return name_; }
 
-  // Reads up to `bytes` bytes into `into`; returns how many, 0 only at the end of the file.
+  // Reads up to `bytes` (> 0) bytes into `into`; returns how many, 0 only at the end of the file.
   // Throws std::runtime_error naming the file on a read error.
   size_t Read(char* into, size_t bytes);
 
