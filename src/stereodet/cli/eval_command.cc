@@ -82,6 +82,7 @@ struct EvalArgs {
   std::string filter;
   std::string filter_mode = FilterModeName(EvalOptions().filter.mode);
   std::vector<std::string> breakdowns;  // --breakdown AXIS=EDGES, repeatable (eval, eval merge)
+  bool breakdown_naive = false;         // --breakdown-naive (eval)
   std::string score_transform = ScoreTransformName(EvalOptions().score_transform);
   bool loose = false;
   std::string overlaps;  // empty: strict, or loose with --loose
@@ -285,6 +286,9 @@ EvalOptions MakeOptions(const EvalArgs& a) {
       throw std::invalid_argument(std::string("--breakdown: ") + e.what());
     }
   }
+  STEREODET_CHECK(!a.breakdown_naive || !a.breakdowns.empty())
+      << "--breakdown-naive recomputes the bins of --breakdown: give --breakdown AXIS=EDGES too";
+  o.breakdown_naive = a.breakdown_naive;
   const auto transform = ParseScoreTransform(a.score_transform);
   STEREODET_CHECK(transform.has_value())
       << "--score-transform: unknown '" << a.score_transform << "' (none, sigmoid)";
@@ -571,6 +575,10 @@ void AddEvalCommand(CLI::App& app) {
                    "column px; bins [a, b)); repeatable; in the table, results.json and "
                    "OUT/breakdown.csv (docs/metrics.md, Breakdowns)")
       ->allow_extra_args(false);
+  eval->add_flag("--breakdown-naive", args->breakdown_naive,
+                 "also each --breakdown bin evaluated on its own, its labels and detections "
+                 "struck outside it before matching (the naive recomputation, for comparison: a "
+                 "line under each bin in the table, results.json's breakdown[].naive)");
   eval->add_flag("--records", args->records,
                  "also write OUT/matches.csv: what every detection and label counts as, per class, "
                  "metric and difficulty (docs/metrics.md)");

@@ -116,6 +116,11 @@ struct EvalOptions {
   // Breakdowns (breakdown.h): each cell's figures again per bin of each axis, from the cell's own
   // matching (ClassResult::breakdown). Empty: none.
   std::vector<BreakdownOptions> breakdowns;
+  // Also each bin evaluated the naive way, for comparison (BreakdownBin::naive; `eval
+  // --breakdown-naive`): labels and detections outside the bin struck (a detection without a value
+  // on the axis kept, as it may be in the bin; DontCare regions stay), then matched on their own,
+  // as a naive filter does. One more evaluation per bin and cell.
+  bool breakdown_naive = false;
 
   // Keep every cell's per-detection records (ClassResult::records). Memory: 24 bytes a row, about
   // (detections + unmatched labels) x overlap kinds x difficulties rows.

@@ -95,6 +95,33 @@ std::vector<EvalFrame> StrikeFailing(const std::vector<EvalFrame>& frames,
   return out;
 }
 
+// The frames of breakdown bin [lower, upper) of `axis`, the naive way: labels outside it struck
+// (DontCare regions stay), detections outside it struck, a detection without a value on the axis
+// kept (it may be in the bin).
+std::vector<EvalFrame> StrikeOutsideBin(const std::vector<EvalFrame>& frames, BreakdownAxis axis,
+                                        double lower, double upper, int num_threads) {
+  auto inside = [&](const Object& o, bool is_label) {
+    const std::optional<double> v = BreakdownValue(axis, o, is_label);
+    return !v.has_value() || (*v >= lower && *v < upper);
+  };
+  std::vector<EvalFrame> out(frames.size());
+  ParallelFor(
+      frames.size(),
+      [&](size_t i) {
+        out[i].id = frames[i].id;
+        for (const Object& label : frames[i].labels) {
+          if (EqualsIgnoreCase(label.type, "DontCare") || inside(label, true)) {
+            out[i].labels.push_back(label);
+          }
+        }
+        for (const Object& det : frames[i].detections) {
+          if (inside(det, false)) out[i].detections.push_back(det);
+        }
+      },
+      num_threads);
+  return out;
+}
+
 // `reuse`: associations whose memory is reused (those of the previous cell).
 std::vector<FrameAssociation> AssociateAll(Matcher matcher, const std::vector<ClassFrame>& cfs,
                                            Difficulty difficulty, double threshold, int num_threads,
@@ -491,6 +518,16 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
 
   std::vector<EvalFrame> struck;
   if (!options.filter.empty()) struck = StrikeFailing(frames, options.filter.conditions, threads);
+  // With breakdown_naive, each bin's frames (in the order of the cells' breakdown bins).
+  std::vector<std::vector<EvalFrame>> bin_frames;
+  if (options.breakdown_naive) {
+    for (const BreakdownOptions& breakdown : options.breakdowns) {
+      for (int b = 0; b < breakdown.num_bins(); ++b) {
+        bin_frames.push_back(StrikeOutsideBin(frames, breakdown.axis, breakdown.edges[b],
+                                              breakdown.edges[b + 1], threads));
+      }
+    }
+  }
 
   // Kept from cell to cell so that their memory is reused; and from one overlap kind of a class to
   // the next, their labels and detections (the class whose ClassFrames they hold).
@@ -686,6 +723,34 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             acc.Add(frames[f], cfs[f], assocs[d][f], difficulty, &selection);
           }
           bin.brier = result.probability_metrics ? acc.Brier() : WithoutProbabilities(acc.Brier());
+          if (options.breakdown_naive) {
+            // The bin evaluated on its own, as an unfiltered cell is.
+            const std::vector<ClassFrame> bin_cfs =
+                PrepareAll(bin_frames[k], spec, kind, options.matcher, threads, compat);
+            BreakdownBin::Naive naive;
+            naive.at_threshold =
+                CountAll(AssociateAll(options.matcher, bin_cfs, difficulty, t_op, threads), t_op);
+            if (kitti) {
+              ClassResult own = KittiCurve(bin_cfs, difficulty, with_aos, threads, compat);
+              naive.num_valid_labels = own.num_valid_labels;
+              naive.curve.curve = std::move(own.curve);
+              naive.curve.ap_r40 = own.ap_r40;
+              naive.curve.ap_r11 = own.ap_r11;
+              naive.curve.ap_voc = kNaN;
+              naive.curve.aos_r40 = own.aos_r40;
+              naive.curve.aos_r11 = own.aos_r11;
+            } else {
+              ExactCurveResult own = ExactCurve(options.matcher, bin_frames[k], bin_cfs, difficulty,
+                                                with_aos, threads);
+              naive.num_valid_labels = own.num_valid_labels;
+              naive.curve = std::move(own.curve);
+            }
+            if (naive.num_valid_labels == 0) {
+              naive.curve.ap_r40 = naive.curve.ap_r11 = naive.curve.ap_voc = kNaN;
+              naive.curve.aos_r40 = naive.curve.aos_r11 = kNaN;
+            }
+            bin.naive = std::move(naive);
+          }
           r.breakdown.push_back(std::move(bin));
         }
         result.results.push_back(std::move(r));

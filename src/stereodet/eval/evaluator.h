@@ -74,6 +74,16 @@ struct BreakdownBin {
   // exact at every score (as FilteredStats::stable_curve).
   FilteredCurve curve;
   BrierScores brier;  // NaN where the cell's are (EvalResult::probability_metrics)
+  // With EvalOptions::breakdown_naive: the bin evaluated on its own, its labels and detections
+  // struck outside it before matching (the naive per-bin recomputation: a pair across an edge
+  // becomes a FN in one bin and a FP in the other, and a detection can find another label than in
+  // the whole cell's matching). Its curve as FilteredStats::naive_curve's.
+  struct Naive {
+    int64_t num_valid_labels = 0;
+    OperatingPoint at_threshold;
+    FilteredCurve curve;
+  };
+  std::optional<Naive> naive;
 };
 
 // One class x overlap kind x difficulty.

@@ -175,6 +175,14 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
                       {"brier_over_labels", b.brier.over_labels},
                       {"brier_over_detections", b.brier.over_detections},
                       {"brier_over_all", b.brier.over_all}});
+      if (b.naive) {
+        // The bin evaluated on its own (EvalOptions::breakdown_naive), for comparison.
+        bins.back()["naive"] = {{"num_valid_labels", b.naive->num_valid_labels},
+                                {"at_threshold", OperatingPointJson(b.naive->at_threshold)},
+                                {"ap_r40", b.naive->curve.ap_r40},
+                                {"ap_r11", b.naive->curve.ap_r11},
+                                {"ap_voc", b.naive->curve.ap_voc}};
+      }
     }
     e["breakdown"] = bins;
   }
@@ -704,6 +712,18 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
         out << fmt::format("{:>23} | {:<7}{} |  labels {}  TP {} FP {} FN {}  Brier_L {}\n", name,
                            "AP_R40", aps, bin.num_valid_labels, op.tp, op.fp, op.fn,
                            FormatNumber(bin.brier.over_labels, 4));
+        if (bin.naive) {
+          // The naive recomputation's line under the stable one.
+          const std::string naive_aps = cells([&](const ClassResult& r) {
+            return k < r.breakdown.size() && r.breakdown[k].naive
+                       ? FormatNumber(r.breakdown[k].naive->curve.ap_r40, 2)
+                       : std::string("-");
+          });
+          const OperatingPoint& nop = bin.naive->at_threshold;
+          out << fmt::format("{:>23} | {:<7}{} |  labels {}  TP {} FP {} FN {}\n", "naive",
+                             "AP_R40", naive_aps, bin.naive->num_valid_labels, nop.tp, nop.fp,
+                             nop.fn);
+        }
       }
     }
   }
