@@ -716,6 +716,8 @@ void BindEvalOptions(py::module_& m) {
       .def_readwrite("distance_bin_m", &EvalOptions::distance_bin_m)
       .def_readwrite("max_distance_m", &EvalOptions::max_distance_m)
       .def_readwrite("keep_records", &EvalOptions::keep_records)
+      .def_readwrite("breakdown_naive", &EvalOptions::breakdown_naive,
+                     "also each breakdown bin evaluated on its own (the CLI's --breakdown-naive)")
       .def_readwrite("num_threads", &EvalOptions::num_threads)
       .def("check", &EvalOptions::Check, "Raises ValueError on a bad setting.");
 }
@@ -782,12 +784,23 @@ filled). docs/metrics.md defines every number.)")
               d["brier_over_labels"] = b.brier.over_labels;
               d["brier_over_detections"] = b.brier.over_detections;
               d["brier_over_all"] = b.brier.over_all;
+              if (b.naive) {
+                py::dict naive;
+                naive["num_valid_labels"] = b.naive->num_valid_labels;
+                naive["at_threshold"] = OperatingPointDict(b.naive->at_threshold);
+                naive["curve"] = FilteredCurveDict(b.naive->curve);
+                d["naive"] = naive;
+              } else {
+                d["naive"] = py::none();
+              }
               bins.append(d);
             }
             return bins;
           },
           "with EvalOptions.breakdowns: one dict per bin (axis, bin, lower, upper, "
-          "num_valid_labels, at_threshold, curve, brier_*), breakdowns in order, bins ascending")
+          "num_valid_labels, at_threshold, curve, brier_*, and naive: with "
+          "EvalOptions.breakdown_naive the bin evaluated on its own {num_valid_labels, "
+          "at_threshold, curve}, else None), breakdowns in order, bins ascending")
       .def_property_readonly("brier",
                              [](const ClassResult& c) {
                                py::dict d;

@@ -71,7 +71,8 @@ def _runs(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str],
           overlaps: Union[str, Iterable[str]], filters: Any, filter_mode: str,
           score_threshold: float, score_transform: str, all_classes: bool, calibration_bins: int,
           distance_bin_m: float, max_distance_m: float, records: bool,
-          num_threads: int, breakdowns: Union[str, Iterable[str]] = ()) -> List[EvalOptions]:
+          num_threads: int, breakdowns: Union[str, Iterable[str]] = (),
+          breakdown_naive: bool = False) -> List[EvalOptions]:
     """The evaluation runs of evaluate()'s keyword arguments, one per overlap set, as the CLI
     builds them (cli/eval_command.cc): the base options with the strict set's class specs
     (KittiClassSpec, or OpenPcdetClassSpec with compat="openpcdet"), then the library's
@@ -98,6 +99,9 @@ def _runs(*, classes: Iterable[Union[str, ClassSpec]], metrics: Iterable[str],
     o.filters = filters
     o.filter_mode = filter_mode
     o.breakdowns = breakdowns if isinstance(breakdowns, str) else list(breakdowns)
+    if breakdown_naive and not o.breakdowns:
+        raise ValueError("breakdown_naive recomputes the bins of breakdowns: give breakdowns too")
+    o.breakdown_naive = bool(breakdown_naive)
     o.score_threshold = float(score_threshold)
     o.score_transform = score_transform
     o.require_detections = not all_classes
@@ -135,7 +139,7 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
              distance_bin_m: float = 5.0, max_distance_m: float = 80.0, records: bool = False,
              lenient: bool = False, missing_as_empty: bool = False, num_threads: int = 0,
              out: Optional[PathLike] = None,
-             breakdowns: Union[str, Iterable[str]] = (),
+             breakdowns: Union[str, Iterable[str]] = (), breakdown_naive: bool = False,
              score_if_missing: Optional[float] = None, bootstrap: int = 0,
              bootstrap_seed: int = 1, bootstrap_confidence: float = 0.95,
              bootstrap_method: str = "percentile") -> EvalResult:
@@ -155,7 +159,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
       (bound, value) pairs; filter_mode "stable" (the paper's) or "naive".
     breakdowns: the CLI's --breakdown texts, e.g. ["distance=0,30,50,inf", "occlusion=0,1,2,4"]:
       every cell again per bin, from one matching (each ClassResult's .breakdown; docs/metrics.md,
-      "Breakdowns").
+      "Breakdowns"); breakdown_naive=True also each bin evaluated on its own, struck before
+      matching, for comparison (each bin's "naive"; the CLI's --breakdown-naive).
     score_threshold: the operating point (TP/FP/FN, Brier, calibration, filters).
     score_transform: "none" or "sigmoid" (logit scores; Brier and ECE only).
     all_classes: evaluate classes without any detection too (the devkit skips them).
@@ -188,7 +193,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
                  score_threshold=score_threshold, score_transform=score_transform,
                  all_classes=all_classes, calibration_bins=calibration_bins,
                  distance_bin_m=distance_bin_m, max_distance_m=max_distance_m, records=records,
-                 num_threads=num_threads, breakdowns=breakdowns)
+                 num_threads=num_threads, breakdowns=breakdowns,
+                 breakdown_naive=breakdown_naive)
     target = "" if out is None else os.fspath(out)
     if out is not None and not target:
         raise ValueError("out: an empty path")

@@ -413,6 +413,28 @@ def test_breakdowns_are_the_clis(cli, small, tmp_path):
         stereodet.evaluate(label_dir, det_dir, breakdowns="distance=30,0")
 
 
+def test_naive_breakdowns_are_the_clis(cli, small, tmp_path):
+    label_dir, det_dir = small[:2]
+    expected = cli_results(cli, tmp_path, "--gt", label_dir, "--det", det_dir, "--metrics", "2d",
+                           "--classes", "Car", "--breakdown", "distance=0,20,inf",
+                           "--breakdown-naive")
+    result = stereodet.evaluate(label_dir, det_dir, metrics=["2d"], classes=["Car"],
+                                breakdowns=["distance=0,20,inf"], breakdown_naive=True)
+    same_as_cli(result, expected)
+    cell = result.find("Car", "2d")  # Moderate
+    want = [e for e in expected["results"] if e["class"] == "Car" and e["metric"] == "2d"
+            and e["difficulty"] == "Moderate"][0]["breakdown"]
+    for got, bin_ in zip(cell.breakdown, want):
+        assert got["naive"]["at_threshold"]["tp"] == bin_["naive"]["at_threshold"]["tp"]
+        assert got["naive"]["at_threshold"]["fp"] == bin_["naive"]["at_threshold"]["fp"]
+        assert got["naive"]["curve"]["ap_r40"] == pytest.approx(bin_["naive"]["ap_r40"])
+    plain = stereodet.evaluate(label_dir, det_dir, metrics=["2d"], classes=["Car"],
+                               breakdowns=["distance=0,20,inf"])
+    assert plain.find("Car", "2d").breakdown[0]["naive"] is None
+    with pytest.raises(ValueError, match="give breakdowns"):
+        stereodet.evaluate(label_dir, det_dir, breakdown_naive=True)
+
+
 # --- Sweep and compare, against the CLI's CSVs ---
 
 def test_filter_sweep_is_the_clis(cli, small):

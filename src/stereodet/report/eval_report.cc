@@ -115,6 +115,7 @@ json OptionsJson(const EvalOptions& options) {
     json breakdowns = json::array();
     for (const BreakdownOptions& b : options.breakdowns) breakdowns.push_back(BreakdownText(b));
     j["breakdowns"] = breakdowns;
+    if (options.breakdown_naive) j["breakdown_naive"] = true;
   }
   return j;
 }
