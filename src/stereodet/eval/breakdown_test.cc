@@ -67,6 +67,15 @@ TEST(BreakdownTest, ValuesOfLabelsAndDetections) {
 // detection, the third missed; a false positive at 35 m and one without a distance. By hand, per
 // bin of distance=0,30,50,inf: [0, 30): the 10 m pair, the distance-less FP; [30, 50): the 40 m
 // pair (its label decides), both FPs; [50, inf): the 60 m miss, the distance-less FP.
+// Random frames with scores of two decimals (ties across frames).
+std::vector<EvalFrame> ScoredRandomFrames(int num_frames, int seed) {
+  RandomFramesOptions ro;
+  ro.num_frames = num_frames;
+  ro.seed = seed;
+  ro.score_decimals = 2;
+  return RandomFrames(ro);
+}
+
 std::vector<EvalFrame> ThreeDistancesFrame() {
   EvalFrame frame;
   frame.id = "000000";
@@ -169,11 +178,7 @@ TEST(BreakdownTest, NaiveBinsStrikeBeforeMatchingByHand) {
 // A bin that holds every value, evaluated naively, is the whole cell evaluated: same counts and
 // AP as the cell, for every matcher, on random frames.
 TEST(BreakdownTest, NaiveBinOfEverythingIsTheCell) {
-  RandomFramesOptions ro;
-  ro.num_frames = 30;
-  ro.seed = 11;
-  ro.score_decimals = 2;
-  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  const std::vector<EvalFrame> frames = ScoredRandomFrames(30, 11);
   for (const Matcher matcher : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
     SCOPED_TRACE(MatcherName(matcher));
     EvalOptions options;
@@ -202,11 +207,7 @@ TEST(BreakdownTest, NaiveBinOfEverythingIsTheCell) {
 // partition the TPs and FNs of the whole cell and hold no more FPs than it; a single bin
 // (-inf, inf) is the whole cell, curve and Brier included.
 TEST(BreakdownTest, BinsPartitionTheCellAndOneBinOfEverythingIsTheCell) {
-  RandomFramesOptions ro;
-  ro.num_frames = 40;
-  ro.seed = 7;
-  ro.score_decimals = 2;
-  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  const std::vector<EvalFrame> frames = ScoredRandomFrames(40, 7);
   for (const Matcher matcher : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
     SCOPED_TRACE(MatcherName(matcher));
     EvalOptions options;

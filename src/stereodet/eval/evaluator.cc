@@ -73,53 +73,49 @@ std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const C
   return out;
 }
 
-// The frames with the labels and detections that fail `conditions` struck (DontCare regions stay).
-std::vector<EvalFrame> StrikeFailing(const std::vector<EvalFrame>& frames,
-                                     const std::vector<FilterCondition>& conditions,
-                                     int num_threads) {
+// The frames with the labels and detections `keep(object, is_label)` refuses struck (DontCare
+// regions stay).
+template <typename Keep>
+std::vector<EvalFrame> StrikeFrames(const std::vector<EvalFrame>& frames, const Keep& keep,
+                                    int num_threads) {
   std::vector<EvalFrame> out(frames.size());
   ParallelFor(
       frames.size(),
       [&](size_t i) {
         out[i].id = frames[i].id;
         for (const Object& label : frames[i].labels) {
-          if (EqualsIgnoreCase(label.type, "DontCare") || PassesFilter(label, true, conditions)) {
+          if (EqualsIgnoreCase(label.type, "DontCare") || keep(label, true)) {
             out[i].labels.push_back(label);
           }
         }
         for (const Object& det : frames[i].detections) {
-          if (PassesFilter(det, false, conditions)) out[i].detections.push_back(det);
+          if (keep(det, false)) out[i].detections.push_back(det);
         }
       },
       num_threads);
   return out;
 }
 
-// The frames of breakdown bin [lower, upper) of `axis`, the naive way: labels outside it struck
-// (DontCare regions stay), detections outside it struck, a detection without a value on the axis
-// kept (it may be in the bin).
+// The frames with the labels and detections that fail `conditions` struck.
+std::vector<EvalFrame> StrikeFailing(const std::vector<EvalFrame>& frames,
+                                     const std::vector<FilterCondition>& conditions,
+                                     int num_threads) {
+  return StrikeFrames(
+      frames, [&](const Object& o, bool is_label) { return PassesFilter(o, is_label, conditions); },
+      num_threads);
+}
+
+// The frames of breakdown bin [lower, upper) of `axis`, the naive way: labels and detections
+// outside it struck, a detection without a value on the axis kept (it may be in the bin).
 std::vector<EvalFrame> StrikeOutsideBin(const std::vector<EvalFrame>& frames, BreakdownAxis axis,
                                         double lower, double upper, int num_threads) {
-  auto inside = [&](const Object& o, bool is_label) {
-    const std::optional<double> v = BreakdownValue(axis, o, is_label);
-    return !v.has_value() || (*v >= lower && *v < upper);
-  };
-  std::vector<EvalFrame> out(frames.size());
-  ParallelFor(
-      frames.size(),
-      [&](size_t i) {
-        out[i].id = frames[i].id;
-        for (const Object& label : frames[i].labels) {
-          if (EqualsIgnoreCase(label.type, "DontCare") || inside(label, true)) {
-            out[i].labels.push_back(label);
-          }
-        }
-        for (const Object& det : frames[i].detections) {
-          if (inside(det, false)) out[i].detections.push_back(det);
-        }
+  return StrikeFrames(
+      frames,
+      [&](const Object& o, bool is_label) {
+        const std::optional<double> v = BreakdownValue(axis, o, is_label);
+        return !v.has_value() || (*v >= lower && *v < upper);
       },
       num_threads);
-  return out;
 }
 
 // `reuse`: associations whose memory is reused (those of the previous cell).
@@ -471,6 +467,26 @@ ClassResult KittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty
   return WithKittiCurve(EvaluateKittiClass(cfs, difficulty, num_threads, compat), with_aos, {});
 }
 
+// A set's own curve, as an unfiltered cell gets it: the devkit's with the KITTI matcher (its own
+// thresholds; no AP_VOC), the exact one with the others. For the naive filter and naive bins.
+ExactCurveResult OwnCurve(Matcher matcher, const std::vector<EvalFrame>& frames,
+                          const std::vector<ClassFrame>& cfs, Difficulty difficulty, bool with_aos,
+                          int num_threads, EvalCompat compat) {
+  if (matcher != Matcher::kKitti) {
+    return ExactCurve(matcher, frames, cfs, difficulty, with_aos, num_threads);
+  }
+  ClassResult own = KittiCurve(cfs, difficulty, with_aos, num_threads, compat);
+  ExactCurveResult out;
+  out.num_valid_labels = own.num_valid_labels;
+  out.curve.curve = std::move(own.curve);
+  out.curve.ap_r40 = own.ap_r40;
+  out.curve.ap_r11 = own.ap_r11;
+  out.curve.ap_voc = kNaN;
+  out.curve.aos_r40 = own.aos_r40;
+  out.curve.aos_r11 = own.aos_r11;
+  return out;
+}
+
 ScoreSummary SummarizeScores(const std::vector<EvalFrame>& frames) {
   ScoreSummary s;
   s.min_score = std::numeric_limits<double>::infinity();
@@ -668,24 +684,14 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           fs.naive =
               CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           // Naive curve: the struck set evaluated exactly like the unfiltered one.
-          if (options.matcher == Matcher::kKitti) {
-            ClassResult naive = KittiCurve(struck_cfs, difficulty, with_aos, threads, compat);
-            fs.naive_curve.curve = std::move(naive.curve);
-            fs.naive_curve.ap_r40 = naive.ap_r40;
-            fs.naive_curve.ap_r11 = naive.ap_r11;
-            fs.naive_curve.ap_voc = kNaN;
-            fs.naive_curve.aos_r40 = naive.aos_r40;
-            fs.naive_curve.aos_r11 = naive.aos_r11;
-            fs.stable_curve = StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds,
-                                                {filter}, with_aos, threads)
-                                  .front();
-          } else {
-            fs.naive_curve =
-                ExactCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads)
-                    .curve;
-            fs.stable_curve = StableExactCurve(options.matcher, frames, cfs, difficulty, filter,
-                                               with_aos, threads);
-          }
+          fs.naive_curve =
+              OwnCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads, compat)
+                  .curve;
+          fs.stable_curve = kitti ? StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds,
+                                                      {filter}, with_aos, threads)
+                                        .front()
+                                  : StableExactCurve(options.matcher, frames, cfs, difficulty,
+                                                     filter, with_aos, threads);
           r.filtered = fs;
         }
         // Breakdowns: every bin from the cell's association; the KITTI matcher's curves of all
@@ -730,21 +736,10 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             BreakdownBin::Naive naive;
             naive.at_threshold =
                 CountAll(AssociateAll(options.matcher, bin_cfs, difficulty, t_op, threads), t_op);
-            if (kitti) {
-              ClassResult own = KittiCurve(bin_cfs, difficulty, with_aos, threads, compat);
-              naive.num_valid_labels = own.num_valid_labels;
-              naive.curve.curve = std::move(own.curve);
-              naive.curve.ap_r40 = own.ap_r40;
-              naive.curve.ap_r11 = own.ap_r11;
-              naive.curve.ap_voc = kNaN;
-              naive.curve.aos_r40 = own.aos_r40;
-              naive.curve.aos_r11 = own.aos_r11;
-            } else {
-              ExactCurveResult own = ExactCurve(options.matcher, bin_frames[k], bin_cfs, difficulty,
-                                                with_aos, threads);
-              naive.num_valid_labels = own.num_valid_labels;
-              naive.curve = std::move(own.curve);
-            }
+            ExactCurveResult own = OwnCurve(options.matcher, bin_frames[k], bin_cfs, difficulty,
+                                            with_aos, threads, compat);
+            naive.num_valid_labels = own.num_valid_labels;
+            naive.curve = std::move(own.curve);
             if (naive.num_valid_labels == 0) {
               naive.curve.ap_r40 = naive.curve.ap_r11 = naive.curve.ap_voc = kNaN;
               naive.curve.aos_r40 = naive.curve.aos_r11 = kNaN;
