@@ -575,18 +575,6 @@ bool FastParseCocoArray(simdjson::ondemand::parser& parser, simdjson::padded_str
   return doc.current_location().get(rest) == simdjson::OUT_OF_BOUNDS;
 }
 
-// The fast path where it reads the text, CocoReader where it does not.
-std::vector<CocoDetection> ParseCocoDetectionsIn(std::string_view text, const std::string& source,
-                                                 const CocoGroundTruth& gt) {
-  std::vector<CocoDetection> dets;
-  // About 90 bytes a detection ({"image_id": 1, "category_id": 1, "bbox": [...], "score": ...}).
-  dets.reserve(text.size() / 90);
-  const simdjson::padded_string copy(text);
-  simdjson::ondemand::parser parser;
-  if (FastParseCocoArray(parser, copy, gt, &dets)) return dets;
-  return ParseCocoDetectionsNamingErrors(text, source, gt);
-}
-
 constexpr bool IsJsonWhitespace(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
 
 }  // namespace
@@ -749,9 +737,16 @@ std::vector<CocoDetection> ReadCocoDetectionsInBlocks(const std::filesystem::pat
   return ParseCocoDetectionsNamingErrors(text, path.string(), gt);
 }
 
+// The fast path where it reads the text, CocoReader where it does not.
 std::vector<CocoDetection> ParseCocoDetections(std::string_view text, const std::string& source,
                                                const CocoGroundTruth& gt) {
-  return ParseCocoDetectionsIn(text, source, gt);
+  std::vector<CocoDetection> dets;
+  // About 90 bytes a detection ({"image_id": 1, "category_id": 1, "bbox": [...], "score": ...}).
+  dets.reserve(text.size() / 90);
+  const simdjson::padded_string copy(text);
+  simdjson::ondemand::parser parser;
+  if (FastParseCocoArray(parser, copy, gt, &dets)) return dets;
+  return ParseCocoDetectionsNamingErrors(text, source, gt);
 }
 
 std::vector<CocoDetection> ParseCocoDetectionsNamingErrors(std::string_view text,

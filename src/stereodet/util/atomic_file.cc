@@ -101,8 +101,8 @@ std::string HumanBytes(uint64_t bytes) {
 // files and the stream set-up (and its seeks) would cost more than the parsing. The read loop also
 // grows past st_size, so /proc files (size 0) read whole. A file of the size fstat reports takes
 // one read().
-std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole, const char* what,
-                            size_t padding = 0) {
+std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole,
+                            const char* what) {
   RegularFileReader reader(path, what);
   const std::string& name = reader.name();
   const uint64_t size = reader.size();
@@ -111,8 +111,6 @@ std::string ReadRegularFile(const fs::path& path, uint64_t max_bytes, bool whole
       << HumanBytes(max_bytes) << " read of one file";
   const uint64_t wanted = std::min(size, max_bytes);
   std::string contents;
-  // The padding's capacity first: resizing down keeps it.
-  if (padding > 0) contents.reserve(static_cast<size_t>(wanted) + 1 + padding);
   // One byte more than the size, so a single read() both fills the file and sees its end.
   contents.resize(static_cast<size_t>(wanted) + (whole ? 1 : 0));
   size_t used = 0;
@@ -167,8 +165,8 @@ size_t RegularFileReader::Read(char* into, size_t bytes) {
   }
 }
 
-std::string ReadFile(const fs::path& path, uint64_t max_bytes, const char* what, size_t padding) {
-  return ReadRegularFile(path, max_bytes, /*whole=*/true, what, padding);
+std::string ReadFile(const fs::path& path, uint64_t max_bytes, const char* what) {
+  return ReadRegularFile(path, max_bytes, /*whole=*/true, what);
 }
 
 std::string ReadFileHead(const fs::path& path, size_t bytes) {

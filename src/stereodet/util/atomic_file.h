@@ -52,11 +52,9 @@ inline constexpr uint64_t kMaxReadFileBytes = uint64_t{4} << 30;
 // std::runtime_error naming the path if it cannot be read, is not a regular file (a FIFO, a
 // folder, a device: opened without blocking, so a reader never hangs) or is larger than
 // `max_bytes` ("... is 5.0 GB, more than the 4.0 GB read of one file"). `what`, when given, names
-// the kind of file in the messages: "cannot read image PATH: not a regular file". The string's
-// capacity is at least its size + 1 + `padding` (a parser that reads past the end, such as
-// simdjson, can then read it in place).
+// the kind of file in the messages: "cannot read image PATH: not a regular file".
 std::string ReadFile(const std::filesystem::path& path, uint64_t max_bytes = kMaxReadFileBytes,
-                     const char* what = nullptr, size_t padding = 0);
+                     const char* what = nullptr);
 
 // The first `bytes` bytes of a regular file (fewer if it is shorter), with ReadFile's checks.
 std::string ReadFileHead(const std::filesystem::path& path, size_t bytes);

@@ -31,15 +31,6 @@ TEST_F(AtomicFileTest, WritesContentsCreatingParentsAndLeavesNoTemporary) {
   EXPECT_EQ(CountFiles(), 1u);
 }
 
-// ReadFile's padding: room after the text for a parser that reads past its end (simdjson).
-TEST_F(AtomicFileTest, ReadFileLeavesThePaddingAskedFor) {
-  const auto path = dir_ / "padded.txt";
-  WriteFileAtomically(path, std::string(1000, 'x'));
-  const std::string padded = ReadFile(path, kMaxReadFileBytes, "test", 64);
-  EXPECT_EQ(padded, std::string(1000, 'x'));
-  EXPECT_GE(padded.capacity(), 1000u + 1 + 64);
-}
-
 TEST_F(AtomicFileTest, ReplacesAnExistingFile) {
   const fs::path path = dir_ / "out.txt";
   WriteFileAtomically(path, "old contents that are longer");
