@@ -103,6 +103,10 @@ def parse_tables(text):
             kind = "variance"
         elif line.startswith("### Verdicts"):
             cls, kind = "all", "verdicts"
+        elif line.startswith("### What deciding"):
+            cls, kind = "all", "power"
+        elif line.startswith("### Percentile against BCa"):
+            cls, kind = "all", "bca"
         elif line.startswith("Filter sweep"):
             cls, kind = "all", "sweep"
         elif line.startswith("| ") and cls and not line.startswith("| model |") \
@@ -130,8 +134,11 @@ steps = int(m.group(1)) if m else 0
 # trainings (2 x 2 RPN seeds), detect: 6 image models x 2 blurs + 2 3D models, 2 evals each,
 # compares: 3 image pairs (the SSDs, 2 RPN seed pairs) x 2 blurs x 2 matchers + the 3D pair x 2
 # matchers, figures: the models' report, the blur report, the 3D pair's compare report and the
-# filter sweep, the compression overlay = 1 + 1 + 4 + 14 + 28 + 14 + 5
-check(steps == 67 and m.group(2) == "0", f"first run: 67 steps, none skipped (got {m.groups()})")
+# filter sweep, the compression overlay = 1 + 1 + 4 + 14 + 28 + 14 + 5 = 67; the BCa check of the
+# claims' compares: ssd-rgb vs ssd-rgbh-fixed sharp optimal, blurred kitti and blurred optimal, the
+# 2 RPN seed pairs sharp optimal = 5. The replication set: its data, stereo points, the 14
+# detections, 28 evaluations, 14 compares, 5 BCa checks and the sweep = 64. 67 + 5 + 64 = 136.
+check(steps == 136 and m.group(2) == "0", f"first run: 136 steps, none skipped (got {m.groups()})")
 table_text = (out / "table1.md").read_text()
 tables = parse_tables(table_text)
 
@@ -255,12 +262,12 @@ check(sorted(r[0] for r in vrows) == sorted(claims),
       f"a verdict row per claim: {[r[0] for r in vrows]}")
 
 
-def seeds_interval(seed_pairs, c, measure):
+def seeds_interval(seed_pairs, c, measure, root):
     """The rule over seeds and frames recomputed from the seed pairs' compares: the mean of their
     A - B, the frame term from the seed-averaged bootstrap_samples.csv (same resamples)."""
     estimates, resampled = [], []
     for a_name, b_name in seed_pairs:
-        path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
+        path = root / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
         with open(path / "bootstrap.csv") as f:
             row = [r for r in csv.DictReader(f) if r["class"] == c["class"] and r["metric"] == "2d"
                    and r["difficulty"] == "Moderate" and r["measure"] == measure][0]
@@ -277,72 +284,122 @@ def seeds_interval(seed_pairs, c, measure):
     variance = sum((x - mean) ** 2 for x in averaged) / (len(averaged) - 1)
     _, lo, hi, _ = verdict_rule.combined_interval(estimates, variance, len(averaged) - 1)
     return lo, hi
-seen, flips_seen = set(), set()
-for row in vrows:
-    c = claims[row[0]]
+
+
+def set_verdict(root, c, row):
+    """The verdict claim `c` gets on one set (the experiment folder `root`: OUT, or
+    OUT/replication for the replication set), recomputed from its files."""
     if c["measure"].startswith("sweep_"):
         # A sweep claim: the share of swept values where stable is above naive, recounted from
         # sweep.csv; confirmed at 80 % or more, refuted below 50 %.
         measure = c["measure"][len("sweep_"):]
-        with open(out / "figures" / f"sweep-{c['a']}" / "sweep.csv") as f:
+        with open(root / "figures" / f"sweep-{c['a']}" / "sweep.csv") as f:
             d = [float(r[f"stable_{measure}"]) - float(r[f"naive_{measure}"])
                  for r in csv.DictReader(f) if r["class"] == c["class"]
                  and r[f"stable_{measure}"] != "" and r[f"naive_{measure}"] != ""]
         share = sum(x > 1e-12 for x in d) / len(d) if d else None
-        want = "confirmed" if share is not None and share >= 0.8 else \
-            "refuted" if share is not None and share < 0.5 else "inconclusive"
-        check(row[3] == want and (share is None or row[2].startswith(
-              f"{sum(x > 1e-12 for x in d)} / {len(d)} = ")),
-              f"sweep verdict of {c['id']}: {row[2:4]} vs {want} (share {share})")
-        seen.add(row[3].split(" (")[0])
-        continue
-    pair_text, blur, cls, matcher, measure = (x.strip() for x in row[1].split(","))
+        text = f"{sum(x > 1e-12 for x in d)} / {len(d)} = "
+        return ("confirmed" if share is not None and share >= 0.8 else
+                "refuted" if share is not None and share < 0.5 else "inconclusive"), text
+    pair_text = row[1].split(",")[0].strip()
     a_name, b_name = pair_text.split(" - ")
-    check(a_name == c["a"] and blur == f"blur {c['blur_sigma_px']}",
-          f"verdict row {row[1]!r} is of claim {c['id']}")
     if len(groups.get(a_name, [])) > 1 and len(groups.get(a_name, [])) == len(groups.get(b_name, [])):
         # A claim on seeds: the combined interval of every measure, its side of 0.
         sides = []
         for measure in c["measure"].split("/"):
-            lo, hi = seeds_interval(list(zip(groups[a_name], groups[b_name])), c, measure)
+            lo, hi = seeds_interval(list(zip(groups[a_name], groups[b_name])), c, measure, root)
             sides.append(0 if lo <= 0 <= hi else 1 if lo > 0 else -1)
         if 0 in sides:
-            want = "inconclusive"
-        elif c["expect"] == "flip":
-            want = "confirmed" if sides[0] != sides[1] else "refuted"
-        else:
-            want = "confirmed" if (sides[0] > 0) == (c["expect"] == ">0") else "refuted"
-        check(row[3] == want and "2 seed pairs" in row[2],
-              f"verdict of {c['id']} over seeds ({row[1]}): {row[2:4]!r}, want {want!r}")
-        seen.add(row[3].split(" (")[0])
-        continue
+            return "inconclusive", "2 seed pairs"
+        if c["expect"] == "flip":
+            return ("confirmed" if sides[0] != sides[1] else "refuted"), "2 seed pairs"
+        return ("confirmed" if (sides[0] > 0) == (c["expect"] == ">0") else "refuted"), \
+            "2 seed pairs"
     if [a_name, b_name] not in config["pairs"]:
-        want = "not measured (the pair is not in this config)"
-    elif b_name == "ssd-absent":
-        want = "not measured (missing: ssd-absent)"
-    else:
-        path = out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
-        with open(path / "bootstrap.csv") as f:
-            by_measure = {r["measure"]: r for r in csv.DictReader(f) if r["class"] == c["class"]
-                          and r["metric"] == "2d" and r["difficulty"] == "Moderate"}
-        # Each measure's side of 0: +1, -1, or 0 when its interval holds 0.
-        sides = []
-        for measure in c["measure"].split("/"):
-            lo = float(by_measure[measure]["a_minus_b_lower"])
-            hi = float(by_measure[measure]["a_minus_b_upper"])
-            sides.append(0 if lo <= 0 <= hi else 1 if lo > 0 else -1)
-        if 0 in sides:
-            want = "inconclusive"
-        elif c["expect"] == "flip":  # two Brier terms: confirmed when they rank A, B oppositely
-            want = "confirmed" if sides[0] != sides[1] else "refuted"
-            flips_seen.add(want)
-        else:
-            want = "confirmed" if (sides[0] > 0) == (c["expect"] == ">0") else "refuted"
-    check(row[3] == want, f"verdict of {c['id']} ({row[1]}): {row[3]!r} != {want!r}")
-    seen.add(row[3].split(" (")[0])
-check(seen == {"confirmed", "refuted", "inconclusive", "not measured"},
+        return "not measured (the pair is not in this config)", ""
+    if b_name == "ssd-absent":
+        return "not measured (missing: ssd-absent)", ""
+    path = root / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / c["matcher"]
+    with open(path / "bootstrap.csv") as f:
+        by_measure = {r["measure"]: r for r in csv.DictReader(f) if r["class"] == c["class"]
+                      and r["metric"] == "2d" and r["difficulty"] == "Moderate"}
+    # Each measure's side of 0: +1, -1, or 0 when its interval holds 0.
+    sides = []
+    for measure in c["measure"].split("/"):
+        lo = float(by_measure[measure]["a_minus_b_lower"])
+        hi = float(by_measure[measure]["a_minus_b_upper"])
+        sides.append(0 if lo <= 0 <= hi else 1 if lo > 0 else -1)
+    if 0 in sides:
+        return "inconclusive", ""
+    if c["expect"] == "flip":  # two Brier terms: confirmed when they rank A, B oppositely
+        return ("confirmed" if sides[0] != sides[1] else "refuted"), ""
+    return ("confirmed" if (sides[0] > 0) == (c["expect"] == ">0") else "refuted"), ""
+
+
+# Each claim's row: its verdict on each set, recomputed, and the rule of replication: confirmed or
+# refuted where both sets say so, "not replicated" where they differ.
+seen, flips_seen = set(), set()
+for row in vrows:
+    c = claims[row[0]]
+    check(len(row) == 6, f"verdict row of {c['id']}: claim, decided by, two intervals, verdict, "
+          f"change ({len(row)} cells)")
+    if len(row) != 6:
+        continue
+    if not c["measure"].startswith("sweep_"):
+        pair_text, blur = (x.strip() for x in row[1].split(",")[:2])
+        check(pair_text.split(" - ")[0] == c["a"] and blur == f"blur {c['blur_sigma_px']}",
+              f"verdict row {row[1]!r} is of claim {c['id']}")
+    v1, how = set_verdict(out, c, row)
+    v2, how2 = set_verdict(out / "replication", c, row)
+    word1, word2 = v1.split(" (")[0], v2.split(" (")[0]
+    want = v1 if word1 in ("not measured", word2) else \
+        f"not replicated ({word1} on the first set, {word2} on the replication set)"
+    check(row[4] == want, f"verdict of {c['id']} ({row[1]}): {row[4]!r} != {want!r}")
+    check(how in row[2] and how2 in row[3], f"verdict of {c['id']}: intervals {row[2:4]} "
+          f"show {how!r}, {how2!r}")
+    if c["expect"] == "flip" and word1 != "inconclusive":
+        flips_seen.add(word1)
+    seen.add(word1)
+    seen.add(row[4].split(" (")[0])
+check(seen >= {"confirmed", "refuted", "inconclusive", "not measured"},
       f"the miniature's claims cover every verdict: {sorted(seen)}")
 check(flips_seen, "a flip claim of the miniature is decided (confirmed or refuted)")
+
+# Percentile against BCa: one row per claim, seed pair and measure (the 5 BCa compares: 9 rows),
+# each interval the one its compare folder's bootstrap.csv holds.
+brows = tables.get(("all", "bca"), [])
+check(len(brows) == 9, f"a BCa row per claim, seed pair and measure: {len(brows)}")
+for row in brows:
+    c = [x for x in claims.values() if x["id"] == row[0]][0]
+    a_name, b_name = row[1].split(" - ")
+    scale = 0.01 if row[2] == "ap_r40" else 1.0
+    for col, matcher in ((3, c["matcher"]), (5, c["matcher"] + "-bca")):
+        with open(out / "compare" / f"{a_name}-vs-{b_name}" / f"blur{c['blur_sigma_px']}" / matcher
+                  / "bootstrap.csv") as f:
+            r = [r for r in csv.DictReader(f) if r["class"] == c["class"] and r["metric"] == "2d"
+                 and r["difficulty"] == "Moderate" and r["measure"] == row[2]][0]
+        text = f"{float(r['a_minus_b']) * scale:+.3f}"
+        if r["a_minus_b_lower"] != "":
+            lo, hi = float(r["a_minus_b_lower"]) * scale, float(r["a_minus_b_upper"]) * scale
+            text += f" [{lo:+.3f}, {hi:+.3f}]" + (" *" if lo > 0 or hi < 0 else "")
+        check(row[col] == text, f"BCa row {row[:3]}: {matcher} {row[col]!r} != {text!r}")
+# The power table: a row per claim and measure decided by an interval; the frames needed by a
+# claim on one training recomputed from its interval (verdict_rule.power_needs).
+prows = {(r[0], r[1]): r for r in tables.get(("all", "power"), [])}
+check(len(prows) == 8, f"a power row per claim and measure: {sorted(prows)}")
+row = prows.get(("ap-blurred", "ap_r40"))
+with open(out / "compare" / "ssd-rgb-vs-ssd-rgbh-fixed" / "blur5" / "kitti" / "bootstrap.csv") as f:
+    r = [r for r in csv.DictReader(f) if r["class"] == "Car" and r["metric"] == "2d"
+         and r["difficulty"] == "Moderate" and r["measure"] == "ap_r40"][0]
+effect = float(r["a_minus_b"]) / 100
+width = (float(r["a_minus_b_upper"]) - float(r["a_minus_b_lower"])) / 100
+_, frames_needed = verdict_rule.power_needs(effect, 0.0, (width / (2 * 1.959964)) ** 2, 2, 1, 1)
+check(row is not None and row[6] == str(frames_needed) and row[5] == "n/a",
+      f"power row of ap-blurred: {row}, frames needed {frames_needed}")
+# By hand: effect 0.05, one training, frame se 0.02 at 1000 frames: 80 % power needs se <=
+# 0.05 / (1.96 + 0.8416) = 0.017846, i.e. 1000 * (0.02 / 0.017846)^2 = 1256 frames.
+check(verdict_rule.power_needs(0.05, 0.0, 0.0004, 1000, 999, 1) == (None, 1256),
+      "power_needs by hand: 1256 frames")
 
 # rpn-rgbd is initialised from rpn-rgb of its seed ({models}, {seed}): its training depends on it.
 for seed in (1, 2):
@@ -442,7 +499,9 @@ check((out / "table1.md").read_text() == table_text, "second run writes the same
 third = run()
 rerun = sorted(re.findall(r"^==> ([\w.-]+):", third.stdout, re.M))
 check(rerun == ["compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti",
-                "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal", "detect-ssd-rgbh-fixed-blur5",
+                "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-kitti-bca",
+                "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal",
+                "compare-ssd-rgb-vs-ssd-rgbh-fixed-blur5-optimal-bca", "detect-ssd-rgbh-fixed-blur5",
                 "eval-ssd-rgbh-fixed-blur5-kitti", "eval-ssd-rgbh-fixed-blur5-optimal",
                 "report-blur", "report-compression"],
       f"a lost detection marker reruns it and what depends on it, only: {rerun}")
@@ -463,15 +522,18 @@ def run_ckpt():
     p = subprocess.run([sys.executable, str(script), "--config", str(ckpt_path), "--out",
                         str(work / "ckpt-out"), "--bin", str(bin_dir)], capture_output=True, text=True)
     check(p.returncode == 0, f"checkpoint run: {p.stderr.strip()}")
-    return sorted(re.findall(r"^==> ([\w.-]+):", p.stdout, re.M))
+    return sorted(re.findall(r"^==> ((?:replication/)?[\w.-]+):", p.stdout, re.M))
 
 
 run_ckpt()
 check(run_ckpt() == [], "the checkpoint run skips everything the second time")
 os.utime(ckpt / "model.pt", ns=(0, 12345))
-check(run_ckpt() == ["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal",
-                    "report-models", "sweep-ssd-rgb"],
-      "a replaced checkpoint reruns its detection, evaluations and figures")
+rerun = run_ckpt()
+check(rerun == sorted(["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal",
+                       "report-models", "sweep-ssd-rgb"] +
+                      [f"replication/{x}" for x in ("detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti",
+                                                    "eval-ssd-rgb-blur0-optimal", "sweep-ssd-rgb")]),
+      f"a replaced checkpoint reruns its detection, evaluations and figures on both sets: {rerun}")
 
 # A "kitti" source: a data set in KITTI's layout that the experiment does not generate (the
 # miniature's synthetic set, which synth writes in that layout). The same frames and checkpoints
@@ -482,6 +544,7 @@ kitti_cfg["datasets"] = {"real": {"source": "kitti", "root": str(out / "data" / 
 kitti_cfg["models"] = [dict(m, data="real") for m in kitti_cfg["models"]
                        if m["name"] in ("ssd-rgb", "det3d-stereo")]
 kitti_cfg["pairs"], kitti_cfg["claims"], kitti_cfg["blur_sigmas_px"] = [], "", [0]
+kitti_cfg["replication"] = {}
 kitti_cfg["figures"] = {"png": False}
 kitti_path = work / "kitti.json"
 kitti_path.write_text(json.dumps(kitti_cfg))

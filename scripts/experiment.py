@@ -20,6 +20,7 @@ those of a run without Dask, so either resumes the other.
 """
 
 import argparse
+import copy
 import csv
 import dataclasses
 import json
@@ -227,6 +228,7 @@ def load_config(path, train=False, kitti=None, kitti_splits=None, max_epochs=Non
         if by_name[pair[0]]["data"] != by_name[pair[1]]["data"]:
             raise ConfigError(f"{w}: {pair[0]} and {pair[1]} use different datasets; a paired "
                               "bootstrap needs the same frames")
+    _check_replication(config, where)
     config.setdefault("paper_figures", "")
     config.setdefault("claims", "")
     figures = config.setdefault("figures", {})
@@ -267,6 +269,43 @@ def load_config(path, train=False, kitti=None, kitti_splits=None, max_epochs=Non
     return config
 
 
+def val_frames(d):
+    """How many frames `synth` puts in the val split of synthetic data set `d` (its rounding)."""
+    return int(math.floor(d["frames"] * d.get("val_fraction", 0.25) + 0.5))
+
+
+def _check_replication(config, where):
+    """"replication": {DATA: REPLICATION_DATA, ...}: every data set a model uses, mapped to another
+    data set of the config on which every model is evaluated again (docs/experiment.md,
+    "Replication"): independent (another generator seed) and at least as large (val frames)."""
+    rep = config.setdefault("replication", {})
+    w = f"{where}: replication"
+    if not isinstance(rep, dict):
+        raise ConfigError(f"{w}: an object of DATA: REPLICATION_DATA, got {rep!r}")
+    datasets = config["datasets"]
+    for name, other in rep.items():
+        if name not in datasets:
+            raise ConfigError(f"{w}.{name}: {name!r} is not in datasets")
+        if not isinstance(other, str) or other not in datasets or other == name or other in rep:
+            raise ConfigError(f"{w}.{name}: another data set of datasets, not itself replicated, "
+                              f"got {other!r}")
+        d, r = datasets[name], datasets[other]
+        if d["source"] == "synth" and r["source"] == "synth":
+            if r["seed"] == d["seed"]:
+                raise ConfigError(f"{w}.{name}: {other!r} has {name!r}'s generator seed "
+                                  f"({d['seed']}): the same frames, not an independent set")
+            if val_frames(r) < val_frames(d):
+                raise ConfigError(f"{w}.{name}: {other!r} has {val_frames(r)} val frames, fewer "
+                                  f"than {name!r}'s {val_frames(d)}")
+            if r.get("lidar", True) != d.get("lidar", True):
+                raise ConfigError(f"{w}.{name}: {other!r} and {name!r} differ in lidar")
+    if rep:
+        unmapped = sorted({m["data"] for m in config["models"]} - set(rep))
+        if unmapped:
+            raise ConfigError(f"{w}: no replication set for {', '.join(unmapped)} (every data set "
+                              "a model uses needs one)")
+
+
 def repo_path(p):
     p = pathlib.Path(p)
     return p if p.is_absolute() else REPO / p
@@ -277,8 +316,13 @@ def blur_tag(sigma):
 
 
 class Pipeline:
-    def __init__(self, config, out, bin_dir, table_only=False):
+    def __init__(self, config, out, bin_dir, table_only=False, models_of=None):
+        """`models_of`: the pipeline whose models this one evaluates on its own data (the
+        replication set's, from replication()): nothing is trained here, and its figures are the
+        filter sweep alone."""
         self.config, self.out, self.table_only = config, out, table_only
+        self.models_of = models_of
+        self.label = "" if models_of is None else "replication/"  # before step names printed
         self.bin = bin_dir / "stereodet"
         self.steps_run, self.steps_skipped = 0, 0
         self.plan = []  # the steps in the order run() plans them (deps before their users)
@@ -341,12 +385,12 @@ class Pipeline:
         tokens = self.dep_tokens(step)
         if self.is_complete(step, tokens):
             self.steps_skipped += 1
-            print(f"--- {step.name}: complete, skipped", flush=True)
+            print(f"--- {self.label}{step.name}: complete, skipped", flush=True)
             return None
         if self.table_only:
             raise RuntimeError(f"--table-only: step {step.name} has not run ({step.output} "
                                "missing)")
-        print(f"==> {step.name}: {' '.join(step.command)}", flush=True)
+        print(f"==> {self.label}{step.name}: {' '.join(step.command)}", flush=True)
         return tokens
 
     def execute(self, client=None):
@@ -411,7 +455,7 @@ class Pipeline:
                 continue
             self.write_marker(step, tokens, seconds)
             finished.add(step.name)
-            print(f"<== {step.name}: {seconds:.1f} s ({len(finished)} of {len(self.plan)} "
+            print(f"<== {self.label}{step.name}: {seconds:.1f} s ({len(finished)} of {len(self.plan)} "
                   "complete)", flush=True)
             if not failed:
                 submit_ready()
@@ -500,16 +544,37 @@ class Pipeline:
                            self.config["threads"], "--quiet"],
                           deps=[f"data-{name}"] if d["source"] == "synth" else [])
 
+    def replication(self):
+        """The pipeline that evaluates every model again on the config's replication sets (its
+        "replication": each model's data set replaced by its replication set), into OUT/replication
+        with its own markers; None without one. Run it after this one: it uses this one's models."""
+        rep = self.config["replication"]
+        if not rep:
+            return None
+        config = copy.deepcopy(self.config)
+        config["models"] = [dict(m, data=rep[m["data"]]) for m in config["models"]]
+        config["replication"] = {}
+        config["figures"] = {"png": False, "overlays": {},
+                             "sweep": self.config["figures"].get("sweep")}
+        return Pipeline(config, self.out / "replication", self.bin.parent, self.table_only,
+                        models_of=self)
+
     # -- models --------------------------------------------------------------------------------
     def trains(self, model):
-        return self.config["train"] and "train" in model
+        return self.models_of is None and self.config["train"] and "train" in model
 
     def model_dir(self, model):
+        if self.models_of is not None:
+            return self.models_of.model_dir(model)
         return self.out / "models" / model["name"] if self.trains(model) else repo_path(
             model["model"])
 
     def find_missing(self):
+        if self.models_of is not None:
+            self.missing.update(self.models_of.missing)
         for m in self.config["models"]:
+            if m["name"] in self.missing:
+                continue
             if not self.has_models and not self.table_only:
                 self.missing[m["name"]] = "this build has no LibTorch detectors"
             elif not self.trains(m) and not (self.model_dir(m) / "model.pt").is_file():
@@ -581,25 +646,64 @@ class Pipeline:
     def compare_dir(self, a, b, sigma, matcher):
         return self.out / "compare" / f"{a['name']}-vs-{b['name']}" / blur_tag(sigma) / matcher
 
-    def run_compare(self, a, b):
-        data = self.dataset_root(a["data"])
+    def compare_command(self, a, b, sigma, matcher, out, flags):
         boot = self.config["bootstrap"]
-        if boot["resamples"] == 0:
+        return [self.bin, "eval", "compare", "--gt", self.dataset_root(a["data"]),
+                "--det", self.run_dir(a, sigma) / "detections",
+                "--det-b", self.run_dir(b, sigma) / "detections",
+                "--split", self.split_arg(a["data"], self.config["split"]),
+                "--metrics", TABLE_METRIC[a["family"]],
+                "--matcher", matcher, "--threads", self.config["threads"],
+                "--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"], *flags,
+                "--out", out]
+
+    def run_compare(self, a, b):
+        if self.config["bootstrap"]["resamples"] == 0:
             return
         for sigma in [s for s in self.blurs(a) if s in self.blurs(b)]:
             for matcher in self.config["matchers"]:
                 cmp = self.compare_dir(a, b, sigma, matcher)
-                cmd = [self.bin, "eval", "compare", "--gt", data,
-                       "--det", self.run_dir(a, sigma) / "detections",
-                       "--det-b", self.run_dir(b, sigma) / "detections",
-                       "--split", self.split_arg(a["data"], self.config["split"]),
-                       "--metrics", TABLE_METRIC[a["family"]],
-                       "--matcher", matcher, "--threads", self.config["threads"],
-                       "--bootstrap", boot["resamples"], "--bootstrap-seed", boot["seed"],
-                       "--bootstrap-samples", "--out", cmp]
-                self.step(self.compare_step(a, b, sigma, matcher),
-                          cmp / "bootstrap.csv", cmd,
+                self.step(self.compare_step(a, b, sigma, matcher), cmp / "bootstrap.csv",
+                          self.compare_command(a, b, sigma, matcher, cmp,
+                                               ["--bootstrap-samples"]),
                           deps=[self.detect_step(a, sigma), self.detect_step(b, sigma)])
+
+    def bca_dir(self, a, b, sigma, matcher):
+        return self.compare_dir(a, b, sigma, matcher).with_name(f"{matcher}-bca")
+
+    def bca_cells(self):
+        """The (A, B, blur, matcher) compares that decide a claim of the config (every seed pair
+        of a claim on seeds), in claim order, each once: those the BCa check repeats."""
+        by_name = {m["name"]: m for m in self.config["models"]}
+        pairs = {tuple(p) for p in self.config["pairs"]}
+        cells = []
+        if self.config["bootstrap"]["resamples"] == 0:
+            return cells
+        for c in expand_claims(self.config):
+            if c["measure"] in SWEEP_MEASURES or c["matcher"] not in self.config["matchers"]:
+                continue
+            sigma = float(c["blur_sigma_px"])
+            for a_name, b_name in claim_pairs(c):
+                if (a_name, b_name) not in pairs or a_name in self.missing or \
+                        b_name in self.missing or sigma not in self.blurs(by_name[a_name]):
+                    continue
+                cell = (a_name, b_name, sigma, c["matcher"])
+                if cell not in cells:
+                    cells.append(cell)
+        return cells
+
+    def run_bca_checks(self):
+        """The claims' compares again with BCa intervals (`--bootstrap-method bca`, the same
+        resamples): the percentile intervals the verdicts read, checked against intervals that
+        correct for a skewed, biased bootstrap distribution ("Percentile against BCa")."""
+        by_name = {m["name"]: m for m in self.config["models"]}
+        for a_name, b_name, sigma, matcher in self.bca_cells():
+            a, b = by_name[a_name], by_name[b_name]
+            out = self.bca_dir(a, b, sigma, matcher)
+            self.step(self.compare_step(a, b, sigma, matcher) + "-bca", out / "bootstrap.csv",
+                      self.compare_command(a, b, sigma, matcher, out,
+                                           ["--bootstrap-method", "bca"]),
+                      deps=[self.detect_step(a, sigma), self.detect_step(b, sigma)])
 
     # -- figures (docs/experiment.md, "Figures") ----------------------------------------------
     def figures_dir(self, name):
@@ -621,6 +725,11 @@ class Pipeline:
         dz model, and the filter sweep naive vs stable."""
         if not present:
             return
+        if self.models_of is None:
+            self.run_reports(present)
+        self.run_sweep(present)
+
+    def run_reports(self, present):
         # A model of the first family first: its cells are the report's (a 3D model's 2D cells
         # are overlaid too).
         self.report("models", [self.run_dir(m, 0) / "eval-optimal" for m in present],
@@ -655,6 +764,9 @@ class Pipeline:
                     deps.append(self.eval_step(m, sigma, "optimal"))
             if len(sources) > 1:
                 self.report(overlay, sources, labels, deps)
+
+    def run_sweep(self, present):
+        by_name = {m["name"]: m for m in present}
         sweep = self.config["figures"].get("sweep")
         if sweep:
             for name in sweep["models"]:
@@ -689,6 +801,7 @@ class Pipeline:
         for a, b in self.config["pairs"]:
             if a not in self.missing and b not in self.missing:
                 self.run_compare(by_name[a], by_name[b])
+        self.run_bca_checks()
         self.run_figures(present)
         self.execute(client)
 
@@ -933,7 +1046,8 @@ def seeds_cell(pipeline, seed_pairs, c, measure):
     centre, lower, upper, _ = verdict_rule.combined_interval(estimates, frame_variance,
                                                              len(averaged) - 1)
     return {"a_minus_b": repr(centre), "a_minus_b_lower": repr(lower),
-            "a_minus_b_upper": repr(upper), "seeds": estimates}
+            "a_minus_b_upper": repr(upper), "seeds": estimates, "frame_variance": frame_variance,
+            "frame_df": len(averaged) - 1}
 
 
 def flip_verdict(cells, terms):
@@ -958,24 +1072,35 @@ def flip_verdict(cells, terms):
     return "; ".join(texts), verdict, change
 
 
+def expand_claims(config):
+    """The claims of the config's claims file as the verdicts decide them: a claim on models with
+    training seeds keeps its groups' names and gains "seed_pairs" (one row, the rule over seeds
+    and frames); a claim on models of one training names them."""
+    groups = config["groups"]
+    claims = []
+    for c in read_claims(config["claims"]):
+        ga, gb = groups.get(c["a"], [c["a"]]), groups.get(c["b"], [c["b"]])
+        if len(ga) == len(gb) and len(ga) > 1:
+            claims.append(dict(c, seed_pairs=list(zip(ga, gb))))
+        elif len(ga) == len(gb):
+            claims += [dict(c, a=a, b=b) for a, b in zip(ga, gb)]
+        else:
+            claims.append(c)
+    return claims
+
+
+def claim_pairs(c):
+    """The (A, B) model pairs whose compares decide claim `c` (one per seed pair)."""
+    return c.get("seed_pairs") or [(c["a"], c["b"])]
+
+
 def verdict_rows(pipeline):
     """One row per claim: the interval of A - B that decides it and the verdict."""
     config = pipeline.config
     by_name = {m["name"]: m for m in config["models"]}
     pairs = {tuple(p) for p in config["pairs"]}
     rows = []
-    groups = config["groups"]
-    claims = []
-    for c in read_claims(config["claims"]):
-        ga, gb = groups.get(c["a"], [c["a"]]), groups.get(c["b"], [c["b"]])
-        if len(ga) == len(gb) and len(ga) > 1:
-            # Seeds: one row, decided by the rule over seeds and frames.
-            claims.append(dict(c, seed_pairs=list(zip(ga, gb))))
-        elif len(ga) == len(gb):
-            claims += [dict(c, a=a, b=b) for a, b in zip(ga, gb)]
-        else:
-            claims.append(c)
-    for c in claims:
+    for c in expand_claims(config):
         if "seed_pairs" in c and c["measure"] not in SWEEP_MEASURES:
             rows.append(seeds_verdict(pipeline, c))
             continue
@@ -1058,6 +1183,140 @@ def seeds_verdict(pipeline, c):
         own = ", ".join(f"{d * scale:+.3f}" for d in cell["seeds"])
         interval += f" ({seeds}: {own})"
     return head + [interval, verdict, change]
+
+
+def verdict_word(verdict):
+    """'confirmed', 'refuted', 'inconclusive' or 'not measured' of a verdict cell."""
+    return verdict.split(" (")[0]
+
+
+def replicated_rows(rows, replication_rows):
+    """Each claim's rows on the two sets -> one row: claim, decided by, A - B on the first set, on
+    the replication set, the verdict and what would change it. Confirmed or refuted only where
+    both sets say so; "not replicated" where they differ (one of them deciding)."""
+    out = []
+    for first, second in zip(rows, replication_rows):
+        w1, w2 = verdict_word(first[3]), verdict_word(second[3])
+        if w1 == "not measured" or w1 == w2:
+            verdict, change = first[3], first[4]
+        else:
+            verdict = f"not replicated ({w1} on the first set, {w2} on the replication set)"
+            change = "both sets on the same side of 0 (more frames or seeds: the power table)"
+        out.append([first[0], first[1], first[2], second[2], verdict, change])
+    return out
+
+
+def split_frames(pipeline, name):
+    """How many frames the config's split of data set `name` holds (its split file's lines)."""
+    d = pipeline.config["datasets"][name]
+    split = pipeline.config["split"]
+    path = pathlib.Path(pipeline.split_arg(name, split)) if "splits" in d else \
+        pipeline.dataset_root(name) / "ImageSets" / f"{split}.txt"
+    with open(path) as f:
+        return sum(1 for line in f if line.strip())
+
+
+def fmt_count(n, limit):
+    return f"more than {limit}" if n is None else f"{n}"
+
+
+def power_rows(pipeline):
+    """Per claim decided by an interval, on the first set: the observed A - B, the training and
+    frame terms of its variance, and how many seed pairs (at these frames) and frames (at these
+    seeds) would decide it with 80 % power were the observed difference the true one
+    (verdict_rule.power_needs)."""
+    config = pipeline.config
+    by_name = {m["name"]: m for m in config["models"]}
+    rows = []
+    for c in expand_claims(config):
+        if c["measure"] in SWEEP_MEASURES:
+            continue
+        names = [n for pair in claim_pairs(c) for n in pair]
+        if any(n not in by_name or n in pipeline.missing for n in names) or \
+                config["bootstrap"]["resamples"] == 0:
+            continue
+        a = by_name[claim_pairs(c)[0][0]]
+        sigma = float(c["blur_sigma_px"])
+        if sigma not in pipeline.blurs(a) or c["matcher"] not in config["matchers"]:
+            continue
+        frames = split_frames(pipeline, a["data"])
+        seeds = len(claim_pairs(c))
+        for measure in c["measure"].split("/"):
+            scale = 0.01 if measure == "ap_r40" else 1.0
+            if "seed_pairs" in c:
+                try:
+                    cell = seeds_cell(pipeline, c["seed_pairs"], c, measure)
+                except FileNotFoundError:
+                    cell = None
+                if cell is None:
+                    continue
+                effect = float(cell["a_minus_b"]) * scale
+                d = [x * scale for x in cell["seeds"]]
+                seed_var = sum((x - effect) ** 2 for x in d) / (len(d) - 1)
+                frame_var, frame_df = cell["frame_variance"] * scale ** 2, cell["frame_df"]
+            else:
+                cell = read_bootstrap_csv(
+                    pipeline.compare_dir(a, by_name[c["b"]], sigma, c["matcher"]) /
+                    "bootstrap.csv", c["class"], TABLE_METRIC[a["family"]],
+                    config["difficulty"]).get(measure)
+                if cell is None or "" in (cell["a_minus_b"], cell["a_minus_b_lower"],
+                                          cell["a_minus_b_upper"]):
+                    continue
+                # One training: the frame term alone, its variance read off the interval.
+                effect = float(cell["a_minus_b"]) * scale
+                width = (float(cell["a_minus_b_upper"]) - float(cell["a_minus_b_lower"])) * scale
+                seed_var, frame_var, frame_df = 0.0, (width / (2 * 1.959964)) ** 2, frames - 1
+            need_seeds, need_frames = verdict_rule.power_needs(effect, seed_var, frame_var,
+                                                               frames, frame_df, seeds)
+            rows.append([c["id"], measure, f"{effect:+.3f}",
+                         f"{math.sqrt(seed_var):.3f}" if "seed_pairs" in c else "one training",
+                         f"{math.sqrt(frame_var):.3f} ({frames} frames)",
+                         fmt_count(need_seeds, 100) if "seed_pairs" in c else "n/a",
+                         fmt_count(need_frames, 1000 * frames)])
+    return rows
+
+
+def bca_rows(pipeline):
+    """Per claim and seed pair: the percentile interval of A - B the verdicts read, where its
+    estimate sits in it (0 % its lower end, 100 % its upper), and the BCa interval of the same
+    resamples, with whether they put A - B on the same side of 0."""
+    config = pipeline.config
+    by_name = {m["name"]: m for m in config["models"]}
+    claims = {}
+    for c in expand_claims(config):
+        for pair in claim_pairs(c):
+            claims.setdefault((pair[0], pair[1], float(c["blur_sigma_px"]), c["matcher"]),
+                              []).append(c)
+    rows = []
+    for a_name, b_name, sigma, matcher in pipeline.bca_cells():
+        a, b = by_name[a_name], by_name[b_name]
+        metric = TABLE_METRIC[a["family"]]
+        for c in claims[(a_name, b_name, sigma, matcher)]:
+            for measure in c["measure"].split("/"):
+                scale = 0.01 if measure == "ap_r40" else 1.0
+                read = [read_bootstrap_csv(folder / "bootstrap.csv", c["class"], metric,
+                                           config["difficulty"]).get(measure)
+                        for folder in (pipeline.compare_dir(a, b, sigma, matcher),
+                                       pipeline.bca_dir(a, b, sigma, matcher))]
+                if None in read or "" in (read[0]["a_minus_b_lower"], read[0]["a_minus_b_upper"]):
+                    continue
+                lo, hi = (float(read[0][k]) for k in ("a_minus_b_lower", "a_minus_b_upper"))
+                est = float(read[0]["a_minus_b"])
+                place = f"{100 * (est - lo) / (hi - lo):.0f} %" if hi > lo else "n/a"
+
+                def side(row):
+                    if "" in (row["a_minus_b_lower"], row["a_minus_b_upper"]):
+                        return None
+                    low, high = float(row["a_minus_b_lower"]), float(row["a_minus_b_upper"])
+                    return 1 if low > 0 else -1 if high < 0 else 0
+
+                sides = side(read[0]), side(read[1])
+                rows.append([c["id"], f"{a_name} - {b_name}", measure,
+                             fmt_difference(read[0], scale), place,
+                             fmt_difference(read[1], scale),
+                             "BCa undefined" if sides[1] is None else
+                             "same" if sides[0] == sides[1] else "**differs**"])
+    return rows
 
 
 def sweep_counts(values, measure):
@@ -1184,7 +1443,9 @@ def markdown(header, rows, align):
     return "\n".join(lines)
 
 
-def write_table(pipeline):
+def write_table(pipeline, replication=None):
+    """OUT/table1.md from the outputs of `pipeline`'s steps (and the verdicts' second set from
+    `replication`'s, its replication pipeline); returns the text."""
     config = pipeline.config
     figures = read_paper_figures(config["paper_figures"])
     boot = config["bootstrap"]
@@ -1219,23 +1480,67 @@ def write_table(pipeline):
                          + markdown(pair_header, prows, ["---", "---:", "---", "---:", "---:"]))
     vrows = verdict_rows(pipeline)
     if vrows:
-        parts.append("### Verdicts on the paper's claims\n\nEach claim is decided by the paired "
-                     "95% interval of A - B (experiments/claims.csv): confirmed when it lies on the "
-                     "claimed side of 0, refuted when on the other, inconclusive when it holds 0. "
-                     "A 'flip' claim (two Brier terms rank A and B oppositely) is confirmed when "
-                     "both terms' intervals lie off 0 on opposite sides, refuted when on the same "
-                     "side. A sweep claim is decided by the share of swept filter values where "
-                     "the stable filter's measure is above the naive one's (a count, no interval): "
-                     f"confirmed at {100 * SWEEP_CONFIRMED:.0f} % or more, refuted below "
-                     f"{100 * SWEEP_REFUTED:.0f} %. The intervals are over frames only: "
-                     + ("a model with training seeds has one row per seed pair, and the seeds' "
-                        "spread is the training-variance table." if any(
-                            len(g) > 1 for g in config["groups"].values()) else
-                        "one training per model, so training variance is not in them.")
-                     + "\n\n"
-                     + markdown(["claim", "decided by", "A - B [95%]", "verdict",
-                                 "what would change it"], vrows,
-                                ["---", "---", "---:", "---", "---"]))
+        seeds = any(len(g) > 1 for g in config["groups"].values())
+        text = ("### Verdicts on the paper's claims\n\nEach claim is decided by the paired "
+                "95% interval of A - B (experiments/claims.csv): confirmed when it lies on the "
+                "claimed side of 0, refuted when on the other, inconclusive when it holds 0. "
+                "A 'flip' claim (two Brier terms rank A and B oppositely) is confirmed when "
+                "both terms' intervals lie off 0 on opposite sides, refuted when on the same "
+                "side. A sweep claim is decided by the share of swept filter values where "
+                "the stable filter's measure is above the naive one's (a count, no interval): "
+                f"confirmed at {100 * SWEEP_CONFIRMED:.0f} % or more, refuted below "
+                f"{100 * SWEEP_REFUTED:.0f} %. "
+                + ("A claim on models with training seeds is decided by the rule over seeds and "
+                   "frames (docs/experiment.md): the mean over the seed pairs of A - B, with the "
+                   "seed pairs' spread and the frames' bootstrap variance in its t interval; each "
+                   "seed pair's own A - B follows in brackets. "
+                   if seeds else "One training per model: training variance is not in the "
+                   "intervals. ")
+                + "Other claims: the percentile interval over frames.")
+        header = ["claim", "decided by", "A - B [95%]", "verdict", "what would change it"]
+        align = ["---", "---", "---:", "---", "---"]
+        if replication is not None:
+            names = ", ".join(f"`{k}` by `{v}`" for k, v in config["replication"].items())
+            text += (" **Replication**: every model is evaluated again on an independent set "
+                     f"({names}); a claim is confirmed or refuted only where both sets decide it "
+                     "the same way, **not replicated** where they differ.")
+            vrows = replicated_rows(vrows, verdict_rows(replication))
+            header = ["claim", "decided by", "A - B [95%], first set",
+                      "A - B [95%], replication set", "verdict", "what would change it"]
+            align = ["---", "---", "---:", "---:", "---", "---"]
+        parts.append(text + "\n\n" + markdown(header, vrows, align))
+    prows = power_rows(pipeline)
+    if prows:
+        parts.append("### What deciding each claim would cost (power)\n\nPer claim and measure, "
+                     "on the first set: the observed A - B, the spread of the seed pairs' "
+                     "differences (one seed pair's training standard deviation), the frame term's "
+                     "standard error, and how many seed pairs (at these frames) and frames (at "
+                     "these seeds) the rule would need to decide it with 80 % power at 95 % "
+                     "confidence, were the observed A - B the true one "
+                     "(`verdict_rule.power_needs`; the frame term scales as 1 / frames). Observed "
+                     "effects taken as true overstate the power for small ones: read it as an "
+                     "order of magnitude.\n\n"
+                     + markdown(["claim", "measure", "A - B", "seed sd", "frame se",
+                                 "seed pairs needed", "frames needed"], prows,
+                                ["---", "---", "---:", "---:", "---:", "---:", "---:"]))
+    brows = bca_rows(pipeline)
+    if brows:
+        differ = sum(r[-1] == "**differs**" for r in brows)
+        undefined = sum(r[-1] == "BCa undefined" for r in brows)
+        parts.append("### Percentile against BCa\n\nThe claims' paired intervals of A - B "
+                     "(first set, each seed pair) as the percentile bootstrap gives them, where "
+                     "the estimate sits in that interval (50 %: centred; near 0 % or 100 %: it "
+                     "leans), and the BCa interval of the same resamples (bias-corrected and "
+                     "accelerated, docs/metrics.md), which corrects for a skewed, biased "
+                     f"distribution. They put A - B on different sides of 0 in {differ} of "
+                     f"{len(brows)} intervals"
+                     + (f"; BCa is undefined in {undefined} (every resample on one side of the "
+                        "estimate, or all equal: z0 infinite)" if undefined else "")
+                     + ". The rule over seeds reads no percentile: its interval is centred on "
+                     "the mean over seed pairs.\n\n"
+                     + markdown(["claim", "seed pair", "measure", "percentile", "estimate at",
+                                 "BCa", "side of 0"], brows,
+                                ["---", "---", "---", "---:", "---:", "---:", "---"]))
     figures_text = figures_section(pipeline)
     if figures_text:
         parts.append(figures_text)
@@ -1342,7 +1647,7 @@ def main(argv):
     out.mkdir(parents=True, exist_ok=True)
     pipeline = Pipeline(config, out, pathlib.Path(args.bin).resolve(), args.table_only)
     start = time.monotonic()
-    client = cluster = None
+    client = cluster = replication = None
     try:
         if (args.workers or args.scheduler) and not args.table_only:
             from distributed import Client, LocalCluster
@@ -1355,7 +1660,11 @@ def main(argv):
                                        processes=True, dashboard_address=None)
                 client = Client(cluster)
         pipeline.run(client)
-        text = write_table(pipeline)
+        replication = pipeline.replication()
+        if replication is not None:
+            replication.run(client)
+            write_table(replication)  # OUT/replication/table1.md: the second set alone
+        text = write_table(pipeline, replication)
         if args.update_docs:
             images = copy_doc_figures(pipeline, args.update_docs)
             update_docs(args.update_docs, text + ("\n" + images if images else ""))
@@ -1369,7 +1678,9 @@ def main(argv):
             cluster.close()
     for name, why in pipeline.missing.items():
         print(f"experiment: {name}: missing ({why}); its rows say so")
-    print(f"experiment: {pipeline.steps_run} steps run, {pipeline.steps_skipped} skipped, "
+    runs = [pipeline] + ([replication] if replication is not None else [])
+    print(f"experiment: {sum(p.steps_run for p in runs)} steps run, "
+          f"{sum(p.steps_skipped for p in runs)} skipped, "
           f"{time.monotonic() - start:.1f} s; table: {out / 'table1.md'}")
     return 0
 

@@ -24,10 +24,60 @@ def combined_interval(seed_differences, frame_variance, frame_df, confidence=0.9
     total = seed_var + frame_variance
     if total <= 0:
         return centre, centre, centre, math.inf
-    denominator = seed_var ** 2 / (s - 1) + (frame_variance ** 2 / frame_df if frame_df > 0 else 0)
-    df = total ** 2 / denominator if denominator > 0 else math.inf
+    df = welch_df(seed_var, s - 1, frame_variance, frame_df)
     half = t_quantile(0.5 + confidence / 2, df) * math.sqrt(total)
     return centre, centre - half, centre + half, df
+
+
+def welch_df(seed_var, seed_df, frame_var, frame_df):
+    """Welch-Satterthwaite's degrees of freedom of the sum of the two variance terms."""
+    denominator = (seed_var ** 2 / seed_df if seed_df > 0 else 0) + \
+        (frame_var ** 2 / frame_df if frame_df > 0 else 0)
+    return (seed_var + frame_var) ** 2 / denominator if denominator > 0 else math.inf
+
+
+# z at 80 % power: a claim is "decided with 80 % power" at (seeds, frames) where the true effect
+# is at least (t(0.975, df) + POWER_Z) standard errors from 0.
+POWER_Z = 0.8416212335729143
+
+
+def decided_with_power(effect, seed_var, frames_var, seeds, frames, frame_df):
+    """Whether a 95 % interval of the rule excludes 0 with 80 % power at `seeds` seed pairs and
+    `frames` frames, if the true A - B is `effect`. seed_var: one seed pair's training variance
+    (the sample variance of the seed pairs' differences; 0 for a claim on one training);
+    frames_var(frames): the frame term's variance at that many frames (it scales as 1 / frames)."""
+    a, b = seed_var / seeds, frames_var(frames)
+    if a + b <= 0:
+        return effect != 0
+    df = welch_df(a, seeds - 1 if seed_var > 0 else 0, b, frame_df)
+    return abs(effect) >= (t_quantile(0.975, df) + POWER_Z) * math.sqrt(a + b)
+
+
+def power_needs(effect, seed_var, frame_var, frames, frame_df, seeds, max_seeds=100,
+                max_frames_factor=1000):
+    """(seed pairs needed at `frames` frames, frames needed at `seeds` seed pairs) to decide a
+    claim whose true A - B is `effect` with 80 % power; None where more than max_seeds seed pairs,
+    or more than max_frames_factor x `frames` frames, would not do it (the other term alone is
+    too wide). frame_var: the frame term's variance measured at `frames` frames."""
+    def frames_var(n):
+        return frame_var * frames / n
+
+    seeds_needed = None
+    if seed_var > 0:
+        seeds_needed = next((s for s in range(2, max_seeds + 1) if decided_with_power(
+            effect, seed_var, frames_var, s, frames, frame_df)), None)
+    frames_needed = None
+    hi = frames * max_frames_factor
+    if decided_with_power(effect, seed_var, frames_var, seeds, hi, frame_df):
+        lo = 1
+        while hi - lo > 1:  # decided at hi, not at lo (or lo = 1)
+            mid = (lo + hi) // 2
+            if decided_with_power(effect, seed_var, frames_var, seeds, mid, frame_df):
+                hi = mid
+            else:
+                lo = mid
+        frames_needed = hi
+    return seeds_needed, frames_needed
 
 
 def t_quantile(p, df):
