@@ -232,6 +232,12 @@ double KittiOverlap(OverlapKind kind, const Object& detection, const Object& lab
   return 0.0;
 }
 
+double KittiBoxOverlap(OverlapKind kind, const Box3D& detection, const Box3D& label) {
+  STEREODET_CHECK(kind == OverlapKind::kBev || kind == OverlapKind::k3D)
+      << "KittiBoxOverlap: BEV or 3D, got " << OverlapKindName(kind);
+  return OverlapFromFootprint(kind, detection, label, FootprintIntersection(detection, label));
+}
+
 double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Object& dontcare) {
   switch (kind) {
     case OverlapKind::k2D: {

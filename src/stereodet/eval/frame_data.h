@@ -33,6 +33,9 @@ struct EvalFrame {
 // |l|, |w| (the devkit's polygon); a footprint with one non-positive side has no area (the devkit
 // crashes on it when it overlaps a label).
 double KittiOverlap(OverlapKind kind, const Object& detection, const Object& label);
+// KittiOverlap's BEV or 3D value of two boxes (`kind` kBev or k3D; std::invalid_argument
+// otherwise).
+double KittiBoxOverlap(OverlapKind kind, const Box3D& detection, const Box3D& label);
 // The devkit's DontCare test (criterion 0): the intersection over the detection's own area (2D),
 // footprint (BEV) or volume (3D). KITTI's DontCare rows carry 3D fields of -1 / -1000: in BEV their
 // footprint is a 1 m x 1 m square at (x, z) = (-1000, -1000), exactly that of a detection whose 3D
