@@ -6,13 +6,16 @@
 #include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/util/atomic_file.h"
+#include "stereodet/util/strings.h"
 #include "stereodet/util/test_paths.h"
 #include "stereodet/util/test_temp_dir.h"
 
@@ -25,6 +28,13 @@ using ::testing::HasSubstr;
 const fs::path kData = ::stereodet::TestSourceDir() / "tests/data";
 
 // tests/data/eval_small (README): KITTI's devkit gives Car 2D AP_R40 6.25 / 15.77 / 15.77.
+// A CSV line's fields (no quoting: breakdown.csv has none).
+std::vector<std::string> SplitCsvLine(const std::string& line) {
+  std::vector<std::string> fields;
+  for (std::string_view f : Split(line, ',')) fields.emplace_back(f);
+  return fields;
+}
+
 EvaluationOptions SmallCar2d() {
   EvaluationOptions options;
   options.input.gt = kData / "eval_small";
@@ -321,6 +331,67 @@ TEST(RunEvaluationTest, BootstrapIntervalsOfBreakdownBins) {
                          "\nCar +2d +Moderate +[|] [^\n]+\n +height [[]0, 40[)] +[|] "
                          "[-0-9.]+ [[][-0-9.]+, [-0-9.]+[]] +[-0-9.]+ [[][^\n]+\n +height "
                          "[[]40, inf[)] +[|] "));
+}
+
+// --breakdown-naive: breakdown.csv's naive_* columns are each bin's "naive" figures of results.json
+// (rows in results.json's order of cells and bins); without it they are empty.
+TEST(RunEvaluationTest, BreakdownCsvHoldsTheNaiveBins) {
+  TestTempDir dir;
+  EvaluationOptions options = SmallCar2d();
+  options.out = dir / "eval";
+  options.runs.front().metrics = {OverlapKind::k2D, OverlapKind::k3D};
+  options.runs.front().breakdowns = {ParseBreakdown("distance=0,20,40,inf")};
+  for (bool naive : {true, false}) {
+    options.runs.front().breakdown_naive = naive;
+    RunEvaluation(options);
+    const nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+    std::istringstream csv(ReadFile(options.out / "breakdown.csv"));
+    std::string line;
+    std::getline(csv, line);
+    const std::vector<std::string> header = SplitCsvLine(line);
+    auto column = [&](const std::string& name) {
+      const auto it = std::find(header.begin(), header.end(), name);
+      EXPECT_NE(it, header.end()) << name;
+      return static_cast<size_t>(it - header.begin());
+    };
+    int rows = 0, with_detections = 0;
+    for (const nlohmann::json& cell : j["results"]) {
+      for (const nlohmann::json& bin : cell["breakdown"]) {
+        ASSERT_TRUE(std::getline(csv, line));
+        const std::vector<std::string> f = SplitCsvLine(line);
+        ASSERT_EQ(f.size(), header.size()) << line;
+        EXPECT_EQ(std::stod(f[column("lower")]), bin["lower"].get<double>());
+        if (!naive) {
+          for (const char* name : {"naive_num_valid_labels", "naive_ap_r40", "naive_tp", "naive_fp",
+                                   "naive_fn", "naive_precision", "naive_recall"}) {
+            EXPECT_EQ(f[column(name)], "") << name << ": " << line;
+          }
+          ++rows;
+          continue;
+        }
+        const nlohmann::json& n = bin["naive"];
+        EXPECT_EQ(f[column("naive_num_valid_labels")],
+                  std::to_string(n["num_valid_labels"].get<int64_t>()));
+        EXPECT_EQ(f[column("naive_tp")], std::to_string(n["at_threshold"]["tp"].get<int64_t>()));
+        EXPECT_EQ(f[column("naive_fp")], std::to_string(n["at_threshold"]["fp"].get<int64_t>()));
+        EXPECT_EQ(f[column("naive_fn")], std::to_string(n["at_threshold"]["fn"].get<int64_t>()));
+        // The shortest text that reads back as the double (fmt's "{}"): equal after reading.
+        if (n["ap_r40"].is_null()) {
+          EXPECT_EQ(f[column("naive_ap_r40")], "");
+        } else {
+          EXPECT_EQ(std::stod(f[column("naive_ap_r40")]), n["ap_r40"].get<double>());
+        }
+        with_detections +=
+            n["at_threshold"]["tp"].get<int64_t>() + n["at_threshold"]["fp"].get<int64_t>() > 0;
+        ++rows;
+      }
+    }
+    EXPECT_FALSE(std::getline(csv, line)) << "a row beyond results.json's bins: " << line;
+    EXPECT_EQ(rows, 2 * 3 * 3);  // 2 overlap kinds x 3 difficulties x 3 bins
+    if (naive) {
+      EXPECT_GT(with_detections, 0);  // the naive figures are there, not only zeros
+    }
+  }
 }
 
 // eval compare --bootstrap: the paired intervals in OUT/bootstrap.csv; A vs A is exactly zero.

@@ -543,9 +543,11 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
   // repeat summary.csv's keys there).
   std::ostringstream breakdown;
   bool any_breakdown = false;
+  // The naive_* columns: the bin evaluated on its own (eval --breakdown-naive), empty without it.
   breakdown << "class,metric,difficulty,axis,lower,upper,num_valid_labels,ap_r40,ap_r11,ap_voc,"
                "threshold,tp,fp,fn,precision,recall,brier_labels,brier_detections,brier_all,"
-               "overlaps\n";
+               "naive_num_valid_labels,naive_ap_r40,naive_tp,naive_fp,naive_fn,naive_precision,"
+               "naive_recall,overlaps\n";
   for (const EvalRun& run : runs) {
     const std::string tag = DescribeOverlaps(run.options.classes);
     for (const ClassResult& r : run.result.results) {
@@ -558,8 +560,16 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
                   << Csv(b.curve.ap_r40) << ',' << Csv(b.curve.ap_r11) << ',' << Csv(b.curve.ap_voc)
                   << ',' << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ',' << op.fn << ','
                   << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(b.brier.over_labels)
-                  << ',' << Csv(b.brier.over_detections) << ',' << Csv(b.brier.over_all) << ','
-                  << tag << '\n';
+                  << ',' << Csv(b.brier.over_detections) << ',' << Csv(b.brier.over_all) << ',';
+        if (b.naive) {
+          const OperatingPoint& nop = b.naive->at_threshold;
+          breakdown << b.naive->num_valid_labels << ',' << Csv(b.naive->curve.ap_r40) << ','
+                    << nop.tp << ',' << nop.fp << ',' << nop.fn << ',' << Csv(nop.precision) << ','
+                    << Csv(nop.recall) << ',';
+        } else {
+          breakdown << ",,,,,,,";
+        }
+        breakdown << tag << '\n';
       }
     }
   }
