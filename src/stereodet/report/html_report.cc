@@ -428,11 +428,36 @@ Plot BreakdownFigure(const std::vector<ReportSource>& sources,
     caption.push_back(fmt::format("{}{}", sources.size() > 1 ? sources[i].label + ": " : "",
                                   fmt::join(values, ", ")));
     p.series.push_back(std::move(s));
+    // eval --breakdown-naive: each bin evaluated on its own, a bar beside the stable one (a colour
+    // of its own: the next role with one source, the palette's second half with several).
+    PlotSeries naive;
+    naive.style = SeriesStyle::kBars;
+    naive.name = st.Name(sources[i], "AP_R40 naive (bin evaluated alone)");
+    naive.colour = sources.size() > 1 ? PaletteColour(i + sources.size()) : st.Colour(i, 1);
+    std::vector<std::string> naive_values;
+    for (size_t c = 0; c < p.categories.size(); ++c) {
+      double v = kNaN;
+      for (const json& b : (*entries[i])["breakdown"]) {
+        if (b.value("axis", "") == axis && b.value("bin", "") == p.categories[c] &&
+            b.contains("naive")) {
+          v = Num(b["naive"], "ap_r40");
+          naive_values.push_back(fmt::format("{} {}", p.categories[c], Fixed(v, 2)));
+        }
+      }
+      naive.x.push_back(static_cast<double>(c));
+      naive.y.push_back(v);
+    }
+    if (!naive_values.empty()) {
+      caption.push_back(fmt::format("{}naive {}", sources.size() > 1 ? sources[i].label + " " : "",
+                                    fmt::join(naive_values, ", ")));
+      p.series.push_back(std::move(naive));
+    }
   }
   p.caption = fmt::format(
       "{}. From the cell's one matching: a pair counts in its label's bin, a detection without a "
       "value on the axis in every bin (docs/metrics.md, Breakdowns); a bin without labels has no "
-      "bar; with eval --bootstrap, whiskers and brackets give each bin's interval.",
+      "bar; with eval --bootstrap, whiskers and brackets give each bin's interval; with eval "
+      "--breakdown-naive, a second bar per bin gives the bin evaluated on its own.",
       fmt::join(caption, "; "));
   return p;
 }

@@ -276,6 +276,21 @@ TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
       ReadFile(options.out / "report/figures/breakdown_height_car_2d_moderate.svg");
   EXPECT_THAT(svg, HasSubstr("<line class=\"whisker\""));
   EXPECT_THAT(svg, HasSubstr("stroke=\"#222222\""));
+
+  // With --breakdown-naive a second bar series holds each bin's naive AP_R40, results.json's.
+  options.bootstrap.reset();
+  options.runs.front().breakdown_naive = true;
+  options.out = dir.path() / "naive";
+  RunEvaluation(options);
+  const json with_naive = ReadReportSource(options.out, "kitti").results;
+  const json& en = Entry(with_naive, "Car", "2d", "Moderate");
+  const json fn = SvgData(options.out / "report/figures/breakdown_height_car_2d_moderate.svg");
+  ASSERT_EQ(fn["series"].size(), 2u);
+  for (size_t b = 0; b < 2; ++b) {
+    EXPECT_EQ(fn["series"][0]["y"][b], en["breakdown"][b]["ap_r40"]) << b;
+    EXPECT_EQ(fn["series"][1]["y"][b], en["breakdown"][b]["naive"]["ap_r40"]) << b;
+  }
+  EXPECT_THAT(ReadFile(options.out / "report/index.html"), HasSubstr("naive [0, 40)"));
 }
 
 // The curves results.json names come back exactly, point for point and bit for bit, as the
