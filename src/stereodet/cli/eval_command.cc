@@ -533,6 +533,8 @@ void RunCompare(const EvalArgs& given, EvaluationCompareOptions options) {
   options.input = MakeInputOptions(a);
   options.out = a.out;
   options.bootstrap = MakeBootstrapOptions(a);
+  STEREODET_CHECK(a.breakdowns.empty() || options.bootstrap)
+      << "--breakdown: eval compare resamples each bin's paired A - B; give --bootstrap N too";
   const EvaluationCompareResult result = RunEvaluationCompare(options);
   PrintNotices(result.input_a);
   PrintNotices(result.input_b);
@@ -554,6 +556,9 @@ void RunCompare(const EvalArgs& given, EvaluationCompareOptions options) {
     if (!a.out.empty()) fmt::print("wrote {}\n", result.bootstrap_csv_path.string());
     if (!result.bootstrap_samples_path.empty()) {
       fmt::print("wrote {}\n", result.bootstrap_samples_path.string());
+    }
+    if (!result.bootstrap_breakdown_path.empty()) {
+      fmt::print("wrote {}\n", result.bootstrap_breakdown_path.string());
     }
   }
   if (!result.report_index.empty()) fmt::print("report: open {}\n", result.report_index.string());
@@ -676,6 +681,10 @@ void AddEvalCommand(CLI::App& app) {
   compare->add_option("--out", compare_common->out, "write compare.csv here");
   AddBootstrapOptions(compare, compare_common.get(),
                       "paired intervals of A - B, printed and in OUT/bootstrap.csv");
+  compare->add_option("--breakdown", compare_common->breakdowns,
+                      "AXIS=EDGES (repeatable): with --bootstrap, every bin's paired A - B with "
+                      "its interval, printed under each cell and in OUT/bootstrap_breakdown.csv "
+                      "(docs/metrics.md, Breakdowns)");
   compare->add_flag("--bootstrap-samples", compare_options->bootstrap_samples,
                     "with --bootstrap N and --out: also OUT/bootstrap_samples.csv, every "
                     "resample's A, B and A - B of AP_R40 and Brier over labels (docs/metrics.md)");

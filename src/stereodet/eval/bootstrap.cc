@@ -544,10 +544,25 @@ BootstrapResult MakeResult(const Prepared& p, const BootstrapOptions& options,
   return result;
 }
 
-std::vector<Values> Difference(const std::vector<Values>& a, const std::vector<Values>& b) {
-  std::vector<Values> d(a.size());
-  for (size_t c = 0; c < a.size(); ++c) {
-    for (int m = 0; m < kNumBootstrapMetrics; ++m) d[c][m] = a[c][m] - b[c][m];  // NaN stays
+// A - B of CellValues' values of two preparations of the same frames and options, in A's order:
+// each cell, then each bin of A's cells. A cell's bins exist only where the cell is evaluated, so
+// the two orders of bins differ where a cell is evaluated in one set alone: its bins' differences
+// are NaN (as the cell's are, one side being NaN).
+std::vector<Values> Difference(const Prepared& pa, const Prepared& pb, const std::vector<Values>& a,
+                               const std::vector<Values>& b) {
+  std::vector<Values> d(a.size(), AllNaN());
+  auto subtract = [&](size_t ia, size_t ib) {
+    for (int m = 0; m < kNumBootstrapMetrics; ++m) d[ia][m] = a[ia][m] - b[ib][m];  // NaN stays
+  };
+  const size_t num_cells = pa.cells.size();
+  for (size_t c = 0; c < num_cells; ++c) {
+    subtract(c, c);
+    const CellData& ca = pa.cells[c];
+    const CellData& cb = pb.cells[c];
+    if (ca.bins.size() != cb.bins.size()) continue;
+    for (size_t k = 0; k < ca.bins.size(); ++k) {
+      subtract(num_cells + ca.first_bin + k, num_cells + cb.first_bin + k);
+    }
   }
   return d;
 }
@@ -790,8 +805,8 @@ PairedBootstrapResult PairedBootstrap(const std::vector<EvalFrame>& a,
                                         << "' in A but '" << b[f].id << "' in B";
   }
   const Timer timer;
-  const Prepared pa = Prepare(a, eval, /*with_breakdowns=*/false);
-  const Prepared pb = Prepare(b, eval, /*with_breakdowns=*/false);
+  const Prepared pa = Prepare(a, eval, /*with_breakdowns=*/true);
+  const Prepared pb = Prepare(b, eval, /*with_breakdowns=*/true);
   const int64_t n = static_cast<int64_t>(a.size());
   const std::vector<int32_t> ones(n, 1);
   const std::vector<Values> estimate_a = CellValues(pa, ones), estimate_b = CellValues(pb, ones);
@@ -804,18 +819,20 @@ PairedBootstrapResult PairedBootstrap(const std::vector<EvalFrame>& a,
             BootstrapFrameCounts(n, bootstrap.seed, static_cast<int64_t>(r));
         values_a[r] = CellValues(pa, w);
         values_b[r] = CellValues(pb, w);
-        values_d[r] = Difference(values_a[r], values_b[r]);
+        values_d[r] = Difference(pa, pb, values_a[r], values_b[r]);
       },
       bootstrap.num_threads);
   const std::vector<std::vector<Values>> jack_a = Jackknife(pa, n, bootstrap),
                                          jack_b = Jackknife(pb, n, bootstrap);
   std::vector<std::vector<Values>> jack_d(jack_a.size());
-  for (size_t g = 0; g < jack_a.size(); ++g) jack_d[g] = Difference(jack_a[g], jack_b[g]);
+  for (size_t g = 0; g < jack_a.size(); ++g) {
+    jack_d[g] = Difference(pa, pb, jack_a[g], jack_b[g]);
+  }
   PairedBootstrapResult result;
   result.a = MakeResult(pa, bootstrap, estimate_a, values_a, jack_a);
   result.b = MakeResult(pb, bootstrap, estimate_b, values_b, jack_b);
   result.difference =
-      MakeResult(pa, bootstrap, Difference(estimate_a, estimate_b), values_d, jack_d);
+      MakeResult(pa, bootstrap, Difference(pa, pb, estimate_a, estimate_b), values_d, jack_d);
   for (size_t c = 0; c < result.difference.cells.size(); ++c) {
     result.difference.cells[c].evaluated = pa.headers[c].evaluated && pb.headers[c].evaluated;
   }

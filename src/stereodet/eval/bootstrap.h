@@ -23,7 +23,7 @@
 // StableSelection's tally of the cell's association, stored per frame as above, at the same
 // thresholds as the cell's (KITTI: the resample's own, from the whole cell's TP scores), with a
 // bin's empty threshold slot at precision 0 and NaN AP for a bin without a valid label
-// (breakdown.h, evaluator.cc). PairedBootstrap resamples the cells only.
+// (breakdown.h, evaluator.cc). PairedBootstrap resamples the bins too (A - B per bin).
 //
 //   BootstrapOptions bootstrap;                   // 1000 resamples, seed 1, 95 %
 //   BootstrapResult b = Bootstrap(frames, eval_options, bootstrap);
@@ -142,7 +142,7 @@ struct BootstrapCell {
   // As ClassResult::evaluated on the frames as given; false: every interval NaN.
   bool evaluated = true;
   std::array<BootstrapInterval, kNumBootstrapMetrics> intervals;  // by BootstrapMetric
-  // With EvalOptions::breakdowns (Bootstrap only; empty in PairedBootstrap's results): every
+  // With EvalOptions::breakdowns: every
   // breakdown's bins, in the options' order, bins ascending, as ClassResult::breakdown; empty for
   // a cell that is not evaluated.
   std::vector<BootstrapBin> breakdown;
@@ -204,11 +204,11 @@ BootstrapResult Bootstrap(const std::vector<EvalFrame>& frames, const EvalOption
                           const BootstrapOptions& bootstrap);
 
 // Two detection sets of the same frames (same ids, same order; the labels of `a` and `b` should be
-// the same), resampled with the same frame counts. eval.breakdowns are not resampled (the cells'
-// BootstrapCell::breakdown stay empty). `difference` holds, per cell and metric, the
-// estimate A - B and the percentile interval of the resamples' A - B (over the resamples where
-// both are numbers); `a` and `b` are Bootstrap's results for each. A cell evaluated in only one of
-// them has a NaN difference.
+// the same), resampled with the same frame counts. `difference` holds, per cell and metric, the
+// estimate A - B and the interval of the resamples' A - B (over the resamples where both are
+// numbers), and with eval.breakdowns the same for every bin of every cell (BootstrapCell::
+// breakdown, in A's cells); `a` and `b` are Bootstrap's results for each. A cell evaluated in only
+// one of them has a NaN difference, and so have its bins.
 struct PairedBootstrapResult {
   BootstrapResult a, b, difference;
 };

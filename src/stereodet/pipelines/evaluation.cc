@@ -270,6 +270,11 @@ EvaluationCompareResult RunEvaluationCompare(const EvaluationCompareOptions& opt
       result.bootstrap_csv_path = options.out / "bootstrap.csv";
       WriteFileAtomically(result.bootstrap_csv_path, result.bootstrap_csv);
     }
+    if (!options.eval.breakdowns.empty() && !options.out.empty()) {
+      result.bootstrap_breakdown_path = options.out / "bootstrap_breakdown.csv";
+      WriteFileAtomically(result.bootstrap_breakdown_path,
+                          FormatPairedBootstrapBreakdownCsv(*result.bootstrap));
+    }
     if (options.bootstrap_samples) {
       result.bootstrap_samples_path = options.out / "bootstrap_samples.csv";
       WriteFileAtomically(result.bootstrap_samples_path,

@@ -217,6 +217,8 @@ struct EvaluationCompareResult {
   std::string bootstrap_csv;
   std::filesystem::path bootstrap_csv_path;
   std::filesystem::path bootstrap_samples_path;  // with bootstrap_samples and out
+  // With eval.breakdowns and out: every bin's paired A - B (FormatPairedBootstrapBreakdownCsv).
+  std::filesystem::path bootstrap_breakdown_path;
 };
 
 // Reads A then B, evaluates both, then reads the calibration and compares.

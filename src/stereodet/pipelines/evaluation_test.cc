@@ -14,6 +14,7 @@
 
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
+#include "stereodet/report/bootstrap_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/strings.h"
 #include "stereodet/util/test_paths.h"
@@ -421,6 +422,33 @@ TEST(RunEvaluationCompareTest, PairedBootstrapCsv) {
     EXPECT_EQ(cell.Get(BootstrapMetric::kApR40).lower, 0.0);
     EXPECT_EQ(cell.Get(BootstrapMetric::kApR40).upper, 0.0);
   }
+  EXPECT_TRUE(result.bootstrap_breakdown_path.empty());  // no --breakdown, no bins' file
+
+  // With breakdowns: every bin's paired A - B in OUT/bootstrap_breakdown.csv (A vs A: 0 wherever
+  // defined) and a line per bin under each cell in the printed block.
+  options.eval.breakdowns = {ParseBreakdown("height=0,40,inf")};
+  const EvaluationCompareResult bins = RunEvaluationCompare(options);
+  EXPECT_EQ(ReadFile(options.out / "bootstrap.csv"), csv);  // the cells' file unchanged
+  ASSERT_EQ(bins.bootstrap_breakdown_path, options.out / "bootstrap_breakdown.csv");
+  const std::string bin_csv = ReadFile(bins.bootstrap_breakdown_path);
+  // Header + 3 difficulties x 2 bins x 5 metrics.
+  EXPECT_EQ(CountLines(bin_csv), 1 + 3 * 2 * 5);
+  EXPECT_THAT(bin_csv, HasSubstr("class,metric,difficulty,axis,bin,lower,upper,measure,a,"));
+  EXPECT_THAT(bin_csv, HasSubstr("Car,2d,Moderate,height,\"[40, inf)\",40,,ap_r40,"));
+  int zero = 0;
+  for (const BootstrapCell& cell : bins.bootstrap->difference.cells) {
+    ASSERT_EQ(cell.breakdown.size(), 2u);
+    for (const BootstrapBin& bin : cell.breakdown) {
+      const BootstrapInterval& i = bin.Get(BootstrapMetric::kApR40);
+      if (i.num_defined == 0) continue;
+      EXPECT_EQ(i.estimate, 0.0);
+      EXPECT_EQ(i.lower, 0.0);
+      EXPECT_EQ(i.upper, 0.0);
+      ++zero;
+    }
+  }
+  EXPECT_GT(zero, 0);
+  EXPECT_THAT(FormatPairedBootstrapTable(*bins.bootstrap), HasSubstr("height [40, inf) |"));
 }
 
 }  // namespace

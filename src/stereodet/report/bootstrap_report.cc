@@ -55,6 +55,8 @@ std::string WithInterval(const BootstrapInterval& i, int decimals) {
 }
 
 std::string Csv(double v) { return std::isnan(v) ? std::string() : fmt::format("{}", v); }
+// A bin edge: empty for an infinite one (breakdown.csv's convention).
+std::string Edge(double v) { return std::isinf(v) ? std::string() : Csv(v); }
 
 std::string PercentText(double confidence) { return fmt::format("{:g}%", confidence * 100); }
 
@@ -155,6 +157,38 @@ std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result) {
   return out.str();
 }
 
+std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& result) {
+  std::ostringstream out;
+  out << "class,metric,difficulty,axis,bin,lower,upper,measure,a,a_lower,a_upper,b,b_lower,"
+         "b_upper,a_minus_b,a_minus_b_lower,a_minus_b_upper,resamples,resamples_defined,"
+         "confidence,seed\n";
+  const BootstrapResult& d = result.difference;
+  for (size_t c = 0; c < d.cells.size(); ++c) {
+    const BootstrapCell& cell = d.cells[c];
+    const BootstrapCell& ca = result.a.cells[c];
+    const BootstrapCell& cb = result.b.cells[c];
+    for (size_t k = 0; k < cell.breakdown.size(); ++k) {
+      const BootstrapBin& bin = cell.breakdown[k];
+      for (const BootstrapMetric m : BootstrapMetrics(d.matcher)) {
+        // B's bin where B has the cell's bins (a cell evaluated in A alone has none there).
+        const BootstrapInterval none;
+        const BootstrapInterval& a = k < ca.breakdown.size() ? ca.breakdown[k].Get(m) : none;
+        const BootstrapInterval& b =
+            cb.breakdown.size() == cell.breakdown.size() ? cb.breakdown[k].Get(m) : none;
+        const BootstrapInterval& x = bin.Get(m);
+        out << fmt::format(
+            "{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", cell.class_name,
+            OverlapKindName(cell.metric), DifficultyName(cell.difficulty),
+            BreakdownAxisName(bin.axis), BreakdownBinName(bin.lower, bin.upper), Edge(bin.lower),
+            Edge(bin.upper), BootstrapMetricName(m), Csv(a.estimate), Csv(a.lower), Csv(a.upper),
+            Csv(b.estimate), Csv(b.lower), Csv(b.upper), Csv(x.estimate), Csv(x.lower),
+            Csv(x.upper), d.num_resamples, x.num_defined, d.confidence, d.seed);
+      }
+    }
+  }
+  return out.str();
+}
+
 std::string FormatPairedBootstrapSamplesCsv(const PairedBootstrapResult& result) {
   const BootstrapResult& d = result.difference;
   std::string out = "resample,class,metric,difficulty,measure,a,b,a_minus_b\n";
@@ -202,6 +236,16 @@ std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result) {
       out << fmt::format(" {:<32}", WithInterval(i, Decimals(m)) + (excludes_zero ? " *" : ""));
     }
     out << "\n";
+    for (const BootstrapBin& bin : cell.breakdown) {
+      out << fmt::format("{:>26} |", std::string(BreakdownAxisName(bin.axis)) + " " +
+                                         BreakdownBinName(bin.lower, bin.upper));
+      for (const BootstrapMetric m : metrics) {
+        const BootstrapInterval& i = bin.Get(m);
+        const bool excludes_zero = i.num_defined > 0 && (i.lower > 0 || i.upper < 0);
+        out << fmt::format(" {:<32}", WithInterval(i, Decimals(m)) + (excludes_zero ? " *" : ""));
+      }
+      out << "\n";
+    }
   }
   out << "* the interval excludes 0\n";
   return WithoutTrailingBlanks(out.str());

@@ -33,6 +33,11 @@ std::string FormatBootstrapTable(const BootstrapResult& result);
 // a_minus_b, a_minus_b_lower, a_minus_b_upper, resamples, resamples_defined (of the difference),
 // confidence, seed. Numbers at full precision (shortest round trip); empty for NaN.
 std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result);
+// With breakdowns (eval compare --breakdown): one row per cell, bin and metric, cells in result
+// order and bins in BootstrapCell::breakdown's: class, metric, difficulty, axis, bin ("[0, 30)",
+// quoted), lower, upper (empty: inf), measure, then as FormatPairedBootstrapCsv. Only the header
+// when no cell has bins.
+std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& result);
 // Every resample's values (the result must have been made with keep_samples): one row per
 // resample, evaluated cell and measure (ap_r40, brier_labels), resample-major:
 //   resample,class,metric,difficulty,measure,a,b,a_minus_b
@@ -41,7 +46,8 @@ std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result);
 std::string FormatPairedBootstrapSamplesCsv(const PairedBootstrapResult& result);
 
 // The printed block of the paired difference: title, then per evaluated cell its A - B with its
-// interval for AP_R40 and Brier over labels, and whether the interval excludes 0.
+// interval for AP_R40 and Brier over labels, and whether the interval excludes 0; each cell
+// followed by one line per breakdown bin ("distance [0, 30)", the same columns).
 std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result);
 
 }  // namespace stereodet
