@@ -29,8 +29,10 @@ BrierScores WithoutProbabilities(BrierScores brier) {
 }
 
 CalibrationResult WithoutProbabilities(CalibrationResult calibration) {
-  calibration.ece = kNaN;
-  for (ReliabilityBin& bin : calibration.bins) bin.mean_score = bin.tp_fraction = kNaN;
+  calibration.ece = calibration.laece = kNaN;
+  for (ReliabilityBin& bin : calibration.bins) {
+    bin.mean_score = bin.tp_fraction = bin.mean_iou = kNaN;
+  }
   return calibration;
 }
 
@@ -39,6 +41,7 @@ ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double di
     : bin_count_(calibration_bins, 0),
       bin_tp_(calibration_bins, 0),
       bin_score_sum_(calibration_bins, 0.0),
+      bin_iou_sum_(calibration_bins, 0.0),
       distance_bin_m_(distance_bin_m),
       max_distance_m_(max_distance_m),
       transform_(transform) {
@@ -68,7 +71,18 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
           depth_errors_[bin].push_back(det.box3d.location.z() - z);
         }
       },
-      [&](double s, Outcome o, int) { AddDetectionTerm(s, o == Outcome::kTp); });
+      [&](double s, Outcome o, int j) {
+        double overlap = 0.0;
+        if (o == Outcome::kTp) {
+          // The matched pair's overlap: its edge among the label's.
+          const int i = a.det_label[j];
+          overlap = kUnknownOverlap;
+          for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
+            if (cf.edge_det[e] == j) overlap = cf.edge_overlap[e];
+          }
+        }
+        AddDetectionTerm(s, o == Outcome::kTp, overlap);
+      });
 }
 
 void ScoreMetricsAccumulator::AddLabelTerm(double term) {
@@ -78,7 +92,7 @@ void ScoreMetricsAccumulator::AddLabelTerm(double term) {
   ++brier_sums_.num_all_terms;
 }
 
-void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp) {
+void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp, double overlap) {
   const int num_bins = static_cast<int>(bin_count_.size());
   const double y = tp ? 1.0 : 0.0;
   brier_sums_.over_detections += (s - y) * (s - y);
@@ -93,6 +107,10 @@ void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp) {
   ++bin_count_[bin];
   bin_tp_[bin] += tp ? 1 : 0;
   bin_score_sum_[bin] += s;
+  if (tp) {
+    overlaps_known_ = overlaps_known_ && !std::isnan(overlap);
+    bin_iou_sum_[bin] += overlap;
+  }
 }
 
 BrierScores ScoreMetricsAccumulator::Brier() const {
@@ -109,7 +127,7 @@ CalibrationResult ScoreMetricsAccumulator::Calibration() const {
   const int num_bins = static_cast<int>(bin_count_.size());
   for (int k = 0; k < num_bins; ++k) c.num_detections += bin_count_[k];
   c.num_out_of_range = out_of_range_;
-  double ece = 0.0;
+  double ece = 0.0, laece = 0.0;
   for (int k = 0; k < num_bins; ++k) {
     ReliabilityBin bin;
     bin.lower = static_cast<double>(k) / num_bins;
@@ -118,14 +136,17 @@ CalibrationResult ScoreMetricsAccumulator::Calibration() const {
     if (bin.count > 0) {
       bin.mean_score = bin_score_sum_[k] / static_cast<double>(bin.count);
       bin.tp_fraction = static_cast<double>(bin_tp_[k]) / static_cast<double>(bin.count);
-      ece += static_cast<double>(bin.count) / static_cast<double>(c.num_detections) *
-             std::abs(bin.mean_score - bin.tp_fraction);
+      bin.mean_iou = overlaps_known_ ? bin_iou_sum_[k] / static_cast<double>(bin.count) : kNaN;
+      const double weight = static_cast<double>(bin.count) / static_cast<double>(c.num_detections);
+      ece += weight * std::abs(bin.mean_score - bin.tp_fraction);
+      laece += weight * std::abs(bin.mean_score - bin.mean_iou);
     } else {
-      bin.mean_score = bin.tp_fraction = kNaN;
+      bin.mean_score = bin.tp_fraction = bin.mean_iou = kNaN;
     }
     c.bins.push_back(bin);
   }
   c.ece = c.num_detections > 0 ? ece : kNaN;
+  c.laece = c.num_detections > 0 && overlaps_known_ ? laece : kNaN;
   return c;
 }
 

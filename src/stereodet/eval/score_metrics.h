@@ -31,12 +31,21 @@ struct ReliabilityBin {
   int64_t count = 0;                // counted detections (TP or FP) in the bin
   double mean_score = 0.0;          // NaN if empty
   double tp_fraction = 0.0;         // NaN if empty
+  // The mean of each detection's overlap with its label (a TP's matched overlap, 0 for a FP): what
+  // LaECE compares the mean score with. NaN if empty or unknown (COCO mode).
+  double mean_iou = 0.0;
 };
 
 struct CalibrationResult {
   std::vector<ReliabilityBin> bins;
   // Detection ECE: sum over bins of count / N * |mean_score - tp_fraction|; NaN if N = 0.
   double ece = 0.0;
+  // Localization-aware ECE (LaECE, Oksuz et al. CVPR 2023), for the cell's class: sum over bins of
+  // count / N * |mean_score - mean_iou|, a TP counting its matched overlap (IoU, BEV or 3D overlap
+  // by the cell's kind) and a FP 0: a score should say how well the box fits, not only whether it
+  // matched. NaN if N = 0 or an overlap is unknown (COCO mode). Like ece, over the detections at
+  // the operating point only: misses do not count (docs/metrics.md, "Calibration").
+  double laece = 0.0;
   int64_t num_detections = 0;
   int64_t num_out_of_range = 0;  // scores outside [0, 1], clamped into the end bins
 };

@@ -3,6 +3,7 @@
 #define STEREODET_EVAL_SCORE_METRICS_INTERNAL_H_
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "stereodet/eval/association.h"
@@ -78,7 +79,9 @@ class ScoreMetricsAccumulator {
   // (1 - s)^2 for its TP detection's transformed score s, or 1 without one; a counted detection
   // (TP or FP) with its transformed score. Add() is made of these.
   void AddLabelTerm(double term);
-  void AddDetectionTerm(double s, bool tp);
+  // `overlap`: a TP's overlap with its label, for LaECE (NaN: unknown, LaECE then NaN).
+  void AddDetectionTerm(double s, bool tp, double overlap = kUnknownOverlap);
+  static constexpr double kUnknownOverlap = std::numeric_limits<double>::quiet_NaN();
 
   BrierScores Brier() const;  // means
   CalibrationResult Calibration() const;
@@ -88,6 +91,8 @@ class ScoreMetricsAccumulator {
   BrierScores brier_sums_;
   std::vector<int64_t> bin_count_, bin_tp_;
   std::vector<double> bin_score_sum_;
+  std::vector<double> bin_iou_sum_;  // TPs' overlaps (FPs add 0): LaECE
+  bool overlaps_known_ = true;
   int64_t out_of_range_ = 0;
   double distance_bin_m_, max_distance_m_;
   ScoreTransform transform_;

@@ -44,6 +44,42 @@ TEST(ScoreMetricsTest, BrierThreeWaysByHand) {
   }
 }
 
+// LaECE by hand, through the evaluator: a TP whose box covers the top 60 % of its label (2D IoU
+// 0.6; a match needs more than 0.5), score 0.9; a FP at 0.4; a TP fitting exactly (IoU 1) at 0.95.
+// Bins of 0.1: bin 9 holds the two TPs (mean score 0.925, mean IoU 0.8, TP fraction 1), bin 4 the
+// FP (0.4, IoU 0). LaECE = 2/3 |0.925 - 0.8| + 1/3 |0.4 - 0| = 0.0833 + 0.1333; ECE = 2/3 |0.925 -
+// 1| + 1/3 |0.4 - 0| = 0.05 + 0.1333.
+TEST(ScoreMetricsTest, LocalizationAwareEceByHand) {
+  EvalFrame f;
+  Object l1, l2, d1, d2, d3;
+  l1.type = l2.type = d1.type = d2.type = d3.type = "Car";
+  l1.box = {0, 0, 100, 100};
+  l2.box = {300, 0, 400, 100};
+  d1.box = {0, 0, 100, 60};
+  d1.score = 0.9;
+  d2.box = {600, 0, 700, 100};
+  d2.score = 0.4;
+  d3.box = {300, 0, 400, 100};
+  d3.score = 0.95;
+  f.labels = {l1, l2};
+  f.detections = {d1, d2, d3};
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.classes[0].min_overlap = {0.5, 0.5, 0.5};
+  options.metrics = {OverlapKind::k2D};
+  options.difficulties = {Difficulty::kEasy};
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    options.matcher = m;
+    const EvalResult result = Evaluate({f}, options);
+    const ClassResult& r = result.results.at(0);
+    EXPECT_NEAR(r.calibration.bins[9].mean_iou, 0.8, 1e-12) << MatcherName(m);
+    EXPECT_NEAR(r.calibration.bins[4].mean_iou, 0.0, 1e-12) << MatcherName(m);
+    EXPECT_TRUE(std::isnan(r.calibration.bins[0].mean_iou));
+    EXPECT_NEAR(r.calibration.laece, 2.0 / 3 * 0.125 + 0.4 / 3, 1e-12) << MatcherName(m);
+    EXPECT_NEAR(r.calibration.ece, 2.0 / 3 * 0.075 + 0.4 / 3, 1e-12) << MatcherName(m);
+  }
+}
+
 // Brier over labels has a fixed support: one term per valid label whatever the detector did. Two
 // detectors on the same two labels (l1 100 px tall, l2 30 px, both valid at Moderate): A finds l1
 // (0.9) and misses l2; B finds l1 (0.9) and covers l2 with a 24 px detection, which Moderate

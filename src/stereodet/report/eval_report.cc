@@ -205,9 +205,11 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
                     {"upper", b.upper},
                     {"count", b.count},
                     {"mean_score", b.mean_score},
-                    {"tp_fraction", b.tp_fraction}});
+                    {"tp_fraction", b.tp_fraction},
+                    {"mean_iou", b.mean_iou}});
   }
   e["calibration"] = {{"ece", r.calibration.ece},
+                      {"laece", r.calibration.laece},
                       {"num_detections", r.calibration.num_detections},
                       {"num_out_of_range", r.calibration.num_out_of_range},
                       {"bins", bins}};
