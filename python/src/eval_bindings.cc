@@ -455,6 +455,7 @@ py::list Rows(const PyEvalResult& r) {
       row["brier_over_detections"] = v(c.brier.over_detections);
       row["brier_over_all"] = v(c.brier.over_all);
       row["ece"] = v(c.calibration.ece);
+      row["laece"] = v(c.calibration.laece);
       rows.append(row);
     }
   }
@@ -813,6 +814,7 @@ filled). docs/metrics.md defines every number.)")
                                return d;
                              })
       .def_property_readonly("ece", [](const ClassResult& c) { return c.calibration.ece; })
+      .def_property_readonly("laece", [](const ClassResult& c) { return c.calibration.laece; })
       .def("__repr__", [](const ClassResult& c) {
         return "<ClassResult " + c.class_name + " " + OverlapKindName(c.metric) + " " +
                DifficultyName(c.difficulty) +
