@@ -131,6 +131,14 @@ TEST(BreakdownTest, ByHandPairsFollowTheirLabelsAndUnplacedFalsePositivesCountEv
     EXPECT_DOUBLE_EQ(cell.breakdown[2].brier.over_labels, 1.0);
     // Over detections in [30, 50): the 0.8 TP, the FPs at 0.7 and 0.6.
     EXPECT_NEAR(cell.breakdown[1].brier.over_detections, (0.04 + 0.49 + 0.36) / 3, 1e-12);
+    // Calibration per bin, the same detections: [30, 50) holds the 0.8 TP (bin 8) and the FPs at
+    // 0.7 and 0.6 (bins 7 and 6): ECE = (0.2 + 0.7 + 0.6) / 3; [50, inf) only the distance-less
+    // FP at 0.6: ECE 0.6.
+    EXPECT_EQ(cell.breakdown[1].calibration.num_detections, 3);
+    EXPECT_NEAR(cell.breakdown[1].calibration.ece, (0.2 + 0.7 + 0.6) / 3, 1e-12);
+    EXPECT_EQ(cell.breakdown[1].calibration.bins[8].tp_fraction, 1.0);
+    EXPECT_EQ(cell.breakdown[2].calibration.num_detections, 1);
+    EXPECT_NEAR(cell.breakdown[2].calibration.ece, 0.6, 1e-12);
   }
 }
 
@@ -247,6 +255,17 @@ TEST(BreakdownTest, BinsPartitionTheCellAndOneBinOfEverythingIsTheCell) {
         EXPECT_NEAR(all.brier.over_labels, cell.brier.over_labels, 1e-12);
         EXPECT_NEAR(all.brier.over_detections, cell.brier.over_detections, 1e-12);
       }
+      // The bin of everything has the cell's reliability, ECE and LaECE.
+      EXPECT_EQ(all.calibration.num_detections, cell.calibration.num_detections);
+      if (!std::isnan(cell.calibration.ece)) {
+        EXPECT_NEAR(all.calibration.ece, cell.calibration.ece, 1e-12);
+        EXPECT_NEAR(all.calibration.laece, cell.calibration.laece, 1e-12);
+      }
+      // The distance bins' detections: each counted detection in exactly one bin, except a FP
+      // without a distance, which is in every bin (so at least the cell's count).
+      int64_t counted = 0;
+      for (int b = 0; b < 3; ++b) counted += cell.breakdown[b].calibration.num_detections;
+      EXPECT_GE(counted, cell.calibration.num_detections);
       ++checked;
     }
     EXPECT_GT(checked, 0);

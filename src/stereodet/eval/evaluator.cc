@@ -729,6 +729,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
             acc.Add(frames[f], cfs[f], assocs[d][f], difficulty, &selection);
           }
           bin.brier = result.probability_metrics ? acc.Brier() : WithoutProbabilities(acc.Brier());
+          bin.calibration = result.probability_metrics ? acc.Calibration()
+                                                       : WithoutProbabilities(acc.Calibration());
           if (options.breakdown_naive) {
             // The bin evaluated on its own, as an unfiltered cell is.
             const std::vector<ClassFrame> bin_cfs =

@@ -74,6 +74,9 @@ struct BreakdownBin {
   // exact at every score (as FilteredStats::stable_curve).
   FilteredCurve curve;
   BrierScores brier;  // NaN where the cell's are (EvalResult::probability_metrics)
+  // Reliability, ECE and LaECE of the bin's counted detections (a pair in its label's bin, a FP
+  // where its own value is): calibration per distance, height, ... bin. NaN as the cell's.
+  CalibrationResult calibration;
   // With EvalOptions::breakdown_naive: the bin evaluated on its own, its labels and detections
   // struck outside it before matching (the naive per-bin recomputation: a pair across an edge
   // becomes a FN in one bin and a FP in the other, and a detection can find another label than in

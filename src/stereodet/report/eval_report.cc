@@ -22,6 +22,24 @@ namespace {
 
 using nlohmann::json;
 
+// A CalibrationResult: ECE, LaECE, counts and the reliability bins.
+json CalibrationJson(const CalibrationResult& c) {
+  json bins = json::array();
+  for (const ReliabilityBin& b : c.bins) {
+    bins.push_back({{"lower", b.lower},
+                    {"upper", b.upper},
+                    {"count", b.count},
+                    {"mean_score", b.mean_score},
+                    {"tp_fraction", b.tp_fraction},
+                    {"mean_iou", b.mean_iou}});
+  }
+  return {{"ece", c.ece},
+          {"laece", c.laece},
+          {"num_detections", c.num_detections},
+          {"num_out_of_range", c.num_out_of_range},
+          {"bins", bins}};
+}
+
 json OperatingPointJson(const OperatingPoint& op) {
   return json{{"threshold", op.threshold}, {"tp", op.tp},         {"fp", op.fp}, {"fn", op.fn},
               {"precision", op.precision}, {"recall", op.recall}, {"f1", op.f1}};
@@ -175,7 +193,8 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
                       {"ap_voc", b.curve.ap_voc},
                       {"brier_over_labels", b.brier.over_labels},
                       {"brier_over_detections", b.brier.over_detections},
-                      {"brier_over_all", b.brier.over_all}});
+                      {"brier_over_all", b.brier.over_all},
+                      {"calibration", CalibrationJson(b.calibration)}});
       if (b.naive) {
         // The bin evaluated on its own (EvalOptions::breakdown_naive), for comparison.
         bins.back()["naive"] = {{"num_valid_labels", b.naive->num_valid_labels},
@@ -199,20 +218,7 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
                 {"num_detection_terms", r.brier.num_detection_terms},
                 {"over_all", r.brier.over_all},
                 {"num_all_terms", r.brier.num_all_terms}};
-  json bins = json::array();
-  for (const ReliabilityBin& b : r.calibration.bins) {
-    bins.push_back({{"lower", b.lower},
-                    {"upper", b.upper},
-                    {"count", b.count},
-                    {"mean_score", b.mean_score},
-                    {"tp_fraction", b.tp_fraction},
-                    {"mean_iou", b.mean_iou}});
-  }
-  e["calibration"] = {{"ece", r.calibration.ece},
-                      {"laece", r.calibration.laece},
-                      {"num_detections", r.calibration.num_detections},
-                      {"num_out_of_range", r.calibration.num_out_of_range},
-                      {"bins", bins}};
+  e["calibration"] = CalibrationJson(r.calibration);
   json loc = json::array();
   for (const DistanceBin& b : r.localization) {
     loc.push_back({{"lower_m", b.lower_m},
