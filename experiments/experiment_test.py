@@ -365,10 +365,10 @@ check(seen >= {"confirmed", "refuted", "inconclusive", "not measured"},
       f"the miniature's claims cover every verdict: {sorted(seen)}")
 check(flips_seen, "a flip claim of the miniature is decided (confirmed or refuted)")
 
-# Percentile against BCa: one row per claim, seed pair and measure (the 5 BCa compares: 9 rows),
+# Percentile against BCa: one row per claim, seed pair and measure (the 5 BCa compares: 13 rows),
 # each interval the one its compare folder's bootstrap.csv holds.
 brows = tables.get(("all", "bca"), [])
-check(len(brows) == 9, f"a BCa row per claim, seed pair and measure: {len(brows)}")
+check(len(brows) == 13, f"a BCa row per claim, seed pair and measure: {len(brows)}")
 for row in brows:
     c = [x for x in claims.values() if x["id"] == row[0]][0]
     a_name, b_name = row[1].split(" - ")
@@ -386,7 +386,7 @@ for row in brows:
 # The power table: a row per claim and measure decided by an interval; the frames needed by a
 # claim on one training recomputed from its interval (verdict_rule.power_needs).
 prows = {(r[0], r[1]): r for r in tables.get(("all", "power"), [])}
-check(len(prows) == 8, f"a power row per claim and measure: {sorted(prows)}")
+check(len(prows) == 10, f"a power row per claim and measure: {sorted(prows)}")
 row = prows.get(("ap-blurred", "ap_r40"))
 with open(out / "compare" / "ssd-rgb-vs-ssd-rgbh-fixed" / "blur5" / "kitti" / "bootstrap.csv") as f:
     r = [r for r in csv.DictReader(f) if r["class"] == "Car" and r["metric"] == "2d"

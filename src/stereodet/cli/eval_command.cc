@@ -685,9 +685,10 @@ void AddEvalCommand(CLI::App& app) {
                       "AXIS=EDGES (repeatable): with --bootstrap, every bin's paired A - B with "
                       "its interval, printed under each cell and in OUT/bootstrap_breakdown.csv "
                       "(docs/metrics.md, Breakdowns)");
-  compare->add_flag("--bootstrap-samples", compare_options->bootstrap_samples,
-                    "with --bootstrap N and --out: also OUT/bootstrap_samples.csv, every "
-                    "resample's A, B and A - B of AP_R40 and Brier over labels (docs/metrics.md)");
+  compare->add_flag(
+      "--bootstrap-samples", compare_options->bootstrap_samples,
+      "with --bootstrap N and --out: also OUT/bootstrap_samples.csv, every "
+      "resample's A, B and A - B of AP_R40 and the three Brier scores (docs/metrics.md)");
   compare->add_flag("--report", compare_options->report,
                     "also write OUT/report/: the comparison's figures and index.html "
                     "(docs/report.md)");

@@ -192,8 +192,11 @@ std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& resul
 std::string FormatPairedBootstrapSamplesCsv(const PairedBootstrapResult& result) {
   const BootstrapResult& d = result.difference;
   std::string out = "resample,class,metric,difficulty,measure,a,b,a_minus_b\n";
-  const std::array<BootstrapMetric, 2> measures = {BootstrapMetric::kApR40,
-                                                   BootstrapMetric::kBrierLabels};
+  // AP_R40 and the three Brier terms: what the experiment's claims are decided by (a claim that
+  // two Brier terms rank A and B oppositely needs both terms' resamples).
+  const std::array<BootstrapMetric, 4> measures = {
+      BootstrapMetric::kApR40, BootstrapMetric::kBrierLabels, BootstrapMetric::kBrierDetections,
+      BootstrapMetric::kBrierAll};
   for (int r = 0; r < d.num_resamples; ++r) {
     for (size_t c = 0; c < d.cells.size(); ++c) {
       const BootstrapCell& cell = d.cells[c];

@@ -39,7 +39,8 @@ std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result);
 // when no cell has bins.
 std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& result);
 // Every resample's values (the result must have been made with keep_samples): one row per
-// resample, evaluated cell and measure (ap_r40, brier_labels), resample-major:
+// resample, evaluated cell and measure (ap_r40, brier_labels, brier_detections, brier_all),
+// resample-major:
 //   resample,class,metric,difficulty,measure,a,b,a_minus_b
 // (full precision, empty for NaN). Resample r's frame counts depend on (frames, seed, r) only,
 // so two compares with the same seed on the same frames resampled the same frames in row r.
