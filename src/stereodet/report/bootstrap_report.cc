@@ -159,9 +159,8 @@ std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result) {
 
 std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& result) {
   std::ostringstream out;
-  out << "class,metric,difficulty,axis,bin,lower,upper,measure,a,a_lower,a_upper,b,b_lower,"
-         "b_upper,a_minus_b,a_minus_b_lower,a_minus_b_upper,resamples,resamples_defined,"
-         "confidence,seed\n";
+  out << "class,metric,difficulty,axis,lower,upper,measure,a,a_lower,a_upper,b,b_lower,b_upper,"
+         "a_minus_b,a_minus_b_lower,a_minus_b_upper,resamples,resamples_defined,confidence,seed\n";
   const BootstrapResult& d = result.difference;
   for (size_t c = 0; c < d.cells.size(); ++c) {
     const BootstrapCell& cell = d.cells[c];
@@ -176,13 +175,13 @@ std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& resul
         const BootstrapInterval& b =
             cb.breakdown.size() == cell.breakdown.size() ? cb.breakdown[k].Get(m) : none;
         const BootstrapInterval& x = bin.Get(m);
-        out << fmt::format(
-            "{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", cell.class_name,
-            OverlapKindName(cell.metric), DifficultyName(cell.difficulty),
-            BreakdownAxisName(bin.axis), BreakdownBinName(bin.lower, bin.upper), Edge(bin.lower),
-            Edge(bin.upper), BootstrapMetricName(m), Csv(a.estimate), Csv(a.lower), Csv(a.upper),
-            Csv(b.estimate), Csv(b.lower), Csv(b.upper), Csv(x.estimate), Csv(x.lower),
-            Csv(x.upper), d.num_resamples, x.num_defined, d.confidence, d.seed);
+        out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                           cell.class_name, OverlapKindName(cell.metric),
+                           DifficultyName(cell.difficulty), BreakdownAxisName(bin.axis),
+                           Edge(bin.lower), Edge(bin.upper), BootstrapMetricName(m),
+                           Csv(a.estimate), Csv(a.lower), Csv(a.upper), Csv(b.estimate),
+                           Csv(b.lower), Csv(b.upper), Csv(x.estimate), Csv(x.lower), Csv(x.upper),
+                           d.num_resamples, x.num_defined, d.confidence, d.seed);
       }
     }
   }

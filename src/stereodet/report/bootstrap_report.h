@@ -34,9 +34,9 @@ std::string FormatBootstrapTable(const BootstrapResult& result);
 // confidence, seed. Numbers at full precision (shortest round trip); empty for NaN.
 std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result);
 // With breakdowns (eval compare --breakdown): one row per cell, bin and metric, cells in result
-// order and bins in BootstrapCell::breakdown's: class, metric, difficulty, axis, bin ("[0, 30)",
-// quoted), lower, upper (empty: inf), measure, then as FormatPairedBootstrapCsv. Only the header
-// when no cell has bins.
+// order and bins in BootstrapCell::breakdown's: class, metric, difficulty, axis, lower, upper
+// (empty: infinite), measure, then as FormatPairedBootstrapCsv. Only the header when no cell has
+// bins.
 std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& result);
 // Every resample's values (the result must have been made with keep_samples): one row per
 // resample, evaluated cell and measure (ap_r40, brier_labels, brier_detections, brier_all),

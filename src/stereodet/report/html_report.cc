@@ -578,7 +578,8 @@ const std::vector<std::string> kCompareColumns = {
     "class",   "metric",        "difficulty", "lower_m",       "upper_m",
     "count_a", "abs_dz_mean_a", "count_b",    "abs_dz_mean_b", "difference_b_minus_a",
     "model_dz"};
-const std::set<std::string> kTextColumns = {"class", "metric", "difficulty", "filter"};
+const std::set<std::string> kTextColumns = {"class",  "metric",  "difficulty",
+                                            "filter", "measure", "axis"};
 
 // A CSV of FormatSweepCsv or FormatCompareCsv: a header, then rows of plain fields (no quoting).
 std::vector<ReportSource::Row> ReadCsvRows(const fs::path& path,
@@ -860,6 +861,19 @@ ReportSource ReadReportSource(const fs::path& folder, const std::string& label) 
         source.name_a = name("det_a");
         source.name_b = name("det_b");
       }
+      if (kind == ReportKind::kCompare) {
+        // The paired intervals of `eval compare --bootstrap` (and of its bins), for the page's
+        // difference table.
+        const std::vector<std::string> paired_columns = {
+            "class", "metric",    "difficulty",      "measure",        "a",
+            "b",     "a_minus_b", "a_minus_b_lower", "a_minus_b_upper"};
+        for (const char* file : {"bootstrap.csv", "bootstrap_breakdown.csv"}) {
+          if (!fs::is_regular_file(folder / file)) continue;
+          for (ReportSource::Row& row : ReadCsvRows(folder / file, paired_columns)) {
+            source.paired.push_back(std::move(row));
+          }
+        }
+      }
       return source;
     }
     STEREODET_THROW_IO() << path.string() << " is not there: is " << folder.string()
@@ -1092,6 +1106,52 @@ std::string WorstFramesHtml(const std::vector<ReportFrameViews>& views) {
 
 }  // namespace
 
+// The difference table of `eval compare --bootstrap` folders: per folder, cell (and bin, from
+// bootstrap_breakdown.csv) the paired A - B of AP_R40 and Brier over labels with its interval,
+// "*" where it excludes 0. Empty when no folder has bootstrap.csv.
+std::string PairedTableHtml(const std::vector<ReportSource>& sources) {
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  std::string rows;
+  for (const ReportSource& s : sources) {
+    for (const ReportSource::Row& row : s.paired) {
+      const auto text = [&](const char* n) {
+        const auto it = row.text.find(n);
+        return it == row.text.end() ? std::string() : it->second;
+      };
+      const std::string measure = text("measure");
+      if (measure != "ap_r40" && measure != "brier_labels") continue;
+      const int decimals = measure == "ap_r40" ? 2 : 4;
+      std::string bin = "all";
+      if (!text("axis").empty()) {
+        const double lower = RowNumber(row, "lower"), upper = RowNumber(row, "upper");
+        bin = text("axis") + " " +
+              BreakdownBinName(std::isnan(lower) ? -kInfinity : lower,
+                               std::isnan(upper) ? kInfinity : upper);
+      }
+      const double d = RowNumber(row, "a_minus_b"), lo = RowNumber(row, "a_minus_b_lower"),
+                   hi = RowNumber(row, "a_minus_b_upper");
+      const bool excludes_zero = lo > 0 || hi < 0;
+      rows += fmt::format(
+          "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
+          "<td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}</td>"
+          "<td>{}</td><td>{} [{}, {}]{}</td></tr>\n",
+          XmlEscape(s.label), XmlEscape(text("class")), XmlEscape(text("metric")),
+          XmlEscape(text("difficulty")), XmlEscape(bin),
+          measure == "ap_r40" ? "AP_R40" : "Brier over labels",
+          Fixed(RowNumber(row, "a"), decimals), Fixed(RowNumber(row, "b"), decimals),
+          Fixed(d, decimals), Fixed(lo, decimals), Fixed(hi, decimals), excludes_zero ? " *" : "");
+    }
+  }
+  if (rows.empty()) return "";
+  return "<h2 id=\"paired\">Paired A - B (eval compare --bootstrap)</h2>\n<p>Each difference "
+         "with its paired bootstrap interval (both sets resampled with the same frames; "
+         "docs/metrics.md, Bootstrap intervals); * where it excludes 0.</p>\n"
+         "<table id=\"paired-table\">\n<tr><th>compare</th><th>class</th><th>metric</th>"
+         "<th>difficulty</th><th>bin</th><th>measure</th><th>A</th><th>B</th><th>A - "
+         "B</th></tr>\n" +
+         rows + "</table>\n";
+}
+
 std::string ReportHtml(const std::vector<ReportSource>& sources,
                        const std::vector<ReportFigure>& figures, bool with_png,
                        const std::vector<ReportFrameViews>& views) {
@@ -1147,6 +1207,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
     last = figure.section;
   }
   html += "</p>\n";
+  html += PairedTableHtml(sources);
   const bool eval = sources.front().kind == ReportKind::kEval;
   if (eval) html += "<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
   if (eval) {

@@ -43,6 +43,9 @@ struct ReportSource {
     std::map<std::string, std::string> text;
   };
   std::vector<Row> rows;
+  // kCompare with `--bootstrap`: bootstrap.csv's rows, then bootstrap_breakdown.csv's (those have
+  // the text column "axis" and the numbers lower, upper); empty without them.
+  std::vector<Row> paired;
   std::filesystem::path folder;  // where it was read from (shown in the page; may be empty)
   // kCompare: the last path components of the two detection folders compare.json names (A, B),
   // for the legends; empty when the folder has no compare.json (written before it existed).

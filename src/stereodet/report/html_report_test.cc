@@ -522,6 +522,49 @@ Plot CompareFigurePlot(const fs::path& folder, const std::string& id) {
   return {};
 }
 
+// `eval compare --bootstrap --breakdown` folders: the page's difference table holds each cell's
+// (and bin's) paired A - B of AP_R40 and Brier over labels as bootstrap.csv and
+// bootstrap_breakdown.csv give them; without --bootstrap there is no table.
+TEST(ReportTest, CompareReportHasThePairedDifferenceTable) {
+  TestTempDir dir;
+  EvaluationCompareOptions compare;
+  compare.input.gt = kData / "eval_compare";
+  compare.input.det = kData / "eval_compare/det_a";
+  compare.det_b = kData / "eval_compare/det_b";
+  compare.eval.classes = {KittiClassSpec("Car")};
+  compare.eval.metrics = {OverlapKind::k2D};
+  compare.out = dir.path() / "plain";
+  RunEvaluationCompare(compare);
+  ReportOptions options;
+  options.results = {compare.out};
+  options.png = false;
+  WriteReport(options);
+  EXPECT_THAT(ReadFile(compare.out / "report/index.html"),
+              ::testing::Not(HasSubstr("paired-table")));
+
+  compare.out = dir.path() / "paired";
+  compare.bootstrap = BootstrapOptions{};
+  compare.bootstrap->num_resamples = 30;
+  compare.eval.breakdowns = {ParseBreakdown("distance=0,20,inf")};
+  const EvaluationCompareResult result = RunEvaluationCompare(compare);
+  options.results = {compare.out};
+  WriteReport(options);
+  const ReportSource source = ReadReportSource(compare.out, "paired");
+  // bootstrap.csv: 3 difficulties x 5 measures; bootstrap_breakdown.csv: x 2 bins.
+  EXPECT_EQ(source.paired.size(), 3u * 5u + 3u * 2u * 5u);
+  const std::string html = ReadFile(compare.out / "report/index.html");
+  EXPECT_THAT(html, HasSubstr("<table id=\"paired-table\">"));
+  const BootstrapCell* moderate =
+      result.bootstrap->difference.Find("Car", OverlapKind::k2D, Difficulty::kModerate);
+  ASSERT_NE(moderate, nullptr);
+  const BootstrapInterval& ap = moderate->Get(BootstrapMetric::kApR40);
+  EXPECT_THAT(html, HasSubstr("<td class=\"t\">Moderate</td><td class=\"t\">all</td>"
+                              "<td class=\"t\">AP_R40</td>"));
+  EXPECT_THAT(html,
+              HasSubstr(fmt::format("{:.2f} [{:.2f}, {:.2f}]", ap.estimate, ap.lower, ap.upper)));
+  EXPECT_THAT(html, HasSubstr("<td class=\"t\">distance [20, inf)</td>"));
+}
+
 TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   TestTempDir dir;
   EvaluationCompareOptions compare;
