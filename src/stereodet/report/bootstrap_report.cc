@@ -136,6 +136,16 @@ std::string FormatBootstrapTable(const BootstrapResult& result) {
   return WithoutTrailingBlanks(out.str());
 }
 
+// The columns both paired CSVs end with: measure, A, B and A - B with their bounds, the counts,
+// confidence and seed.
+std::string PairedColumns(BootstrapMetric m, const BootstrapInterval& a, const BootstrapInterval& b,
+                          const BootstrapInterval& x, const BootstrapResult& d) {
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}", BootstrapMetricName(m),
+                     Csv(a.estimate), Csv(a.lower), Csv(a.upper), Csv(b.estimate), Csv(b.lower),
+                     Csv(b.upper), Csv(x.estimate), Csv(x.lower), Csv(x.upper), d.num_resamples,
+                     x.num_defined, d.confidence, d.seed);
+}
+
 std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result) {
   std::ostringstream out;
   out << "class,metric,difficulty,measure,a,a_lower,a_upper,b,b_lower,b_upper,a_minus_b,"
@@ -147,11 +157,8 @@ std::string FormatPairedBootstrapCsv(const PairedBootstrapResult& result) {
       const BootstrapInterval& a = result.a.cells[c].Get(m);
       const BootstrapInterval& b = result.b.cells[c].Get(m);
       const BootstrapInterval& x = cell.Get(m);
-      out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", cell.class_name,
-                         OverlapKindName(cell.metric), DifficultyName(cell.difficulty),
-                         BootstrapMetricName(m), Csv(a.estimate), Csv(a.lower), Csv(a.upper),
-                         Csv(b.estimate), Csv(b.lower), Csv(b.upper), Csv(x.estimate), Csv(x.lower),
-                         Csv(x.upper), d.num_resamples, x.num_defined, d.confidence, d.seed);
+      out << fmt::format("{},{},{},{}\n", cell.class_name, OverlapKindName(cell.metric),
+                         DifficultyName(cell.difficulty), PairedColumns(m, a, b, x, d));
     }
   }
   return out.str();
@@ -175,13 +182,9 @@ std::string FormatPairedBootstrapBreakdownCsv(const PairedBootstrapResult& resul
         const BootstrapInterval& b =
             cb.breakdown.size() == cell.breakdown.size() ? cb.breakdown[k].Get(m) : none;
         const BootstrapInterval& x = bin.Get(m);
-        out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                           cell.class_name, OverlapKindName(cell.metric),
+        out << fmt::format("{},{},{},{},{},{},{}\n", cell.class_name, OverlapKindName(cell.metric),
                            DifficultyName(cell.difficulty), BreakdownAxisName(bin.axis),
-                           Edge(bin.lower), Edge(bin.upper), BootstrapMetricName(m),
-                           Csv(a.estimate), Csv(a.lower), Csv(a.upper), Csv(b.estimate),
-                           Csv(b.lower), Csv(b.upper), Csv(x.estimate), Csv(x.lower), Csv(x.upper),
-                           d.num_resamples, x.num_defined, d.confidence, d.seed);
+                           Edge(bin.lower), Edge(bin.upper), PairedColumns(m, a, b, x, d));
       }
     }
   }
