@@ -1268,11 +1268,17 @@ def power_rows(pipeline):
                 seed_var, frame_var, frame_df = 0.0, (width / (2 * 1.959964)) ** 2, frames - 1
             need_seeds, need_frames = verdict_rule.power_needs(effect, seed_var, frame_var,
                                                                frames, frame_df, seeds)
+            if need_frames is not None:
+                frames_text = str(need_frames)
+            elif seed_var > 0:  # the seed term alone is wider than the effect allows
+                frames_text = f"none at {seeds} seed pairs"
+            else:
+                frames_text = f"more than {1000 * frames}"
             rows.append([c["id"], measure, f"{effect:+.3f}",
                          f"{math.sqrt(seed_var):.3f}" if "seed_pairs" in c else "one training",
                          f"{math.sqrt(frame_var):.3f} ({frames} frames)",
                          fmt_count(need_seeds, 100) if "seed_pairs" in c else "n/a",
-                         fmt_count(need_frames, 1000 * frames)])
+                         frames_text])
     return rows
 
 
@@ -1517,7 +1523,9 @@ def write_table(pipeline, replication=None):
                      "standard error, and how many seed pairs (at these frames) and frames (at "
                      "these seeds) the rule would need to decide it with 80 % power at 95 % "
                      "confidence, were the observed A - B the true one "
-                     "(`verdict_rule.power_needs`; the frame term scales as 1 / frames). Observed "
+                     "(`verdict_rule.power_needs`; the frame term scales as 1 / frames; \"none "
+                     "at S seed pairs\": the seeds' spread alone is too wide, no number of frames "
+                     "decides it). Observed "
                      "effects taken as true overstate the power for small ones: read it as an "
                      "order of magnitude.\n\n"
                      + markdown(["claim", "measure", "A - B", "seed sd", "frame se",
