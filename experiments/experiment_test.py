@@ -656,6 +656,23 @@ try:
 except experiment.ConfigError as e:
     check(f"{seeded_path}: models[1].seed_model:" in str(e), f"seed_model error names it: {e}")
 
+# A replication set that is not independent (the same generator seed), smaller, or missing for a
+# data set a model uses is refused, naming the field.
+for change, wanted in ((lambda c: c["datasets"]["mini-rep"].update(seed=1), "generator seed"),
+                       (lambda c: c["datasets"]["mini-rep"].update(frames=2), "val frames, fewer"),
+                       (lambda c: c.update(replication={}) or c["replication"].update(
+                           {"mini-rep": "mini"}), "no replication set for mini")):
+    rep_cfg = json.loads(config_path.read_text())
+    change(rep_cfg)
+    rep_path = work / "bad_replication.json"
+    rep_path.write_text(json.dumps(rep_cfg))
+    try:
+        experiment.load_config(rep_path)
+        check(False, f"replication config refused: {wanted}")
+    except experiment.ConfigError as e:
+        check(f"{rep_path}: replication" in str(e) and wanted in str(e),
+              f"replication error names it ({wanted}): {e}")
+
 # A claim of an unknown kind is refused, naming the file, the claim and what it accepts.
 header = "id,claim,a,b,blur_sigma_px,class,matcher,measure,expect,source\n"
 for line, wanted in (
