@@ -1050,6 +1050,15 @@ def seeds_cell(pipeline, seed_pairs, c, measure):
             "frame_df": len(averaged) - 1}
 
 
+def interval_side(cell):
+    """Where a bootstrap.csv-shaped row's interval of A - B lies: 1 above 0, -1 below, 0 holding
+    it; None where the row or its bounds are missing (undefined)."""
+    if cell is None or "" in (cell["a_minus_b_lower"], cell["a_minus_b_upper"]):
+        return None
+    lo, hi = float(cell["a_minus_b_lower"]), float(cell["a_minus_b_upper"])
+    return 1 if lo > 0 else -1 if hi < 0 else 0
+
+
 def flip_verdict(cells, terms):
     """A 'flip' claim: the two Brier terms rank A and B oppositely. Confirmed when both paired
     intervals of A - B lie off 0 on opposite sides, refuted when both lie off 0 on the same side
@@ -1058,11 +1067,8 @@ def flip_verdict(cells, terms):
     for term in terms:
         cell = cells.get(term)
         texts.append(f"{term[6:]} {fmt_difference(cell, 1.0)}")
-        if cell is None or "" in (cell["a_minus_b_lower"], cell["a_minus_b_upper"]):
-            sides.append(0)
-            continue
-        lo, hi = float(cell["a_minus_b_lower"]), float(cell["a_minus_b_upper"])
-        sides.append(1 if lo > 0 else -1 if hi < 0 else 0)
+        side = interval_side(cell)
+        sides.append(0 if side is None else side)  # undefined: inconclusive
     if 0 in sides:
         verdict, change = "inconclusive", "narrower intervals (more frames), both off 0"
     elif sides[0] != sides[1]:
@@ -1216,10 +1222,6 @@ def split_frames(pipeline, name):
         return sum(1 for line in f if line.strip())
 
 
-def fmt_count(n, limit):
-    return f"more than {limit}" if n is None else f"{n}"
-
-
 def power_rows(pipeline):
     """Per claim decided by an interval, on the first set: the observed A - B, the training and
     frame terms of its variance, and how many seed pairs (at these frames) and frames (at these
@@ -1277,7 +1279,8 @@ def power_rows(pipeline):
             rows.append([c["id"], measure, f"{effect:+.3f}",
                          f"{math.sqrt(seed_var):.3f}" if "seed_pairs" in c else "one training",
                          f"{math.sqrt(frame_var):.3f} ({frames} frames)",
-                         fmt_count(need_seeds, 100) if "seed_pairs" in c else "n/a",
+                         ("more than 100" if need_seeds is None else str(need_seeds))
+                         if "seed_pairs" in c else "n/a",
                          frames_text])
     return rows
 
@@ -1309,14 +1312,7 @@ def bca_rows(pipeline):
                 lo, hi = (float(read[0][k]) for k in ("a_minus_b_lower", "a_minus_b_upper"))
                 est = float(read[0]["a_minus_b"])
                 place = f"{100 * (est - lo) / (hi - lo):.0f} %" if hi > lo else "n/a"
-
-                def side(row):
-                    if "" in (row["a_minus_b_lower"], row["a_minus_b_upper"]):
-                        return None
-                    low, high = float(row["a_minus_b_lower"]), float(row["a_minus_b_upper"])
-                    return 1 if low > 0 else -1 if high < 0 else 0
-
-                sides = side(read[0]), side(read[1])
+                sides = interval_side(read[0]), interval_side(read[1])
                 rows.append([c["id"], f"{a_name} - {b_name}", measure,
                              fmt_difference(read[0], scale), place,
                              fmt_difference(read[1], scale),

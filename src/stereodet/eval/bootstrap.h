@@ -142,9 +142,8 @@ struct BootstrapCell {
   // As ClassResult::evaluated on the frames as given; false: every interval NaN.
   bool evaluated = true;
   std::array<BootstrapInterval, kNumBootstrapMetrics> intervals;  // by BootstrapMetric
-  // With EvalOptions::breakdowns: every
-  // breakdown's bins, in the options' order, bins ascending, as ClassResult::breakdown; empty for
-  // a cell that is not evaluated.
+  // With EvalOptions::breakdowns: every breakdown's bins, in the options' order, bins ascending, as
+  // ClassResult::breakdown; empty for a cell that is not evaluated.
   std::vector<BootstrapBin> breakdown;
 
   const BootstrapInterval& Get(BootstrapMetric m) const { return intervals[static_cast<int>(m)]; }

@@ -376,10 +376,10 @@ std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& fram
   std::vector<MatchRecord> rows;
   std::vector<MatchRecord>* out = &rows;
   auto pair_overlap = [&](int i, int j) {
-    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
-      if (cf.edge_det[e] == j) return KittiRecordedOverlap(kind, frame, cf, i, e);
-    }
-    return KittiOverlap(kind, frame.detections[cf.det_object[j]], frame.labels[cf.label_object[i]]);
+    const int e = cf.FindEdge(i, j);
+    return e >= 0 ? KittiRecordedOverlap(kind, frame, cf, i, e)
+                  : KittiOverlap(kind, frame.detections[cf.det_object[j]],
+                                 frame.labels[cf.label_object[i]]);
   };
   for (int j = 0; j < cf.num_dets(); ++j) {
     if (a.det_outcome[j] == Outcome::kNone) continue;

@@ -89,6 +89,14 @@ struct ClassFrame {
   bool LabelValid(int i, Difficulty d) const {
     return !label_neighbour[i] && (label_difficulty[i] >> static_cast<int>(d) & 1);
   }
+  // The edge (an index into edge_det / edge_overlap) of label i with detection j, or -1 when
+  // their overlap is below min_overlap (no edge).
+  int FindEdge(int i, int j) const {
+    for (int e = edge_begin[i]; e < edge_begin[i + 1]; ++e) {
+      if (edge_det[e] == j) return e;
+    }
+    return -1;
+  }
 };
 
 // PrepareClassFrame's first two steps, shared with PrepareClassFrameOpenPcdet: which labels and

@@ -73,13 +73,9 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
       },
       [&](double s, Outcome o, int j) {
         double overlap = 0.0;
-        if (o == Outcome::kTp) {
-          // The matched pair's overlap: its edge among the label's.
-          const int i = a.det_label[j];
-          overlap = kUnknownOverlap;
-          for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
-            if (cf.edge_det[e] == j) overlap = cf.edge_overlap[e];
-          }
+        if (o == Outcome::kTp) {  // the matched pair's overlap: its edge among the label's
+          const int e = cf.FindEdge(a.det_label[j], j);
+          overlap = e >= 0 ? cf.edge_overlap[e] : kUnknownOverlap;
         }
         AddDetectionTerm(s, o == Outcome::kTp, overlap);
       });

@@ -623,12 +623,13 @@ double RowNumber(const ReportSource::Row& row, const std::string& name) {
   return it == row.number.end() ? kNaN : it->second;
 }
 
+std::string RowText(const ReportSource::Row& row, const std::string& name) {
+  auto it = row.text.find(name);
+  return it == row.text.end() ? std::string() : it->second;
+}
+
 CellKey RowKey(const ReportSource::Row& row) {
-  auto text = [&](const char* n) {
-    auto it = row.text.find(n);
-    return it == row.text.end() ? std::string() : it->second;
-  };
-  return {text("class"), text("metric"), text("difficulty"), ""};
+  return {RowText(row, "class"), RowText(row, "metric"), RowText(row, "difficulty"), ""};
 }
 
 // The cells of CSV sources in the first source's order, with every source's rows of each.
@@ -1114,10 +1115,7 @@ std::string PairedTableHtml(const std::vector<ReportSource>& sources) {
   std::string rows;
   for (const ReportSource& s : sources) {
     for (const ReportSource::Row& row : s.paired) {
-      const auto text = [&](const char* n) {
-        const auto it = row.text.find(n);
-        return it == row.text.end() ? std::string() : it->second;
-      };
+      const auto text = [&](const char* name) { return RowText(row, name); };
       const std::string measure = text("measure");
       if (measure != "ap_r40" && measure != "brier_labels") continue;
       const int decimals = measure == "ap_r40" ? 2 : 4;

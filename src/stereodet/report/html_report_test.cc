@@ -35,6 +35,17 @@ const fs::path kData = ::stereodet::TestSourceDir() / "tests/data";
 
 // tests/data/eval_small with the KITTI matcher (41-slot arrays) or the optimal one, every class,
 // metric and difficulty (or Car 2D only), written with its report (SVG only unless `png`).
+// `eval compare` of tests/data/eval_compare's two detection sets, Car 2D (set out before running).
+EvaluationCompareOptions CarCompareOptions() {
+  EvaluationCompareOptions compare;
+  compare.input.gt = kData / "eval_compare";
+  compare.input.det = kData / "eval_compare/det_a";
+  compare.det_b = kData / "eval_compare/det_b";
+  compare.eval.classes = {KittiClassSpec("Car")};
+  compare.eval.metrics = {OverlapKind::k2D};
+  return compare;
+}
+
 EvaluationResult EvaluateSmall(const fs::path& out, Matcher matcher, bool png = false,
                                bool car_2d_only = false) {
   EvaluationOptions options;
@@ -527,12 +538,7 @@ Plot CompareFigurePlot(const fs::path& folder, const std::string& id) {
 // bootstrap_breakdown.csv give them; without --bootstrap there is no table.
 TEST(ReportTest, CompareReportHasThePairedDifferenceTable) {
   TestTempDir dir;
-  EvaluationCompareOptions compare;
-  compare.input.gt = kData / "eval_compare";
-  compare.input.det = kData / "eval_compare/det_a";
-  compare.det_b = kData / "eval_compare/det_b";
-  compare.eval.classes = {KittiClassSpec("Car")};
-  compare.eval.metrics = {OverlapKind::k2D};
+  EvaluationCompareOptions compare = CarCompareOptions();
   compare.out = dir.path() / "plain";
   RunEvaluationCompare(compare);
   ReportOptions options;
@@ -567,12 +573,7 @@ TEST(ReportTest, CompareReportHasThePairedDifferenceTable) {
 
 TEST(ReportTest, CompareFigureShowsBothErrorsTheirDifferenceAndTheModel) {
   TestTempDir dir;
-  EvaluationCompareOptions compare;
-  compare.input.gt = kData / "eval_compare";
-  compare.input.det = kData / "eval_compare/det_a";
-  compare.det_b = kData / "eval_compare/det_b";
-  compare.eval.classes = {KittiClassSpec("Car")};
-  compare.eval.metrics = {OverlapKind::k2D};
+  EvaluationCompareOptions compare = CarCompareOptions();
   compare.out = dir.path() / "compare";
   RunEvaluationCompare(compare);
   ReportOptions options;
@@ -675,12 +676,7 @@ TEST(ReportTest, SeveralResultsGetTable1OneRowPerModelPerClass) {
 // in the 10-15 m bin (A errs 0.5 m, B 0.2 m), appended after the earlier columns.
 TEST(ReportTest, CompareCsvHasTheDifferenceAMinusBAsItsLastColumn) {
   TestTempDir dir;
-  EvaluationCompareOptions compare;
-  compare.input.gt = kData / "eval_compare";
-  compare.input.det = kData / "eval_compare/det_a";
-  compare.det_b = kData / "eval_compare/det_b";
-  compare.eval.classes = {KittiClassSpec("Car")};
-  compare.eval.metrics = {OverlapKind::k2D};
+  EvaluationCompareOptions compare = CarCompareOptions();
   compare.out = dir.path() / "compare";
   RunEvaluationCompare(compare);
   const std::string text = ReadFile(dir.path() / "compare/compare.csv");
