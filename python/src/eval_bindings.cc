@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -400,6 +401,8 @@ py::dict FilteredCurveDict(const FilteredCurve& c) {
   d["ap_voc"] = c.ap_voc;
   d["aos_r40"] = c.aos_r40;
   d["aos_r11"] = c.aos_r11;
+  d["apl_r40"] = c.apl_r40;
+  d["apl_r11"] = c.apl_r11;
   return d;
 }
 
@@ -442,6 +445,8 @@ py::list Rows(const PyEvalResult& r) {
       row["ap_voc"] = v(c.ap_voc);
       row["aos_r40"] = v(c.aos_r40);
       row["aos_r11"] = v(c.aos_r11);
+      row["apl_r40"] = v(c.apl_r40);
+      row["apl_r11"] = v(c.apl_r11);
       row["threshold"] = v(c.at_threshold.threshold);
       row["tp"] = c.at_threshold.tp;
       row["fp"] = c.at_threshold.fp;
@@ -607,24 +612,42 @@ const ClassResult* FindCell(const PyEvalResult& r, const std::string& class_name
   ThrowValueError("overlaps: no run '" + *overlaps + "' (" + names + ")");
 }
 
+// ClassSpec::min_overlap of three thresholds (2D, BEV, 3D; the LET kinds take BEV's and 3D's, as
+// KittiClassSpec's) or five.
+std::array<double, kNumOverlapKinds> MinOverlaps(const std::vector<double>& v) {
+  if (v.size() == 3) return {v[0], v[1], v[2], v[1], v[2]};
+  if (v.size() == 5) return {v[0], v[1], v[2], v[3], v[4]};
+  throw std::invalid_argument(
+      "min_overlap: 3 thresholds (2D, BEV, 3D) or 5 (and LET-BEV, LET-3D), got " +
+      std::to_string(v.size()));
+}
+
 void BindClassSpec(py::module_& m) {
   py::class_<ClassSpec>(m, "ClassSpec",
                         R"(One evaluated class: its name (compared case-insensitively, as
 the devkit does), the neighbour classes whose labels are ignored (Car: Van; Pedestrian:
-Person_sitting) and the minimum overlap for a match in 2D, BEV and 3D.)")
+Person_sitting) and the minimum overlap for a match in 2D, BEV and 3D (and LET-BEV,
+LET-3D: three values give them BEV's and 3D's).)")
       .def(py::init([](std::string name, std::vector<std::string> neighbours,
-                       std::array<double, kNumOverlapKinds> min_overlap) {
+                       const std::vector<double>& min_overlap) {
              ClassSpec spec;
              spec.name = std::move(name);
              spec.neighbours = std::move(neighbours);
-             spec.min_overlap = min_overlap;
+             spec.min_overlap = MinOverlaps(min_overlap);
              return spec;
            }),
            py::arg("name"), py::arg("neighbours") = std::vector<std::string>{},
-           py::arg("min_overlap") = std::array<double, kNumOverlapKinds>{0.5, 0.5, 0.5})
+           py::arg("min_overlap") = std::vector<double>{0.5, 0.5, 0.5})
       .def_readwrite("name", &ClassSpec::name)
       .def_readwrite("neighbours", &ClassSpec::neighbours)
-      .def_readwrite("min_overlap", &ClassSpec::min_overlap, "(2D, BEV, 3D)")
+      .def_property(
+          "min_overlap",
+          [](const ClassSpec& c) {
+            return std::vector<double>(c.min_overlap.begin(), c.min_overlap.end());
+          },
+          [](ClassSpec& c, const std::vector<double>& v) { c.min_overlap = MinOverlaps(v); },
+          "(2D, BEV, 3D, LET-BEV, LET-3D); set with three (the LET kinds then take BEV's and "
+          "3D's) or five")
       .def("__repr__", [](const ClassSpec& c) {
         return py::str("ClassSpec({!r}, neighbours={!r}, min_overlap={!r})")
             .format(c.name, c.neighbours, c.min_overlap)
@@ -745,6 +768,10 @@ filled). docs/metrics.md defines every number.)")
       .def_readonly("aos_r40", &ClassResult::aos_r40)
       .def_readonly("aos_r11", &ClassResult::aos_r11)
       .def_readonly("has_aos", &ClassResult::has_aos)
+      .def_readonly("apl_r40", &ClassResult::apl_r40,
+                    "LET-APL in percent (metrics let-bev, let-3d; NaN otherwise)")
+      .def_readonly("apl_r11", &ClassResult::apl_r11)
+      .def_readonly("has_apl", &ClassResult::has_apl)
       .def_property_readonly("small_sample", &IsSmallSample,
                              "True for 40 valid labels or fewer (the KITTI matcher's AP_R40 cap)")
       .def_property_readonly(

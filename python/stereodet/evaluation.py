@@ -152,7 +152,8 @@ def evaluate(gt: Source, det: Source, split: Optional[PathLike] = None, *,
     matcher: "kitti" (the official devkit, quirks included), "optimal" or "voc".
     compat: "devkit" or "openpcdet" (OpenPCDet's / mmdetection3d's numbers; matcher kitti).
     classes: names (KITTI's thresholds and neighbours) or ClassSpec objects.
-    metrics: of "2d", "bev", "3d". difficulties: of "easy", "moderate", "hard".
+    metrics: of "2d", "bev", "3d", "let-bev", "let-3d" (LET-3D-AP at Waymo's tolerance, 10 % of the
+      range, at least 0.5 m; the cells' apl_r40 / apl_r11 its LET-APL). difficulties: of "easy", "moderate", "hard".
     overlaps: "strict" (0.7 / 0.5 / 0.5), "loose" (KITTI's second set for BEV and 3D), or several,
       "strict,loose" or ["strict", "loose"] (the CLI's --overlaps): one run each (result.runs).
     filters: "min-area=100,max-distance=40" (the CLI's syntax), a dict {"min_area": 100}, or

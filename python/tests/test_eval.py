@@ -42,16 +42,15 @@ def cli_results(cli, tmp_path, *args):
 
 def same_as_cli(result, expected):
     got = result.to_dict()
-    # Everything but what describes the run itself (command line, wall time); the tool's name and
-    # version too (both StereodetVersion(), the CMake project's).
+#Everything but what describes the run itself(command line, wall time); the tool's name and
+#version too(both StereodetVersion(), the CMake project's).
     for key in expected:
         if key not in ("command_line", "seconds"):
             assert got[key] == expected[key], key
     assert got["tool"] == {"name": "stereodet eval", "version": stereodet.__version__}
     assert set(got) == set(expected)
 
-
-# --- Folders, against the CLI ---
+#-- - Folders, against the CLI -- -
 
 def test_folders_give_the_clis_numbers_to_the_last_digit(cli, small, random_set, tmp_path):
     for label_dir, det_dir in (small[:2], random_set[:2]):
@@ -63,6 +62,8 @@ def test_folders_give_the_clis_numbers_to_the_last_digit(cli, small, random_set,
 @pytest.mark.parametrize("python, flags", [
     (dict(matcher="optimal", classes=["Car", "Pedestrian"], metrics=["bev", "3d"]),
      ["--matcher", "optimal", "--classes", "Car,Pedestrian", "--metrics", "bev,3d"]),
+    (dict(matcher="optimal", classes=["Car"], metrics=["3d", "let-3d", "let-bev"]),
+     ["--matcher", "optimal", "--classes", "Car", "--metrics", "3d,let-3d,let-bev"]),
     (dict(filters={"min_area": 400, "max-distance": 40}, filter_mode="naive",
           score_threshold=0.3, overlaps="loose"),
      ["--filter", "min-area=400,max-distance=40", "--filter-mode", "naive",
@@ -96,8 +97,7 @@ def test_a_kitti_root_with_a_split(cli, data, tmp_path):
     same_as_cli(result, expected)
     assert result.num_frames == 2
 
-
-# --- Several overlap sets, as the CLI's --overlaps ---
+#-- - Several overlap sets, as the CLI's --overlaps ---
 
 def test_overlap_sets_are_the_clis_runs(cli, random_set, tmp_path):
     label_dir, det_dir = random_set[:2]
@@ -105,18 +105,18 @@ def test_overlap_sets_are_the_clis_runs(cli, random_set, tmp_path):
     same_as_cli(both, cli_results(cli, tmp_path / "both", "--gt", label_dir, "--det", det_dir,
                                   "--overlaps", "strict,loose"))
     assert both.overlaps == ["strict", "loose"] and len(both.runs) == 2
-    # Each run is the CLI's run of that set alone.
+#Each run is the CLI's run of that set alone.
     strict, loose = both.runs
     same_as_cli(strict, cli_results(cli, tmp_path / "strict", "--gt", label_dir, "--det",
                                     det_dir))
     same_as_cli(loose, cli_results(cli, tmp_path / "loose", "--gt", label_dir, "--det", det_dir,
                                    "--overlaps", "loose"))
     assert strict.overlaps == ["strict"] and loose.overlaps == ["loose"]
-    # KITTI's thresholds: Car 0.7 / 0.7 / 0.7 strict, 0.7 / 0.5 / 0.5 loose.
+#KITTI's thresholds: Car 0.7 / 0.7 / 0.7 strict, 0.7 / 0.5 / 0.5 loose.
     assert strict.find("Car", "3d").min_overlap == 0.7
     assert loose.find("Car", "3d").min_overlap == 0.5
     assert loose.find("Car", "2d").min_overlap == 0.7
-    # The whole: every run's cells in run order, rows tagged, the CLI's table.
+#The whole : every run 's cells in run order, rows tagged, the CLI' s table.
     assert len(both.cells) == len(strict.cells) + len(loose.cells) == 54
     assert [r["overlaps"] for r in both.rows()] == ["strict"] * 27 + ["loose"] * 27
     assert both.find("Car", "bev", overlaps="loose").ap_r40 == loose.ap("Car", "bev")
@@ -124,7 +124,7 @@ def test_overlap_sets_are_the_clis_runs(cli, random_set, tmp_path):
     out = cli("eval", "--gt", label_dir, "--det", det_dir, "--overlaps", "strict,loose").stdout
     assert both.table() in out and "overlaps loose" in both.table()
     assert both.num_frames == 300 and both.seconds == strict.seconds + loose.seconds
-    # A list works as the text does; one set is the result as before.
+#A list works as the text does; one set is the result as before.
     listed = stereodet.evaluate(label_dir, det_dir, overlaps=["strict", "loose"]).to_dict()
     assert listed["results"] == both.to_dict()["results"]
     one = stereodet.evaluate(label_dir, det_dir)
@@ -153,20 +153,19 @@ def test_overlap_sets_refuse_what_is_ambiguous(small):
     spec = stereodet.ClassSpec("Car", ["Van"], [0.6, 0.6, 0.6])
     with pytest.raises(ValueError, match="ClassSpec objects have their own thresholds"):
         stereodet.evaluate(gt, dt, classes=[spec], overlaps="strict,loose")
-    # One set: a ClassSpec keeps its thresholds, names beside it get the set's.
+#One set : a ClassSpec keeps its thresholds, names beside it get the set's.
     custom = stereodet.evaluate(gt, dt, classes=[spec, "Pedestrian"], overlaps="loose")
     assert custom.find("Car", "3d").min_overlap == 0.6
     assert custom.find("Pedestrian", "3d").min_overlap == 0.25
     truck = stereodet.ClassSpec("Truck", [], [0.4, 0.3, 0.2])
     assert stereodet.evaluate(gt, dt, classes=[truck], all_classes=True).options.classes[0] \
-        .min_overlap == [0.4, 0.3, 0.2]
+        .min_overlap == [0.4, 0.3, 0.2, 0.3, 0.2]
     with pytest.raises(ValueError, match="filter_sweep takes one overlap set"):
         stereodet.filter_sweep(label_dir, det_dir, "min-area", overlaps="strict,loose")
     with pytest.raises(ValueError, match="compare takes one overlap set"):
         stereodet.compare(label_dir, det_dir, det_dir, overlaps="strict,loose")
 
-
-# --- out=: the CLI's results folder ---
+#-- - out = : the CLI's results folder ---
 
 def files_under(folder):
     return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
@@ -210,7 +209,7 @@ def test_out_writes_the_clis_results_folder(cli, random_set, tmp_path, python, f
     assert sorted(os.path.relpath(f, tmp_path / "py") for f in result.files) == files
     if python.get("records"):
         assert {"matches_strict.csv", "matches_loose.csv"} <= set(files)
-    # An earlier results folder is replaced whole; a folder of other files is refused.
+#An earlier results folder is replaced whole; a folder of other files is refused.
     stereodet.evaluate(label_dir, det_dir, out=tmp_path / "py", **python)
     assert files_under(tmp_path / "py") == files
     (tmp_path / "mine").mkdir()
@@ -225,7 +224,7 @@ def test_out_of_annotation_dicts_is_the_same_report(cli, random_set, tmp_path):
     label_dir, det_dir, gt, dt = random_set
     cli("eval", "--gt", label_dir, "--det", det_dir, "--out", tmp_path / "cli", "--records")
     result = stereodet.evaluate(gt, dt, out=tmp_path / "py", records=True)
-    # The numbers and curves byte for byte; results.json differs in what was read (no folders).
+#The numbers and curves byte for byte; results.json differs in what was read(no folders).
     assert_same_folder(tmp_path / "cli", tmp_path / "py", results_json=False)
     written = json.loads((tmp_path / "py" / "results.json").read_text())
     expected = json.loads((tmp_path / "cli" / "results.json").read_text())
@@ -254,7 +253,7 @@ def test_sweep_and_compare_out_are_the_clis_csvs(cli, small, data, tmp_path):
                       disparity_error_px=0.5, out=tmp_path / "py_compare")
     assert (tmp_path / "py_compare" / "compare.csv").read_bytes() == \
         (tmp_path / "cli_compare" / "compare.csv").read_bytes()
-    # A Calibration object is the in-memory path: the same rows as the CLI's call.
+#A Calibration object is the in - memory path : the same rows as the CLI's call.
     in_memory = stereodet.compare(root / "label_2", root / "det_a", root / "det_b",
                                   classes="Car", disparity_error_px=0.5,
                                   calib=kitti.Calibration.kitti_like())
@@ -265,8 +264,7 @@ def test_sweep_and_compare_out_are_the_clis_csvs(cli, small, data, tmp_path):
     with pytest.raises(ValueError, match="only for folders"):
         stereodet.filter_sweep(small[2], small[3], "min-area", out=tmp_path / "x")
 
-
-# --- Annotation dicts ---
+#-- - Annotation dicts -- -
 
 def test_annotation_dicts_give_the_numbers_of_their_files(small, random_set):
     for label_dir, det_dir, gt, dt in (small, random_set):
@@ -279,7 +277,7 @@ def test_annotation_dicts_give_the_numbers_of_their_files(small, random_set):
 
 def test_openpcdet_prediction_dtypes_are_accepted(random_set):
     _, _, gt, dt = random_set
-    # OpenPCDet's predictions: float32 arrays, zero truncation/occlusion, extra keys.
+#OpenPCDet's predictions: float32 arrays, zero truncation/occlusion, extra keys.
     preds = []
     for d in dt:
         p = {k: (v.astype(np.float32) if v.dtype.kind == "f" else v) for k, v in d.items()}
@@ -287,7 +285,8 @@ def test_openpcdet_prediction_dtypes_are_accepted(random_set):
         p["occluded"] = np.zeros(len(d["name"]))
         p["boxes_lidar"] = np.zeros((len(d["name"]), 7))
         preds.append(p)
-    ref = [{k: v.astype(np.float32).astype(np.float64) if v.dtype.kind == "f" else v
+    ref = [{
+k: v.astype(np.float32).astype(np.float64) if v.dtype.kind == "f" else v
             for k, v in d.items()} for d in dt]
     got = stereodet.evaluate(gt, preds).to_dict()["results"]
     assert got == stereodet.evaluate(gt, ref).to_dict()["results"]
@@ -327,7 +326,7 @@ def test_rows_are_flat_and_agree_with_the_cells(small):
         assert (row["class"], row["metric"], row["difficulty"]) == \
                (cell.class_name, cell.metric, cell.difficulty)
         assert row["ap_r40"] == cell.ap_r40 and row["tp"] == cell.at_threshold["tp"]
-    # A table of columns, as pandas.DataFrame(rows) builds it.
+#A table of columns, as pandas.DataFrame(rows) builds it.
     table = np.rec.fromrecords([tuple(r.values()) for r in rows], names=list(rows[0]))
     assert table["ap_r40"].dtype == np.float64
 
@@ -346,26 +345,29 @@ def test_cells_find_and_ap(small):
     assert (entry["class"], entry["metric"], entry["difficulty"]) == ("Car", "3d", "Moderate")
     assert entry["ap_r40"] == cell.ap_r40
     assert "Car" in str(result) and "AP_R40" in result.table()
+    assert math.isnan(cell.apl_r40) and not cell.has_apl
+    let = stereodet.evaluate(small[0], small[1], classes=["Car"], metrics=["let-3d"]) \
+        .find("Car", "let-3d", "Moderate")
+    assert let.has_apl and not let.has_aos and 0 <= let.apl_r40 <= let.ap_r40
 
 
 def test_the_result_outlives_its_inputs(small):
     cells = stereodet.evaluate(list(small[2]), list(small[3]), records=True).cells
     assert cells[0].class_name == "Car"  # the result object is kept alive by its cells
 
-
-# --- OpenPCDet's get_official_eval_result ---
+#-- - OpenPCDet's get_official_eval_result ---
 
 def test_get_official_eval_result_prints_openpcdets_table(data, small, cli, tmp_path):
     gt, dt = small[2], small[3]
     text, figures = stereodet.get_official_eval_result(gt, dt, ["Car", "Pedestrian", "Cyclist"])
     assert text == (data / "eval_small" / "openpcdet_expected.txt").read_text()
-    # Its keys, in its order: per class aos (alpha is valid here), 3d, bev, image, R40, strict.
+#Its keys, in its order : per class aos(alpha is valid here), 3d, bev, image, R40, strict.
     expected_keys = [f"{c}_{k}/{level}_R40" for c in ("Car", "Pedestrian", "Cyclist")
                      for k in ("aos", "3d", "bev", "image")
                      for level in ("easy", "moderate", "hard")]
     assert list(figures) == expected_keys
     assert all(isinstance(v, np.float64) for v in figures.values())
-    # The figures are `stereodet eval --compat openpcdet`'s AP_R40 (strict set), exactly.
+#The figures are `stereodet eval-- compat openpcdet`'s AP_R40 (strict set), exactly.
     json_results = cli_results(cli, tmp_path, "--gt", small[0], "--det", small[1],
                                "--compat", "openpcdet")["results"]
     kinds = {"3d": "3d", "bev": "bev", "image": "2d"}
@@ -383,7 +385,7 @@ def test_get_official_eval_result_fills_pr_details(small):
     _, figures = stereodet.get_official_eval_result(small[2], small[3], [0, 1], details)
     assert set(details) == {"bbox", "aos", "bev", "3d"}
     assert details["3d"].shape == (2, 3, 2, 41)
-    # OpenPCDet's get_mAP_R40 of the strict set gives its figures back.
+#OpenPCDet's get_mAP_R40 of the strict set gives its figures back.
     r40 = details["3d"][..., 1:].sum(axis=-1) / 40 * 100
     assert r40[0, 1, 0] == pytest.approx(figures["Car_3d/moderate_R40"], abs=1e-9)
     assert r40[1, 2, 0] == pytest.approx(figures["Pedestrian_3d/hard_R40"], abs=1e-9)
@@ -407,7 +409,7 @@ def test_breakdowns_are_the_clis(cli, small, tmp_path):
     same_as_cli(result, expected)
     cell = result.find("Car", "2d")  # Moderate
     assert [b["bin"] for b in cell.breakdown] == ["[0, 40)", "[40, inf)", "[0, 1)", "[1, 4)"]
-    # The height bins partition the cell's true positives (docs/metrics.md, "Breakdowns").
+#The height bins partition the cell's true positives (docs/metrics.md, "Breakdowns").
     assert sum(b["at_threshold"]["tp"] for b in cell.breakdown[:2]) == cell.at_threshold["tp"]
     with pytest.raises(ValueError, match="edges must increase"):
         stereodet.evaluate(label_dir, det_dir, breakdowns="distance=30,0")
@@ -434,8 +436,7 @@ def test_naive_breakdowns_are_the_clis(cli, small, tmp_path):
     with pytest.raises(ValueError, match="give breakdowns"):
         stereodet.evaluate(label_dir, det_dir, breakdown_naive=True)
 
-
-# --- Sweep and compare, against the CLI's CSVs ---
+#-- - Sweep and compare, against the CLI's CSVs ---
 
 def test_filter_sweep_is_the_clis(cli, small):
     label_dir, det_dir = small[:2]
@@ -469,14 +470,13 @@ def test_compare_is_the_clis(cli, data, tmp_path):
     assert bins == [(10.0, 1, 0.5, 0.2), (20.0, 1, 1.0, 2.0)]  # eval_compare/README.md
     for row, want in zip(rows, expected):
         assert row["count_b"] == int(want["count_b"])
-        # An empty cell where a bin has no pair; else the shortest text that reads back exactly.
+#An empty cell where a bin has no pair; else the shortest text that reads back exactly.
         if want["abs_dz_mean_b"] == "":
             assert math.isnan(row["abs_depth_error_mean_b_m"])
         else:
             assert row["abs_depth_error_mean_b_m"] == float(want["abs_dz_mean_b"])
 
-
-# --- Bad input ---
+#-- - Bad input -- -
 
 def test_bad_input_raises_value_and_os_errors(small, data, tmp_path, cli):
     gt, dt = small[2], small[3]
@@ -507,7 +507,7 @@ def test_bad_input_raises_value_and_os_errors(small, data, tmp_path, cli):
         stereodet.evaluate(gt, dt, filters="min-size=3")
     with pytest.raises(OSError, match="no_such_folder"):
         stereodet.evaluate(tmp_path / "no_such_folder", small[1])
-    # A bad detection line: the CLI's message, as a ParseError.
+#A bad detection line : the CLI's message, as a ParseError.
     bad = data / "eval_bad_det"
     with pytest.raises(stereodet.ParseError) as caught:
         stereodet.evaluate(bad / "label_2", bad / "det")

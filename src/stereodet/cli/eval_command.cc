@@ -23,6 +23,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -75,6 +76,8 @@ struct EvalArgs {
   EvalOptions eval;        // --score-threshold, --calibration-bins, ..., --threads
   std::string classes = JoinNames(EvalOptions().classes, [](const ClassSpec& c) { return c.name; });
   std::string metrics = JoinNames(EvalOptions().metrics, OverlapKindName);
+  std::string let_tolerance;  // --let-tolerance FRACTION,MIN_M (empty: LetOptions' defaults)
+  std::string let_sensor;     // --let-sensor X,Y,Z (empty: the origin)
   std::string difficulties = JoinNames(
       EvalOptions().difficulties, [](Difficulty d) { return ToLowerAscii(DifficultyName(d)); });
   std::string matcher = MatcherName(EvalOptions().matcher);
@@ -161,7 +164,15 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--split", a->input.split,
                   "frame ids, one per line (or a name in ROOT/ImageSets)");
   cmd->add_option("--classes", a->classes, "classes, comma separated")->capture_default_str();
-  cmd->add_option("--metrics", a->metrics, "overlap kinds: 2d,bev,3d")->capture_default_str();
+  cmd->add_option("--metrics", a->metrics,
+                  "overlap kinds: 2d,bev,3d and LET-3D-AP's let-bev,let-3d (docs/metrics.md)")
+      ->capture_default_str();
+  cmd->add_option("--let-tolerance", a->let_tolerance,
+                  "let-bev / let-3d: longitudinal tolerance FRACTION,MIN_M, max(FRACTION x range, "
+                  "MIN_M) (default 0.1,0.5, Waymo's)");
+  cmd->add_option("--let-sensor", a->let_sensor,
+                  "let-bev / let-3d: the sensor X,Y,Z in the camera frame, m, whose lines of sight "
+                  "the tolerance runs along (default 0,0,0, KITTI's camera 0)");
   cmd->add_option("--difficulties", a->difficulties, "easy,moderate,hard")->capture_default_str();
   cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc (COCO mode: coco | optimal)")
       ->capture_default_str();
@@ -219,6 +230,41 @@ std::vector<std::string> SplitList(const std::string& text) {
   return out;
 }
 
+// `count` finite numbers separated by commas, or a clear error naming `flag`.
+std::vector<double> ParseNumbers(const std::string& text, size_t count, const char* flag,
+                                 const char* what) {
+  std::vector<double> out;
+  for (const std::string& part : SplitList(text)) {
+    const std::optional<double> v = ParseDouble(part);
+    STEREODET_CHECK(v.has_value() && std::isfinite(*v))
+        << flag << ": '" << part << "' is not a finite number (" << what << ")";
+    out.push_back(*v);
+  }
+  STEREODET_CHECK(out.size() == count)
+      << flag << ": expected " << count << " numbers " << what << ", got '" << text << "'";
+  return out;
+}
+
+// EvalOptions::let of --let-tolerance and --let-sensor (each empty: its default).
+LetOptions ParseLetFlags(const std::string& tolerance, const std::string& sensor) {
+  LetOptions let;
+  if (!tolerance.empty()) {
+    const std::vector<double> v = ParseNumbers(tolerance, 2, "--let-tolerance", "FRACTION,MIN_M");
+    let.longitudinal_tolerance_fraction = v[0];
+    let.min_longitudinal_tolerance_m = v[1];
+  }
+  if (!sensor.empty()) {
+    const std::vector<double> v = ParseNumbers(sensor, 3, "--let-sensor", "X,Y,Z in metres");
+    let.sensor_m = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  try {
+    let.Check();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--let-tolerance / --let-sensor: ") + e.what());
+  }
+  return let;
+}
+
 // The overlap sets of --overlaps (and --loose, its alias for loose), in the order given.
 std::vector<OverlapSet> OverlapSets(const EvalArgs& a) {
   std::vector<OverlapSet> sets;
@@ -260,9 +306,11 @@ EvalOptions MakeOptions(const EvalArgs& a) {
   o.metrics.clear();
   for (const std::string& m : SplitList(a.metrics)) {
     const auto kind = ParseOverlapKind(m);
-    STEREODET_CHECK(kind.has_value()) << "--metrics: unknown '" << m << "' (2d, bev, 3d)";
+    STEREODET_CHECK(kind.has_value())
+        << "--metrics: unknown '" << m << "' (2d, bev, 3d, let-bev, let-3d)";
     o.metrics.push_back(*kind);
   }
+  o.let = ParseLetFlags(a.let_tolerance, a.let_sensor);
   o.difficulties.clear();
   for (const std::string& d : SplitList(a.difficulties)) {
     const auto difficulty = ParseDifficulty(d);

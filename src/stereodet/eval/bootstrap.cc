@@ -296,10 +296,10 @@ Prepared Prepare(const std::vector<EvalFrame>& frames, const EvalOptions& eval,
         ParallelFor(
             n,
             [&](size_t f) {
-              cfs[f] =
-                  eval.compat == EvalCompat::kOpenPcdet
-                      ? PrepareClassFrameOpenPcdet(frames[f], spec, kind, std::move(cfs[f]))
-                      : PrepareClassFrame(frames[f], spec, kind, arithmetic, std::move(cfs[f]));
+              cfs[f] = eval.compat == EvalCompat::kOpenPcdet
+                           ? PrepareClassFrameOpenPcdet(frames[f], spec, kind, std::move(cfs[f]))
+                           : PrepareClassFrame(frames[f], spec, kind, arithmetic, std::move(cfs[f]),
+                                               /*reuse_selection=*/false, eval.let);
             },
             threads);
       }

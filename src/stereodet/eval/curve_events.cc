@@ -28,7 +28,7 @@ Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const Frame
       const int j = a.label_det[i];
       if (pair_passes(i, j)) {
         ++t.tp;
-        t.similarity += (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[i])) / 2.0;
+        t.similarity += cf.TpWeight(i, j, cf.edge_affinity.empty() ? -1 : cf.FindEdge(i, j));
       }
     } else if (a.label_outcome[i] == Outcome::kFn) {
       if (label_passes(i)) ++t.fn;
@@ -121,7 +121,7 @@ struct ComponentScratch {
   std::vector<uint8_t> single;
   std::vector<ClassFrame> comps;  // the first num_comps hold this call's components
   int num_comps = 0;
-  std::vector<std::pair<int32_t, double>> dets;  // SingleLabelSimilarityEvents'
+  std::vector<std::pair<int32_t, int32_t>> dets;  // SingleLabelSimilarityEvents'
 };
 
 ComponentScratch& ComponentMemory() {
@@ -209,6 +209,7 @@ void EdgeComponents(const ClassFrame& cf, OnLabel on_label, ComponentScratch* sc
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
       c.edge_det.push_back(local[nl + cf.edge_det[e]]);
       c.edge_overlap.push_back(cf.edge_overlap[e]);
+      if (!cf.edge_affinity.empty()) c.edge_affinity.push_back(cf.edge_affinity[e]);
     }
     c.edge_begin.push_back(static_cast<int32_t>(c.edge_det.size()));
   }
@@ -216,28 +217,28 @@ void EdgeComponents(const ClassFrame& cf, OnLabel on_label, ComponentScratch* sc
 
 // The similarity events of a component made of one label and the detections overlapping only it.
 // The optimal association pairs the label, if valid, with its best present valid detection: the
-// largest (not inside DontCare, overlap), the lowest index among equals (OptimalAssociate makes the
-// same choice for a one-label component). So the partner changes only when a better detection
-// arrives.
+// largest (not inside DontCare, ClassFrame::EdgeWeight), the lowest index among equals
+// (OptimalAssociate makes the same choice for a one-label component). So the partner changes only
+// when a better detection arrives.
 void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty difficulty,
-                                 std::vector<std::pair<int32_t, double>>* dets_memory,
+                                 std::vector<std::pair<int32_t, int32_t>>* dets_memory,
                                  std::vector<CurveEvent>* events) {
   if (!cf.LabelValid(label, difficulty)) return;
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  std::vector<std::pair<int32_t, double>>& dets = *dets_memory;  // (detection, overlap), valid ones
+  std::vector<std::pair<int32_t, int32_t>>& dets = *dets_memory;  // (detection, edge), valid ones
   dets.clear();
   for (int e = cf.edge_begin[label]; e < cf.edge_begin[label + 1]; ++e) {
     const int j = cf.edge_det[e];
-    if (cf.det_is_class[j] && std::trunc(cf.det_height[j]) >= min_height)
-      dets.emplace_back(j, cf.edge_overlap[e]);
+    if (cf.det_is_class[j] && std::trunc(cf.det_height[j]) >= min_height) dets.emplace_back(j, e);
   }
   StableSortSmall(dets.begin(), dets.end(), [&](const auto& a, const auto& b) {
     return cf.det_score[a.first] > cf.det_score[b.first];
   });
-  auto better = [&](const std::pair<int32_t, double>& a, const std::pair<int32_t, double>& b) {
+  auto better = [&](const std::pair<int32_t, int32_t>& a, const std::pair<int32_t, int32_t>& b) {
     const int ka = cf.det_dontcare[a.first] ? 0 : 1, kb = cf.det_dontcare[b.first] ? 0 : 1;
     if (ka != kb) return ka > kb;
-    if (a.second != b.second) return a.second > b.second;
+    const double wa = cf.EdgeWeight(a.second), wb = cf.EdgeWeight(b.second);
+    if (wa != wb) return wa > wb;
     return a.first < b.first;
   };
   int best = -1;
@@ -249,8 +250,7 @@ void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty dif
       if (best < 0 || better(dets[k], dets[best])) best = static_cast<int>(k);
     }
     if (best == before) continue;
-    const int j = dets[best].first;
-    const double now = (1.0 + std::cos(cf.det_alpha[j] - cf.label_alpha[label])) / 2.0;
+    const double now = cf.TpWeight(label, dets[best].first, dets[best].second);
     CurveEvent ev;
     ev.score = score;
     ev.similarity = now - similarity;

@@ -23,7 +23,8 @@ struct CurvePoint {
   double precision = 0.0;  // tp / (tp + fp); 0 when there is no detection
   double recall = 0.0;     // tp / (tp + fn); 0 when there is no label
   // Sum over the TP pairs of (1 + cos(alpha_det - alpha_label)) / 2, and its ratio to tp + fp (the
-  // devkit's AOS "precision"; 0 when there is no detection). Filled only where AOS is computed.
+  // devkit's AOS "precision"; 0 when there is no detection). Filled only where AOS is computed. In
+  // the LET kinds, the sum of the TPs' longitudinal affinities and LET-APL's weighted precision.
   double similarity = 0.0;
   double orientation = 0.0;
 };

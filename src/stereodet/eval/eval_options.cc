@@ -1,5 +1,6 @@
 #include "stereodet/eval/eval_options.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 
@@ -51,12 +52,17 @@ const char* OverlapKindName(OverlapKind kind) {
       return "bev";
     case OverlapKind::k3D:
       return "3d";
+    case OverlapKind::kLetBev:
+      return "let-bev";
+    case OverlapKind::kLet3D:
+      return "let-3d";
   }
   return "?";
 }
 
 std::optional<OverlapKind> ParseOverlapKind(std::string_view text) {
-  for (OverlapKind k : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D}) {
+  for (OverlapKind k : {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D, OverlapKind::kLetBev,
+                        OverlapKind::kLet3D}) {
     if (EqualsIgnoreCase(text, OverlapKindName(k))) return k;
   }
   return std::nullopt;
@@ -65,17 +71,18 @@ std::optional<OverlapKind> ParseOverlapKind(std::string_view text) {
 ClassSpec KittiClassSpec(const std::string& name, bool loose) {
   ClassSpec spec;
   spec.name = name;
+  // (2D, BEV and 3D); the LET kinds copy BEV and 3D.
+  const auto set = [&](double image, double box) {
+    spec.min_overlap = {image, box, box, box, box};
+  };
   if (EqualsIgnoreCase(name, "Car")) {
     spec.neighbours = {"Van"};
-    spec.min_overlap =
-        loose ? std::array<double, 3>{0.7, 0.5, 0.5} : std::array<double, 3>{0.7, 0.7, 0.7};
+    set(0.7, loose ? 0.5 : 0.7);
   } else if (EqualsIgnoreCase(name, "Pedestrian")) {
     spec.neighbours = {"Person_sitting"};
-    spec.min_overlap =
-        loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
+    set(0.5, loose ? 0.25 : 0.5);
   } else if (EqualsIgnoreCase(name, "Cyclist")) {
-    spec.min_overlap =
-        loose ? std::array<double, 3>{0.5, 0.25, 0.25} : std::array<double, 3>{0.5, 0.5, 0.5};
+    set(0.5, loose ? 0.25 : 0.5);
   }
   return spec;
 }
@@ -137,18 +144,27 @@ double ApplyScoreTransform(ScoreTransform transform, double score) {
 
 void EvalOptions::Check() const {
   STEREODET_CHECK(!classes.empty()) << "no class to evaluate";
-  STEREODET_CHECK(!metrics.empty()) << "no overlap kind (2d, bev, 3d) to evaluate";
+  STEREODET_CHECK(!metrics.empty()) << "no overlap kind (2d, bev, 3d, let-bev, let-3d) to evaluate";
   STEREODET_CHECK(!difficulties.empty()) << "no difficulty to evaluate";
   for (const ClassSpec& c : classes) {
     STEREODET_CHECK(!c.name.empty()) << "empty class name";
-    for (double tau : c.min_overlap) {
+    // The evaluated kinds' thresholds only: a spec made with three (2D, BEV, 3D) leaves the LET
+    // kinds' at 0, which matters only when they are evaluated.
+    for (OverlapKind kind : metrics) {
+      const double tau = c.min_overlap[static_cast<int>(kind)];
       STEREODET_CHECK(tau > 0 && tau <= 1)
-          << "class " << c.name << ": min overlap must be in (0, 1], got " << tau;
+          << "class " << c.name << ": min overlap (" << OverlapKindName(kind)
+          << ") must be in (0, 1], got " << tau;
     }
   }
   STEREODET_CHECK(compat == EvalCompat::kDevkit || matcher == Matcher::kKitti)
       << "compat " << EvalCompatName(compat)
       << " reproduces a KITTI evaluation: it needs matcher kitti, got " << MatcherName(matcher);
+  const bool has_let = std::any_of(metrics.begin(), metrics.end(), IsLetKind);
+  STEREODET_CHECK(compat == EvalCompat::kDevkit || !has_let)
+      << "compat " << EvalCompatName(compat)
+      << " has no LET overlaps (let-bev, let-3d): evaluate them without it";
+  if (has_let) let.Check();
   STEREODET_CHECK(!std::isnan(score_threshold)) << "score_threshold is NaN";
   STEREODET_CHECK(calibration_bins >= 1 && calibration_bins <= 10000)
       << "calibration_bins must be in [1, 10000], got " << calibration_bins;

@@ -5,6 +5,7 @@
 #ifndef STEREODET_EVAL_EVAL_OPTIONS_H_
 #define STEREODET_EVAL_EVAL_OPTIONS_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <limits>
 #include <optional>
@@ -37,23 +38,56 @@ enum class EvalCompat {
 const char* EvalCompatName(EvalCompat compat);  // "devkit", "openpcdet"
 std::optional<EvalCompat> ParseEvalCompat(std::string_view text);
 
-// Which overlap decides a match. The numeric values index ClassSpec::min_overlap.
-enum class OverlapKind { k2D = 0, kBev = 1, k3D = 2 };
-inline constexpr int kNumOverlapKinds = 3;
-const char* OverlapKindName(OverlapKind kind);  // "2d", "bev", "3d"
+// Which overlap decides a match. The numeric values index ClassSpec::min_overlap. kLetBev and
+// kLet3D are LET-3D-AP's longitudinal-error-tolerant BEV and 3D overlaps (let.h, docs/metrics.md
+// "LET-3D-AP"): the detection moved along its line of sight to the label, a match also needing a
+// longitudinal affinity above 0; their TP-weighted AP is LET-APL (ClassResult::apl_r40).
+enum class OverlapKind { k2D = 0, kBev = 1, k3D = 2, kLetBev = 3, kLet3D = 4 };
+inline constexpr int kNumOverlapKinds = 5;
+const char* OverlapKindName(OverlapKind kind);  // "2d", "bev", "3d", "let-bev", "let-3d"
 std::optional<OverlapKind> ParseOverlapKind(std::string_view text);
+// True for kLetBev and kLet3D.
+constexpr bool IsLetKind(OverlapKind kind) {
+  return kind == OverlapKind::kLetBev || kind == OverlapKind::kLet3D;
+}
+// The plain overlap a kind measures the aligned box with: kBev for kLetBev, k3D for kLet3D, the
+// kind itself otherwise (also the DontCare test of a LET kind: regions are not moved).
+constexpr OverlapKind PlainKind(OverlapKind kind) {
+  return kind == OverlapKind::kLetBev  ? OverlapKind::kBev
+         : kind == OverlapKind::kLet3D ? OverlapKind::k3D
+                                       : kind;
+}
+
+// The longitudinal error tolerance of the LET kinds (let.h; Waymo's defaults).
+struct LetOptions {
+  // The longitudinal tolerance of a label at range r (m, from the sensor to its centre):
+  // max(longitudinal_tolerance_fraction * r, min_longitudinal_tolerance_m).
+  double longitudinal_tolerance_fraction = 0.1;
+  double min_longitudinal_tolerance_m = 0.5;
+  // The sensor whose line of sight the tolerance runs along, in the rectified camera frame (m).
+  // The default, the frame's origin, is KITTI's reference camera 0; the left colour camera 2 sits
+  // about 6 cm to its left (calib P2: -P2(0,3) / P2(0,0) along x).
+  Eigen::Vector3d sensor_m = Eigen::Vector3d::Zero();
+
+  // Throws std::invalid_argument on a negative or non-finite fraction or minimum, both zero (no
+  // tolerance at all: every affinity 0), or a non-finite sensor position.
+  void Check() const;
+};
 
 // One evaluated class. Names compare case-insensitively, as in KITTI's devkit.
 struct ClassSpec {
   std::string name;                     // "Car"
   std::vector<std::string> neighbours;  // labels of these classes are ignored, e.g. {"Van"}
-  // Minimum overlap for a match, indexed by OverlapKind (2D, BEV, 3D).
-  std::array<double, kNumOverlapKinds> min_overlap = {0.5, 0.5, 0.5};
+  // Minimum overlap for a match, indexed by OverlapKind (2D, BEV, 3D, LET-BEV, LET-3D). Only the
+  // evaluated kinds' need be in (0, 1].
+  std::array<double, kNumOverlapKinds> min_overlap = {0.5, 0.5, 0.5, 0.5, 0.5};
 };
 
 // KITTI's settings for Car (neighbour Van, overlap 0.7), Pedestrian (Person_sitting, 0.5) and
 // Cyclist (0.5). With `loose`, the BEV and 3D thresholds become 0.5 / 0.25 / 0.25 (KITTI's second
-// set); 2D keeps 0.7 / 0.5 / 0.5. Another name gets no neighbours and 0.5 everywhere.
+// set); 2D keeps 0.7 / 0.5 / 0.5. The LET kinds take their plain kind's threshold, so that LET
+// changes only what is forgiven (the loose set is the nearest to Waymo's 0.5 / 0.3 / 0.3). Another
+// name gets no neighbours and 0.5 everywhere.
 ClassSpec KittiClassSpec(const std::string& name, bool loose = false);
 
 // KITTI's two overlap sets (KittiClassSpec's thresholds), as OpenPCDet prints both.
@@ -110,6 +144,9 @@ struct EvalOptions {
   double distance_bin_m = 5.0;
   double max_distance_m = 80.0;
 
+  // The longitudinal tolerance of the LET kinds (metrics kLetBev, kLet3D).
+  LetOptions let;
+
   // Extra filter on labels and detections (difficulty filtering is always KITTI's).
   FilterOptions filter;
 
@@ -129,7 +166,7 @@ struct EvalOptions {
   int num_threads = 0;  // 0 = all hardware threads
 
   // Throws std::invalid_argument on an empty class list, a threshold outside (0, 1], bins < 1,
-  // compat kOpenPcdet with another matcher than kKitti, ...
+  // compat kOpenPcdet with another matcher than kKitti or with a LET kind, ...
   void Check() const;
 };
 

@@ -50,23 +50,25 @@ void ForEachFrame(size_t num_frames, int num_threads, const Fn& fn) {
 struct NoFrameWork {
   void operator()(size_t, const ClassFrame&) const {}
 };
+// `options`: the matcher, compat, LET tolerance and threads.
 template <typename AfterFrame = NoFrameWork>
 std::vector<ClassFrame> PrepareAll(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
-                                   OverlapKind kind, Matcher matcher, int num_threads,
-                                   EvalCompat compat = EvalCompat::kDevkit,
+                                   OverlapKind kind, const EvalOptions& options,
                                    std::vector<ClassFrame> reuse = {},
                                    const AfterFrame& after = AfterFrame{},
                                    bool reuse_selection = false) {
   const OverlapArithmetic arithmetic =
-      matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
+      options.matcher == Matcher::kKitti ? OverlapArithmetic::kDevkit : OverlapArithmetic::kExact;
+  const EvalCompat compat = options.compat;
   std::vector<ClassFrame> out = std::move(reuse);
   reuse_selection = reuse_selection && out.size() == frames.size();
   out.resize(frames.size());
-  ForEachFrame(frames.size(), num_threads, [&](size_t i) {
+  ForEachFrame(frames.size(), options.num_threads, [&](size_t i) {
     if (compat == EvalCompat::kOpenPcdet) {
       out[i] = PrepareClassFrameOpenPcdet(frames[i], spec, kind, std::move(out[i]));
     } else {
-      PrepareClassFrameInPlace(frames[i], spec, kind, arithmetic, reuse_selection, &out[i]);
+      PrepareClassFrameInPlace(frames[i], spec, kind, arithmetic, reuse_selection, &out[i],
+                               options.let);
     }
     after(i, out[i]);
   });
@@ -372,14 +374,17 @@ std::vector<FilteredCurve> StableKittiCurves(
 // The rows of one frame (see MatchRecord), in the documented order.
 std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& frame,
                                       const ClassFrame& cf, const FrameAssociation& a,
-                                      OverlapKind kind, Difficulty difficulty, double threshold) {
+                                      OverlapKind kind, Difficulty difficulty, double threshold,
+                                      const LetOptions& let) {
   std::vector<MatchRecord> rows;
   std::vector<MatchRecord>* out = &rows;
+  auto overlap = [&](int j, int i) {
+    return MatchOverlap(kind, frame.detections[cf.det_object[j]], frame.labels[cf.label_object[i]],
+                        let);
+  };
   auto pair_overlap = [&](int i, int j) {
     const int e = cf.FindEdge(i, j);
-    return e >= 0 ? KittiRecordedOverlap(kind, frame, cf, i, e)
-                  : KittiOverlap(kind, frame.detections[cf.det_object[j]],
-                                 frame.labels[cf.label_object[i]]);
+    return e >= 0 ? KittiRecordedOverlap(kind, frame, cf, i, e) : overlap(j, i);
   };
   for (int j = 0; j < cf.num_dets(); ++j) {
     if (a.det_outcome[j] == Outcome::kNone) continue;
@@ -392,10 +397,7 @@ std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& fram
       r.label_valid = true;
       r.iou = pair_overlap(a.det_label[j], j);
     } else {
-      for (int i = 0; i < cf.num_labels(); ++i) {
-        r.iou = std::max(r.iou, KittiOverlap(kind, frame.detections[cf.det_object[j]],
-                                             frame.labels[cf.label_object[i]]));
-      }
+      for (int i = 0; i < cf.num_labels(); ++i) r.iou = std::max(r.iou, overlap(j, i));
     }
     out->push_back(r);
   }
@@ -408,8 +410,7 @@ std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& fram
     r.label_valid = cf.LabelValid(i, difficulty);
     for (int j = 0; j < cf.num_dets(); ++j) {
       if (!cf.det_is_class[j] || cf.det_score[j] < threshold) continue;
-      r.iou = std::max(r.iou, KittiOverlap(kind, frame.detections[cf.det_object[j]],
-                                           frame.labels[cf.label_object[i]]));
+      r.iou = std::max(r.iou, overlap(j, i));
     }
     out->push_back(r);
   }
@@ -419,13 +420,14 @@ std::vector<MatchRecord> FrameRecords(int32_t frame_index, const EvalFrame& fram
 std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
                                       const std::vector<ClassFrame>& cfs,
                                       const std::vector<FrameAssociation>& assocs, OverlapKind kind,
-                                      Difficulty difficulty, double threshold, int num_threads) {
+                                      Difficulty difficulty, double threshold,
+                                      const LetOptions& let, int num_threads) {
   std::vector<std::vector<MatchRecord>> per_frame(frames.size());
   ParallelFor(
       frames.size(),
       [&](size_t f) {
         per_frame[f] = FrameRecords(static_cast<int32_t>(f), frames[f], cfs[f], assocs[f], kind,
-                                    difficulty, threshold);
+                                    difficulty, threshold, let);
       },
       num_threads);
   size_t total = 0;
@@ -434,6 +436,31 @@ std::vector<MatchRecord> BuildRecords(const std::vector<EvalFrame>& frames,
   out.reserve(total);
   for (const auto& v : per_frame) out.insert(out.end(), v.begin(), v.end());
   return out;
+}
+
+// A LET cell's TP-weighted AP, made in the AOS channel (the TP weight is the affinity there:
+// ClassFrame::TpWeight), is its LET-APL: moved to the apl fields, AOS left NaN.
+void UseWeightedApAsApl(ClassResult* r) {
+  const auto move = [](FilteredCurve* c) {
+    c->apl_r40 = c->aos_r40;
+    c->apl_r11 = c->aos_r11;
+    c->aos_r40 = c->aos_r11 = kNaN;
+  };
+  r->apl_r40 = r->aos_r40;
+  r->apl_r11 = r->aos_r11;
+  r->aos_r40 = r->aos_r11 = kNaN;
+  r->has_apl = r->has_aos;
+  r->has_aos = false;
+  r->kitti_apl = std::move(r->kitti_aos);
+  r->kitti_aos.clear();
+  if (r->filtered) {
+    move(&r->filtered->naive_curve);
+    move(&r->filtered->stable_curve);
+  }
+  for (BreakdownBin& bin : r->breakdown) {
+    move(&bin.curve);
+    if (bin.naive) move(&bin.naive->curve);
+  }
 }
 
 // `r` with the KITTI matcher's curve and summaries.
@@ -580,25 +607,27 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         for (ClassResult& r : cell) result.results.push_back(std::move(r));
         continue;
       }
-      const bool with_aos = result.aos_computed && kind == OverlapKind::k2D;
+      // The TP-weighted AP: AOS in 2D (as the devkit), LET-APL in the LET kinds (their weight, the
+      // affinity, needs no alpha); moved to ClassResult::apl_* at the end (UseWeightedApAsApl).
+      const bool with_aos = (result.aos_computed && kind == OverlapKind::k2D) || IsLetKind(kind);
       // KITTI matcher: its pass 1 goes with the preparation of each frame and its pass 2 with the
       // association at the operating point (kitti_passes.Finish() below).
       static_assert(kFrameBlock == KittiPasses::kBlock);
       KittiPasses kitti_passes(kitti ? frames.size() : 0, difficulties, compat);
       if (kitti) {
         cfs = PrepareAll(
-            frames, spec, kind, options.matcher, threads, compat, std::move(cfs),
+            frames, spec, kind, options, std::move(cfs),
             [&](size_t i, const ClassFrame& cf) { kitti_passes.CollectFrame(i, cf); },
             cfs_class == &spec);
         kitti_passes.ChooseThresholds();
       } else {
-        cfs = PrepareAll(frames, spec, kind, options.matcher, threads, compat, std::move(cfs),
-                         NoFrameWork{}, cfs_class == &spec);
+        cfs = PrepareAll(frames, spec, kind, options, std::move(cfs), NoFrameWork{},
+                         cfs_class == &spec);
       }
       cfs_class = &spec;
       if (!options.filter.empty()) {
-        struck_cfs = PrepareAll(struck, spec, kind, options.matcher, threads, compat,
-                                std::move(struck_cfs), NoFrameWork{}, struck_cfs_class == &spec);
+        struck_cfs = PrepareAll(struck, spec, kind, options, std::move(struck_cfs), NoFrameWork{},
+                                struck_cfs_class == &spec);
         struck_cfs_class = &spec;
       }
 
@@ -674,7 +703,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         }
         r.localization = accs[d].Localization();
         if (options.keep_records) {
-          r.records = BuildRecords(frames, cfs, assocs[d], kind, difficulty, t_op, threads);
+          r.records =
+              BuildRecords(frames, cfs, assocs[d], kind, difficulty, t_op, options.let, threads);
         }
 
         if (!options.filter.empty()) {
@@ -733,8 +763,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
                                                        : WithoutProbabilities(acc.Calibration());
           if (options.breakdown_naive) {
             // The bin evaluated on its own, as an unfiltered cell is.
-            const std::vector<ClassFrame> bin_cfs =
-                PrepareAll(bin_frames[k], spec, kind, options.matcher, threads, compat);
+            const std::vector<ClassFrame> bin_cfs = PrepareAll(bin_frames[k], spec, kind, options);
             BreakdownBin::Naive naive;
             naive.at_threshold =
                 CountAll(AssociateAll(options.matcher, bin_cfs, difficulty, t_op, threads), t_op);
@@ -750,6 +779,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           }
           r.breakdown.push_back(std::move(bin));
         }
+        if (IsLetKind(kind)) UseWeightedApAsApl(&r);
         result.results.push_back(std::move(r));
       }
     }
@@ -775,8 +805,7 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
   std::vector<SweepRow> rows;
   for (const ClassSpec& spec : options.classes) {
     for (const OverlapKind kind : options.metrics) {
-      const std::vector<ClassFrame> cfs =
-          PrepareAll(frames, spec, kind, options.matcher, threads, options.compat);
+      const std::vector<ClassFrame> cfs = PrepareAll(frames, spec, kind, options);
       for (const Difficulty difficulty : options.difficulties) {
         const std::vector<FrameAssociation> assocs =
             AssociateAll(options.matcher, cfs, difficulty, t_op, threads);
@@ -792,8 +821,7 @@ std::vector<SweepRow> FilterSweep(const std::vector<EvalFrame>& frames, const Ev
           row.stats.stable =
               CountStable(frames, cfs, assocs, StableSelection::Filter(conditions), t_op);
           const std::vector<ClassFrame> struck_cfs =
-              PrepareAll(StrikeFailing(frames, conditions, threads), spec, kind, options.matcher,
-                         threads, options.compat);
+              PrepareAll(StrikeFailing(frames, conditions, threads), spec, kind, options);
           row.stats.naive =
               CountAll(AssociateAll(options.matcher, struck_cfs, difficulty, t_op, threads), t_op);
           rows.push_back(std::move(row));

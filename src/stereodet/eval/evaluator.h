@@ -7,6 +7,7 @@
 #define STEREODET_EVAL_EVALUATOR_H_
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,7 +21,8 @@
 
 namespace stereodet {
 
-// The PR curve and its summaries under a filter (percent; aos_* NaN where AOS is not computed).
+// The PR curve and its summaries under a filter (percent; aos_* NaN where AOS is not computed,
+// apl_* NaN but in the LET kinds).
 // KITTI matcher: the devkit's arithmetic (41 slots, envelope) at the devkit thresholds (naive:
 // those of the struck set; stable: those of the unfiltered set). Optimal / VOC: exact at every
 // score.
@@ -28,6 +30,8 @@ struct FilteredCurve {
   std::vector<CurvePoint> curve;
   double ap_r40 = 0.0, ap_r11 = 0.0, ap_voc = 0.0;
   double aos_r40 = 0.0, aos_r11 = 0.0;
+  double apl_r40 = std::numeric_limits<double>::quiet_NaN();
+  double apl_r11 = std::numeric_limits<double>::quiet_NaN();
 };
 
 // TP/FP/FN under a filter at the operating threshold, and the curves, in both modes.
@@ -103,15 +107,23 @@ struct ClassResult {
   int64_t num_detections = 0;    // detections of the class
 
   // Percent. ap_voc is NaN for the KITTI matcher (its curve has only 41 points); aos_* are NaN when
-  // AOS is not computed (BEV/3D, or a detection with alpha = -10, for every matcher).
+  // AOS is not computed (BEV/3D and the LET kinds, or a detection with alpha = -10, for every
+  // matcher). apl_* (LET-3D-APL, docs/metrics.md "LET-3D-AP"): the LET kinds only, NaN otherwise;
+  // AP with each true positive counted as its longitudinal affinity in the precision, computed as
+  // AOS is with the affinity in place of the orientation similarity (so the curve's
+  // CurvePoint::orientation is the affinity-weighted precision in a LET cell).
   double ap_r40 = 0.0, ap_r11 = 0.0, ap_voc = 0.0;
   double aos_r40 = 0.0, aos_r11 = 0.0;
   bool has_aos = false;
+  double apl_r40 = std::numeric_limits<double>::quiet_NaN();
+  double apl_r11 = std::numeric_limits<double>::quiet_NaN();
+  bool has_apl = false;
 
   // KITTI: one point per devkit threshold (<= 41); optimal/VOC: one per distinct score (exact).
   std::vector<CurvePoint> curve;
-  // KITTI matcher only: the devkit's 41-slot arrays after the envelope, and its thresholds.
-  std::vector<double> kitti_precision, kitti_aos, kitti_thresholds;
+  // KITTI matcher only: the devkit's 41-slot arrays after the envelope, and its thresholds;
+  // kitti_aos of a LET cell is its APL's weighted precision (kitti_apl), kitti_aos then empty.
+  std::vector<double> kitti_precision, kitti_aos, kitti_apl, kitti_thresholds;
 
   OperatingPoint at_threshold;            // at EvalOptions::score_threshold
   OperatingPoint best_f1;                 // over the curve's points

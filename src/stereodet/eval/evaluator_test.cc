@@ -327,10 +327,12 @@ TEST(EvaluatorTest, GroundTruthAgainstItselfScores100) {
   }
   EvalOptions options;
   options.num_threads = 2;
+  options.metrics = {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D, OverlapKind::kLetBev,
+                     OverlapKind::kLet3D};
   for (const Matcher matcher : {Matcher::kKitti, Matcher::kOptimal}) {
     options.matcher = matcher;
     const EvalResult result = Evaluate(frames, options);
-    ASSERT_EQ(result.results.size(), 27u);
+    ASSERT_EQ(result.results.size(), 45u);
     for (const ClassResult& r : result.results) {
       SCOPED_TRACE(std::string(MatcherName(matcher)) + " " + r.class_name + " " +
                    OverlapKindName(r.metric) + " " + DifficultyName(r.difficulty));
@@ -338,7 +340,129 @@ TEST(EvaluatorTest, GroundTruthAgainstItselfScores100) {
       EXPECT_GT(r.num_valid_labels, 40);
       EXPECT_EQ(r.ap_r40, 100.0);
       EXPECT_EQ(r.ap_r11, 100.0);
+      // Every detection on its label: affinity exactly 1, so LET-APL is AP.
+      EXPECT_EQ(r.has_apl, IsLetKind(r.metric));
+      if (IsLetKind(r.metric)) {
+        EXPECT_EQ(r.apl_r40, 100.0);
+        EXPECT_EQ(r.apl_r11, 100.0);
+        EXPECT_FALSE(r.has_aos);
+        EXPECT_TRUE(std::isnan(r.aos_r40));
+      } else {
+        EXPECT_TRUE(std::isnan(r.apl_r40));
+      }
     }
+  }
+}
+
+// LET-3D-AP by hand (docs/metrics.md, "LET-3D-AP"): the sensor at the boxes' centre height, so
+// every line of sight is level. Car A 20 m ahead, its detection (score 0.9) 1 m beyond it:
+// tolerance 2 m, affinity 0.5, LET-IoU 1, plain 3D IoU 2.9 / 4.9 < 0.7. Car B at (10, 20), its
+// detection (0.8) exactly on it: affinity 1. Car C at (-10, 20), its detection (0.7) 3 m beyond
+// it along the line of sight: beyond its tolerance of 2.24 m, so no match under LET either.
+// Exact matchers, LET-3D: points (R 1/3, P 1, weighted 0.5), (2/3, 1, 0.75), (2/3, 2/3, 0.5):
+// AP_R40 = 26 / 40 (recall slots up to 2/3) = 65, APL_R40 = 26 x 0.75 / 40 = 48.75; plain 3D:
+// only B, AP_R40 = 13 / 40 x 0.5 = 16.25 (recall 1/3, precision 1/2). KITTI matcher: two TP
+// scores, two devkit thresholds, so R40 reads slot 1 only: AP 2.5, APL 0.75 x 2.5.
+TEST(EvaluatorTest, LetForgivesErrorAlongTheLineOfSightByHandEveryMatcher) {
+  const auto car = [](double x, double z, std::optional<double> score) {
+    Object o = Car({100, 100, 200, 200}, score);
+    o.box3d.h = 1.5;
+    o.box3d.w = 1.6;
+    o.box3d.l = 3.9;
+    o.box3d.location = Eigen::Vector3d(x, 1.6, z);
+    o.alpha = 0;
+    return o;
+  };
+  const double c = 3.0 / std::hypot(10.0, 20.0);  // 3 m along C's line of sight, per metre
+  EvalFrame f;
+  f.labels = {car(0, 20, std::nullopt), car(10, 20, std::nullopt), car(-10, 20, std::nullopt)};
+  f.detections = {car(0, 21, 0.9), car(10, 20, 0.8), car(-10 - 10 * c, 20 + 20 * c, 0.7)};
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.difficulties = {Difficulty::kEasy};
+  options.metrics = {OverlapKind::k3D, OverlapKind::kLet3D, OverlapKind::kLetBev};
+  options.let.sensor_m = Eigen::Vector3d(0, 1.6 - 0.75, 0);
+  for (const Matcher m : {Matcher::kOptimal, Matcher::kVoc, Matcher::kKitti}) {
+    SCOPED_TRACE(MatcherName(m));
+    options.matcher = m;
+    const EvalResult result = Evaluate({f}, options);
+    const ClassResult& plain = *result.Find("Car", OverlapKind::k3D, Difficulty::kEasy);
+    for (const OverlapKind kind : {OverlapKind::kLet3D, OverlapKind::kLetBev}) {
+      const ClassResult& let = *result.Find("Car", kind, Difficulty::kEasy);
+      EXPECT_EQ(let.at_threshold.tp, 2);
+      EXPECT_EQ(let.at_threshold.fp, 1);
+      EXPECT_EQ(let.at_threshold.fn, 1);
+      ASSERT_TRUE(let.has_apl);
+      EXPECT_FALSE(let.has_aos);
+      if (m == Matcher::kKitti) {
+        EXPECT_NEAR(let.ap_r40, 2.5, 1e-9);
+        EXPECT_NEAR(let.apl_r40, 0.75 * 2.5, 1e-9);
+        ASSERT_EQ(let.kitti_apl.size(), 41u);
+        EXPECT_NEAR(let.kitti_apl[0], 0.75, 1e-12);  // the envelope of 0.5 and 0.75
+        EXPECT_TRUE(let.kitti_aos.empty());
+      } else {
+        EXPECT_NEAR(let.ap_r40, 65.0, 1e-9);
+        EXPECT_NEAR(let.apl_r40, 48.75, 1e-9);
+        ASSERT_EQ(let.curve.size(), 3u);
+        EXPECT_NEAR(let.curve[0].similarity, 0.5, 1e-12);
+        EXPECT_NEAR(let.curve[1].orientation, 0.75, 1e-12);
+      }
+    }
+    EXPECT_EQ(plain.at_threshold.tp, 1);
+    EXPECT_EQ(plain.at_threshold.fp, 2);
+    EXPECT_FALSE(plain.has_apl);
+    if (m != Matcher::kKitti) EXPECT_NEAR(plain.ap_r40, 16.25, 1e-9);
+  }
+  // Waymo's tolerance of 0.1 x range is the default; a tighter one (5 %, 0.5 m) rules A out too.
+  options.matcher = Matcher::kOptimal;
+  options.let.longitudinal_tolerance_fraction = 0.05;
+  EXPECT_EQ(
+      Evaluate({f}, options).Find("Car", OverlapKind::kLet3D, Difficulty::kEasy)->at_threshold.tp,
+      1);
+  // --compat openpcdet has no LET.
+  options.matcher = Matcher::kKitti;
+  options.compat = EvalCompat::kOpenPcdet;
+  EXPECT_THROW(Evaluate({f}, options), std::invalid_argument);
+}
+
+// LET-APL never exceeds LET-AP (each TP counts at most 1), a LET cell's records report LET-IoU, and
+// the LET kinds' counts are those of MatchOverlap's pairs: on random frames, every matcher.
+TEST(EvaluatorTest, LetAplIsAtMostApAndOneAndManyThreadsAgree) {
+  RandomFramesOptions ro;
+  ro.num_frames = 200;
+  ro.position_noise = 0.04;
+  ro.seed = 37;
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  EvalOptions options;
+  options.metrics = {OverlapKind::kLetBev, OverlapKind::kLet3D};
+  options.keep_records = true;
+  for (const Matcher m : {Matcher::kOptimal, Matcher::kVoc, Matcher::kKitti}) {
+    SCOPED_TRACE(MatcherName(m));
+    options.matcher = m;
+    options.num_threads = 1;
+    const EvalResult one = Evaluate(frames, options);
+    options.num_threads = 2;
+    const EvalResult two = Evaluate(frames, options);
+    ASSERT_EQ(one.results.size(), two.results.size());
+    int with_tp = 0;
+    for (size_t k = 0; k < one.results.size(); ++k) {
+      const ClassResult& r = one.results[k];
+      if (!r.evaluated) continue;
+      SCOPED_TRACE(r.class_name + " " + OverlapKindName(r.metric));
+      EXPECT_EQ(r.ap_r40, two.results[k].ap_r40);
+      EXPECT_EQ(r.apl_r40, two.results[k].apl_r40);
+      EXPECT_LE(r.apl_r40, r.ap_r40 + 1e-9);
+      EXPECT_LE(r.apl_r11, r.ap_r11 + 1e-9);
+      with_tp += r.at_threshold.tp > 0 ? 1 : 0;
+      for (const MatchRecord& rec : r.records) {
+        if (rec.outcome != Outcome::kTp) continue;
+        const EvalFrame& frame = frames[rec.frame];
+        EXPECT_EQ(rec.iou, MatchOverlap(r.metric, frame.detections[rec.detection],
+                                        frame.labels[rec.label], options.let));
+        EXPECT_GE(rec.iou, r.min_overlap);
+      }
+    }
+    EXPECT_GT(with_tp, 6);
   }
 }
 

@@ -10,6 +10,7 @@
 
 #include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/let.h"
 #include "stereodet/geometry/iou.h"
 #include "stereodet/util/check.h"
 
@@ -228,8 +229,20 @@ double KittiOverlap(OverlapKind kind, const Object& detection, const Object& lab
     case OverlapKind::k3D:
       return OverlapFromFootprint(kind, detection.box3d, label.box3d,
                                   FootprintIntersection(detection.box3d, label.box3d));
+    case OverlapKind::kLetBev:
+    case OverlapKind::kLet3D:
+      break;
   }
+  STEREODET_CHECK(false) << "KittiOverlap: " << OverlapKindName(kind)
+                         << " needs the LET tolerance (MatchOverlap)";
   return 0.0;
+}
+
+double MatchOverlap(OverlapKind kind, const Object& detection, const Object& label,
+                    const LetOptions& let) {
+  if (!IsLetKind(kind)) return KittiOverlap(kind, detection, label);
+  if (!(LongitudinalAffinity(detection.box3d, label.box3d, let) > 0)) return 0.0;
+  return LetOverlap(kind, detection.box3d, label.box3d, let);
 }
 
 double KittiBoxOverlap(OverlapKind kind, const Box3D& detection, const Box3D& label) {
@@ -239,7 +252,7 @@ double KittiBoxOverlap(OverlapKind kind, const Box3D& detection, const Box3D& la
 }
 
 double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Object& dontcare) {
-  switch (kind) {
+  switch (PlainKind(kind)) {
     case OverlapKind::k2D: {
       ImageOverlapParts p;
       if (!ImageOverlap(detection.box, dontcare.box, &p)) return 0.0;
@@ -257,6 +270,9 @@ double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Obj
       if (inter <= 0) return 0.0;
       return inter / (d.h * d.l * d.w);
     }
+    case OverlapKind::kLetBev:  // not a PlainKind
+    case OverlapKind::kLet3D:
+      break;
   }
   return 0.0;
 }
@@ -370,25 +386,57 @@ void ClassFrame::Clear() {
   edge_begin.clear();
   edge_det.clear();
   edge_overlap.clear();
+  edge_affinity.clear();
   pair_footprint.clear();
   devkit_overlaps = false;
 }
 
+namespace {
+
+// A LET kind's edges (`plain` its BEV or 3D): pairs with an affinity above 0 and LET-IoU >= tau,
+// the affinity beside each. The affinity is the cheaper of the two and rules most pairs out.
+void PrepareLetEdges(const EvalFrame& frame, OverlapKind plain, double tau, const LetOptions& let,
+                     ClassFrame* cf) {
+  cf->edge_begin.assign(1, 0);
+  for (int i = 0; i < cf->num_labels(); ++i) {
+    const Box3D& label = frame.labels[cf->label_object[i]].box3d;
+    for (int j = 0; j < cf->num_dets(); ++j) {
+      const Box3D& det = frame.detections[cf->det_object[j]].box3d;
+      const double affinity = LongitudinalAffinity(det, label, let);
+      if (!(affinity > 0)) continue;  // NaN fails
+      const double overlap = LetOverlap(plain, det, label, let);
+      if (overlap >= tau) {  // NaN fails
+        cf->edge_det.push_back(j);
+        cf->edge_overlap.push_back(overlap);
+        cf->edge_affinity.push_back(affinity);
+      }
+    }
+    cf->edge_begin.push_back(static_cast<int32_t>(cf->edge_det.size()));
+  }
+}
+
+}  // namespace
+
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                             OverlapArithmetic arithmetic, ClassFrame reuse, bool reuse_selection) {
-  PrepareClassFrameInPlace(frame, spec, kind, arithmetic, reuse_selection, &reuse);
+                             OverlapArithmetic arithmetic, ClassFrame reuse, bool reuse_selection,
+                             const LetOptions& let) {
+  PrepareClassFrameInPlace(frame, spec, kind, arithmetic, reuse_selection, &reuse, let);
   return reuse;
 }
 
 void PrepareClassFrameInPlace(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                               OverlapArithmetic arithmetic, bool reuse_selection,
-                              ClassFrame* result) {
+                              ClassFrame* result, const LetOptions& let) {
   const double tau = spec.min_overlap[static_cast<int>(kind)];
-  const bool devkit = arithmetic == OverlapArithmetic::kDevkit;
+  const bool let_kind = IsLetKind(kind);
+  // The devkit has no LET overlaps: a LET kind under the KITTI matcher keeps its rules (> tau,
+  // passes 1 and 2) on exact values, its DontCare test included.
+  const bool devkit = arithmetic == OverlapArithmetic::kDevkit && !let_kind;
+  const OverlapKind plain = PlainKind(kind);
   auto in_dontcare = [&](const Object& det, const std::vector<const Object*>& dontcares) {
     for (const Object* dc : dontcares) {
-      const double overlap = devkit ? KittiDontCareOverlapAtThreshold(kind, det, *dc, tau)
-                                    : KittiDontCareOverlap(kind, det, *dc);
+      const double overlap = devkit ? KittiDontCareOverlapAtThreshold(plain, det, *dc, tau)
+                                    : KittiDontCareOverlap(plain, det, *dc);
       if (overlap > tau) return true;
     }
     return false;
@@ -409,6 +457,7 @@ void PrepareClassFrameInPlace(const EvalFrame& frame, const ClassSpec& spec, Ove
     cf.edge_begin.clear();
     cf.edge_det.clear();
     cf.edge_overlap.clear();
+    cf.edge_affinity.clear();
   } else {
     ClassFrameBuilder builder(&cf);
     builder.AddLabels(frame, spec, false);
@@ -422,6 +471,10 @@ void PrepareClassFrameInPlace(const EvalFrame& frame, const ClassSpec& spec, Ove
   }
   cf.min_overlap = tau;
   cf.devkit_overlaps = devkit;
+  if (let_kind) {
+    PrepareLetEdges(frame, plain, tau, let, &cf);
+    return;
+  }
 
   // BEV and 3D share each pair's footprint intersection: the first of them for this selection
   // keeps it in pair_footprint, the second reads it there.
@@ -502,6 +555,8 @@ bool HasEvaluableDetection(const std::vector<EvalFrame>& frames, const ClassSpec
           }
           break;
         case OverlapKind::k3D:
+        case OverlapKind::kLetBev:
+        case OverlapKind::kLet3D:
           if (det.box3d.location.x() != -1000 && det.box3d.location.y() != -1000 &&
               det.box3d.location.z() != -1000 && det.box3d.h > 0 && det.box3d.w > 0 &&
               det.box3d.l > 0) {

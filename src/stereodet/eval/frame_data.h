@@ -31,8 +31,14 @@ struct EvalFrame {
 //        (h_d l_d w_d + h_l l_l w_l - intersection).
 // A footprint with both l and w negative (KITTI's -1 "not estimated") is the same square as with
 // |l|, |w| (the devkit's polygon); a footprint with one non-positive side has no area (the devkit
-// crashes on it when it overlaps a label).
+// crashes on it when it overlaps a label). `kind` 2D, BEV or 3D (std::invalid_argument for a LET
+// kind, which needs LetOptions: MatchOverlap).
 double KittiOverlap(OverlapKind kind, const Object& detection, const Object& label);
+// The overlap a match is decided on: KittiOverlap for 2D, BEV and 3D; for kLetBev / kLet3D the
+// LET-IoU (LetOverlap, let.h) where the longitudinal affinity is above 0, else 0 (outside the
+// tolerance no pair matches, however well its aligned box overlaps).
+double MatchOverlap(OverlapKind kind, const Object& detection, const Object& label,
+                    const LetOptions& let);
 // KittiOverlap's BEV or 3D value of two boxes (`kind` kBev or k3D; std::invalid_argument
 // otherwise).
 double KittiBoxOverlap(OverlapKind kind, const Box3D& detection, const Box3D& label);
@@ -40,12 +46,13 @@ double KittiBoxOverlap(OverlapKind kind, const Box3D& detection, const Box3D& la
 // footprint (BEV) or volume (3D). KITTI's DontCare rows carry 3D fields of -1 / -1000: in BEV their
 // footprint is a 1 m x 1 m square at (x, z) = (-1000, -1000), exactly that of a detection whose 3D
 // was not estimated (own-area overlap 1), so in BEV they suppress such detections, as the devkit
-// does; in 3D (height -1, no volume) they suppress nothing.
+// does; in 3D (height -1, no volume) they suppress nothing. A LET kind tests as its plain kind
+// (PlainKind): DontCare regions are not moved.
 double KittiDontCareOverlap(OverlapKind kind, const Object& detection, const Object& dontcare);
 
 // Whether KITTI's official devkit would evaluate `spec` for `kind` given these detections: some
 // detection of the class with left >= 0 (2D); x, z != -1000 and w, l > 0 (BEV); x, y, z != -1000
-// and h, w, l > 0 (3D).
+// and h, w, l > 0 (3D, and both LET kinds: the affinity needs the box's centre).
 bool HasEvaluableDetection(const std::vector<EvalFrame>& frames, const ClassSpec& spec,
                            OverlapKind kind);
 // False if any detection (any class) has alpha == -10: the devkit then skips AOS altogether.

@@ -4,6 +4,7 @@
 #ifndef STEREODET_EVAL_FRAME_DATA_INTERNAL_H_
 #define STEREODET_EVAL_FRAME_DATA_INTERNAL_H_
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <utility>
@@ -74,6 +75,9 @@ struct ClassFrame {
   std::vector<int32_t> edge_begin;
   std::vector<int32_t> edge_det;
   std::vector<double> edge_overlap;
+  // LET kinds only (empty otherwise): each edge's longitudinal affinity (let.h), in (0, 1]. An edge
+  // needs LET-IoU >= min_overlap and an affinity above 0.
+  std::vector<double> edge_affinity;
   double min_overlap = 0.5;
   // Made by PrepareClassFrame with OverlapArithmetic::kDevkit (see KittiRecordedOverlap).
   bool devkit_overlaps = false;
@@ -81,6 +85,19 @@ struct ClassFrame {
   // intersection of label i and detection j, pair_footprint[i * num_dets() + j], once a BEV or 3D
   // ClassFrame of this selection was made (empty otherwise).
   std::vector<double> pair_footprint;
+
+  // What every matcher prefers among a label's (or a detection's) candidate edges: the overlap, or
+  // for the LET kinds LET-IoU x affinity, the weight Waymo's matcher maximises.
+  double EdgeWeight(int e) const {
+    return edge_affinity.empty() ? edge_overlap[e] : edge_overlap[e] * edge_affinity[e];
+  }
+  // A true positive's weight in the TP-weighted AP (edge e pairs label i and detection j): the
+  // orientation similarity (1 + cos(alpha_d - alpha_l)) / 2 (AOS), or for the LET kinds the
+  // longitudinal affinity (LET-APL).
+  double TpWeight(int i, int j, int e) const {
+    return edge_affinity.empty() ? (1.0 + std::cos(det_alpha[j] - label_alpha[i])) / 2.0
+                                 : edge_affinity[e];
+  }
 
   int num_labels() const { return static_cast<int>(label_object.size()); }
   int num_dets() const { return static_cast<int>(det_object.size()); }
@@ -146,13 +163,17 @@ class ClassFrameBuilder {
 // `reuse_selection`, `reuse` must be a result of PrepareClassFrame for this very frame and `spec`
 // (any overlap kind, any arithmetic): its labels and detections are kept instead of being selected
 // again, and BEV and 3D share each pair's footprint intersection (ClassFrame::pair_footprint); the
-// result is the same, bit for bit. Requires: every detection has a score.
+// result is the same, bit for bit. The LET kinds (`let` their tolerance) store LET-IoU in
+// edge_overlap and the affinity in edge_affinity, always in exact arithmetic (the devkit has no
+// LET), and neither read nor write pair_footprint. Requires: every detection has a score.
 ClassFrame PrepareClassFrame(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
                              OverlapArithmetic arithmetic = OverlapArithmetic::kDevkit,
-                             ClassFrame reuse = {}, bool reuse_selection = false);
+                             ClassFrame reuse = {}, bool reuse_selection = false,
+                             const LetOptions& let = LetOptions());
 // The same in place: `*cf` is the `reuse` above and becomes the result (no ClassFrame moved).
 void PrepareClassFrameInPlace(const EvalFrame& frame, const ClassSpec& spec, OverlapKind kind,
-                              OverlapArithmetic arithmetic, bool reuse_selection, ClassFrame* cf);
+                              OverlapArithmetic arithmetic, bool reuse_selection, ClassFrame* cf,
+                              const LetOptions& let = LetOptions());
 
 // The overlap of label `label_index`'s edge `edge` (an index into cf.edge_det) that records
 // (matches.csv) report: cf.edge_overlap[edge], except in a ClassFrame of PrepareClassFrame with

@@ -13,6 +13,7 @@
 #include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/frame_data_internal.h"
 #include "stereodet/eval/kitti_matcher_internal.h"
+#include "stereodet/eval/let.h"
 #include "stereodet/eval/random_frames.h"
 #include "stereodet/eval/test_objects.h"
 #include "stereodet/geometry/iou.h"
@@ -393,6 +394,57 @@ TEST(FrameDataTest, ReusingTheSelectionOfAnotherOverlapKindGivesTheSameClassFram
   }
   EXPECT_GT(edges, 4000);
   EXPECT_GT(dontcare_flags, 20);
+}
+
+// A LET kind's ClassFrame holds exactly the pairs with an affinity above 0 and LET-IoU >= the class
+// threshold, with both values, in either arithmetic (the devkit has no LET: always exact), and
+// leaves pair_footprint to BEV and 3D.
+TEST(FrameDataTest, LetEdgesAreThePairsWithinTheToleranceAndThreshold) {
+  RandomFramesOptions ro;
+  ro.num_frames = 80;
+  ro.crowded = true;
+  ro.seed = 37;
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  LetOptions let;
+  let.sensor_m = Eigen::Vector3d(-0.06, 0.0, 0.0);
+  int edges = 0, ruled_out_by_affinity = 0;
+  for (const EvalFrame& frame : frames) {
+    for (const char* name : {"Car", "Pedestrian", "Cyclist"}) {
+      const ClassSpec spec = KittiClassSpec(name, /*loose=*/true);
+      for (const OverlapKind kind : {OverlapKind::kLetBev, OverlapKind::kLet3D}) {
+        for (const OverlapArithmetic arithmetic :
+             {OverlapArithmetic::kExact, OverlapArithmetic::kDevkit}) {
+          const ClassFrame cf =
+              PrepareClassFrame(frame, spec, kind, arithmetic, {}, /*reuse_selection=*/false, let);
+          EXPECT_FALSE(cf.devkit_overlaps);
+          EXPECT_TRUE(cf.pair_footprint.empty());
+          ASSERT_EQ(cf.edge_affinity.size(), cf.edge_det.size());
+          const double tau = spec.min_overlap[static_cast<int>(kind)];
+          for (int i = 0; i < cf.num_labels(); ++i) {
+            const Object& label = frame.labels[cf.label_object[i]];
+            for (int j = 0; j < cf.num_dets(); ++j) {
+              const Object& det = frame.detections[cf.det_object[j]];
+              const double affinity = LongitudinalAffinity(det.box3d, label.box3d, let);
+              const double overlap = LetOverlap(kind, det.box3d, label.box3d, let);
+              const int e = cf.FindEdge(i, j);
+              const bool expected = affinity > 0 && overlap >= tau;
+              ASSERT_EQ(e >= 0, expected) << frame.id << " " << i << " " << j;
+              EXPECT_EQ(MatchOverlap(kind, det, label, let), affinity > 0 ? overlap : 0.0);
+              if (affinity == 0 && overlap >= tau) ++ruled_out_by_affinity;
+              if (e < 0) continue;
+              ++edges;
+              EXPECT_EQ(cf.edge_overlap[e], overlap);
+              EXPECT_EQ(cf.edge_affinity[e], affinity);
+              EXPECT_EQ(cf.EdgeWeight(e), overlap * affinity);
+              EXPECT_EQ(cf.TpWeight(i, j, e), affinity);
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(edges, 200);
+  EXPECT_GT(ruled_out_by_affinity, 0);  // pairs LET-IoU alone would match
 }
 
 }  // namespace

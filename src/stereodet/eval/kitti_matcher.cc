@@ -80,6 +80,7 @@ struct FrameView {
         edge_begin(f.edge_begin.data()),
         edge_det(f.edge_det.data()),
         edge_overlap(f.edge_overlap.data()),
+        edge_affinity(f.edge_affinity.empty() ? nullptr : f.edge_affinity.data()),
         num_edges(static_cast<int>(f.edge_det.size())) {}
 
   // ClassFrame::LabelValid
@@ -96,6 +97,7 @@ struct FrameView {
   const uint8_t* det_dontcare;
   const int32_t *edge_begin, *edge_det;
   const double* edge_overlap;
+  const double* edge_affinity;  // LET kinds only, else null (ClassFrame::edge_affinity)
   int num_edges;
 };
 
@@ -105,9 +107,9 @@ struct Pass2Result {
 };
 
 // computeStatistics(compute_fp = true) without the FP count: matches labels in order, each taking
-// the unassigned detection (score >= threshold) with overlap > tau of largest overlap; a valid
-// detection replaces an earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records
-// pairs.
+// the unassigned detection (score >= threshold) with overlap > tau of largest overlap (for the LET
+// kinds, of largest LET-IoU x affinity: ClassFrame::EdgeWeight); a valid detection replaces an
+// earlier-chosen ignored one. Marks `assigned` and, if `assoc`, records pairs.
 Pass2Result RunPass2(const FrameView& f, DetStateView states, double threshold,
                      std::vector<uint8_t>* assigned_list, FrameAssociation* assoc) {
   Pass2Result r;
@@ -116,7 +118,7 @@ Pass2Result RunPass2(const FrameView& f, DetStateView states, double threshold,
   uint8_t* const assigned = assigned_list->data();
   for (int i = 0; i < f.num_labels; ++i) {
     const bool label_valid = f.LabelValid(i);
-    int best = -1;
+    int best = -1, best_edge = -1;
     double max_overlap = 0.0;
     bool assigned_ignored = false;
     for (int e = f.edge_begin[i], end = f.edge_begin[i + 1]; e < end; ++e) {
@@ -125,12 +127,15 @@ Pass2Result RunPass2(const FrameView& f, DetStateView states, double threshold,
       if (state == -1 || assigned[j] || f.det_score[j] < threshold) continue;
       const double overlap = f.edge_overlap[e];
       if (!(overlap > tau)) continue;
-      if (state == 0 && (overlap > max_overlap || assigned_ignored)) {
-        max_overlap = overlap;
+      const double weight = f.edge_affinity ? overlap * f.edge_affinity[e] : overlap;
+      if (state == 0 && (weight > max_overlap || assigned_ignored)) {
+        max_overlap = weight;
         best = j;
+        best_edge = e;
         assigned_ignored = false;
       } else if (best < 0 && state == 1) {
         best = j;
+        best_edge = e;
         assigned_ignored = true;
       }
     }
@@ -143,7 +148,9 @@ Pass2Result RunPass2(const FrameView& f, DetStateView states, double threshold,
       assigned[best] = 1;
     } else {
       ++r.tp;
-      r.similarity += (1.0 + std::cos(f.label_alpha[i] - f.det_alpha[best])) / 2.0;
+      r.similarity += f.edge_affinity
+                          ? f.edge_affinity[best_edge]
+                          : (1.0 + std::cos(f.label_alpha[i] - f.det_alpha[best])) / 2.0;
       assigned[best] = 1;
       if (assoc) {
         assoc->label_outcome[i] = Outcome::kTp;

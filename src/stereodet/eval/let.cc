@@ -55,7 +55,7 @@ Box3D RangeAlignedBox(const Box3D& detection, const Box3D& label, const LetOptio
 
 double LetOverlap(OverlapKind kind, const Box3D& detection, const Box3D& label,
                   const LetOptions& options) {
-  return KittiBoxOverlap(kind, RangeAlignedBox(detection, label, options), label);
+  return KittiBoxOverlap(PlainKind(kind), RangeAlignedBox(detection, label, options), label);
 }
 
 }  // namespace stereodet

@@ -12,27 +12,12 @@
 #ifndef STEREODET_EVAL_LET_H_
 #define STEREODET_EVAL_LET_H_
 
-#include <Eigen/Core>
-
 #include "stereodet/eval/eval_options.h"
 #include "stereodet/geometry/box.h"
 
 namespace stereodet {
 
-struct LetOptions {
-  // The longitudinal tolerance of a label at range r (m, from the sensor to its centre):
-  // max(longitudinal_tolerance_fraction * r, min_longitudinal_tolerance_m). Waymo's defaults.
-  double longitudinal_tolerance_fraction = 0.1;
-  double min_longitudinal_tolerance_m = 0.5;
-  // The sensor whose line of sight the tolerance runs along, in the rectified camera frame (m).
-  // The default, the frame's origin, is KITTI's reference camera 0; the left colour camera 2 sits
-  // about 6 cm to its left (calib P2: -P2(0,3) / P2(0,0) along x).
-  Eigen::Vector3d sensor_m = Eigen::Vector3d::Zero();
-
-  // Throws std::invalid_argument on a negative or non-finite fraction or minimum, both zero (no
-  // tolerance at all: every affinity 0), or a non-finite sensor position.
-  void Check() const;
-};
+// LetOptions (the tolerance and the sensor) is in eval_options.h, as EvalOptions::let.
 
 // The longitudinal affinity of a detection to a label, in [0, 1]: 1 - |e| / tolerance clamped to
 // [0, 1], with e = |P| cos(angle(P, G)) - |G| the detection centre's range error projected on the
@@ -48,8 +33,8 @@ double LongitudinalAffinity(const Box3D& detection, const Box3D& label, const Le
 Box3D RangeAlignedBox(const Box3D& detection, const Box3D& label, const LetOptions& options);
 
 // LET-IoU: KittiBoxOverlap(kind) of RangeAlignedBox(detection, label) with the label (kind kBev or
-// k3D; std::invalid_argument otherwise). A pair matches under LET when this is at least the class's
-// threshold and LongitudinalAffinity is above 0.
+// k3D, or kLetBev / kLet3D for the same; std::invalid_argument otherwise). A pair matches under LET
+// when this is at least the class's threshold and LongitudinalAffinity is above 0.
 double LetOverlap(OverlapKind kind, const Box3D& detection, const Box3D& label,
                   const LetOptions& options);
 

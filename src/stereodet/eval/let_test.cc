@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/frame_data.h"
 #include "stereodet/util/test_paths.h"
 
@@ -205,6 +207,83 @@ TEST(LetTest, WaymoReferenceCases) {
   }
   EXPECT_EQ(cases, 400);
   EXPECT_GT(matched, 100);  // the set exercises matches, not only misses
+}
+
+// Whole frames through the evaluator against Waymo's whole metric (tests/data/let/waymo_frames.csv,
+// scripts/let_reference_cases.py --frames-out: 150 frames, 327 cars, 515 detections; Waymo's
+// Hungarian matcher, IoU >= 0.5, LET at 10 % and 0.5 m): at each score cutoff, the LET-3D and
+// LET-BEV cells' TP, FP and FN and the sum of the TPs' affinities (LET-APL's numerator) under the
+// optimal matcher. Cars here stand apart, as cars do, so the most true positives (stereodet's
+// first aim) and the largest total LET-IoU x affinity (Waymo's only aim) pick the same pairs. The
+// areas (AP, APL) are not compared: Waymo integrates its own way (docs/metrics.md).
+TEST(LetTest, WaymoReferenceFrames) {
+  std::ifstream in(TestSourceDir() / "tests/data/let/waymo_frames.csv");
+  ASSERT_TRUE(in) << "tests/data/let/waymo_frames.csv";
+  std::vector<EvalFrame> frames;
+  struct Counts {
+    int64_t tp, fp, fn;
+    double sum_affinity;
+  };
+  std::map<std::pair<std::string, int>, Counts> expected;  // (box type, cutoff x 20)
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> f;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
+    if (f.size() == 7 && f[1] == "counts") {
+      const int cutoff = static_cast<int>(std::lround(std::stod(f[2]) * 20));
+      expected[{f[0], cutoff}] = {std::stoll(f[3]), std::stoll(f[4]), std::stoll(f[5]),
+                                  std::stod(f[6])};
+      continue;
+    }
+    ASSERT_GE(f.size(), 9u) << line;
+    const size_t k = std::stoul(f[0]);
+    if (frames.size() <= k) frames.resize(k + 1);
+    Object o;
+    o.type = "Car";
+    o.box = {100, 100, 200, 200};  // tall, untruncated, unoccluded: a valid Easy label
+    o.box3d.h = std::stod(f[2]);
+    o.box3d.w = std::stod(f[3]);
+    o.box3d.l = std::stod(f[4]);
+    o.box3d.location = Eigen::Vector3d(std::stod(f[5]), std::stod(f[6]), std::stod(f[7]));
+    o.box3d.rotation_y = std::stod(f[8]);
+    if (f[1] == "det") {
+      o.score = std::stod(f.at(9));
+      frames[k].detections.push_back(o);
+    } else {
+      frames[k].labels.push_back(o);
+    }
+  }
+  ASSERT_EQ(frames.size(), 150u);
+  ASSERT_EQ(expected.size(), 40u);
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car", /*loose=*/true)};  // LET-BEV and LET-3D at 0.5
+  options.metrics = {OverlapKind::kLet3D, OverlapKind::kLetBev};
+  options.difficulties = {Difficulty::kEasy};
+  options.matcher = Matcher::kOptimal;
+  const EvalResult result = Evaluate(frames, options);
+  int checked = 0;
+  for (const auto& [key, want] : expected) {
+    const auto& [box_type, cutoff] = key;
+    const OverlapKind kind = box_type == "3d" ? OverlapKind::kLet3D : OverlapKind::kLetBev;
+    const ClassResult& r = *result.Find("Car", kind, Difficulty::kEasy);
+    ASSERT_EQ(r.num_valid_labels, 327);
+    // The curve's point at the lowest score >= the cutoff (scores are on the same 0.05 grid).
+    CurvePoint at;
+    at.fn = r.num_valid_labels;
+    for (const CurvePoint& p : r.curve) {
+      if (p.threshold >= cutoff * 0.05 - 1e-9) at = p;
+    }
+    SCOPED_TRACE(box_type + " cutoff " + std::to_string(cutoff * 0.05));
+    EXPECT_EQ(at.tp, want.tp);
+    EXPECT_EQ(at.fp, want.fp);
+    EXPECT_EQ(at.fn, want.fn);
+    EXPECT_NEAR(at.similarity, want.sum_affinity, 1e-4);  // Waymo sums floats
+    ++checked;
+  }
+  EXPECT_EQ(checked, 40);
+  EXPECT_GT(result.Find("Car", OverlapKind::kLet3D, Difficulty::kEasy)->at_threshold.tp, 150);
 }
 
 TEST(LetTest, OptionsAreChecked) {

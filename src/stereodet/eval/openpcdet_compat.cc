@@ -230,7 +230,11 @@ double PcdetOverlap(OverlapKind kind, const Object& detection, const Object& lab
       const double inc = iw * rinc;
       return inc / (area1 + area2 - inc);
     }
+    case OverlapKind::kLetBev:  // EvalOptions::Check refuses LET with --compat openpcdet
+    case OverlapKind::kLet3D:
+      break;
   }
+  STEREODET_CHECK(false) << "OpenPCDet has no " << OverlapKindName(kind) << " overlap";
   return 0.0;
 }
 
@@ -260,6 +264,10 @@ ClassSpec OpenPcdetClassSpec(const std::string& name, bool loose) {
   if (EqualsIgnoreCase(name, "Car")) spec.neighbours = {"Van"};
   if (EqualsIgnoreCase(name, "Pedestrian")) spec.neighbours = {"Person_sitting"};
   spec.min_overlap = loose ? found->loose : found->strict;
+  // (OpenPCDet has no LET kinds; EvalOptions::Check refuses them with --compat openpcdet. Their
+  // thresholds follow BEV and 3D, as KittiClassSpec's.)
+  spec.min_overlap[3] = spec.min_overlap[1];
+  spec.min_overlap[4] = spec.min_overlap[2];
   return spec;
 }
 

@@ -51,20 +51,24 @@ Object Footprint(double x, double z, double l, double w, double ry) {
 
 // get_official_eval_result's overlap_0_7 / overlap_0_5 tables, class by class.
 TEST(OpenPcdetCompatTest, ClassSpecHasTheToolsOverlapsAndNeighbours) {
-  EXPECT_EQ(OpenPcdetClassSpec("Car").min_overlap, (std::array<double, 3>{0.7, 0.7, 0.7}));
-  EXPECT_EQ(OpenPcdetClassSpec("car", true).min_overlap, (std::array<double, 3>{0.7, 0.5, 0.5}));
+  EXPECT_EQ(OpenPcdetClassSpec("Car").min_overlap,
+            (std::array<double, 5>{0.7, 0.7, 0.7, 0.7, 0.7}));
+  EXPECT_EQ(OpenPcdetClassSpec("car", true).min_overlap,
+            (std::array<double, 5>{0.7, 0.5, 0.5, 0.5, 0.5}));
   EXPECT_EQ(OpenPcdetClassSpec("Car").neighbours, std::vector<std::string>{"Van"});
   EXPECT_EQ(OpenPcdetClassSpec("Pedestrian", true).min_overlap,
-            (std::array<double, 3>{0.5, 0.25, 0.25}));
+            (std::array<double, 5>{0.5, 0.25, 0.25, 0.25, 0.25}));
   EXPECT_EQ(OpenPcdetClassSpec("Pedestrian").neighbours,
             std::vector<std::string>{"Person_sitting"});
   EXPECT_TRUE(OpenPcdetClassSpec("Cyclist").neighbours.empty());
   // Unlike KittiClassSpec (0.5 for any other class): Van and Truck are 0.7, and the loose Truck
   // is 0.5 in 2D too.
-  EXPECT_EQ(OpenPcdetClassSpec("Van").min_overlap, (std::array<double, 3>{0.7, 0.7, 0.7}));
-  EXPECT_EQ(OpenPcdetClassSpec("Truck", true).min_overlap, (std::array<double, 3>{0.5, 0.5, 0.5}));
+  EXPECT_EQ(OpenPcdetClassSpec("Van").min_overlap,
+            (std::array<double, 5>{0.7, 0.7, 0.7, 0.7, 0.7}));
+  EXPECT_EQ(OpenPcdetClassSpec("Truck", true).min_overlap,
+            (std::array<double, 5>{0.5, 0.5, 0.5, 0.5, 0.5}));
   EXPECT_EQ(OpenPcdetClassSpec("Person_sitting", true).min_overlap,
-            (std::array<double, 3>{0.5, 0.25, 0.25}));
+            (std::array<double, 5>{0.5, 0.25, 0.25, 0.25, 0.25}));
   EXPECT_THROW(OpenPcdetClassSpec("Tram"), std::invalid_argument);
 }
 

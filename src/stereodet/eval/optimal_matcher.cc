@@ -18,7 +18,7 @@ struct OptimalGraph {
   std::vector<uint8_t> det_excusable;   // valid detection overlapping an ignored label or DontCare
   std::vector<uint8_t> det_on_ignored;  // valid detection overlapping an ignored label
   DetAdjacency adj;                     // detection -> valid labels, overlap >= tau
-  std::vector<double> adj_overlap;      // parallel to adj.labels
+  std::vector<double> adj_overlap;      // parallel to adj.labels: ClassFrame::EdgeWeight
   std::vector<int32_t> fill;            // scratch of BuildGraph
 };
 
@@ -79,7 +79,7 @@ void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
       const int j = f.edge_det[e];
       if (g->role[j] == kOut) continue;
       g->adj.labels[g->fill[j]] = i;
-      g->adj_overlap[g->fill[j]++] = f.edge_overlap[e];
+      g->adj_overlap[g->fill[j]++] = f.EdgeWeight(e);
     }
   }
 }

@@ -2,7 +2,8 @@
 //
 // The paper's optimal matcher: per frame and class, the association of detections to labels with
 // overlap >= tau that has the most true positives, then the fewest false positives and false
-// negatives, then the largest total overlap. Exact (integer lexicographic weights, no (IoU +
+// negatives, then the largest total overlap (LET kinds: LET-IoU x affinity, ClassFrame::EdgeWeight,
+// the weight Waymo's matcher maximises alone). Exact (integer lexicographic weights, no (IoU +
 // n)/2n^2 scaling), each connected component of the overlap graph solved on its own.
 //
 // Who takes part, per difficulty (KITTI's meaning, see docs/metrics.md "Optimal matching"):

@@ -13,14 +13,15 @@ namespace {
 template <typename OnDet>
 void RunVoc(const ClassFrame& f, Difficulty difficulty, double threshold, OnDet on_det) {
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
-  // Best label of each detection: the largest overlap (>= tau, as stored), lowest label on ties.
+  // Best label of each detection: the largest overlap (>= tau, as stored; LET kinds: the largest
+  // LET-IoU x affinity, ClassFrame::EdgeWeight), lowest label on ties.
   std::vector<int32_t> best_label(f.num_dets(), -1);
   std::vector<double> best_overlap(f.num_dets(), -1.0);
   for (int i = 0; i < f.num_labels(); ++i) {
     for (int e = f.edge_begin[i]; e < f.edge_begin[i + 1]; ++e) {
       const int j = f.edge_det[e];
-      if (f.edge_overlap[e] > best_overlap[j]) {
-        best_overlap[j] = f.edge_overlap[e];
+      if (f.EdgeWeight(e) > best_overlap[j]) {
+        best_overlap[j] = f.EdgeWeight(e);
         best_label[j] = i;
       }
     }
@@ -65,7 +66,8 @@ std::vector<CurveEvent> VocFrameEvents(const ClassFrame& f, Difficulty difficult
     if (outcome == Outcome::kTp) {
       ev.tp = 1;
       ev.fn = -1;
-      ev.similarity = (1.0 + std::cos(f.det_alpha[j] - f.label_alpha[label])) / 2.0;
+      // (The edge is looked up only where TpWeight reads it: the LET kinds.)
+      ev.similarity = f.TpWeight(label, j, f.edge_affinity.empty() ? -1 : f.FindEdge(label, j));
     } else if (outcome == Outcome::kFp) {
       ev.fp = 1;
     } else if (label >= 0) {

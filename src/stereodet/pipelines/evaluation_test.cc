@@ -59,7 +59,7 @@ TEST(OverlapSetRunsTest, OneRunPerSetWithThatSetsThresholdsAndTheRestKept) {
   EXPECT_EQ(DescribeOverlaps(runs[0].classes), "loose");
   EXPECT_EQ(DescribeOverlaps(runs[1].classes), "strict");
   EXPECT_EQ(runs[0].classes[0].min_overlap, KittiClassSpec("Car", true).min_overlap);
-  EXPECT_EQ(runs[1].classes[0].min_overlap, (std::array<double, 3>{0.7, 0.7, 0.7}));
+  EXPECT_EQ(runs[1].classes[0].min_overlap, (std::array<double, 5>{0.7, 0.7, 0.7, 0.7, 0.7}));
   EXPECT_EQ(runs[1].classes[1].name, "Pedestrian");
   for (const EvalOptions& run : runs) {
     EXPECT_EQ(run.matcher, Matcher::kOptimal);

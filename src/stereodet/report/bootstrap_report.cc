@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/report/eval_report.h"
@@ -107,26 +109,38 @@ json BootstrapBinJson(const BootstrapBin& bin, Matcher matcher) {
   return IntervalsJson(bin.intervals, matcher);
 }
 
+// The tables' kind column: its longest name ("let-bev"), at least 4 wide ("kind").
+size_t KindWidth(const std::vector<BootstrapCell>& cells) {
+  size_t width = 4;
+  for (const BootstrapCell& cell : cells) {
+    width = std::max(width, std::string_view(OverlapKindName(cell.metric)).size());
+  }
+  return width;
+}
+
 std::string FormatBootstrapTable(const BootstrapResult& result) {
   std::ostringstream out;
   out << fmt::format("bootstrap: {} resamples of the {} frames (seed {}), {} {} intervals\n",
                      result.num_resamples, result.num_frames, result.seed,
                      PercentText(result.confidence), BootstrapMethodTitle(result.method));
   const std::vector<BootstrapMetric> metrics = TableMetrics(result.matcher);
-  out << fmt::format("{:<12} {:<4} {:<8} |", "class", "kind", "diff.");
+  const size_t kind_width = KindWidth(result.cells);
+  out << fmt::format("{:<12} {:<{}} {:<8} |", "class", "kind", kind_width, "diff.");
   for (const BootstrapMetric m : metrics) out << fmt::format(" {:<26}", Title(m));
   out << "\n";
   for (const BootstrapCell& cell : result.cells) {
     if (!cell.evaluated) continue;
-    out << fmt::format("{:<12} {:<4} {:<8} |", cell.class_name, OverlapKindName(cell.metric),
-                       DifficultyName(cell.difficulty));
+    out << fmt::format("{:<12} {:<{}} {:<8} |", cell.class_name, OverlapKindName(cell.metric),
+                       kind_width, DifficultyName(cell.difficulty));
     for (const BootstrapMetric m : metrics) {
       out << fmt::format(" {:<26}", WithInterval(cell.Get(m), Decimals(m)));
     }
     out << "\n";
     for (const BootstrapBin& bin : cell.breakdown) {
-      out << fmt::format("{:>26} |", std::string(BreakdownAxisName(bin.axis)) + " " +
-                                         BreakdownBinName(bin.lower, bin.upper));
+      out << fmt::format(
+          "{:>{}} |",
+          std::string(BreakdownAxisName(bin.axis)) + " " + BreakdownBinName(bin.lower, bin.upper),
+          22 + kind_width);
       for (const BootstrapMetric m : metrics) {
         out << fmt::format(" {:<26}", WithInterval(bin.Get(m), Decimals(m)));
       }
@@ -228,13 +242,14 @@ std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result) {
       BootstrapMethodTitle(d.method));
   const std::vector<BootstrapMetric> metrics = {BootstrapMetric::kApR40,
                                                 BootstrapMetric::kBrierLabels};
-  out << fmt::format("{:<12} {:<4} {:<8} |", "class", "kind", "diff.");
+  const size_t kind_width = KindWidth(d.cells);
+  out << fmt::format("{:<12} {:<{}} {:<8} |", "class", "kind", kind_width, "diff.");
   for (const BootstrapMetric m : metrics) out << fmt::format(" {:<32}", Title(m) + " A - B");
   out << "\n";
   for (const BootstrapCell& cell : d.cells) {
     if (!cell.evaluated) continue;
-    out << fmt::format("{:<12} {:<4} {:<8} |", cell.class_name, OverlapKindName(cell.metric),
-                       DifficultyName(cell.difficulty));
+    out << fmt::format("{:<12} {:<{}} {:<8} |", cell.class_name, OverlapKindName(cell.metric),
+                       kind_width, DifficultyName(cell.difficulty));
     for (const BootstrapMetric m : metrics) {
       const BootstrapInterval& i = cell.Get(m);
       const bool excludes_zero = i.num_defined > 0 && (i.lower > 0 || i.upper < 0);
@@ -242,8 +257,10 @@ std::string FormatPairedBootstrapTable(const PairedBootstrapResult& result) {
     }
     out << "\n";
     for (const BootstrapBin& bin : cell.breakdown) {
-      out << fmt::format("{:>26} |", std::string(BreakdownAxisName(bin.axis)) + " " +
-                                         BreakdownBinName(bin.lower, bin.upper));
+      out << fmt::format(
+          "{:>{}} |",
+          std::string(BreakdownAxisName(bin.axis)) + " " + BreakdownBinName(bin.lower, bin.upper),
+          22 + kind_width);
       for (const BootstrapMetric m : metrics) {
         const BootstrapInterval& i = bin.Get(m);
         const bool excludes_zero = i.num_defined > 0 && (i.lower > 0 || i.upper < 0);

@@ -31,6 +31,9 @@ const char* KindStem(OverlapKind kind) {
       return "detection_ground";
     case OverlapKind::k3D:
       return "detection_3d";
+    case OverlapKind::kLetBev:  // the devkit has no LET: WriteDevkitFiles skips those cells
+    case OverlapKind::kLet3D:
+      break;
   }
   return "detection";
 }
@@ -76,7 +79,7 @@ std::vector<fs::path> WriteDevkitFiles(const fs::path& dir, const EvalResult& re
   std::vector<std::pair<std::string, OverlapKind>> order;
   std::map<std::pair<std::string, OverlapKind>, std::map<Difficulty, const ClassResult*>> cells;
   for (const ClassResult& r : result.results) {
-    if (!r.evaluated) continue;
+    if (!r.evaluated || IsLetKind(r.metric)) continue;
     STEREODET_CHECK(r.kitti_precision.size() == 41)
         << "--devkit-files: the devkit's files hold its 41 precision slots, which only the KITTI "
            "matcher computes ("

@@ -23,7 +23,8 @@ namespace stereodet {
 //   plot/CLASS_KIND.txt (KIND: detection, orientation, detection_ground, detection_3d): 41 lines
 //     "%f %f %f %f\n" of recall i/40 and the three difficulties' slots (its saveAndPlotPlots' data;
 //     the gnuplot, EPS and PDF files are not made).
-// Files are written atomically. Returns the paths written, in that order per class and kind.
+// The LET kinds have no devkit file (the devkit has no LET) and are skipped. Files are written
+// atomically. Returns the paths written, in that order per class and kind.
 // Requires the KITTI matcher's arrays (ClassResult::kitti_precision): throws std::invalid_argument
 // naming what is missing for another matcher, or when no class x kind has all three difficulties
 // (a run of --difficulties moderate has nothing the devkit would write).

@@ -82,12 +82,17 @@ void AddCurveFile(json& e, const std::string& file, size_t points) {
   e["curve_points"] = points;
 }
 
-json FilteredCurveJson(const FilteredCurve& c, const std::string& file) {
+// `let`: the cell is of a LET kind (its APL added).
+json FilteredCurveJson(const FilteredCurve& c, const std::string& file, bool let) {
   json e = {{"ap_r40", c.ap_r40},
             {"ap_r11", c.ap_r11},
             {"ap_voc", c.ap_voc},
             {"aos_r40", c.aos_r40},
             {"aos_r11", c.aos_r11}};
+  if (let) {
+    e["apl_r40"] = c.apl_r40;
+    e["apl_r11"] = c.apl_r11;
+  }
   AddCurveFile(e, file, c.curve.size());
   return e;
 }
@@ -96,16 +101,21 @@ json FilteredCurveJson(const FilteredCurve& c, const std::string& file) {
 
 namespace {
 
-json ClassesJson(const std::vector<ClassSpec>& specs) {
+// min_overlap: 2D, BEV, 3D, and with `with_let` LET-BEV, LET-3D too (runs without a LET kind keep
+// the three of their records).
+json ClassesJson(const std::vector<ClassSpec>& specs, bool with_let) {
   json classes = json::array();
   for (const ClassSpec& c : specs) {
+    const size_t n = with_let ? c.min_overlap.size() : 3;
+    const std::vector<double> min_overlap(c.min_overlap.begin(), c.min_overlap.begin() + n);
     classes.push_back(
-        {{"name", c.name}, {"neighbours", c.neighbours}, {"min_overlap", c.min_overlap}});
+        {{"name", c.name}, {"neighbours", c.neighbours}, {"min_overlap", min_overlap}});
   }
   return classes;
 }
 
 json OptionsJson(const EvalOptions& options) {
+  const bool with_let = std::any_of(options.metrics.begin(), options.metrics.end(), IsLetKind);
   json metrics = json::array();
   for (OverlapKind k : options.metrics) metrics.push_back(OverlapKindName(k));
   json difficulties = json::array();
@@ -116,7 +126,7 @@ json OptionsJson(const EvalOptions& options) {
   }
   json j = {{"matcher", MatcherName(options.matcher)},
             {"compat", EvalCompatName(options.compat)},
-            {"classes", ClassesJson(options.classes)},
+            {"classes", ClassesJson(options.classes, with_let)},
             {"metrics", metrics},
             {"difficulties", difficulties},
             {"score_threshold", options.score_threshold},
@@ -129,6 +139,12 @@ json OptionsJson(const EvalOptions& options) {
             {"filter_mode", FilterModeName(options.filter.mode)},
             {"num_threads", options.num_threads}};
   // Only when asked, so that the records of runs without one stay as they were.
+  if (with_let) {
+    const LetOptions& let = options.let;
+    j["let"] = {{"longitudinal_tolerance_fraction", let.longitudinal_tolerance_fraction},
+                {"min_longitudinal_tolerance_m", let.min_longitudinal_tolerance_m},
+                {"sensor_m", {let.sensor_m.x(), let.sensor_m.y(), let.sensor_m.z()}}};
+  }
   if (!options.breakdowns.empty()) {
     json breakdowns = json::array();
     for (const BreakdownOptions& b : options.breakdowns) breakdowns.push_back(BreakdownText(b));
@@ -168,6 +184,10 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
   e["ap_voc"] = r.ap_voc;
   e["aos_r40"] = r.aos_r40;
   e["aos_r11"] = r.aos_r11;
+  if (IsLetKind(r.metric)) {
+    e["apl_r40"] = r.apl_r40;
+    e["apl_r11"] = r.apl_r11;
+  }
   e["at_threshold"] = OperatingPointJson(r.at_threshold);
   e["best_f1"] = OperatingPointJson(r.best_f1);
   if (r.filtered) {
@@ -175,8 +195,10 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
     e["filtered"] = {
         {"naive", OperatingPointJson(fs.naive)},
         {"stable", OperatingPointJson(fs.stable)},
-        {"naive_curve", FilteredCurveJson(fs.naive_curve, CurveFile("pr_naive_", r, suffix))},
-        {"stable_curve", FilteredCurveJson(fs.stable_curve, CurveFile("pr_stable_", r, suffix))}};
+        {"naive_curve",
+         FilteredCurveJson(fs.naive_curve, CurveFile("pr_naive_", r, suffix), IsLetKind(r.metric))},
+        {"stable_curve", FilteredCurveJson(fs.stable_curve, CurveFile("pr_stable_", r, suffix),
+                                           IsLetKind(r.metric))}};
   }
   if (!r.breakdown.empty()) {
     json bins = json::array();
@@ -195,6 +217,10 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
                       {"brier_over_detections", b.brier.over_detections},
                       {"brier_over_all", b.brier.over_all},
                       {"calibration", CalibrationJson(b.calibration)}});
+      if (IsLetKind(r.metric)) {
+        bins.back()["apl_r40"] = b.curve.apl_r40;
+        bins.back()["apl_r11"] = b.curve.apl_r11;
+      }
       if (b.naive) {
         // The bin evaluated on its own (EvalOptions::breakdown_naive), for comparison.
         bins.back()["naive"] = {{"num_valid_labels", b.naive->num_valid_labels},
@@ -211,6 +237,7 @@ json ClassResultJson(const ClassResult& r, const std::string& overlaps, const st
   if (!r.kitti_precision.empty()) {
     e["kitti"] = {
         {"precision", r.kitti_precision}, {"aos", r.kitti_aos}, {"thresholds", r.kitti_thresholds}};
+    if (IsLetKind(r.metric)) e["kitti"]["apl"] = r.kitti_apl;
   }
   e["brier"] = {{"over_labels", r.brier.over_labels},
                 {"num_label_terms", r.brier.num_label_terms},
@@ -301,12 +328,15 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
                 {"det_run", info.det_run.empty() ? json() : json(info.det_run)},
                 {"det_files_not_from_run", info.det_not_from_run}};
   j["options"] = OptionsJson(first.options);
+  const bool with_let =
+      std::any_of(first.options.metrics.begin(), first.options.metrics.end(), IsLetKind);
   json overlaps = json::array(), overlap_sets = json::array();
   double seconds = 0.0;
   for (const EvalRun& run : runs) {
     const std::string tag = DescribeOverlaps(run.options.classes);
     overlaps.push_back(tag);
-    overlap_sets.push_back({{"name", tag}, {"classes", ClassesJson(run.options.classes)}});
+    overlap_sets.push_back(
+        {{"name", tag}, {"classes", ClassesJson(run.options.classes, with_let)}});
     seconds += run.result.seconds;
   }
   j["options"]["overlaps"] = overlaps;
@@ -521,10 +551,10 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
   write(out_dir / "results.json", EvalResultToJson(runs, info).dump(1) + "\n");
 
   std::ostringstream summary;
-  summary
-      << "class,metric,difficulty,min_overlap,evaluated,num_valid_labels,num_detections,ap_r40,"
-         "ap_r11,ap_voc,aos_r40,aos_r11,threshold,tp,fp,fn,precision,recall,f1,best_f1_threshold,"
-         "best_f1,brier_labels,brier_detections,brier_all,ece,overlaps\n";
+  summary << "class,metric,difficulty,min_overlap,evaluated,num_valid_labels,num_detections,ap_r40,"
+             "ap_r11,ap_voc,aos_r40,aos_r11,apl_r40,apl_r11,threshold,tp,fp,fn,precision,recall,f1,"
+             "best_f1_threshold,"
+             "best_f1,brier_labels,brier_detections,brier_all,ece,overlaps\n";
   for (const EvalRun& run : runs) {
     const std::string tag = DescribeOverlaps(run.options.classes);
     for (const ClassResult& r : run.result.results) {
@@ -532,15 +562,16 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
               << DifficultyName(r.difficulty) << ',' << r.min_overlap << ','
               << (r.evaluated ? 1 : 0);
       if (!r.evaluated) {
-        summary << std::string(20, ',') << ',' << tag << '\n';
+        summary << std::string(22, ',') << ',' << tag << '\n';
         continue;
       }
       const OperatingPoint& op = r.at_threshold;
       summary << ',' << r.num_valid_labels << ',' << r.num_detections << ',' << Csv(r.ap_r40) << ','
               << Csv(r.ap_r11) << ',' << Csv(r.ap_voc) << ',' << Csv(r.aos_r40) << ','
-              << Csv(r.aos_r11) << ',' << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ','
-              << op.fn << ',' << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(op.f1)
-              << ',' << Csv(r.best_f1.threshold) << ',' << Csv(r.best_f1.f1) << ','
+              << Csv(r.aos_r11) << ',' << Csv(r.apl_r40) << ',' << Csv(r.apl_r11) << ','
+              << Csv(op.threshold) << ',' << op.tp << ',' << op.fp << ',' << op.fn << ','
+              << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(op.f1) << ','
+              << Csv(r.best_f1.threshold) << ',' << Csv(r.best_f1.f1) << ','
               << Csv(r.brier.over_labels) << ',' << Csv(r.brier.over_detections) << ','
               << Csv(r.brier.over_all) << ',' << Csv(r.calibration.ece) << ',' << tag << '\n';
     }
@@ -640,7 +671,13 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
   out << "\n";
   std::string diff_header;
   for (Difficulty d : options.difficulties) diff_header += fmt::format(" {:>8}", DifficultyName(d));
-  out << fmt::format("{:<12} {:<4} {:>5} | {:<7}{} |", "class", "kind", "tau", "", diff_header);
+  // The kind column fits its longest name ("let-bev"), 4 wide without a LET kind.
+  size_t kind_width = 4;
+  for (OverlapKind kind : options.metrics) {
+    kind_width = std::max(kind_width, std::string_view(OverlapKindName(kind)).size());
+  }
+  out << fmt::format("{:<12} {:<{}} {:>5} | {:<7}{} |", "class", "kind", kind_width, "tau", "",
+                     diff_header);
   // The operating point is shown at Moderate (KITTI's ranking level) when evaluated.
   Difficulty op_difficulty = options.difficulties.front();
   for (Difficulty d : options.difficulties) {
@@ -655,9 +692,10 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
       if (!first) continue;
       if (!first->evaluated) {
         out << fmt::format(
-            "{:<12} {:<4} {:>5.2f} | not evaluated (no detection of this class with a "
+            "{:<12} {:<{}} {:>5.2f} | not evaluated (no detection of this class with a "
             "valid {} box)\n",
-            spec.name, OverlapKindName(kind), first->min_overlap, OverlapKindName(kind));
+            spec.name, OverlapKindName(kind), kind_width, first->min_overlap,
+            OverlapKindName(PlainKind(kind)));
         continue;
       }
       auto cells = [&](auto format) {
@@ -669,8 +707,8 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
         return text;
       };
       auto line = [&](const char* what, const std::string& text) {
-        return fmt::format("{:<12} {:<4} {:>5.2f} | {:<7}{} |", spec.name, OverlapKindName(kind),
-                           first->min_overlap, what, text);
+        return fmt::format("{:<12} {:<{}} {:>5.2f} | {:<7}{} |", spec.name, OverlapKindName(kind),
+                           kind_width, first->min_overlap, what, text);
       };
       auto row = [&](const char* what, auto get, bool with_op, int decimals = 2) {
         out << line(what,
@@ -697,6 +735,12 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
         row(
             "AOS_R11", [](const ClassResult& r) { return r.aos_r11; }, false);
       }
+      if (first->has_apl) {
+        row(
+            "APL_R40", [](const ClassResult& r) { return r.apl_r40; }, false);
+        row(
+            "APL_R11", [](const ClassResult& r) { return r.apl_r11; }, false);
+      }
       out << line("labels", cells([&](const ClassResult& r) {
                     return std::to_string(r.num_valid_labels) +
                            (mark_small && IsSmallSample(r) ? "*" : "");
@@ -709,12 +753,13 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
       if (first->filtered) {
         const FilteredStats& fs = *first->filtered;
         out << fmt::format(
-            "{:<12} {:<4} {:>5} | filtered: naive TP {} FP {} FN {} P {:.4f} R {:.4f}; "
+            "{:<12} {:<{}} {:>5} | filtered: naive TP {} FP {} FN {} P {:.4f} R {:.4f}; "
             "stable TP {} FP {} FN {} P {:.4f} R {:.4f}\n",
-            "", "", "", fs.naive.tp, fs.naive.fp, fs.naive.fn, fs.naive.precision, fs.naive.recall,
-            fs.stable.tp, fs.stable.fp, fs.stable.fn, fs.stable.precision, fs.stable.recall);
-        out << fmt::format("{:<12} {:<4} {:>5} | filtered AP_R40: naive {}, stable {}\n", "", "",
-                           "", FormatNumber(fs.naive_curve.ap_r40, 2),
+            "", "", kind_width, "", fs.naive.tp, fs.naive.fp, fs.naive.fn, fs.naive.precision,
+            fs.naive.recall, fs.stable.tp, fs.stable.fp, fs.stable.fn, fs.stable.precision,
+            fs.stable.recall);
+        out << fmt::format("{:<12} {:<{}} {:>5} | filtered AP_R40: naive {}, stable {}\n", "", "",
+                           kind_width, "", FormatNumber(fs.naive_curve.ap_r40, 2),
                            FormatNumber(fs.stable_curve.ap_r40, 2));
       }
       // Breakdowns: AP_R40 per difficulty, then the operating point and Brier at the operating

@@ -1210,7 +1210,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
   if (eval) html += "<h2 id=\"summary\">Summary</h2>\n<table id=\"summary-table\">\n<tr>";
   if (eval) {
     for (const char* h : {"results", "class", "metric", "difficulty", "overlaps", "min overlap",
-                          "labels", "detections", "AP_R40", "AP_R11", "AOS_R40", "best F1",
+                          "labels", "detections", "AP_R40", "AP_R11", "AOS / APL_R40", "best F1",
                           "Brier labels", "Brier detections", "Brier all", "ECE"}) {
       html += fmt::format("<th>{}</th>", h);
     }
@@ -1241,14 +1241,16 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
             XmlEscape(s.label), XmlEscape(Str(e, "class")), Str(e, "metric"), Str(e, "difficulty"),
             Str(e, "overlaps"), Fixed(Num(e, "min_overlap"), 2), e.value("num_valid_labels", 0),
             e.value("small_sample", false) ? "*" : "", e.value("num_detections", 0),
-            ApText(e, "ap_r40"), ApText(e, "ap_r11"), ApText(e, "aos_r40"),
+            ApText(e, "ap_r40"), ApText(e, "ap_r11"),
+            ApText(e, e.contains("apl_r40") ? "apl_r40" : "aos_r40"),  // LET cells: LET-APL
             Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(b, "over_labels"), 4),
             Fixed(Num(b, "over_detections"), 4), Fixed(Num(b, "over_all"), 4),
             Fixed(Num(e["calibration"], "ece"), 4));
       }
     }
     html +=
-        "</table>\n<p style=\"font-size:12px\">AP and AOS in percent; * 40 or fewer valid labels "
+        "</table>\n<p style=\"font-size:12px\">AP, AOS (2D) and LET-APL (let-bev, let-3d) in "
+        "percent; * 40 or fewer valid labels "
         "(docs/metrics.md, small samples).</p>\n";
   }
   if (eval) html += Table1Html(sources);
