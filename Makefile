@@ -6,7 +6,7 @@ CTEST_FLAGS ?=
 DEMO_DIR ?= $(BUILD_DIR)/demo
 SYNTH_DIR ?= data/synth
 
-.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results rpn-results det3d-models det3d-results experiment kitti-experiment
+.PHONY: all deps configure build test demo bench fuzz sanitize clean format format-check tidy models rpn-models ssd-results rpn-results det3d-models det3d-results det3d-let-results experiment kitti-experiment
 
 all: build
 
@@ -69,6 +69,14 @@ rpn-results: deps
 det3d-results: deps
 	$(MAKE) build
 	./scripts/det3d-results.sh $(BUILD_DIR) $(DET3D_DIR) models results/det3d
+
+# docs/RESULTS.md's LiDAR-vs-stereo table by distance with LET-3D-AP (issue 37): the 3D detectors
+# of $(EXPERIMENT_DIR) (make experiment) on the val split and on the replication set; writes
+# results/det3d-let{,-rep}/table.md.
+det3d-let-results: deps
+	$(MAKE) build
+	./scripts/det3d-let-results.sh $(BUILD_DIR) $(EXPERIMENT_DIR) $(DET3D_DIR) results/det3d-let
+	./scripts/det3d-let-results.sh $(BUILD_DIR) $(EXPERIMENT_DIR)/replication $(DET3D_DIR)-rep results/det3d-let-rep
 
 # The paper's Table 1 (docs/experiment.md): data, stereo points, detection with every model of
 # $(EXPERIMENT_CONFIG) (absent checkpoints are "missing" rows), sharp and blurred, both matchers,
