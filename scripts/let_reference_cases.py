@@ -173,7 +173,7 @@ def write_frames(harness, path, num_frames, seed):
                 "scripts/let_reference_cases.py --frames-out; KITTI camera frame, m, rad. Rows "
                 "label/det: frame,role,h,w,l,x,y,z,ry,score; rows counts: "
                 "box_type,counts,cutoff,tp,fp,fn,sum_affinity\n")
-        w = csv.writer(f)
+        w = csv.writer(f, lineterminator="\n")
         for k, (labels, dets) in enumerate(frames):
             for label in labels:
                 w.writerow([k, "label"] + [repr(v) for v in label] + [""])
@@ -217,7 +217,7 @@ def main():
         f.write("# LET-3D-AP per-pair values from Waymo Open Dataset's metrics code (ComputeLetIoU, "
                 "range-aligned; ComputeLongitudinalAffinity, 10 %, >= 0.5 m), "
                 "scripts/let_reference_cases.py; KITTI camera frame, m, rad\n")
-        w = csv.writer(f)
+        w = csv.writer(f, lineterminator="\n")
         w.writerow(["label_h", "label_w", "label_l", "label_x", "label_y", "label_z", "label_ry",
                     "det_h", "det_w", "det_l", "det_x", "det_y", "det_z", "det_ry",
                     "sensor_x", "sensor_y", "sensor_z", "let_iou_3d", "let_iou_bev", "affinity"])

@@ -461,6 +461,7 @@ py::list Rows(const PyEvalResult& r) {
       row["brier_over_all"] = v(c.brier.over_all);
       row["ece"] = v(c.calibration.ece);
       row["laece"] = v(c.calibration.laece);
+      row["dece"] = v(c.calibration.dece);
       rows.append(row);
     }
   }
@@ -842,6 +843,9 @@ filled). docs/metrics.md defines every number.)")
                              })
       .def_property_readonly("ece", [](const ClassResult& c) { return c.calibration.ece; })
       .def_property_readonly("laece", [](const ClassResult& c) { return c.calibration.laece; })
+      .def_property_readonly(
+          "dece", [](const ClassResult& c) { return c.calibration.dece; },
+          "D-ECE over (score, box centre, box size) bins (docs/metrics.md, Calibration)")
       .def("__repr__", [](const ClassResult& c) {
         return "<ClassResult " + c.class_name + " " + OverlapKindName(c.metric) + " " +
                DifficultyName(c.difficulty) +

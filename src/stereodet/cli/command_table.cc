@@ -60,6 +60,9 @@ std::span<const Command> CommandTable() {
       {"eval", Program::kFrontEnd,
        "evaluate detections: KITTI-compatible AP, optimal matching, filters, Brier, calibration, "
        "3D error"},
+      {"calibrate", Program::kFrontEnd,
+       "fit score calibrators (temperature, Platt, isotonic) per class on one split's matched "
+       "detections and write a calibration file that `eval --calibration` applies"},
       {"report", Program::kFrontEnd,
        "figures (SVG, PNG) and one self-contained HTML page of one or several `eval --out` "
        "results folders: PR, recall vs FP per frame, reliability and Brier, 3D error vs distance"},

@@ -15,15 +15,16 @@ TEST(CommandTableTest, NamesAreUniqueAndDescribed) {
     EXPECT_TRUE(names.insert(command.name).second) << "twice: " << command.name;
     EXPECT_FALSE(command.description.empty()) << command.name;
   }
-  EXPECT_EQ(names, (std::set<std::string_view>{"synth", "stereo", "info", "eval", "report", "view",
-                                               "train", "detect", "run"}));
+  EXPECT_EQ(names, (std::set<std::string_view>{"synth", "stereo", "info", "eval", "calibrate",
+                                               "report", "view", "train", "detect", "run"}));
 }
 
 // The front end must hold only the commands that need neither OpenCV nor LibTorch.
 TEST(CommandTableTest, OwnersKeepHeavyLibrariesOutOfTheFrontEnd) {
   for (const Command& command : CommandTable()) {
     const bool light = command.name == "info" || command.name == "eval" ||
-                       command.name == "report" || command.name == "view";
+                       command.name == "calibrate" || command.name == "report" ||
+                       command.name == "view";
     EXPECT_EQ(command.program == Program::kFrontEnd, light) << command.name;
   }
   EXPECT_STREQ(ProgramName(Program::kFrontEnd), "stereodet");

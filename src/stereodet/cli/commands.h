@@ -53,14 +53,15 @@ std::string CommandDescription(std::string_view name);
 
 // Adds one area's subcommands (each *_command.cc defines one of these).
 using AddCommandFn = void (*)(CLI::App&);
-void AddInfoCommand(CLI::App& app);    // info_command.cc (kitti helper)
-void AddEvalCommand(CLI::App& app);    // eval_command.cc (eval, eval sweep, eval compare)
-void AddReportCommand(CLI::App& app);  // report_command.cc (figures and the HTML report)
-void AddViewCommand(CLI::App& app);    // report_command.cc (frame views)
-void AddSynthCommand(CLI::App& app);   // synth_command.cc
-void AddStereoCommand(CLI::App& app);  // stereo_command.cc
-void AddModelsCommand(CLI::App& app);  // models_command.cc (train ssd, detect ssd)
-void AddRunCommand(CLI::App& app);     // run_command.cc (stereodet run: streams, latency)
+void AddInfoCommand(CLI::App& app);       // info_command.cc (kitti helper)
+void AddEvalCommand(CLI::App& app);       // eval_command.cc (eval, eval sweep, eval compare)
+void AddCalibrateCommand(CLI::App& app);  // eval_command.cc (calibrate --fit)
+void AddReportCommand(CLI::App& app);     // report_command.cc (figures and the HTML report)
+void AddViewCommand(CLI::App& app);       // report_command.cc (frame views)
+void AddSynthCommand(CLI::App& app);      // synth_command.cc
+void AddStereoCommand(CLI::App& app);     // stereo_command.cc
+void AddModelsCommand(CLI::App& app);     // models_command.cc (train ssd, detect ssd)
+void AddRunCommand(CLI::App& app);        // run_command.cc (stereodet run: streams, latency)
 
 // The whole main() of the executable `self`: `own` maps each command that `self` implements to the
 // function adding it (a function named twice, as train and detect, is called once). A command of

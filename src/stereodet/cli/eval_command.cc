@@ -34,6 +34,7 @@
 
 #include "stereodet/cli/commands.h"
 #include "stereodet/eval/bootstrap.h"
+#include "stereodet/eval/calibration_fit.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/pipelines/coco_evaluation.h"
@@ -78,6 +79,8 @@ struct EvalArgs {
   std::string metrics = JoinNames(EvalOptions().metrics, OverlapKindName);
   std::string let_tolerance;  // --let-tolerance FRACTION,MIN_M (empty: LetOptions' defaults)
   std::string let_sensor;     // --let-sensor X,Y,Z (empty: the origin)
+  std::string dece_bins;      // --dece-bins S,X,Y,W,H (empty: DeceOptions' defaults)
+  std::string image_size;     // --image-size W,H (empty: KITTI's 1242,375)
   std::string difficulties = JoinNames(
       EvalOptions().difficulties, [](Difficulty d) { return ToLowerAscii(DifficultyName(d)); });
   std::string matcher = MatcherName(EvalOptions().matcher);
@@ -94,6 +97,8 @@ struct EvalArgs {
   bool records = false;
   bool report = false;
   bool devkit_files = false;  // --devkit-files (eval only)
+  std::string calibration;    // --calibration FILE (eval, eval merge)
+  std::string method = CalibrationMethodName(CalibrationFitOptions().method);  // calibrate
   // --bootstrap N, --bootstrap-seed, --bootstrap-confidence (eval, compare, merge); used when
   // --bootstrap was given (bootstrap_given, set by the command's callback).
   BootstrapOptions bootstrap;
@@ -154,11 +159,13 @@ std::optional<BootstrapOptions> MakeBootstrapOptions(const EvalArgs& a) {
 // The common options of eval, eval sweep and eval compare.
 // --gt and --det are checked when the command runs (not CLI11-required, so that `eval sweep ...`
 // does not demand them of `eval`).
-void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
+// `det_flag`: the detections' flag ("--det"; calibrate's "--fit").
+void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter,
+                      const std::string& det_flag = "--det") {
   cmd->add_option("--gt", a->input.gt,
                   "labels: a KITTI root (with training/label_2) or a folder of .txt (required, "
                   "except with --shards or in COCO mode)");
-  cmd->add_option("--det", a->input.det,
+  cmd->add_option(det_flag, a->input.det,
                   "detections: a folder of .txt (or with data/ inside, devkit style) (required, "
                   "except with --shards or in COCO mode)");
   cmd->add_option("--split", a->input.split,
@@ -170,6 +177,11 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter) {
   cmd->add_option("--let-tolerance", a->let_tolerance,
                   "let-bev / let-3d: longitudinal tolerance FRACTION,MIN_M, max(FRACTION x range, "
                   "MIN_M) (default 0.1,0.5, Waymo's)");
+  cmd->add_option("--dece-bins", a->dece_bins,
+                  "D-ECE's bins of the score, box centre x, centre y, width and height (default "
+                  "5,5,5,5,5; docs/metrics.md, Calibration)");
+  cmd->add_option("--image-size", a->image_size,
+                  "the image the 2D boxes are in, W,H px, for D-ECE (default 1242,375, KITTI's)");
   cmd->add_option("--let-sensor", a->let_sensor,
                   "let-bev / let-3d: the sensor X,Y,Z in the camera frame, m, whose lines of sight "
                   "the tolerance runs along (default 0,0,0, KITTI's camera 0)");
@@ -311,6 +323,19 @@ EvalOptions MakeOptions(const EvalArgs& a) {
     o.metrics.push_back(*kind);
   }
   o.let = ParseLetFlags(a.let_tolerance, a.let_sensor);
+  if (!a.dece_bins.empty()) {
+    const std::vector<double> v = ParseNumbers(a.dece_bins, 5, "--dece-bins", "S,X,Y,W,H");
+    for (int d = 0; d < 5; ++d) {
+      STEREODET_CHECK(v[d] == std::floor(v[d]) && v[d] >= 1 && v[d] <= 100)
+          << "--dece-bins: " << v[d] << " is not a whole number of bins in [1, 100]";
+      o.dece.bins[d] = static_cast<int>(v[d]);
+    }
+  }
+  if (!a.image_size.empty()) {
+    const std::vector<double> v = ParseNumbers(a.image_size, 2, "--image-size", "W,H in px");
+    o.dece.image_width_px = v[0];
+    o.dece.image_height_px = v[1];
+  }
   o.difficulties.clear();
   for (const std::string& d : SplitList(a.difficulties)) {
     const auto difficulty = ParseDifficulty(d);
@@ -388,10 +413,15 @@ void RunEval(const EvalArgs& a) {
   options.records = a.records;
   options.report = a.report;
   options.devkit_files = a.devkit_files;
+  options.calibration = a.calibration;
   options.bootstrap = MakeBootstrapOptions(a);
   options.tool_version = StereodetVersion();
   options.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluation(options);
+  if (!a.calibration.empty()) {
+    fmt::print("calibration {}: {} detection scores replaced\n", a.calibration,
+               result.info.calibrated_detections);
+  }
 
   PrintNotices(result.input);
   fmt::print("{}", FormatEvalTable(result.runs));
@@ -614,6 +644,80 @@ void RunCompare(const EvalArgs& given, EvaluationCompareOptions options) {
 
 }  // namespace
 
+// `stereodet calibrate --fit DET --gt GT --split A --out FILE`: the calibrators of the detection
+// folder's classes on split A (eval/calibration_fit.h), written to FILE.
+void RunCalibrate(const EvalArgs& a) {
+  STEREODET_CHECK(!a.out.empty()) << "--out FILE is required: the calibration file to write";
+  const std::filesystem::path out = a.out;
+  STEREODET_CHECK(!std::filesystem::is_directory(out))
+      << "--out " << a.out << " is a folder: give the calibration file's name";
+  if (std::filesystem::exists(out)) {
+    // A command replaces only what it made itself: an earlier calibration file, nothing else.
+    try {
+      ReadScoreCalibration(out);
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--out " + a.out +
+                                  " exists and is not a calibration file: calibrate replaces only "
+                                  "its own files");
+    }
+  }
+  CalibrationFitOptions options;
+  options.eval = MakeOptions(a);
+  const auto method = ParseCalibrationMethod(a.method);
+  STEREODET_CHECK(method.has_value())
+      << "--method: unknown '" << a.method << "' (temperature, platt, isotonic)";
+  options.method = *method;
+  options.Check();
+  const EvalInput input = LoadEvalFrames(MakeInputOptions(a));
+  PrintNotices(input);
+  CalibrationFit fit = FitScoreCalibration(input.frames, options);
+  const std::vector<std::pair<std::string, std::string>> source = {
+      {"gt", a.input.gt.string()},
+      {"det", a.input.det.string()},
+      {"split", a.input.split},
+      {"input_hash", input.input_hash},
+      {"tool", std::string("stereodet ") + StereodetVersion()}};
+  fit.calibration.fitted_on.insert(fit.calibration.fitted_on.begin(), source.begin(), source.end());
+  WriteScoreCalibration(out, fit.calibration);
+  fmt::print(
+      "{} calibrators on {} frames ({} {} {}, {} matcher); in-sample, over the fitted "
+      "detections (TP 1, FP 0):\n",
+      CalibrationMethodName(options.method), input.frames.size(),
+      OverlapKindName(options.eval.metrics.front()),
+      DifficultyName(options.eval.difficulties.front()), DescribeOverlaps(options.eval.classes),
+      MatcherName(options.eval.matcher));
+  fmt::print("{:<12} {:>7} {:>7} | {:>13} {:>13} | {}\n", "class", "TP", "FP", "Brier before",
+             "after", "log loss before / after, parameters");
+  for (size_t k = 0; k < fit.classes.size(); ++k) {
+    const ClassCalibrationFit& c = fit.classes[k];
+    const ScoreCalibrator& cal = fit.calibration.classes[k].second;
+    const std::string params =
+        cal.method == CalibrationMethod::kIsotonic ? fmt::format("{} points", cal.x.size())
+        : cal.method == CalibrationMethod::kTemperature
+            ? fmt::format("T = {:.4f}", 1.0 / cal.slope)
+            : fmt::format("slope {:.4f}, intercept {:.4f}", cal.slope, cal.intercept);
+    fmt::print("{:<12} {:>7} {:>7} | {:>13.4f} {:>13.4f} | {:.4f} / {:.4f}, {}\n", c.class_name,
+               c.num_tp, c.num_fp, c.brier_before, c.brier_after, c.nll_before, c.nll_after,
+               params);
+  }
+  fmt::print("wrote {}; apply it with `stereodet eval --calibration {}` on another split\n", a.out,
+             a.out);
+}
+
+void AddCalibrateCommand(CLI::App& app) {
+  auto args = std::make_shared<EvalArgs>();
+  args->metrics = "2d";
+  args->difficulties = "moderate";
+  args->matcher = "optimal";
+  CLI::App* cmd = app.add_subcommand("calibrate", CommandDescription("calibrate"));
+  AddCommonOptions(cmd, args.get(), false, "--fit");
+  cmd->add_option("--method", args->method,
+                  "temperature | platt | isotonic (docs/metrics.md, Calibrators)")
+      ->capture_default_str();
+  cmd->add_option("--out", args->out, "the calibration file to write (JSON)");
+  cmd->callback([args] { RunCalibrate(*args); });
+}
+
 void AddEvalCommand(CLI::App& app) {
   auto args = std::make_shared<EvalArgs>();
   CLI::App* eval = app.add_subcommand("eval", CommandDescription("eval"));
@@ -638,6 +742,10 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--report", args->report,
                  "also write OUT/report/: index.html and figures/ as SVG and PNG, as `stereodet "
                  "report OUT` does (docs/report.md)");
+  eval->add_option("--calibration", args->calibration,
+                   "a score calibration file of `stereodet calibrate --fit` (fitted on another "
+                   "split): every detection of a calibrated class gets its calibrated probability "
+                   "before evaluating (docs/metrics.md, Calibrators)");
   eval->add_flag("--devkit-files", args->devkit_files,
                  "also write the official KITTI devkit's result files into OUT: "
                  "stats_CLASS_{detection,orientation,detection_ground,detection_3d}.txt and "

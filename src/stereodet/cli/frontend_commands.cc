@@ -9,10 +9,8 @@ namespace stereodet::cli {
 
 std::span<const std::pair<std::string_view, AddCommandFn>> FrontEndCommands() {
   static constexpr std::pair<std::string_view, AddCommandFn> kOwn[] = {
-      {"info", AddInfoCommand},
-      {"eval", AddEvalCommand},
-      {"report", AddReportCommand},
-      {"view", AddViewCommand},
+      {"info", AddInfoCommand},     {"eval", AddEvalCommand}, {"calibrate", AddCalibrateCommand},
+      {"report", AddReportCommand}, {"view", AddViewCommand},
   };
   return kOwn;
 }

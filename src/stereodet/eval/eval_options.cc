@@ -142,6 +142,19 @@ double ApplyScoreTransform(ScoreTransform transform, double score) {
   return score;
 }
 
+void DeceOptions::Check() const {
+  int64_t total = 1;
+  for (const int b : bins) {
+    STEREODET_CHECK(b >= 1 && b <= 100) << "D-ECE bins must be in [1, 100], got " << b;
+    total *= b;
+  }
+  STEREODET_CHECK(total <= 1000000) << "D-ECE: " << total << " bins in all, at most 10^6";
+  STEREODET_CHECK(std::isfinite(image_width_px) && image_width_px > 0 &&
+                  std::isfinite(image_height_px) && image_height_px > 0)
+      << "D-ECE: the image size must be positive, got " << image_width_px << " x "
+      << image_height_px;
+}
+
 void EvalOptions::Check() const {
   STEREODET_CHECK(!classes.empty()) << "no class to evaluate";
   STEREODET_CHECK(!metrics.empty()) << "no overlap kind (2d, bev, 3d, let-bev, let-3d) to evaluate";
@@ -176,6 +189,7 @@ void EvalOptions::Check() const {
       << "max_distance_m must be a finite number > 0, got " << max_distance_m;
   STEREODET_CHECK_LE(max_distance_m / distance_bin_m, 100000) << " (localization bins)";
   STEREODET_CHECK_GE(num_threads, 0);
+  dece.Check();
   filter.Check();
   for (const BreakdownOptions& b : breakdowns) b.Check();
 }

@@ -108,6 +108,24 @@ const char* ScoreTransformName(ScoreTransform transform);  // "none", "sigmoid"
 std::optional<ScoreTransform> ParseScoreTransform(std::string_view text);
 double ApplyScoreTransform(ScoreTransform transform, double score);
 
+// D-ECE, the detection ECE over joint bins of the score and the 2D box (Kuppers et al.,
+// "Multivariate confidence calibration for object detection", CVPR-W 2020; netcal's
+// ECE(detection=True)): the features score, box centre x / image width, centre y / image height,
+// box width / image width, box height / image height, each split into equal-width bins over [0, 1]
+// (a value of 1 in the last bin); a detection with a feature outside [0, 1] falls in no bin and
+// takes no part.
+struct DeceOptions {
+  // Bins of the score, centre x, centre y, width and height, in that order.
+  std::array<int, 5> bins = {5, 5, 5, 5, 5};
+  // The image the 2D boxes are in, px (KITTI's left colour image: 1242 x 375).
+  double image_width_px = 1242.0;
+  double image_height_px = 375.0;
+
+  // Throws std::invalid_argument on a bin count outside [1, 100], more than 10^6 bins in all, or a
+  // non-positive or non-finite image size.
+  void Check() const;
+};
+
 struct EvalOptions {
   std::vector<ClassSpec> classes = {KittiClassSpec("Car"), KittiClassSpec("Pedestrian"),
                                     KittiClassSpec("Cyclist")};
@@ -140,6 +158,8 @@ struct EvalOptions {
 
   // Reliability curve: equal-width score bins over [0, 1].
   int calibration_bins = 10;
+  // D-ECE's bins (CalibrationResult::dece).
+  DeceOptions dece;
   // Localization error of matched pairs, binned by the label's depth z (m).
   double distance_bin_m = 5.0;
   double max_distance_m = 80.0;

@@ -677,6 +677,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       for (size_t d = 0; d < n_d; ++d) {
         accs.emplace_back(options.calibration_bins, options.distance_bin_m, options.max_distance_m,
                           options.score_transform);
+        accs.back().EnableDece(options.dece);
       }
       for (size_t f = 0; f < frames.size(); ++f) {
         for (size_t d = 0; d < n_d; ++d) {
@@ -755,6 +756,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           }
           ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
                                       options.max_distance_m, options.score_transform);
+          acc.EnableDece(options.dece);
           for (size_t f = 0; f < frames.size(); ++f) {
             acc.Add(frames[f], cfs[f], assocs[d][f], difficulty, &selection);
           }

@@ -64,7 +64,7 @@ struct MatchRecord {
   // kTp: the overlap that decided the match. Otherwise the largest overlap of the row's object with
   // the other side: for a detection, with any label of the class or its neighbours; for a label,
   // with any detection of the class at the operating point (0 when there is none). Same overlap
-  // kind and definition as the matching (KittiOverlap).
+  // kind and definition as the matching (MatchOverlap: KittiOverlap, or LET-IoU in the LET kinds).
   double iou = 0.0;
 };
 

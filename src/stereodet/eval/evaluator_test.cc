@@ -411,7 +411,9 @@ TEST(EvaluatorTest, LetForgivesErrorAlongTheLineOfSightByHandEveryMatcher) {
     EXPECT_EQ(plain.at_threshold.tp, 1);
     EXPECT_EQ(plain.at_threshold.fp, 2);
     EXPECT_FALSE(plain.has_apl);
-    if (m != Matcher::kKitti) EXPECT_NEAR(plain.ap_r40, 16.25, 1e-9);
+    if (m != Matcher::kKitti) {
+      EXPECT_NEAR(plain.ap_r40, 16.25, 1e-9);
+    }
   }
   // Waymo's tolerance of 0.1 x range is the default; a tighter one (5 %, 0.5 m) rules A out too.
   options.matcher = Matcher::kOptimal;

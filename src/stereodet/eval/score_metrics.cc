@@ -77,9 +77,36 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
           const int e = cf.FindEdge(a.det_label[j], j);
           overlap = e >= 0 ? cf.edge_overlap[e] : kUnknownOverlap;
         }
-        AddDetectionTerm(s, o == Outcome::kTp, overlap);
+        AddDetectionTerm(s, o == Outcome::kTp, overlap, &frame.detections[cf.det_object[j]].box);
       });
 }
+
+void ScoreMetricsAccumulator::EnableDece(const DeceOptions& options) {
+  options.Check();
+  dece_ = options;
+  size_t total = 1;
+  for (const int b : options.bins) total *= static_cast<size_t>(b);
+  dece_count_.assign(total, 0);
+  dece_tp_.assign(total, 0);
+  dece_score_sum_.assign(total, 0.0);
+}
+
+namespace {
+
+// numpy.histogramdd's bin of v among `bins` equal-width bins of [0, 1] (edges as numpy.linspace
+// makes them: i * (1 / bins), the last exactly 1; a value equal to an edge goes to the bin above
+// it, 1 to the last bin); v in [0, 1] (netcal clamps every feature into it first).
+int EqualWidthBin(double v, int bins) {
+  if (v >= 1.0) return bins - 1;
+  const double step = 1.0 / bins;
+  int k = std::min(static_cast<int>(v / step), bins - 1);
+  // v / step can land one bin off the edges' own rounding: settle against the edges themselves.
+  while (k > 0 && v < k * step) --k;
+  while (k + 1 < bins && v >= (k + 1) * step) ++k;
+  return k;
+}
+
+}  // namespace
 
 void ScoreMetricsAccumulator::AddLabelTerm(double term) {
   brier_sums_.over_labels += term;
@@ -88,7 +115,32 @@ void ScoreMetricsAccumulator::AddLabelTerm(double term) {
   ++brier_sums_.num_all_terms;
 }
 
-void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp, double overlap) {
+void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp, double overlap,
+                                               const Box2D* box) {
+  if (!dece_count_.empty()) {
+    if (box == nullptr) {
+      boxes_known_ = false;
+    } else {
+      const double w = dece_.image_width_px, h = dece_.image_height_px;
+      const double features[5] = {s, (box->left + box->right) / 2 / w,
+                                  (box->top + box->bottom) / 2 / h, (box->right - box->left) / w,
+                                  (box->bottom - box->top) / h};
+      // As netcal: every feature clamped into [0, 1], so that a box reaching past the image (a
+      // truncated object) counts in the edge bins.
+      size_t index = 0;
+      bool outside = false;
+      for (int d = 0; d < 5; ++d) {
+        outside = outside || !(features[d] >= 0.0 && features[d] <= 1.0);
+        const double v = std::isnan(features[d]) ? 0.0 : std::clamp(features[d], 0.0, 1.0);
+        index = index * static_cast<size_t>(dece_.bins[d]) +
+                static_cast<size_t>(EqualWidthBin(v, dece_.bins[d]));
+      }
+      ++dece_count_[index];
+      dece_tp_[index] += tp ? 1 : 0;
+      dece_score_sum_[index] += std::clamp(s, 0.0, 1.0);
+      dece_outside_ += outside ? 1 : 0;
+    }
+  }
   const int num_bins = static_cast<int>(bin_count_.size());
   const double y = tp ? 1.0 : 0.0;
   brier_sums_.over_detections += (s - y) * (s - y);
@@ -143,6 +195,20 @@ CalibrationResult ScoreMetricsAccumulator::Calibration() const {
   }
   c.ece = c.num_detections > 0 ? ece : kNaN;
   c.laece = c.num_detections > 0 && overlaps_known_ ? laece : kNaN;
+  c.dece = kNaN;
+  c.dece_outside = dece_outside_;
+  if (!dece_count_.empty() && boxes_known_) {
+    int64_t n = 0;
+    for (const int64_t count : dece_count_) n += count;
+    double dece = 0.0;
+    for (size_t k = 0; k < dece_count_.size(); ++k) {
+      if (dece_count_[k] == 0) continue;
+      const double count = static_cast<double>(dece_count_[k]);
+      dece += count / static_cast<double>(n) *
+              std::abs(static_cast<double>(dece_tp_[k]) / count - dece_score_sum_[k] / count);
+    }
+    if (n > 0) c.dece = dece;
+  }
   return c;
 }
 

@@ -46,6 +46,13 @@ struct CalibrationResult {
   // matched. NaN if N = 0 or an overlap is unknown (COCO mode). Like ece, over the detections at
   // the operating point only: misses do not count (docs/metrics.md, "Calibration").
   double laece = 0.0;
+  // D-ECE (DeceOptions): sum over the joint bins of (score, box centre, box size) of count / N *
+  // |mean score - TP fraction|, N the detections in some bin; NaN if N = 0 or the boxes are not
+  // known (COCO mode). Over the detections at the operating point, as ece.
+  double dece = 0.0;
+  // Detections with a feature outside [0, 1] (a box reaching past the image, a score outside [0,
+  // 1]), clamped into the end bins as netcal does.
+  int64_t dece_outside = 0;
   int64_t num_detections = 0;
   int64_t num_out_of_range = 0;  // scores outside [0, 1], clamped into the end bins
 };

@@ -79,8 +79,12 @@ class ScoreMetricsAccumulator {
   // (1 - s)^2 for its TP detection's transformed score s, or 1 without one; a counted detection
   // (TP or FP) with its transformed score. Add() is made of these.
   void AddLabelTerm(double term);
-  // `overlap`: a TP's overlap with its label, for LaECE (NaN: unknown, LaECE then NaN).
-  void AddDetectionTerm(double s, bool tp, double overlap = kUnknownOverlap);
+  // `overlap`: a TP's overlap with its label, for LaECE (NaN: unknown, LaECE then NaN). `box`: the
+  // detection's 2D box, for D-ECE (null: unknown, D-ECE then NaN).
+  void AddDetectionTerm(double s, bool tp, double overlap = kUnknownOverlap,
+                        const Box2D* box = nullptr);
+  // Turns D-ECE on (off by default: COCO mode has no image size).
+  void EnableDece(const DeceOptions& options);
   static constexpr double kUnknownOverlap = std::numeric_limits<double>::quiet_NaN();
 
   BrierScores Brier() const;  // means
@@ -94,6 +98,13 @@ class ScoreMetricsAccumulator {
   std::vector<double> bin_iou_sum_;  // TPs' overlaps (FPs add 0): LaECE
   bool overlaps_known_ = true;
   int64_t out_of_range_ = 0;
+  // D-ECE: per joint bin (DeceOptions::bins, score first, row-major) the detections, their score
+  // sum and TPs; empty when off.
+  DeceOptions dece_;
+  std::vector<int64_t> dece_count_, dece_tp_;
+  std::vector<double> dece_score_sum_;
+  bool boxes_known_ = true;
+  int64_t dece_outside_ = 0;
   double distance_bin_m_, max_distance_m_;
   ScoreTransform transform_;
   std::vector<std::vector<double>> centre_errors_, depth_errors_;

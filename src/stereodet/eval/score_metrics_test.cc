@@ -3,10 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "stereodet/eval/evaluator.h"
+#include "stereodet/eval/score_metrics_internal.h"
 #include "stereodet/eval/test_objects.h"
+#include "stereodet/util/test_paths.h"
 
 namespace stereodet {
 namespace {
@@ -78,6 +84,82 @@ TEST(ScoreMetricsTest, LocalizationAwareEceByHand) {
     EXPECT_NEAR(r.calibration.laece, 2.0 / 3 * 0.125 + 0.4 / 3, 1e-12) << MatcherName(m);
     EXPECT_NEAR(r.calibration.ece, 2.0 / 3 * 0.075 + 0.4 / 3, 1e-12) << MatcherName(m);
   }
+}
+
+// D-ECE by hand: two detections of score 0.9 in a 1242 x 375 image, a TP (l1's, at the left) and a
+// FP. In one joint bin their TP fraction is 1/2: D-ECE = |0.5 - 0.9| = 0.4 = ECE. A FP far to the
+// right puts them in two bins of the centre's x: D-ECE = 1/2 |1 - 0.9| + 1/2 |0 - 0.9| = 0.5 > ECE:
+// D-ECE sees that the scores are right for neither place. A box past the image's edge (centre x
+// beyond 1242) is clamped into the last bin of x, as netcal does.
+TEST(ScoreMetricsTest, DetectionEceByHand) {
+  EvalFrame f;
+  Object l1, d1, d2;
+  l1.type = d1.type = d2.type = "Car";
+  l1.box = {0, 100, 100, 200};
+  d1.box = l1.box;
+  d1.score = 0.9;
+  d2.box = {10, 150, 110, 250};  // same bins as d1 (5 per feature): a FP beside it
+  d2.score = 0.9;
+  f.labels = {l1};
+  f.detections = {d1, d2};
+  EvalOptions options;
+  options.classes = {KittiClassSpec("Car")};
+  options.metrics = {OverlapKind::k2D};
+  options.difficulties = {Difficulty::kEasy};
+  for (Matcher m : {Matcher::kKitti, Matcher::kOptimal, Matcher::kVoc}) {
+    options.matcher = m;
+    EXPECT_NEAR(Evaluate({f}, options).results.at(0).calibration.dece, 0.4, 1e-12)
+        << MatcherName(m);
+  }
+  f.detections[1].box = {1100, 100, 1200, 200};
+  options.matcher = Matcher::kOptimal;
+  CalibrationResult c = Evaluate({f}, options).results.at(0).calibration;
+  EXPECT_NEAR(c.dece, 0.5, 1e-12);
+  EXPECT_NEAR(c.ece, 0.4, 1e-12);
+  EXPECT_EQ(c.dece_outside, 0);
+  f.detections[1].box = {1200, 100, 1400, 200};
+  c = Evaluate({f}, options).results.at(0).calibration;
+  EXPECT_EQ(c.dece_outside, 1);
+  EXPECT_NEAR(c.dece, 0.5, 1e-12);
+  // One bin per box feature: D-ECE is ECE over the score's bins (5 here).
+  options.dece.bins = {10, 1, 1, 1, 1};
+  f.detections[1].box = {1100, 100, 1200, 200};
+  c = Evaluate({f}, options).results.at(0).calibration;
+  EXPECT_NEAR(c.dece, c.ece, 1e-12);
+  options.dece.bins = {0, 1, 1, 1, 1};
+  EXPECT_THROW(Evaluate({f}, options), std::invalid_argument);
+}
+
+// netcal's own D-ECE (ECE(bins, detection=True), revision 2a3db8d, run unmodified by
+// scripts/dece_reference_cases.py) on five sets of 60 to 5000 detections and three bin layouts:
+// tests/data/calibration/netcal_dece.csv. Some boxes reach past the image: clamped into the edge
+// bins in both.
+TEST(ScoreMetricsTest, DeceAgreesWithNetcal) {
+  std::ifstream in(TestSourceDir() / "tests/data/calibration/netcal_dece.csv");
+  ASSERT_TRUE(in);
+  std::map<int, std::vector<std::pair<Box2D, std::pair<double, bool>>>> cases;
+  std::string line;
+  int checked = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> v;
+    std::stringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) v.push_back(field);
+    const int k = std::stoi(v.at(0));
+    if (v.at(1) == "det") {
+      const Box2D box{std::stod(v[2]), std::stod(v[3]), std::stod(v[4]), std::stod(v[5])};
+      cases[k].push_back({box, {std::stod(v[6]), v[7] == "1"}});
+      continue;
+    }
+    DeceOptions dece;
+    for (int d = 0; d < 5; ++d) dece.bins[d] = std::stoi(v.at(2 + d));
+    ScoreMetricsAccumulator acc(10, 5.0, 80.0);
+    acc.EnableDece(dece);
+    for (const auto& [box, st] : cases.at(k)) acc.AddDetectionTerm(st.first, st.second, 0.0, &box);
+    EXPECT_NEAR(acc.Calibration().dece, std::stod(v.at(7)), 1e-12) << line;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 15);
 }
 
 // Brier over labels has a fixed support: one term per valid label whatever the detector did. Two

@@ -9,6 +9,7 @@
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/geometry/calibration.h"
 #include "stereodet/kitti/calib_io.h"
+#include "stereodet/kitti/score_calibration.h"
 #include "stereodet/pipelines/evaluation_internal.h"
 #include "stereodet/report/bootstrap_report.h"
 #include "stereodet/report/devkit_files.h"
@@ -70,6 +71,14 @@ void EvaluationOptions::Check() const {
       << "--devkit-files: the devkit's files hold its 41 precision slots, which only the KITTI "
          "matcher computes; evaluate with --matcher kitti";
   if (bootstrap) bootstrap->Check();
+  if (!calibration.empty()) {
+    for (const EvalOptions& run : runs) {
+      STEREODET_CHECK(run.score_transform == ScoreTransform::kNone)
+          << "--calibration maps the scores to probabilities: drop --score-transform "
+          << ScoreTransformName(run.score_transform)
+          << " (a calibration fitted on logits takes logits itself)";
+    }
+  }
 }
 
 EvaluationResult RunEvaluation(const EvaluationOptions& options) {
@@ -97,6 +106,13 @@ EvaluationResult EvaluateAndWrite(
   }
   result.input = std::move(input);
   result.info = MakeRunInfo(options.input, result.input);
+  if (!options.calibration.empty()) {
+    const ScoreCalibration calibration = ReadScoreCalibration(options.calibration);
+    int64_t changed = 0;
+    for (EvalFrame& frame : result.input.frames) changed += calibration.Apply(&frame.detections);
+    result.info.calibration_path = options.calibration.string();
+    result.info.calibrated_detections = changed;
+  }
   result.info.tool_version = options.tool_version;
   result.info.command_line = options.command_line;
   for (EvalRun& run : result.runs) {

@@ -54,6 +54,11 @@ struct EvaluationOptions {
   // Bootstrap intervals over frames for every run (Bootstrap; EvalRun::bootstrap), in
   // results.json and the table. Unset: none. Its num_threads is replaced by input.num_threads.
   std::optional<BootstrapOptions> bootstrap;
+  // A score calibration file (kitti/score_calibration.h, `stereodet calibrate --fit`): applied to
+  // the detections once read, before every run; recorded in results.json ("input.calibration").
+  // Its outputs are probabilities: every run's score_transform must be kNone (a calibration fitted
+  // on logits says so itself). Empty: none.
+  std::filesystem::path calibration;
   // Provenance recorded in results.json (EvalRunInfo).
   std::string tool_version;
   std::string command_line;

@@ -35,6 +35,8 @@ json CalibrationJson(const CalibrationResult& c) {
   }
   return {{"ece", c.ece},
           {"laece", c.laece},
+          {"dece", c.dece},
+          {"dece_outside", c.dece_outside},
           {"num_detections", c.num_detections},
           {"num_out_of_range", c.num_out_of_range},
           {"bins", bins}};
@@ -133,6 +135,10 @@ json OptionsJson(const EvalOptions& options) {
             {"score_transform", ScoreTransformName(options.score_transform)},
             {"require_detections", options.require_detections},
             {"calibration_bins", options.calibration_bins},
+            {"dece",
+             {{"bins", options.dece.bins},
+              {"image_width_px", options.dece.image_width_px},
+              {"image_height_px", options.dece.image_height_px}}},
             {"distance_bin_m", options.distance_bin_m},
             {"max_distance_m", options.max_distance_m},
             {"filter", filter},
@@ -327,6 +333,11 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
                 {"skipped_lines", info.skipped_lines},
                 {"det_run", info.det_run.empty() ? json() : json(info.det_run)},
                 {"det_files_not_from_run", info.det_not_from_run}};
+  // Only when given, so that the records of runs without one stay as they were.
+  if (!info.calibration_path.empty()) {
+    j["input"]["calibration"] = {{"file", info.calibration_path},
+                                 {"calibrated_detections", info.calibrated_detections}};
+  }
   j["options"] = OptionsJson(first.options);
   const bool with_let =
       std::any_of(first.options.metrics.begin(), first.options.metrics.end(), IsLetKind);
@@ -554,7 +565,7 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
   summary << "class,metric,difficulty,min_overlap,evaluated,num_valid_labels,num_detections,ap_r40,"
              "ap_r11,ap_voc,aos_r40,aos_r11,apl_r40,apl_r11,threshold,tp,fp,fn,precision,recall,f1,"
              "best_f1_threshold,"
-             "best_f1,brier_labels,brier_detections,brier_all,ece,overlaps\n";
+             "best_f1,brier_labels,brier_detections,brier_all,ece,dece,overlaps\n";
   for (const EvalRun& run : runs) {
     const std::string tag = DescribeOverlaps(run.options.classes);
     for (const ClassResult& r : run.result.results) {
@@ -562,7 +573,7 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
               << DifficultyName(r.difficulty) << ',' << r.min_overlap << ','
               << (r.evaluated ? 1 : 0);
       if (!r.evaluated) {
-        summary << std::string(22, ',') << ',' << tag << '\n';
+        summary << std::string(23, ',') << ',' << tag << '\n';
         continue;
       }
       const OperatingPoint& op = r.at_threshold;
@@ -573,7 +584,8 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
               << Csv(op.precision) << ',' << Csv(op.recall) << ',' << Csv(op.f1) << ','
               << Csv(r.best_f1.threshold) << ',' << Csv(r.best_f1.f1) << ','
               << Csv(r.brier.over_labels) << ',' << Csv(r.brier.over_detections) << ','
-              << Csv(r.brier.over_all) << ',' << Csv(r.calibration.ece) << ',' << tag << '\n';
+              << Csv(r.brier.over_all) << ',' << Csv(r.calibration.ece) << ','
+              << Csv(r.calibration.dece) << ',' << tag << '\n';
     }
   }
   write(out_dir / "summary.csv", summary.str());
@@ -750,6 +762,8 @@ void FormatRun(const EvalResult& result, const EvalOptions& options, std::ostrin
       auto ece = [](const ClassResult& r) { return r.calibration.ece; };
       row("Brier_L", brier, false, 4);
       row("ECE", ece, false, 4);
+      row(
+          "D-ECE", [](const ClassResult& r) { return r.calibration.dece; }, false, 4);
       if (first->filtered) {
         const FilteredStats& fs = *first->filtered;
         out << fmt::format(

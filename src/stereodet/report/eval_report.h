@@ -31,6 +31,10 @@ struct EvalRunInfo {
   std::vector<std::string> skipped_lines;  // EvalInput::skipped_lines ("FILE:LINE: field F: ...")
   std::string det_run;                     // EvalInput::det_run (empty: no DET/run.json)
   std::vector<std::string> det_not_from_run;  // EvalInput::det_not_from_run
+  // `eval --calibration FILE`: the file, and the detections whose scores it replaced (empty, 0:
+  // none).
+  std::string calibration_path;
+  int64_t calibrated_detections = 0;
 };
 
 // One evaluation of the same frames under one set of options, e.g. one overlap set of
