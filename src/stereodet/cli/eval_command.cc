@@ -177,14 +177,14 @@ void AddCommonOptions(CLI::App* cmd, EvalArgs* a, bool with_filter,
   cmd->add_option("--let-tolerance", a->let_tolerance,
                   "let-bev / let-3d: longitudinal tolerance FRACTION,MIN_M, max(FRACTION x range, "
                   "MIN_M) (default 0.1,0.5, Waymo's)");
+  cmd->add_option("--let-sensor", a->let_sensor,
+                  "let-bev / let-3d: the sensor X,Y,Z in the camera frame, m, whose lines of sight "
+                  "the tolerance runs along (default 0,0,0, KITTI's camera 0)");
   cmd->add_option("--dece-bins", a->dece_bins,
                   "D-ECE's bins of the score, box centre x, centre y, width and height (default "
                   "5,5,5,5,5; docs/metrics.md, Calibration)");
   cmd->add_option("--image-size", a->image_size,
                   "the image the 2D boxes are in, W,H px, for D-ECE (default 1242,375, KITTI's)");
-  cmd->add_option("--let-sensor", a->let_sensor,
-                  "let-bev / let-3d: the sensor X,Y,Z in the camera frame, m, whose lines of sight "
-                  "the tolerance runs along (default 0,0,0, KITTI's camera 0)");
   cmd->add_option("--difficulties", a->difficulties, "easy,moderate,hard")->capture_default_str();
   cmd->add_option("--matcher", a->matcher, "kitti | optimal | voc (COCO mode: coco | optimal)")
       ->capture_default_str();

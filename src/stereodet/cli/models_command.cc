@@ -157,6 +157,9 @@ void AddDetectRunFlags(CLI::App* ds, DetectOptions& d) {
       ->capture_default_str();
   ds->add_option("--max-frames", d.max_frames, "only the first N frames (0 = all)")
       ->capture_default_str();
+  ds->add_option("--calibration", d.calibration,
+                 "a score calibration file of `stereodet calibrate --fit`: the detections are "
+                 "written with their calibrated probabilities (docs/metrics.md, Calibrators)");
 }
 
 // Warns (stderr, even with --quiet: it changes what the detections mean) when the model's

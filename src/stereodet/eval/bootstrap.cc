@@ -168,10 +168,12 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
       // The bins' tallies of pass 2's association (StableKittiCurves' counts) at each distinct
       // score; above the highest, no detection takes part: 0 TP, 0 FP.
       std::vector<Tally> previous(bins.size());
+      std::vector<SelectionMask> masks(bins.size());
+      for (size_t s = 0; s < bins.size(); ++s) masks[s] = MaskSelection(frame, cf, &bins[s]);
       for (const double score : scores) {
         const FrameAssociation a = KittiAssociate(cf, difficulty, score);
         for (size_t s = 0; s < bins.size(); ++s) {
-          const Tally t = TallyAssociation(frame, cf, a, &bins[s]);
+          const Tally t = TallyMasked(cf, a, masks[s]);
           if (t.tp != previous[s].tp || t.fp != previous[s].fp) {
             out.bins[s].steps.push_back(Step{score, f, static_cast<int32_t>(t.tp - previous[s].tp),
                                              static_cast<int32_t>(t.fp - previous[s].fp), 0});

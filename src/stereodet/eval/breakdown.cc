@@ -34,10 +34,6 @@ std::string FormatEdge(double v) {
   return out.str();
 }
 
-bool InBin(std::optional<double> value, double lower, double upper) {
-  return value && *value >= lower && *value < upper;
-}
-
 }  // namespace
 
 const char* BreakdownAxisName(BreakdownAxis axis) {
@@ -50,27 +46,6 @@ const char* BreakdownAxisName(BreakdownAxis axis) {
 std::optional<BreakdownAxis> ParseBreakdownAxis(std::string_view text) {
   for (const auto& entry : kAxisNames) {
     if (text == entry.name) return entry.axis;
-  }
-  return std::nullopt;
-}
-
-std::optional<double> BreakdownValue(BreakdownAxis axis, const Object& object, bool is_label) {
-  switch (axis) {
-    case BreakdownAxis::kDistance:
-      // A label always has its location (KITTI's DontCare regions are no valid label anywhere); a
-      // 2D detector's file says -1000.
-      if (!is_label && !object.Has3D()) return std::nullopt;
-      return object.box3d.location.z();
-    case BreakdownAxis::kHeight:
-      return object.box.Height();
-    case BreakdownAxis::kOcclusion:
-      if (!is_label) return std::nullopt;
-      return static_cast<double>(object.occluded);
-    case BreakdownAxis::kTruncation:
-      if (!is_label) return std::nullopt;
-      return object.truncated;
-    case BreakdownAxis::kColumn:
-      return 0.5 * (object.box.left + object.box.right);
   }
   return std::nullopt;
 }
@@ -117,32 +92,22 @@ BreakdownOptions ParseBreakdown(std::string_view text) {
 
 std::string BreakdownText(const BreakdownOptions& options) {
   std::string text = std::string(BreakdownAxisName(options.axis)) + "=";
+  // (append, not "," + string: g++ 12 warns falsely on the latter, -Wrestrict)
   for (size_t i = 0; i < options.edges.size(); ++i) {
-    text += (i > 0 ? "," : "") + FormatEdge(options.edges[i]);
+    if (i > 0) text.append(",");
+    text.append(FormatEdge(options.edges[i]));
   }
   return text;
 }
 
 std::string BreakdownBinName(double lower, double upper) {
-  return "[" + FormatEdge(lower) + ", " + FormatEdge(upper) + ")";
+  std::string name = "[";
+  name.append(FormatEdge(lower)).append(", ").append(FormatEdge(upper)).append(")");
+  return name;
 }
 
-bool StableSelection::KeepsLabel(const Object& label) const {
-  if (conditions != nullptr) return PassesFilter(label, true, *conditions);
-  return InBin(BreakdownValue(axis, label, true), lower, upper);
-}
-
-bool StableSelection::KeepsDetection(const Object& detection) const {
-  if (conditions != nullptr) return PassesFilter(detection, false, *conditions);
-  const std::optional<double> value = BreakdownValue(axis, detection, false);
-  return !value || InBin(value, lower, upper);  // no value: counted in every bin
-}
-
-bool StableSelection::KeepsPair(const Object& label, const Object& detection) const {
-  if (conditions != nullptr) {
-    return PassesFilter(label, true, *conditions) && PassesFilter(detection, false, *conditions);
-  }
-  return KeepsLabel(label);
+bool StableSelection::FilterKeeps(const Object& object, bool is_label) const {
+  return PassesFilter(object, is_label, *conditions);
 }
 
 }  // namespace stereodet

@@ -36,8 +36,29 @@ const char* BreakdownAxisName(BreakdownAxis axis);
 std::optional<BreakdownAxis> ParseBreakdownAxis(std::string_view text);
 
 // `object`'s value on `axis`; nullopt where it has none (a detection without a 3D box on the
-// distance axis, a detection on the occlusion and truncation axes).
-std::optional<double> BreakdownValue(BreakdownAxis axis, const Object& object, bool is_label);
+// distance axis, a detection on the occlusion and truncation axes). Inline: a breakdown reads it
+// for every label and detection of every frame, cell and bin.
+inline std::optional<double> BreakdownValue(BreakdownAxis axis, const Object& object,
+                                            bool is_label) {
+  switch (axis) {
+    case BreakdownAxis::kDistance:
+      // A label always has its location (KITTI's DontCare regions are no valid label anywhere); a
+      // 2D detector's file says -1000.
+      if (!is_label && !object.Has3D()) return std::nullopt;
+      return object.box3d.location.z();
+    case BreakdownAxis::kHeight:
+      return object.box.Height();
+    case BreakdownAxis::kOcclusion:
+      if (!is_label) return std::nullopt;
+      return static_cast<double>(object.occluded);
+    case BreakdownAxis::kTruncation:
+      if (!is_label) return std::nullopt;
+      return object.truncated;
+    case BreakdownAxis::kColumn:
+      return 0.5 * (object.box.left + object.box.right);
+  }
+  return std::nullopt;
+}
 
 // One axis and its bin edges: bins [edges[i], edges[i + 1]) for i < edges.size() - 1.
 struct BreakdownOptions {
@@ -81,9 +102,26 @@ struct StableSelection {
     return s;
   }
 
-  bool KeepsLabel(const Object& label) const;          // a label alone (FN, or valid label count)
-  bool KeepsDetection(const Object& detection) const;  // a detection alone (FP)
-  bool KeepsPair(const Object& label, const Object& detection) const;  // a TP pair
+  // A label alone (FN, or valid label count).
+  bool KeepsLabel(const Object& label) const {
+    if (conditions != nullptr) return FilterKeeps(label, true);
+    const std::optional<double> value = BreakdownValue(axis, label, true);
+    return value && *value >= lower && *value < upper;
+  }
+  // A detection alone (FP); one without a value on the axis is counted in every bin.
+  bool KeepsDetection(const Object& detection) const {
+    if (conditions != nullptr) return FilterKeeps(detection, false);
+    const std::optional<double> value = BreakdownValue(axis, detection, false);
+    return !value || (*value >= lower && *value < upper);
+  }
+  // A TP pair: both objects for a filter, the label alone for a bin.
+  bool KeepsPair(const Object& label, const Object& detection) const {
+    if (conditions != nullptr) return FilterKeeps(label, true) && FilterKeeps(detection, false);
+    return KeepsLabel(label);
+  }
+
+ private:
+  bool FilterKeeps(const Object& object, bool is_label) const;  // PassesFilter(.., *conditions)
 };
 
 }  // namespace stereodet

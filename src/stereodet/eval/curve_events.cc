@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <utility>
 
 #include "stereodet/eval/associate_internal.h"
@@ -40,6 +41,44 @@ Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const Frame
   return t;
 }
 
+SelectionMask MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
+                            const StableSelection* selection) {
+  SelectionMask m;
+  m.label.resize(cf.num_labels());
+  m.det.resize(cf.num_dets());
+  m.pair_needs_det = selection != nullptr && selection->conditions != nullptr;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    m.label[i] =
+        selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]) ? 1 : 0;
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    m.det[j] = selection == nullptr || selection->KeepsDetection(frame.detections[cf.det_object[j]])
+                   ? 1
+                   : 0;
+  }
+  return m;
+}
+
+Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, const SelectionMask& m) {
+  // StableSelection::KeepsPair: the label alone for a bin, both for a filter.
+  Tally t;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      if (m.label[i] && (!m.pair_needs_det || m.det[j])) {
+        ++t.tp;
+        t.similarity += cf.TpWeight(i, j, cf.edge_affinity.empty() ? -1 : cf.FindEdge(i, j));
+      }
+    } else if (a.label_outcome[i] == Outcome::kFn) {
+      if (m.label[i]) ++t.fn;
+    }
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    if (a.det_outcome[j] == Outcome::kFp && m.det[j]) ++t.fp;
+  }
+  return t;
+}
+
 namespace {
 
 // AOS of the optimal matcher: above this many distinct scores in one connected component, the
@@ -64,49 +103,78 @@ std::vector<FrameCurveEvents> FrameEventsFromAssociations(
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
+  // Each selection's mask once for the frame's associations (a breakdown bin's value of every
+  // label and detection is read once, not once per score).
+  std::vector<SelectionMask> masks(n_s);
+  for (size_t s = 0; s < n_s; ++s) masks[s] = MaskSelection(frame, cf, selections[s]);
   std::vector<Tally> prev(n_s);
   {
     const FrameAssociation a =
         Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity());
     for (size_t s = 0; s < n_s; ++s) {
-      prev[s] = TallyAssociation(frame, cf, a, selections[s]);
+      prev[s] = TallyMasked(cf, a, masks[s]);
       out[s].base_fn = prev[s].fn;
     }
   }
-  std::vector<double> scores;  // the distinct scores at which the association is recomputed
+  // The distinct scores, each with whether one of its detections has an edge. A score whose
+  // detections all have none changes no pair of the optimal or VOC association: each of its
+  // detections only adds its own outcome, which is the same at every threshold (it pairs with
+  // nothing; DontCare and its height decide it), so it is read once from the association of all
+  // the detections instead of associating again.
+  std::vector<std::pair<double, bool>> scores;
+  const bool exact = matcher != Matcher::kKitti;  // (the KITTI matcher's passes: every score)
   for (size_t k = 0; k < order.size();) {
     const double score = cf.det_score[order[k]];
-    bool relevant = !similarity_only;
+    bool relevant = !exact;
     for (; k < order.size() && cf.det_score[order[k]] == score; ++k)
       relevant |= has_edge[order[k]] != 0;
-    if (relevant) scores.push_back(score);
+    if (relevant || !similarity_only) scores.emplace_back(score, relevant);
   }
   if (similarity_only && scores.size() > kMaxExactAosScores) {
     // A huge component (thousands of overlapping detections): bound the cost to kAosSamples
     // associations, evenly spaced over its scores, the lowest included; the similarity is held
     // between them (documented approximation; the counts are exact, they come from elsewhere).
-    std::vector<double> sampled;
+    std::vector<std::pair<double, bool>> sampled;
     for (size_t s = 1; s <= kAosSamples; ++s)
       sampled.push_back(scores[s * scores.size() / kAosSamples - 1]);
     scores = std::move(sampled);
   }
-  for (const double score : scores) {
-    const FrameAssociation a = Associate(matcher, cf, difficulty, score);
+  std::optional<FrameAssociation> everything;  // with every detection: the edgeless ones' outcomes
+  size_t next = 0;                             // into `order`: the first detection not yet entered
+  for (const auto& [score, relevant] : scores) {
+    // The detections entering at this score (order is by descending score).
+    const size_t first = next;
+    while (next < order.size() && cf.det_score[order[next]] >= score) ++next;
+    std::vector<Tally> cur(n_s);
+    if (relevant) {
+      const FrameAssociation a = Associate(matcher, cf, difficulty, score);
+      for (size_t s = 0; s < n_s; ++s) cur[s] = TallyMasked(cf, a, masks[s]);
+    } else {
+      if (!everything) {
+        everything = Associate(matcher, cf, difficulty, -std::numeric_limits<double>::infinity());
+      }
+      for (size_t s = 0; s < n_s; ++s) {
+        cur[s] = prev[s];
+        for (size_t k = first; k < next; ++k) {
+          const int j = order[k];
+          if (everything->det_outcome[j] == Outcome::kFp && masks[s].det[j]) ++cur[s].fp;
+        }
+      }
+    }
     for (size_t s = 0; s < n_s; ++s) {
-      const Tally cur = TallyAssociation(frame, cf, a, selections[s]);
       CurveEvent ev;
       ev.score = score;
       // Without AOS the similarity takes no part (it must not add curve points).
-      ev.similarity = with_aos ? cur.similarity - prev[s].similarity : 0.0;
+      ev.similarity = with_aos ? cur[s].similarity - prev[s].similarity : 0.0;
       if (!similarity_only) {
-        ev.tp = static_cast<int32_t>(cur.tp - prev[s].tp);
-        ev.fp = static_cast<int32_t>(cur.fp - prev[s].fp);
-        ev.fn = static_cast<int32_t>(cur.fn - prev[s].fn);
+        ev.tp = static_cast<int32_t>(cur[s].tp - prev[s].tp);
+        ev.fp = static_cast<int32_t>(cur[s].fp - prev[s].fp);
+        ev.fn = static_cast<int32_t>(cur[s].fn - prev[s].fn);
       }
       if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) {
         out[s].events.push_back(ev);
       }
-      prev[s] = cur;
+      prev[s] = cur[s];
     }
   }
   return out;

@@ -28,6 +28,19 @@ struct Tally {
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                        const StableSelection* selection);
 
+// What a selection keeps of one frame's ClassFrame, computed once for the many associations of the
+// frame (one per score) that are tallied against it: its labels, its detections, and whether a
+// pair needs its detection kept too (a stable filter) or its label alone (a breakdown bin).
+struct SelectionMask {
+  std::vector<uint8_t> label, det;
+  bool pair_needs_det = false;
+};
+// The mask of `selection` (null: everything kept) on `cf`, prepared from `frame`.
+SelectionMask MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
+                            const StableSelection* selection);
+// TallyAssociation(frame, cf, a, selection) from the selection's mask: the same counts.
+Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, const SelectionMask& mask);
+
 // A frame's curve events and its share of the curve's starting FN count.
 struct FrameCurveEvents {
   std::vector<CurveEvent> events;

@@ -327,11 +327,29 @@ std::vector<FilteredCurve> StableKittiCurves(
   ParallelFor(
       cfs.size(),
       [&](size_t i) {
+        const ClassFrame& cf = cfs[i];
+        std::vector<SelectionMask> masks(n_s);
+        for (size_t s = 0; s < n_s; ++s) masks[s] = MaskSelection(frames[i], cf, &selections[s]);
+        // The association at a threshold depends only on which detections reach it, which changes
+        // only at the frame's own scores: one association per distinct set, not one per threshold
+        // (a frame has a few scores, the devkit up to 41 thresholds).
+        std::vector<double> scores = cf.det_score;
+        std::sort(scores.begin(), scores.end(), std::greater<double>());
+        scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
+        size_t done = scores.size() + 1;  // how many distinct scores the last tallies took in
         for (size_t t = 0; t < n_t; ++t) {
-          const FrameAssociation a = KittiAssociate(cfs[i], difficulty, thresholds[t]);
-          for (size_t s = 0; s < n_s; ++s) {
-            per_frame[i][t * n_s + s] = TallyAssociation(frames[i], cfs[i], a, &selections[s]);
+          const size_t reached =
+              static_cast<size_t>(std::upper_bound(scores.begin(), scores.end(), thresholds[t],
+                                                   std::greater<double>()) -
+                                  scores.begin());
+          Tally* tallies = &per_frame[i][t * n_s];
+          if (reached == done) {
+            std::copy(tallies - n_s, tallies, tallies);
+            continue;
           }
+          const FrameAssociation a = KittiAssociate(cf, difficulty, thresholds[t]);
+          for (size_t s = 0; s < n_s; ++s) tallies[s] = TallyMasked(cf, a, masks[s]);
+          done = reached;
         }
       },
       num_threads);

@@ -357,7 +357,10 @@ int64_t DetectionRun::DetectFrames(
     slots[k % 2] = detector.Prepare(frames);
   };
   auto consume = [&](int k) {
-    const std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
+    std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
+    if (calibration_) {
+      for (DetectResult& r : results) calibration_->Apply(&r.objects);
+    }
     ScopedStage stage(times_, "write");
     objects += WriteDetectResults(results, out.path(), times_);
     progress.Add(static_cast<int64_t>(results.size()));
@@ -373,6 +376,7 @@ DetectSummary DetectionRun::Commit(
     const std::string& settings) {
   RunManifest manifest = manifest_;
   manifest.inputs.insert(manifest.inputs.end(), more_inputs.begin(), more_inputs.end());
+  if (calibration_) manifest.inputs.emplace_back("--calibration", calibration_path_.string());
   manifest.settings_json =
       "{\"model_weights_fnv1a64\": \"" + detector.weights_fnv1a64() + "\", " + settings + "}";
   CommitDetectionFolder(out, std::move(manifest), ids, all_ids, shard_, batch_size_);

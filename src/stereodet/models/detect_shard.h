@@ -23,10 +23,12 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
+#include "stereodet/kitti/score_calibration.h"
 #include "stereodet/models/detector.h"
 #include "stereodet/models/device.h"
 #include "stereodet/stereo/disparity.h"
@@ -153,7 +155,8 @@ struct DetectSummary {
 
 // What the three batch detection commands (`detect ssd|rpn|det3d`) do around their frames.
 // `DetectOptions` is one of their options structs; the fields read: model_dir, data_root, subset,
-// split, out_dir, max_frames, shard, batch_size, threads, device, progress and command_line.
+// split, out_dir, max_frames, shard, batch_size, threads, device, progress, command_line and
+// calibration.
 class DetectionRun {
   // Made first (members are made in declaration order), so that DetectSummary::seconds counts
   // opening the output folder and the model too.
@@ -178,6 +181,9 @@ class DetectionRun {
         manifest_(DetectionManifest("detect " + family, o.command_line, o.model_dir, o.data_root,
                                     o.subset, o.split)),
         shard_(o.shard),
+        calibration_path_(o.calibration),
+        calibration_(o.calibration.empty() ? std::nullopt
+                                           : std::optional(ReadScoreCalibration(o.calibration))),
         batch_size_(o.batch_size),
         threads_(o.threads),
         progress_(o.progress) {}
@@ -213,6 +219,8 @@ class DetectionRun {
 
   RunManifest manifest_;
   Shard shard_;
+  std::filesystem::path calibration_path_;
+  std::optional<ScoreCalibration> calibration_;  // applied to every frame's objects before writing
   int batch_size_;
   int threads_;
   ProgressOptions progress_;

@@ -35,6 +35,10 @@ struct DetectDet3dOptions {
   PointFilterOptions filter;  // as in training (LiDAR: the camera's view; stereo: 50 m)
   ProgressOptions progress;
   std::string command_line;
+  // A score calibration file (`stereodet calibrate --fit`, kitti/score_calibration.h): every
+  // detection of a calibrated class is written with its calibrated probability (after the score
+  // threshold, which applies to the raw scores). Empty: the raw scores.
+  std::filesystem::path calibration;
   void Check() const;
 };
 

@@ -35,6 +35,10 @@ struct DetectRpnOptions {
   RpnDetectOptions detect;  // 600 -> 100 proposals, score >= 0.01, class NMS 0.45, <= 100 boxes
   ProgressOptions progress;
   std::string command_line;
+  // A score calibration file (`stereodet calibrate --fit`, kitti/score_calibration.h): every
+  // detection of a calibrated class is written with its calibrated probability (after the score
+  // threshold, which applies to the raw scores). Empty: the raw scores.
+  std::filesystem::path calibration;
   void Check() const;  // throws std::invalid_argument
 };
 

@@ -56,7 +56,11 @@ struct DetectSsdOptions {
   std::filesystem::path stereo_dir;
   ProgressOptions progress;
   std::string command_line;  // for OUT/run.json (empty from a library call)
-  void Check() const;        // throws std::invalid_argument
+  // A score calibration file (`stereodet calibrate --fit`, kitti/score_calibration.h): every
+  // detection of a calibrated class is written with its calibrated probability (after the score
+  // threshold, which applies to the raw scores). Empty: the raw scores.
+  std::filesystem::path calibration;
+  void Check() const;  // throws std::invalid_argument
 };
 
 // The stereo settings the model in `model_dir` was trained with (model.json's "stereo", the
