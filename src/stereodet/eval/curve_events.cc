@@ -13,32 +13,7 @@ namespace stereodet {
 
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                        const StableSelection* selection) {
-  auto label_passes = [&](int i) {
-    return selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]);
-  };
-  auto det_passes = [&](int j) {
-    return selection == nullptr || selection->KeepsDetection(frame.detections[cf.det_object[j]]);
-  };
-  auto pair_passes = [&](int i, int j) {
-    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
-                                                        frame.detections[cf.det_object[j]]);
-  };
-  Tally t;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const int j = a.label_det[i];
-      if (pair_passes(i, j)) {
-        ++t.tp;
-        t.similarity += cf.TpWeight(i, j, cf.edge_affinity.empty() ? -1 : cf.FindEdge(i, j));
-      }
-    } else if (a.label_outcome[i] == Outcome::kFn) {
-      if (label_passes(i)) ++t.fn;
-    }
-  }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    if (a.det_outcome[j] == Outcome::kFp && det_passes(j)) ++t.fp;
-  }
-  return t;
+  return TallyMasked(cf, a, MaskSelection(frame, cf, selection));
 }
 
 SelectionMask MaskSelection(const EvalFrame& frame, const ClassFrame& cf,

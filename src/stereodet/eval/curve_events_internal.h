@@ -38,7 +38,8 @@ struct SelectionMask {
 // The mask of `selection` (null: everything kept) on `cf`, prepared from `frame`.
 SelectionMask MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
                             const StableSelection* selection);
-// TallyAssociation(frame, cf, a, selection) from the selection's mask: the same counts.
+// TallyAssociation(frame, cf, a, selection) from the selection's mask: the same counts (a TP pair
+// counts when StableSelection::KeepsPair would keep it: its label for a bin, both for a filter).
 Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, const SelectionMask& mask);
 
 // A frame's curve events and its share of the curve's starting FN count.

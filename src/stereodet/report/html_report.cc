@@ -1211,7 +1211,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
   if (eval) {
     for (const char* h : {"results", "class", "metric", "difficulty", "overlaps", "min overlap",
                           "labels", "detections", "AP_R40", "AP_R11", "AOS / APL_R40", "best F1",
-                          "Brier labels", "Brier detections", "Brier all", "ECE"}) {
+                          "Brier labels", "Brier detections", "Brier all", "ECE", "D-ECE"}) {
       html += fmt::format("<th>{}</th>", h);
     }
     html += "</tr>\n";
@@ -1237,7 +1237,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
             "<tr><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"t\">{}</td>"
             "<td class=\"t\">{}</td><td class=\"t\">{}</td><td>{}</td><td>{}{}</td><td>{}</td>"
             "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
-            "<td>{}</td></tr>\n",
+            "<td>{}</td><td>{}</td></tr>\n",
             XmlEscape(s.label), XmlEscape(Str(e, "class")), Str(e, "metric"), Str(e, "difficulty"),
             Str(e, "overlaps"), Fixed(Num(e, "min_overlap"), 2), e.value("num_valid_labels", 0),
             e.value("small_sample", false) ? "*" : "", e.value("num_detections", 0),
@@ -1245,7 +1245,7 @@ std::string ReportHtml(const std::vector<ReportSource>& sources,
             ApText(e, e.contains("apl_r40") ? "apl_r40" : "aos_r40"),  // LET cells: LET-APL
             Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(b, "over_labels"), 4),
             Fixed(Num(b, "over_detections"), 4), Fixed(Num(b, "over_all"), 4),
-            Fixed(Num(e["calibration"], "ece"), 4));
+            Fixed(Num(e["calibration"], "ece"), 4), Fixed(Num(e["calibration"], "dece"), 4));
       }
     }
     html +=
