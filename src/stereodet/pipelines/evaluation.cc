@@ -72,6 +72,12 @@ void EvaluationOptions::Check() const {
          "matcher computes; evaluate with --matcher kitti";
   if (bootstrap) bootstrap->Check();
   if (!calibration.empty()) {
+    // A shard keeps its raw detection files for `eval merge`, which would evaluate them
+    // uncalibrated: refused rather than merged inconsistently.
+    STEREODET_CHECK(!input.shard.Recorded())
+        << "--calibration with --shard: eval merge evaluates the shards' raw detections, so a "
+           "sharded evaluation cannot be calibrated yet; evaluate the whole split with "
+           "--calibration";
     for (const EvalOptions& run : runs) {
       STEREODET_CHECK(run.score_transform == ScoreTransform::kNone)
           << "--calibration maps the scores to probabilities: drop --score-transform "

@@ -57,7 +57,7 @@ struct EvaluationOptions {
   // A score calibration file (kitti/score_calibration.h, `stereodet calibrate --fit`): applied to
   // the detections once read, before every run; recorded in results.json ("input.calibration").
   // Its outputs are probabilities: every run's score_transform must be kNone (a calibration fitted
-  // on logits says so itself). Empty: none.
+  // on logits says so itself). Not with input.shard (eval merge reads the raw files). Empty: none.
   std::filesystem::path calibration;
   // Provenance recorded in results.json (EvalRunInfo).
   std::string tool_version;
