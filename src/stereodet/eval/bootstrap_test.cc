@@ -228,13 +228,13 @@ void ExpectBinsExactAndSeen(const BinCase& c, int resamples) {
 
 TEST(BootstrapTest, BreakdownBinsMatchEvaluateOnEveryResampleKitti) {
   BinCase c = BreakdownCase(21, Matcher::kKitti);
-  c.eval.metrics = {OverlapKind::k2D, OverlapKind::k3D};
+  c.eval.metrics = {OverlapKind::k2D, OverlapKind::k3D, OverlapKind::kLet3D};
   ExpectBinsExactAndSeen(c, 10);
 }
 
 TEST(BootstrapTest, BreakdownBinsMatchEvaluateOnEveryResampleOptimal) {
   BinCase c = BreakdownCase(22, Matcher::kOptimal);
-  c.eval.metrics = {OverlapKind::k2D, OverlapKind::kBev};
+  c.eval.metrics = {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::kLetBev};
   ExpectBinsExactAndSeen(c, 10);
 }
 
@@ -401,6 +401,8 @@ TEST(BootstrapTest, MatchesEvaluateOnEveryResampleKitti) {
 TEST(BootstrapTest, MatchesEvaluateOnEveryResampleOptimal) {
   EvalOptions eval;
   eval.matcher = Matcher::kOptimal;
+  eval.metrics = {OverlapKind::k2D, OverlapKind::kBev, OverlapKind::k3D, OverlapKind::kLetBev,
+                  OverlapKind::kLet3D};
   eval.num_threads = 2;
   ExpectExact(SmallFrames(4), eval, 12);
 }
