@@ -161,9 +161,7 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
   if (eval.matcher == Matcher::kKitti) {
     out.tp_scores = KittiCollectTpScores(cf, difficulty).scores;
     // Pass 2's counts change only where a detection of the frame enters: at its distinct scores.
-    std::vector<double> scores = cf.det_score;
-    std::sort(scores.begin(), scores.end(), std::greater<double>());
-    scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
+    const std::vector<double> scores = cf.DistinctScores();
     if (!bins.empty()) {
       // The bins' tallies of pass 2's association (StableKittiCurves' counts) at each distinct
       // score; above the highest, no detection takes part: 0 TP, 0 FP.

@@ -243,11 +243,8 @@ CalibrationFit FitScoreCalibration(const std::vector<EvalFrame>& frames,
         << ": a calibrator needs both";
     // Temperature and Platt work on logits.
     std::vector<double> x = scores;
-    if (options.method != CalibrationMethod::kIsotonic && !logits) {
-      for (double& v : x) {
-        const double s = std::clamp(v, 1e-7, 1.0 - 1e-7);
-        v = std::log(s / (1 - s));
-      }
+    if (options.method != CalibrationMethod::kIsotonic) {
+      for (double& v : x) v = CalibrationLogit(v, logits);
     }
     ScoreCalibrator calibrator;
     try {
@@ -259,7 +256,8 @@ CalibrationFit FitScoreCalibration(const std::vector<EvalFrame>& frames,
     }
     const double n = static_cast<double>(scores.size());
     for (size_t i = 0; i < scores.size(); ++i) {
-      const double before = std::clamp(logits ? Sigmoid(scores[i]) : scores[i], 1e-12, 1.0 - 1e-12);
+      const double before =
+          std::clamp(ApplyScoreTransform(eval.score_transform, scores[i]), 1e-12, 1.0 - 1e-12);
       const double after = std::clamp(calibrator.Apply(scores[i], logits), 1e-12, 1.0 - 1e-12);
       const double t = targets[i];
       c.brier_before += (before - t) * (before - t) / n;

@@ -333,9 +333,7 @@ std::vector<FilteredCurve> StableKittiCurves(
         // The association at a threshold depends only on which detections reach it, which changes
         // only at the frame's own scores: one association per distinct set, not one per threshold
         // (a frame has a few scores, the devkit up to 41 thresholds).
-        std::vector<double> scores = cf.det_score;
-        std::sort(scores.begin(), scores.end(), std::greater<double>());
-        scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
+        const std::vector<double> scores = cf.DistinctScores();
         size_t done = scores.size() + 1;  // how many distinct scores the last tallies took in
         for (size_t t = 0; t < n_t; ++t) {
           const size_t reached =

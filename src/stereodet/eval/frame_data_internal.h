@@ -4,6 +4,7 @@
 #ifndef STEREODET_EVAL_FRAME_DATA_INTERNAL_H_
 #define STEREODET_EVAL_FRAME_DATA_INTERNAL_H_
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -97,6 +98,15 @@ struct ClassFrame {
   double TpWeight(int i, int j, int e) const {
     return edge_affinity.empty() ? (1.0 + std::cos(det_alpha[j] - label_alpha[i])) / 2.0
                                  : edge_affinity[e];
+  }
+
+  // The detections' distinct scores, descending: where the set of detections above a threshold
+  // (and so any association at it) can change.
+  std::vector<double> DistinctScores() const {
+    std::vector<double> scores = det_score;
+    std::sort(scores.begin(), scores.end(), std::greater<double>());
+    scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
+    return scores;
   }
 
   int num_labels() const { return static_cast<int>(label_object.size()); }

@@ -15,8 +15,7 @@ using json = nlohmann::json;
 
 constexpr const char* kFormat = "stereodet score calibration";
 constexpr int kVersion = 1;
-// Probabilities are clamped this far from 0 and 1 before their logit (a score of exactly 0 or 1
-// would have an infinite one).
+// Probabilities are clamped this far from 0 and 1 before their logit (CalibrationLogit).
 constexpr double kLogitClamp = 1e-7;
 
 double Sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
@@ -43,11 +42,15 @@ std::optional<CalibrationMethod> ParseCalibrationMethod(std::string_view text) {
   return std::nullopt;
 }
 
+double CalibrationLogit(double score, bool scores_are_logits) {
+  if (scores_are_logits) return score;
+  const double s = std::clamp(score, kLogitClamp, 1.0 - kLogitClamp);
+  return std::log(s / (1.0 - s));
+}
+
 double ScoreCalibrator::Apply(double score, bool scores_are_logits) const {
   if (method != CalibrationMethod::kIsotonic) {
-    const double s = std::clamp(score, kLogitClamp, 1.0 - kLogitClamp);
-    const double x = scores_are_logits ? score : std::log(s / (1.0 - s));
-    return Sigmoid(slope * x + intercept);
+    return Sigmoid(slope * CalibrationLogit(score, scores_are_logits) + intercept);
   }
   if (score <= x.front()) return y.front();
   if (score >= x.back()) return y.back();

@@ -26,9 +26,12 @@ enum class CalibrationMethod {
 const char* CalibrationMethodName(CalibrationMethod method);  // "temperature", "platt", "isotonic"
 std::optional<CalibrationMethod> ParseCalibrationMethod(std::string_view text);
 
-// One class's map. x is the score's logit for temperature and Platt: the score itself when the
-// scores are logits (ScoreCalibration::scores_are_logits), else log(s / (1 - s)) with s clamped to
-// [1e-7, 1 - 1e-7]. Isotonic maps the raw score.
+// What temperature and Platt map: the score's logit x, the score itself when the scores are logits
+// (ScoreCalibration::scores_are_logits), else log(s / (1 - s)) with s clamped to [1e-7, 1 - 1e-7]
+// (a score of 0 or 1 would have an infinite one). The fits (eval/calibration_fit.h) take the same.
+double CalibrationLogit(double score, bool scores_are_logits);
+
+// One class's map: temperature and Platt of CalibrationLogit(score), isotonic of the raw score.
 struct ScoreCalibrator {
   CalibrationMethod method = CalibrationMethod::kTemperature;
   // Temperature and Platt: p = 1 / (1 + exp(-(slope x + intercept))); temperature T = 1 / slope,
