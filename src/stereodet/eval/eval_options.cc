@@ -155,6 +155,10 @@ void DeceOptions::Check() const {
       << image_height_px;
 }
 
+bool EvalOptions::HasLetKind() const {
+  return std::any_of(metrics.begin(), metrics.end(), IsLetKind);
+}
+
 void EvalOptions::Check() const {
   STEREODET_CHECK(!classes.empty()) << "no class to evaluate";
   STEREODET_CHECK(!metrics.empty()) << "no overlap kind (2d, bev, 3d, let-bev, let-3d) to evaluate";
@@ -173,7 +177,7 @@ void EvalOptions::Check() const {
   STEREODET_CHECK(compat == EvalCompat::kDevkit || matcher == Matcher::kKitti)
       << "compat " << EvalCompatName(compat)
       << " reproduces a KITTI evaluation: it needs matcher kitti, got " << MatcherName(matcher);
-  const bool has_let = std::any_of(metrics.begin(), metrics.end(), IsLetKind);
+  const bool has_let = HasLetKind();
   STEREODET_CHECK(compat == EvalCompat::kDevkit || !has_let)
       << "compat " << EvalCompatName(compat)
       << " has no LET overlaps (let-bev, let-3d): evaluate them without it";

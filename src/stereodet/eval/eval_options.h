@@ -185,6 +185,9 @@ struct EvalOptions {
 
   int num_threads = 0;  // 0 = all hardware threads
 
+  // Whether `metrics` holds a LET kind (kLetBev, kLet3D).
+  bool HasLetKind() const;
+
   // Throws std::invalid_argument on an empty class list, a threshold outside (0, 1], bins < 1,
   // compat kOpenPcdet with another matcher than kKitti or with a LET kind, ...
   void Check() const;

@@ -117,7 +117,7 @@ json ClassesJson(const std::vector<ClassSpec>& specs, bool with_let) {
 }
 
 json OptionsJson(const EvalOptions& options) {
-  const bool with_let = std::any_of(options.metrics.begin(), options.metrics.end(), IsLetKind);
+  const bool with_let = options.HasLetKind();
   json metrics = json::array();
   for (OverlapKind k : options.metrics) metrics.push_back(OverlapKindName(k));
   json difficulties = json::array();
@@ -339,8 +339,7 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
                                  {"calibrated_detections", info.calibrated_detections}};
   }
   j["options"] = OptionsJson(first.options);
-  const bool with_let =
-      std::any_of(first.options.metrics.begin(), first.options.metrics.end(), IsLetKind);
+  const bool with_let = first.options.HasLetKind();
   json overlaps = json::array(), overlap_sets = json::array();
   double seconds = 0.0;
   for (const EvalRun& run : runs) {
