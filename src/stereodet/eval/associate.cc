@@ -20,4 +20,14 @@ FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty 
   return {};
 }
 
+FrameAssociator::FrameAssociator(Matcher matcher, const ClassFrame& frame, Difficulty difficulty)
+    : matcher_(matcher), frame_(frame), difficulty_(difficulty) {
+  if (matcher == Matcher::kOptimal) optimal_.emplace(frame, difficulty);
+}
+
+FrameAssociation FrameAssociator::At(double threshold, FrameAssociation reuse) const {
+  if (optimal_) return optimal_->At(threshold, std::move(reuse));
+  return Associate(matcher_, frame_, difficulty_, threshold, std::move(reuse));
+}
+
 }  // namespace stereodet

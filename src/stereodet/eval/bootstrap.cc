@@ -112,21 +112,23 @@ struct Prepared {
 struct FrameTerms {
   std::vector<double> label_terms, det_terms, all_terms;
 };
-FrameTerms BrierTerms(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
-                      Difficulty difficulty, ScoreTransform transform,
-                      const StableSelection* selection) {
+FrameTerms BrierTerms(const ClassFrame& cf, const FrameAssociation& a, Difficulty difficulty,
+                      ScoreTransform transform, const MaskView* selection) {
   FrameTerms out;
-  ForEachBrierTerm(
-      frame, cf, a, difficulty, transform, selection,
-      [&](double term, int, int) {
-        out.label_terms.push_back(term);
-        out.all_terms.push_back(term);
-      },
-      [&](double s, Outcome o, int) {
-        const double y = o == Outcome::kTp ? 1.0 : 0.0;
-        out.det_terms.push_back((s - y) * (s - y));
-        if (o == Outcome::kFp) out.all_terms.push_back(s * s);
-      });
+  auto on_label = [&](double term, int, int) {
+    out.label_terms.push_back(term);
+    out.all_terms.push_back(term);
+  };
+  auto on_detection = [&](double s, Outcome o, int) {
+    const double y = o == Outcome::kTp ? 1.0 : 0.0;
+    out.det_terms.push_back((s - y) * (s - y));
+    if (o == Outcome::kFp) out.all_terms.push_back(s * s);
+  };
+  if (selection == nullptr) {
+    ForEachBrierTerm(cf, a, difficulty, transform, KeepEverything{}, on_label, on_detection);
+  } else {
+    ForEachBrierTerm(cf, a, difficulty, transform, *selection, on_label, on_detection);
+  }
   return out;
 }
 
@@ -152,11 +154,11 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
                           const std::vector<StableSelection>& bins) {
   FrameCell out;
   out.bins.resize(bins.size());
+  const BinMasks masks = MaskBins(frame, cf, bins);
   for (int i = 0; i < cf.num_labels(); ++i) {
     if (!cf.LabelValid(i, difficulty)) continue;
     ++out.valid_labels;
-    const Object& label = frame.labels[cf.label_object[i]];
-    for (size_t s = 0; s < bins.size(); ++s) out.bins[s].valid_labels += bins[s].KeepsLabel(label);
+    for (size_t s = 0; s < bins.size(); ++s) out.bins[s].valid_labels += masks.Bin(s).KeepsLabel(i);
   }
   if (eval.matcher == Matcher::kKitti) {
     out.tp_scores = KittiCollectTpScores(cf, difficulty).scores;
@@ -166,12 +168,10 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
       // The bins' tallies of pass 2's association (StableKittiCurves' counts) at each distinct
       // score; above the highest, no detection takes part: 0 TP, 0 FP.
       std::vector<Tally> previous(bins.size());
-      std::vector<SelectionMask> masks(bins.size());
-      for (size_t s = 0; s < bins.size(); ++s) masks[s] = MaskSelection(frame, cf, &bins[s]);
       for (const double score : scores) {
         const FrameAssociation a = KittiAssociate(cf, difficulty, score);
         for (size_t s = 0; s < bins.size(); ++s) {
-          const Tally t = TallyMasked(cf, a, masks[s]);
+          const Tally t = TallyMasked(cf, a, masks.Bin(s));
           if (t.tp != previous[s].tp || t.fp != previous[s].fp) {
             out.bins[s].steps.push_back(Step{score, f, static_cast<int32_t>(t.tp - previous[s].tp),
                                              static_cast<int32_t>(t.fp - previous[s].fp), 0});
@@ -204,7 +204,7 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
       // The bins' curve events (StableExactCurves'). Without the similarity, which only adds
       // points that repeat their predecessor's precision and recall: no AP changes.
       const std::vector<FrameCurveEvents> bin_events =
-          AssociationEvents(eval.matcher, frame, cf, difficulty, bins, /*with_aos=*/false);
+          AssociationEvents(eval.matcher, cf, difficulty, masks, bins.size(), /*with_aos=*/false);
       for (size_t s = 0; s < bins.size(); ++s) {
         out.bins[s].base_fn = static_cast<int32_t>(bin_events[s].base_fn);
         for (const CurveEvent& e : bin_events[s].events) {
@@ -216,9 +216,10 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
   // The Brier terms at the operating point, as ScoreMetricsAccumulator::Add sums them: the cell's
   // and each bin's, from one association.
   const FrameAssociation a = Associate(eval.matcher, cf, difficulty, eval.score_threshold);
-  out.terms = BrierTerms(frame, cf, a, difficulty, eval.score_transform, nullptr);
+  out.terms = BrierTerms(cf, a, difficulty, eval.score_transform, nullptr);
   for (size_t s = 0; s < bins.size(); ++s) {
-    out.bins[s].terms = BrierTerms(frame, cf, a, difficulty, eval.score_transform, &bins[s]);
+    const MaskView mask = masks.Bin(s);
+    out.bins[s].terms = BrierTerms(cf, a, difficulty, eval.score_transform, &mask);
   }
   return out;
 }

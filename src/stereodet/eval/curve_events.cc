@@ -13,45 +13,120 @@ namespace stereodet {
 
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                        const StableSelection* selection) {
-  return TallyMasked(cf, a, MaskSelection(frame, cf, selection));
+  return TallyMasked(cf, a, MaskSelection(frame, cf, selection).Bin(0));
 }
 
-SelectionMask MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
-                            const StableSelection* selection) {
-  SelectionMask m;
-  m.label.resize(cf.num_labels());
-  m.det.resize(cf.num_dets());
-  m.pair_needs_det = selection != nullptr && selection->conditions != nullptr;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    m.label[i] =
-        selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]) ? 1 : 0;
+BinMasks MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
+                       const StableSelection* selection) {
+  if (selection != nullptr) return MaskBins(frame, cf, {*selection});
+  BinMasks m;
+  m.num_labels = cf.num_labels();
+  m.num_dets = cf.num_dets();
+  m.label.assign(m.num_labels, 1);
+  m.det.assign(m.num_dets, 1);
+  return m;
+}
+
+BinMasks MaskBins(const EvalFrame& frame, const ClassFrame& cf,
+                  const std::vector<StableSelection>& selections) {
+  BinMasks m;
+  const size_t n_s = selections.size();
+  m.num_labels = cf.num_labels();
+  m.num_dets = cf.num_dets();
+  m.pair_needs_det = n_s > 0 && selections.front().conditions != nullptr;
+  m.label.resize(n_s * static_cast<size_t>(m.num_labels));
+  m.det.resize(n_s * static_cast<size_t>(m.num_dets));
+  if (m.pair_needs_det) {  // filters
+    for (int i = 0; i < m.num_labels; ++i) {
+      const Object& label = frame.labels[cf.label_object[i]];
+      for (size_t s = 0; s < n_s; ++s) {
+        m.label[s * m.num_labels + i] = selections[s].KeepsLabel(label) ? 1 : 0;
+      }
+    }
+    for (int j = 0; j < m.num_dets; ++j) {
+      const Object& det = frame.detections[cf.det_object[j]];
+      for (size_t s = 0; s < n_s; ++s) {
+        m.det[s * m.num_dets + j] = selections[s].KeepsDetection(det) ? 1 : 0;
+      }
+    }
+    return m;
   }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    m.det[j] = selection == nullptr || selection->KeepsDetection(frame.detections[cf.det_object[j]])
-                   ? 1
-                   : 0;
+  // Bins (StableSelection::KeepsLabel / KeepsDetection), the object's value on an axis read once
+  // for the axis' consecutive bins.
+  for (int i = 0; i < m.num_labels; ++i) {
+    const Object& label = frame.labels[cf.label_object[i]];
+    std::optional<double> value;
+    for (size_t s = 0; s < n_s; ++s) {
+      const StableSelection& bin = selections[s];
+      if (s == 0 || bin.axis != selections[s - 1].axis)
+        value = BreakdownValue(bin.axis, label, true);
+      m.label[s * m.num_labels + i] = value && *value >= bin.lower && *value < bin.upper ? 1 : 0;
+    }
+  }
+  for (int j = 0; j < m.num_dets; ++j) {
+    const Object& det = frame.detections[cf.det_object[j]];
+    std::optional<double> value;
+    for (size_t s = 0; s < n_s; ++s) {
+      const StableSelection& bin = selections[s];
+      if (s == 0 || bin.axis != selections[s - 1].axis)
+        value = BreakdownValue(bin.axis, det, false);
+      m.det[s * m.num_dets + j] = !value || (*value >= bin.lower && *value < bin.upper) ? 1 : 0;
+    }
   }
   return m;
 }
 
-Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, const SelectionMask& m) {
-  // StableSelection::KeepsPair: the label alone for a bin, both for a filter.
+Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, MaskView m) {
   Tally t;
   for (int i = 0; i < cf.num_labels(); ++i) {
     if (a.label_outcome[i] == Outcome::kTp) {
       const int j = a.label_det[i];
-      if (m.label[i] && (!m.pair_needs_det || m.det[j])) {
+      if (m.KeepsPair(i, j)) {
         ++t.tp;
         t.similarity += cf.TpWeight(i, j, cf.edge_affinity.empty() ? -1 : cf.FindEdge(i, j));
       }
     } else if (a.label_outcome[i] == Outcome::kFn) {
-      if (m.label[i]) ++t.fn;
+      if (m.KeepsLabel(i)) ++t.fn;
     }
   }
   for (int j = 0; j < cf.num_dets(); ++j) {
-    if (a.det_outcome[j] == Outcome::kFp && m.det[j]) ++t.fp;
+    if (a.det_outcome[j] == Outcome::kFp && m.KeepsDetection(j)) ++t.fp;
   }
   return t;
+}
+
+void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
+               Tally* out) {
+  const size_t nl = static_cast<size_t>(cf.num_labels()), nd = static_cast<size_t>(cf.num_dets());
+  for (size_t i = 0; i < nl; ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      const int label = static_cast<int>(i);
+      const double weight =
+          cf.TpWeight(label, j, cf.edge_affinity.empty() ? -1 : cf.FindEdge(label, j));
+      for (size_t s = 0; s < n_s; ++s) {
+        if (masks.label[s * nl + i] && (!masks.pair_needs_det || masks.det[s * nd + j])) {
+          ++out[s].tp;
+          out[s].similarity += weight;
+        }
+      }
+    } else if (a.label_outcome[i] == Outcome::kFn) {
+      for (size_t s = 0; s < n_s; ++s) out[s].fn += masks.label[s * nl + i];
+    }
+  }
+  for (size_t j = 0; j < nd; ++j) {
+    if (a.det_outcome[j] != Outcome::kFp) continue;
+    for (size_t s = 0; s < n_s; ++s) out[s].fp += masks.det[s * nd + j];
+  }
+}
+
+void TallyNoDetections(const ClassFrame& cf, Difficulty difficulty, const BinMasks& masks,
+                       size_t n_s, Tally* out) {
+  const size_t nl = static_cast<size_t>(cf.num_labels());
+  for (size_t i = 0; i < nl; ++i) {
+    if (!cf.LabelValid(static_cast<int>(i), difficulty)) continue;
+    for (size_t s = 0; s < n_s; ++s) out[s].fn += masks.label[s * nl + i];
+  }
 }
 
 namespace {
@@ -61,15 +136,15 @@ namespace {
 constexpr size_t kMaxExactAosScores = 256;
 constexpr size_t kAosSamples = 64;
 
-// AssociationEvents for each of `selections` (nullptr: no selection) from one association per
+// AssociationEvents for each of the first `n_s` selections of `masks` from one association per
 // distinct score; with `similarity_only` only the similarity changes are emitted, and scores whose
 // detections overlap no label are skipped (such a detection changes no pair of the optimal or VOC
 // association, only its own outcome). out[0].events starts as `append_to`.
-std::vector<FrameCurveEvents> FrameEventsFromAssociations(
-    Matcher matcher, const EvalFrame& frame, const ClassFrame& cf, Difficulty difficulty,
-    const std::vector<const StableSelection*>& selections, bool similarity_only, bool with_aos,
-    std::vector<CurveEvent> append_to) {
-  const size_t n_s = selections.size();
+std::vector<FrameCurveEvents> FrameEventsFromAssociations(Matcher matcher, const ClassFrame& cf,
+                                                          Difficulty difficulty,
+                                                          const BinMasks& masks, size_t n_s,
+                                                          bool similarity_only, bool with_aos,
+                                                          std::vector<CurveEvent> append_to) {
   std::vector<FrameCurveEvents> out(n_s);
   if (n_s > 0) out[0].events = std::move(append_to);
   std::vector<uint8_t> has_edge(cf.num_dets(), 0);
@@ -78,19 +153,12 @@ std::vector<FrameCurveEvents> FrameEventsFromAssociations(
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
-  // Each selection's mask once for the frame's associations (a breakdown bin's value of every
-  // label and detection is read once, not once per score).
-  std::vector<SelectionMask> masks(n_s);
-  for (size_t s = 0; s < n_s; ++s) masks[s] = MaskSelection(frame, cf, selections[s]);
+  // Every association of the frame on one overlap graph, each in the memory of the one before.
+  const FrameAssociator associator(matcher, cf, difficulty);
+  FrameAssociation a;
   std::vector<Tally> prev(n_s);
-  {
-    const FrameAssociation a =
-        Associate(matcher, cf, difficulty, std::numeric_limits<double>::infinity());
-    for (size_t s = 0; s < n_s; ++s) {
-      prev[s] = TallyMasked(cf, a, masks[s]);
-      out[s].base_fn = prev[s].fn;
-    }
-  }
+  TallyNoDetections(cf, difficulty, masks, n_s, prev.data());  // above every score
+  for (size_t s = 0; s < n_s; ++s) out[s].base_fn = prev[s].fn;
   // The distinct scores, each with whether one of its detections has an edge. A score whose
   // detections all have none changes no pair of the optimal or VOC association: each of its
   // detections only adds its own outcome, which is the same at every threshold (it pairs with
@@ -122,17 +190,19 @@ std::vector<FrameCurveEvents> FrameEventsFromAssociations(
     while (next < order.size() && cf.det_score[order[next]] >= score) ++next;
     std::vector<Tally> cur(n_s);
     if (relevant) {
-      const FrameAssociation a = Associate(matcher, cf, difficulty, score);
-      for (size_t s = 0; s < n_s; ++s) cur[s] = TallyMasked(cf, a, masks[s]);
+      a = associator.At(score, std::move(a));
+      TallyBins(cf, a, masks, n_s, cur.data());
     } else {
       if (!everything) {
-        everything = Associate(matcher, cf, difficulty, -std::numeric_limits<double>::infinity());
+        everything = associator.At(-std::numeric_limits<double>::infinity());
       }
       for (size_t s = 0; s < n_s; ++s) {
         cur[s] = prev[s];
         for (size_t k = first; k < next; ++k) {
           const int j = order[k];
-          if (everything->det_outcome[j] == Outcome::kFp && masks[s].det[j]) ++cur[s].fp;
+          if (everything->det_outcome[j] == Outcome::kFp && masks.Bin(s).KeepsDetection(j)) {
+            ++cur[s].fp;
+          }
         }
       }
     }
@@ -307,18 +377,17 @@ void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty dif
 FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
                                    Difficulty difficulty, const StableSelection* selection,
                                    bool with_aos, std::vector<CurveEvent> append_to) {
-  return std::move(FrameEventsFromAssociations(matcher, frame, cf, difficulty, {selection}, false,
+  return std::move(FrameEventsFromAssociations(matcher, cf, difficulty,
+                                               MaskSelection(frame, cf, selection), 1, false,
                                                with_aos, std::move(append_to))
                        .front());
 }
 
-std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const EvalFrame& frame,
-                                                const ClassFrame& cf, Difficulty difficulty,
-                                                const std::vector<StableSelection>& selections,
-                                                bool with_aos) {
-  std::vector<const StableSelection*> pointers;
-  for (const StableSelection& s : selections) pointers.push_back(&s);
-  return FrameEventsFromAssociations(matcher, frame, cf, difficulty, pointers, false, with_aos, {});
+std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const ClassFrame& cf,
+                                                Difficulty difficulty, const BinMasks& masks,
+                                                size_t num_selections, bool with_aos) {
+  return FrameEventsFromAssociations(matcher, cf, difficulty, masks, num_selections, false,
+                                     with_aos, {});
 }
 
 std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const ClassFrame& cf,
@@ -331,11 +400,11 @@ std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const Cl
   };
   EdgeComponents(cf, on_label, &scratch);
   for (int k = 0; k < scratch.num_comps; ++k) {
-    events =
-        std::move(FrameEventsFromAssociations(Matcher::kOptimal, frame, scratch.comps[k],
-                                              difficulty, {nullptr}, true, true, std::move(events))
-                      .front()
-                      .events);
+    events = std::move(FrameEventsFromAssociations(Matcher::kOptimal, scratch.comps[k], difficulty,
+                                                   MaskSelection(frame, scratch.comps[k], nullptr),
+                                                   1, true, true, std::move(events))
+                           .front()
+                           .events);
   }
   return events;
 }

@@ -15,6 +15,7 @@
 #include "stereodet/eval/filter.h"
 #include "stereodet/eval/frame_data.h"
 #include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/selection_mask_internal.h"
 
 namespace stereodet {
 
@@ -28,19 +29,18 @@ struct Tally {
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                        const StableSelection* selection);
 
-// What a selection keeps of one frame's ClassFrame, computed once for the many associations of the
-// frame (one per score) that are tallied against it: its labels, its detections, and whether a
-// pair needs its detection kept too (a stable filter) or its label alone (a breakdown bin).
-struct SelectionMask {
-  std::vector<uint8_t> label, det;
-  bool pair_needs_det = false;
-};
-// The mask of `selection` (null: everything kept) on `cf`, prepared from `frame`.
-SelectionMask MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
-                            const StableSelection* selection);
-// TallyAssociation(frame, cf, a, selection) from the selection's mask: the same counts (a TP pair
-// counts when StableSelection::KeepsPair would keep it: its label for a bin, both for a filter).
-Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, const SelectionMask& mask);
+// TallyAssociation(frame, cf, a, selection) from the selection's mask (selection_mask_internal.h):
+// the same counts (a TP pair counts when the mask keeps the pair: its label for a bin, both for a
+// filter).
+Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, MaskView mask);
+// TallyMasked of the first `n_s` selections of `masks` at once (the association and each TP's
+// weight read once for all), added to out[0, n_s); each sum in the order TallyMasked makes it.
+void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
+               Tally* out);
+// TallyBins of the association in which no detection takes part (a threshold above every score),
+// without making it: with every matcher each valid label is a FN there, and nothing else counts.
+void TallyNoDetections(const ClassFrame& cf, Difficulty difficulty, const BinMasks& masks,
+                       size_t n_s, Tally* out);
 
 // A frame's curve events and its share of the curve's starting FN count.
 struct FrameCurveEvents {
@@ -59,12 +59,11 @@ FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, cons
                                    Difficulty difficulty,
                                    const StableSelection* selection = nullptr, bool with_aos = true,
                                    std::vector<CurveEvent> append_to = {});
-// AssociationEvents for several selections at once (breakdown bins): one association per distinct
-// score serves them all; out[s] is selection s's.
-std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const EvalFrame& frame,
-                                                const ClassFrame& cf, Difficulty difficulty,
-                                                const std::vector<StableSelection>& selections,
-                                                bool with_aos);
+// AssociationEvents for several selections at once (breakdown bins, as masks on `cf`): one
+// association per distinct score serves them all; out[s] is selection s's, s < num_selections.
+std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const ClassFrame& cf,
+                                                Difficulty difficulty, const BinMasks& masks,
+                                                size_t num_selections, bool with_aos);
 
 // The similarity events (AOS) of the optimal matcher's association on one frame, appended to
 // `append_to`: each connected component of the overlap graph on its own, one-label components in

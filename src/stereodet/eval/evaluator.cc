@@ -162,19 +162,6 @@ OperatingPoint CountAll(const std::vector<FrameAssociation>& assocs, double thre
   return MakeOperatingPoint(threshold, tp, fp, fn);
 }
 
-// The valid labels of `difficulty` that `selection` keeps.
-int64_t CountValidLabels(const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs,
-                         Difficulty difficulty, const StableSelection& selection) {
-  int64_t n = 0;
-  for (size_t f = 0; f < frames.size(); ++f) {
-    for (int i = 0; i < cfs[f].num_labels(); ++i) {
-      n += cfs[f].LabelValid(i, difficulty) &&
-           selection.KeepsLabel(frames[f].labels[cfs[f].label_object[i]]);
-    }
-  }
-  return n;
-}
-
 // The stable counts at the operating point: the unfiltered association, kept as `selection` says
 // (the stable filter: pairs whose both sides pass, unmatched labels / detections that pass; a
 // breakdown bin: breakdown.h).
@@ -281,23 +268,33 @@ FilteredCurve StableExactCurve(Matcher matcher, const std::vector<EvalFrame>& fr
   return SummarizeExact(BuildCurve(std::move(events), num_labels), with_aos);
 }
 
-// StableExactCurve for several selections (breakdown bins), from one association per distinct
-// score of a frame.
-std::vector<FilteredCurve> StableExactCurves(Matcher matcher, const std::vector<EvalFrame>& frames,
-                                             const std::vector<ClassFrame>& cfs,
+// The masks of `selections` on every frame (selection_mask_internal.h), made once per cell for
+// all its difficulties and passes.
+std::vector<BinMasks> MaskAll(const std::vector<EvalFrame>& frames,
+                              const std::vector<ClassFrame>& cfs,
+                              const std::vector<StableSelection>& selections, int num_threads) {
+  std::vector<BinMasks> masks(cfs.size());
+  ParallelFor(
+      cfs.size(), [&](size_t i) { masks[i] = MaskBins(frames[i], cfs[i], selections); },
+      num_threads);
+  return masks;
+}
+
+// StableExactCurve for several selections (breakdown bins, `n_s` of them in each frame's masks),
+// from one association per distinct score of a frame.
+std::vector<FilteredCurve> StableExactCurves(Matcher matcher, const std::vector<ClassFrame>& cfs,
                                              Difficulty difficulty,
-                                             const std::vector<StableSelection>& selections,
+                                             const std::vector<BinMasks>& masks, size_t n_s,
                                              bool with_aos, int num_threads) {
   std::vector<std::vector<FrameCurveEvents>> per_frame(cfs.size());
   ParallelFor(
       cfs.size(),
       [&](size_t i) {
-        per_frame[i] =
-            AssociationEvents(matcher, frames[i], cfs[i], difficulty, selections, with_aos);
+        per_frame[i] = AssociationEvents(matcher, cfs[i], difficulty, masks[i], n_s, with_aos);
       },
       num_threads);
   std::vector<FilteredCurve> curves;
-  for (size_t s = 0; s < selections.size(); ++s) {
+  for (size_t s = 0; s < n_s; ++s) {
     std::vector<CurveEvent> events;
     int64_t num_labels = 0;
     for (size_t i = 0; i < cfs.size(); ++i) {
@@ -309,45 +306,77 @@ std::vector<FilteredCurve> StableExactCurves(Matcher matcher, const std::vector<
   return curves;
 }
 
-// The stable filter's curves with the KITTI matcher, one per selection: the devkit's pass 2
-// association of the unfiltered set at the unfiltered evaluation's thresholds (made once, whatever
-// the number of selections), counted under each selection, then the devkit's 41-slot arithmetic
-// (NaN for 0 / 0 kept, envelope, AP_R40 / AP_R11). With `empty_slots_zero` (breakdown bins) a
-// threshold at which the selection holds no detection has precision 0 instead of NaN: a bin's
-// labels that nothing finds above it score 0, where NaN would spread through the envelope to the
-// whole AP.
-std::vector<FilteredCurve> StableKittiCurves(
-    const std::vector<EvalFrame>& frames, const std::vector<ClassFrame>& cfs, Difficulty difficulty,
-    const std::vector<double>& thresholds, const std::vector<StableSelection>& selections,
-    bool with_aos, int num_threads, bool empty_slots_zero = false) {
+// The stable filter's curves with the KITTI matcher, one per selection (`n_s` of them in each
+// frame's masks): the devkit's pass 2 association of the unfiltered set at the unfiltered
+// evaluation's thresholds (made once, whatever the number of selections), counted under each
+// selection, then the devkit's 41-slot arithmetic (NaN for 0 / 0 kept, envelope, AP_R40 / AP_R11).
+// With `empty_slots_zero` (breakdown bins) a threshold at which the selection holds no detection
+// has precision 0 instead of NaN: a bin's labels that nothing finds above it score 0, where NaN
+// would spread through the envelope to the whole AP.
+std::vector<FilteredCurve> StableKittiCurves(const std::vector<ClassFrame>& cfs,
+                                             Difficulty difficulty,
+                                             const std::vector<double>& thresholds,
+                                             const std::vector<BinMasks>& masks, size_t n_s,
+                                             bool with_aos, int num_threads,
+                                             bool empty_slots_zero = false) {
   const size_t n_t = std::min<size_t>(thresholds.size(), kKittiSamplePoints);
-  const size_t n_s = selections.size();
-  // [frame][threshold * n_s + selection]
-  std::vector<std::vector<Tally>> per_frame(cfs.size(), std::vector<Tally>(n_t * n_s));
+  // Per block of frames and selection, the counts as changes at the ends of each frame's runs of
+  // thresholds (summed in any order: integers) and each threshold's similarity sum, frame after
+  // frame within the block, then block after block (as KittiPasses sums the unfiltered curve).
+  struct BlockCounts {
+    std::vector<int64_t> tp, fp, fn;  // [s * (n_t + 1) + t]: changes
+    std::vector<double> similarity;   // [s * n_t + t]
+  };
+  const size_t num_blocks = (cfs.size() + kFrameBlock - 1) / kFrameBlock;
+  std::vector<BlockCounts> blocks(num_blocks);
   ParallelFor(
-      cfs.size(),
-      [&](size_t i) {
-        const ClassFrame& cf = cfs[i];
-        std::vector<SelectionMask> masks(n_s);
-        for (size_t s = 0; s < n_s; ++s) masks[s] = MaskSelection(frames[i], cf, &selections[s]);
-        // The association at a threshold depends only on which detections reach it, which changes
-        // only at the frame's own scores: one association per distinct set, not one per threshold
-        // (a frame has a few scores, the devkit up to 41 thresholds).
-        const std::vector<double> scores = cf.DistinctScores();
-        size_t done = scores.size() + 1;  // how many distinct scores the last tallies took in
-        for (size_t t = 0; t < n_t; ++t) {
-          const size_t reached =
-              static_cast<size_t>(std::upper_bound(scores.begin(), scores.end(), thresholds[t],
-                                                   std::greater<double>()) -
-                                  scores.begin());
-          Tally* tallies = &per_frame[i][t * n_s];
-          if (reached == done) {
-            std::copy(tallies - n_s, tallies, tallies);
-            continue;
+      num_blocks,
+      [&](size_t b) {
+        BlockCounts& c = blocks[b];
+        c.tp.assign(n_s * (n_t + 1), 0);
+        c.fp.assign(n_s * (n_t + 1), 0);
+        c.fn.assign(n_s * (n_t + 1), 0);
+        c.similarity.assign(n_s * n_t, 0.0);
+        FrameAssociation a;
+        std::vector<Tally> tallies(n_s);
+        for (size_t i = b * kFrameBlock; i < std::min(cfs.size(), (b + 1) * kFrameBlock); ++i) {
+          const ClassFrame& cf = cfs[i];
+          if (cf.num_labels() == 0 && cf.num_dets() == 0) continue;  // nothing to count
+          // The association at a threshold depends only on which detections reach it, which
+          // changes only at the frame's own scores: one association per run of thresholds that
+          // the same scores reach (a frame has a few scores, the devkit up to 41 thresholds).
+          const std::vector<double> scores = cf.DistinctScores();  // descending
+          size_t reached = 0;
+          for (size_t t = 0; t < n_t;) {
+            while (reached < scores.size() && scores[reached] >= thresholds[t]) ++reached;
+            size_t end = t + 1;
+            if (reached < scores.size()) {
+              while (end < n_t && !(scores[reached] >= thresholds[end])) ++end;
+            } else {
+              end = n_t;
+            }
+            std::fill(tallies.begin(), tallies.end(), Tally{});
+            if (reached == 0) {  // no detection takes part yet
+              TallyNoDetections(cf, difficulty, masks[i], n_s, tallies.data());
+            } else {
+              a = KittiAssociate(cf, difficulty, thresholds[t], std::move(a));
+              TallyBins(cf, a, masks[i], n_s, tallies.data());
+            }
+            for (size_t s = 0; s < n_s; ++s) {
+              const Tally& tally = tallies[s];
+              const size_t o = s * (n_t + 1);
+              c.tp[o + t] += tally.tp;
+              c.tp[o + end] -= tally.tp;
+              c.fp[o + t] += tally.fp;
+              c.fp[o + end] -= tally.fp;
+              c.fn[o + t] += tally.fn;
+              c.fn[o + end] -= tally.fn;
+              if (tally.similarity != 0.0) {
+                for (size_t u = t; u < end; ++u) c.similarity[s * n_t + u] += tally.similarity;
+              }
+            }
+            t = end;
           }
-          const FrameAssociation a = KittiAssociate(cf, difficulty, thresholds[t]);
-          for (size_t s = 0; s < n_s; ++s) tallies[s] = TallyMasked(cf, a, masks[s]);
-          done = reached;
         }
       },
       num_threads);
@@ -355,16 +384,19 @@ std::vector<FilteredCurve> StableKittiCurves(
   for (size_t s = 0; s < n_s; ++s) {
     FilteredCurve& c = curves[s];
     std::array<double, kKittiSamplePoints> precision{}, aos{};
+    int64_t tp = 0, fp = 0, fn = 0;
     for (size_t t = 0; t < n_t; ++t) {
       CurvePoint p;
       p.threshold = thresholds[t];
-      for (size_t i = 0; i < cfs.size(); ++i) {
-        const Tally& tally = per_frame[i][t * n_s + s];
-        p.tp += tally.tp;
-        p.fp += tally.fp;
-        p.fn += tally.fn;
-        p.similarity += tally.similarity;
+      for (const BlockCounts& block : blocks) {
+        tp += block.tp[s * (n_t + 1) + t];
+        fp += block.fp[s * (n_t + 1) + t];
+        fn += block.fn[s * (n_t + 1) + t];
+        p.similarity += block.similarity[s * n_t + t];
       }
+      p.tp = tp;
+      p.fp = fp;
+      p.fn = fn;
       p = FinishPoint(p);
       c.curve.push_back(p);
       if (empty_slots_zero && p.tp + p.fp == 0) {
@@ -686,6 +718,17 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       }
       for (ClassResult& r : cell) r.best_f1 = BestF1(r.curve);
 
+      // The breakdown bins and their masks on every frame, for all difficulties.
+      std::vector<StableSelection> bins;
+      for (const BreakdownOptions& breakdown : options.breakdowns) {
+        for (int b = 0; b < breakdown.num_bins(); ++b) {
+          bins.push_back(
+              StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
+        }
+      }
+      const std::vector<BinMasks> bin_masks =
+          bins.empty() ? std::vector<BinMasks>{} : MaskAll(frames, cfs, bins, threads);
+
       // The operating point: counts and the metrics of scores, each accumulator over the frames in
       // order.
       std::vector<ScoreMetricsAccumulator> accs;
@@ -695,13 +738,26 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
                           options.score_transform);
         accs.back().EnableDece(options.dece);
       }
+      // Each detection's D-ECE cell, once for the cell's difficulties and bins (dece_first[f]:
+      // frame f's first).
+      std::vector<size_t> dece_first(frames.size() + 1, 0);
+      for (size_t f = 0; f < frames.size(); ++f) {
+        dece_first[f + 1] = dece_first[f] + static_cast<size_t>(cfs[f].num_dets());
+      }
+      std::vector<ScoreMetricsAccumulator::DeceCell> dece_cells(dece_first.back());
+      if (n_d > 0) {
+        ForEachFrame(frames.size(), threads, [&](size_t f) {
+          accs[0].DeceCells(frames[f], cfs[f], dece_cells.data() + dece_first[f]);
+        });
+      }
       for (size_t f = 0; f < frames.size(); ++f) {
         for (size_t d = 0; d < n_d; ++d) {
           const FrameAssociation& a = assocs[d][f];
           tp_fp_fn[d][0] += a.CountDets(Outcome::kTp);
           tp_fp_fn[d][1] += a.CountDets(Outcome::kFp);
           tp_fp_fn[d][2] += a.CountLabels(Outcome::kFn);
-          accs[d].Add(frames[f], cfs[f], a, difficulties[d]);
+          accs[d].Add(frames[f], cfs[f], a, difficulties[d], nullptr,
+                      dece_cells.data() + dece_first[f]);
         }
       }
       for (size_t d = 0; d < n_d; ++d) {
@@ -734,51 +790,69 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           fs.naive_curve =
               OwnCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads, compat)
                   .curve;
-          fs.stable_curve = kitti ? StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds,
-                                                      {filter}, with_aos, threads)
+          fs.stable_curve = kitti ? StableKittiCurves(cfs, difficulty, r.kitti_thresholds,
+                                                      MaskAll(frames, cfs, {filter}, threads), 1,
+                                                      with_aos, threads)
                                         .front()
                                   : StableExactCurve(options.matcher, frames, cfs, difficulty,
                                                      filter, with_aos, threads);
           r.filtered = fs;
         }
-        // Breakdowns: every bin from the cell's association; the KITTI matcher's curves of all
-        // bins from one association per threshold.
-        std::vector<StableSelection> bins;
-        for (const BreakdownOptions& breakdown : options.breakdowns) {
-          for (int b = 0; b < breakdown.num_bins(); ++b) {
-            bins.push_back(
-                StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
-          }
-        }
+        // Breakdowns: every bin from the cell's association, its masks made once per cell; the
+        // curves of all bins from one association per run of thresholds (KITTI) or per distinct
+        // score (exact matchers).
+        const size_t n_s = bins.size();
         std::vector<FilteredCurve> bin_curves;
-        if (!bins.empty()) {
-          bin_curves = kitti ? StableKittiCurves(frames, cfs, difficulty, r.kitti_thresholds, bins,
-                                                 with_aos, threads, /*empty_slots_zero=*/true)
-                             : StableExactCurves(options.matcher, frames, cfs, difficulty, bins,
+        if (n_s > 0) {
+          bin_curves = kitti ? StableKittiCurves(cfs, difficulty, r.kitti_thresholds, bin_masks,
+                                                 n_s, with_aos, threads, /*empty_slots_zero=*/true)
+                             : StableExactCurves(options.matcher, cfs, difficulty, bin_masks, n_s,
                                                  with_aos, threads);
         }
-        for (size_t k = 0; k < bins.size(); ++k) {
+        // The bins' valid labels, operating points and score metrics: one pass over the frames for
+        // all bins (each bin's sums in frame order, whatever the threads).
+        std::vector<BreakdownBin> bin_results(n_s);
+        std::vector<Tally> bin_tallies(n_s);
+        std::vector<ScoreMetricsAccumulator> bin_accs;
+        for (size_t k = 0; k < n_s; ++k) {
+          bin_accs.emplace_back(options.calibration_bins, options.distance_bin_m,
+                                options.max_distance_m, options.score_transform);
+          bin_accs.back().EnableDece(options.dece);
+        }
+        for (size_t f = 0; f < frames.size() && n_s > 0; ++f) {
+          const ClassFrame& cf = cfs[f];
+          if (cf.num_labels() == 0 && cf.num_dets() == 0) continue;
+          const BinMasks& masks = bin_masks[f];
+          for (int i = 0; i < cf.num_labels(); ++i) {
+            if (!cf.LabelValid(i, difficulty)) continue;
+            for (size_t k = 0; k < n_s; ++k) {
+              bin_results[k].num_valid_labels += masks.Bin(k).KeepsLabel(i);
+            }
+          }
+          TallyBins(cf, assocs[d][f], masks, n_s, bin_tallies.data());
+          ScoreMetricsAccumulator::AddToBins(frames[f], cf, assocs[d][f], difficulty, masks, n_s,
+                                             bin_accs.data(), dece_cells.data() + dece_first[f]);
+        }
+        for (size_t k = 0; k < n_s; ++k) {
+          BreakdownBin& bin = bin_results[k];
+          const Tally& t = bin_tallies[k];
+          bin.at_threshold = MakeOperatingPoint(t_op, t.tp, t.fp, t.fn);
+          const ScoreMetricsAccumulator& acc = bin_accs[k];
+          bin.brier = result.probability_metrics ? acc.Brier() : WithoutProbabilities(acc.Brier());
+          bin.calibration = result.probability_metrics ? acc.Calibration()
+                                                       : WithoutProbabilities(acc.Calibration());
+        }
+        for (size_t k = 0; k < n_s; ++k) {
           const StableSelection& selection = bins[k];
-          BreakdownBin bin;
+          BreakdownBin bin = std::move(bin_results[k]);
           bin.axis = selection.axis;
           bin.lower = selection.lower;
           bin.upper = selection.upper;
-          bin.num_valid_labels = CountValidLabels(frames, cfs, difficulty, selection);
-          bin.at_threshold = CountStable(frames, cfs, assocs[d], selection, t_op);
           bin.curve = std::move(bin_curves[k]);
           if (bin.num_valid_labels == 0) {  // no label in the bin: no recall, AP undefined
             bin.curve.ap_r40 = bin.curve.ap_r11 = bin.curve.ap_voc = kNaN;
             bin.curve.aos_r40 = bin.curve.aos_r11 = kNaN;
           }
-          ScoreMetricsAccumulator acc(options.calibration_bins, options.distance_bin_m,
-                                      options.max_distance_m, options.score_transform);
-          acc.EnableDece(options.dece);
-          for (size_t f = 0; f < frames.size(); ++f) {
-            acc.Add(frames[f], cfs[f], assocs[d][f], difficulty, &selection);
-          }
-          bin.brier = result.probability_metrics ? acc.Brier() : WithoutProbabilities(acc.Brier());
-          bin.calibration = result.probability_metrics ? acc.Calibration()
-                                                       : WithoutProbabilities(acc.Calibration());
           if (options.breakdown_naive) {
             // The bin evaluated on its own, as an unfiltered cell is.
             const std::vector<ClassFrame> bin_cfs = PrepareAll(bin_frames[k], spec, kind, options);

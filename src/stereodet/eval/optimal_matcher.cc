@@ -1,10 +1,12 @@
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 #include <utility>
 
 #include "stereodet/eval/bipartite_internal.h"
 #include "stereodet/eval/optimal_matcher_internal.h"
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 
@@ -34,6 +36,8 @@ struct ThreadScratch {
   DisjointSets sets;
   std::vector<int32_t> comp_begin, members, local, cl, cd, fill, match;
   std::vector<WeightedEdge> edges;
+  // Which BuildGraph made `graph`: a number unique over all threads (OptimalAssociator's check).
+  uint64_t graph_generation = 0;
 };
 
 ThreadScratch& Scratch() {
@@ -43,6 +47,8 @@ ThreadScratch& Scratch() {
 
 // Fills *g for `f` at `difficulty`, reusing g's memory (see ThreadScratch).
 void BuildGraph(const ClassFrame& f, Difficulty difficulty, OptimalGraph* g) {
+  static std::atomic<uint64_t> generations{0};
+  Scratch().graph_generation = ++generations;
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
   g->role.resize(f.num_dets());
   for (int j = 0; j < f.num_dets(); ++j) {
@@ -232,6 +238,21 @@ FrameAssociation OptimalAssociate(const ClassFrame& f, Difficulty difficulty, do
   ThreadScratch& scratch = Scratch();
   BuildGraph(f, difficulty, &scratch.graph);
   return AssociateOnGraph(f, scratch.graph, threshold, scratch, std::move(reuse));
+}
+
+OptimalAssociator::OptimalAssociator(const ClassFrame& frame, Difficulty difficulty)
+    : frame_(frame) {
+  ThreadScratch& scratch = Scratch();
+  BuildGraph(frame, difficulty, &scratch.graph);
+  graph_generation_ = scratch.graph_generation;
+}
+
+FrameAssociation OptimalAssociator::At(double threshold, FrameAssociation reuse) const {
+  ThreadScratch& scratch = Scratch();
+  STEREODET_CHECK(scratch.graph_generation == graph_generation_)
+      << "OptimalAssociator used after another optimal-matcher call on its thread, or on another "
+         "thread";
+  return AssociateOnGraph(frame_, scratch.graph, threshold, scratch, std::move(reuse));
 }
 
 FrameAssociation OptimalFrameEventsAndAssociate(const ClassFrame& f, Difficulty difficulty,

@@ -22,6 +22,7 @@
 #ifndef STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_
 #define STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_
 
+#include <cstdint>
 #include <vector>
 
 #include "stereodet/eval/association.h"
@@ -46,6 +47,21 @@ std::vector<CurveEvent> OptimalFrameEvents(const ClassFrame& frame, Difficulty d
 // `reuse` lends its memory to the result (its contents are discarded).
 FrameAssociation OptimalAssociate(const ClassFrame& frame, Difficulty difficulty, double threshold,
                                   FrameAssociation reuse = {});
+
+// OptimalAssociate of one frame at many thresholds, its overlap graph built once (in this thread's
+// memory, where every optimal-matcher call builds its graph): construct, then At(threshold) as
+// often as needed. Precondition: At runs on the constructing thread with no other optimal-matcher
+// call on that thread in between (checked: an exception, not a wrong association); `frame` outlives
+// the object.
+class OptimalAssociator {
+ public:
+  OptimalAssociator(const ClassFrame& frame, Difficulty difficulty);
+  FrameAssociation At(double threshold, FrameAssociation reuse = {}) const;
+
+ private:
+  const ClassFrame& frame_;
+  uint64_t graph_generation_;
+};
 
 // OptimalFrameEvents(frame, difficulty) appended to *events and OptimalAssociate(frame, difficulty,
 // threshold, reuse) returned, with the overlap graph built once for both (Evaluate needs both of

@@ -55,9 +55,71 @@ ScoreMetricsAccumulator::ScoreMetricsAccumulator(int calibration_bins, double di
 
 void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
                                   const FrameAssociation& a, Difficulty difficulty,
-                                  const StableSelection* selection) {
+                                  const StableSelection* selection, const DeceCell* dece_cells) {
+  if (selection == nullptr) {
+    AddKept(frame, cf, a, difficulty, KeepEverything{}, dece_cells);
+  } else {
+    AddKept(frame, cf, a, difficulty, MaskSelection(frame, cf, selection).Bin(0), dece_cells);
+  }
+}
+
+void ScoreMetricsAccumulator::DeceCells(const EvalFrame& frame, const ClassFrame& cf,
+                                        DeceCell* out) const {
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    out[j] = DeceCellOf(ApplyScoreTransform(transform_, cf.det_score[j]),
+                        &frame.detections[cf.det_object[j]].box);
+  }
+}
+
+void ScoreMetricsAccumulator::AddToBins(const EvalFrame& frame, const ClassFrame& cf,
+                                        const FrameAssociation& a, Difficulty difficulty,
+                                        const BinMasks& masks, size_t n_s,
+                                        ScoreMetricsAccumulator* accs, const DeceCell* dece_cells) {
+  if (n_s == 0) return;
+  // ForEachBrierTerm's order: the labels, then the TP and FP detections.
+  const ScoreTransform transform = accs[0].transform_;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (a.label_outcome[i] == Outcome::kTp) {
+      const int j = a.label_det[i];
+      const double s = ApplyScoreTransform(transform, cf.det_score[j]);
+      const double term = (1 - s) * (1 - s);
+      for (size_t k = 0; k < n_s; ++k) {
+        if (masks.Bin(k).KeepsPair(i, j)) accs[k].AddLabelTerm(term);
+      }
+    } else if (cf.LabelValid(i, difficulty)) {
+      for (size_t k = 0; k < n_s; ++k) {
+        if (masks.Bin(k).KeepsLabel(i)) accs[k].AddLabelTerm(1.0);
+      }
+    }
+  }
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    const Outcome o = a.det_outcome[j];
+    if (o != Outcome::kTp && o != Outcome::kFp) continue;
+    const bool tp = o == Outcome::kTp;
+    const double s = ApplyScoreTransform(transform, cf.det_score[j]);
+    double overlap = 0.0;
+    if (tp) {  // the matched pair's overlap: its edge among the label's
+      const int e = cf.FindEdge(a.det_label[j], j);
+      overlap = e >= 0 ? cf.edge_overlap[e] : kUnknownOverlap;
+    }
+    const DeceCell cell = dece_cells != nullptr
+                              ? dece_cells[j]
+                              : accs[0].DeceCellOf(s, &frame.detections[cf.det_object[j]].box);
+    for (size_t k = 0; k < n_s; ++k) {
+      const MaskView mask = masks.Bin(k);
+      if (tp ? mask.KeepsPair(a.det_label[j], j) : mask.KeepsDetection(j)) {
+        accs[k].AddDetectionTermIn(s, tp, overlap, cell);
+      }
+    }
+  }
+}
+
+template <typename Keeps>
+void ScoreMetricsAccumulator::AddKept(const EvalFrame& frame, const ClassFrame& cf,
+                                      const FrameAssociation& a, Difficulty difficulty,
+                                      const Keeps& keeps, const DeceCell* dece_cells) {
   ForEachBrierTerm(
-      frame, cf, a, difficulty, transform_, selection,
+      cf, a, difficulty, transform_, keeps,
       [&](double term, int i, int j) {
         AddLabelTerm(term);
         if (j < 0) return;  // a label alone: no localization error
@@ -77,13 +139,17 @@ void ScoreMetricsAccumulator::Add(const EvalFrame& frame, const ClassFrame& cf,
           const int e = cf.FindEdge(a.det_label[j], j);
           overlap = e >= 0 ? cf.edge_overlap[e] : kUnknownOverlap;
         }
-        AddDetectionTerm(s, o == Outcome::kTp, overlap, &frame.detections[cf.det_object[j]].box);
+        AddDetectionTermIn(s, o == Outcome::kTp, overlap,
+                           dece_cells != nullptr
+                               ? dece_cells[j]
+                               : DeceCellOf(s, &frame.detections[cf.det_object[j]].box));
       });
 }
 
 void ScoreMetricsAccumulator::EnableDece(const DeceOptions& options) {
   options.Check();
   dece_ = options;
+  for (int d = 0; d < 5; ++d) dece_step_[d] = 1.0 / options.bins[d];
   size_t total = 1;
   for (const int b : options.bins) total *= static_cast<size_t>(b);
   dece_count_.assign(total, 0);
@@ -95,12 +161,12 @@ namespace {
 
 // numpy.histogramdd's bin of v among `bins` equal-width bins of [0, 1] (edges as numpy.linspace
 // makes them: i * (1 / bins), the last exactly 1; a value equal to an edge goes to the bin above
-// it, 1 to the last bin); v in [0, 1] (netcal clamps every feature into it first).
-int EqualWidthBin(double v, int bins) {
+// it, 1 to the last bin); v in [0, 1] (netcal clamps every feature into it first); `step` is
+// 1.0 / bins.
+int EqualWidthBin(double v, int bins, double step) {
   if (v >= 1.0) return bins - 1;
-  const double step = 1.0 / bins;
-  int k = std::min(static_cast<int>(v / step), bins - 1);
-  // v / step can land one bin off the edges' own rounding: settle against the edges themselves.
+  int k = std::min(static_cast<int>(v * bins), bins - 1);
+  // v * bins can land one bin off the edges' own rounding: settle against the edges themselves.
   while (k > 0 && v < k * step) --k;
   while (k + 1 < bins && v >= (k + 1) * step) ++k;
   return k;
@@ -117,29 +183,41 @@ void ScoreMetricsAccumulator::AddLabelTerm(double term) {
 
 void ScoreMetricsAccumulator::AddDetectionTerm(double s, bool tp, double overlap,
                                                const Box2D* box) {
-  if (!dece_count_.empty()) {
-    if (box == nullptr) {
-      boxes_known_ = false;
-    } else {
-      const double w = dece_.image_width_px, h = dece_.image_height_px;
-      const double features[5] = {s, (box->left + box->right) / 2 / w,
-                                  (box->top + box->bottom) / 2 / h, (box->right - box->left) / w,
-                                  (box->bottom - box->top) / h};
-      // As netcal: every feature clamped into [0, 1], so that a box reaching past the image (a
-      // truncated object) counts in the edge bins.
-      size_t index = 0;
-      bool outside = false;
-      for (int d = 0; d < 5; ++d) {
-        outside = outside || !(features[d] >= 0.0 && features[d] <= 1.0);
-        const double v = std::isnan(features[d]) ? 0.0 : std::clamp(features[d], 0.0, 1.0);
-        index = index * static_cast<size_t>(dece_.bins[d]) +
-                static_cast<size_t>(EqualWidthBin(v, dece_.bins[d]));
-      }
-      ++dece_count_[index];
-      dece_tp_[index] += tp ? 1 : 0;
-      dece_score_sum_[index] += std::clamp(s, 0.0, 1.0);
-      dece_outside_ += outside ? 1 : 0;
-    }
+  AddDetectionTermIn(s, tp, overlap, DeceCellOf(s, box));
+}
+
+ScoreMetricsAccumulator::DeceCell ScoreMetricsAccumulator::DeceCellOf(double s,
+                                                                      const Box2D* box) const {
+  DeceCell cell;
+  if (dece_count_.empty()) return cell;
+  if (box == nullptr) {
+    cell.state = DeceCell::kNoBox;
+    return cell;
+  }
+  const double w = dece_.image_width_px, h = dece_.image_height_px;
+  const double features[5] = {s, (box->left + box->right) / 2 / w, (box->top + box->bottom) / 2 / h,
+                              (box->right - box->left) / w, (box->bottom - box->top) / h};
+  // As netcal: every feature clamped into [0, 1], so that a box reaching past the image (a
+  // truncated object) counts in the edge bins.
+  cell.state = DeceCell::kIn;
+  for (int d = 0; d < 5; ++d) {
+    cell.outside = cell.outside || !(features[d] >= 0.0 && features[d] <= 1.0);
+    const double v = std::isnan(features[d]) ? 0.0 : std::clamp(features[d], 0.0, 1.0);
+    cell.index = cell.index * static_cast<size_t>(dece_.bins[d]) +
+                 static_cast<size_t>(EqualWidthBin(v, dece_.bins[d], dece_step_[d]));
+  }
+  return cell;
+}
+
+void ScoreMetricsAccumulator::AddDetectionTermIn(double s, bool tp, double overlap,
+                                                 const DeceCell& cell) {
+  if (cell.state == DeceCell::kNoBox) {
+    boxes_known_ = false;
+  } else if (cell.state == DeceCell::kIn) {
+    ++dece_count_[cell.index];
+    dece_tp_[cell.index] += tp ? 1 : 0;
+    dece_score_sum_[cell.index] += std::clamp(s, 0.0, 1.0);
+    dece_outside_ += cell.outside ? 1 : 0;
   }
   const int num_bins = static_cast<int>(bin_count_.size());
   const double y = tp ? 1.0 : 0.0;

@@ -2,6 +2,7 @@
 #ifndef STEREODET_EVAL_SCORE_METRICS_INTERNAL_H_
 #define STEREODET_EVAL_SCORE_METRICS_INTERNAL_H_
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "stereodet/eval/frame_data.h"
 #include "stereodet/eval/frame_data_internal.h"
 #include "stereodet/eval/score_metrics.h"
+#include "stereodet/eval/selection_mask_internal.h"
 
 namespace stereodet {
 
@@ -20,30 +22,31 @@ namespace stereodet {
 BrierScores WithoutProbabilities(BrierScores brier);
 CalibrationResult WithoutProbabilities(CalibrationResult calibration);
 
+// Keeps every label and detection: ForEachBrierTerm without a selection.
+struct KeepEverything {
+  bool KeepsLabel(int) const { return true; }
+  bool KeepsDetection(int) const { return true; }
+  bool KeepsPair(int, int) const { return true; }
+};
+
 // The Brier terms of one frame's association `a` at the operating point, in the order Evaluate
 // sums them (ScoreMetricsAccumulator::Add and the bootstrap's per-frame terms both come from here):
 // first the labels in order, `on_label(term, i, j)`: a TP pair's label (1 - s)^2 with its detection
 // j, a valid label alone (FN, or excused by an ignored detection) 1 with j = -1; then the TP and FP
-// detections in order, `on_detection(s, outcome, j)` with s the transformed score. With
-// `selection`, only what it keeps: a pair by KeepsPair, a lone label by KeepsLabel, an FP by
-// KeepsDetection.
-template <typename OnLabel, typename OnDetection>
-void ForEachBrierTerm(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
-                      Difficulty difficulty, ScoreTransform transform,
-                      const StableSelection* selection, OnLabel on_label,
+// detections in order, `on_detection(s, outcome, j)` with s the transformed score. Only what
+// `keeps` keeps (KeepEverything, or a selection's MaskView): a pair by KeepsPair(i, j), a lone
+// label by KeepsLabel(i), an FP by KeepsDetection(j).
+template <typename Keeps, typename OnLabel, typename OnDetection>
+void ForEachBrierTerm(const ClassFrame& cf, const FrameAssociation& a, Difficulty difficulty,
+                      ScoreTransform transform, const Keeps& keeps, OnLabel on_label,
                       OnDetection on_detection) {
-  auto pair_kept = [&](int i, int j) {
-    return selection == nullptr || selection->KeepsPair(frame.labels[cf.label_object[i]],
-                                                        frame.detections[cf.det_object[j]]);
-  };
   for (int i = 0; i < cf.num_labels(); ++i) {
     if (a.label_outcome[i] == Outcome::kTp) {
       const int j = a.label_det[i];
-      if (!pair_kept(i, j)) continue;
+      if (!keeps.KeepsPair(i, j)) continue;
       const double s = ApplyScoreTransform(transform, cf.det_score[j]);
       on_label((1 - s) * (1 - s), i, j);
-    } else if (cf.LabelValid(i, difficulty) &&
-               (selection == nullptr || selection->KeepsLabel(frame.labels[cf.label_object[i]]))) {
+    } else if (cf.LabelValid(i, difficulty) && keeps.KeepsLabel(i)) {
       // FN, or excused by an ignored (too low) detection: the label's term is there all the same,
       // so that every detector is scored over the same labels.
       on_label(1.0, i, -1);
@@ -52,9 +55,7 @@ void ForEachBrierTerm(const EvalFrame& frame, const ClassFrame& cf, const FrameA
   for (int j = 0; j < cf.num_dets(); ++j) {
     const Outcome o = a.det_outcome[j];
     if (o != Outcome::kTp && o != Outcome::kFp) continue;
-    if (o == Outcome::kTp ? !pair_kept(a.det_label[j], j)
-                          : selection != nullptr &&
-                                !selection->KeepsDetection(frame.detections[cf.det_object[j]])) {
+    if (o == Outcome::kTp ? !keeps.KeepsPair(a.det_label[j], j) : !keeps.KeepsDetection(j)) {
       continue;
     }
     on_detection(ApplyScoreTransform(transform, cf.det_score[j]), o, j);
@@ -69,11 +70,24 @@ class ScoreMetricsAccumulator {
   ScoreMetricsAccumulator(int calibration_bins, double distance_bin_m, double max_distance_m,
                           ScoreTransform transform = ScoreTransform::kNone);
 
+  // A detection's D-ECE bin (DeceOptions::bins, score first, row-major), or why it has none.
+  struct DeceCell {
+    enum State : uint8_t { kOff, kNoBox, kIn } state = kOff;
+    bool outside = false;  // a feature was outside [0, 1] (clamped into the end bins)
+    size_t index = 0;
+  };
+  // The D-ECE cell of each detection of `class_frame` (from its transformed score and 2D box),
+  // written to out[0, num_dets): for Add and AddToBins to reuse across difficulties and bins (a
+  // detection's box is far in memory; reading it once per cell instead of once per accumulator
+  // was a tenth of a breakdown's time).
+  void DeceCells(const EvalFrame& frame, const ClassFrame& class_frame, DeceCell* out) const;
+
   // `association` is that of `class_frame` at `difficulty` (which decides the valid labels). With
   // `selection`, only what it keeps (a breakdown bin's pairs, labels and detections) adds terms.
+  // `dece_cells`: DeceCells of this frame by an accumulator with the same options, or null.
   void Add(const EvalFrame& frame, const ClassFrame& class_frame,
            const FrameAssociation& association, Difficulty difficulty,
-           const StableSelection* selection = nullptr);
+           const StableSelection* selection = nullptr, const DeceCell* dece_cells = nullptr);
 
   // One term of each kind, for callers with their own association (COCO mode): a valid label's
   // (1 - s)^2 for its TP detection's transformed score s, or 1 without one; a counted detection
@@ -83,6 +97,15 @@ class ScoreMetricsAccumulator {
   // detection's 2D box, for D-ECE (null: unknown, D-ECE then NaN).
   void AddDetectionTerm(double s, bool tp, double overlap = kUnknownOverlap,
                         const Box2D* box = nullptr);
+  // Add of one frame for several selections at once (a cell's breakdown bins: the first `n_s` of
+  // `masks`): accs[s] gets the terms bin s keeps, in the order Add would add them under bin s's
+  // selection, each term computed once for all (`dece_cells` as Add's). The localization errors are
+  // not collected (a bin reports none). Precondition: the accumulators have the same transform and
+  // D-ECE options.
+  static void AddToBins(const EvalFrame& frame, const ClassFrame& class_frame,
+                        const FrameAssociation& association, Difficulty difficulty,
+                        const BinMasks& masks, size_t n_s, ScoreMetricsAccumulator* accs,
+                        const DeceCell* dece_cells = nullptr);
   // Turns D-ECE on (off by default: COCO mode has no image size).
   void EnableDece(const DeceOptions& options);
   static constexpr double kUnknownOverlap = std::numeric_limits<double>::quiet_NaN();
@@ -92,6 +115,14 @@ class ScoreMetricsAccumulator {
   std::vector<DistanceBin> Localization() const;  // bins [0, w), [w, 2w), ... up to max_distance_m
 
  private:
+  DeceCell DeceCellOf(double s, const Box2D* box) const;
+  void AddDetectionTermIn(double s, bool tp, double overlap, const DeceCell& cell);
+
+  template <typename Keeps>
+  void AddKept(const EvalFrame& frame, const ClassFrame& class_frame,
+               const FrameAssociation& association, Difficulty difficulty, const Keeps& keeps,
+               const DeceCell* dece_cells);
+
   BrierScores brier_sums_;
   std::vector<int64_t> bin_count_, bin_tp_;
   std::vector<double> bin_score_sum_;
@@ -101,6 +132,7 @@ class ScoreMetricsAccumulator {
   // D-ECE: per joint bin (DeceOptions::bins, score first, row-major) the detections, their score
   // sum and TPs; empty when off.
   DeceOptions dece_;
+  std::array<double, 5> dece_step_{};  // 1 / dece_.bins[d]: the width of a bin of feature d
   std::vector<int64_t> dece_count_, dece_tp_;
   std::vector<double> dece_score_sum_;
   bool boxes_known_ = true;
