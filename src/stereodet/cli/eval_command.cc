@@ -2,7 +2,8 @@
 //   stereodet eval --gt DIR --det DIR [--split FILE] [--classes ..] [--metrics 2d,bev,3d]
 //                  [--matcher kitti|optimal|voc] [--filter COND] [--filter-mode naive|stable]
 //                  [--overlaps strict,loose] [--score-transform none|sigmoid] [--lenient]
-//                  [--out DIR [--records] [--report]] [--bootstrap N [--bootstrap-seed S]
+//                  [--out DIR [--records] [--report]] [--errors] [--bootstrap N [--bootstrap-seed
+//                  S]
 //                  [--bootstrap-confidence C]]
 //   stereodet eval sweep --gt DIR --det DIR --filter min-area --from 0 --to 200 --step 5
 //                  [--out DIR]
@@ -35,6 +36,7 @@
 #include "stereodet/cli/commands.h"
 #include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/calibration_fit.h"
+#include "stereodet/eval/error_analysis.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/pipelines/coco_evaluation.h"
@@ -98,6 +100,8 @@ struct EvalArgs {
   bool report = false;
   bool devkit_files = false;  // --devkit-files (eval only)
   std::string calibration;    // --calibration FILE (eval, eval merge)
+  bool errors = false;        // --errors (eval, eval merge)
+  double errors_background = ErrorAnalysisOptions().background_overlap;  // --errors-background
   std::string method = CalibrationMethodName(CalibrationFitOptions().method);  // calibrate
   // --bootstrap N, --bootstrap-seed, --bootstrap-confidence (eval, compare, merge); used when
   // --bootstrap was given (bootstrap_given, set by the command's callback).
@@ -399,6 +403,16 @@ void PrintNotices(const EvalInput& input, std::FILE* stream = stdout) {
   }
 }
 
+// The error analysis options of --errors / --errors-background: unset without --errors.
+std::optional<ErrorAnalysisOptions> MakeErrorOptions(const EvalArgs& a) {
+  const bool background_given = a.errors_background != ErrorAnalysisOptions().background_overlap;
+  STEREODET_CHECK(a.errors || !background_given) << "--errors-background needs --errors";
+  if (!a.errors) return std::nullopt;
+  ErrorAnalysisOptions options;
+  options.background_overlap = a.errors_background;
+  return options;
+}
+
 void RunEval(const EvalArgs& a) {
   STEREODET_CHECK(!a.records || !a.out.empty())
       << "--records needs --out (it writes OUT/matches.csv)";
@@ -415,6 +429,7 @@ void RunEval(const EvalArgs& a) {
   options.devkit_files = a.devkit_files;
   options.calibration = a.calibration;
   options.bootstrap = MakeBootstrapOptions(a);
+  options.errors = MakeErrorOptions(a);
   options.tool_version = StereodetVersion();
   options.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluation(options);
@@ -432,6 +447,7 @@ void RunEval(const EvalArgs& a) {
   }
   fmt::print("evaluated in {:.3f} s\n", result.seconds);
   if (options.bootstrap) fmt::print("bootstrap in {:.3f} s\n", result.bootstrap_seconds);
+  if (options.errors) fmt::print("error analysis in {:.3f} s\n", result.errors_seconds);
   if (a.out.empty()) return;
   for (const EvaluationResult::RecordsFile& records : result.records) {
     fmt::print("per-detection records: {} rows in {}\n", records.rows, records.name);
@@ -559,6 +575,7 @@ void RunMerge(const EvalArgs& given, const std::vector<std::string>& shards) {
   e.records = a.records;
   e.report = a.report;
   e.bootstrap = MakeBootstrapOptions(a);
+  e.errors = MakeErrorOptions(a);
   e.tool_version = StereodetVersion();
   e.command_line = ProcessCommandLine();
   const EvaluationResult result = RunEvaluationMerge(options);
@@ -736,6 +753,16 @@ void AddEvalCommand(CLI::App& app) {
                  "also each --breakdown bin evaluated on its own, its labels and detections "
                  "struck outside it before matching (the naive recomputation, for comparison: a "
                  "line under each bin in the table, results.json's breakdown[].naive)");
+  eval->add_flag("--errors", args->errors,
+                 "also the TIDE-style error analysis of every cell: each false positive "
+                 "classified (cls, loc, both, dupe, bkg), each miss, and the AP_R40 gained by "
+                 "fixing each type alone, re-evaluated with the cell's matcher; in the table, "
+                 "results.json (each cell's errors) and OUT/errors.csv (docs/metrics.md, Error "
+                 "analysis). Costs about 15 plain evaluations");
+  eval->add_option("--errors-background", args->errors_background,
+                   "--errors: a false positive overlapping every label by at most this is a "
+                   "background error (TIDE's 0.1)")
+      ->capture_default_str();
   eval->add_flag("--records", args->records,
                  "also write OUT/matches.csv: what every detection and label counts as, per class, "
                  "metric and difficulty (docs/metrics.md)");
@@ -869,6 +896,10 @@ void AddEvalCommand(CLI::App& app) {
       ->allow_extra_args(false);
   merge->add_flag("--records", merge_common->records, "also write OUT/matches.csv");
   merge->add_flag("--report", merge_common->report, "also write OUT/report/");
+  merge->add_flag("--errors", merge_common->errors,
+                  "as for eval: the error analysis, of the merged frames");
+  merge->add_option("--errors-background", merge_common->errors_background, "as for eval")
+      ->capture_default_str();
   AddBootstrapOptions(merge, merge_common.get(), "as for eval, on the merged frames");
   merge->callback([merge, merge_common, merge_shards] {
     NoteBootstrapFlags(merge, merge_common.get());

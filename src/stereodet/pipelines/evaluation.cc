@@ -17,6 +17,7 @@
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/output_folder.h"
+#include "stereodet/util/timer.h"
 #include "stereodet/util/version.h"
 
 namespace stereodet {
@@ -71,6 +72,12 @@ void EvaluationOptions::Check() const {
       << "--devkit-files: the devkit's files hold its 41 precision slots, which only the KITTI "
          "matcher computes; evaluate with --matcher kitti";
   if (bootstrap) bootstrap->Check();
+  if (errors) {
+    errors->Check();
+    STEREODET_CHECK(runs.front().compat == EvalCompat::kDevkit)
+        << "--errors: the error analysis re-evaluates with stereodet's own rules; it does not "
+           "reproduce --compat openpcdet";
+  }
   if (!calibration.empty()) {
     // A shard keeps its raw detection files for `eval merge`, which would evaluate them
     // uncalibrated: refused rather than merged inconsistently.
@@ -129,6 +136,11 @@ EvaluationResult EvaluateAndWrite(
       bootstrap.num_threads = options.input.num_threads;
       run.bootstrap = Bootstrap(result.input.frames, run.options, bootstrap);
       result.bootstrap_seconds += run.bootstrap->seconds;
+    }
+    if (options.errors) {
+      const Timer timer;
+      run.errors = AnalyzeAllErrors(result.input.frames, run.options, *options.errors);
+      result.errors_seconds += timer.ElapsedSeconds();
     }
   }
   if (!out) return result;

@@ -54,6 +54,9 @@ struct EvaluationOptions {
   // Bootstrap intervals over frames for every run (Bootstrap; EvalRun::bootstrap), in
   // results.json and the table. Unset: none. Its num_threads is replaced by input.num_threads.
   std::optional<BootstrapOptions> bootstrap;
+  // The TIDE-style error analysis of every run's cells (AnalyzeAllErrors; EvalRun::errors), in
+  // results.json, OUT/errors.csv and the table. Unset: none. Not with compat openpcdet.
+  std::optional<ErrorAnalysisOptions> errors;
   // A score calibration file (kitti/score_calibration.h, `stereodet calibrate --fit`): applied to
   // the detections once read, before every run; recorded in results.json ("input.calibration").
   // Its outputs are probabilities: every run's score_transform must be kNone (a calibration fitted
@@ -77,6 +80,7 @@ struct EvaluationResult {
   EvalRunInfo info;              // what results.json records about the input and the run
   double seconds = 0;            // the runs' Evaluate() time, summed
   double bootstrap_seconds = 0;  // the runs' Bootstrap() time, summed (0 without bootstrap)
+  double errors_seconds = 0;     // the runs' AnalyzeAllErrors() time, summed (0 without errors)
   // With out: every file written, as paths under out (the report's, then the records files).
   std::vector<std::filesystem::path> files;
   // With records: per run, the records file's name under out and its rows.

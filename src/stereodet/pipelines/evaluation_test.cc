@@ -292,6 +292,73 @@ TEST(RunEvaluationTest, BootstrapIntervalsInResultsJsonAndTheTable) {
   EXPECT_THROW(RunEvaluation(options), std::invalid_argument);
 }
 
+// --errors: each evaluated cell's "errors" in results.json is AnalyzeAllErrors' analysis of the
+// cell, errors.csv has its eight rows (six types, FP, FN) with the same numbers, the table its
+// block and the report its figure; refused with --compat openpcdet.
+TEST(RunEvaluationTest, ErrorAnalysisInResultsJsonErrorsCsvTheTableAndTheReport) {
+  TestTempDir dir;
+  EvaluationOptions options = SmallCar2d();
+  options.runs.front().matcher = Matcher::kOptimal;
+  options.out = dir / "eval";
+  options.report = true;
+  options.report_png = false;
+  options.errors = ErrorAnalysisOptions{};
+  const EvaluationResult result = RunEvaluation(options);
+  ASSERT_TRUE(result.runs[0].errors.has_value());
+  const EvalInput input = LoadEvalFrames(options.input);
+  const std::vector<ErrorAnalysis> expected =
+      AnalyzeAllErrors(input.frames, result.runs[0].options, ErrorAnalysisOptions{});
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(options.out / "results.json"));
+  EXPECT_EQ(j["error_analysis"]["background_overlap"], 0.1);
+  ASSERT_EQ(j["results"].size(), expected.size());
+  std::istringstream csv(ReadFile(options.out / "errors.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line,
+            "class,metric,difficulty,overlaps,error,count,delta_ap_r40,delta_ap_r11,ap_r40,ap_r11");
+  int checked = 0;
+  for (size_t c = 0; c < expected.size(); ++c) {
+    const ErrorAnalysis& a = expected[c];
+    const nlohmann::json& e = j["results"][c]["errors"];
+    EXPECT_EQ(e["ap_r40"], j["results"][c]["ap_r40"]);  // the cell's AP as is
+    EXPECT_EQ(e["fp"], a.fp);
+    EXPECT_EQ(e["fn"], a.fn);
+    for (int t = 0; t < kNumErrorTypes; ++t) {
+      const char* name = ErrorTypeName(static_cast<ErrorType>(t));
+      EXPECT_EQ(e["count"][name], a.count[t]) << name;
+      EXPECT_EQ(e["delta_ap_r40"][name].get<double>(), a.delta_ap_r40[t]) << name;
+      std::getline(csv, line);
+      const std::vector<std::string> f = SplitCsvLine(line);
+      ASSERT_EQ(f.size(), 10u) << line;
+      EXPECT_EQ(f[0], "Car");
+      EXPECT_EQ(f[4], name);
+      EXPECT_EQ(std::stoll(f[5]), a.count[t]);
+      EXPECT_EQ(std::stod(f[6]), a.delta_ap_r40[t]);
+    }
+    EXPECT_EQ(e["special"]["fp_r40"].get<double>(), a.delta_fp_r40);
+    EXPECT_EQ(e["special"]["fn_r40"].get<double>(), a.delta_fn_r40);
+    std::getline(csv, line);
+    EXPECT_THAT(line, HasSubstr(",fp,,"));
+    std::getline(csv, line);
+    EXPECT_THAT(line, HasSubstr(",fn,,"));
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
+  EXPECT_FALSE(std::getline(csv, line));
+  EXPECT_THAT(FormatEvalTable(result.runs), HasSubstr("Error analysis (TIDE"));
+  EXPECT_TRUE(fs::exists(options.out / "report/figures/errors_car_2d_moderate.svg"));
+
+  // Without --errors: no key, no file.
+  options.errors.reset();
+  RunEvaluation(options);
+  EXPECT_FALSE(
+      nlohmann::json::parse(ReadFile(options.out / "results.json")).contains("error_analysis"));
+  EXPECT_FALSE(fs::exists(options.out / "errors.csv"));
+  options.errors = ErrorAnalysisOptions{};
+  options.runs.front().compat = EvalCompat::kOpenPcdet;
+  EXPECT_THROW(RunEvaluation(options), std::invalid_argument);
+}
+
 // --bootstrap with --breakdown: each bin of each cell's "breakdown" carries its intervals, whose
 // estimates are the bin's own figures (null where the bin has none); the table's bootstrap block
 // has a line per bin under its cell.

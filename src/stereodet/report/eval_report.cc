@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "stereodet/report/bootstrap_report.h"
+#include "stereodet/report/error_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/strings.h"
@@ -367,6 +368,15 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
     const std::string tag = DescribeOverlaps(run.options.classes);
     for (size_t c = 0; c < run.result.results.size(); ++c) {
       results.push_back(ClassResultJson(run.result.results[c], tag, RunSuffix(runs, run)));
+      if (run.errors && c < run.errors->size()) {
+        const ErrorAnalysis& a = (*run.errors)[c];
+        const ClassResult& r = run.result.results[c];
+        // AnalyzeAllErrors' cells are Evaluate's, in its order: checked all the same.
+        if (r.evaluated && a.class_name == r.class_name && a.kind == r.metric &&
+            a.difficulty == r.difficulty) {
+          results.back()["errors"] = ErrorAnalysisJson(a);
+        }
+      }
       if (run.bootstrap && c < run.bootstrap->cells.size()) {
         const BootstrapCell& cell = run.bootstrap->cells[c];
         json& entry = results.back();
@@ -382,6 +392,18 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
     }
   }
   if (first.bootstrap) j["bootstrap"] = BootstrapSummaryJson(*first.bootstrap);
+  if (first.errors) {
+    double error_seconds = 0.0;
+    for (const EvalRun& run : runs) {
+      for (const ErrorAnalysis& a : run.errors.value_or(std::vector<ErrorAnalysis>{})) {
+        error_seconds += a.seconds;
+      }
+    }
+    j["error_analysis"] = {
+        {"background_overlap", first.errors->empty() ? ErrorAnalysisOptions().background_overlap
+                                                     : first.errors->front().background_overlap},
+        {"seconds", error_seconds}};
+  }
   j["results"] = results;
   return j;
 }
@@ -588,6 +610,14 @@ std::vector<std::filesystem::path> WriteEvalReport(const std::filesystem::path& 
     }
   }
   write(out_dir / "summary.csv", summary.str());
+
+  // errors.csv: with `eval --errors`, every cell's error types and their dAP.
+  std::string errors;
+  for (const EvalRun& run : runs) {
+    if (!run.errors) continue;
+    errors += FormatErrorCsv(*run.errors, DescribeOverlaps(run.options.classes), errors.empty());
+  }
+  if (!errors.empty()) write(out_dir / "errors.csv", errors);
 
   // breakdown.csv: one row per cell and bin, when a run has breakdowns (the bins' figures would
   // repeat summary.csv's keys there).
@@ -814,6 +844,7 @@ std::string FormatEvalTable(const std::vector<EvalRun>& runs) {
     if (k > 0) out << "\n";
     FormatRun(runs[k].result, runs[k].options, out);
     if (runs[k].bootstrap) out << FormatBootstrapTable(*runs[k].bootstrap);
+    if (runs[k].errors) out << FormatErrorTable(*runs[k].errors);
   }
   for (const std::string& note : EvalNotes(runs)) out << note << "\n";
   return out.str();

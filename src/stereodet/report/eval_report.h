@@ -13,6 +13,7 @@
 
 #include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/compare.h"
+#include "stereodet/eval/error_analysis.h"
 #include "stereodet/eval/evaluator.h"
 
 namespace stereodet {
@@ -45,6 +46,9 @@ struct EvalRun {
   // With `eval --bootstrap N`: the intervals of the same frames and options (Bootstrap), in
   // results.json (top-level "bootstrap", and each cell's) and after the run's table.
   std::optional<BootstrapResult> bootstrap = std::nullopt;
+  // With `eval --errors`: the TIDE-style analysis of every cell (AnalyzeAllErrors, EvalResult's
+  // order), in results.json (each cell's "errors"), OUT/errors.csv and after the run's table.
+  std::optional<std::vector<ErrorAnalysis>> errors = std::nullopt;
 };
 
 // Notes for the reader, one line each: scores that are not probabilities (Brier and ECE left out)

@@ -154,9 +154,12 @@ Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const 
     if (entries[i] == nullptr) continue;
     const json& e = *entries[i];
     const std::string matcher = Str(sources[i].results["options"], "matcher");
+    // LET cells: their LET-APL beside the AP (docs/metrics.md, LET-3D-AP).
+    const std::string apl =
+        e.contains("apl_r40") ? fmt::format(", APL_R40 {}", ApText(e, "apl_r40")) : std::string();
     PlotSeries exact;
-    exact.name = st.Name(sources[i], fmt::format("{}, exact curve: AP_R40 {}, AP_R11 {}", matcher,
-                                                 ApText(e, "ap_r40"), ApText(e, "ap_r11")));
+    exact.name = st.Name(sources[i], fmt::format("{}, exact curve: AP_R40 {}, AP_R11 {}{}", matcher,
+                                                 ApText(e, "ap_r40"), ApText(e, "ap_r11"), apl));
     exact.x = Numbers(e["curve"], "recall");
     exact.y = Numbers(e["curve"], "precision");
     exact.steps = true;  // precision holds until the next detection
@@ -183,10 +186,10 @@ Plot PrFigure(const std::vector<ReportSource>& sources, const std::vector<const 
       continue;
     }
     caption.push_back(fmt::format(
-        "{}{} valid labels, {} detections; AP_R40 {} / AP_R11 {}; best F1 {} (precision {}, "
+        "{}{} valid labels, {} detections; AP_R40 {} / AP_R11 {}{}; best F1 {} (precision {}, "
         "recall {} at score {})",
         sources.size() > 1 ? sources[i].label + ": " : "", e.value("num_valid_labels", 0),
-        e.value("num_detections", 0), ApText(e, "ap_r40"), ApText(e, "ap_r11"),
+        e.value("num_detections", 0), ApText(e, "ap_r40"), ApText(e, "ap_r11"), apl,
         Fixed(Num(e["best_f1"], "f1"), 3), Fixed(Num(e["best_f1"], "precision"), 3),
         Fixed(Num(e["best_f1"], "recall"), 3), Fixed(Num(e["best_f1"], "threshold"), 3)));
   }
@@ -296,16 +299,23 @@ Plot ReliabilityFigure(const std::vector<ReportSource>& sources,
       s.y.push_back(filled ? Num(b, "tp_fraction") : kNaN);
       counts.push_back(fmt::format("{}", b.value("count", 0)));
     }
-    s.name = st.Name(sources[i], fmt::format("ECE {} ({} detections)", Fixed(Num(cal, "ece"), 4),
-                                             cal.value("num_detections", 0)));
+    // LaECE (IoU as the target) and D-ECE (score x box position and size bins) beside the ECE,
+    // where the results have them (older folders do not).
+    std::string more;
+    if (cal.contains("laece")) more += fmt::format(", LaECE {}", Fixed(Num(cal, "laece"), 4));
+    if (cal.contains("dece")) more += fmt::format(", D-ECE {}", Fixed(Num(cal, "dece"), 4));
+    s.name = st.Name(sources[i], fmt::format("ECE {}{} ({} detections)", Fixed(Num(cal, "ece"), 4),
+                                             more, cal.value("num_detections", 0)));
     s.colour = st.Colour(i, 1);
     s.style = SeriesStyle::kLineMarkers;
-    caption.push_back(fmt::format("{}ECE {}; detections per bin {}",
+    caption.push_back(fmt::format("{}ECE {}{}; detections per bin {}",
                                   sources.size() > 1 ? sources[i].label + ": " : "",
-                                  Fixed(Num(cal, "ece"), 4), fmt::join(counts, ", ")));
+                                  Fixed(Num(cal, "ece"), 4), more, fmt::join(counts, ", ")));
     p.series.push_back(std::move(s));
   }
-  p.caption = fmt::format("{} (empty bins are not drawn).", fmt::join(caption, "; "));
+  p.caption =
+      fmt::format("{} (empty bins are not drawn; LaECE and D-ECE: docs/metrics.md, Calibration).",
+                  fmt::join(caption, "; "));
   return p;
 }
 
@@ -428,6 +438,31 @@ Plot BreakdownFigure(const std::vector<ReportSource>& sources,
     caption.push_back(fmt::format("{}{}", sources.size() > 1 ? sources[i].label + ": " : "",
                                   fmt::join(values, ", ")));
     p.series.push_back(std::move(s));
+    // LET cells: each bin's LET-APL, a bar beside its AP (a colour of its own: the third role with
+    // one source, after the naive bars' colours with several).
+    PlotSeries apl;
+    apl.style = SeriesStyle::kBars;
+    apl.name = st.Name(sources[i], "APL_R40 (LET, affinity-weighted)");
+    apl.colour = sources.size() > 1 ? PaletteColour(i + 2 * sources.size()) : st.Colour(i, 2);
+    std::vector<std::string> apl_values;
+    for (size_t c = 0; c < p.categories.size(); ++c) {
+      double v = kNaN;
+      for (const json& b : (*entries[i])["breakdown"]) {
+        if (b.value("axis", "") == axis && b.value("bin", "") == p.categories[c] &&
+            b.contains("apl_r40")) {
+          v = Num(b, "apl_r40");
+          apl_values.push_back(fmt::format("{} {}", p.categories[c], Fixed(v, 2)));
+        }
+      }
+      apl.x.push_back(static_cast<double>(c));
+      apl.y.push_back(v);
+    }
+    if (!apl_values.empty()) {
+      caption.push_back(fmt::format("{}APL_R40 {}",
+                                    sources.size() > 1 ? sources[i].label + " " : "",
+                                    fmt::join(apl_values, ", ")));
+      p.series.push_back(std::move(apl));
+    }
     // eval --breakdown-naive: each bin evaluated on its own, a bar beside the stable one (a colour
     // of its own: the next role with one source, the palette's second half with several).
     PlotSeries naive;
@@ -456,8 +491,53 @@ Plot BreakdownFigure(const std::vector<ReportSource>& sources,
   p.caption = fmt::format(
       "{}. From the cell's one matching: a pair counts in its label's bin, a detection without a "
       "value on the axis in every bin (docs/metrics.md, Breakdowns); a bin without labels has no "
-      "bar; with eval --bootstrap, whiskers and brackets give each bin's interval; with eval "
-      "--breakdown-naive, a second bar per bin gives the bin evaluated on its own.",
+      "bar; with eval --bootstrap, whiskers and brackets give each bin's interval; in the LET "
+      "kinds a second bar per bin gives its LET-APL; with eval --breakdown-naive, another bar per "
+      "bin gives the bin evaluated on its own.",
+      fmt::join(caption, "; "));
+  return p;
+}
+
+// `eval --errors`: the AP_R40 points each error type's fix gains, a bar per type and source.
+Plot ErrorsFigure(const std::vector<ReportSource>& sources, const std::vector<const json*>& entries,
+                  const CellKey& key, const std::string& stem, const Styler& st) {
+  static const char* const kTypes[] = {"cls", "loc", "both", "dupe", "bkg", "missed"};
+  Plot p;
+  p.id = "errors_" + stem;
+  p.title = CellTitle(key, *entries.front()) + ": where the AP goes (TIDE)";
+  p.x_label = "error type fixed alone (FP, FN: every false positive / miss)";
+  p.y_label = "AP_R40 gained (points)";
+  for (const char* type : kTypes) p.categories.push_back(type);
+  p.categories.push_back("FP");
+  p.categories.push_back("FN");
+  std::vector<std::string> caption;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    if (entries[i] == nullptr || !entries[i]->contains("errors")) continue;
+    const json& e = (*entries[i])["errors"];
+    PlotSeries s;
+    s.style = SeriesStyle::kBars;
+    s.name = st.Name(sources[i], "dAP_R40");
+    s.colour = st.Colour(i, 0);
+    std::vector<std::string> values;
+    for (size_t c = 0; c < p.categories.size(); ++c) {
+      const bool special = c >= std::size(kTypes);
+      const double v = special ? Num(e["special"], c == std::size(kTypes) ? "fp_r40" : "fn_r40")
+                               : Num(e["delta_ap_r40"], kTypes[c]);
+      s.x.push_back(static_cast<double>(c));
+      s.y.push_back(v);
+      values.push_back(special ? fmt::format("{} {}", p.categories[c], Fixed(v, 2))
+                               : fmt::format("{} {} ({})", p.categories[c], Fixed(v, 2),
+                                             e["count"].value(kTypes[c], 0)));
+    }
+    caption.push_back(fmt::format("{}AP_R40 {}; {}",
+                                  sources.size() > 1 ? sources[i].label + ": " : "",
+                                  Fixed(Num(e, "ap_r40"), 2), fmt::join(values, ", ")));
+    p.series.push_back(std::move(s));
+  }
+  p.caption = fmt::format(
+      "{}. dAP (count): AP_R40 with only that type fixed, re-evaluated, minus the AP as is "
+      "(docs/metrics.md, Error analysis); every detection takes part, so a Dupe's fix can lower "
+      "the AP.",
       fmt::join(caption, "; "));
   return p;
 }
@@ -542,8 +622,8 @@ std::string FigureKind(const std::string& id) {
 
 // The order of the kinds within a section: the difficulties' PR figure, then each kind's row.
 int FigureKindRank(const std::string& id) {
-  static const char* const kOrder[] = {"pr_difficulties", "pr",        "roc",  "reliability",
-                                       "localization",    "breakdown", "brier"};
+  static const char* const kOrder[] = {"pr_difficulties", "pr",        "roc",    "reliability",
+                                       "localization",    "breakdown", "errors", "brier"};
   const std::string kind = FigureKind(id);
   for (int i = 0; i < static_cast<int>(std::size(kOrder)); ++i) {
     if (kind == kOrder[i]) return i;
@@ -958,6 +1038,10 @@ std::vector<ReportFigure> ReportFigures(const std::vector<ReportSource>& sources
     }
     for (const std::string& axis : BreakdownAxes(entries.front())) {
       figures.push_back({section, BreakdownFigure(sources, entries, key, axis, stem, st)});
+    }
+    if (std::any_of(entries.begin(), entries.end(),
+                    [](const json* e) { return e != nullptr && e->contains("errors"); })) {
+      figures.push_back({section, ErrorsFigure(sources, entries, key, stem, st)});
     }
     // The group's Brier figure after its last difficulty.
     const json& results = sources.front().results["results"];

@@ -75,6 +75,10 @@ ReportSource ReadReportSource(const std::filesystem::path& folder, const std::st
 //                     diagonal, the ECE in the legend
 //   localization_CELL median 3D centre error and median |depth error| per distance bin (m);
 //                     whiskers up to the 90th percentile; only where a bin has a TP with 3D boxes
+//   breakdown_AXIS_CELL  AP_R40 per bin of each `--breakdown` axis (LET cells: APL_R40 beside it;
+//                     --bootstrap: whiskers; --breakdown-naive: the naive bins' bars)
+//   errors_CELL       with `eval --errors`: the AP_R40 points fixing each error type gains (TIDE's
+//                     cls, loc, both, dupe, bkg, missed; then every FP, every FN)
 // and per class x metric x overlap set:
 //   brier_CLASS_METRIC  the Brier scores over labels, detections and all, side by side per
 //   difficulty

@@ -304,6 +304,41 @@ TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
   EXPECT_THAT(ReadFile(options.out / "report/index.html"), HasSubstr("naive [0, 40)"));
 }
 
+// A LET cell's figures carry its LET-APL (the PR legend; a bar per breakdown bin beside the AP),
+// and every reliability figure its LaECE and D-ECE, each results.json's number.
+TEST(ReportTest, LetCellsShowAplAndReliabilityFiguresShowLaeceAndDece) {
+  TestTempDir dir;
+  const fs::path out = dir.path() / "eval";
+  EvaluationOptions options;
+  options.input.gt = kData / "eval_small";
+  options.input.det = kData / "eval_small/det";
+  options.runs.front().classes = {KittiClassSpec("Car")};
+  options.runs.front().metrics = {OverlapKind::kLet3D};
+  options.runs.front().breakdowns = {ParseBreakdown("distance=0,20,inf")};
+  options.out = out;
+  options.report = true;
+  RunEvaluation(options);
+  const json results = ReadReportSource(out, "let").results;
+  const json& e = Entry(results, "Car", "let-3d", "Moderate");
+  ASSERT_TRUE(e.contains("apl_r40"));
+  ASSERT_EQ(e["breakdown"].size(), 2u);
+  const json figure = SvgData(out / "report/figures/breakdown_distance_car_let-3d_moderate.svg");
+  ASSERT_EQ(figure["series"].size(), 2u);
+  EXPECT_THAT(figure["series"][1]["name"].get<std::string>(), HasSubstr("APL_R40"));
+  for (size_t b = 0; b < 2; ++b) {
+    EXPECT_EQ(figure["series"][0]["y"][b], e["breakdown"][b]["ap_r40"]) << b;
+    EXPECT_EQ(figure["series"][1]["y"][b], e["breakdown"][b]["apl_r40"]) << b;
+  }
+  const json pr = SvgData(out / "report/figures/pr_car_let-3d_moderate.svg");
+  EXPECT_THAT(pr["series"][0]["name"].get<std::string>(),
+              HasSubstr(fmt::format("APL_R40 {:.2f}", e["apl_r40"].get<double>())));
+  const json reliability = SvgData(out / "report/figures/reliability_car_let-3d_moderate.svg");
+  const std::string name = reliability["series"][1]["name"].get<std::string>();
+  EXPECT_THAT(name,
+              HasSubstr(fmt::format("LaECE {:.4f}", e["calibration"]["laece"].get<double>())));
+  EXPECT_THAT(name, HasSubstr(fmt::format("D-ECE {:.4f}", e["calibration"]["dece"].get<double>())));
+}
+
 // The curves results.json names come back exactly, point for point and bit for bit, as the
 // evaluation computed them (the optimal matcher: one point per distinct score; NaN as null).
 TEST(ReportTest, ReadReportSourceLoadsTheExactCurvesOfTheCsvsResultsJsonNames) {
