@@ -90,7 +90,7 @@ struct EvalArgs {
   std::string filter;
   std::string filter_mode = FilterModeName(EvalOptions().filter.mode);
   std::vector<std::string> breakdowns;  // --breakdown AXIS=EDGES, repeatable (eval, eval merge)
-  bool breakdown_naive = false;         // --breakdown-naive (eval)
+  bool breakdown_naive = false;         // --breakdown-naive (eval, eval merge)
   std::string score_transform = ScoreTransformName(EvalOptions().score_transform);
   bool loose = false;
   std::string overlaps;  // empty: strict, or loose with --loose
@@ -894,6 +894,8 @@ void AddEvalCommand(CLI::App& app) {
                    "as for eval: every figure again per bin, from the merged frames (as the "
                    "shards' other options, the shards' own)")
       ->allow_extra_args(false);
+  merge->add_flag("--breakdown-naive", merge_common->breakdown_naive,
+                  "as for eval: each bin also evaluated on its own, from the merged frames");
   merge->add_flag("--records", merge_common->records, "also write OUT/matches.csv");
   merge->add_flag("--report", merge_common->report, "also write OUT/report/");
   merge->add_flag("--errors", merge_common->errors,

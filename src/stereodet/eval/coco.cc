@@ -1514,8 +1514,8 @@ class CocoEvaluator {
           continue;
         }
         if (options_.stable_area_ranges && static_cast<int>(a) != area_all_) {
-          StableRange(dts, gt_valid, det_outside, all_gt, first, num_present, image, a, &det_flags,
-                      &det_gt, &out);
+          StableRange(dts, gt_valid, det_outside, all_gt, iou.data(), first, num_present, image, a,
+                      &det_flags, &det_gt, &out);
           continue;
         }
         if (options_.matcher == CocoMatcher::kOptimal) {
@@ -1531,7 +1531,8 @@ class CocoEvaluator {
             for (size_t d = 0; d < D; ++d) out.flags[((first + d) * A + a) * T + t] = det_flags[d];
             if (options_.score_metrics) {
               optimal.Associate(cell, tau, static_cast<int>(num_present), &det_gt, &det_flags);
-              AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, image, t, a, &out);
+              AddCellTerms(dts, gt_valid, det_flags, det_gt, iou.data(), num_present, image, t, a,
+                           &out);
             }
           }
           continue;
@@ -1601,7 +1602,8 @@ class CocoEvaluator {
           if (options_.score_metrics) {
             // Greedy in score order: the association of the detections at the operating point
             // is the whole one's restricted to them.
-            AddCellTerms(dts, gt_valid, det_flags, det_gt, num_present, image, t, a, &out);
+            AddCellTerms(dts, gt_valid, det_flags, det_gt, iou.data(), num_present, image, t, a,
+                         &out);
           }
         }
       }
@@ -1616,7 +1618,7 @@ class CocoEvaluator {
   // its own area is in the range.
   void StableRange(const std::vector<uint32_t>& dts, const std::vector<uint8_t>& gt_valid,
                    const std::vector<uint8_t>& det_outside, const std::vector<int32_t>& all_gt,
-                   size_t first, size_t num_present, int32_t image, size_t a,
+                   const double* iou, size_t first, size_t num_present, int32_t image, size_t a,
                    std::vector<uint8_t>* det_flags, std::vector<int32_t>* det_gt,
                    CategoryDetections* out) const {
     const size_t T = options_.iou_thresholds.size(), A = options_.area_ranges.size(),
@@ -1640,18 +1642,19 @@ class CocoEvaluator {
         }
       }
       if (options_.score_metrics) {
-        AddCellTerms(dts, gt_valid, *det_flags, *det_gt, num_present, image, t, a, out);
+        AddCellTerms(dts, gt_valid, *det_flags, *det_gt, iou, num_present, image, t, a, out);
       }
     }
   }
 
   // One image's share of cell `cell` (t * A + a) at the operating point: `flags` and `det_gt` are
   // the association of the first num_present detections of `dts` (kMatched alone: a TP with
-  // ground truth det_gt[d], an index into the image's ground truths; 0: a FP; else neither).
-  // Label terms first, in file order, then the detections' in score order.
+  // ground truth det_gt[d], an index into the image's ground truths; 0: a FP; else neither);
+  // iou[d * G + g] the IoU of detection d with ground truth g (G = gt_valid.size()), a TP's for
+  // LaECE. Label terms first, in file order, then the detections' in score order.
   void AddCellTerms(const std::vector<uint32_t>& dts, const std::vector<uint8_t>& gt_valid,
                     const std::vector<uint8_t>& flags, const std::vector<int32_t>& det_gt,
-                    size_t num_present, int32_t image, size_t t, size_t a,
+                    const double* iou, size_t num_present, int32_t image, size_t t, size_t a,
                     CategoryDetections* out) const {
     const size_t cell = t * options_.area_ranges.size() + a;
     ScoreMetricsAccumulator& terms = out->cell_terms[cell];
@@ -1685,7 +1688,7 @@ class CocoEvaluator {
       if (flags[d] != kMatched && flags[d] != 0) continue;
       const bool tp = flags[d] == kMatched;
       const double s = probability(d);
-      terms.AddDetectionTerm(s, tp);
+      terms.AddDetectionTerm(s, tp, tp ? iou[d * gt_valid.size() + det_gt[d]] : 0.0);
       ++(tp ? out->cell_tp : out->cell_fp)[cell];
       own.detection_sum += (s - (tp ? 1.0 : 0.0)) * (s - (tp ? 1.0 : 0.0));
       ++own.detections;

@@ -156,18 +156,18 @@ std::string CellsCsv(const CocoEvalResult& r) {
   const CocoEvalOptions& o = r.options;
   std::string csv =
       "iou,category_id,area,num_valid_gt,tp,fp,fn,precision,recall,f1,brier_labels,"
-      "brier_detections,brier_all,ece,num_detections\n";
+      "brier_detections,brier_all,ece,laece,num_detections\n";
   for (size_t t = 0; t < o.iou_thresholds.size(); ++t) {
     for (size_t k = 0; k < r.category_ids.size(); ++k) {
       for (size_t a = 0; a < o.area_ranges.size(); ++a) {
         const CocoCell& c =
             r.cells[r.CellIndex(static_cast<int>(t), static_cast<int>(k), static_cast<int>(a))];
         const OperatingPoint& p = c.at_threshold;
-        csv +=
-            fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", o.iou_thresholds[t],
-                        r.category_ids[k], o.area_ranges[a].label, c.num_valid_gt, p.tp, p.fp, p.fn,
-                        p.precision, p.recall, p.f1, c.brier.over_labels, c.brier.over_detections,
-                        c.brier.over_all, c.calibration.ece, c.calibration.num_detections);
+        csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", o.iou_thresholds[t],
+                           r.category_ids[k], o.area_ranges[a].label, c.num_valid_gt, p.tp, p.fp,
+                           p.fn, p.precision, p.recall, p.f1, c.brier.over_labels,
+                           c.brier.over_detections, c.brier.over_all, c.calibration.ece,
+                           c.calibration.laece, c.calibration.num_detections);
       }
     }
   }

@@ -7,12 +7,15 @@
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
+#include "stereodet/util/strings.h"
 #include "stereodet/util/test_temp_dir.h"
 
 namespace stereodet {
@@ -138,6 +141,26 @@ TEST(CocoEvaluationTest, ScoreMetricsWriteCellsAndReliability) {
   EXPECT_EQ(std::count(cells.begin(), cells.end(), '\n'), 1 + 10 * 2 * 4);
   EXPECT_THAT(cells, HasSubstr("0.5,1,all,2,2,0,0,1,1,1,0.0249999"));  // (0.01 + 0.04) / 2
   EXPECT_THAT(cells, HasSubstr("0.5,2,all,0,0,1,0,0,0,0,nan,0.09,0.09,"));
+  // LaECE: category 1's two TPs (0.9, 0.8) on their boxes (IoU 1) share the bin [0.8, 1): |0.85 -
+  // 1| = 0.15, as the ECE; category 2's lone FP at 0.3 (IoU 0): |0.3 - 0| = 0.3.
+  {
+    std::istringstream lines(cells);
+    std::string line;
+    std::getline(lines, line);
+    const std::vector<std::string_view> header = Split(line, ',');
+    const size_t laece =
+        static_cast<size_t>(std::find(header.begin(), header.end(), "laece") - header.begin());
+    ASSERT_LT(laece, header.size()) << line;
+    int found = 0;
+    while (std::getline(lines, line)) {
+      const std::vector<std::string_view> f = Split(line, ',');
+      if (f[0] != "0.5" || f[2] != "all") continue;
+      const double expected = f[1] == "1" ? 0.15 : 0.3;
+      EXPECT_NEAR(std::stod(std::string(f[laece])), expected, 1e-12) << line;
+      ++found;
+    }
+    EXPECT_EQ(found, 2);
+  }
   const std::string reliability = ReadFile(options.out / "reliability.csv");
   EXPECT_EQ(std::count(reliability.begin(), reliability.end(), '\n'), 1 + 10 * 2 * 4 * 5);
   EXPECT_THAT(reliability, HasSubstr("0.5,2,all,0.2,0.4,1,0.3,0\n"));
