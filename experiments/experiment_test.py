@@ -22,7 +22,11 @@ with 2 seeds each, 3D models for one step, a model without a checkpoint), then:
 - a checkpoint replaced under the same path reruns its detections and their evaluations;
 - --update-docs replaces only the marked section of a copy of docs/RESULTS.md;
 - a config error, and a claim of an unknown kind, names the file and the field;
-- committed checkpoints per training seed ("seed_model") expand into one model per seed.
+- committed checkpoints per training seed ("seed_model") expand into one model per seed;
+- calibration on a held-out split: the split's halves, each calibration file fitted on the first
+  half at the model's Table 1 overlap kind, every row of the table against the held-out
+  evaluations' results.json, the same rows from a "kitti" source, and the calibration steps rerun
+  with their detection.
 
 Usage: experiment_test.py REPO_ROOT BIN_DIR WORK_DIR
 """
@@ -109,6 +113,8 @@ def parse_tables(text):
             cls, kind = "all", "bca"
         elif line.startswith("Filter sweep"):
             cls, kind = "all", "sweep"
+        elif line.startswith("### Calibration on a held-out split"):
+            cls, kind = "all", "calibration"
         elif line.startswith("| ") and cls and not line.startswith("| model |") \
                 and not line.startswith("| A - B |") and not line.startswith("| claim |"):
             tables.setdefault((cls, kind), []).append([c.strip() for c in line.strip("|").split("|")])
@@ -136,9 +142,11 @@ steps = int(m.group(1)) if m else 0
 # matchers, figures: the models' report, the blur report, the 3D pair's compare report and the
 # filter sweep, the compression overlay = 1 + 1 + 4 + 14 + 28 + 14 + 5 = 67; the BCa check of the
 # claims' compares: ssd-rgb vs ssd-rgbh-fixed sharp optimal, blurred kitti and blurred optimal, the
-# 2 RPN seed pairs sharp optimal = 5. The replication set: its data, stereo points, the 14
-# detections, 28 evaluations, 14 compares, 5 BCa checks and the sweep = 64. 67 + 5 + 64 = 136.
-check(steps == 136 and m.group(2) == "0", f"first run: 136 steps, none skipped (got {m.groups()})")
+# 2 RPN seed pairs sharp optimal = 5. Calibration on a held-out split, for the 4 models of
+# calibration.models: 3 fits and 4 evaluations of the held-out half each = 28. The replication
+# set: its data, stereo points, the 14 detections, 28 evaluations, 14 compares, 5 BCa checks and
+# the sweep = 64. 67 + 5 + 28 + 64 = 164.
+check(steps == 164 and m.group(2) == "0", f"first run: 164 steps, none skipped (got {m.groups()})")
 table_text = (out / "table1.md").read_text()
 tables = parse_tables(table_text)
 
@@ -434,6 +442,44 @@ for cls in config["classes"]:
         check(row is not None and row[k].startswith(counts),
               f"sweep {cls} {measure}: {row[k] if row else None} vs {counts}")
 
+# Calibration on a held-out split: the halves of the val split in split order; per model of
+# calibration.models and method a calibration file fitted on the first half at the model's Table 1
+# overlap kind (Moderate, optimal matcher); every row of the table equal to its held-out
+# evaluation's results.json (the miniature's calibrated models have one training each).
+METHODS = ("temperature", "platt", "isotonic")
+val_ids = (out / "data" / "mini" / "ImageSets" / "val.txt").read_text().split()
+halves = [(out / "splits" / "mini" / f"{h}.txt").read_text().split() for h in ("calib", "heldout")]
+check(halves == [val_ids[:len(val_ids) // 2], val_ids[len(val_ids) // 2:]],
+      f"the split's halves: {halves} of {val_ids}")
+crows = {(r[0], r[1]): r for r in tables.get(("all", "calibration"), [])}
+calibrated = [n for g in config["calibration"]["models"] for n in groups[g]]
+check(len(crows) == 4 * len(calibrated), f"a calibration row per model and calibration: "
+      f"{sorted(crows)}")
+by_name = {m["name"]: m for m in config["models"]}
+for name in calibrated:
+    metric = METRIC[by_name[name]["family"]]
+    for method in (None,) + METHODS:
+        folder = out / "calibration" / name / f"heldout-{method or 'uncalibrated'}"
+        results = json.loads((folder / "results.json").read_text())
+        file = out / "calibration" / name / f"{method}.json" if method else None
+        check((results["input"].get("calibration") or {}).get("file") == (str(file) if file else
+                                                                           None) and
+              f"--split {out / 'splits' / 'mini' / 'heldout.txt'} " in results["command_line"],
+              f"{folder.name} of {name}: the held-out half, calibrated by {file}")
+        if file:
+            fitted = json.loads(file.read_text())["fitted_on"]
+            want = {"metric": metric, "matcher": "optimal", "difficulty": "Moderate",
+                    "method": method, "frames": str(len(halves[0])),
+                    "split": str(out / "splits" / "mini" / "calib.txt")}
+            check({k: fitted.get(k) for k in want} == want, f"{file}: fitted on {fitted}")
+        c = cells(folder / "results.json", "Car", metric)
+        values = [c["calibration"][k] for k in ("ece", "laece", "dece")] + \
+            [c["brier"][k] for k in ("over_labels", "over_detections", "over_all")]
+        want = [name, method or "none", metric, "1 of 1"] + \
+            ["n/a" if v is None else f"{v:.4f}" for v in values]
+        check(crows.get((name, method or "none")) == want,
+              f"calibration row {name} {method}: {crows.get((name, method or 'none'))} != {want}")
+
 # On Dask (a local cluster of 2 workers): the same steps, the same table and the same result
 # files byte for byte as the run without Dask; a run without Dask then finds it all complete.
 dask_out = work / "dask-out"
@@ -457,15 +503,24 @@ check(p.returncode == 0 and (dask_out / "table1.md").read_text() == table_text,
 # bootstrap and sweep tables; results.json by its results (its provenance names its folders).
 same_bytes = sorted(f.relative_to(out) for pattern in (
     "models/*/model.pt", "runs/*/*/detections/*.txt", "compare/**/*.csv",
-    "figures/sweep-*/sweep.csv") for f in out.glob(pattern))
-results_json = sorted(f.relative_to(out) for f in out.glob("runs/**/results.json"))
-check(len(same_bytes) > 40 and len(results_json) == 28,
-      f"the serial run's result files: {len(same_bytes)}, {len(results_json)} results.json")
+    "figures/sweep-*/sweep.csv", "splits/*/*.txt") for f in out.glob(pattern))
+results_json = sorted(f.relative_to(out) for pattern in ("runs/**/results.json",
+                                                         "calibration/**/results.json")
+                      for f in out.glob(pattern))
+calibration_files = sorted(f.relative_to(out) for f in out.glob("calibration/*/*.json"))
+check(len(same_bytes) > 40 and len(results_json) == 28 + 4 * len(calibrated) and
+      len(calibration_files) == 3 * len(calibrated),
+      f"the serial run's result files: {len(same_bytes)}, {len(results_json)} results.json, "
+      f"{len(calibration_files)} calibration files")
 differ = [str(f) for f in same_bytes if not (dask_out / f).is_file() or
           (dask_out / f).read_bytes() != (out / f).read_bytes()]
 differ += [str(f) for f in results_json if not (dask_out / f).is_file() or
            json.loads((dask_out / f).read_text())["results"] !=
            json.loads((out / f).read_text())["results"]]
+# A calibration file by its maps (its fitted_on names its folders).
+differ += [str(f) for f in calibration_files if not (dask_out / f).is_file() or
+           json.loads((dask_out / f).read_text())["classes"] !=
+           json.loads((out / f).read_text())["classes"]]
 check(not differ, f"Dask run: result files equal to the serial run's ({differ[:5]})")
 p = run_to(dask_out)
 check(f"0 steps run, {steps} skipped" in p.stdout, "a run without Dask resumes the Dask run's "
@@ -477,6 +532,7 @@ failing_cfg["models"] = [failing_cfg["models"][0], dict(failing_cfg["models"][1]
                                                         detect_flags=["--no-such-flag"])]
 failing_cfg["pairs"], failing_cfg["claims"], failing_cfg["blur_sigmas_px"] = [], "", [0]
 failing_cfg["figures"] = {"png": False}
+failing_cfg["calibration"] = {"methods": []}
 failing_path = work / "failing.json"
 failing_path.write_text(json.dumps(failing_cfg))
 p = run_to(work / "failing-out", "--workers", "2", config_file=failing_path)
@@ -514,6 +570,7 @@ shutil.copytree(repo / "models" / "ssd-rgb", ckpt)
 ckpt_cfg["models"] = [dict(ckpt_cfg["models"][0], model=str(ckpt))]
 ckpt_cfg["pairs"], ckpt_cfg["claims"], ckpt_cfg["blur_sigmas_px"] = [], "", [0]
 ckpt_cfg["figures"]["overlays"] = {}
+ckpt_cfg["calibration"] = {"models": ["ssd-rgb"]}
 ckpt_path = work / "checkpoint.json"
 ckpt_path.write_text(json.dumps(ckpt_cfg))
 
@@ -530,7 +587,9 @@ check(run_ckpt() == [], "the checkpoint run skips everything the second time")
 os.utime(ckpt / "model.pt", ns=(0, 12345))
 rerun = run_ckpt()
 check(rerun == sorted(["detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti", "eval-ssd-rgb-blur0-optimal",
-                       "report-models", "sweep-ssd-rgb"] +
+                       "report-models", "sweep-ssd-rgb", "heldout-ssd-rgb-uncalibrated"] +
+                      [f"calibrate-ssd-rgb-{x}" for x in METHODS] +
+                      [f"heldout-ssd-rgb-{x}" for x in METHODS] +
                       [f"replication/{x}" for x in ("detect-ssd-rgb-blur0", "eval-ssd-rgb-blur0-kitti",
                                                     "eval-ssd-rgb-blur0-optimal", "sweep-ssd-rgb")]),
       f"a replaced checkpoint reruns its detection, evaluations and figures on both sets: {rerun}")
@@ -546,6 +605,7 @@ kitti_cfg["models"] = [dict(m, data="real") for m in kitti_cfg["models"]
 kitti_cfg["pairs"], kitti_cfg["claims"], kitti_cfg["blur_sigmas_px"] = [], "", [0]
 kitti_cfg["replication"] = {}
 kitti_cfg["figures"] = {"png": False}
+kitti_cfg["calibration"] = {"models": ["ssd-rgb", "det3d-stereo"]}
 kitti_path = work / "kitti.json"
 kitti_path.write_text(json.dumps(kitti_cfg))
 
@@ -570,6 +630,13 @@ for cls in config["classes"]:
         a, b = synth_rows.get((name, "0")), kitti_rows.get((name, "0"))
         check(a is not None and b is not None and a[3:8] == b[3:8],
               f"kitti source {cls} {name}: the synth run's row {a}, the kitti run's {b}")
+# The calibration rows too: the halves of the root's own ImageSets/val.txt, the same frames.
+kitti_crows = {(r[0], r[1]): r for r in kitti_tables.get(("all", "calibration"), [])}
+for name in ("ssd-rgb", "det3d-stereo"):
+    for method in ("none",) + METHODS:
+        a, b = crows.get((name, method)), kitti_crows.get((name, method))
+        check(a is not None and a == b,
+              f"kitti source calibration {name} {method}: the synth run's row {a}, the kitti's {b}")
 # A root without training/ is refused before anything runs, naming the field.
 kitti_cfg["datasets"]["real"]["root"] = str(work / "no-such-kitti")
 kitti_path.write_text(json.dumps(kitti_cfg))
@@ -672,6 +739,21 @@ for change, wanted in ((lambda c: c["datasets"]["mini-rep"].update(seed=1), "gen
     except experiment.ConfigError as e:
         check(f"{rep_path}: replication" in str(e) and wanted in str(e),
               f"replication error names it ({wanted}): {e}")
+
+# A calibration block with an unknown method, a class outside `classes` or an unknown model is
+# refused, naming the field.
+for change, field in ((dict(methods=["beta"]), "calibration.methods"),
+                      (dict(classes=["Van"]), "calibration.classes"),
+                      (dict(models=["no-such-model"]), "calibration.models")):
+    cal_cfg = json.loads(config_path.read_text())
+    cal_cfg["calibration"] = change
+    cal_path = work / "bad_calibration.json"
+    cal_path.write_text(json.dumps(cal_cfg))
+    try:
+        experiment.load_config(cal_path)
+        check(False, f"calibration config refused: {change}")
+    except experiment.ConfigError as e:
+        check(f"{cal_path}: {field}:" in str(e), f"calibration error names {field}: {e}")
 
 # A claim of an unknown kind is refused, naming the file, the claim and what it accepts.
 header = "id,claim,a,b,blur_sigma_px,class,matcher,measure,expect,source\n"
