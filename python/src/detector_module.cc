@@ -124,18 +124,21 @@ pair when not given). What a model does not need may be None (`needs` says what 
 objects are those `stereodet detect` writes for the same frame. One thread at a time per Detector
 (the GIL is released while it runs; two Detectors on two threads run in parallel).)")
       .def(py::init([](const std::string& model_dir, const std::string& device, int threads,
-                       double blur_sigma_px) {
+                       double blur_sigma_px, const std::string& calibration) {
              DetectorOptions options;
              options.device = device;
              options.threads = threads;
              options.blur_sigma_px = blur_sigma_px;
+             options.calibration = calibration;
              ReleaseGil release;
              return std::make_unique<Detector>(Detector::Open(model_dir, options));
            }),
            py::arg("model_dir"), py::kw_only(), py::arg("device") = "cpu", py::arg("threads") = 0,
-           py::arg("blur_sigma_px") = 0.0,
+           py::arg("blur_sigma_px") = 0.0, py::arg("calibration") = "",
            "Opens the model folder. threads: LibTorch's (0 = all cores); blur_sigma_px: Gaussian "
-           "blur of the network's image only (the paper's degradation).")
+           "blur of the network's image only (the paper's degradation); calibration: a score "
+           "calibration file of `stereodet calibrate --fit` (scores become calibrated "
+           "probabilities, as `stereodet detect --calibration` writes them; '' = raw scores).")
       .def_property_readonly(
           "family", [](const Detector& d) { return d.family(); }, "ssd, rpn or det3d")
       .def_property_readonly(

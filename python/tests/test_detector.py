@@ -76,6 +76,24 @@ def test_a_batch_gives_what_detect_batch_of_the_cli_gives(cli, tmp_path, frames)
             (out / f"{r['frame_id']}.txt").read_text()
 
 
+def test_calibration_gives_what_detect_calibration_writes(cli, tmp_path, frames):
+    calibration = REPO / "tests" / "data" / "calibration" / "car_platt.json"
+    detector = stereodet.Detector(str(REPO / "models" / "ssd-rgb"), threads=2,
+                                  calibration=str(calibration))
+    files = detect_files(cli, tmp_path, "ssd-rgb", ("--calibration", calibration))
+    raw = stereodet.Detector(str(REPO / "models" / "ssd-rgb"), threads=2)
+    changed = 0
+    for f in frames:
+        annos = detector.detect(f["left"], frame_id=f["frame_id"])
+        assert stereodet.kitti.format_objects(annos, "detection") == files[f["frame_id"]]
+        plain = raw.detect(f["left"], frame_id=f["frame_id"])
+        changed += int(np.sum(annos["score"] != plain["score"]))
+    assert changed > 0  # the Cars' scores moved: not vacuous
+    with pytest.raises(ValueError, match="not JSON"):
+        stereodet.Detector(str(REPO / "models" / "ssd-rgb"),
+                           calibration=str(REPO / "tests" / "data" / "eval_small" / "README.md"))
+
+
 def test_p2_p3_matrices_stand_for_a_calibration(frames):
     detector = stereodet.Detector(str(REPO / "models" / "ssd-rgbh-learned"), threads=2)
     f = frames[0]

@@ -136,6 +136,11 @@ void AddRunCommand(CLI::App& app) {
                   "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--score-calibration", o.detector.calibration,
+                  "a score calibration file of `stereodet calibrate --fit`: each detection's "
+                  "calibrated probability instead of the network's score (as `detect "
+                  "--calibration` writes them; docs/metrics.md, Calibrators)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--quiet", args->quiet, "no progress or latency table on stderr");
   cmd->callback([args] { Run(*args); });
 }

@@ -327,9 +327,10 @@ std::filesystem::path DetectionRun::CheckedOutputDir(
 }
 
 DetectorOptions DetectionRun::WithDevice(DetectorOptions options, const std::string& device,
-                                         int threads) {
+                                         int threads, const fs::path& calibration) {
   options.device = device;
   options.threads = threads;
+  options.calibration = calibration;
   return options;
 }
 
@@ -358,9 +359,6 @@ int64_t DetectionRun::DetectFrames(
   };
   auto consume = [&](int k) {
     std::vector<DetectResult> results = detector.Run(std::move(slots[k % 2]));
-    if (calibration_) {
-      for (DetectResult& r : results) calibration_->Apply(&r.objects);
-    }
     ScopedStage stage(times_, "write");
     objects += WriteDetectResults(results, out.path(), times_);
     progress.Add(static_cast<int64_t>(results.size()));
@@ -376,7 +374,8 @@ DetectSummary DetectionRun::Commit(
     const std::string& settings) {
   RunManifest manifest = manifest_;
   manifest.inputs.insert(manifest.inputs.end(), more_inputs.begin(), more_inputs.end());
-  if (calibration_) manifest.inputs.emplace_back("--calibration", calibration_path_.string());
+  const fs::path& calibration = detector.options().calibration;
+  if (!calibration.empty()) manifest.inputs.emplace_back("--calibration", calibration.string());
   manifest.settings_json =
       "{\"model_weights_fnv1a64\": \"" + detector.weights_fnv1a64() + "\", " + settings + "}";
   CommitDetectionFolder(out, std::move(manifest), ids, all_ids, shard_, batch_size_);

@@ -173,17 +173,14 @@ class DetectionRun {
                const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs = {})
       : out(CheckedOutputDir(o.out_dir, o.data_root, o.subset, o.model_dir, more_inputs),
             "detect " + family, DetectionFolderMakers()),
-        detector(OpenDetectorOfFamily(o.model_dir,
-                                      WithDevice(detector_options, o.device, o.threads), family)),
+        detector(OpenDetectorOfFamily(
+            o.model_dir, WithDevice(detector_options, o.device, o.threads, o.calibration), family)),
         dataset(o.data_root, o.subset),
         all_ids(DetectFrameList(dataset, o.split, o.max_frames)),
         ids(ShardFrames(all_ids, o.shard, o.batch_size)),
         manifest_(DetectionManifest("detect " + family, o.command_line, o.model_dir, o.data_root,
                                     o.subset, o.split)),
         shard_(o.shard),
-        calibration_path_(o.calibration),
-        calibration_(o.calibration.empty() ? std::nullopt
-                                           : std::optional(ReadScoreCalibration(o.calibration))),
         batch_size_(o.batch_size),
         threads_(o.threads),
         progress_(o.progress) {}
@@ -214,13 +211,13 @@ class DetectionRun {
       const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
       const std::string& subset, const std::filesystem::path& model_dir,
       const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs);
-  static DetectorOptions WithDevice(DetectorOptions options, const std::string& device,
-                                    int threads);
+  // `detector_options` with the run's device, threads and calibration file (the Detector applies
+  // it to every frame's objects).
+  static DetectorOptions WithDevice(DetectorOptions options, const std::string& device, int threads,
+                                    const std::filesystem::path& calibration);
 
   RunManifest manifest_;
   Shard shard_;
-  std::filesystem::path calibration_path_;
-  std::optional<ScoreCalibration> calibration_;  // applied to every frame's objects before writing
   int batch_size_;
   int threads_;
   ProgressOptions progress_;

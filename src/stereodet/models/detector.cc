@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <utility>
 
+#include "stereodet/kitti/score_calibration.h"
 #include "stereodet/models/det3d/det3d_boxes.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/model_json.h"
@@ -70,6 +71,7 @@ struct Detector::Impl {
   std::vector<std::string> classes;
   DetectorNeeds needs;
   DetectorOptions options;
+  std::optional<ScoreCalibration> calibration;  // DetectorOptions::calibration's, once read
 
   virtual ~Impl() = default;
   virtual std::optional<StereoOptions> Stereo() const = 0;
@@ -417,6 +419,7 @@ Detector Detector::Open(const fs::path& model_dir, const DetectorOptions& option
   impl->model_dir = model_dir;
   impl->family = family;
   impl->options = options;
+  if (!options.calibration.empty()) impl->calibration = ReadScoreCalibration(options.calibration);
   const fs::path config = model_dir / kModelConfigFile;
   impl->weights_fnv1a64 = ReadWeightsRecord(ReadFile(config), config.string()).fnv1a64;
   if (impl->weights_fnv1a64.empty()) {
@@ -453,6 +456,9 @@ std::vector<DetectResult> Detector::Run(std::unique_ptr<PreparedBatch> batch) {
                          << impl_->input << "): the network's " << e.output()
                          << " are not finite (NaN or inf); its weights overflow on this input "
                             "(a training that diverged?): retrain the model";
+  }
+  if (impl_->calibration) {
+    for (DetectResult& r : batch->results) impl_->calibration->Apply(&r.objects);
   }
   return std::move(batch->results);
 }

@@ -83,7 +83,11 @@ struct DetectorOptions {
   RpnDetectOptions rpn;             // proposals and the head's decoding
   Det3dDecodeOptions det3d;         // score 0.1, BEV NMS
   PointFilterOptions det3d_points;  // which points a 3D model sees (camera view, range)
-  void Check() const;               // throws std::invalid_argument naming the field
+  // A score calibration file (kitti/score_calibration.h, `stereodet calibrate --fit`): each
+  // detection of a calibrated class gets its calibrated probability once decoded (after the
+  // family's raw-score threshold). Read by Open. Empty: the network's scores.
+  std::filesystem::path calibration;
+  void Check() const;  // throws std::invalid_argument naming the field
 };
 
 // Wall-clock seconds of one frame's stages. For a batch, network_s is the batch's network time
