@@ -19,47 +19,15 @@ case,left,top,right,bottom,score,tp; rows "dece": case,b_score,b_cx,b_cy,b_w,b_h
 
 import argparse
 import csv
-import importlib.machinery
 import pathlib
 import random
 import sys
-import types
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import stub_modules  # noqa: E402  (scripts/stub_modules.py)
 
 W, H = 1242.0, 375.0
 STUBS = ("torch", "pyro", "tikzplotlib", "tqdm", "tensorboard", "gpytorch")
-
-
-class _Stub(types.ModuleType):
-    """A module that has every attribute (each another stub) and can be a base class."""
-
-    def __getattr__(self, name):
-        if name.startswith("__"):
-            raise AttributeError(name)
-        m = _Stub(f"{self.__name__}.{name}")
-        m.__path__ = []
-        sys.modules[m.__name__] = m
-        return m
-
-    def __call__(self, *args, **kwargs):
-        return self
-
-    def __mro_entries__(self, bases):
-        return (object,)
-
-
-class _StubFinder:
-    def find_spec(self, name, path, target=None):
-        if name.split(".")[0] in STUBS:
-            return importlib.machinery.ModuleSpec(name, self)
-        return None
-
-    def create_module(self, spec):
-        m = _Stub(spec.name)
-        m.__path__ = []
-        return m
-
-    def exec_module(self, module):
-        pass
 
 
 def draw(rng, n):
@@ -81,7 +49,7 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--seed", type=int, default=37)
     args = parser.parse_args()
-    sys.meta_path.insert(0, _StubFinder())
+    stub_modules.install(STUBS)
     sys.path.insert(0, args.netcal)
     import numpy as np
     from netcal.metrics.confidence import ECE

@@ -41,49 +41,18 @@ Indices are 0-based, in the order the rows come (file order of the frames the te
 
 import argparse
 import csv
-import importlib.machinery
 import os
 import pathlib
 import random
 import sys
 import types
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import stub_modules  # noqa: E402  (scripts/stub_modules.py)
+
 W, H = 1242, 375
 STUBS = ("cv2", "pandas", "seaborn")
 CLASSES = {1: "Car", 2: "Pedestrian"}
-
-
-class _Stub(types.ModuleType):
-    """A module that has every attribute (each another stub) and can be called."""
-
-    def __getattr__(self, name):
-        if name.startswith("__"):
-            raise AttributeError(name)
-        m = _Stub(f"{self.__name__}.{name}")
-        m.__path__ = []
-        sys.modules[m.__name__] = m
-        return m
-
-    def __call__(self, *args, **kwargs):
-        return self
-
-
-class _StubFinder:
-    def __init__(self, names):
-        self.names = names
-
-    def find_spec(self, name, path, target=None):
-        if name.split(".")[0] in self.names:
-            return importlib.machinery.ModuleSpec(name, self)
-        return None
-
-    def create_module(self, spec):
-        m = _Stub(spec.name)
-        m.__path__ = []
-        return m
-
-    def exec_module(self, module):
-        pass
 
 
 def bb_iou(dt, gt, iscrowd):
@@ -203,7 +172,7 @@ def main():
         os.environ.setdefault("MPLBACKEND", "Agg")
     except ImportError:
         stubs.append("matplotlib")
-    sys.meta_path.insert(0, _StubFinder(stubs))
+    stub_modules.install(stubs)
     if args.pycocotools:
         sys.path.insert(0, args.pycocotools)
         iou_source = "pycocotools.mask.iou (built from cocoapi)"

@@ -463,6 +463,16 @@ bool OwnLabel(const std::string& type, const ClassSpec& spec) {
   return false;
 }
 
+// The options of a random case: its matcher and overlap kind, Moderate, two threads.
+EvalOptions OptionsOf(const RandomCase& rc) {
+  EvalOptions o;
+  o.matcher = rc.matcher;
+  o.metrics = {rc.kind};
+  o.difficulties = {Difficulty::kModerate};
+  o.num_threads = 2;
+  return o;
+}
+
 class ErrorAnalysisPropertyTest : public ::testing::TestWithParam<RandomCase> {};
 class ErrorAnalysisFixPropertyTest : public ::testing::TestWithParam<RandomCase> {};
 
@@ -472,11 +482,7 @@ class ErrorAnalysisFixPropertyTest : public ::testing::TestWithParam<RandomCase>
 TEST_P(ErrorAnalysisPropertyTest, TypesPartitionTheFalsePositivesAndNegatives) {
   const RandomCase rc = GetParam();
   const std::vector<EvalFrame> frames = Frames(rc);
-  EvalOptions o;
-  o.matcher = rc.matcher;
-  o.metrics = {rc.kind};
-  o.difficulties = {Difficulty::kModerate};
-  o.num_threads = 2;
+  const EvalOptions o = OptionsOf(rc);
   const ErrorClassification c = ClassifyErrors(frames, o, rc.kind, Difficulty::kModerate);
   const EvalResult plain = Evaluate(frames, o);
   const int kind = static_cast<int>(rc.kind);
@@ -554,11 +560,7 @@ TEST_P(ErrorAnalysisPropertyTest, TypesPartitionTheFalsePositivesAndNegatives) {
 TEST_P(ErrorAnalysisFixPropertyTest, FixesDoWhatTheyShould) {
   const RandomCase rc = GetParam();
   const std::vector<EvalFrame> frames = Frames(rc);
-  EvalOptions o;
-  o.matcher = rc.matcher;
-  o.metrics = {rc.kind};
-  o.difficulties = {Difficulty::kModerate};
-  o.num_threads = 2;
+  const EvalOptions o = OptionsOf(rc);
   const ErrorClassification c = ClassifyErrors(frames, o, rc.kind, Difficulty::kModerate);
   for (size_t k = 0; k < c.classes.size(); ++k) {
     EvalOptions one = o;

@@ -243,17 +243,25 @@ TEST(ReportTest, FiguresPlotTheCurvesOfResultsJson) {
 }
 
 // eval --breakdown: one figure per cell and axis, a bar per bin holding results.json's AP_R40.
-TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
-  TestTempDir dir;
-  const fs::path out = dir.path() / "eval";
+// tests/data/eval_small's Car cells of one overlap kind with one breakdown, and the report (SVG).
+EvaluationOptions SmallCarBreakdown(const fs::path& out, OverlapKind kind,
+                                    const std::string& breakdown) {
   EvaluationOptions options;
   options.input.gt = kData / "eval_small";
   options.input.det = kData / "eval_small/det";
   options.runs.front().classes = {KittiClassSpec("Car")};
-  options.runs.front().metrics = {OverlapKind::k2D};
-  options.runs.front().breakdowns = {ParseBreakdown("height=0,40,inf")};
+  options.runs.front().metrics = {kind};
+  options.runs.front().breakdowns = {ParseBreakdown(breakdown)};
   options.out = out;
   options.report = true;
+  options.report_png = false;
+  return options;
+}
+
+TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
+  TestTempDir dir;
+  const fs::path out = dir.path() / "eval";
+  EvaluationOptions options = SmallCarBreakdown(out, OverlapKind::k2D, "height=0,40,inf");
   RunEvaluation(options);
   const json results = ReadReportSource(out, "kitti").results;
   const json& e = Entry(results, "Car", "2d", "Moderate");
@@ -309,15 +317,7 @@ TEST(ReportTest, BreakdownFigurePlotsApR40PerBin) {
 TEST(ReportTest, LetCellsShowAplAndReliabilityFiguresShowLaeceAndDece) {
   TestTempDir dir;
   const fs::path out = dir.path() / "eval";
-  EvaluationOptions options;
-  options.input.gt = kData / "eval_small";
-  options.input.det = kData / "eval_small/det";
-  options.runs.front().classes = {KittiClassSpec("Car")};
-  options.runs.front().metrics = {OverlapKind::kLet3D};
-  options.runs.front().breakdowns = {ParseBreakdown("distance=0,20,inf")};
-  options.out = out;
-  options.report = true;
-  RunEvaluation(options);
+  RunEvaluation(SmallCarBreakdown(out, OverlapKind::kLet3D, "distance=0,20,inf"));
   const json results = ReadReportSource(out, "let").results;
   const json& e = Entry(results, "Car", "let-3d", "Moderate");
   ASSERT_TRUE(e.contains("apl_r40"));
