@@ -21,12 +21,14 @@
 #include "stereodet/eval/bootstrap.h"
 #include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/compare.h"
+#include "stereodet/eval/error_analysis.h"
 #include "stereodet/eval/eval_input.h"
 #include "stereodet/eval/eval_options.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/filter.h"
 #include "stereodet/eval/openpcdet_compat.h"
 #include "stereodet/pipelines/evaluation.h"
+#include "stereodet/report/error_report.h"
 #include "stereodet/report/eval_report.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/output_folder.h"
@@ -1040,6 +1042,32 @@ void BindEval(py::module_& m) {
         py::arg("bootstrap_method") = "percentile");
   m.def("_write_report", &WriteReport, py::arg("result"), py::arg("out"), py::arg("records"));
 
+  // The TIDE-style error analysis of every cell (AnalyzeAllErrors), each as results.json's
+  // "errors" (ErrorAnalysisJson) with its class, metric and difficulty, as one JSON text.
+  m.def(
+      "_analyze_errors",
+      [](const PyFrames& frames, const EvalOptions& options, double background_overlap) {
+        ErrorAnalysisOptions ea;
+        ea.background_overlap = background_overlap;
+        std::string text;
+        {
+          ReleaseGil release;
+          options.Check();
+          ea.Check();
+          nlohmann::json cells = nlohmann::json::array();
+          for (const ErrorAnalysis& a : AnalyzeAllErrors(*frames.frames, options, ea)) {
+            nlohmann::json j = ErrorAnalysisJson(a);
+            j["class"] = a.class_name;
+            j["metric"] = OverlapKindName(a.kind);
+            j["difficulty"] = DifficultyName(a.difficulty);
+            j["evaluated"] = a.evaluated;
+            cells.push_back(std::move(j));
+          }
+          text = cells.dump();
+        }
+        return text;
+      },
+      py::arg("frames"), py::arg("options"), py::arg("background_overlap"));
   m.def(
       "_filter_sweep",
       [](const PyFrames& frames, const EvalOptions& options, const std::string& bound, double from,

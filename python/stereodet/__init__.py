@@ -21,11 +21,11 @@ top level. docs/python.md is the guide.
 
 from . import kitti, mmdet3d
 from ._core import ParseError, __version__
-from .evaluation import (ClassResult, ClassSpec, EvalOptions, EvalResult, compare, evaluate,
-                         filter_sweep, get_official_eval_result)
+from .evaluation import (ClassResult, ClassSpec, EvalOptions, EvalResult, analyze_errors, compare,
+                         evaluate, filter_sweep, get_official_eval_result)
 
 __all__ = ["ClassResult", "ClassSpec", "EvalOptions", "EvalResult", "ParseError", "__version__",
-           "Detector", "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti",
+           "Detector", "analyze_errors", "compare", "evaluate", "filter_sweep", "get_official_eval_result", "kitti",
            "mmdet3d", "stereo"]
 
 

@@ -19,6 +19,7 @@ set come from its OverlapSetRuns.
 from __future__ import annotations
 
 import inspect
+import json
 import math
 import os
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
@@ -35,8 +36,8 @@ Source = Union[PathLike, Sequence[Annos]]
 for _cls in (ClassResult, ClassSpec, EvalOptions, EvalResult):
     _cls.__module__ = "stereodet"
 
-__all__ = ["ClassResult", "ClassSpec", "EvalOptions", "EvalResult", "compare", "evaluate",
-           "filter_sweep", "get_official_eval_result"]
+__all__ = ["ClassResult", "ClassSpec", "EvalOptions", "EvalResult", "analyze_errors", "compare",
+           "evaluate", "filter_sweep", "get_official_eval_result"]
 
 DEFAULT_CLASSES = ("Car", "Pedestrian", "Cyclist")
 
@@ -305,6 +306,25 @@ def filter_sweep(gt: Source, det: Source, bound: str, start: float = 0.0, stop: 
         raise ValueError("out: only for folders (the CLI's sweep.csv)")
     frames = _frames(gt, det, split, lenient, merged["num_threads"], missing_as_empty)
     return _core._filter_sweep(frames, eval_options, bound, start, stop, step)
+
+
+def analyze_errors(gt: Source, det: Source, split: Optional[PathLike] = None, *,
+                   background_overlap: float = 0.1, lenient: bool = False,
+                   missing_as_empty: bool = False, **options: Any) -> List[Dict[str, Any]]:
+    """`stereodet eval --errors`: the TIDE-style error analysis of every cell (class x metric x
+    difficulty), one dict per cell in evaluate()'s order, as each results.json cell's "errors"
+    (count, delta_ap_r40 and delta_ap_r11 per type: cls, loc, both, dupe, bkg, missed; special:
+    fp_r40, fn_r40, ...; the association's tp, fp, fn at score -inf; ap_r40 as is) with its
+    "class", "metric", "difficulty" and "evaluated" (docs/metrics.md, "Error analysis (TIDE)").
+
+    gt, det, split, lenient, missing_as_empty: as evaluate(). options: evaluate()'s (classes,
+    metrics, matcher, ...; one overlap set, no compat "openpcdet"). background_overlap: a false
+    positive overlapping every label by at most this is a background error (TIDE's 0.1).
+    """
+    merged = dict(_EVALUATE_DEFAULTS, **options)
+    eval_options = _single(_runs(**merged), "analyze_errors")
+    frames = _frames(gt, det, split, lenient, merged["num_threads"], missing_as_empty)
+    return json.loads(_core._analyze_errors(frames, eval_options, background_overlap))
 
 
 def compare(gt: Source, det_a: Source, det_b: Source, *, split: Optional[PathLike] = None,

@@ -415,6 +415,25 @@ def test_breakdowns_are_the_clis(cli, small, tmp_path):
         stereodet.evaluate(label_dir, det_dir, breakdowns="distance=30,0")
 
 
+def test_error_analysis_is_the_clis(cli, small, tmp_path):
+    label_dir, det_dir = small[:2]
+    expected = cli_results(cli, tmp_path, "--gt", label_dir, "--det", det_dir, "--metrics", "2d",
+                           "--classes", "Car", "--matcher", "optimal", "--errors")
+    cells = stereodet.analyze_errors(label_dir, det_dir, metrics=["2d"], classes=["Car"],
+                                     matcher="optimal")
+    want = [e for e in expected["results"] if e["evaluated"]]
+    assert [(c["class"], c["metric"], c["difficulty"]) for c in cells] == \
+        [(e["class"], e["metric"], e["difficulty"]) for e in want]
+    for got, e in zip(cells, want):
+        assert got["count"] == e["errors"]["count"]
+        assert got["delta_ap_r40"] == e["errors"]["delta_ap_r40"]
+        assert got["special"] == e["errors"]["special"]
+        assert got["ap_r40"] == e["ap_r40"]
+    assert sum(sum(c["count"].values()) for c in cells) > 0  # not vacuous
+    with pytest.raises(ValueError, match="background"):
+        stereodet.analyze_errors(label_dir, det_dir, background_overlap=1.5)
+
+
 def test_naive_breakdowns_are_the_clis(cli, small, tmp_path):
     label_dir, det_dir = small[:2]
     expected = cli_results(cli, tmp_path, "--gt", label_dir, "--det", det_dir, "--metrics", "2d",
