@@ -1,7 +1,7 @@
 #!/bin/bash
 # CPU time of the whole `stereodet eval` process with everything issue 37 added (LET kinds,
-# distance breakdown, naive bins, calibration terms) against plain `eval`, side by side on one
-# KITTI-val-sized random set (figures in docs/BENCHMARKS.md, "eval with everything").
+# distance breakdown, naive bins, calibration terms, error analysis) against plain `eval`, side by
+# side on one KITTI-val-sized random set (figures in docs/BENCHMARKS.md, "eval with everything").
 #
 #   benchmarks/eval_all_speed.sh BUILD_DIR [WORK_DIR]
 #
@@ -19,6 +19,7 @@
 #   let:        --metrics 2d,bev,3d,let-bev,let-3d
 #   standard:   let + --breakdown distance=0,30,50,inf (issue 37's run: every kind, AP by range)
 #   everything: standard + --breakdown occlusion=0,1,2,3 --breakdown-naive
+#   errors:     let + --errors (the TIDE-style analysis: up to 8 re-evaluations of every cell)
 # CPU time = user + sys of the process (/usr/bin/time); the median of the rounds is printed, and
 # each variant's ratio to plain (and to the baseline's plain, with BASELINE).
 set -euo pipefail
@@ -60,13 +61,14 @@ run() {  # run NAME BINARY ARGS...
   times[$name]+="$t "
 }
 
-variants=(plain let standard everything)
+variants=(plain let standard everything errors)
 for ((r = 1; r <= rounds; ++r)); do
   run plain "$stereodet" --metrics 2d,bev,3d
   run let "$stereodet" --metrics 2d,bev,3d,let-bev,let-3d
   run standard "$stereodet" --metrics 2d,bev,3d,let-bev,let-3d --breakdown distance=0,30,50,inf
   run everything "$stereodet" --metrics 2d,bev,3d,let-bev,let-3d \
     --breakdown distance=0,30,50,inf --breakdown occlusion=0,1,2,3 --breakdown-naive
+  run errors "$stereodet" --metrics 2d,bev,3d,let-bev,let-3d --errors
   if [ -n "${BASELINE:-}" ]; then
     run "plain (baseline)" "$BASELINE" --metrics 2d,bev,3d
   fi
