@@ -758,6 +758,7 @@ class Pipeline:
                                "--metrics", TABLE_METRIC[m["family"]],
                                "--difficulties", self.config["difficulty"].lower(),
                                "--matcher", "optimal", "--method", method,
+                               "--skip-unfittable",
                                "--threads", self.config["threads"], "--out", out],
                               deps=[detect], prepare=prepare)
                     deps, flags = deps + [f"calibrate-{m['name']}-{method}"], ["--calibration", out]
@@ -1082,13 +1083,30 @@ def calibration_rows(pipeline, cls):
             continue
         metric = TABLE_METRIC[members[0]["family"]]
         for method in [None] + methods:
+            # A seed whose calibrator could not be fitted (no TP or no FP of the class on the
+            # first half: `calibrate --skip-unfittable`) evaluated raw scores: left out, counted.
+            fitted = [m for m in members if method is None
+                      or not unfitted_in(pipeline.calibration_file(m, method), cls)]
             cells = [load_cells(pipeline.heldout_dir(m, method) / "results.json", metric,
-                                config["difficulty"]).get(cls) for m in members]
+                                config["difficulty"]).get(cls) for m in fitted]
             cells = [c for c in cells if c is not None]
-            rows.append([group, method or "none", metric, f"{len(cells)} of {len(members)}"]
+            seeds = f"{len(cells)} of {len(members)}"
+            if len(fitted) < len(members):
+                seeds += f" ({len(members) - len(fitted)} not fitted)"
+            rows.append([group, method or "none", metric, seeds]
                         + [mean_sd([c[part].get(key) for c in cells], 4)
                            for part, key in CALIBRATION_COLUMNS])
     return rows
+
+
+def unfitted_in(path, cls):
+    """Whether calibration file `path` lists class `cls` as not fitted (no true or no false
+    positive to fit on); False for a file that cannot be read (the row then shows what exists)."""
+    try:
+        j = json.loads(pathlib.Path(path).read_text())
+    except (OSError, ValueError):
+        return False
+    return any(str(u.get("class", "")).lower() == cls.lower() for u in j.get("unfitted", []))
 
 
 def calibration_section(pipeline):

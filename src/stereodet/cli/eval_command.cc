@@ -103,6 +103,7 @@ struct EvalArgs {
   bool errors = false;        // --errors (eval, eval merge)
   double errors_background = ErrorAnalysisOptions().background_overlap;  // --errors-background
   std::string method = CalibrationMethodName(CalibrationFitOptions().method);  // calibrate
+  bool skip_unfittable = false;                                                // calibrate
   // --bootstrap N, --bootstrap-seed, --bootstrap-confidence (eval, compare, merge); used when
   // --bootstrap was given (bootstrap_given, set by the command's callback).
   BootstrapOptions bootstrap;
@@ -684,6 +685,7 @@ void RunCalibrate(const EvalArgs& a) {
   STEREODET_CHECK(method.has_value())
       << "--method: unknown '" << a.method << "' (temperature, platt, isotonic)";
   options.method = *method;
+  options.skip_unfittable = a.skip_unfittable;
   options.Check();
   const EvalInput input = LoadEvalFrames(MakeInputOptions(a));
   PrintNotices(input);
@@ -705,9 +707,14 @@ void RunCalibrate(const EvalArgs& a) {
       MatcherName(options.eval.matcher));
   fmt::print("{:<12} {:>7} {:>7} | {:>13} {:>13} | {}\n", "class", "TP", "FP", "Brier before",
              "after", "log loss before / after, parameters");
-  for (size_t k = 0; k < fit.classes.size(); ++k) {
-    const ClassCalibrationFit& c = fit.classes[k];
-    const ScoreCalibrator& cal = fit.calibration.classes[k].second;
+  size_t fitted = 0;  // into fit.calibration.classes: the fitted classes, in order
+  for (const ClassCalibrationFit& c : fit.classes) {
+    if (!c.fitted) {
+      fmt::print("{:<12} {:>7} {:>7} | not fitted (--skip-unfittable; the file says why)\n",
+                 c.class_name, c.num_tp, c.num_fp);
+      continue;
+    }
+    const ScoreCalibrator& cal = fit.calibration.classes[fitted++].second;
     const std::string params =
         cal.method == CalibrationMethod::kIsotonic ? fmt::format("{} points", cal.x.size())
         : cal.method == CalibrationMethod::kTemperature
@@ -732,6 +739,10 @@ void AddCalibrateCommand(CLI::App& app) {
                   "temperature | platt | isotonic (docs/metrics.md, Calibrators)")
       ->capture_default_str();
   cmd->add_option("--out", args->out, "the calibration file to write (JSON)");
+  cmd->add_flag("--skip-unfittable", args->skip_unfittable,
+                "a class that cannot be fitted (no true or no false positive, scores that rank "
+                "false positives first) is listed in the file's \"unfitted\" (its scores then "
+                "stay as they are) instead of an error");
   cmd->callback([args] { RunCalibrate(*args); });
 }
 

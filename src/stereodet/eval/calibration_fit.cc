@@ -222,10 +222,23 @@ CalibrationFit FitScoreCalibration(const std::vector<EvalFrame>& frames,
   fit.calibration.scores_are_logits = logits;
   std::string counts;
   for (const ClassSpec& spec : eval.classes) {
+    // A class that cannot be fitted: an error, or with skip_unfittable a record of why.
+    auto unfittable = [&](const std::string& why, const ClassCalibrationFit& c) {
+      STEREODET_CHECK(options.skip_unfittable) << "calibrate: class " << spec.name << " " << why;
+      fit.calibration.unfitted.emplace_back(spec.name, why);
+      ClassCalibrationFit out = c;
+      out.class_name = spec.name;
+      out.fitted = false;
+      fit.classes.push_back(out);
+      counts += fmt::format("{}{}: {} TP, {} FP (not fitted)", counts.empty() ? "" : "; ",
+                            spec.name, c.num_tp, c.num_fp);
+    };
     const ClassResult* cell = result.Find(spec.name, kind, difficulty);
-    STEREODET_CHECK(cell != nullptr && cell->evaluated)
-        << "calibrate: class " << spec.name << " has no detection with a valid "
-        << OverlapKindName(kind) << " box to fit on";
+    if (cell == nullptr || !cell->evaluated) {
+      unfittable(
+          fmt::format("has no detection with a valid {} box to fit on", OverlapKindName(kind)), {});
+      continue;
+    }
     std::vector<double> scores;
     std::vector<uint8_t> targets;
     for (const MatchRecord& r : cell->records) {
@@ -237,10 +250,13 @@ CalibrationFit FitScoreCalibration(const std::vector<EvalFrame>& frames,
     c.class_name = spec.name;
     c.num_tp = std::count(targets.begin(), targets.end(), 1);
     c.num_fp = static_cast<int64_t>(targets.size()) - c.num_tp;
-    STEREODET_CHECK(c.num_tp > 0 && c.num_fp > 0)
-        << "calibrate: class " << spec.name << " has " << c.num_tp << " true and " << c.num_fp
-        << " false positives in " << OverlapKindName(kind) << " at " << DifficultyName(difficulty)
-        << ": a calibrator needs both";
+    if (c.num_tp == 0 || c.num_fp == 0) {
+      unfittable(fmt::format("has {} true and {} false positives in {} at {}: a calibrator needs "
+                             "both",
+                             c.num_tp, c.num_fp, OverlapKindName(kind), DifficultyName(difficulty)),
+                 c);
+      continue;
+    }
     // Temperature and Platt work on logits.
     std::vector<double> x = scores;
     if (options.method != CalibrationMethod::kIsotonic) {
@@ -252,7 +268,11 @@ CalibrationFit FitScoreCalibration(const std::vector<EvalFrame>& frames,
                    : options.method == CalibrationMethod::kPlatt     ? FitPlatt(x, targets)
                                                                      : FitIsotonic(x, targets);
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("calibrate: class " + spec.name + ": " + e.what());
+      if (!options.skip_unfittable) {
+        throw std::invalid_argument("calibrate: class " + spec.name + ": " + e.what());
+      }
+      unfittable(e.what(), c);  // e.g. Platt's slope <= 0: the scores rank FPs above TPs
+      continue;
     }
     const double n = static_cast<double>(scores.size());
     for (size_t i = 0; i < scores.size(); ++i) {

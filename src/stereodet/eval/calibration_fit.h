@@ -24,6 +24,10 @@ struct CalibrationFitOptions {
   // scores are logits (the calibration file records it).
   EvalOptions eval = DefaultEval();
   CalibrationMethod method = CalibrationMethod::kPlatt;
+  // A class that cannot be fitted (no detection to fit on, no true or no false positive, or a
+  // fit the method refuses, e.g. Platt's slope <= 0) is listed in ScoreCalibration::unfitted with
+  // why, instead of an error.
+  bool skip_unfittable = false;
 
   static EvalOptions DefaultEval();
   // Throws std::invalid_argument on several or no overlap kinds or difficulties, or what
@@ -36,6 +40,7 @@ struct CalibrationFitOptions {
 struct ClassCalibrationFit {
   std::string class_name;
   int64_t num_tp = 0, num_fp = 0;
+  bool fitted = true;  // false: CalibrationFitOptions::skip_unfittable left it out (the rest 0)
   // Over the fitted detections (a TP 1, a FP 0): mean squared error and mean negative log
   // likelihood of the scores before (as probabilities: the scores themselves, or their sigmoid for
   // logits) and after calibration.

@@ -1,5 +1,6 @@
 #include "stereodet/eval/calibration_fit.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -157,6 +158,26 @@ TEST(CalibrationFitTest, FitsOnTheMatchersTargets) {
   }
   options.eval.classes = {KittiClassSpec("Car")};
   EXPECT_THROW(FitScoreCalibration(frames, options), std::invalid_argument);
+  // With skip_unfittable the class is listed with why (and Pedestrian, with no detection left, as
+  // well); the file round-trips, and applying it changes no score.
+  options.skip_unfittable = true;
+  options.eval.classes = {KittiClassSpec("Car"), KittiClassSpec("Pedestrian")};
+  const CalibrationFit unfitted = FitScoreCalibration(frames, options);
+  EXPECT_TRUE(unfitted.calibration.classes.empty());
+  ASSERT_EQ(unfitted.calibration.unfitted.size(), 2u);
+  EXPECT_EQ(unfitted.calibration.unfitted[0].first, "Car");
+  EXPECT_THAT(unfitted.calibration.unfitted[0].second,
+              ::testing::HasSubstr("0 false positives in 2d at Moderate"));
+  EXPECT_EQ(unfitted.calibration.unfitted[1].first, "Pedestrian");
+  EXPECT_THAT(unfitted.calibration.unfitted[1].second, ::testing::HasSubstr("no detection"));
+  ASSERT_EQ(unfitted.classes.size(), 2u);
+  EXPECT_FALSE(unfitted.classes[0].fitted);
+  EXPECT_GT(unfitted.classes[0].num_tp, 0);
+  const ScoreCalibration back =
+      ParseScoreCalibration(ScoreCalibrationToJson(unfitted.calibration), "round trip");
+  EXPECT_EQ(back.unfitted, unfitted.calibration.unfitted);
+  std::vector<Object> detections = frames.front().detections;
+  EXPECT_EQ(back.Apply(&detections), 0);
   options.eval.metrics = {OverlapKind::k2D, OverlapKind::k3D};
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }

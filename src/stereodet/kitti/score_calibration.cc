@@ -107,7 +107,14 @@ int64_t ScoreCalibration::Apply(std::vector<Object>* detections) const {
 }
 
 void ScoreCalibration::Check() const {
-  STEREODET_CHECK(!classes.empty()) << "calibration: no class";
+  STEREODET_CHECK(!classes.empty() || !unfitted.empty()) << "calibration: no class";
+  for (size_t i = 0; i < unfitted.size(); ++i) {
+    STEREODET_CHECK(!unfitted[i].first.empty()) << "calibration: unfitted[" << i << "] has no name";
+    for (const auto& [name, calibrator] : classes) {
+      STEREODET_CHECK(!EqualsIgnoreCase(unfitted[i].first, name))
+          << "calibration: class '" << name << "' both fitted and unfitted";
+    }
+  }
   for (size_t i = 0; i < classes.size(); ++i) {
     STEREODET_CHECK(!classes[i].first.empty()) << "calibration: classes[" << i << "] has no name";
     for (size_t j = 0; j < i; ++j) {
@@ -138,11 +145,18 @@ std::string ScoreCalibrationToJson(const ScoreCalibration& calibration) {
   }
   json fitted_on = json::object();
   for (const auto& [key, value] : calibration.fitted_on) fitted_on[key] = value;
-  const json j = {{"format", kFormat},
-                  {"version", kVersion},
-                  {"scores_are_logits", calibration.scores_are_logits},
-                  {"classes", classes},
-                  {"fitted_on", fitted_on}};
+  json j = {{"format", kFormat},
+            {"version", kVersion},
+            {"scores_are_logits", calibration.scores_are_logits},
+            {"classes", classes},
+            {"fitted_on", fitted_on}};
+  if (!calibration.unfitted.empty()) {
+    json unfitted = json::array();
+    for (const auto& [name, reason] : calibration.unfitted) {
+      unfitted.push_back({{"class", name}, {"reason", reason}});
+    }
+    j["unfitted"] = unfitted;
+  }
   return j.dump(1) + "\n";
 }
 
@@ -208,6 +222,18 @@ ScoreCalibration ParseScoreCalibration(std::string_view text, const std::string&
   if (j.contains("fitted_on") && j["fitted_on"].is_object()) {
     for (const auto& [key, value] : j["fitted_on"].items()) {
       out.fitted_on.emplace_back(key, value.is_string() ? value.get<std::string>() : value.dump());
+    }
+  }
+  if (j.contains("unfitted")) {
+    const json& unfitted = j["unfitted"];
+    STEREODET_CHECK(unfitted.is_array()) << source << ": unfitted must be a list";
+    for (size_t i = 0; i < unfitted.size(); ++i) {
+      const std::string where = "unfitted[" + std::to_string(i) + "].";
+      const json& name = field(unfitted[i], "class", where);
+      const json& reason = field(unfitted[i], "reason", where);
+      STEREODET_CHECK(name.is_string() && reason.is_string())
+          << source << ": " << where << "class and reason must be text";
+      out.unfitted.emplace_back(name.get<std::string>(), reason.get<std::string>());
     }
   }
   try {

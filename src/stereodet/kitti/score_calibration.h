@@ -60,6 +60,9 @@ struct ScoreCalibration {
   // What the fit saw, written into the file for the record (split, frames, matcher, metric,
   // difficulty, overlap threshold, counts of TPs and FPs per class, ...): key / value pairs.
   std::vector<std::pair<std::string, std::string>> fitted_on;
+  // Classes asked for that could not be fitted (`calibrate --skip-unfittable`: no true or no false
+  // positive to fit on), each with why; they have no calibrator, so their scores stay as they are.
+  std::vector<std::pair<std::string, std::string>> unfitted;
 
   // The class's calibrator, or null.
   const ScoreCalibrator* Find(std::string_view class_name) const;
@@ -67,14 +70,15 @@ struct ScoreCalibration {
   // detections of other classes are left as they are. Returns how many were changed. Throws
   // std::invalid_argument on a detection of a calibrated class without a finite score.
   int64_t Apply(std::vector<Object>* detections) const;
-  // Check() of every calibrator; throws std::invalid_argument on no class or a class twice.
+  // Check() of every calibrator; throws std::invalid_argument on no class (fitted or unfitted) or
+  // a class twice.
   void Check() const;
 };
 
 // The calibration file (JSON; docs/metrics.md, "Calibrators"): {"format": "stereodet score
 // calibration", "version": 1, "scores_are_logits": false, "classes": [{"class": "Car", "method":
 // "platt", "slope": .., "intercept": ..} | {.., "method": "isotonic", "x": [..], "y": [..]}],
-// "fitted_on": {..}}.
+// "fitted_on": {..}, "unfitted": [{"class": "Cyclist", "reason": ".."}] (only when some are)}.
 std::string ScoreCalibrationToJson(const ScoreCalibration& calibration);
 // Parses and checks a calibration file's text; errors (std::invalid_argument) name `source` and
 // the field.
