@@ -70,9 +70,9 @@ det3d-results: deps
 	$(MAKE) build
 	./scripts/det3d-results.sh $(BUILD_DIR) $(DET3D_DIR) models results/det3d
 
-# docs/RESULTS.md's LiDAR-vs-stereo table by distance with LET-3D-AP (issue 37): the 3D detectors
-# of $(EXPERIMENT_DIR) (make experiment) on the val split and on the replication set; writes
-# results/det3d-let{,-rep}/table.md.
+# docs/RESULTS.md's LiDAR-vs-stereo table by distance with LET-3D-AP and its error-analysis table
+# (issue 37): the 3D detectors of $(EXPERIMENT_DIR) (make experiment) on the val split and on the
+# replication set; writes results/det3d-let{,-rep}/table.md and errors.md.
 det3d-let-results: deps
 	$(MAKE) build
 	./scripts/det3d-let-results.sh $(BUILD_DIR) $(EXPERIMENT_DIR) $(DET3D_DIR) results/det3d-let

@@ -5,12 +5,14 @@
 # `eval compare` with paired bootstrap intervals of every cell and every distance bin, in BEV, 3D,
 # LET-BEV and LET-3D, at KITTI's strict (Car 0.7) and loose (Car 0.5) overlaps, optimal matcher,
 # Car Moderate; each model alone too (`eval`, for LET-APL and the labels per bin); then one Markdown
-# table of the means over the seeds.
+# table of the means over the seeds; and each model's TIDE-style error analysis (`eval --errors`,
+# BEV, 3D, LET-3D at the strict overlaps), a second table: where each model's AP goes.
 # Usage: scripts/det3d-let-results.sh BUILD_DIR [EXPERIMENT_DIR] [DATA_DIR] [OUT_DIR]
 #   LET_SEEDS="1 2 3"   LET_BOOTSTRAP=1000   LET_BINS=0,15,30,50,inf
 #   LET_TABLE_ONLY=1: only rebuild the table from the results already there
 # Writes OUT_DIR/seedS-SET/ (compare.csv, bootstrap.csv, bootstrap_breakdown.csv),
-# OUT_DIR/eval-INPUT-seedS/ (results.json, ...) and OUT_DIR/table.md. A folder of a run that completed is kept (delete it to run it again).
+# OUT_DIR/eval-INPUT-seedS/ and OUT_DIR/errors-INPUT-seedS/ (results.json, ...), OUT_DIR/table.md
+# and OUT_DIR/errors.md. A folder of a run that completed is kept (delete it to run it again).
 set -euo pipefail
 build_dir=${1:-build}
 experiment=${2:-results/experiment}
@@ -36,6 +38,14 @@ if [[ -z "${LET_TABLE_ONLY:-}" ]]; then
       "$bin" eval --gt "$data" --split val --det "$experiment/runs/det3d-$input-seed$seed/blur0/detections" \
         --classes Car --metrics bev,3d,let-bev,let-3d --difficulties moderate --matcher optimal \
         --overlaps strict,loose --breakdown "distance=$bins" --out "$run" > /dev/null
+    done
+    for input in lidar stereo; do
+      run="$out/errors-$input-seed$seed"
+      [[ -f "$run/errors.csv" ]] && continue
+      echo "==> det3d-$input-seed$seed error analysis ($run)"
+      "$bin" eval --gt "$data" --split val --det "$experiment/runs/det3d-$input-seed$seed/blur0/detections" \
+        --classes Car --metrics bev,3d,let-3d --difficulties moderate --matcher optimal --errors \
+        --out "$run" > /dev/null
     done
     for set in strict loose; do
       run="$out/seed$seed-$set"
@@ -133,4 +143,35 @@ tmp = out / "table.md.tmp"
 tmp.write_text(table)
 tmp.replace(out / "table.md")
 print(table, end="")
+
+# Where each model's AP goes (TIDE; docs/metrics.md "Error analysis"): per model and overlap kind,
+# the means over the seeds of the AP as is, the points each error type's fix gains and the counts.
+types = ("loc", "bkg", "missed", "both", "cls", "dupe")
+lines = ["| model | overlap | AP_R40 | dAP loc | dAP bkg | dAP missed | dAP both, cls, dupe | "
+         "dAP every FP | dAP every FN | Loc FPs | Bkg FPs | missed labels |",
+         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+for model in ("lidar", "stereo"):
+    for metric in ("bev", "3d", "let-3d"):
+        cells = []
+        for seed in seeds:
+            results = json.loads((out / f"errors-{model}-seed{seed}" / "results.json").read_text())
+            cells += [c["errors"] for c in results["results"]
+                      if c["metric"] == metric and "errors" in c]
+        if len(cells) != len(seeds):
+            continue
+        d = {t: mean([c["delta_ap_r40"][t] for c in cells]) / 100 for t in types}
+        n = {t: mean([c["count"][t] for c in cells]) for t in types}
+        lines.append(
+            f"| det3d-{model} | {metric.upper()} | {mean([c['ap_r40'] for c in cells]) / 100:.3f} | "
+            f"{d['loc']:+.3f} | {d['bkg']:+.3f} | {d['missed']:+.3f} | "
+            f"{d['both'] + d['cls'] + d['dupe']:+.3f} | "
+            f"{mean([c['special']['fp_r40'] for c in cells]) / 100:+.3f} | "
+            f"{mean([c['special']['fn_r40'] for c in cells]) / 100:+.3f} | "
+            f"{n['loc']:.0f} | {n['bkg']:.0f} | {n['missed']:.0f} |")
+errors = "\n".join(lines) + "\n"
+tmp = out / "errors.md.tmp"
+tmp.write_text(errors)
+tmp.replace(out / "errors.md")
+print()
+print(errors, end="")
 EOF
