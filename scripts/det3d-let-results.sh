@@ -92,6 +92,15 @@ def mean(values):
     return statistics.fmean(values)
 
 
+def write_table(name, lines):
+    """OUT/NAME (written to a temporary file, then renamed) and standard output."""
+    text = "\n".join(lines) + "\n"
+    tmp = out / f"{name}.tmp"
+    tmp.write_text(text)
+    tmp.replace(out / name)
+    print(text, end="")
+
+
 # LET-APL and the labels of every (set, metric, bin) of each model alone: (input, seed) -> ...
 alone = {}
 for seed in seeds:
@@ -138,11 +147,7 @@ for (overlap_set, metric, where) in sorted(
                  f"{mean(b):.3f} | {mean(d):+.3f} | {excl} of {len(seeds)} | "
                  f"{apl('lidar', overlap_set, metric, where)} | "
                  f"{apl('stereo', overlap_set, metric, where)} |")
-table = "\n".join(lines) + "\n"
-tmp = out / "table.md.tmp"
-tmp.write_text(table)
-tmp.replace(out / "table.md")
-print(table, end="")
+write_table("table.md", lines)
 
 # Where each model's AP goes (TIDE; docs/metrics.md "Error analysis"): per model and overlap kind,
 # the means over the seeds of the AP as is, the points each error type's fix gains and the counts.
@@ -168,10 +173,6 @@ for model in ("lidar", "stereo"):
             f"{mean([c['special']['fp_r40'] for c in cells]) / 100:+.3f} | "
             f"{mean([c['special']['fn_r40'] for c in cells]) / 100:+.3f} | "
             f"{n['loc']:.0f} | {n['bkg']:.0f} | {n['missed']:.0f} |")
-errors = "\n".join(lines) + "\n"
-tmp = out / "errors.md.tmp"
-tmp.write_text(errors)
-tmp.replace(out / "errors.md")
 print()
-print(errors, end="")
+write_table("errors.md", lines)
 EOF
