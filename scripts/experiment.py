@@ -329,8 +329,8 @@ def _check_calibration(config, where, groups):
             any(m not in CALIBRATION_METHODS for m in methods):
         raise ConfigError(f"{w}.methods: distinct names of {', '.join(CALIBRATION_METHODS)} "
                           f"([] for none), got {methods!r}")
-    # Car by default: every family detects cars (the 3D detectors nothing else), and calibrate
-    # refuses a class without a true and a false positive to fit on.
+    # Car by default: every family detects cars (the 3D detectors nothing else); a class without
+    # a true and a false positive to fit on is listed as unfitted (`calibrate --skip-unfittable`).
     classes = cal.setdefault("classes", ["Car"])
     if not isinstance(classes, list) or not classes or \
             any(c not in config["classes"] for c in classes):
