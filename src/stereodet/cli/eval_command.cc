@@ -102,6 +102,7 @@ struct EvalArgs {
   std::string calibration;    // --calibration FILE (eval, eval merge)
   bool errors = false;        // --errors (eval, eval merge)
   double errors_background = ErrorAnalysisOptions().background_overlap;  // --errors-background
+  bool errors_background_given = false;                                  // set by NoteGivenFlags
   std::string method = CalibrationMethodName(CalibrationFitOptions().method);  // calibrate
   bool skip_unfittable = false;                                                // calibrate
   // --bootstrap N, --bootstrap-seed, --bootstrap-confidence (eval, compare, merge); used when
@@ -132,12 +133,15 @@ void AddBootstrapOptions(CLI::App* cmd, EvalArgs* a, const char* what) {
       ->capture_default_str();
 }
 
-// Records in `a` which bootstrap flags `cmd` got (called from the command's callback).
-void NoteBootstrapFlags(const CLI::App* cmd, EvalArgs* a) {
+// Records in `a` which bootstrap flags `cmd` got, and --errors-background where `cmd` has it
+// (called from the command's callback).
+void NoteGivenFlags(const CLI::App* cmd, EvalArgs* a) {
   a->bootstrap_given = cmd->count("--bootstrap") > 0;
   a->bootstrap_settings_given = cmd->count("--bootstrap-seed") > 0 ||
                                 cmd->count("--bootstrap-confidence") > 0 ||
                                 cmd->count("--bootstrap-method") > 0;
+  const CLI::Option* background = cmd->get_option_no_throw("--errors-background");
+  a->errors_background_given = background != nullptr && background->count() > 0;
 }
 
 // The bootstrap options of the flags: unset without --bootstrap.
@@ -406,8 +410,7 @@ void PrintNotices(const EvalInput& input, std::FILE* stream = stdout) {
 
 // The error analysis options of --errors / --errors-background: unset without --errors.
 std::optional<ErrorAnalysisOptions> MakeErrorOptions(const EvalArgs& a) {
-  const bool background_given = a.errors_background != ErrorAnalysisOptions().background_overlap;
-  STEREODET_CHECK(a.errors || !background_given) << "--errors-background needs --errors";
+  STEREODET_CHECK(a.errors || !a.errors_background_given) << "--errors-background needs --errors";
   if (!a.errors) return std::nullopt;
   ErrorAnalysisOptions options;
   options.background_overlap = a.errors_background;
@@ -887,7 +890,7 @@ void AddEvalCommand(CLI::App& app) {
                     "also write OUT/report/: the comparison's figures and index.html "
                     "(docs/report.md)");
   compare->callback([compare, compare_common, compare_options] {
-    NoteBootstrapFlags(compare, compare_common.get());
+    NoteGivenFlags(compare, compare_common.get());
     RunCompare(*compare_common, *compare_options);
   });
 
@@ -915,7 +918,7 @@ void AddEvalCommand(CLI::App& app) {
       ->capture_default_str();
   AddBootstrapOptions(merge, merge_common.get(), "as for eval, on the merged frames");
   merge->callback([merge, merge_common, merge_shards] {
-    NoteBootstrapFlags(merge, merge_common.get());
+    NoteGivenFlags(merge, merge_common.get());
     RunMerge(*merge_common, *merge_shards);
   });
 
@@ -925,11 +928,11 @@ void AddEvalCommand(CLI::App& app) {
       return;
     }
     if (eval->count("--coco-gt") > 0 || eval->count("--coco-det") > 0) {
-      NoteBootstrapFlags(eval, args.get());
+      NoteGivenFlags(eval, args.get());
       RunCocoEval(eval, *args);
       return;
     }
-    NoteBootstrapFlags(eval, args.get());
+    NoteGivenFlags(eval, args.get());
     RunEval(*args);
   });
 }

@@ -167,11 +167,13 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
     if (!bins.empty()) {
       // The bins' tallies of pass 2's association (StableKittiCurves' counts) at each distinct
       // score; above the highest, no detection takes part: 0 TP, 0 FP.
-      std::vector<Tally> previous(bins.size());
+      std::vector<Tally> previous(bins.size()), current(bins.size());
       for (const double score : scores) {
         const FrameAssociation a = KittiAssociate(cf, difficulty, score);
+        std::fill(current.begin(), current.end(), Tally{});
+        TallyBins(cf, a, masks, bins.size(), current.data());
         for (size_t s = 0; s < bins.size(); ++s) {
-          const Tally t = TallyMasked(cf, a, masks.Bin(s));
+          const Tally& t = current[s];
           if (t.tp != previous[s].tp || t.fp != previous[s].fp) {
             out.bins[s].steps.push_back(Step{score, f, static_cast<int32_t>(t.tp - previous[s].tp),
                                              static_cast<int32_t>(t.fp - previous[s].fp), 0});

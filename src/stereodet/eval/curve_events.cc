@@ -13,7 +13,9 @@ namespace stereodet {
 
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                        const StableSelection* selection) {
-  return TallyMasked(cf, a, MaskSelection(frame, cf, selection).Bin(0));
+  Tally t;
+  TallyBins(cf, a, MaskSelection(frame, cf, selection), 1, &t);
+  return t;
 }
 
 BinMasks MaskSelection(const EvalFrame& frame, const ClassFrame& cf,
@@ -36,63 +38,20 @@ BinMasks MaskBins(const EvalFrame& frame, const ClassFrame& cf,
   m.pair_needs_det = n_s > 0 && selections.front().conditions != nullptr;
   m.label.resize(n_s * static_cast<size_t>(m.num_labels));
   m.det.resize(n_s * static_cast<size_t>(m.num_dets));
-  if (m.pair_needs_det) {  // filters
-    for (int i = 0; i < m.num_labels; ++i) {
-      const Object& label = frame.labels[cf.label_object[i]];
-      for (size_t s = 0; s < n_s; ++s) {
-        m.label[s * m.num_labels + i] = selections[s].KeepsLabel(label) ? 1 : 0;
-      }
-    }
-    for (int j = 0; j < m.num_dets; ++j) {
-      const Object& det = frame.detections[cf.det_object[j]];
-      for (size_t s = 0; s < n_s; ++s) {
-        m.det[s * m.num_dets + j] = selections[s].KeepsDetection(det) ? 1 : 0;
-      }
-    }
-    return m;
-  }
-  // Bins (StableSelection::KeepsLabel / KeepsDetection), the object's value on an axis read once
-  // for the axis' consecutive bins.
+  // Each object read once for all the selections.
   for (int i = 0; i < m.num_labels; ++i) {
     const Object& label = frame.labels[cf.label_object[i]];
-    std::optional<double> value;
     for (size_t s = 0; s < n_s; ++s) {
-      const StableSelection& bin = selections[s];
-      if (s == 0 || bin.axis != selections[s - 1].axis)
-        value = BreakdownValue(bin.axis, label, true);
-      m.label[s * m.num_labels + i] = value && *value >= bin.lower && *value < bin.upper ? 1 : 0;
+      m.label[s * m.num_labels + i] = selections[s].KeepsLabel(label) ? 1 : 0;
     }
   }
   for (int j = 0; j < m.num_dets; ++j) {
     const Object& det = frame.detections[cf.det_object[j]];
-    std::optional<double> value;
     for (size_t s = 0; s < n_s; ++s) {
-      const StableSelection& bin = selections[s];
-      if (s == 0 || bin.axis != selections[s - 1].axis)
-        value = BreakdownValue(bin.axis, det, false);
-      m.det[s * m.num_dets + j] = !value || (*value >= bin.lower && *value < bin.upper) ? 1 : 0;
+      m.det[s * m.num_dets + j] = selections[s].KeepsDetection(det) ? 1 : 0;
     }
   }
   return m;
-}
-
-Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, MaskView m) {
-  Tally t;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const int j = a.label_det[i];
-      if (m.KeepsPair(i, j)) {
-        ++t.tp;
-        t.similarity += cf.TpWeight(i, j, cf.edge_affinity.empty() ? -1 : cf.FindEdge(i, j));
-      }
-    } else if (a.label_outcome[i] == Outcome::kFn) {
-      if (m.KeepsLabel(i)) ++t.fn;
-    }
-  }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    if (a.det_outcome[j] == Outcome::kFp && m.KeepsDetection(j)) ++t.fp;
-  }
-  return t;
 }
 
 void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,

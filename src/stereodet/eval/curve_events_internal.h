@@ -29,12 +29,10 @@ struct Tally {
 Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const FrameAssociation& a,
                        const StableSelection* selection);
 
-// TallyAssociation(frame, cf, a, selection) from the selection's mask (selection_mask_internal.h):
-// the same counts (a TP pair counts when the mask keeps the pair: its label for a bin, both for a
-// filter).
-Tally TallyMasked(const ClassFrame& cf, const FrameAssociation& a, MaskView mask);
-// TallyMasked of the first `n_s` selections of `masks` at once (the association and each TP's
-// weight read once for all), added to out[0, n_s); each sum in the order TallyMasked makes it.
+// TallyAssociation of the first `n_s` selections of `masks` (selection_mask_internal.h) at once,
+// added to out[0, n_s): a TP pair counts in a selection that keeps the pair (its label for a bin,
+// both for a filter), a FN / FP in one that keeps its label / detection. The association and each
+// TP's weight are read once for all; each sum goes in label order.
 void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
                Tally* out);
 // TallyBins of the association in which no detection takes part (a threshold above every score),

@@ -320,23 +320,15 @@ std::vector<FilteredCurve> StableKittiCurves(const std::vector<ClassFrame>& cfs,
                                              bool with_aos, int num_threads,
                                              bool empty_slots_zero = false) {
   const size_t n_t = std::min<size_t>(thresholds.size(), kKittiSamplePoints);
-  // Per block of frames and selection, the counts as changes at the ends of each frame's runs of
-  // thresholds (summed in any order: integers) and each threshold's similarity sum, frame after
-  // frame within the block, then block after block (as KittiPasses sums the unfiltered curve).
-  struct BlockCounts {
-    std::vector<int64_t> tp, fp, fn;  // [s * (n_t + 1) + t]: changes
-    std::vector<double> similarity;   // [s * n_t + t]
-  };
+  // Per block of frames, each selection's counts over the thresholds (PassTwoCounts: summed in
+  // block order, as KittiPasses sums the unfiltered curve).
   const size_t num_blocks = (cfs.size() + kFrameBlock - 1) / kFrameBlock;
-  std::vector<BlockCounts> blocks(num_blocks);
+  std::vector<std::vector<PassTwoCounts>> blocks(num_blocks);
   ParallelFor(
       num_blocks,
       [&](size_t b) {
-        BlockCounts& c = blocks[b];
-        c.tp.assign(n_s * (n_t + 1), 0);
-        c.fp.assign(n_s * (n_t + 1), 0);
-        c.fn.assign(n_s * (n_t + 1), 0);
-        c.similarity.assign(n_s * n_t, 0.0);
+        std::vector<PassTwoCounts>& counts = blocks[b];
+        counts.assign(n_s, PassTwoCounts(n_t));
         FrameAssociation a;
         std::vector<Tally> tallies(n_s);
         for (size_t i = b * kFrameBlock; i < std::min(cfs.size(), (b + 1) * kFrameBlock); ++i) {
@@ -364,16 +356,7 @@ std::vector<FilteredCurve> StableKittiCurves(const std::vector<ClassFrame>& cfs,
             }
             for (size_t s = 0; s < n_s; ++s) {
               const Tally& tally = tallies[s];
-              const size_t o = s * (n_t + 1);
-              c.tp[o + t] += tally.tp;
-              c.tp[o + end] -= tally.tp;
-              c.fp[o + t] += tally.fp;
-              c.fp[o + end] -= tally.fp;
-              c.fn[o + t] += tally.fn;
-              c.fn[o + end] -= tally.fn;
-              if (tally.similarity != 0.0) {
-                for (size_t u = t; u < end; ++u) c.similarity[s * n_t + u] += tally.similarity;
-              }
+              counts[s].AddRun(t, end, tally.tp, tally.fp, tally.fn, tally.similarity);
             }
             t = end;
           }
@@ -384,19 +367,15 @@ std::vector<FilteredCurve> StableKittiCurves(const std::vector<ClassFrame>& cfs,
   for (size_t s = 0; s < n_s; ++s) {
     FilteredCurve& c = curves[s];
     std::array<double, kKittiSamplePoints> precision{}, aos{};
-    int64_t tp = 0, fp = 0, fn = 0;
+    std::vector<KittiCounts> counts(n_t);
+    for (const std::vector<PassTwoCounts>& block : blocks) block[s].AddTo(&counts);
     for (size_t t = 0; t < n_t; ++t) {
       CurvePoint p;
       p.threshold = thresholds[t];
-      for (const BlockCounts& block : blocks) {
-        tp += block.tp[s * (n_t + 1) + t];
-        fp += block.fp[s * (n_t + 1) + t];
-        fn += block.fn[s * (n_t + 1) + t];
-        p.similarity += block.similarity[s * n_t + t];
-      }
-      p.tp = tp;
-      p.fp = fp;
-      p.fn = fn;
+      p.tp = counts[t].tp;
+      p.fp = counts[t].fp;
+      p.fn = counts[t].fn;
+      p.similarity = counts[t].similarity;
       p = FinishPoint(p);
       c.curve.push_back(p);
       if (empty_slots_zero && p.tp + p.fp == 0) {

@@ -215,55 +215,6 @@ KittiTpScores KittiCollectTpScores(const ClassFrame& frame, Difficulty difficult
 
 namespace {
 
-// Pass 2's counts of many frames at every threshold. A frame's counts are constant over runs of
-// thresholds, so its integer counts are recorded as changes at the ends of its runs (summed up in
-// AddTo, exact in any order), while each threshold's similarity sum gets the frame's value added
-// at each threshold of a run, frame after frame: a floating-point sum depends on its order, and
-// this is the order of adding every frame's counts threshold by threshold. Zero similarities are
-// not added (x + 0 is x for every sum here, none of which is -0).
-class PassTwoCounts {
- public:
-  explicit PassTwoCounts(size_t num_thresholds)
-      : tp_(num_thresholds + 1, 0),
-        fp_(num_thresholds + 1, 0),
-        fn_(num_thresholds + 1, 0),
-        similarity_(num_thresholds, 0.0) {}
-
-  size_t num_thresholds() const { return similarity_.size(); }
-
-  // Adds the counts to the thresholds [begin, end).
-  void AddRun(size_t begin, size_t end, int64_t tp, int64_t fp, int64_t fn, double similarity) {
-    tp_[begin] += tp;
-    tp_[end] -= tp;
-    fp_[begin] += fp;
-    fp_[end] -= fp;
-    fn_[begin] += fn;
-    fn_[end] -= fn;
-    if (similarity != 0.0) {
-      for (size_t t = begin; t < end; ++t) similarity_[t] += similarity;
-    }
-  }
-
-  // Adds the sums to counts[t], t < num_thresholds().
-  void AddTo(std::vector<KittiCounts>* counts) const {
-    int64_t tp = 0, fp = 0, fn = 0;
-    for (size_t t = 0; t < similarity_.size(); ++t) {
-      tp += tp_[t];
-      fp += fp_[t];
-      fn += fn_[t];
-      KittiCounts& c = (*counts)[t];
-      c.tp += tp;
-      c.fp += fp;
-      c.fn += fn;
-      c.similarity += similarity_[t];
-    }
-  }
-
- private:
-  std::vector<int64_t> tp_, fp_, fn_;
-  std::vector<double> similarity_;
-};
-
 void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
                     const std::vector<double>& thresholds, PassTwoCounts* counts) {
   const size_t n_t = thresholds.size();

@@ -71,47 +71,48 @@ void ScoreMetricsAccumulator::DeceCells(const EvalFrame& frame, const ClassFrame
   }
 }
 
+namespace {
+
+// A TP detection j's overlap with its label in `a` (its edge among the label's), for LaECE.
+double TpOverlap(const ClassFrame& cf, const FrameAssociation& a, int j) {
+  const int e = cf.FindEdge(a.det_label[j], j);
+  return e >= 0 ? cf.edge_overlap[e] : ScoreMetricsAccumulator::kUnknownOverlap;
+}
+
+}  // namespace
+
+ScoreMetricsAccumulator::DeceCell ScoreMetricsAccumulator::DeceCellOf(
+    const EvalFrame& frame, const ClassFrame& cf, int j, double s,
+    const DeceCell* dece_cells) const {
+  return dece_cells != nullptr ? dece_cells[j]
+                               : DeceCellOf(s, &frame.detections[cf.det_object[j]].box);
+}
+
 void ScoreMetricsAccumulator::AddToBins(const EvalFrame& frame, const ClassFrame& cf,
                                         const FrameAssociation& a, Difficulty difficulty,
                                         const BinMasks& masks, size_t n_s,
                                         ScoreMetricsAccumulator* accs, const DeceCell* dece_cells) {
   if (n_s == 0) return;
-  // ForEachBrierTerm's order: the labels, then the TP and FP detections.
-  const ScoreTransform transform = accs[0].transform_;
-  for (int i = 0; i < cf.num_labels(); ++i) {
-    if (a.label_outcome[i] == Outcome::kTp) {
-      const int j = a.label_det[i];
-      const double s = ApplyScoreTransform(transform, cf.det_score[j]);
-      const double term = (1 - s) * (1 - s);
-      for (size_t k = 0; k < n_s; ++k) {
-        if (masks.Bin(k).KeepsPair(i, j)) accs[k].AddLabelTerm(term);
-      }
-    } else if (cf.LabelValid(i, difficulty)) {
-      for (size_t k = 0; k < n_s; ++k) {
-        if (masks.Bin(k).KeepsLabel(i)) accs[k].AddLabelTerm(1.0);
-      }
-    }
-  }
-  for (int j = 0; j < cf.num_dets(); ++j) {
-    const Outcome o = a.det_outcome[j];
-    if (o != Outcome::kTp && o != Outcome::kFp) continue;
-    const bool tp = o == Outcome::kTp;
-    const double s = ApplyScoreTransform(transform, cf.det_score[j]);
-    double overlap = 0.0;
-    if (tp) {  // the matched pair's overlap: its edge among the label's
-      const int e = cf.FindEdge(a.det_label[j], j);
-      overlap = e >= 0 ? cf.edge_overlap[e] : kUnknownOverlap;
-    }
-    const DeceCell cell = dece_cells != nullptr
-                              ? dece_cells[j]
-                              : accs[0].DeceCellOf(s, &frame.detections[cf.det_object[j]].box);
-    for (size_t k = 0; k < n_s; ++k) {
-      const MaskView mask = masks.Bin(k);
-      if (tp ? mask.KeepsPair(a.det_label[j], j) : mask.KeepsDetection(j)) {
-        accs[k].AddDetectionTermIn(s, tp, overlap, cell);
-      }
-    }
-  }
+  // Add's terms, each made once and given to every bin that keeps it.
+  ForEachBrierTerm(
+      cf, a, difficulty, accs[0].transform_, KeepEverything{},
+      [&](double term, int i, int j) {
+        for (size_t k = 0; k < n_s; ++k) {
+          const MaskView mask = masks.Bin(k);
+          if (j >= 0 ? mask.KeepsPair(i, j) : mask.KeepsLabel(i)) accs[k].AddLabelTerm(term);
+        }
+      },
+      [&](double s, Outcome o, int j) {
+        const bool tp = o == Outcome::kTp;
+        const double overlap = tp ? TpOverlap(cf, a, j) : 0.0;
+        const DeceCell cell = accs[0].DeceCellOf(frame, cf, j, s, dece_cells);
+        for (size_t k = 0; k < n_s; ++k) {
+          const MaskView mask = masks.Bin(k);
+          if (tp ? mask.KeepsPair(a.det_label[j], j) : mask.KeepsDetection(j)) {
+            accs[k].AddDetectionTermIn(s, tp, overlap, cell);
+          }
+        }
+      });
 }
 
 template <typename Keeps>
@@ -134,15 +135,9 @@ void ScoreMetricsAccumulator::AddKept(const EvalFrame& frame, const ClassFrame& 
         }
       },
       [&](double s, Outcome o, int j) {
-        double overlap = 0.0;
-        if (o == Outcome::kTp) {  // the matched pair's overlap: its edge among the label's
-          const int e = cf.FindEdge(a.det_label[j], j);
-          overlap = e >= 0 ? cf.edge_overlap[e] : kUnknownOverlap;
-        }
-        AddDetectionTermIn(s, o == Outcome::kTp, overlap,
-                           dece_cells != nullptr
-                               ? dece_cells[j]
-                               : DeceCellOf(s, &frame.detections[cf.det_object[j]].box));
+        const bool tp = o == Outcome::kTp;
+        AddDetectionTermIn(s, tp, tp ? TpOverlap(cf, a, j) : 0.0,
+                           DeceCellOf(frame, cf, j, s, dece_cells));
       });
 }
 

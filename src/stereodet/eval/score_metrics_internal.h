@@ -116,6 +116,9 @@ class ScoreMetricsAccumulator {
 
  private:
   DeceCell DeceCellOf(double s, const Box2D* box) const;
+  // Detection j's cell: dece_cells[j] where given (DeceCells), else from its box.
+  DeceCell DeceCellOf(const EvalFrame& frame, const ClassFrame& cf, int j, double s,
+                      const DeceCell* dece_cells) const;
   void AddDetectionTermIn(double s, bool tp, double overlap, const DeceCell& cell);
 
   template <typename Keeps>

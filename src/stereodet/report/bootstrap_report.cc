@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "stereodet/report/eval_report.h"
+#include "stereodet/report/report_json_internal.h"
 #include "stereodet/util/check.h"
 
 namespace stereodet {
@@ -56,7 +57,7 @@ std::string WithInterval(const BootstrapInterval& i, int decimals) {
                      FormatNumber(i.lower, decimals), FormatNumber(i.upper, decimals));
 }
 
-std::string Csv(double v) { return std::isnan(v) ? std::string() : fmt::format("{}", v); }
+using report_internal::Csv;
 // A bin edge: empty for an infinite one (breakdown.csv's convention).
 std::string Edge(double v) { return std::isinf(v) ? std::string() : Csv(v); }
 

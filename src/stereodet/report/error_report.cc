@@ -5,15 +5,15 @@
 #include <cmath>
 #include <sstream>
 
+#include "stereodet/report/report_json_internal.h"
+
 namespace stereodet {
 
 namespace {
 
 using nlohmann::json;
 
-json Number(double v) { return std::isnan(v) ? json(nullptr) : json(v); }
-
-std::string Csv(double v) { return std::isnan(v) ? std::string() : fmt::format("{}", v); }
+using report_internal::Csv;
 
 std::string Points(double v) { return std::isnan(v) ? std::string("-") : fmt::format("{:.2f}", v); }
 
@@ -28,24 +28,24 @@ json ErrorAnalysisJson(const ErrorAnalysis& a) {
   for (const ErrorType type : kTypes) {
     const int t = static_cast<int>(type);
     count[ErrorTypeName(type)] = a.count[t];
-    r40[ErrorTypeName(type)] = Number(a.delta_ap_r40[t]);
-    r11[ErrorTypeName(type)] = Number(a.delta_ap_r11[t]);
+    r40[ErrorTypeName(type)] = a.delta_ap_r40[t];
+    r11[ErrorTypeName(type)] = a.delta_ap_r11[t];
   }
   return {{"background_overlap", a.background_overlap},
           {"min_overlap", a.min_overlap},
           {"tp", a.tp},
           {"fp", a.fp},
           {"fn", a.fn},
-          {"ap_r40", Number(a.ap_r40)},
-          {"ap_r11", Number(a.ap_r11)},
+          {"ap_r40", a.ap_r40},
+          {"ap_r11", a.ap_r11},
           {"count", count},
           {"delta_ap_r40", r40},
           {"delta_ap_r11", r11},
           {"special",
-           {{"fp_r40", Number(a.delta_fp_r40)},
-            {"fp_r11", Number(a.delta_fp_r11)},
-            {"fn_r40", Number(a.delta_fn_r40)},
-            {"fn_r11", Number(a.delta_fn_r11)}}},
+           {{"fp_r40", a.delta_fp_r40},
+            {"fp_r11", a.delta_fp_r11},
+            {"fn_r40", a.delta_fn_r40},
+            {"fn_r11", a.delta_fn_r11}}},
           {"cls_incoming", a.cls_incoming},
           {"seconds", a.seconds}};
 }

@@ -13,6 +13,7 @@
 
 #include "stereodet/report/bootstrap_report.h"
 #include "stereodet/report/error_report.h"
+#include "stereodet/report/report_json_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/strings.h"
@@ -59,10 +60,7 @@ std::string CurveStem(const ClassResult& r) {
          LowerName(DifficultyName(r.difficulty));
 }
 
-std::string Csv(double v) {
-  if (std::isnan(v)) return "";
-  return fmt::format("{}", v);
-}
+using report_internal::Csv;
 
 }  // namespace
 
@@ -395,9 +393,8 @@ json EvalResultToJson(const std::vector<EvalRun>& runs, const EvalRunInfo& info)
   if (first.errors) {
     double error_seconds = 0.0;
     for (const EvalRun& run : runs) {
-      for (const ErrorAnalysis& a : run.errors.value_or(std::vector<ErrorAnalysis>{})) {
-        error_seconds += a.seconds;
-      }
+      if (!run.errors) continue;
+      for (const ErrorAnalysis& a : *run.errors) error_seconds += a.seconds;
     }
     j["error_analysis"] = {
         {"background_overlap", first.errors->empty() ? ErrorAnalysisOptions().background_overlap

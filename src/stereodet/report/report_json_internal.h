@@ -1,5 +1,5 @@
-// Reading results.json in the report: the number, text and fixed-point helpers that html_report.cc
-// and coco_report.cc share (the report module's own; not for users).
+// Reading results.json in the report, and writing its CSVs: the number, text and fixed-point
+// helpers the report module's files share (the report module's own; not for users).
 #ifndef STEREODET_REPORT_REPORT_JSON_INTERNAL_H_
 #define STEREODET_REPORT_REPORT_JSON_INTERNAL_H_
 
@@ -34,6 +34,9 @@ inline std::vector<double> Numbers(const nlohmann::json& j, const char* key) {
 inline std::string Str(const nlohmann::json& j, const char* key) {
   return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : "";
 }
+
+// A CSV field: the shortest text that reads back as `v`, or empty for NaN (not computed).
+inline std::string Csv(double v) { return std::isnan(v) ? std::string() : fmt::format("{}", v); }
 
 // "0.459" (`decimals` places), or "-" for NaN and infinities.
 inline std::string Fixed(double v, int decimals) {
