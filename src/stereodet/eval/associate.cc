@@ -25,6 +25,12 @@ FrameAssociator::FrameAssociator(Matcher matcher, const ClassFrame& frame, Diffi
   if (matcher == Matcher::kOptimal) optimal_.emplace(frame, difficulty);
 }
 
+FrameAssociator::FrameAssociator(const OptimalAssociator& optimal, Difficulty difficulty)
+    : matcher_(Matcher::kOptimal),
+      frame_(optimal.frame()),
+      difficulty_(difficulty),
+      optimal_(optimal) {}
+
 FrameAssociation FrameAssociator::At(double threshold, FrameAssociation reuse) const {
   if (optimal_) return optimal_->At(threshold, std::move(reuse));
   return Associate(matcher_, frame_, difficulty_, threshold, std::move(reuse));

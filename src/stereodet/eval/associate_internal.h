@@ -22,7 +22,10 @@ FrameAssociation Associate(Matcher matcher, const ClassFrame& frame, Difficulty 
 class FrameAssociator {
  public:
   FrameAssociator(Matcher matcher, const ClassFrame& frame, Difficulty difficulty);
+  // The optimal matcher's, on the graph `optimal` built (its preconditions apply).
+  explicit FrameAssociator(const OptimalAssociator& optimal, Difficulty difficulty);
   FrameAssociation At(double threshold, FrameAssociation reuse = {}) const;
+  Matcher matcher() const { return matcher_; }
 
  private:
   Matcher matcher_;

@@ -95,36 +95,55 @@ namespace {
 constexpr size_t kMaxExactAosScores = 256;
 constexpr size_t kAosSamples = 64;
 
+// Memory reused by one thread from call to call of FrameEventsFromAssociations: it runs once per
+// frame, class, difficulty and cell, mostly on frames of a few objects, where allocating its lists
+// afresh cost as much as the associations.
+struct EventScratch {
+  std::vector<uint8_t> has_edge;
+  std::vector<int32_t> order;
+  std::vector<std::pair<double, bool>> scores, sampled;
+  std::vector<Tally> prev, cur;
+  FrameAssociation a, everything;
+};
+
+EventScratch& EventMemory() {
+  thread_local EventScratch scratch;
+  return scratch;
+}
+
 // AssociationEvents for each of the first `n_s` selections of `masks` from one association per
-// distinct score; with `similarity_only` only the similarity changes are emitted, and scores whose
-// detections overlap no label are skipped (such a detection changes no pair of the optimal or VOC
-// association, only its own outcome). out[0].events starts as `append_to`.
-std::vector<FrameCurveEvents> FrameEventsFromAssociations(Matcher matcher, const ClassFrame& cf,
-                                                          Difficulty difficulty,
-                                                          const BinMasks& masks, size_t n_s,
-                                                          bool similarity_only, bool with_aos,
-                                                          std::vector<CurveEvent> append_to) {
-  std::vector<FrameCurveEvents> out(n_s);
-  if (n_s > 0) out[0].events = std::move(append_to);
-  std::vector<uint8_t> has_edge(cf.num_dets(), 0);
-  for (int e = 0; e < static_cast<int>(cf.edge_det.size()); ++e) has_edge[cf.edge_det[e]] = 1;
-  std::vector<int32_t> order(cf.num_dets());
+// distinct score, appended to events[s] (an array of n_s lists), each selection's FN with no
+// detection taken added to base_fn[s]; with `similarity_only` only the similarity changes are
+// emitted, and scores whose detections overlap no label are skipped (such a detection changes no
+// pair of the optimal or VOC association, only its own outcome).
+void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassFrame& cf,
+                                 Difficulty difficulty, const BinMasks& masks, size_t n_s,
+                                 bool similarity_only, bool with_aos,
+                                 std::vector<CurveEvent>* events, int64_t* base_fn) {
+  EventScratch& scratch = EventMemory();
+  std::vector<Tally>& prev = scratch.prev;
+  std::vector<Tally>& cur = scratch.cur;
+  prev.assign(n_s, Tally{});
+  TallyNoDetections(cf, difficulty, masks, n_s, prev.data());  // above every score
+  for (size_t s = 0; s < n_s; ++s) base_fn[s] += prev[s].fn;
+  if (cf.num_dets() == 0) return;  // no score: no event
+  std::vector<uint8_t>& has_edge = scratch.has_edge;
+  has_edge.assign(cf.num_dets(), 0);
+  for (const int32_t j : cf.edge_det) has_edge[j] = 1;
+  std::vector<int32_t>& order = scratch.order;
+  order.resize(cf.num_dets());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
-  // Every association of the frame on one overlap graph, each in the memory of the one before.
-  const FrameAssociator associator(matcher, cf, difficulty);
-  FrameAssociation a;
-  std::vector<Tally> prev(n_s);
-  TallyNoDetections(cf, difficulty, masks, n_s, prev.data());  // above every score
-  for (size_t s = 0; s < n_s; ++s) out[s].base_fn = prev[s].fn;
   // The distinct scores, each with whether one of its detections has an edge. A score whose
   // detections all have none changes no pair of the optimal or VOC association: each of its
   // detections only adds its own outcome, which is the same at every threshold (it pairs with
   // nothing; DontCare and its height decide it), so it is read once from the association of all
   // the detections instead of associating again.
-  std::vector<std::pair<double, bool>> scores;
-  const bool exact = matcher != Matcher::kKitti;  // (the KITTI matcher's passes: every score)
+  std::vector<std::pair<double, bool>>& scores = scratch.scores;
+  scores.clear();
+  // (The KITTI matcher's passes: every score.)
+  const bool exact = associator.matcher() != Matcher::kKitti;
   for (size_t k = 0; k < order.size();) {
     const double score = cf.det_score[order[k]];
     bool relevant = !exact;
@@ -136,30 +155,36 @@ std::vector<FrameCurveEvents> FrameEventsFromAssociations(Matcher matcher, const
     // A huge component (thousands of overlapping detections): bound the cost to kAosSamples
     // associations, evenly spaced over its scores, the lowest included; the similarity is held
     // between them (documented approximation; the counts are exact, they come from elsewhere).
-    std::vector<std::pair<double, bool>> sampled;
+    std::vector<std::pair<double, bool>>& sampled = scratch.sampled;
+    sampled.clear();
     for (size_t s = 1; s <= kAosSamples; ++s)
       sampled.push_back(scores[s * scores.size() / kAosSamples - 1]);
-    scores = std::move(sampled);
+    scores.swap(sampled);
   }
-  std::optional<FrameAssociation> everything;  // with every detection: the edgeless ones' outcomes
-  size_t next = 0;                             // into `order`: the first detection not yet entered
+  // Every association in the memory of the one before.
+  FrameAssociation& a = scratch.a;
+  FrameAssociation& everything = scratch.everything;  // with every detection: the edgeless ones'
+  bool have_everything = false;
+  cur.resize(n_s);
+  size_t next = 0;  // into `order`: the first detection not yet entered
   for (const auto& [score, relevant] : scores) {
     // The detections entering at this score (order is by descending score).
     const size_t first = next;
     while (next < order.size() && cf.det_score[order[next]] >= score) ++next;
-    std::vector<Tally> cur(n_s);
     if (relevant) {
+      std::fill(cur.begin(), cur.end(), Tally{});
       a = associator.At(score, std::move(a));
       TallyBins(cf, a, masks, n_s, cur.data());
     } else {
-      if (!everything) {
-        everything = associator.At(-std::numeric_limits<double>::infinity());
+      if (!have_everything) {
+        everything = associator.At(-std::numeric_limits<double>::infinity(), std::move(everything));
+        have_everything = true;
       }
       for (size_t s = 0; s < n_s; ++s) {
         cur[s] = prev[s];
         for (size_t k = first; k < next; ++k) {
           const int j = order[k];
-          if (everything->det_outcome[j] == Outcome::kFp && masks.Bin(s).KeepsDetection(j)) {
+          if (everything.det_outcome[j] == Outcome::kFp && masks.Bin(s).KeepsDetection(j)) {
             ++cur[s].fp;
           }
         }
@@ -176,10 +201,27 @@ std::vector<FrameCurveEvents> FrameEventsFromAssociations(Matcher matcher, const
         ev.fn = static_cast<int32_t>(cur[s].fn - prev[s].fn);
       }
       if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) {
-        out[s].events.push_back(ev);
+        events[s].push_back(ev);
       }
       prev[s] = cur[s];
     }
+  }
+}
+
+// FrameEventsFromAssociations into FrameCurveEvents, out[0].events starting as `append_to`.
+std::vector<FrameCurveEvents> FrameEventsOf(Matcher matcher, const ClassFrame& cf,
+                                            Difficulty difficulty, const BinMasks& masks,
+                                            size_t n_s, bool similarity_only, bool with_aos,
+                                            std::vector<CurveEvent> append_to) {
+  std::vector<std::vector<CurveEvent>> events(n_s);
+  std::vector<int64_t> base_fn(n_s, 0);
+  if (n_s > 0) events[0] = std::move(append_to);
+  FrameEventsFromAssociations(FrameAssociator(matcher, cf, difficulty), cf, difficulty, masks, n_s,
+                              similarity_only, with_aos, events.data(), base_fn.data());
+  std::vector<FrameCurveEvents> out(n_s);
+  for (size_t s = 0; s < n_s; ++s) {
+    out[s].events = std::move(events[s]);
+    out[s].base_fn = base_fn[s];
   }
   return out;
 }
@@ -336,17 +378,22 @@ void SingleLabelSimilarityEvents(const ClassFrame& cf, int label, Difficulty dif
 FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, const ClassFrame& cf,
                                    Difficulty difficulty, const StableSelection* selection,
                                    bool with_aos, std::vector<CurveEvent> append_to) {
-  return std::move(FrameEventsFromAssociations(matcher, cf, difficulty,
-                                               MaskSelection(frame, cf, selection), 1, false,
-                                               with_aos, std::move(append_to))
+  return std::move(FrameEventsOf(matcher, cf, difficulty, MaskSelection(frame, cf, selection), 1,
+                                 false, with_aos, std::move(append_to))
                        .front());
 }
 
 std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const ClassFrame& cf,
                                                 Difficulty difficulty, const BinMasks& masks,
                                                 size_t num_selections, bool with_aos) {
-  return FrameEventsFromAssociations(matcher, cf, difficulty, masks, num_selections, false,
-                                     with_aos, {});
+  return FrameEventsOf(matcher, cf, difficulty, masks, num_selections, false, with_aos, {});
+}
+
+void AppendAssociationEvents(const FrameAssociator& associator, const ClassFrame& cf,
+                             Difficulty difficulty, const BinMasks& masks, size_t num_selections,
+                             bool with_aos, std::vector<CurveEvent>* events, int64_t* base_fn) {
+  FrameEventsFromAssociations(associator, cf, difficulty, masks, num_selections, false, with_aos,
+                              events, base_fn);
 }
 
 std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const ClassFrame& cf,
@@ -358,12 +405,12 @@ std::vector<CurveEvent> OptimalSimilarityEvents(const EvalFrame& frame, const Cl
     SingleLabelSimilarityEvents(cf, label, difficulty, &scratch.dets, &events);
   };
   EdgeComponents(cf, on_label, &scratch);
+  int64_t base_fn = 0;  // (not needed: the counts come from elsewhere)
   for (int k = 0; k < scratch.num_comps; ++k) {
-    events = std::move(FrameEventsFromAssociations(Matcher::kOptimal, scratch.comps[k], difficulty,
-                                                   MaskSelection(frame, scratch.comps[k], nullptr),
-                                                   1, true, true, std::move(events))
-                           .front()
-                           .events);
+    const ClassFrame& comp = scratch.comps[k];
+    FrameEventsFromAssociations(FrameAssociator(Matcher::kOptimal, comp, difficulty), comp,
+                                difficulty, MaskSelection(frame, comp, nullptr), 1, true, true,
+                                &events, &base_fn);
   }
   return events;
 }

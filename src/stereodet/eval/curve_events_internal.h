@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "stereodet/eval/associate_internal.h"
 #include "stereodet/eval/association.h"
 #include "stereodet/eval/breakdown.h"
 #include "stereodet/eval/curves.h"
@@ -62,6 +63,13 @@ FrameCurveEvents AssociationEvents(Matcher matcher, const EvalFrame& frame, cons
 std::vector<FrameCurveEvents> AssociationEvents(Matcher matcher, const ClassFrame& cf,
                                                 Difficulty difficulty, const BinMasks& masks,
                                                 size_t num_selections, bool with_aos);
+// The same appended to events[s] (an array of num_selections lists), each selection's base_fn
+// added to base_fn[s], from the associations of `associator` (of `cf` at `difficulty`; a caller
+// that has built the optimal matcher's graph of the frame for its curve lends it): what a caller
+// collecting many frames' events uses, without a list per frame.
+void AppendAssociationEvents(const FrameAssociator& associator, const ClassFrame& cf,
+                             Difficulty difficulty, const BinMasks& masks, size_t num_selections,
+                             bool with_aos, std::vector<CurveEvent>* events, int64_t* base_fn);
 
 // The similarity events (AOS) of the optimal matcher's association on one frame, appended to
 // `append_to`: each connected component of the overlap graph on its own, one-label components in

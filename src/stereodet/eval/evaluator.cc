@@ -193,6 +193,7 @@ FilteredCurve SummarizeExact(std::vector<CurvePoint> curve, bool with_aos) {
 struct ExactCurveResult {
   FilteredCurve curve;
   int64_t num_valid_labels = 0;
+  std::vector<FilteredCurve> bins;  // with `bin_masks`: each bin's stable curve
 };
 
 // Curve and AP of the optimal or VOC matcher, exact at every score. AOS: VOC's pairs never change
@@ -200,48 +201,78 @@ struct ExactCurveResult {
 // labels when a detection arrives, so its similarity is taken from the association at each score.
 // With `assocs` (optimal matcher only; one per frame, their memory reused), each frame's
 // association at `threshold` is written there too, from the overlap graph its curve events are
-// computed on.
+// computed on. With `bin_masks` (each frame's masks of `num_bins` breakdown bins), the bins' stable
+// curves too, from the association at each distinct score of a frame, on the same graph.
 ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frames,
                             const std::vector<ClassFrame>& cfs, Difficulty difficulty,
                             bool with_aos, int num_threads,
-                            std::vector<FrameAssociation>* assocs = nullptr,
-                            double threshold = 0.0) {
-  constexpr size_t kBlock = 64;
-  const size_t num_blocks = (cfs.size() + kBlock - 1) / kBlock;
-  std::vector<std::vector<CurveEvent>> block_events(num_blocks);
-  std::vector<int64_t> block_labels(num_blocks, 0);
+                            std::vector<FrameAssociation>* assocs = nullptr, double threshold = 0.0,
+                            const std::vector<BinMasks>* bin_masks = nullptr, size_t num_bins = 0) {
+  // Per block of frames, the events in frame order (and each bin's): the blocks in order give
+  // them in frame order, as one list per frame would.
+  struct Block {
+    std::vector<CurveEvent> events;
+    int64_t num_labels = 0;
+    std::vector<std::vector<CurveEvent>> bin_events;
+    std::vector<int64_t> bin_labels;  // each bin's FN with no detection taken
+  };
+  const size_t n_s = bin_masks != nullptr ? num_bins : 0;
+  const size_t num_blocks = (cfs.size() + kFrameBlock - 1) / kFrameBlock;
+  std::vector<Block> blocks(num_blocks);
   ParallelFor(
       num_blocks,
       [&](size_t b) {
-        for (size_t i = b * kBlock; i < std::min(cfs.size(), (b + 1) * kBlock); ++i) {
-          block_labels[b] += CountValidLabels(cfs[i], difficulty);
-          if (matcher == Matcher::kOptimal && assocs != nullptr) {
-            (*assocs)[i] = OptimalFrameEventsAndAssociate(
-                cfs[i], difficulty, threshold, &block_events[b], std::move((*assocs)[i]));
+        Block& block = blocks[b];
+        block.bin_events.resize(n_s);
+        block.bin_labels.assign(n_s, 0);
+        for (size_t i = b * kFrameBlock; i < std::min(cfs.size(), (b + 1) * kFrameBlock); ++i) {
+          const ClassFrame& cf = cfs[i];
+          block.num_labels += CountValidLabels(cf, difficulty);
+          auto bins = [&](const FrameAssociator& associator) {
+            if (n_s == 0) return;
+            AppendAssociationEvents(associator, cf, difficulty, (*bin_masks)[i], n_s, with_aos,
+                                    block.bin_events.data(), block.bin_labels.data());
+          };
+          if (matcher == Matcher::kOptimal) {
+            // The frame's curve events, its operating point and its bins' events on one graph;
+            // then its similarity events (which build their components' graphs).
+            const OptimalAssociator associator(cf, difficulty);
+            associator.AppendFrameEvents(&block.events);
+            if (assocs != nullptr) (*assocs)[i] = associator.At(threshold, std::move((*assocs)[i]));
+            bins(FrameAssociator(associator, difficulty));
             if (with_aos) {
-              block_events[b] = OptimalSimilarityEvents(frames[i], cfs[i], difficulty,
-                                                        std::move(block_events[b]));
-            }
-          } else if (matcher == Matcher::kOptimal) {
-            block_events[b] = OptimalFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
-            if (with_aos) {
-              block_events[b] = OptimalSimilarityEvents(frames[i], cfs[i], difficulty,
-                                                        std::move(block_events[b]));
+              block.events =
+                  OptimalSimilarityEvents(frames[i], cf, difficulty, std::move(block.events));
             }
           } else {
-            block_events[b] = VocFrameEvents(cfs[i], difficulty, std::move(block_events[b]));
+            block.events = VocFrameEvents(cf, difficulty, std::move(block.events));
+            bins(FrameAssociator(matcher, cf, difficulty));
           }
         }
       },
       num_threads);
+  ExactCurveResult result;
   std::vector<CurveEvent> events;
-  int64_t num_valid_labels = 0;
-  for (size_t b = 0; b < num_blocks; ++b) {
-    num_valid_labels += block_labels[b];
-    events.insert(events.end(), block_events[b].begin(), block_events[b].end());
+  for (const Block& block : blocks) {
+    result.num_valid_labels += block.num_labels;
+    events.insert(events.end(), block.events.begin(), block.events.end());
   }
-  return {SummarizeExact(BuildCurve(std::move(events), num_valid_labels), with_aos),
-          num_valid_labels};
+  result.curve = SummarizeExact(BuildCurve(std::move(events), result.num_valid_labels), with_aos);
+  for (size_t s = 0; s < n_s; ++s) {
+    size_t num_events = 0;
+    int64_t num_labels = 0;
+    for (const Block& block : blocks) {
+      num_events += block.bin_events[s].size();
+      num_labels += block.bin_labels[s];
+    }
+    std::vector<CurveEvent> bin_events;
+    bin_events.reserve(num_events);
+    for (const Block& block : blocks) {
+      bin_events.insert(bin_events.end(), block.bin_events[s].begin(), block.bin_events[s].end());
+    }
+    result.bins.push_back(SummarizeExact(BuildCurve(std::move(bin_events), num_labels), with_aos));
+  }
+  return result;
 }
 
 // The stable filter's exact curve (optimal / VOC): the unfiltered association at every score.
@@ -278,32 +309,6 @@ std::vector<BinMasks> MaskAll(const std::vector<EvalFrame>& frames,
       cfs.size(), [&](size_t i) { masks[i] = MaskBins(frames[i], cfs[i], selections); },
       num_threads);
   return masks;
-}
-
-// StableExactCurve for several selections (breakdown bins, `n_s` of them in each frame's masks),
-// from one association per distinct score of a frame.
-std::vector<FilteredCurve> StableExactCurves(Matcher matcher, const std::vector<ClassFrame>& cfs,
-                                             Difficulty difficulty,
-                                             const std::vector<BinMasks>& masks, size_t n_s,
-                                             bool with_aos, int num_threads) {
-  std::vector<std::vector<FrameCurveEvents>> per_frame(cfs.size());
-  ParallelFor(
-      cfs.size(),
-      [&](size_t i) {
-        per_frame[i] = AssociationEvents(matcher, cfs[i], difficulty, masks[i], n_s, with_aos);
-      },
-      num_threads);
-  std::vector<FilteredCurve> curves;
-  for (size_t s = 0; s < n_s; ++s) {
-    std::vector<CurveEvent> events;
-    int64_t num_labels = 0;
-    for (size_t i = 0; i < cfs.size(); ++i) {
-      num_labels += per_frame[i][s].base_fn;
-      events.insert(events.end(), per_frame[i][s].events.begin(), per_frame[i][s].events.end());
-    }
-    curves.push_back(SummarizeExact(BuildCurve(std::move(events), num_labels), with_aos));
-  }
-  return curves;
 }
 
 // The stable filter's curves with the KITTI matcher, one per selection (`n_s` of them in each
@@ -605,6 +610,18 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
   const ClassSpec* cfs_class = nullptr;
   const ClassSpec* struck_cfs_class = nullptr;
   std::vector<std::vector<FrameAssociation>> assocs;  // by difficulty, then frame
+  // What depends only on a class's labels and detections, not on the overlap kind: made at the
+  // class's first kind and kept for the others while `cfs` keeps its selection (see below).
+  std::vector<StableSelection> bins;
+  for (const BreakdownOptions& breakdown : options.breakdowns) {
+    for (int b = 0; b < breakdown.num_bins(); ++b) {
+      bins.push_back(
+          StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
+    }
+  }
+  std::vector<BinMasks> bin_masks;                            // the bins' masks on every frame
+  std::vector<size_t> dece_first;                             // frame f's first D-ECE cell
+  std::vector<ScoreMetricsAccumulator::DeceCell> dece_cells;  // each detection's
   const std::vector<Difficulty>& difficulties = options.difficulties;
   const size_t n_d = difficulties.size();
   const bool kitti = options.matcher == Matcher::kKitti;
@@ -651,6 +668,9 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         cfs = PrepareAll(frames, spec, kind, options, std::move(cfs), NoFrameWork{},
                          cfs_class == &spec);
       }
+      // PrepareAll kept the previous kind's labels and detections (reuse_selection) unless this
+      // is the class's first kind; OpenPCDet's preparation selects them anew each time.
+      const bool same_objects = cfs_class == &spec && compat != EvalCompat::kOpenPcdet;
       cfs_class = &spec;
       if (!options.filter.empty()) {
         struck_cfs = PrepareAll(struck, spec, kind, options, std::move(struck_cfs), NoFrameWork{},
@@ -672,6 +692,12 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         assocs = AssociateAll(options.matcher, cfs, difficulties, t_op, threads, std::move(assocs));
       }
 
+      // The breakdown bins' masks on every frame, for all difficulties and kinds of the class.
+      if (!bins.empty() && !same_objects) bin_masks = MaskAll(frames, cfs, bins, threads);
+      const size_t n_s = bins.size();
+      // Each difficulty's bins' curves (the exact matchers': with the unfiltered curve).
+      std::vector<std::vector<FilteredCurve>> bin_curves(n_d);
+
       // Curves.
       if (kitti) {
         const std::vector<KittiClassResult> curves = kitti_passes.Finish();
@@ -683,7 +709,8 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           ClassResult& r = cell[d];
           ExactCurveResult exact =
               ExactCurve(options.matcher, frames, cfs, difficulties[d], with_aos, threads,
-                         optimal ? &assocs[d] : nullptr, t_op);
+                         optimal ? &assocs[d] : nullptr, t_op, &bin_masks, n_s);
+          bin_curves[d] = std::move(exact.bins);
           r.num_valid_labels = exact.num_valid_labels;
           FilteredCurve& c = exact.curve;
           r.curve = std::move(c.curve);
@@ -697,17 +724,6 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
       }
       for (ClassResult& r : cell) r.best_f1 = BestF1(r.curve);
 
-      // The breakdown bins and their masks on every frame, for all difficulties.
-      std::vector<StableSelection> bins;
-      for (const BreakdownOptions& breakdown : options.breakdowns) {
-        for (int b = 0; b < breakdown.num_bins(); ++b) {
-          bins.push_back(
-              StableSelection::Bin(breakdown.axis, breakdown.edges[b], breakdown.edges[b + 1]));
-        }
-      }
-      const std::vector<BinMasks> bin_masks =
-          bins.empty() ? std::vector<BinMasks>{} : MaskAll(frames, cfs, bins, threads);
-
       // The operating point: counts and the metrics of scores, each accumulator over the frames in
       // order.
       std::vector<ScoreMetricsAccumulator> accs;
@@ -717,14 +733,14 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
                           options.score_transform);
         accs.back().EnableDece(options.dece);
       }
-      // Each detection's D-ECE cell, once for the cell's difficulties and bins (dece_first[f]:
-      // frame f's first).
-      std::vector<size_t> dece_first(frames.size() + 1, 0);
-      for (size_t f = 0; f < frames.size(); ++f) {
-        dece_first[f + 1] = dece_first[f] + static_cast<size_t>(cfs[f].num_dets());
-      }
-      std::vector<ScoreMetricsAccumulator::DeceCell> dece_cells(dece_first.back());
-      if (n_d > 0) {
+      // Each detection's D-ECE cell (its score and 2D box), once for the class's kinds,
+      // difficulties and bins.
+      if (n_d > 0 && !same_objects) {
+        dece_first.assign(frames.size() + 1, 0);
+        for (size_t f = 0; f < frames.size(); ++f) {
+          dece_first[f + 1] = dece_first[f] + static_cast<size_t>(cfs[f].num_dets());
+        }
+        dece_cells.resize(dece_first.back());
         ForEachFrame(frames.size(), threads, [&](size_t f) {
           accs[0].DeceCells(frames[f], cfs[f], dece_cells.data() + dece_first[f]);
         });
@@ -777,16 +793,12 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
                                                      filter, with_aos, threads);
           r.filtered = fs;
         }
-        // Breakdowns: every bin from the cell's association, its masks made once per cell; the
+        // Breakdowns: every bin from the cell's association, its masks made once per class; the
         // curves of all bins from one association per run of thresholds (KITTI) or per distinct
-        // score (exact matchers).
-        const size_t n_s = bins.size();
-        std::vector<FilteredCurve> bin_curves;
-        if (n_s > 0) {
-          bin_curves = kitti ? StableKittiCurves(cfs, difficulty, r.kitti_thresholds, bin_masks,
-                                                 n_s, with_aos, threads, /*empty_slots_zero=*/true)
-                             : StableExactCurves(options.matcher, cfs, difficulty, bin_masks, n_s,
-                                                 with_aos, threads);
+        // score (exact matchers: made with the unfiltered curve above).
+        if (n_s > 0 && kitti) {
+          bin_curves[d] = StableKittiCurves(cfs, difficulty, r.kitti_thresholds, bin_masks, n_s,
+                                            with_aos, threads, /*empty_slots_zero=*/true);
         }
         // The bins' valid labels, operating points and score metrics: one pass over the frames for
         // all bins (each bin's sums in frame order, whatever the threads).
@@ -827,7 +839,7 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           bin.axis = selection.axis;
           bin.lower = selection.lower;
           bin.upper = selection.upper;
-          bin.curve = std::move(bin_curves[k]);
+          bin.curve = std::move(bin_curves[d][k]);
           if (bin.num_valid_labels == 0) {  // no label in the bin: no recall, AP undefined
             bin.curve.ap_r40 = bin.curve.ap_r11 = bin.curve.ap_voc = kNaN;
             bin.curve.aos_r40 = bin.curve.aos_r11 = kNaN;

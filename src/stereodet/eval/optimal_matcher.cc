@@ -247,21 +247,30 @@ OptimalAssociator::OptimalAssociator(const ClassFrame& frame, Difficulty difficu
   graph_generation_ = scratch.graph_generation;
 }
 
-FrameAssociation OptimalAssociator::At(double threshold, FrameAssociation reuse) const {
-  ThreadScratch& scratch = Scratch();
-  STEREODET_CHECK(scratch.graph_generation == graph_generation_)
+void OptimalAssociator::CheckGraph() const {
+  STEREODET_CHECK(Scratch().graph_generation == graph_generation_)
       << "OptimalAssociator used after another optimal-matcher call on its thread, or on another "
          "thread";
+}
+
+FrameAssociation OptimalAssociator::At(double threshold, FrameAssociation reuse) const {
+  CheckGraph();
+  ThreadScratch& scratch = Scratch();
   return AssociateOnGraph(frame_, scratch.graph, threshold, scratch, std::move(reuse));
+}
+
+void OptimalAssociator::AppendFrameEvents(std::vector<CurveEvent>* events) const {
+  CheckGraph();
+  ThreadScratch& scratch = Scratch();
+  if (frame_.num_dets() > 0) stereodet::AppendFrameEvents(frame_, scratch.graph, scratch, events);
 }
 
 FrameAssociation OptimalFrameEventsAndAssociate(const ClassFrame& f, Difficulty difficulty,
                                                 double threshold, std::vector<CurveEvent>* events,
                                                 FrameAssociation reuse) {
-  ThreadScratch& scratch = Scratch();
-  BuildGraph(f, difficulty, &scratch.graph);
-  if (f.num_dets() > 0) AppendFrameEvents(f, scratch.graph, scratch, events);
-  return AssociateOnGraph(f, scratch.graph, threshold, scratch, std::move(reuse));
+  const OptimalAssociator associator(f, difficulty);
+  associator.AppendFrameEvents(events);
+  return associator.At(threshold, std::move(reuse));
 }
 
 namespace {

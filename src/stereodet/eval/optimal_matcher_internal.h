@@ -57,8 +57,14 @@ class OptimalAssociator {
  public:
   OptimalAssociator(const ClassFrame& frame, Difficulty difficulty);
   FrameAssociation At(double threshold, FrameAssociation reuse = {}) const;
+  // OptimalFrameEvents(frame, difficulty) appended to *events, on the same graph.
+  void AppendFrameEvents(std::vector<CurveEvent>* events) const;
+  const ClassFrame& frame() const { return frame_; }
 
  private:
+  // The thread's graph is still the one this object built (else an exception).
+  void CheckGraph() const;
+
   const ClassFrame& frame_;
   uint64_t graph_generation_;
 };
