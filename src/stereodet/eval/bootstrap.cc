@@ -165,7 +165,7 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
     // Pass 2's counts change only where a detection of the frame enters: at its distinct scores.
     const std::vector<double> scores = cf.DistinctScores();
     if (!bins.empty()) {
-      // The bins' tallies of pass 2's association (StableKittiCurves' counts) at each distinct
+      // The bins' tallies of pass 2's association (KittiPasses' bin counts) at each distinct
       // score; above the highest, no detection takes part: 0 TP, 0 FP.
       std::vector<Tally> previous(bins.size()), current(bins.size());
       for (const double score : scores) {
@@ -203,7 +203,7 @@ FrameCell FrameStatistics(int32_t f, const EvalFrame& frame, const ClassFrame& c
                                                : VocFrameEvents(cf, difficulty);
     for (const CurveEvent& e : events) out.steps.push_back(Step{e.score, f, e.tp, e.fp, e.fn});
     if (!bins.empty()) {
-      // The bins' curve events (StableExactCurves'). Without the similarity, which only adds
+      // The bins' curve events (ExactCurve's). Without the similarity, which only adds
       // points that repeat their predecessor's precision and recall: no AP changes.
       const std::vector<FrameCurveEvents> bin_events =
           AssociationEvents(eval.matcher, cf, difficulty, masks, bins.size(), /*with_aos=*/false);
@@ -397,8 +397,8 @@ std::vector<double> KittiResampleThresholds(const CellData& cell, const std::vec
 
 // AP_R40 and AP_R11 of the KITTI matcher on the resample from `steps` counted at `thresholds`: the
 // cell's (KittiPasses' arithmetic: 0 / 0 kept as NaN, the devkit's or with `openpcdet_envelope`
-// numpy's envelope), or with `empty_slots_zero` a breakdown bin's (StableKittiCurves': precision 0
-// where the bin holds no detection, the devkit's envelope).
+// numpy's envelope), or with `empty_slots_zero` a breakdown bin's (KittiSelectionCurve's: precision
+// 0 where the bin holds no detection, the devkit's envelope).
 void KittiAp(const std::vector<Step>& steps, const std::vector<double>& thresholds,
              const std::vector<int32_t>& w, bool openpcdet_envelope, bool empty_slots_zero,
              Values* v) {

@@ -56,6 +56,16 @@ BinMasks MaskBins(const EvalFrame& frame, const ClassFrame& cf,
 
 void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
                Tally* out) {
+  TallyLabels(cf, a, masks, n_s, out);
+  const size_t nd = static_cast<size_t>(cf.num_dets());
+  for (size_t j = 0; j < nd; ++j) {
+    if (a.det_outcome[j] != Outcome::kFp) continue;
+    for (size_t s = 0; s < n_s; ++s) out[s].fp += masks.det[s * nd + j];
+  }
+}
+
+void TallyLabels(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
+                 Tally* out) {
   const size_t nl = static_cast<size_t>(cf.num_labels()), nd = static_cast<size_t>(cf.num_dets());
   for (size_t i = 0; i < nl; ++i) {
     if (a.label_outcome[i] == Outcome::kTp) {
@@ -72,10 +82,6 @@ void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& 
     } else if (a.label_outcome[i] == Outcome::kFn) {
       for (size_t s = 0; s < n_s; ++s) out[s].fn += masks.label[s * nl + i];
     }
-  }
-  for (size_t j = 0; j < nd; ++j) {
-    if (a.det_outcome[j] != Outcome::kFp) continue;
-    for (size_t s = 0; s < n_s; ++s) out[s].fp += masks.det[s * nd + j];
   }
 }
 

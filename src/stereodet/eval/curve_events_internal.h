@@ -36,6 +36,9 @@ Tally TallyAssociation(const EvalFrame& frame, const ClassFrame& cf, const Frame
 // TP's weight are read once for all; each sum goes in label order.
 void TallyBins(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
                Tally* out);
+// TallyBins' labels' part: the TP pairs (and their similarity) and the FN labels, no FP.
+void TallyLabels(const ClassFrame& cf, const FrameAssociation& a, const BinMasks& masks, size_t n_s,
+                 Tally* out);
 // TallyBins of the association in which no detection takes part (a threshold above every score),
 // without making it: with every matcher each valid label is a FN there, and nothing else counts.
 void TallyNoDetections(const ClassFrame& cf, Difficulty difficulty, const BinMasks& masks,

@@ -311,96 +311,47 @@ std::vector<BinMasks> MaskAll(const std::vector<EvalFrame>& frames,
   return masks;
 }
 
-// The stable filter's curves with the KITTI matcher, one per selection (`n_s` of them in each
-// frame's masks): the devkit's pass 2 association of the unfiltered set at the unfiltered
-// evaluation's thresholds (made once, whatever the number of selections), counted under each
-// selection, then the devkit's 41-slot arithmetic (NaN for 0 / 0 kept, envelope, AP_R40 / AP_R11).
-// With `empty_slots_zero` (breakdown bins) a threshold at which the selection holds no detection
-// has precision 0 instead of NaN: a bin's labels that nothing finds above it score 0, where NaN
-// would spread through the envelope to the whole AP.
-std::vector<FilteredCurve> StableKittiCurves(const std::vector<ClassFrame>& cfs,
-                                             Difficulty difficulty,
-                                             const std::vector<double>& thresholds,
-                                             const std::vector<BinMasks>& masks, size_t n_s,
-                                             bool with_aos, int num_threads,
-                                             bool empty_slots_zero = false) {
-  const size_t n_t = std::min<size_t>(thresholds.size(), kKittiSamplePoints);
-  // Per block of frames, each selection's counts over the thresholds (PassTwoCounts: summed in
-  // block order, as KittiPasses sums the unfiltered curve).
-  const size_t num_blocks = (cfs.size() + kFrameBlock - 1) / kFrameBlock;
-  std::vector<std::vector<PassTwoCounts>> blocks(num_blocks);
-  ParallelFor(
-      num_blocks,
-      [&](size_t b) {
-        std::vector<PassTwoCounts>& counts = blocks[b];
-        counts.assign(n_s, PassTwoCounts(n_t));
-        FrameAssociation a;
-        std::vector<Tally> tallies(n_s);
-        for (size_t i = b * kFrameBlock; i < std::min(cfs.size(), (b + 1) * kFrameBlock); ++i) {
-          const ClassFrame& cf = cfs[i];
-          if (cf.num_labels() == 0 && cf.num_dets() == 0) continue;  // nothing to count
-          // The association at a threshold depends only on which detections reach it, which
-          // changes only at the frame's own scores: one association per run of thresholds that
-          // the same scores reach (a frame has a few scores, the devkit up to 41 thresholds).
-          const std::vector<double> scores = cf.DistinctScores();  // descending
-          size_t reached = 0;
-          for (size_t t = 0; t < n_t;) {
-            while (reached < scores.size() && scores[reached] >= thresholds[t]) ++reached;
-            size_t end = t + 1;
-            if (reached < scores.size()) {
-              while (end < n_t && !(scores[reached] >= thresholds[end])) ++end;
-            } else {
-              end = n_t;
-            }
-            std::fill(tallies.begin(), tallies.end(), Tally{});
-            if (reached == 0) {  // no detection takes part yet
-              TallyNoDetections(cf, difficulty, masks[i], n_s, tallies.data());
-            } else {
-              a = KittiAssociate(cf, difficulty, thresholds[t], std::move(a));
-              TallyBins(cf, a, masks[i], n_s, tallies.data());
-            }
-            for (size_t s = 0; s < n_s; ++s) {
-              const Tally& tally = tallies[s];
-              counts[s].AddRun(t, end, tally.tp, tally.fp, tally.fn, tally.similarity);
-            }
-            t = end;
-          }
-        }
-      },
-      num_threads);
-  std::vector<FilteredCurve> curves(n_s);
-  for (size_t s = 0; s < n_s; ++s) {
-    FilteredCurve& c = curves[s];
-    std::array<double, kKittiSamplePoints> precision{}, aos{};
-    std::vector<KittiCounts> counts(n_t);
-    for (const std::vector<PassTwoCounts>& block : blocks) block[s].AddTo(&counts);
-    for (size_t t = 0; t < n_t; ++t) {
-      CurvePoint p;
-      p.threshold = thresholds[t];
-      p.tp = counts[t].tp;
-      p.fp = counts[t].fp;
-      p.fn = counts[t].fn;
-      p.similarity = counts[t].similarity;
-      p = FinishPoint(p);
-      c.curve.push_back(p);
-      if (empty_slots_zero && p.tp + p.fp == 0) {
-        precision[t] = aos[t] = 0.0;
-        continue;
-      }
-      precision[t] = static_cast<double>(p.tp) / static_cast<double>(p.tp + p.fp);
-      aos[t] = p.similarity / static_cast<double>(p.tp + p.fp);
-    }
-    for (size_t t = 0; t < n_t; ++t) {
-      precision[t] = *std::max_element(precision.begin() + t, precision.end());
-      aos[t] = *std::max_element(aos.begin() + t, aos.end());
-    }
-    c.ap_r40 = KittiApR40(precision);
-    c.ap_r11 = KittiApR11(precision);
-    c.ap_voc = kNaN;
-    c.aos_r40 = with_aos ? KittiApR40(aos) : kNaN;
-    c.aos_r11 = with_aos ? KittiApR11(aos) : kNaN;
+// A stable selection's curve with the KITTI matcher from its pass 2 counts at the unfiltered
+// evaluation's thresholds: the devkit's 41-slot arithmetic (KittiSlots: NaN for 0 / 0 kept,
+// envelope, AP_R40 / AP_R11). With `empty_slots_zero` (breakdown bins) a threshold at which the
+// selection holds no detection has precision 0 instead of NaN: a bin's labels that nothing finds
+// above it score 0, where NaN would spread through the envelope to the whole AP.
+FilteredCurve KittiSelectionCurve(const std::vector<double>& thresholds,
+                                  const std::vector<KittiCounts>& counts, bool with_aos,
+                                  bool empty_slots_zero) {
+  FilteredCurve c;
+  for (size_t t = 0; t < counts.size(); ++t) {
+    CurvePoint p;
+    p.threshold = thresholds[t];
+    p.tp = counts[t].tp;
+    p.fp = counts[t].fp;
+    p.fn = counts[t].fn;
+    p.similarity = counts[t].similarity;
+    c.curve.push_back(FinishPoint(p));
   }
-  return curves;
+  std::array<double, kKittiSamplePoints> precision, aos;
+  KittiSlots(counts, EvalCompat::kDevkit, empty_slots_zero, &precision, &aos);
+  c.ap_r40 = KittiApR40(precision);
+  c.ap_r11 = KittiApR11(precision);
+  c.ap_voc = kNaN;
+  c.aos_r40 = with_aos ? KittiApR40(aos) : kNaN;
+  c.aos_r11 = with_aos ? KittiApR11(aos) : kNaN;
+  return c;
+}
+
+// The stable filter's curve with the KITTI matcher (`masks` of the filter on each frame): the
+// devkit's pass 2 association of the unfiltered set at the unfiltered evaluation's thresholds,
+// counted under the filter (KittiPasses with the filter as its one bin; the breakdown bins are
+// counted in the cell's own pass 2).
+FilteredCurve StableKittiCurve(const std::vector<ClassFrame>& cfs, Difficulty difficulty,
+                               const std::vector<double>& thresholds,
+                               const std::vector<BinMasks>& masks, bool with_aos, int num_threads) {
+  KittiPasses passes(cfs.size(), {difficulty});
+  passes.UseThresholds({thresholds});
+  passes.SetBins(&masks, 1);
+  ForEachFrame(cfs.size(), num_threads, [&](size_t i) { passes.CountFrame(i, cfs[i]); });
+  return KittiSelectionCurve(thresholds, passes.Finish()[0].bin_counts[0], with_aos,
+                             /*empty_slots_zero=*/false);
 }
 
 // The rows of one frame (see MatchRecord), in the documented order.
@@ -678,6 +629,14 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         struck_cfs_class = &spec;
       }
 
+      // The breakdown bins' masks on every frame, for all difficulties and kinds of the class.
+      if (!bins.empty() && !same_objects) bin_masks = MaskAll(frames, cfs, bins, threads);
+      const size_t n_s = bins.size();
+      // Each difficulty's bins' curves: made with the unfiltered curve (the KITTI matcher's bins
+      // counted in its pass 2, the exact matchers' on the graph of their curve).
+      std::vector<std::vector<FilteredCurve>> bin_curves(n_d);
+      if (kitti && n_s > 0) kitti_passes.SetBins(&bin_masks, n_s);
+
       // The operating point's associations (and the KITTI matcher's pass 2). The optimal matcher's
       // are made with its curve below, on the same overlap graphs.
       const bool optimal = options.matcher == Matcher::kOptimal;
@@ -692,17 +651,15 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
         assocs = AssociateAll(options.matcher, cfs, difficulties, t_op, threads, std::move(assocs));
       }
 
-      // The breakdown bins' masks on every frame, for all difficulties and kinds of the class.
-      if (!bins.empty() && !same_objects) bin_masks = MaskAll(frames, cfs, bins, threads);
-      const size_t n_s = bins.size();
-      // Each difficulty's bins' curves (the exact matchers': with the unfiltered curve).
-      std::vector<std::vector<FilteredCurve>> bin_curves(n_d);
-
       // Curves.
       if (kitti) {
         const std::vector<KittiClassResult> curves = kitti_passes.Finish();
         for (size_t d = 0; d < n_d; ++d) {
           cell[d] = WithKittiCurve(curves[d], with_aos, std::move(cell[d]));
+          for (const std::vector<KittiCounts>& counts : curves[d].bin_counts) {
+            bin_curves[d].push_back(KittiSelectionCurve(curves[d].thresholds, counts, with_aos,
+                                                        /*empty_slots_zero=*/true));
+          }
         }
       } else {
         for (size_t d = 0; d < n_d; ++d) {
@@ -785,21 +742,16 @@ EvalResult Evaluate(const std::vector<EvalFrame>& frames, const EvalOptions& opt
           fs.naive_curve =
               OwnCurve(options.matcher, struck, struck_cfs, difficulty, with_aos, threads, compat)
                   .curve;
-          fs.stable_curve = kitti ? StableKittiCurves(cfs, difficulty, r.kitti_thresholds,
-                                                      MaskAll(frames, cfs, {filter}, threads), 1,
-                                                      with_aos, threads)
-                                        .front()
-                                  : StableExactCurve(options.matcher, frames, cfs, difficulty,
-                                                     filter, with_aos, threads);
+          fs.stable_curve =
+              kitti ? StableKittiCurve(cfs, difficulty, r.kitti_thresholds,
+                                       MaskAll(frames, cfs, {filter}, threads), with_aos, threads)
+                    : StableExactCurve(options.matcher, frames, cfs, difficulty, filter, with_aos,
+                                       threads);
           r.filtered = fs;
         }
         // Breakdowns: every bin from the cell's association, its masks made once per class; the
         // curves of all bins from one association per run of thresholds (KITTI) or per distinct
         // score (exact matchers: made with the unfiltered curve above).
-        if (n_s > 0 && kitti) {
-          bin_curves[d] = StableKittiCurves(cfs, difficulty, r.kitti_thresholds, bin_masks, n_s,
-                                            with_aos, threads, /*empty_slots_zero=*/true);
-        }
         // The bins' valid labels, operating points and score metrics: one pass over the frames for
         // all bins (each bin's sums in frame order, whatever the threads).
         std::vector<BreakdownBin> bin_results(n_s);

@@ -4,8 +4,10 @@
 #include <memory>
 #include <utility>
 
+#include "stereodet/eval/curve_events_internal.h"
 #include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/eval/openpcdet_compat_internal.h"
+#include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
 
 namespace stereodet {
@@ -55,6 +57,12 @@ struct ThreadScratch {
   std::vector<int8_t> states;
   std::vector<uint8_t> assigned, interacting;
   std::vector<double> interacting_scores, free_fp_scores;
+  // Breakdown bins' (AddFrameCounts with bins): the free FPs by descending score, the association,
+  // each bin's tally of it and its free FPs so far.
+  std::vector<int32_t> free_fp_dets;
+  FrameAssociation association;
+  std::vector<Tally> bin_tallies;
+  std::vector<int64_t> bin_free_fp;
 };
 
 ThreadScratch& Scratch() {
@@ -215,17 +223,37 @@ KittiTpScores KittiCollectTpScores(const ClassFrame& frame, Difficulty difficult
 
 namespace {
 
+// Pass 2 of one frame at every threshold, added to *counts; with `bins` (each bin's mask of the
+// frame, bins->num_bins of them), each bin's counts of the same associations added to
+// bin_counts[s], as TallyBins counts KittiAssociate's association at each threshold.
+struct FrameBins {
+  const BinMasks* masks;
+  size_t num_bins;
+  PassTwoCounts* counts;
+};
+
 void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
-                    const std::vector<double>& thresholds, PassTwoCounts* counts) {
+                    const std::vector<double>& thresholds, PassTwoCounts* counts,
+                    const FrameBins* bins = nullptr) {
   const size_t n_t = thresholds.size();
   const FrameView f(frame, difficulty);
   int64_t n_valid = 0;
   for (int i = 0; i < f.num_labels; ++i) n_valid += f.LabelValid(i) ? 1 : 0;
+  ThreadScratch& scratch = Scratch();
+  const size_t n_s = bins != nullptr ? bins->num_bins : 0;
+  std::vector<Tally>& bin_tallies = scratch.bin_tallies;
+  if (n_s > 0) {
+    // Before any detection takes part: each bin's valid labels are FN.
+    bin_tallies.assign(n_s, Tally{});
+    TallyNoDetections(frame, difficulty, *bins->masks, n_s, bin_tallies.data());
+  }
   if (f.num_dets == 0) {  // many frames hold nothing of a class: every valid label is a FN
-    if (n_t > 0) counts->AddRun(0, n_t, 0, 0, n_valid, 0.0);
+    if (n_t > 0) {
+      counts->AddRun(0, n_t, 0, 0, n_valid, 0.0);
+      for (size_t s = 0; s < n_s; ++s) bins->counts[s].AddRun(0, n_t, 0, 0, bin_tallies[s].fn, 0.0);
+    }
     return;
   }
-  ThreadScratch& scratch = Scratch();
   const DetStateView states = DetStates(frame, difficulty, &scratch.states);
   const double tau = f.tau;
   // Detections that can be chosen by some label; only their presence above the threshold changes
@@ -238,16 +266,27 @@ void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
   }
   std::vector<double>& interacting_scores = scratch.interacting_scores;
   std::vector<double>& free_fp_scores = scratch.free_fp_scores;
+  std::vector<int32_t>& free_fp_dets = scratch.free_fp_dets;
   interacting_scores.clear();
   free_fp_scores.clear();
+  free_fp_dets.clear();
   for (int j = 0; j < f.num_dets; ++j) {
-    if (interacting[j])
+    if (interacting[j]) {
       interacting_scores.push_back(f.det_score[j]);
-    else if (states[j] == 0 && !f.det_dontcare[j])
+    } else if (states[j] == 0 && !f.det_dontcare[j]) {
       free_fp_scores.push_back(f.det_score[j]);
+      if (n_s > 0) free_fp_dets.push_back(j);
+    }
   }
   std::sort(interacting_scores.begin(), interacting_scores.end(), std::greater<double>());
   std::sort(free_fp_scores.begin(), free_fp_scores.end(), std::greater<double>());
+  // (The same order of scores: the first k of each list are the free FPs a threshold reaches.)
+  std::sort(free_fp_dets.begin(), free_fp_dets.end(),
+            [&](int32_t a, int32_t b) { return f.det_score[a] > f.det_score[b]; });
+  std::vector<int64_t>& bin_free_fp = scratch.bin_free_fp;
+  bin_free_fp.assign(n_s, 0);
+  FrameAssociation& a = scratch.association;
+  const size_t nd = static_cast<size_t>(f.num_dets);
 
   // The counts change only where a detection enters (its score >= the threshold), so the
   // thresholds go by runs over which nothing enters: the greedy runs once per run, and every
@@ -257,26 +296,41 @@ void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
   KittiCounts cached;
   for (size_t t = 0; t < n_t;) {
     const double threshold = thresholds[t];
-    const size_t inter_before = k_inter;
+    const size_t inter_before = k_inter, free_before = k_free;
     while (k_inter < n_inter && interacting_scores[k_inter] >= threshold) ++k_inter;
     while (k_free < n_free && free_fp_scores[k_free] >= threshold) ++k_free;
     if (t == 0 || k_inter != inter_before) {
       cached = KittiCounts{};
       if (k_inter == 0) {
-        cached.fn = n_valid;
+        cached.fn = n_valid;  // (the bins' tallies: still those of no detection)
       } else {
-        const Pass2Result r = RunPass2(f, states, threshold, &scratch.assigned, nullptr);
+        FrameAssociation* assoc = nullptr;
+        if (n_s > 0) {
+          a.label_outcome.assign(f.num_labels, Outcome::kIgnored);
+          a.label_det.assign(f.num_labels, -1);
+          a.det_outcome.assign(f.num_dets, Outcome::kNone);
+          a.det_label.assign(f.num_dets, -1);
+          assoc = &a;
+          bin_tallies.assign(n_s, Tally{});
+        }
+        const Pass2Result r = RunPass2(f, states, threshold, &scratch.assigned, assoc);
         const uint8_t* const assigned = scratch.assigned.data();
         cached.tp = r.tp;
         cached.fn = r.fn;
         cached.similarity = r.similarity;
+        if (n_s > 0) TallyLabels(frame, a, *bins->masks, n_s, bin_tallies.data());
         for (int j = 0; j < f.num_dets; ++j) {
           if (interacting[j] && states[j] == 0 && !assigned[j] && f.det_score[j] >= threshold &&
               !f.det_dontcare[j]) {
             ++cached.fp;
+            for (size_t s = 0; s < n_s; ++s) bin_tallies[s].fp += bins->masks->det[s * nd + j];
           }
         }
       }
+    }
+    for (size_t k = free_before; k < k_free && n_s > 0; ++k) {
+      const size_t j = static_cast<size_t>(free_fp_dets[k]);
+      for (size_t s = 0; s < n_s; ++s) bin_free_fp[s] += bins->masks->det[s * nd + j];
     }
     // The run ends at the first threshold after t at which the next detection of either list
     // enters (score >= threshold). The thresholds descend (and hold no NaN: they are TP scores), so
@@ -293,6 +347,11 @@ void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
     if (k_free < n_free) end = std::min(end, first_entered(free_fp_scores[k_free]));
     counts->AddRun(t, end, cached.tp, cached.fp + static_cast<int64_t>(k_free), cached.fn,
                    cached.similarity);
+    for (size_t s = 0; s < n_s; ++s) {
+      const Tally& tally = bin_tallies[s];
+      bins->counts[s].AddRun(t, end, tally.tp, tally.fp + bin_free_fp[s], tally.fn,
+                             tally.similarity);
+    }
     t = end;
   }
 }
@@ -352,8 +411,9 @@ struct KittiPasses::Blocks {
   // Pass 1, by difficulty then block: the TP scores in frame order, the valid labels.
   std::vector<std::vector<std::vector<double>>> scores;
   std::vector<std::vector<int64_t>> groundtruth;
-  // Pass 2, by difficulty then block.
+  // Pass 2, by difficulty then block; the bins', by difficulty, block, then bin.
   std::vector<std::vector<PassTwoCounts>> counts;
+  std::vector<std::vector<std::vector<PassTwoCounts>>> bin_counts;
 };
 
 KittiPasses::KittiPasses(size_t num_frames, std::vector<Difficulty> difficulties, EvalCompat compat)
@@ -394,10 +454,62 @@ void KittiPasses::ChooseThresholds() {
   }
 }
 
+void KittiPasses::UseThresholds(const std::vector<std::vector<double>>& thresholds) {
+  STEREODET_CHECK(thresholds.size() == difficulties_.size())
+      << "KittiPasses::UseThresholds: " << thresholds.size() << " lists for "
+      << difficulties_.size() << " difficulties";
+  blocks_->counts.clear();
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    KittiClassResult& result = results_[d];
+    result.thresholds = thresholds[d];
+    if (result.thresholds.size() > kKittiSamplePoints) result.thresholds.resize(kKittiSamplePoints);
+    blocks_->counts.emplace_back(num_blocks_, PassTwoCounts(result.thresholds.size()));
+  }
+}
+
+void KittiPasses::SetBins(const std::vector<BinMasks>* masks, size_t num_bins) {
+  bin_masks_ = masks;
+  num_bins_ = masks != nullptr ? num_bins : 0;
+  blocks_->bin_counts.clear();
+  for (size_t d = 0; d < difficulties_.size(); ++d) {
+    blocks_->bin_counts.emplace_back(
+        num_blocks_,
+        std::vector<PassTwoCounts>(num_bins_, PassTwoCounts(results_[d].thresholds.size())));
+  }
+}
+
 void KittiPasses::CountFrame(size_t frame_index, const ClassFrame& frame) {
   const size_t b = frame_index / kBlock;
   for (size_t d = 0; d < difficulties_.size(); ++d) {
-    AddFrameCounts(frame, difficulties_[d], results_[d].thresholds, &blocks_->counts[d][b]);
+    if (num_bins_ == 0) {
+      AddFrameCounts(frame, difficulties_[d], results_[d].thresholds, &blocks_->counts[d][b]);
+      continue;
+    }
+    const FrameBins bins{&(*bin_masks_)[frame_index], num_bins_, blocks_->bin_counts[d][b].data()};
+    AddFrameCounts(frame, difficulties_[d], results_[d].thresholds, &blocks_->counts[d][b], &bins);
+  }
+}
+
+void KittiSlots(const std::vector<KittiCounts>& counts, EvalCompat compat, bool empty_slots_zero,
+                std::array<double, kKittiSamplePoints>* precision,
+                std::array<double, kKittiSamplePoints>* aos) {
+  const size_t n_t = std::min<size_t>(counts.size(), kKittiSamplePoints);
+  precision->fill(0.0);
+  aos->fill(0.0);
+  for (size_t i = 0; i < n_t; ++i) {
+    const KittiCounts& c = counts[i];
+    if (empty_slots_zero && c.tp + c.fp == 0) continue;
+    (*precision)[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
+    (*aos)[i] = c.similarity / static_cast<double>(c.tp + c.fp);
+  }
+  if (compat == EvalCompat::kOpenPcdet) {
+    *precision = OpenPcdetEnvelope(*precision);
+    *aos = OpenPcdetEnvelope(*aos);
+  } else {
+    for (size_t i = 0; i < n_t; ++i) {
+      (*precision)[i] = *std::max_element(precision->begin() + i, precision->end());
+      (*aos)[i] = *std::max_element(aos->begin() + i, aos->end());
+    }
   }
 }
 
@@ -408,29 +520,22 @@ std::vector<KittiClassResult> KittiPasses::Finish() {
     result.counts.assign(n_t, KittiCounts{});
     for (size_t b = 0; b < num_blocks_; ++b) blocks_->counts[d][b].AddTo(&result.counts);
 
-    // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
-    std::array<double, kKittiSamplePoints> precision{}, aos{};
     for (size_t i = 0; i < n_t; ++i) {
       const KittiCounts& c = result.counts[i];
       result.recall[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fn);
-      precision[i] = static_cast<double>(c.tp) / static_cast<double>(c.tp + c.fp);
-      aos[i] = c.similarity / static_cast<double>(c.tp + c.fp);
     }
-    if (compat_ == EvalCompat::kOpenPcdet) {
-      precision = OpenPcdetEnvelope(precision);
-      aos = OpenPcdetEnvelope(aos);
-    } else {
-      for (size_t i = 0; i < n_t; ++i) {
-        precision[i] = *std::max_element(precision.begin() + i, precision.end());
-        aos[i] = *std::max_element(aos.begin() + i, aos.end());
+    // Precision, AOS, envelope: the devkit's arithmetic, NaN (0 / 0) included.
+    KittiSlots(result.counts, compat_, /*empty_slots_zero=*/false, &result.precision, &result.aos);
+    result.ap_r11 = KittiApR11(result.precision);
+    result.ap_r40 = KittiApR40(result.precision);
+    result.aos_r11 = KittiApR11(result.aos);
+    result.aos_r40 = KittiApR40(result.aos);
+    result.bin_counts.assign(num_bins_, std::vector<KittiCounts>(n_t));
+    for (size_t s = 0; s < num_bins_; ++s) {
+      for (size_t b = 0; b < num_blocks_; ++b) {
+        blocks_->bin_counts[d][b][s].AddTo(&result.bin_counts[s]);
       }
     }
-    result.precision = precision;
-    result.aos = aos;
-    result.ap_r11 = KittiApR11(precision);
-    result.ap_r40 = KittiApR40(precision);
-    result.aos_r11 = KittiApR11(aos);
-    result.aos_r40 = KittiApR40(aos);
   }
   return std::move(results_);
 }

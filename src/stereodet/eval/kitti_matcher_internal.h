@@ -26,7 +26,9 @@
 #include <vector>
 
 #include "stereodet/eval/association.h"
+#include "stereodet/eval/eval_options.h"
 #include "stereodet/eval/frame_data_internal.h"
+#include "stereodet/eval/selection_mask_internal.h"
 
 namespace stereodet {
 
@@ -124,7 +126,18 @@ struct KittiClassResult {
   std::array<double, kKittiSamplePoints> recall{};     // TP / (TP + FN) per threshold, 0 beyond
   double ap_r11 = 0.0, ap_r40 = 0.0;                   // percent
   double aos_r11 = 0.0, aos_r40 = 0.0;                 // percent (valid only if AOS was computed)
+  // With KittiPasses::SetBins: each breakdown bin's counts per threshold (of the same pass 2
+  // associations, counted under the bin's masks as TallyBins counts them).
+  std::vector<std::vector<KittiCounts>> bin_counts;
 };
+
+// The devkit's arithmetic on pass 2's counts (at most 41 thresholds): precision TP / (TP + FP) and
+// AOS similarity / (TP + FP) per threshold in 41 slots (0 beyond the thresholds; 0 / 0 is NaN as
+// in the devkit, or 0 with `empty_slots_zero`), each replaced by its envelope (the maximum over
+// the slots from it on; numpy's with EvalCompat::kOpenPcdet, see OpenPcdetEnvelope).
+void KittiSlots(const std::vector<KittiCounts>& counts, EvalCompat compat, bool empty_slots_zero,
+                std::array<double, kKittiSamplePoints>* precision,
+                std::array<double, kKittiSamplePoints>* aos);
 
 // Runs passes 1-5 over all frames (parallel over frames). With EvalCompat::kOpenPcdet the envelope
 // is numpy's (OpenPcdetEnvelope: a NaN slot makes every slot before it NaN); the rest is the same.
@@ -154,6 +167,13 @@ class KittiPasses {
 
   void CollectFrame(size_t frame_index, const ClassFrame& frame);
   void ChooseThresholds();
+  // Instead of CollectFrame and ChooseThresholds: pass 2 at these thresholds, one list per
+  // difficulty (descending; at most 41 used), e.g. an unfiltered evaluation's for a stable filter.
+  void UseThresholds(const std::vector<std::vector<double>>& thresholds);
+  // Optional, after ChooseThresholds and before any CountFrame: count breakdown bins too, frame
+  // i's masks (of `num_bins` bins) being (*masks)[i] (outliving the passes); their counts in each
+  // result's bin_counts.
+  void SetBins(const std::vector<BinMasks>* masks, size_t num_bins);
   void CountFrame(size_t frame_index, const ClassFrame& frame);
   // One result per difficulty, in the constructor's order.
   std::vector<KittiClassResult> Finish();
@@ -163,6 +183,8 @@ class KittiPasses {
   std::vector<Difficulty> difficulties_;
   EvalCompat compat_;
   size_t num_blocks_;
+  const std::vector<BinMasks>* bin_masks_ = nullptr;
+  size_t num_bins_ = 0;
   std::vector<KittiClassResult> results_;
   std::unique_ptr<Blocks> blocks_;
 };

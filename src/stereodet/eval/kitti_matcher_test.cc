@@ -1,13 +1,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <utility>
 
+#include "stereodet/eval/curve_events_internal.h"
 #include "stereodet/eval/devkit_overlap_internal.h"
 #include "stereodet/eval/evaluator.h"
 #include "stereodet/eval/kitti_matcher_internal.h"
 #include "stereodet/eval/random_frames.h"
+#include "stereodet/eval/selection_mask_internal.h"
 #include "stereodet/eval/test_objects.h"
 
 namespace stereodet {
@@ -446,6 +449,99 @@ TEST(KittiMatcherTest, FramesWithoutDerivedStatesGiveTheSameResults) {
         EXPECT_EQ(x.label_det, y.label_det);
         EXPECT_EQ(x.det_outcome, y.det_outcome);
         EXPECT_EQ(x.det_label, y.det_label);
+      }
+    }
+  }
+}
+
+// The breakdown bins' (or a stable filter's) counts that KittiPasses makes in its pass 2 (SetBins)
+// are, threshold by threshold, the sums over the frames of TallyBins on KittiAssociate's
+// association at that threshold, which is what a bin's curve is defined by; counting them changes
+// nothing of the unfiltered result; UseThresholds with the chosen thresholds gives the same counts.
+TEST(KittiMatcherTest, PassTwoCountsBinsAsTallyBinsCountsTheAssociationAtEachThreshold) {
+  RandomFramesOptions ro;
+  ro.num_frames = 150;  // three blocks
+  ro.seed = 33;
+  ro.crowded = true;
+  ro.score_decimals = 2;  // ties
+  const std::vector<EvalFrame> frames = RandomFrames(ro);
+  const std::vector<Difficulty> all = {Difficulty::kEasy, Difficulty::kModerate, Difficulty::kHard};
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<FilterCondition> filter = {{FilterBound::kMaxDistance, 10.0}};
+  const std::vector<std::vector<StableSelection>> selection_sets = {
+      {StableSelection::Bin(BreakdownAxis::kDistance, 0, 9),  // (crowded frames: z in [6, 14] m)
+       StableSelection::Bin(BreakdownAxis::kDistance, 9, 11),
+       StableSelection::Bin(BreakdownAxis::kDistance, 11, inf),
+       StableSelection::Bin(BreakdownAxis::kHeight, 0, 120)},
+      {StableSelection::Filter(filter)}};
+  for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::kLet3D}) {
+    std::vector<ClassFrame> cfs;
+    for (const EvalFrame& f : frames)
+      cfs.push_back(PrepareClassFrame(f, KittiClassSpec("Car"), kind));
+    for (const std::vector<StableSelection>& selections : selection_sets) {
+      SCOPED_TRACE(std::string(OverlapKindName(kind)) + " " +
+                   (selections.front().conditions ? "filter" : "bins"));
+      const size_t n_s = selections.size();
+      std::vector<BinMasks> masks;
+      for (size_t i = 0; i < frames.size(); ++i)
+        masks.push_back(MaskBins(frames[i], cfs[i], selections));
+      auto run = [&](bool with_bins, const std::vector<std::vector<double>>* thresholds) {
+        KittiPasses passes(cfs.size(), all);
+        if (thresholds) {
+          passes.UseThresholds(*thresholds);
+        } else {
+          for (size_t i = 0; i < cfs.size(); ++i) passes.CollectFrame(i, cfs[i]);
+          passes.ChooseThresholds();
+        }
+        if (with_bins) passes.SetBins(&masks, n_s);
+        for (size_t i = 0; i < cfs.size(); ++i) passes.CountFrame(i, cfs[i]);
+        return passes.Finish();
+      };
+      const std::vector<KittiClassResult> plain = run(false, nullptr);
+      const std::vector<KittiClassResult> got = run(true, nullptr);
+      std::vector<std::vector<double>> chosen;
+      for (const KittiClassResult& r : plain) chosen.push_back(r.thresholds);
+      const std::vector<KittiClassResult> given = run(true, &chosen);
+      std::vector<uint8_t> any_tp(n_s, 0), any_fp(n_s, 0);
+      for (size_t d = 0; d < all.size(); ++d) {
+        SCOPED_TRACE(DifficultyName(all[d]));
+        const std::vector<double>& thresholds = plain[d].thresholds;
+        ASSERT_FALSE(thresholds.empty());
+        ASSERT_EQ(got[d].thresholds, thresholds);
+        ASSERT_EQ(given[d].thresholds, thresholds);
+        EXPECT_EQ(got[d].ap_r40, plain[d].ap_r40);
+        EXPECT_EQ(got[d].aos_r40, plain[d].aos_r40);
+        EXPECT_TRUE(plain[d].bin_counts.empty());
+        ASSERT_EQ(got[d].bin_counts.size(), n_s);
+        ASSERT_EQ(given[d].bin_counts.size(), n_s);
+        for (size_t t = 0; t < thresholds.size(); ++t) {
+          EXPECT_EQ(got[d].counts[t].tp, plain[d].counts[t].tp);
+          EXPECT_EQ(got[d].counts[t].fp, plain[d].counts[t].fp);
+          EXPECT_EQ(got[d].counts[t].similarity, plain[d].counts[t].similarity);
+          std::vector<Tally> want(n_s);
+          for (size_t i = 0; i < cfs.size(); ++i) {
+            TallyBins(cfs[i], KittiAssociate(cfs[i], all[d], thresholds[t]), masks[i], n_s,
+                      want.data());
+          }
+          for (size_t s = 0; s < n_s; ++s) {
+            const KittiCounts& c = got[d].bin_counts[s][t];
+            EXPECT_EQ(c.tp, want[s].tp) << t << " " << s;
+            EXPECT_EQ(c.fp, want[s].fp) << t << " " << s;
+            EXPECT_EQ(c.fn, want[s].fn) << t << " " << s;
+            EXPECT_NEAR(c.similarity, want[s].similarity, 1e-9) << t << " " << s;
+            const KittiCounts& g = given[d].bin_counts[s][t];
+            EXPECT_EQ(g.tp, c.tp);
+            EXPECT_EQ(g.fp, c.fp);
+            EXPECT_EQ(g.fn, c.fn);
+            EXPECT_EQ(g.similarity, c.similarity);
+            any_tp[s] |= c.tp > 0;
+            any_fp[s] |= c.fp > 0;
+          }
+        }
+      }
+      for (size_t s = 0; s < n_s; ++s) {  // every selection counts something
+        EXPECT_TRUE(any_tp[s]) << s;
+        EXPECT_TRUE(any_fp[s]) << s;
       }
     }
   }

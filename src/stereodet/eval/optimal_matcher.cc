@@ -265,14 +265,6 @@ void OptimalAssociator::AppendFrameEvents(std::vector<CurveEvent>* events) const
   if (frame_.num_dets() > 0) stereodet::AppendFrameEvents(frame_, scratch.graph, scratch, events);
 }
 
-FrameAssociation OptimalFrameEventsAndAssociate(const ClassFrame& f, Difficulty difficulty,
-                                                double threshold, std::vector<CurveEvent>* events,
-                                                FrameAssociation reuse) {
-  const OptimalAssociator associator(f, difficulty);
-  associator.AppendFrameEvents(events);
-  return associator.At(threshold, std::move(reuse));
-}
-
 namespace {
 
 void MatchComponents(const ClassFrame& f, const OptimalGraph& g,

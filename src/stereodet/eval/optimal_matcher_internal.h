@@ -69,13 +69,6 @@ class OptimalAssociator {
   uint64_t graph_generation_;
 };
 
-// OptimalFrameEvents(frame, difficulty) appended to *events and OptimalAssociate(frame, difficulty,
-// threshold, reuse) returned, with the overlap graph built once for both (Evaluate needs both of
-// every frame and difficulty: the curve and the operating point).
-FrameAssociation OptimalFrameEventsAndAssociate(const ClassFrame& frame, Difficulty difficulty,
-                                                double threshold, std::vector<CurveEvent>* events,
-                                                FrameAssociation reuse = {});
-
 }  // namespace stereodet
 
 #endif  // STEREODET_EVAL_OPTIMAL_MATCHER_INTERNAL_H_

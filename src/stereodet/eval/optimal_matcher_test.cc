@@ -285,9 +285,9 @@ TEST(OptimalMatcherTest, EqualsBruteForceAtEveryThresholdOnThousandsOfFrames) {
   EXPECT_GT(optimal_beats_greedy, 0);  // the random frames do contain greedy's mistakes
 }
 
-// The combined call Evaluate makes (one graph for the curve and the operating point) gives exactly
-// the events and the association of the two separate calls, also when the association's memory
-// comes from another frame and when the events are appended to earlier ones.
+// The combined calls Evaluate makes (OptimalAssociator: one graph for the curve and the operating
+// point) give exactly the events and the association of the two separate calls, also when the
+// association's memory comes from another frame and when the events are appended to earlier ones.
 TEST(OptimalMatcherTest, EventsAndAssociateTogetherEqualTheSeparateCalls) {
   std::mt19937_64 rng(11);
   ClassSpec spec = KittiClassSpec("Car");
@@ -302,7 +302,9 @@ TEST(OptimalMatcherTest, EventsAndAssociateTogetherEqualTheSeparateCalls) {
       separate[0].score = together[0].score = 9.0;
       separate = OptimalFrameEvents(cf, d, std::move(separate));
       const FrameAssociation expected = OptimalAssociate(cf, d, t);
-      reuse = OptimalFrameEventsAndAssociate(cf, d, t, &together, std::move(reuse));
+      const OptimalAssociator associator(cf, d);
+      associator.AppendFrameEvents(&together);
+      reuse = associator.At(t, std::move(reuse));
       ASSERT_EQ(together.size(), separate.size()) << "trial " << trial;
       for (size_t k = 0; k < separate.size(); ++k) {
         ASSERT_EQ(together[k].score, separate[k].score) << "trial " << trial;
