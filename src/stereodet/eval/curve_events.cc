@@ -133,19 +133,29 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
   TallyNoDetections(cf, difficulty, masks, n_s, prev.data());  // above every score
   for (size_t s = 0; s < n_s; ++s) base_fn[s] += prev[s].fn;
   if (cf.num_dets() == 0) return;  // no score: no event
+  // A detection of the class with an edge to a valid label: only such a detection can change a
+  // pair, or excuse a label, when it enters (below).
   std::vector<uint8_t>& has_edge = scratch.has_edge;
   has_edge.assign(cf.num_dets(), 0);
-  for (const int32_t j : cf.edge_det) has_edge[j] = 1;
+  for (int i = 0; i < cf.num_labels(); ++i) {
+    if (!cf.LabelValid(i, difficulty)) continue;
+    for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
+      const int32_t j = cf.edge_det[e];
+      has_edge[j] = cf.det_is_class[j];
+    }
+  }
   std::vector<int32_t>& order = scratch.order;
   order.resize(cf.num_dets());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
-  // The distinct scores, each with whether one of its detections has an edge. A score whose
-  // detections all have none changes no pair of the optimal or VOC association: each of its
-  // detections only adds its own outcome, which is the same at every threshold (it pairs with
-  // nothing; DontCare and its height decide it), so it is read once from the association of all
-  // the detections instead of associating again.
+  // The distinct scores, each with whether one of its detections has such an edge. A score whose
+  // detections all have none changes no pair of the optimal or VOC association and excuses no
+  // label: each of its detections only adds its own outcome, which is the same at every threshold
+  // (it pairs with nothing, or, VOC, only ever with an ignored label; the optimal matcher's graph
+  // holds valid labels only; DontCare, its height and the ignored labels it overlaps decide it;
+  // another class's detection takes no part), so it is read once from the association of all the
+  // detections instead of associating again.
   std::vector<std::pair<double, bool>>& scores = scratch.scores;
   scores.clear();
   // (The KITTI matcher's passes: every score.)
