@@ -105,11 +105,11 @@ constexpr size_t kAosSamples = 64;
 // frame, class, difficulty and cell, mostly on frames of a few objects, where allocating its lists
 // afresh cost as much as the associations.
 struct EventScratch {
-  std::vector<uint8_t> has_edge;
+  std::vector<uint8_t> role, any_edge;
   std::vector<int32_t> order;
   std::vector<std::pair<double, bool>> scores, sampled;
   std::vector<Tally> prev, cur;
-  FrameAssociation a, everything;
+  FrameAssociation a;
 };
 
 EventScratch& EventMemory() {
@@ -133,15 +133,32 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
   TallyNoDetections(cf, difficulty, masks, n_s, prev.data());  // above every score
   for (size_t s = 0; s < n_s; ++s) base_fn[s] += prev[s].fn;
   if (cf.num_dets() == 0) return;  // no score: no event
-  // A detection of the class with an edge to a valid label: only such a detection can change a
-  // pair, or excuse a label, when it enters (below).
-  std::vector<uint8_t>& has_edge = scratch.has_edge;
-  has_edge.assign(cf.num_dets(), 0);
+  // What each detection can do when it enters: kPairs, change a pair or excuse a label (it is of
+  // the class, with an edge to a valid label); kAloneFp, nothing but count as a FP (of the class,
+  // high enough for the difficulty, overlapping no label at all, outside DontCare); kNothing, the
+  // rest (another class's, or one that is ignored or excused whatever the threshold). Only scores
+  // with a kPairs detection need the association again, and only those with a kAloneFp one change
+  // a count otherwise: a detection that is not kPairs changes no pair of the optimal or VOC
+  // association and excuses no label (the optimal matcher's graph holds valid labels only; VOC
+  // pairs it with an ignored label or nothing), and its own outcome is the same at every threshold.
+  enum Role : uint8_t { kNothing = 0, kPairs = 1, kAloneFp = 2 };
+  std::vector<uint8_t>& role = scratch.role;
+  role.assign(cf.num_dets(), kNothing);
+  std::vector<uint8_t>& any_edge = scratch.any_edge;
+  any_edge.assign(cf.num_dets(), 0);
   for (int i = 0; i < cf.num_labels(); ++i) {
-    if (!cf.LabelValid(i, difficulty)) continue;
+    const bool valid = cf.LabelValid(i, difficulty);
     for (int e = cf.edge_begin[i]; e < cf.edge_begin[i + 1]; ++e) {
       const int32_t j = cf.edge_det[e];
-      has_edge[j] = cf.det_is_class[j];
+      any_edge[j] = 1;
+      if (valid && cf.det_is_class[j]) role[j] = kPairs;
+    }
+  }
+  const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
+  for (int j = 0; j < cf.num_dets(); ++j) {
+    if (cf.det_is_class[j] && !any_edge[j] && !cf.det_dontcare[j] &&
+        !(std::trunc(cf.det_height[j]) < min_height)) {
+      role[j] = kAloneFp;
     }
   }
   std::vector<int32_t>& order = scratch.order;
@@ -149,23 +166,19 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
-  // The distinct scores, each with whether one of its detections has such an edge. A score whose
-  // detections all have none changes no pair of the optimal or VOC association and excuses no
-  // label: each of its detections only adds its own outcome, which is the same at every threshold
-  // (it pairs with nothing, or, VOC, only ever with an ignored label; the optimal matcher's graph
-  // holds valid labels only; DontCare, its height and the ignored labels it overlaps decide it;
-  // another class's detection takes no part), so it is read once from the association of all the
-  // detections instead of associating again.
+  // The distinct scores that change something, each with whether it needs the association.
   std::vector<std::pair<double, bool>>& scores = scratch.scores;
   scores.clear();
   // (The KITTI matcher's passes: every score.)
   const bool exact = associator.matcher() != Matcher::kKitti;
   for (size_t k = 0; k < order.size();) {
     const double score = cf.det_score[order[k]];
-    bool relevant = !exact;
-    for (; k < order.size() && cf.det_score[order[k]] == score; ++k)
-      relevant |= has_edge[order[k]] != 0;
-    if (relevant || !similarity_only) scores.emplace_back(score, relevant);
+    bool relevant = !exact, alone_fp = false;
+    for (; k < order.size() && cf.det_score[order[k]] == score; ++k) {
+      relevant |= role[order[k]] == kPairs;
+      alone_fp |= role[order[k]] == kAloneFp;
+    }
+    if (relevant || (alone_fp && !similarity_only)) scores.emplace_back(score, relevant);
   }
   if (similarity_only && scores.size() > kMaxExactAosScores) {
     // A huge component (thousands of overlapping detections): bound the cost to kAosSamples
@@ -179,8 +192,6 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
   }
   // Every association in the memory of the one before.
   FrameAssociation& a = scratch.a;
-  FrameAssociation& everything = scratch.everything;  // with every detection: the edgeless ones'
-  bool have_everything = false;
   cur.resize(n_s);
   size_t next = 0;  // into `order`: the first detection not yet entered
   for (const auto& [score, relevant] : scores) {
@@ -192,17 +203,11 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
       a = associator.At(score, std::move(a));
       TallyBins(cf, a, masks, n_s, cur.data());
     } else {
-      if (!have_everything) {
-        everything = associator.At(-std::numeric_limits<double>::infinity(), std::move(everything));
-        have_everything = true;
-      }
       for (size_t s = 0; s < n_s; ++s) {
         cur[s] = prev[s];
         for (size_t k = first; k < next; ++k) {
           const int j = order[k];
-          if (everything.det_outcome[j] == Outcome::kFp && masks.Bin(s).KeepsDetection(j)) {
-            ++cur[s].fp;
-          }
+          if (role[j] == kAloneFp && masks.Bin(s).KeepsDetection(j)) ++cur[s].fp;
         }
       }
     }
