@@ -154,18 +154,24 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
       if (valid && cf.det_is_class[j]) role[j] = kPairs;
     }
   }
+  // (det_state 0: of the class and high enough for the difficulty, derived once per frame.)
+  const bool has_states =
+      cf.det_state.size() == static_cast<size_t>(cf.num_dets()) * kNumDifficulties;
   const double min_height = KittiDifficultyLimits(difficulty).min_height_px;
   for (int j = 0; j < cf.num_dets(); ++j) {
-    if (cf.det_is_class[j] && !any_edge[j] && !cf.det_dontcare[j] &&
-        !(std::trunc(cf.det_height[j]) < min_height)) {
-      role[j] = kAloneFp;
-    }
+    if (any_edge[j] || cf.det_dontcare[j]) continue;
+    const bool counts = has_states
+                            ? cf.det_state[static_cast<size_t>(j) * kNumDifficulties +
+                                           static_cast<size_t>(difficulty)] == 0
+                            : cf.det_is_class[j] && !(std::trunc(cf.det_height[j]) < min_height);
+    if (counts) role[j] = kAloneFp;
   }
   std::vector<int32_t>& order = scratch.order;
   order.resize(cf.num_dets());
   std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(),
-            [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
+  // (Any order among equal scores: they enter together.)
+  StableSortSmall(order.begin(), order.end(),
+                  [&](int a, int b) { return cf.det_score[a] > cf.det_score[b]; });
   // The distinct scores that change something, each with whether it needs the association.
   std::vector<std::pair<double, bool>>& scores = scratch.scores;
   scores.clear();
@@ -212,16 +218,18 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
       }
     }
     for (size_t s = 0; s < n_s; ++s) {
-      CurveEvent ev;
-      ev.score = score;
       // Without AOS the similarity takes no part (it must not add curve points).
-      ev.similarity = with_aos ? cur[s].similarity - prev[s].similarity : 0.0;
-      if (!similarity_only) {
-        ev.tp = static_cast<int32_t>(cur[s].tp - prev[s].tp);
-        ev.fp = static_cast<int32_t>(cur[s].fp - prev[s].fp);
-        ev.fn = static_cast<int32_t>(cur[s].fn - prev[s].fn);
-      }
-      if (ev.tp != 0 || ev.fp != 0 || ev.fn != 0 || ev.similarity != 0.0) {
+      const double similarity = with_aos ? cur[s].similarity - prev[s].similarity : 0.0;
+      const int32_t tp = similarity_only ? 0 : static_cast<int32_t>(cur[s].tp - prev[s].tp);
+      const int32_t fp = similarity_only ? 0 : static_cast<int32_t>(cur[s].fp - prev[s].fp);
+      const int32_t fn = similarity_only ? 0 : static_cast<int32_t>(cur[s].fn - prev[s].fn);
+      if (tp != 0 || fp != 0 || fn != 0 || similarity != 0.0) {
+        CurveEvent ev;
+        ev.score = score;
+        ev.similarity = similarity;
+        ev.tp = tp;
+        ev.fp = fp;
+        ev.fn = fn;
         events[s].push_back(ev);
       }
       prev[s] = cur[s];

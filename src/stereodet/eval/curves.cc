@@ -18,7 +18,11 @@ CurvePoint FinishPoint(CurvePoint p) {
 std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels) {
   std::sort(events.begin(), events.end(),
             [](const CurveEvent& a, const CurveEvent& b) { return a.score > b.score; });
+  // At most one point per event: one allocation, not a doubling copy per power of two (the
+  // curves of a 3769-frame set hold tens of thousands of points; their pages are faulted in
+  // once instead of about twice).
   std::vector<CurvePoint> curve;
+  curve.reserve(events.size());
   CurvePoint current;
   current.fn = num_valid_labels;
   for (size_t i = 0; i < events.size();) {

@@ -224,6 +224,7 @@ ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frame
       [&](size_t b) {
         Block& block = blocks[b];
         block.bin_events.resize(n_s);
+        for (std::vector<CurveEvent>& e : block.bin_events) e.reserve(kFrameBlock);
         block.bin_labels.assign(n_s, 0);
         for (size_t i = b * kFrameBlock; i < std::min(cfs.size(), (b + 1) * kFrameBlock); ++i) {
           const ClassFrame& cf = cfs[i];
@@ -253,6 +254,9 @@ ExactCurveResult ExactCurve(Matcher matcher, const std::vector<EvalFrame>& frame
       num_threads);
   ExactCurveResult result;
   std::vector<CurveEvent> events;
+  size_t num_events = 0;
+  for (const Block& block : blocks) num_events += block.events.size();
+  events.reserve(num_events);
   for (const Block& block : blocks) {
     result.num_valid_labels += block.num_labels;
     events.insert(events.end(), block.events.begin(), block.events.end());
