@@ -166,6 +166,10 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
                             : cf.det_is_class[j] && !(std::trunc(cf.det_height[j]) < min_height);
     if (counts) role[j] = kAloneFp;
   }
+  // Nothing that can change a count (a frame with only other classes' detections, or ignored
+  // ones; about a third of the class frames of a KITTI-like set): no event.
+  const uint8_t needed = similarity_only ? kPairs : kPairs | kAloneFp;
+  if (std::none_of(role.begin(), role.end(), [&](uint8_t r) { return (r & needed) != 0; })) return;
   std::vector<int32_t>& order = scratch.order;
   order.resize(cf.num_dets());
   std::iota(order.begin(), order.end(), 0);
