@@ -1,9 +1,15 @@
 #include "stereodet/eval/curves.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
+#include <numeric>
 #include <utility>
+
+#include "stereodet/util/check.h"
 
 namespace stereodet {
 
@@ -15,9 +21,57 @@ CurvePoint FinishPoint(CurvePoint p) {
   return p;
 }
 
+namespace {
+
+// The positions of `events` in descending score, equal scores in their order in `events` (a
+// stable sort; -0 and +0 are one score). An LSD radix sort on the scores' bits, byte by byte,
+// skipping the bytes every score shares: several times faster than a comparison sort on the tens
+// of thousands of events of a curve. With a NaN score (no order), std::stable_sort's.
+std::vector<uint32_t> DescendingScoreOrder(const std::vector<CurveEvent>& events) {
+  const size_t n = events.size();
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  const bool any_nan = std::any_of(events.begin(), events.end(),
+                                   [](const CurveEvent& e) { return std::isnan(e.score); });
+  if (n < 64 || any_nan) {
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint32_t a, uint32_t b) { return events[a].score > events[b].score; });
+    return order;
+  }
+  // Keys whose ascending order is the scores' descending order: the IEEE bits made monotonic
+  // (negative: all bits flipped; positive: the sign bit set), then complemented.
+  std::vector<uint64_t> key(n), key_tmp(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double score = events[i].score == 0.0 ? 0.0 : events[i].score;  // -0 as +0
+    uint64_t bits;
+    std::memcpy(&bits, &score, sizeof bits);
+    bits = (bits >> 63) != 0 ? ~bits : bits | (uint64_t{1} << 63);
+    key[i] = ~bits;
+  }
+  std::vector<uint32_t> order_tmp(n);
+  std::array<size_t, 257> count;
+  for (int shift = 0; shift < 64; shift += 8) {
+    count.fill(0);
+    for (size_t i = 0; i < n; ++i) ++count[((key[i] >> shift) & 0xff) + 1];
+    if (std::find(count.begin() + 1, count.end(), n) != count.end()) continue;  // one byte value
+    for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
+    for (size_t i = 0; i < n; ++i) {
+      const size_t at = count[(key[i] >> shift) & 0xff]++;
+      key_tmp[at] = key[i];
+      order_tmp[at] = order[i];
+    }
+    key.swap(key_tmp);
+    order.swap(order_tmp);
+  }
+  return order;
+}
+
+}  // namespace
+
 std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels) {
-  std::sort(events.begin(), events.end(),
-            [](const CurveEvent& a, const CurveEvent& b) { return a.score > b.score; });
+  STEREODET_CHECK_LE(events.size(), std::numeric_limits<uint32_t>::max())
+      << "BuildCurve: too many curve events";
+  const std::vector<uint32_t> order = DescendingScoreOrder(events);
   // At most one point per event: one allocation, not a doubling copy per power of two (the
   // curves of a 3769-frame set hold tens of thousands of points; their pages are faulted in
   // once instead of about twice).
@@ -25,13 +79,14 @@ std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_v
   curve.reserve(events.size());
   CurvePoint current;
   current.fn = num_valid_labels;
-  for (size_t i = 0; i < events.size();) {
-    const double score = events[i].score;
-    for (; i < events.size() && events[i].score == score; ++i) {
-      current.tp += events[i].tp;
-      current.fp += events[i].fp;
-      current.fn += events[i].fn;
-      current.similarity += events[i].similarity;
+  for (size_t i = 0; i < order.size();) {
+    const double score = events[order[i]].score;
+    for (; i < order.size() && events[order[i]].score == score; ++i) {
+      const CurveEvent& e = events[order[i]];
+      current.tp += e.tp;
+      current.fp += e.fp;
+      current.fn += e.fn;
+      current.similarity += e.similarity;
     }
     current.threshold = score;
     current = FinishPoint(current);

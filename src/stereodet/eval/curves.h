@@ -30,7 +30,9 @@ struct CurvePoint {
 };
 
 // Sorts the events by descending score and sums them; FN starts at `num_valid_labels` (nothing
-// detected). One point per distinct score, in descending threshold order.
+// detected). One point per distinct score, in descending threshold order. Events of equal score
+// are summed in their order in `events` (a stable sort), so the similarity's floating-point sum is
+// fixed by the events' order alone, not by a sort algorithm's choices.
 std::vector<CurvePoint> BuildCurve(std::vector<CurveEvent> events, int64_t num_valid_labels);
 
 // `point` with precision, recall and the orientation ratio filled from its counts.

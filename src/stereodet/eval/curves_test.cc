@@ -91,5 +91,79 @@ TEST(CurvesTest, EveryPointApIntegratesTheEnvelope) {
   EXPECT_NEAR(InterpolatedApR11(curve), (6 * 1.0 + 5 * 2.0 / 3.0) / 11 * 100, 1e-12);
 }
 
+// Events of one score are summed in their order in the list (the sort is stable), so the
+// similarity's floating-point sum is the list's, whatever the sort: 1e16 + 1 rounds back to 1e16.
+TEST(CurvesTest, BuildCurveSumsEqualScoresInTheEventsOrder) {
+  auto event = [](double score, double similarity) {
+    CurveEvent e;
+    e.score = score;
+    e.tp = 1;
+    e.similarity = similarity;
+    return e;
+  };
+  const std::vector<CurvePoint> lost =
+      BuildCurve({event(0.5, 1e16), event(0.5, 1.0), event(0.5, -1e16), event(0.9, 0.0)}, 4);
+  const std::vector<CurvePoint> kept =
+      BuildCurve({event(0.5, 1e16), event(0.5, -1e16), event(0.5, 1.0), event(0.9, 0.0)}, 4);
+  ASSERT_EQ(lost.size(), 2u);
+  ASSERT_EQ(kept.size(), 2u);
+  EXPECT_EQ(lost[0].threshold, 0.9);
+  EXPECT_EQ(lost[1].threshold, 0.5);
+  EXPECT_EQ(lost[1].tp, 4);
+  EXPECT_EQ(lost[1].similarity, 0.0);
+  EXPECT_EQ(kept[1].similarity, 1.0);
+}
+
+// Property: BuildCurve's points are bit for bit those of a stable sort of the events by
+// descending score followed by the running sums, on random events with few distinct scores (many
+// ties, each event with its own similarity, so the order inside a tie shows), negative scores and
+// both zeros, from a handful of events to more than the radix sort's threshold.
+TEST(CurvesTest, BuildCurveEqualsAStableSortOfTheEvents) {
+  std::mt19937_64 rng(5);
+  for (const size_t n : {0, 1, 5, 63, 64, 300, 5000}) {
+    for (const int distinct : {1, 7, 100, 1000000}) {
+      std::uniform_int_distribution<int> score(0, distinct - 1), count(-1, 1);
+      std::uniform_real_distribution<double> similarity(-1.0, 1.0);
+      std::vector<CurveEvent> events(n);
+      for (CurveEvent& e : events) {
+        const int k = score(rng);
+        e.score = k == 0 ? (count(rng) < 0 ? -0.0 : 0.0) : (k - distinct / 2) / 100.0;
+        e.tp = count(rng);
+        e.fp = count(rng);
+        e.fn = count(rng);
+        e.similarity = similarity(rng);
+      }
+      std::vector<CurveEvent> sorted = events;
+      std::stable_sort(sorted.begin(), sorted.end(),
+                       [](const CurveEvent& a, const CurveEvent& b) { return a.score > b.score; });
+      std::vector<CurvePoint> want;
+      CurvePoint current;
+      current.fn = 40;
+      for (size_t i = 0; i < sorted.size();) {
+        const double s = sorted[i].score;
+        for (; i < sorted.size() && sorted[i].score == s; ++i) {
+          current.tp += sorted[i].tp;
+          current.fp += sorted[i].fp;
+          current.fn += sorted[i].fn;
+          current.similarity += sorted[i].similarity;
+        }
+        current.threshold = s;
+        current = FinishPoint(current);
+        want.push_back(current);
+      }
+      const std::vector<CurvePoint> got = BuildCurve(events, 40);
+      ASSERT_EQ(got.size(), want.size()) << n << " " << distinct;
+      for (size_t k = 0; k < got.size(); ++k) {
+        ASSERT_EQ(got[k].threshold, want[k].threshold) << n << " " << distinct << " " << k;
+        EXPECT_EQ(got[k].tp, want[k].tp);
+        EXPECT_EQ(got[k].fp, want[k].fp);
+        EXPECT_EQ(got[k].fn, want[k].fn);
+        EXPECT_TRUE(SameBits(got[k].similarity, want[k].similarity)) << n << " " << k;
+        EXPECT_TRUE(SameBits(got[k].orientation, want[k].orientation)) << n << " " << k;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace stereodet
