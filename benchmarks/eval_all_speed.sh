@@ -21,11 +21,13 @@
 #   everything: standard + --breakdown occlusion=0,1,2,3 --breakdown-naive
 #   errors:     let + --errors (the TIDE-style analysis: up to 8 re-evaluations of every cell)
 # CPU time = user + sys of the process (/usr/bin/time); the median of the rounds is printed, and
-# each variant's ratio to plain (and to the baseline's plain, with BASELINE).
+# each variant's ratio to plain (and to the baseline's plain, with BASELINE), as the ratio of the
+# medians and as the median of each round's own ratio (paired: a round's variants run within
+# seconds of each other, so a slow spell of the shared machine falls on both sides of its ratio).
 set -euo pipefail
 
 if [ $# -lt 1 ]; then
-  sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,26p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
 fi
 build=$(cd "$1" && pwd)
@@ -80,6 +82,12 @@ printf "%s frames (seed %s), matcher %s, %s rounds; CPU seconds (user + sys), me
 plain=$(echo "${times[plain]}" | median)
 base=""
 [ -n "${BASELINE:-}" ] && base=$(echo "${times["plain (baseline)"]}" | median)
+# The median over rounds of a variant's time over another's in the same round.
+paired() {  # paired NAME REFERENCE_NAME
+  paste -d' ' <(echo "${times[$1]}" | tr ' ' '\n' | grep -v '^$') \
+    <(echo "${times[$2]}" | tr ' ' '\n' | grep -v '^$') |
+    awk '{printf "%.4f\n", $1 / $2}' | median
+}
 for name in "plain (baseline)" "${variants[@]}"; do
   [ -n "${times[$name]:-}" ] || continue
   t=$(echo "${times[$name]}" | median)
@@ -87,4 +95,9 @@ for name in "plain (baseline)" "${variants[@]}"; do
     "$(awk -v a="$t" -v p="$plain" 'BEGIN {printf "%.2f", a / p}')" \
     "$([ -n "$base" ] && awk -v a="$t" -v p="$base" 'BEGIN {printf ", x%.2f the baseline", a / p}')" \
     "${times[$name]}"
+done
+echo "Paired (median over rounds of each round's ratio):"
+for name in "${variants[@]}"; do
+  printf "  %-18s x%.2f plain%s\n" "$name" "$(paired "$name" plain)" \
+    "$([ -n "$base" ] && printf ", x%.2f the baseline" "$(paired "$name" "plain (baseline)")")"
 done
