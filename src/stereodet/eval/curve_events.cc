@@ -228,13 +228,7 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
       const int32_t fp = similarity_only ? 0 : static_cast<int32_t>(cur[s].fp - prev[s].fp);
       const int32_t fn = similarity_only ? 0 : static_cast<int32_t>(cur[s].fn - prev[s].fn);
       if (tp != 0 || fp != 0 || fn != 0 || similarity != 0.0) {
-        CurveEvent ev;
-        ev.score = score;
-        ev.similarity = similarity;
-        ev.tp = tp;
-        ev.fp = fp;
-        ev.fn = fn;
-        events[s].push_back(ev);
+        events[s].push_back(CurveEvent{score, tp, fp, fn, similarity});
       }
       prev[s] = cur[s];
     }
