@@ -117,11 +117,10 @@ EventScratch& EventMemory() {
   return scratch;
 }
 
-// AssociationEvents for each of the first `n_s` selections of `masks` from one association per
-// distinct score, appended to events[s] (an array of n_s lists), each selection's FN with no
-// detection taken added to base_fn[s]; with `similarity_only` only the similarity changes are
-// emitted, and scores whose detections overlap no label are skipped (such a detection changes no
-// pair of the optimal or VOC association, only its own outcome).
+// AssociationEvents for each of the first `n_s` selections of `masks` from the association at each
+// distinct score where one can change (below), appended to events[s] (an array of n_s lists), each
+// selection's FN with no detection taken added to base_fn[s]; with `similarity_only` only the
+// similarity changes are emitted.
 void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassFrame& cf,
                                  Difficulty difficulty, const BinMasks& masks, size_t n_s,
                                  bool similarity_only, bool with_aos,
@@ -166,10 +165,16 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
                             : cf.det_is_class[j] && !(std::trunc(cf.det_height[j]) < min_height);
     if (counts) role[j] = kAloneFp;
   }
+  // (The KITTI matcher's greedy is not an optimum: a detection on an ignored label may become a FP
+  // when another takes the label, so with it every score is associated and nothing is skipped.)
+  const bool exact = associator.matcher() != Matcher::kKitti;
   // Nothing that can change a count (a frame with only other classes' detections, or ignored
   // ones; about a third of the class frames of a KITTI-like set): no event.
   const uint8_t needed = similarity_only ? kPairs : kPairs | kAloneFp;
-  if (std::none_of(role.begin(), role.end(), [&](uint8_t r) { return (r & needed) != 0; })) return;
+  if (exact &&
+      std::none_of(role.begin(), role.end(), [&](uint8_t r) { return (r & needed) != 0; })) {
+    return;
+  }
   std::vector<int32_t>& order = scratch.order;
   order.resize(cf.num_dets());
   std::iota(order.begin(), order.end(), 0);
@@ -179,8 +184,6 @@ void FrameEventsFromAssociations(const FrameAssociator& associator, const ClassF
   // The distinct scores that change something, each with whether it needs the association.
   std::vector<std::pair<double, bool>>& scores = scratch.scores;
   scores.clear();
-  // (The KITTI matcher's passes: every score.)
-  const bool exact = associator.matcher() != Matcher::kKitti;
   for (size_t k = 0; k < order.size();) {
     const double score = cf.det_score[order[k]];
     bool relevant = !exact, alone_fp = false;

@@ -67,7 +67,7 @@ TEST(CurveEventsTest, HugeComponentIsSampledAndExactAtTheLowestScore) {
   EXPECT_LE(r.aos_r40, r.ap_r40 + 1e-9);
 }
 
-// Property, on random frames (crowded and not, tied scores) for both exact matchers, 2D and
+// Property, on random frames (crowded and not, tied scores) for every matcher, 2D and
 // LET-3D, every difficulty: the breakdown bins' curves from AppendAssociationEvents (one
 // association per distinct score that can change a pair, the rest read from the association of
 // all detections) hold, at every score of the set, exactly the counts of tallying the matcher's
@@ -93,7 +93,7 @@ TEST(CurveEventsTest, BinEventsGiveTheAssociationsCountsAtEveryScore) {
     }
     std::sort(scores.begin(), scores.end(), std::greater<double>());
     scores.erase(std::unique(scores.begin(), scores.end()), scores.end());
-    for (const Matcher matcher : {Matcher::kOptimal, Matcher::kVoc}) {
+    for (const Matcher matcher : {Matcher::kOptimal, Matcher::kVoc, Matcher::kKitti}) {
       for (const OverlapKind kind : {OverlapKind::k2D, OverlapKind::kLet3D}) {
         std::vector<ClassFrame> cfs;
         std::vector<BinMasks> masks;

@@ -223,15 +223,17 @@ KittiTpScores KittiCollectTpScores(const ClassFrame& frame, Difficulty difficult
 
 namespace {
 
-// Pass 2 of one frame at every threshold, added to *counts; with `bins` (each bin's mask of the
-// frame, bins->num_bins of them), each bin's counts of the same associations added to
-// bin_counts[s], as TallyBins counts KittiAssociate's association at each threshold.
+// A frame's breakdown bins in AddFrameCounts: its masks of `num_bins` bins, and each bin's counts
+// (counts[s], s < num_bins).
 struct FrameBins {
   const BinMasks* masks;
   size_t num_bins;
   PassTwoCounts* counts;
 };
 
+// Pass 2 of one frame at every threshold, added to *counts; with `bins`, each bin's counts of the
+// same associations added to bins->counts[s], as TallyBins counts KittiAssociate's association at
+// each threshold.
 void AddFrameCounts(const ClassFrame& frame, Difficulty difficulty,
                     const std::vector<double>& thresholds, PassTwoCounts* counts,
                     const FrameBins* bins = nullptr) {
