@@ -175,6 +175,7 @@ double InterpolatedAosR11(const std::vector<CurvePoint>& curve) {
 
 double EveryPointAp(const std::vector<CurvePoint>& curve) {
   std::vector<std::pair<double, double>> pr;
+  pr.reserve(curve.size());
   for (const CurvePoint& p : curve) {
     if (p.tp + p.fp > 0) pr.emplace_back(p.recall, p.precision);
   }
@@ -182,7 +183,11 @@ double EveryPointAp(const std::vector<CurvePoint>& curve) {
   const auto by_recall = [](const auto& a, const auto& b) { return a.first < b.first; };
   if (!std::is_sorted(pr.begin(), pr.end(), by_recall))
     std::stable_sort(pr.begin(), pr.end(), by_recall);
-  std::vector<double> mrec = {0.0}, mpre = {0.0};
+  std::vector<double> mrec, mpre;
+  mrec.reserve(pr.size() + 2);
+  mpre.reserve(pr.size() + 2);
+  mrec.push_back(0.0);
+  mpre.push_back(0.0);
   for (const auto& [r, p] : pr) {
     mrec.push_back(r);
     mpre.push_back(p);
