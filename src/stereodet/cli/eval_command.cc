@@ -766,13 +766,16 @@ void AddEvalCommand(CLI::App& app) {
   eval->add_flag("--breakdown-naive", args->breakdown_naive,
                  "also each --breakdown bin evaluated on its own, its labels and detections "
                  "struck outside it before matching (the naive recomputation, for comparison: a "
-                 "line under each bin in the table, results.json's breakdown[].naive)");
+                 "line under each bin in the table, results.json's breakdown[].naive). Costs about "
+                 "one plain evaluation per bin (the stable bins of --breakdown cost a fraction of "
+                 "one)");
   eval->add_flag("--errors", args->errors,
                  "also the TIDE-style error analysis of every cell: each false positive "
                  "classified (cls, loc, both, dupe, bkg), each miss, and the AP_R40 gained by "
                  "fixing each type alone, re-evaluated with the cell's matcher; in the table, "
                  "results.json (each cell's errors) and OUT/errors.csv (docs/metrics.md, Error "
-                 "analysis). Costs about 15 plain evaluations");
+                 "analysis). Costs about 20 plain evaluations (up to 8 re-evaluations of every "
+                 "cell)");
   eval->add_option("--errors-background", args->errors_background,
                    "--errors: a false positive overlapping every label by at most this is a "
                    "background error (TIDE's 0.1)")
