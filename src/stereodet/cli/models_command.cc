@@ -122,12 +122,10 @@ bool PrintsSummary(const TrainOptions& t) {
   return t.distributed.rank == 0;
 }
 
-// The flags every `detect` command shares, bound to the fields of the same names in each family's
-// options. Two groups, so that each command's own flags keep their place in its --help. This one:
-// the model, the frames and the output folder (and det3d's --points, after --data, when
-// `points_dir` is given).
-template <typename DetectOptions>
-void AddDetectInputFlags(CLI::App* ds, DetectOptions& d,
+// The flags every `detect` command shares, bound to its options' DetectionRunOptions. Two groups,
+// so that each command's own flags keep their place in its --help. This one: the model, the frames
+// and the output folder (and det3d's --points, after --data, when `points_dir` is given).
+void AddDetectInputFlags(CLI::App* ds, DetectionRunOptions& d,
                          std::filesystem::path* points_dir = nullptr) {
   ds->add_option("--model", d.model_dir, "model folder")->required();
   ds->add_option("--data", d.data_root, "dataset root")->required();
@@ -146,8 +144,7 @@ void AddDetectInputFlags(CLI::App* ds, DetectOptions& d,
 }
 
 // The other group: batch size, threads, device and frame limit.
-template <typename DetectOptions>
-void AddDetectRunFlags(CLI::App* ds, DetectOptions& d) {
+void AddDetectRunFlags(CLI::App* ds, DetectionRunOptions& d) {
   ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

@@ -315,6 +315,35 @@ RunManifest DetectionManifest(const std::string& tool, const std::string& comman
   return manifest;
 }
 
+void DetectionRunOptions::Check() const {
+  STEREODET_CHECK(!model_dir.empty()) << "--model is required";
+  STEREODET_CHECK(!data_root.empty()) << "--data is required";
+  STEREODET_CHECK(!out_dir.empty()) << "--out is required";
+  STEREODET_CHECK(batch_size >= 1) << "batch size must be >= 1, got " << batch_size;
+  STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
+  STEREODET_CHECK(max_frames >= 0) << "max_frames must be >= 0, got " << max_frames;
+  shard.Check();
+  STEREODET_CHECK(ParseComputeDevice(device).has_value())
+      << "unknown device '" << device << "' (expected cpu or cuda)";
+}
+
+DetectionRun::DetectionRun(
+    const DetectionRunOptions& o, const std::string& family, DetectorOptions detector_options,
+    const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs)
+    : out(CheckedOutputDir(o.out_dir, o.data_root, o.subset, o.model_dir, more_inputs),
+          "detect " + family, DetectionFolderMakers()),
+      detector(
+          OpenDetectorOfFamily(o.model_dir, WithDevice(std::move(detector_options), o), family)),
+      dataset(o.data_root, o.subset),
+      all_ids(DetectFrameList(dataset, o.split, o.max_frames)),
+      ids(ShardFrames(all_ids, o.shard, o.batch_size)),
+      manifest_(DetectionManifest("detect " + family, o.command_line, o.model_dir, o.data_root,
+                                  o.subset, o.split)),
+      shard_(o.shard),
+      batch_size_(o.batch_size),
+      threads_(o.threads),
+      progress_(o.progress) {}
+
 std::filesystem::path DetectionRun::CheckedOutputDir(
     const std::filesystem::path& out_dir, const std::filesystem::path& data_root,
     const std::string& subset, const std::filesystem::path& model_dir,
@@ -326,11 +355,10 @@ std::filesystem::path DetectionRun::CheckedOutputDir(
   return out_dir;
 }
 
-DetectorOptions DetectionRun::WithDevice(DetectorOptions options, const std::string& device,
-                                         int threads, const fs::path& calibration) {
-  options.device = device;
-  options.threads = threads;
-  options.calibration = calibration;
+DetectorOptions DetectionRun::WithDevice(DetectorOptions options, const DetectionRunOptions& o) {
+  options.device = o.device;
+  options.threads = o.threads;
+  options.calibration = o.calibration;
   return options;
 }
 

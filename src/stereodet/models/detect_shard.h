@@ -120,22 +120,36 @@ MergeDetectionsResult MergeDetections(const MergeDetectionsOptions& options);
 void RunTwoStagePipeline(int num_batches, bool overlap, const std::function<void(int)>& prepare,
                          const std::function<void(int)>& consume);
 
-// The checks every detection run's options share (DetectSsdOptions, DetectRpnOptions and
-// DetectDet3dOptions::Check call it), on the fields of these names: --model, --data and --out
-// given, batch size >= 1, threads and max frames >= 0, the shard, a known device. Throws
-// std::invalid_argument naming the field.
-template <typename DetectOptions>
-void CheckDetectionRun(const DetectOptions& o) {
-  STEREODET_CHECK(!o.model_dir.empty()) << "--model is required";
-  STEREODET_CHECK(!o.data_root.empty()) << "--data is required";
-  STEREODET_CHECK(!o.out_dir.empty()) << "--out is required";
-  STEREODET_CHECK(o.batch_size >= 1) << "batch size must be >= 1, got " << o.batch_size;
-  STEREODET_CHECK(o.threads >= 0) << "threads must be >= 0, got " << o.threads;
-  STEREODET_CHECK(o.max_frames >= 0) << "max_frames must be >= 0, got " << o.max_frames;
-  o.shard.Check();
-  STEREODET_CHECK(ParseComputeDevice(o.device).has_value())
-      << "unknown device '" << o.device << "' (expected cpu or cuda)";
-}
+// The options every batch detection command shares (`detect ssd|rpn|det3d`): DetectSsdOptions,
+// DetectRpnOptions and DetectDet3dOptions are these plus their family's own. A family's default
+// batch size is its own (given to the constructor).
+struct DetectionRunOptions {
+  explicit DetectionRunOptions(int default_batch_size) : batch_size(default_batch_size) {}
+
+  std::filesystem::path model_dir;  // written by `stereodet train FAMILY`
+  std::filesystem::path data_root;  // KITTI layout
+  std::string subset = "training";  // "training" or "testing"
+  std::string split = "val";        // ImageSets/SPLIT.txt, or a path to a split file
+  std::filesystem::path out_dir;    // receives ID.txt per frame
+  int batch_size;                   // frames per forward pass
+  int threads = 0;                  // LibTorch and the per-frame preparation (0 = all cores)
+  int max_frames = 0;               // only the first N frames of the split (0 = all)
+  // Only shard K/N of those frames (after max_frames), in whole batches (above); 1/1 = all. A
+  // shard's folder also holds detect_shard.json, for `detect merge`; its detection files are those
+  // of one run of the same batch_size.
+  Shard shard;
+  std::string device = "cpu";  // cpu | cuda (device.h)
+  ProgressOptions progress;
+  std::string command_line;  // for OUT/run.json (empty from a library call)
+  // A score calibration file (`stereodet calibrate --fit`, kitti/score_calibration.h): every
+  // detection of a calibrated class is written with its calibrated probability (after the score
+  // threshold, which applies to the raw scores). Empty: the raw scores.
+  std::filesystem::path calibration;
+
+  // --model, --data and --out given, batch size >= 1, threads and max frames >= 0, the shard, a
+  // known device. Throws std::invalid_argument naming the field. A family's Check calls it.
+  void Check() const;
+};
 
 // run.json's fixed part for a detection run: its tool ("detect rpn"), this build's version, the
 // command line and the inputs model, data, subset and split (a family adds its own).
@@ -154,9 +168,6 @@ struct DetectSummary {
 };
 
 // What the three batch detection commands (`detect ssd|rpn|det3d`) do around their frames.
-// `DetectOptions` is one of their options structs; the fields read: model_dir, data_root, subset,
-// split, out_dir, max_frames, shard, batch_size, threads, device, progress, command_line and
-// calibration.
 class DetectionRun {
   // Made first (members are made in declaration order), so that DetectSummary::seconds counts
   // opening the output folder and the model too.
@@ -166,24 +177,11 @@ class DetectionRun {
   // Checks --out against the inputs (--data's subset and ImageSets, --model, and `more_inputs`,
   // each (flag, path)), opens the output folder (anything but an earlier detection folder is
   // refused before any work), opens the `family` detector ("ssd", "rpn", "det3d") with
-  // `detector_options` and the run's device and threads, and lists the run's frames and this
-  // shard's. Throws what those throw, naming the file or the flag.
-  template <typename DetectOptions>
-  DetectionRun(const DetectOptions& o, const std::string& family, DetectorOptions detector_options,
-               const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs = {})
-      : out(CheckedOutputDir(o.out_dir, o.data_root, o.subset, o.model_dir, more_inputs),
-            "detect " + family, DetectionFolderMakers()),
-        detector(OpenDetectorOfFamily(
-            o.model_dir, WithDevice(detector_options, o.device, o.threads, o.calibration), family)),
-        dataset(o.data_root, o.subset),
-        all_ids(DetectFrameList(dataset, o.split, o.max_frames)),
-        ids(ShardFrames(all_ids, o.shard, o.batch_size)),
-        manifest_(DetectionManifest("detect " + family, o.command_line, o.model_dir, o.data_root,
-                                    o.subset, o.split)),
-        shard_(o.shard),
-        batch_size_(o.batch_size),
-        threads_(o.threads),
-        progress_(o.progress) {}
+  // `detector_options` and the run's device, threads and calibration, and lists the run's frames
+  // and this shard's. Throws what those throw, naming the file or the flag.
+  DetectionRun(const DetectionRunOptions& o, const std::string& family,
+               DetectorOptions detector_options,
+               const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs = {});
 
   // Detects this shard's frames (`ids`) batch by batch and writes each frame's objects to
   // out/ID.txt: `read(id, frame)` fills a frame (a batch's frames in parallel, on the run's
@@ -213,8 +211,7 @@ class DetectionRun {
       const std::vector<std::pair<std::string, std::filesystem::path>>& more_inputs);
   // `detector_options` with the run's device, threads and calibration file (the Detector applies
   // it to every frame's objects).
-  static DetectorOptions WithDevice(DetectorOptions options, const std::string& device, int threads,
-                                    const std::filesystem::path& calibration);
+  static DetectorOptions WithDevice(DetectorOptions options, const DetectionRunOptions& o);
 
   RunManifest manifest_;
   Shard shard_;

@@ -28,7 +28,7 @@ namespace stereodet {
 void DetectDet3dOptions::Check() const {
   decode.Check();
   filter.Check();
-  CheckDetectionRun(*this);
+  DetectionRunOptions::Check();
 }
 
 DetectSummary DetectDet3d(const DetectDet3dOptions& options) {

@@ -17,29 +17,15 @@
 
 namespace stereodet {
 
-struct DetectDet3dOptions {
-  std::filesystem::path model_dir;
-  std::filesystem::path data_root;
+// The run's model, data, output, batch (1 frame), threads, shard, device and calibration
+// (detect_shard.h), and the 3D detector's own settings.
+struct DetectDet3dOptions : DetectionRunOptions {
+  DetectDet3dOptions() : DetectionRunOptions(/*default_batch_size=*/1) {}
+
   std::filesystem::path points_dir;  // stereo models: the `stereo --encode points` folder
-  std::string subset = "training";
-  std::string split = "val";
-  std::filesystem::path out_dir;
-  int batch_size = 1;
-  int threads = 0;
-  int max_frames = 0;
-  // Only shard K/N of those frames (after max_frames), in whole batches (detect_shard.h); 1/1 =
-  // all. A shard's folder also holds detect_shard.json, for `detect merge`.
-  Shard shard;
-  std::string device = "cpu";
-  Det3dDecodeOptions decode;  // score >= 0.1, BEV NMS 0.1, at most 100 boxes a frame
-  PointFilterOptions filter;  // as in training (LiDAR: the camera's view; stereo: 50 m)
-  ProgressOptions progress;
-  std::string command_line;
-  // A score calibration file (`stereodet calibrate --fit`, kitti/score_calibration.h): every
-  // detection of a calibrated class is written with its calibrated probability (after the score
-  // threshold, which applies to the raw scores). Empty: the raw scores.
-  std::filesystem::path calibration;
-  void Check() const;
+  Det3dDecodeOptions decode;         // score >= 0.1, BEV NMS 0.1, at most 100 boxes a frame
+  PointFilterOptions filter;         // as in training (LiDAR: the camera's view; stereo: 50 m)
+  void Check() const;                // throws std::invalid_argument
 };
 
 DetectSummary DetectDet3d(const DetectDet3dOptions& options);

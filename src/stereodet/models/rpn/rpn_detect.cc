@@ -25,7 +25,7 @@ namespace stereodet {
 
 void DetectRpnOptions::Check() const {
   detect.Check();
-  CheckDetectionRun(*this);
+  DetectionRunOptions::Check();
   STEREODET_CHECK(blur_sigma_px >= 0.0 && std::isfinite(blur_sigma_px))
       << "blur sigma must be >= 0, got " << blur_sigma_px;
 }

@@ -25,24 +25,15 @@
 
 namespace stereodet {
 
-struct DetectSsdOptions {
-  std::filesystem::path model_dir;  // written by `stereodet train ssd`
-  std::filesystem::path data_root;  // KITTI layout
-  std::string subset = "training";  // "training" or "testing"
-  std::string split = "val";        // ImageSets/SPLIT.txt, or a path to a split file
-  std::filesystem::path out_dir;    // receives ID.txt per frame
+// The run's model, data, output, batch (8 images), threads, shard (DetectSsdShardTest), device and
+// calibration (detect_shard.h), and the single-shot detector's own settings.
+struct DetectSsdOptions : DetectionRunOptions {
+  DetectSsdOptions() : DetectionRunOptions(/*default_batch_size=*/8) {}
+
   // Gaussian blur (sigma in original image px) of the network's image only; stereo matching sees
   // the sharp pair, as in the paper's degradation study. 0 = off.
   double blur_sigma_px = 0.0;
-  int batch_size = 8;
-  int threads = 0;     // LibTorch and the per-frame preparation (0 = all cores)
-  int max_frames = 0;  // only the first N frames of the split (0 = all)
-  // Only shard K/N of those frames (after max_frames), in whole batches (detect_shard.h); 1/1 =
-  // all. A shard's folder also holds detect_shard.json; its detection files are those of one run
-  // of the same batch_size (DetectSsdShardTest).
-  Shard shard;
-  std::string device = "cpu";  // cpu | cuda (device.h)
-  DecodeOptions decode;        // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
+  DecodeOptions decode;  // score threshold 0.01, NMS 0.45, at most 100 boxes a frame
   // Prepare the next batch (reading, stereo, encoding) on a second thread while the network runs
   // on this one (RunTwoStagePipeline). The detections are the same either way.
   bool pipeline = true;
@@ -54,12 +45,6 @@ struct DetectSsdOptions {
   // matching. Refused (std::invalid_argument naming the setting) when its stereo.json's settings
   // differ from those above (the model's, or `stereo`), and when its run.json records other data.
   std::filesystem::path stereo_dir;
-  ProgressOptions progress;
-  std::string command_line;  // for OUT/run.json (empty from a library call)
-  // A score calibration file (`stereodet calibrate --fit`, kitti/score_calibration.h): every
-  // detection of a calibrated class is written with its calibrated probability (after the score
-  // threshold, which applies to the raw scores). Empty: the raw scores.
-  std::filesystem::path calibration;
   void Check() const;  // throws std::invalid_argument
 };
 
