@@ -67,6 +67,13 @@ void SaveModelFolder(const std::filesystem::path& model_dir, const torch::nn::Mo
 void LoadModelWeights(const std::filesystem::path& model_dir, const std::string& config_text,
                       torch::nn::Module& module, const torch::Device& device);
 
+// `impl` as a ModelHandle or TrainerHandle owns it, with a deleter made here, where Impl is
+// complete.
+template <typename Impl>
+std::unique_ptr<Impl, void (*)(Impl*)> HandleOwned(std::unique_ptr<Impl> impl) {
+  return {impl.release(), [](Impl* p) { delete p; }};
+}
+
 // A family's model pimpl, new: `config` checked, then the weights drawn from `seed` (the same seed
 // gives the same weights). Impl(config, device) builds the network on `device`.
 template <typename Impl, typename Config>

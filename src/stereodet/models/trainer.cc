@@ -197,6 +197,15 @@ TrainingLoopSummary RunTrainingLoop(TrainingTask& task, const TrainingLoopOption
   return summary;
 }
 
+std::string ScheduleSettingsJson(const TrainingSchedule& schedule, int max_frames, int epochs_done,
+                                 size_t frames) {
+  return fmt::format(
+      R"("epochs": {}, "epochs_done": {}, "batch_size": {}, "learning_rate": {}, )"
+      R"("warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, "max_frames": {}, "frames": {})",
+      schedule.epochs, epochs_done, schedule.batch_size, schedule.learning_rate,
+      schedule.warmup_steps, schedule.final_lr_fraction, schedule.seed, max_frames, frames);
+}
+
 ProgressOptions RankProgress(ProgressOptions progress, const TrainingGroup* group) {
   if (group != nullptr && !group->IsRoot()) progress.stream = nullptr;
   return progress;

@@ -16,16 +16,19 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
+#include "stereodet/models/device.h"
 #include "stereodet/models/distributed.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/run_manifest.h"
+#include "stereodet/util/timer.h"
 
 namespace stereodet {
 
@@ -227,6 +230,104 @@ class TrainingFolder {
   bool resuming_ = false;
   std::filesystem::path config_path_, checkpoint_path_;
   std::string config_text_, recorded_run_, training_run_;
+};
+
+// The settings of run.json every training records, in this order, without braces: "epochs",
+// "epochs_done", "batch_size", "learning_rate", "warmup_steps", "final_lr_fraction", "seed",
+// "max_frames", "frames" (`frames`: the split's frames read).
+std::string ScheduleSettingsJson(const TrainingSchedule& schedule, int max_frames, int epochs_done,
+                                 size_t frames);
+
+// What every family's training (TrainSsd, TrainRpn, TrainDet3d) does the same way around its own
+// model, data and task, in the order of these calls:
+//   TrainingRun<TrainRpnOptions> run(options, "train rpn", {{"--init-from", dir}});
+//   const RpnConfig config = run.folder().ModelConfig(...);  // the flags' or, resuming,
+//   model.json's RpnModel model(config, run.options().seed, run.device());  // and the family's
+//   trainer if (!run.Resume(trainer, summary)) return summary;      // nothing left to train
+//   ... the family's data ...
+//   TrainingLoopOptions loop = run.LoopOptions(frames);     // + its columns, inputs, settings
+//   run.Train(task, loop, summary);
+// `TrainOptions` has a Check() and the fields CheckTrainingSchedule names.
+template <typename TrainOptions>
+class TrainingRun {
+  Timer timer_;  // made first: the summary's seconds count everything the run does
+
+ public:
+  // Checks `options`, sets LibTorch's threads, resolves the device, joins the training group
+  // (distributed.h; null alone) and opens the model folder: TrainingFolder of `tool` ("train
+  // rpn") with the family's input flags `inputs` ({"--points", dir}), resuming or not. Throws what
+  // those throw, naming the flag or the file.
+  TrainingRun(const TrainOptions& options, const std::string& tool,
+              const std::vector<std::pair<std::string, std::filesystem::path>>& inputs)
+      : options_(Checked(options)),
+        device_(ResolveComputeDevice(options_.device)),
+        group_(TrainingGroup::Connect(options_.distributed)),
+        folder_(options_.out_dir, options_.data_root, inputs, tool, options_.resume, options_.force,
+                group_.get()),
+        tool_(tool) {
+    options_.progress = RankProgress(options_.progress, group_.get());
+  }
+
+  // The options, with this rank's progress (RankProgress). A family may complete its own settings
+  // in them (the SSD's match scale), not the schedule's.
+  const TrainOptions& options() const { return options_; }
+  TrainOptions& options() { return options_; }
+  ComputeDevice device() const { return device_; }
+  TrainingGroup* group() const { return group_.get(); }
+  const TrainingFolder& folder() const { return folder_; }
+
+  // Starts `trainer` (the family's: SsdTrainer, RpnTrainer, Det3dTrainer) at this run's first
+  // epoch: 0 for a new training; resuming, the epochs of checkpoint.pt, which
+  // trainer.LoadCheckpoint(checkpoint, recorded run) loads (TrainingFolder::StartEpoch). Then the
+  // trainer trains as one rank of the group (SetGroup). Sets summary.epochs_done. Returns false
+  // when no epoch is left to train (summary.seconds set: the training is done already).
+  template <typename Trainer>
+  bool Resume(Trainer& trainer, TrainingRunSummary& summary) {
+    start_epoch_ = folder_.StartEpoch(
+        [&](const std::filesystem::path& checkpoint, const std::string& recorded_run) {
+          return trainer.LoadCheckpoint(checkpoint, recorded_run);
+        });
+    trainer.SetGroup(group_.get());
+    summary.epochs_done = start_epoch_;
+    if (start_epoch_ < options_.epochs) return true;
+    summary.seconds = timer_.ElapsedSeconds();
+    return false;
+  }
+
+  // The loop's options for `num_frames` training frames (TrainingLoopOptions::Of, from the epoch
+  // Resume found, in the group); the family adds its columns, inputs and settings_json.
+  TrainingLoopOptions LoopOptions(int num_frames) const {
+    TrainingLoopOptions loop = TrainingLoopOptions::Of(options_, tool_, num_frames, start_epoch_);
+    loop.group = group_.get();
+    return loop;
+  }
+
+  // run.json's settings every family records (ScheduleSettingsJson), for `frames` frames read.
+  std::string ScheduleSettings(int epochs_done, size_t frames) const {
+    return ScheduleSettingsJson(TrainingSchedule::Of(options_), options_.max_frames, epochs_done,
+                                frames);
+  }
+
+  // Runs the epochs (RunTrainingLoop) and completes `summary` (TrainingRunSummary::Finish, with
+  // the whole run's seconds).
+  void Train(TrainingTask& task, const TrainingLoopOptions& loop, TrainingRunSummary& summary) {
+    const TrainingLoopSummary done = RunTrainingLoop(task, loop);
+    summary.Finish(done, timer_.ElapsedSeconds());
+  }
+
+ private:
+  static TrainOptions Checked(const TrainOptions& options) {
+    options.Check();
+    SetTorchThreads(options.threads);
+    return options;
+  }
+
+  TrainOptions options_;
+  ComputeDevice device_;
+  std::unique_ptr<TrainingGroup> group_;
+  TrainingFolder folder_;
+  std::string tool_;
+  int start_epoch_ = 0;
 };
 
 }  // namespace stereodet

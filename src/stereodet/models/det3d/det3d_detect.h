@@ -6,14 +6,10 @@
 #ifndef STEREODET_MODELS_DET3D_DET3D_DETECT_H_
 #define STEREODET_MODELS_DET3D_DET3D_DETECT_H_
 
-#include <cstdint>
 #include <filesystem>
-#include <string>
 
 #include "stereodet/models/det3d/det3d_model.h"
 #include "stereodet/models/detect_shard.h"
-#include "stereodet/util/progress.h"
-#include "stereodet/util/shard.h"
 
 namespace stereodet {
 

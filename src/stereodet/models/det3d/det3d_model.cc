@@ -14,7 +14,9 @@
 #include "stereodet/models/det3d/det3d_net_internal.h"
 #include "stereodet/models/device_internal.h"
 #include "stereodet/models/distributed_internal.h"
+#include "stereodet/models/model_handle_internal.h"
 #include "stereodet/models/model_json_internal.h"
+#include "stereodet/models/trainer_handle_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -219,8 +221,8 @@ struct NetOutputs {
 
 // --- Det3dModel ----------------------------------------------------------------------------------
 
-struct Det3dModel::Impl {
-  Impl(const Det3dConfig& c, ComputeDevice d)
+struct internal::Det3dModelImpl {
+  Det3dModelImpl(const Det3dConfig& c, ComputeDevice d)
       : config(c),
         device(d),
         torch_device(internal::TorchDevice(d)),
@@ -254,6 +256,16 @@ struct Det3dModel::Impl {
   std::vector<LidarBox> anchors;
   torch::Tensor anchor_tensor, anchor_class, part_u, part_v;
   mutable internal::Det3dNet net;
+
+  // What ModelHandle asks of a family (model_handle_internal.h); model.json holds nothing else.
+  static Det3dConfig ConfigFromJson(const std::string& text, const std::string& source) {
+    return Det3dConfigFromJson(text, source);
+  }
+  void ReadModelJson(const std::string& /*text*/, const std::string& /*source*/) {}
+  int InputChannels() const { return kPillarFeatures; }
+  std::string ModelJson(const WeightsRecord& weights) const {
+    return Det3dConfigToJson(config, weights);
+  }
 
   // Decoded boxes [B, A, 7] (x, y, z, l, w, h, yaw) from residuals (box_coder's DecodeBox).
   torch::Tensor Decode(const torch::Tensor& residuals) const {
@@ -374,31 +386,8 @@ struct Det3dModel::Impl {
   }
 };
 
-Det3dModel::Det3dModel(const Det3dConfig& config, uint64_t seed, ComputeDevice device)
-    : impl_(internal::NewModelImpl<Impl>(config, seed, device)) {}
+template class ModelHandle<Det3dModel, Det3dConfig, internal::Det3dModelImpl>;
 
-Det3dModel::Det3dModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Det3dModel::~Det3dModel() = default;
-Det3dModel::Det3dModel(Det3dModel&&) noexcept = default;
-Det3dModel& Det3dModel::operator=(Det3dModel&&) noexcept = default;
-
-Det3dModel Det3dModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  return Det3dModel(
-      internal::LoadModelImpl<Impl>(model_dir, device, Det3dConfigFromJson,
-                                    [](Impl&, const std::string&, const std::string&) {}));
-}
-
-void Det3dModel::Save(const std::filesystem::path& model_dir,
-                      const std::string& training_run) const {
-  internal::SaveModelFolder(model_dir, *impl_->net, [&](const std::string& hash) {
-    return Det3dConfigToJson(impl_->config, {.fnv1a64 = hash,
-                                             .input_channels = kPillarFeatures,
-                                             .parameters = ParameterCount(),
-                                             .training_run = training_run});
-  });
-}
-
-const Det3dConfig& Det3dModel::config() const { return impl_->config; }
 const std::vector<LidarBox>& Det3dModel::anchors() const { return impl_->anchors; }
 ComputeDevice Det3dModel::device() const { return impl_->device; }
 
@@ -444,8 +433,6 @@ std::vector<std::vector<ScoredLidarBox>> Det3dModel::Detect(
   return detections;
 }
 
-int64_t Det3dModel::ParameterCount() const { return internal::CountParameters(*impl_->net); }
-
 int64_t Det3dModel::AuxiliaryParameterCount() const {
   return internal::CountParameters(*impl_->net->aux) +
          internal::CountParameters(*impl_->net->aux_seg) +
@@ -470,18 +457,27 @@ torch::Tensor FocalLoss(const torch::Tensor& logits, const torch::Tensor& target
 
 }  // namespace
 
-struct Det3dTrainer::Impl {
-  Impl(Det3dModel::Impl& m, const Det3dLossOptions& o, double weight_decay)
+struct internal::Det3dTrainerImpl {
+  Det3dTrainerImpl(Det3dModelImpl& m, const Det3dLossOptions& o, double weight_decay)
       : model(m),
         options(o),
         optimizer(m.net->parameters(),
                   torch::optim::AdamWOptions(1e-3).weight_decay(weight_decay)) {}
 
-  Det3dModel::Impl& model;
+  Det3dModelImpl& model;
   Det3dLossOptions options;
   torch::optim::AdamW optimizer;
   TrainingGroup* group = nullptr;
   std::unique_ptr<internal::GradientReducer> reducer;  // with a group
+
+  // What TrainerHandle asks of a family (trainer_handle_internal.h).
+  torch::nn::Module& Network() const { return *model.net; }
+  torch::Device Device() const { return model.torch_device; }
+  CheckpointRecord Record(const std::string& training_run) const {
+    return {.config_json = Det3dConfigToJson(model.config),
+            .parameters = CountParameters(*model.net),
+            .training_run = training_run};
+  }
 
   // With `group`, this rank's share of the group's whole batch's loss: every term divided by the
   // whole batch's positives or foreground points.
@@ -582,19 +578,22 @@ struct Det3dTrainer::Impl {
   }
 };
 
-Det3dTrainer::Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss, double weight_decay) {
+template class TrainerHandle<internal::Det3dTrainerImpl>;
+
+namespace {
+
+std::unique_ptr<internal::Det3dTrainerImpl> NewTrainerImpl(internal::Det3dModelImpl& model,
+                                                           const Det3dLossOptions& loss,
+                                                           double weight_decay) {
   loss.Check();
   STEREODET_CHECK(weight_decay >= 0.0) << "weight_decay must be >= 0, got " << weight_decay;
-  impl_ = std::make_unique<Impl>(*model.impl_, loss, weight_decay);
+  return std::make_unique<internal::Det3dTrainerImpl>(model, loss, weight_decay);
 }
 
-Det3dTrainer::~Det3dTrainer() = default;
+}  // namespace
 
-void Det3dTrainer::SetGroup(TrainingGroup* group) {
-  impl_->group = group;
-  impl_->reducer.reset();  // its hooks off before the network changes hands
-  impl_->reducer = internal::JoinGroup(group, *impl_->model.net);
-}
+Det3dTrainer::Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss, double weight_decay)
+    : TrainerHandle(internal::HandleOwned(NewTrainerImpl(*model.impl_, loss, weight_decay))) {}
 
 Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double learning_rate) {
   STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
@@ -613,23 +612,6 @@ Det3dLossParts Det3dTrainer::Evaluate(const std::vector<Det3dSample>& batch) con
   torch::NoGradGuard no_grad;
   impl_->model.net->eval();
   return impl_->Loss(batch, /*group=*/nullptr).second;
-}
-
-void Det3dTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
-                                  const std::string& training_run) const {
-  internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done,
-                                   {.config_json = Det3dConfigToJson(impl_->model.config),
-                                    .parameters = internal::CountParameters(*impl_->model.net),
-                                    .training_run = training_run});
-}
-
-int Det3dTrainer::LoadCheckpoint(const std::filesystem::path& path,
-                                 const std::string& training_run) {
-  return internal::LoadTrainingCheckpoint(
-      path, *impl_->model.net, impl_->optimizer, impl_->model.torch_device,
-      {.config_json = Det3dConfigToJson(impl_->model.config),
-       .parameters = internal::CountParameters(*impl_->model.net),
-       .training_run = training_run});
 }
 
 }  // namespace stereodet

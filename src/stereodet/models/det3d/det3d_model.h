@@ -26,7 +26,9 @@
 #include "stereodet/models/det3d/det3d_targets.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/distributed.h"
+#include "stereodet/models/model_handle.h"
 #include "stereodet/models/model_json.h"
+#include "stereodet/models/trainer_handle.h"
 
 namespace stereodet {
 
@@ -56,22 +58,17 @@ struct Det3dDecodeOptions {
   void Check() const;
 };
 
-// Not thread-safe: one thread at a time.
-class Det3dModel {
+namespace internal {
+struct Det3dModelImpl;
+struct Det3dTrainerImpl;
+}  // namespace internal
+
+// A new model from a config and a seed, Load, Save, config() and ParameterCount() are every
+// family's (model_handle.h). Not thread-safe: one thread at a time.
+class Det3dModel : public ModelHandle<Det3dModel, Det3dConfig, internal::Det3dModelImpl> {
  public:
-  Det3dModel(const Det3dConfig& config, uint64_t seed, ComputeDevice device = ComputeDevice::kCpu);
-  ~Det3dModel();
-  Det3dModel(Det3dModel&&) noexcept;
-  Det3dModel& operator=(Det3dModel&&) noexcept;
+  using ModelHandle::ModelHandle;
 
-  // Reads model.json and model.pt; refuses weights model.json does not record (hash, parameter
-  // count), naming both files.
-  static Det3dModel Load(const std::filesystem::path& model_dir,
-                         ComputeDevice device = ComputeDevice::kCpu);
-  // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord).
-  void Save(const std::filesystem::path& model_dir, const std::string& training_run = {}) const;
-
-  const Det3dConfig& config() const;
   const std::vector<LidarBox>& anchors() const;
   ComputeDevice device() const;
 
@@ -81,14 +78,12 @@ class Det3dModel {
   std::vector<std::vector<ScoredLidarBox>> Detect(const std::vector<Det3dSample>& samples,
                                                   const Det3dDecodeOptions& options = {}) const;
 
-  int64_t ParameterCount() const;           // all trainable parameters
   int64_t AuxiliaryParameterCount() const;  // of the auxiliary network (unused at inference)
 
  private:
+  friend class ModelHandle;  // Load makes one
   friend class Det3dTrainer;
-  struct Impl;
-  explicit Det3dModel(std::unique_ptr<Impl> impl);
-  std::unique_ptr<Impl> impl_;
+  using Impl = internal::Det3dModelImpl;
 };
 
 struct Det3dLossOptions {
@@ -101,25 +96,14 @@ struct Det3dLossOptions {
   void Check() const;
 };
 
-class Det3dTrainer {
+// Trains a Det3dModel in place. SetGroup and the checkpoints are every family's
+// (trainer_handle.h).
+class Det3dTrainer : public TrainerHandle<internal::Det3dTrainerImpl> {
  public:
   Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss = {}, double weight_decay = 1e-2);
-  ~Det3dTrainer();
-  // Trains as one rank of `group` from now on (null: alone); SsdTrainer::SetGroup says how.
-  void SetGroup(TrainingGroup* group);
   // One optimizer step; with a group, the loss returned is this rank's share of the whole batch's.
   Det3dLossParts Step(const std::vector<Det3dSample>& batch, double learning_rate);
   Det3dLossParts Evaluate(const std::vector<Det3dSample>& batch) const;
-  // The checkpoint records the config, the parameter count and `training_run`
-  // (checkpoint_internal.h); LoadCheckpoint refuses one of another model or, when `training_run`
-  // is not empty, of another training run, naming the difference, before loading anything.
-  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
-                      const std::string& training_run = {}) const;
-  int LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run = {});
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace stereodet

@@ -94,39 +94,21 @@ void TrainDet3dOptions::Check() const {
 }
 
 TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& given) {
-  given.Check();
-  const ComputeDevice device = ResolveComputeDevice(given.device);
-  const Timer total_timer;
-  SetTorchThreads(given.threads);
+  TrainingRun<TrainDet3dOptions> run(given, "train det3d", {{"--points", given.points_dir}});
+  const TrainDet3dOptions& options = run.options();
   TrainDet3dSummary summary;
-
-  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(given.distributed);
-  TrainDet3dOptions options = given;
-  options.progress = RankProgress(options.progress, group.get());
-  const TrainingFolder folder(options.out_dir, options.data_root,
-                              {{"--points", options.points_dir}}, "train det3d", options.resume,
-                              options.force, group.get());
-  const Det3dConfig config = folder.ModelConfig(
+  const Det3dConfig config = run.folder().ModelConfig(
       options.model, Det3dConfigFromJson,
       [](const Det3dConfig& c) { return std::string(PointSourceName(c.input)); });
 
   const KittiDataset dataset(options.data_root, "training");
   const std::vector<std::string> ids = TrainingFrameIds(dataset, options.split, options.max_frames);
 
-  Det3dModel model(config, options.seed, device);
+  Det3dModel model(config, options.seed, run.device());
   Det3dTrainer trainer(model, options.loss, options.weight_decay);
   summary.parameters = model.ParameterCount();
   summary.auxiliary_parameters = model.AuxiliaryParameterCount();
-  const int start_epoch =
-      folder.StartEpoch([&](const std::filesystem::path& path, const std::string& run) {
-        return trainer.LoadCheckpoint(path, run);
-      });
-  trainer.SetGroup(group.get());
-  summary.epochs_done = start_epoch;
-  if (start_epoch >= options.epochs) {
-    summary.seconds = total_timer.ElapsedSeconds();
-    return summary;
-  }
+  if (!run.Resume(trainer, summary)) return summary;
 
   // Every frame in memory once (points and boxes); augmentation works on copies.
   std::vector<Det3dFrame> frames(ids.size());
@@ -154,8 +136,7 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& given) {
   summary.gt_database_objects = gt_database.ObjectCount();
   summary.gt_database_points = gt_database.PointCount();
 
-  TrainingLoopOptions loop =
-      TrainingLoopOptions::Of(options, "train det3d", static_cast<int>(frames.size()), start_epoch);
+  TrainingLoopOptions loop = run.LoopOptions(static_cast<int>(frames.size()));
   // The progress line leaves the direction term out (it is small and steady).
   loop.columns = {.frames = "frames",
                   .terms = {"classification_loss", "box_loss", "direction_loss", "part_warp_loss",
@@ -168,25 +149,20 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& given) {
   }
   loop.settings_json = [&](int epochs_done) {
     return fmt::format(
-        R"({{"input": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
-        R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
-        R"("max_frames": {}, "frames": {}, "base_channels": {}, "pillar_m": {}, "device": "{}", )"
+        R"({{"input": "{}", {}, "base_channels": {}, "pillar_m": {}, "device": "{}", )"
         R"("augment": {}, "auxiliary": {}, "stereo_max_distance_m": {}, "camera_fov_only": {}, )"
         R"("crop_to_grid": {}, "gt_sampling": {}, "gt_per_class": {}, "gt_min_points": {}, )"
         R"("gt_box_margin_m": {}, "gt_database_objects": {}}})",
-        PointSourceName(config.input), options.epochs, epochs_done, options.batch_size,
-        options.learning_rate, options.warmup_steps, options.final_lr_fraction, options.seed,
-        options.max_frames, ids.size(), config.base_channels, config.grid.pillar_m, options.device,
-        options.augment.enabled, options.loss.auxiliary, options.filter.stereo_max_distance_m,
+        PointSourceName(config.input), run.ScheduleSettings(epochs_done, ids.size()),
+        config.base_channels, config.grid.pillar_m, options.device, options.augment.enabled,
+        options.loss.auxiliary, options.filter.stereo_max_distance_m,
         options.filter.camera_fov_only, options.filter.crop_to_grid, gt_sampling,
         options.gt_sampling.max_per_class, options.gt_database.min_points,
         options.gt_database.box_margin_m, gt_database.ObjectCount());
   };
-  loop.group = group.get();
   Det3dTrainingTask task(frames, gt_database, gt_sampling, model, trainer, options,
-                         folder.training_run());
-  const TrainingLoopSummary done = RunTrainingLoop(task, loop);
-  summary.Finish(done, total_timer.ElapsedSeconds());
+                         run.folder().training_run());
+  run.Train(task, loop, summary);
   return summary;
 }
 

@@ -2,6 +2,7 @@
 // overfits a few frames and detects its own boxes, resumes bit-identically, writes KITTI files.
 #include "stereodet/models/det3d/det3d_train.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -26,6 +27,8 @@ namespace stereodet {
 namespace {
 
 namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
 
 // Frames with one or two cars (labels in the camera frame), a LiDAR scan of points inside each
 // car and a flat ground 1.73 m under the sensor; also a copy of the scans as "stereo" points.
@@ -307,27 +310,17 @@ TEST(Det3dTrainTest, ResumeRefusesACheckpointOfAnotherRunOrModel) {
 
   fs::copy_file(other_run.out_dir / "checkpoint.pt", checkpoint,
                 fs::copy_options::overwrite_existing);
-  try {
-    TrainDet3d(mine);
-    FAIL() << "no exception";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("checkpoint.pt is from another training run ("),
-              std::string::npos)
-        << e.what();
-  }
+  EXPECT_THAT(
+      [&] { TrainDet3d(mine); },
+      ThrowsMessage<std::runtime_error>(HasSubstr("checkpoint.pt is from another training run (")));
   EXPECT_EQ(ReadFile(mine.out_dir / "model.json"), config);
 
   fs::copy_file(other_model.out_dir / "checkpoint.pt", checkpoint,
                 fs::copy_options::overwrite_existing);
-  try {
-    TrainDet3d(mine);
-    FAIL() << "no exception";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("checkpoint.pt was written for another model: "
-                                         "base_channels: 8 here, 16 in the model"),
-              std::string::npos)
-        << e.what();
-  }
+  EXPECT_THAT([&] { TrainDet3d(mine); },
+              ThrowsMessage<std::runtime_error>(HasSubstr(
+                  "checkpoint.pt was written for another model: base_channels: 8 here, 16 in the "
+                  "model")));
   EXPECT_EQ(ReadFile(mine.out_dir / "model.json"), config);
 
   // Its own checkpoint resumes.

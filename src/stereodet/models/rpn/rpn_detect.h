@@ -5,14 +5,8 @@
 #ifndef STEREODET_MODELS_RPN_RPN_DETECT_H_
 #define STEREODET_MODELS_RPN_RPN_DETECT_H_
 
-#include <cstdint>
-#include <filesystem>
-#include <string>
-
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/models/rpn/rpn_model.h"
-#include "stereodet/util/progress.h"
-#include "stereodet/util/shard.h"
 
 namespace stereodet {
 

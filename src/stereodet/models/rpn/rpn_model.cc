@@ -9,10 +9,11 @@
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
+#include "stereodet/models/model_handle_internal.h"
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/rpn/rpn_net_internal.h"
 #include "stereodet/models/train_data.h"
-#include "stereodet/util/atomic_file.h"
+#include "stereodet/models/trainer_handle_internal.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
 #include "stereodet/util/run_manifest.h"
@@ -251,8 +252,8 @@ std::vector<Box2D> BoxesOf(const std::vector<ScoredBox>& boxes) {
 
 }  // namespace
 
-struct RpnModel::Impl {
-  Impl(const RpnConfig& c, ComputeDevice d)
+struct internal::RpnModelImpl {
+  RpnModelImpl(const RpnConfig& c, ComputeDevice d)
       : config(c),
         device(internal::TorchDevice(d)),
         anchors(GenerateRpnAnchors(c.FeatureWidth(), c.FeatureHeight(), c.anchors)),
@@ -265,6 +266,19 @@ struct RpnModel::Impl {
   torch::Device device;
   std::vector<Box2D> anchors;
   mutable internal::RpnNet net;
+
+  // What ModelHandle asks of a family (model_handle_internal.h).
+  static RpnConfig ConfigFromJson(const std::string& text, const std::string& source) {
+    return RpnConfigFromJson(text, source);
+  }
+  void ReadModelJson(const std::string& text, const std::string& source) {
+    stereo = ReadRpnStereoRecord(text, source);
+  }
+  int InputChannels() const { return RpnInputChannels(config.input); }
+  std::string ModelJson(const WeightsRecord& weights) const {
+    return RpnConfigToJson(config, weights,
+                           config.input == RpnInput::kRgbd ? std::optional(stereo) : std::nullopt);
+  }
 
   torch::Tensor ToTensor(const std::vector<PlanarImage>& inputs) const {
     const int c = RpnInputChannels(config.input);
@@ -293,35 +307,8 @@ struct RpnModel::Impl {
   }
 };
 
-RpnModel::RpnModel(const RpnConfig& config, uint64_t seed, ComputeDevice device)
-    : impl_(internal::NewModelImpl<Impl>(config, seed, device)) {}
+template class ModelHandle<RpnModel, RpnConfig, internal::RpnModelImpl>;
 
-RpnModel::RpnModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-RpnModel::~RpnModel() = default;
-RpnModel::RpnModel(RpnModel&&) noexcept = default;
-RpnModel& RpnModel::operator=(RpnModel&&) noexcept = default;
-
-RpnModel RpnModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  return RpnModel(internal::LoadModelImpl<Impl>(
-      model_dir, device, RpnConfigFromJson,
-      [](Impl& impl, const std::string& text, const std::string& source) {
-        impl.stereo = ReadRpnStereoRecord(text, source);
-      }));
-}
-
-void RpnModel::Save(const std::filesystem::path& model_dir) const {
-  const bool geometry = impl_->config.input == RpnInput::kRgbd;
-  internal::SaveModelFolder(model_dir, *impl_->net, [&](const std::string& hash) {
-    return RpnConfigToJson(impl_->config,
-                           {.fnv1a64 = hash,
-                            .input_channels = RpnInputChannels(impl_->config.input),
-                            .parameters = ParameterCount(),
-                            .training_run = {}},
-                           geometry ? std::optional(impl_->stereo) : std::nullopt);
-  });
-}
-
-const RpnConfig& RpnModel::config() const { return impl_->config; }
 const StereoOptions& RpnModel::stereo() const { return impl_->stereo; }
 void RpnModel::set_stereo(const StereoOptions& stereo) {
   stereo.Check();
@@ -384,7 +371,6 @@ std::vector<std::vector<ScoredBox>> RpnModel::Detect(const std::vector<PlanarIma
   return detections;
 }
 
-int64_t RpnModel::ParameterCount() const { return internal::CountParameters(*impl_->net); }
 int64_t RpnModel::ImageBranchParameterCount() const {
   return internal::CountParameters(*impl_->net->image);
 }
@@ -449,8 +435,8 @@ int RpnModel::InitFrom(const RpnModel& rgb, bool geometry_too) {
 // --- RpnTrainer
 // -------------------------------------------------------------------------------------
 
-struct RpnTrainer::Impl {
-  Impl(RpnModel& m, const RpnTrainerOptions& o)
+struct internal::RpnTrainerImpl {
+  RpnTrainerImpl(RpnModel& m, const RpnTrainerOptions& o)
       : model(m),
         options(o),
         optimizer(m.impl_->net->parameters(),
@@ -460,20 +446,31 @@ struct RpnTrainer::Impl {
   torch::optim::AdamW optimizer;
   TrainingGroup* group = nullptr;
   std::unique_ptr<internal::GradientReducer> reducer;  // with a group
+
+  // What TrainerHandle asks of a family (trainer_handle_internal.h).
+  torch::nn::Module& Network() const { return *model.impl_->net; }
+  torch::Device Device() const { return model.impl_->device; }
+  CheckpointRecord Record(const std::string& training_run) const {
+    return {.config_json = RpnConfigToJson(model.config()),
+            .parameters = model.ParameterCount(),
+            .training_run = training_run};
+  }
 };
 
-RpnTrainer::RpnTrainer(RpnModel& model, const RpnTrainerOptions& options) {
+template class TrainerHandle<internal::RpnTrainerImpl>;
+
+namespace {
+
+std::unique_ptr<internal::RpnTrainerImpl> NewTrainerImpl(RpnModel& model,
+                                                         const RpnTrainerOptions& options) {
   options.Check();
-  impl_ = std::make_unique<Impl>(model, options);
+  return std::make_unique<internal::RpnTrainerImpl>(model, options);
 }
 
-RpnTrainer::~RpnTrainer() = default;
+}  // namespace
 
-void RpnTrainer::SetGroup(TrainingGroup* group) {
-  impl_->group = group;
-  impl_->reducer.reset();  // its hooks off before the network changes hands
-  impl_->reducer = internal::JoinGroup(group, *impl_->model.impl_->net);
-}
+RpnTrainer::RpnTrainer(RpnModel& model, const RpnTrainerOptions& options)
+    : TrainerHandle(internal::HandleOwned(NewTrainerImpl(model, options))) {}
 
 RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed) {
   STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
@@ -591,47 +588,6 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
   parts.head_class = head_class_loss.item<double>();
   parts.head_box = head_box_loss.item<double>();
   return parts;
-}
-
-void RpnTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const {
-  torch::serialize::OutputArchive root, model, optimizer;
-  impl_->model.impl_->net->save(model);
-  impl_->optimizer.save(optimizer);
-  root.write("model", model);
-  root.write("optimizer", optimizer);
-  root.write("epochs_done", torch::tensor(static_cast<int64_t>(epochs_done)));
-  root.write("config", c10::IValue(RpnConfigToJson(impl_->model.config())));
-  root.write("parameters", torch::tensor(impl_->model.ParameterCount()));
-  WriteFileAtomically(path, internal::SerializeArchive(root));
-}
-
-int RpnTrainer::LoadCheckpoint(const std::filesystem::path& path) {
-  STEREODET_CHECK_IO(std::filesystem::is_regular_file(path))
-      << "missing checkpoint " << path.string();
-  try {
-    torch::serialize::InputArchive root, model, optimizer;
-    root.load_from(path.string(), impl_->model.impl_->device);
-    c10::IValue recorded_config;
-    root.read("config", recorded_config);
-    STEREODET_CHECK_IO(recorded_config.toStringRef() == RpnConfigToJson(impl_->model.config()))
-        << path.string() << " was written for another model (its config differs from "
-        << "model.json's); copy a model folder whole, or train anew with --force";
-    torch::Tensor parameters, epochs;
-    root.read("parameters", parameters);
-    STEREODET_CHECK_IO(parameters.item<int64_t>() == impl_->model.ParameterCount())
-        << path.string() << " holds " << parameters.item<int64_t>() << " parameters, the model "
-        << impl_->model.ParameterCount();
-    root.read("model", model);
-    root.read("optimizer", optimizer);
-    root.read("epochs_done", epochs);
-    impl_->model.impl_->net->load(model);
-    impl_->optimizer.load(optimizer);
-    return static_cast<int>(epochs.item<int64_t>());
-  } catch (const c10::Error& e) {
-    STEREODET_THROW_IO() << "cannot load checkpoint " << path.string() << ": "
-                         << e.what_without_backtrace();
-  }
-  return 0;
 }
 
 }  // namespace stereodet

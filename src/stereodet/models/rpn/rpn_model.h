@@ -25,9 +25,11 @@
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/distributed.h"
+#include "stereodet/models/model_handle.h"
 #include "stereodet/models/model_json.h"
 #include "stereodet/models/rpn/rpn_boxes.h"
 #include "stereodet/models/rpn/rpn_config.h"
+#include "stereodet/models/trainer_handle.h"
 #include "stereodet/stereo/rgbh.h"
 #include "stereodet/stereo/stereo_encoder.h"
 
@@ -58,23 +60,18 @@ struct RpnBatch {
   std::vector<uint64_t> sampling_seeds;
 };
 
+namespace internal {
+struct RpnModelImpl;
+struct RpnTrainerImpl;
+}  // namespace internal
+
+// A new model from a config and a seed, Load, Save, config() and ParameterCount() are every
+// family's (model_handle.h); model.json also records, for RGB-D models, the stereo settings.
 // Not thread-safe: one thread at a time (LibTorch parallelises inside).
-class RpnModel {
+class RpnModel : public ModelHandle<RpnModel, RpnConfig, internal::RpnModelImpl> {
  public:
-  // A new network, weights drawn from `seed`, on `device`.
-  RpnModel(const RpnConfig& config, uint64_t seed, ComputeDevice device = ComputeDevice::kCpu);
-  ~RpnModel();
-  RpnModel(RpnModel&&) noexcept;
-  RpnModel& operator=(RpnModel&&) noexcept;
+  using ModelHandle::ModelHandle;
 
-  // Reads model.json and model.pt; throws std::runtime_error naming the file (and both when the
-  // weights' hash or parameter count differ from model.json's record).
-  static RpnModel Load(const std::filesystem::path& model_dir,
-                       ComputeDevice device = ComputeDevice::kCpu);
-  // Writes model.pt, then model.json (with the weights' hash, and the stereo settings for rgbd).
-  void Save(const std::filesystem::path& model_dir) const;
-
-  const RpnConfig& config() const;
   const StereoOptions& stereo() const;  // the depth/height settings (rgbd)
   void set_stereo(const StereoOptions& stereo);
   const std::vector<Box2D>& anchors() const;  // GenerateRpnAnchors of the feature map
@@ -88,7 +85,6 @@ class RpnModel {
   std::vector<std::vector<ScoredBox>> Propose(const std::vector<PlanarImage>& inputs,
                                               const ProposalOptions& options) const;
 
-  int64_t ParameterCount() const;
   int64_t ImageBranchParameterCount() const;
   int64_t GeometryBranchParameterCount() const;  // 0 for rgb
 
@@ -99,10 +95,10 @@ class RpnModel {
   int InitFrom(const RpnModel& rgb, bool geometry_too = false);
 
  private:
+  friend class ModelHandle;  // Load makes one
   friend class RpnTrainer;
-  struct Impl;
-  explicit RpnModel(std::unique_ptr<Impl> impl);
-  std::unique_ptr<Impl> impl_;
+  friend struct internal::RpnTrainerImpl;
+  using Impl = internal::RpnModelImpl;
 };
 
 struct RpnTrainerOptions {
@@ -124,27 +120,17 @@ struct RpnLossParts {
   int foreground_rois = 0;
 };
 
-class RpnTrainer {
+// Trains an RpnModel in place. SetGroup and the checkpoints are every family's
+// (trainer_handle.h); with a group, the losses' counts (sampled anchors, sampled RoIs) are the
+// whole batch's.
+class RpnTrainer : public TrainerHandle<internal::RpnTrainerImpl> {
  public:
   RpnTrainer(RpnModel& model, const RpnTrainerOptions& options = {});
-  ~RpnTrainer();
-  // Trains as one rank of `group` from now on (null: alone); SsdTrainer::SetGroup says how. The
-  // losses' counts (sampled anchors, sampled RoIs) are then the whole batch's.
-  void SetGroup(TrainingGroup* group);
   // One optimizer step at `learning_rate`. Each image's anchor and RoI sampling draws from its own
   // stream (RpnBatch::sampling_seeds) and torch::manual_seed(step_seed) is set, so a step is a
   // function of the weights, the optimizer state, the batch and the seeds. Returns the loss before
   // the step (with a group, this rank's share of the whole batch's).
   RpnLossParts Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed);
-  // Weights, optimizer state, epochs_done and the config, atomically.
-  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done) const;
-  // Returns epochs_done; throws std::runtime_error naming the file when it is missing or was
-  // written for another model (config or parameter count).
-  int LoadCheckpoint(const std::filesystem::path& path);
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace stereodet

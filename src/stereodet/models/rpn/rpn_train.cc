@@ -29,8 +29,12 @@ uint64_t StepSeed(uint64_t seed, int64_t step) {
 class RpnTrainingTask : public TrainingTask {
  public:
   RpnTrainingTask(const RpnTrainingData& data, const RpnModel& model, RpnTrainer& trainer,
-                  const TrainRpnOptions& options)
-      : data_(data), model_(model), trainer_(trainer), options_(options) {}
+                  const TrainRpnOptions& options, const std::string& training_run)
+      : data_(data),
+        model_(model),
+        trainer_(trainer),
+        options_(options),
+        training_run_(training_run) {}
 
   StepLoss Step(int epoch, int64_t step, const std::vector<int>& batch_frames,
                 double learning_rate) override {
@@ -57,8 +61,8 @@ class RpnTrainingTask : public TrainingTask {
   }
 
   void Save(int epochs_done) override {
-    model_.Save(options_.out_dir);
-    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done);
+    model_.Save(options_.out_dir, training_run_);
+    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
   }
 
  private:
@@ -66,6 +70,7 @@ class RpnTrainingTask : public TrainingTask {
   const RpnModel& model_;
   RpnTrainer& trainer_;
   const TrainRpnOptions& options_;
+  const std::string& training_run_;
 };
 
 }  // namespace
@@ -79,52 +84,36 @@ void TrainRpnOptions::Check() const {
 }
 
 TrainRpnSummary TrainRpn(const TrainRpnOptions& given) {
-  given.Check();
-  const ComputeDevice device = ResolveComputeDevice(given.device);
-  const Timer total_timer;
-  SetTorchThreads(given.threads);
+  TrainingRun<TrainRpnOptions> run(given, "train rpn", {{"--init-from", given.init_from}});
+  const TrainRpnOptions& options = run.options();
   TrainRpnSummary summary;
-
-  namespace fs = std::filesystem;
-  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(given.distributed);
-  TrainRpnOptions options = given;
-  options.progress = RankProgress(options.progress, group.get());
-  const TrainingFolder folder(options.out_dir, options.data_root,
-                              {{"--init-from", options.init_from}}, "train rpn", options.resume,
-                              options.force, group.get());
-  const bool resuming = folder.resuming();
-  const fs::path& config_path = folder.config_path();
-  const RpnConfig config =
-      folder.ModelConfig(options.model, RpnConfigFromJson,
-                         [](const RpnConfig& c) { return std::string(RpnInputName(c.input)); });
+  const bool resuming = run.folder().resuming();
+  const RpnConfig config = run.folder().ModelConfig(
+      options.model, RpnConfigFromJson,
+      [](const RpnConfig& c) { return std::string(RpnInputName(c.input)); });
   RpnDataOptions data_options = options.data;
   if (resuming && config.input == RpnInput::kRgbd) {
     // The geometry the model was trained on so far, whatever the flags say now.
-    data_options.stereo = ReadRpnStereoRecord(folder.config_text(), config_path.string());
+    data_options.stereo =
+        ReadRpnStereoRecord(run.folder().config_text(), run.folder().config_path().string());
   }
 
   const KittiDataset dataset(options.data_root, "training");
   const std::vector<std::string> ids = TrainingFrameIds(dataset, options.split, options.max_frames);
 
-  RpnModel model(config, options.seed, device);
+  RpnModel model(config, options.seed, run.device());
   model.set_stereo(data_options.stereo);
-  // In a training group, rank 0's initialization reaches the others (SetGroup below).
-  if (!resuming && !options.init_from.empty() && (group == nullptr || group->IsRoot())) {
-    const RpnModel rgb = RpnModel::Load(options.init_from, device);
+  // In a training group, rank 0's initialization reaches the others (Resume's SetGroup).
+  if (!resuming && !options.init_from.empty() &&
+      (run.group() == nullptr || run.group()->IsRoot())) {
+    const RpnModel rgb = RpnModel::Load(options.init_from, run.device());
     summary.init_tensors = model.InitFrom(rgb, options.init_geometry);
   }
   RpnTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.image_branch_parameters = model.ImageBranchParameterCount();
   summary.geometry_branch_parameters = model.GeometryBranchParameterCount();
-  const int start_epoch = folder.StartEpoch(
-      [&](const fs::path& path, const std::string&) { return trainer.LoadCheckpoint(path); });
-  trainer.SetGroup(group.get());
-  summary.epochs_done = start_epoch;
-  if (start_epoch >= options.epochs) {
-    summary.seconds = total_timer.ElapsedSeconds();
-    return summary;
-  }
+  if (!run.Resume(trainer, summary)) return summary;
 
   const Timer stereo_timer;
   const RpnTrainingData data(dataset, ids, config, data_options, options.progress);
@@ -132,8 +121,7 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& given) {
   summary.frames = data.size();
   summary.objects = data.NumObjects();
 
-  TrainingLoopOptions loop =
-      TrainingLoopOptions::Of(options, "train rpn", data.size(), start_epoch);
+  TrainingLoopOptions loop = run.LoopOptions(data.size());
   loop.columns = {.frames = "frames",
                   .terms = {"objectness_loss", "rpn_box_loss", "head_class_loss", "head_box_loss"},
                   .term_labels = {"obj", "rpn-box", "cls", "box"},
@@ -144,21 +132,16 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& given) {
   }
   loop.settings_json = [&](int epochs_done) {
     return fmt::format(
-        R"({{"input": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
-        R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
-        R"("max_frames": {}, "frames": {}, "input_width": {}, "input_height": {}, )"
+        R"({{"input": "{}", {}, "input_width": {}, "input_height": {}, )"
         R"("image_width": {}, "geometry_width": {}, "threads": {}, "device": "{}", )"
         R"("augment": {}, "init_from": "{}", "init_geometry": {}, "parameters": {}}})",
-        RpnInputName(config.input), options.epochs, epochs_done, options.batch_size,
-        options.learning_rate, options.warmup_steps, options.final_lr_fraction, options.seed,
-        options.max_frames, ids.size(), config.input_width, config.input_height, config.image_width,
-        config.geometry_width, options.threads, options.device, options.data.augment,
-        options.init_from.string(), options.init_geometry, summary.parameters);
+        RpnInputName(config.input), run.ScheduleSettings(epochs_done, ids.size()),
+        config.input_width, config.input_height, config.image_width, config.geometry_width,
+        options.threads, options.device, options.data.augment, options.init_from.string(),
+        options.init_geometry, summary.parameters);
   };
-  loop.group = group.get();
-  RpnTrainingTask task(data, model, trainer, options);
-  const TrainingLoopSummary done = RunTrainingLoop(task, loop);
-  summary.Finish(done, total_timer.ElapsedSeconds());
+  RpnTrainingTask task(data, model, trainer, options, run.folder().training_run());
+  run.Train(task, loop, summary);
   return summary;
 }
 

@@ -3,6 +3,7 @@
 // trains from stereo and mirrors an RGB model, detect writes KITTI files.
 #include "stereodet/models/rpn/rpn_train.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -198,6 +199,19 @@ TEST(RpnTrainTest, DeterministicAndResumeIsBitIdentical) {
     direct.epochs = 3;
     TrainRpn(direct);
   }
+  // The checkpoint is tied to its training run, as the other families' are: one copied from
+  // another folder is refused before anything is loaded or written.
+  const std::string own_checkpoint = ReadFile(out / "checkpoint.pt");
+  const std::string model_json = ReadFile(out / "model.json");
+  EXPECT_NE(model_json.find("\"training_run\": \""), std::string::npos);
+  fs::copy_file(straight[0] / "checkpoint.pt", out / "checkpoint.pt",
+                fs::copy_options::overwrite_existing);
+  EXPECT_THAT([&] { TrainRpn(options); },
+              ::testing::ThrowsMessage<std::runtime_error>(
+                  ::testing::HasSubstr("checkpoint.pt is from another training run (")));
+  EXPECT_EQ(ReadFile(out / "model.json"), model_json);
+  WriteFileAtomically(out / "checkpoint.pt", own_checkpoint);
+
   // Two uninterrupted runs and the resumed one: the same losses at every epoch ...
   const std::string log = WithoutTimes(ReadFile(out / "train_log.csv"));
   EXPECT_EQ(log, WithoutTimes(ReadFile(straight[0] / "train_log.csv")));

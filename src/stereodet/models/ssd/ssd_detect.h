@@ -9,19 +9,13 @@
 #ifndef STEREODET_MODELS_SSD_SSD_DETECT_H_
 #define STEREODET_MODELS_SSD_SSD_DETECT_H_
 
-#include <cstdint>
 #include <filesystem>
-#include <functional>
 #include <optional>
 #include <string>
-#include <vector>
 
-#include "stereodet/kitti/object.h"
 #include "stereodet/models/box_coder.h"
 #include "stereodet/models/detect_shard.h"
 #include "stereodet/stereo/stereo_encoder.h"
-#include "stereodet/util/progress.h"
-#include "stereodet/util/shard.h"
 
 namespace stereodet {
 

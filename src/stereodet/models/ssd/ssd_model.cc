@@ -8,8 +8,10 @@
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
 #include "stereodet/models/distributed_internal.h"
+#include "stereodet/models/model_handle_internal.h"
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/ssd/ssd_net.h"
+#include "stereodet/models/trainer_handle_internal.h"
 #include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/hash.h"
@@ -20,8 +22,8 @@ namespace stereodet {
 // --- SsdModel
 // ---------------------------------------------------------------------------------------
 
-struct SsdModel::Impl {
-  Impl(const SsdConfig& c, ComputeDevice d)
+struct internal::SsdModelImpl {
+  SsdModelImpl(const SsdConfig& c, ComputeDevice d)
       : config(c),
         device(internal::TorchDevice(d)),
         default_boxes(GenerateDefaultBoxes(c.boxes)),
@@ -36,6 +38,19 @@ struct SsdModel::Impl {
   // LibTorch's forward() is not const; inference does not change the weights.
   mutable internal::SsdNet net;
 
+  // What ModelHandle asks of a family (model_handle_internal.h).
+  static SsdConfig ConfigFromJson(const std::string& text, const std::string& source) {
+    return SsdConfigFromJson(text, source);
+  }
+  void ReadModelJson(const std::string& text, const std::string& source) {
+    stereo = ReadStereoRecord(text, source);
+  }
+  int InputChannels() const { return NetworkInputChannels(config.encoding); }
+  std::string ModelJson(const WeightsRecord& weights) const {
+    return SsdConfigToJson(config, weights,
+                           UsesHeight(config.encoding) ? std::optional(stereo) : std::nullopt);
+  }
+
   torch::Tensor ToTensor(const std::vector<PlanarImage>& inputs) const {
     const int c = NetworkInputChannels(config.encoding);
     std::vector<float> planar = StackPlanar(inputs, c, config.InputHeight(), config.InputWidth());
@@ -48,35 +63,8 @@ struct SsdModel::Impl {
   }
 };
 
-SsdModel::SsdModel(const SsdConfig& config, uint64_t seed, ComputeDevice device)
-    : impl_(internal::NewModelImpl<Impl>(config, seed, device)) {}
+template class ModelHandle<SsdModel, SsdConfig, internal::SsdModelImpl>;
 
-SsdModel::SsdModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-SsdModel::~SsdModel() = default;
-SsdModel::SsdModel(SsdModel&&) noexcept = default;
-SsdModel& SsdModel::operator=(SsdModel&&) noexcept = default;
-
-SsdModel SsdModel::Load(const std::filesystem::path& model_dir, ComputeDevice device) {
-  return SsdModel(internal::LoadModelImpl<Impl>(
-      model_dir, device, SsdConfigFromJson,
-      [](Impl& impl, const std::string& text, const std::string& source) {
-        impl.stereo = ReadStereoRecord(text, source);
-      }));
-}
-
-void SsdModel::Save(const std::filesystem::path& model_dir, const std::string& training_run) const {
-  internal::SaveModelFolder(model_dir, *impl_->net, [&](const std::string& hash) {
-    return SsdConfigToJson(
-        impl_->config,
-        {.fnv1a64 = hash,
-         .input_channels = NetworkInputChannels(impl_->config.encoding),
-         .parameters = ParameterCount(),
-         .training_run = training_run},
-        UsesHeight(impl_->config.encoding) ? std::optional(impl_->stereo) : std::nullopt);
-  });
-}
-
-const SsdConfig& SsdModel::config() const { return impl_->config; }
 const StereoOptions& SsdModel::stereo() const { return impl_->stereo; }
 void SsdModel::set_stereo(const StereoOptions& stereo) {
   stereo.Check();
@@ -118,8 +106,6 @@ std::vector<std::vector<ScoredBox>> SsdModel::Detect(const std::vector<PlanarIma
   return detections;
 }
 
-int64_t SsdModel::ParameterCount() const { return internal::CountParameters(*impl_->net); }
-
 int64_t SsdModel::CompressionParameterCount() const {
   return impl_->net->CompressionParameterCount();
 }
@@ -144,18 +130,27 @@ void SsdTrainerOptions::Check() const {
   STEREODET_CHECK(weight_decay >= 0.0) << "weight_decay must be >= 0, got " << weight_decay;
 }
 
-struct SsdTrainer::Impl {
-  Impl(SsdModel::Impl& m, const SsdTrainerOptions& o)
+struct internal::SsdTrainerImpl {
+  SsdTrainerImpl(SsdModelImpl& m, const SsdTrainerOptions& o)
       : model(m),
         options(o),
         optimizer(m.net->parameters(),
                   torch::optim::AdamWOptions(1e-3).weight_decay(o.weight_decay)) {}
 
-  SsdModel::Impl& model;
+  SsdModelImpl& model;
   SsdTrainerOptions options;
   torch::optim::AdamW optimizer;
   TrainingGroup* group = nullptr;
   std::unique_ptr<internal::GradientReducer> reducer;  // with a group
+
+  // What TrainerHandle asks of a family (trainer_handle_internal.h).
+  torch::nn::Module& Network() const { return *model.net; }
+  torch::Device Device() const { return model.device; }
+  CheckpointRecord Record(const std::string& training_run) const {
+    return {.config_json = SsdConfigToJson(model.config),
+            .parameters = CountParameters(*model.net),
+            .training_run = training_run};
+  }
 
   // Tensors viewing the batch's arrays (no copy; the batch outlives them). With `group`, this
   // rank's share of the group's whole batch's loss.
@@ -195,18 +190,20 @@ struct SsdTrainer::Impl {
   }
 };
 
-SsdTrainer::SsdTrainer(SsdModel& model, const SsdTrainerOptions& options) {
+template class TrainerHandle<internal::SsdTrainerImpl>;
+
+namespace {
+
+std::unique_ptr<internal::SsdTrainerImpl> NewTrainerImpl(internal::SsdModelImpl& model,
+                                                         const SsdTrainerOptions& options) {
   options.Check();
-  impl_ = std::make_unique<Impl>(*model.impl_, options);
+  return std::make_unique<internal::SsdTrainerImpl>(model, options);
 }
 
-SsdTrainer::~SsdTrainer() = default;
+}  // namespace
 
-void SsdTrainer::SetGroup(TrainingGroup* group) {
-  impl_->group = group;
-  impl_->reducer.reset();  // its hooks off before the network changes hands
-  impl_->reducer = internal::JoinGroup(group, *impl_->model.net);
-}
+SsdTrainer::SsdTrainer(SsdModel& model, const SsdTrainerOptions& options)
+    : TrainerHandle(internal::HandleOwned(NewTrainerImpl(*model.impl_, options))) {}
 
 LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
   STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
@@ -218,29 +215,13 @@ LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
   const internal::MultiBoxLossTerms terms = impl_->Loss(batch, impl_->group);
   internal::Backward(terms.total, impl_->reducer.get());
   impl_->optimizer.step();
-  return Impl::Parts(terms);
+  return internal::SsdTrainerImpl::Parts(terms);
 }
 
 LossParts SsdTrainer::Evaluate(const TrainBatch& batch) const {
   torch::NoGradGuard no_grad;
   impl_->model.net->eval();
-  return Impl::Parts(impl_->Loss(batch, /*group=*/nullptr));
-}
-
-void SsdTrainer::SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
-                                const std::string& training_run) const {
-  internal::SaveTrainingCheckpoint(path, *impl_->model.net, impl_->optimizer, epochs_done,
-                                   {.config_json = SsdConfigToJson(impl_->model.config),
-                                    .parameters = internal::CountParameters(*impl_->model.net),
-                                    .training_run = training_run});
-}
-
-int SsdTrainer::LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run) {
-  return internal::LoadTrainingCheckpoint(
-      path, *impl_->model.net, impl_->optimizer, impl_->model.device,
-      {.config_json = SsdConfigToJson(impl_->model.config),
-       .parameters = internal::CountParameters(*impl_->model.net),
-       .training_run = training_run});
+  return internal::SsdTrainerImpl::Parts(impl_->Loss(batch, /*group=*/nullptr));
 }
 
 }  // namespace stereodet

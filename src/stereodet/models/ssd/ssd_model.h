@@ -26,9 +26,11 @@
 #include "stereodet/models/default_boxes.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/distributed.h"
+#include "stereodet/models/model_handle.h"
 #include "stereodet/models/model_json.h"
 #include "stereodet/models/ssd/input_encoding.h"
 #include "stereodet/models/ssd/ssd_config.h"
+#include "stereodet/models/trainer_handle.h"
 #include "stereodet/stereo/stereo_encoder.h"
 
 namespace stereodet {
@@ -52,27 +54,17 @@ struct TrainBatch {
   int num_positive = 0;         // over the batch
 };
 
+namespace internal {
+struct SsdModelImpl;
+}  // namespace internal
+
+// A new model from a config and a seed, Load, Save, config() and ParameterCount() are every
+// family's (model_handle.h); model.json also records, for RGB-H models, the stereo settings.
 // Not thread-safe: one thread at a time may call Forward/Detect (LibTorch parallelises inside).
-class SsdModel {
+class SsdModel : public ModelHandle<SsdModel, SsdConfig, internal::SsdModelImpl> {
  public:
-  // A new network, its weights drawn from `seed` (the same seed gives the same weights), on
-  // `device` (inputs and outputs stay host arrays).
-  SsdModel(const SsdConfig& config, uint64_t seed, ComputeDevice device = ComputeDevice::kCpu);
-  ~SsdModel();
-  SsdModel(SsdModel&&) noexcept;
-  SsdModel& operator=(SsdModel&&) noexcept;
+  using ModelHandle::ModelHandle;
 
-  // Reads model.json (with its stereo settings) and model.pt from `model_dir`. Throws
-  // std::runtime_error naming the file, and naming both when model.json records another model.pt
-  // (its hash or parameter count differ).
-  static SsdModel Load(const std::filesystem::path& model_dir,
-                       ComputeDevice device = ComputeDevice::kCpu);
-  // Writes model.pt, then model.json with the weights' hash and `training_run` (WeightsRecord)
-  // and, when the encoding uses heights, stereo(), into `model_dir` (created if missing), each
-  // atomically.
-  void Save(const std::filesystem::path& model_dir, const std::string& training_run = {}) const;
-
-  const SsdConfig& config() const;
   // The stereo settings the model's heights are made with (RGB-H): those of model.json after Load,
   // StereoOptions' defaults for a new model until set_stereo. Unused by rgb models.
   const StereoOptions& stereo() const;
@@ -88,18 +80,16 @@ class SsdModel {
   std::vector<std::vector<ScoredBox>> Detect(const std::vector<PlanarImage>& inputs,
                                              const DecodeOptions& options = {}) const;
 
-  // Trainable parameters, all of them / of the learned 1x1 colour compression alone (0 unless
-  // rgbh-learned: 3 x 2 weights, no bias, = 6).
-  int64_t ParameterCount() const;
+  // Trainable parameters of the learned 1x1 colour compression alone (0 unless rgbh-learned: 3 x 2
+  // weights, no bias, = 6).
   int64_t CompressionParameterCount() const;
   // Multiply-accumulates of one forward pass on one image (convolutions; FLOPs ~ 2x this).
   int64_t MultiplyAccumulates() const;
 
  private:
+  friend class ModelHandle;  // Load makes one
   friend class SsdTrainer;
-  struct Impl;
-  explicit SsdModel(std::unique_ptr<Impl> impl);
-  std::unique_ptr<Impl> impl_;
+  using Impl = internal::SsdModelImpl;
 };
 
 struct MultiBoxLossOptions {
@@ -128,17 +118,17 @@ struct LossParts {
   int num_positive = 0;
 };
 
-// Trains an SsdModel in place: holds the optimizer state.
-class SsdTrainer {
+namespace internal {
+struct SsdTrainerImpl;
+}  // namespace internal
+
+// Trains an SsdModel in place: holds the optimizer state. SetGroup and the checkpoints are every
+// family's (trainer_handle.h); the checkpoint's config is SsdConfigToJson's (encoding, classes,
+// input size, boxes, width).
+class SsdTrainer : public TrainerHandle<internal::SsdTrainerImpl> {
  public:
   // `model` must outlive the trainer.
   SsdTrainer(SsdModel& model, const SsdTrainerOptions& options = {});
-  ~SsdTrainer();
-
-  // Trains as one rank of `group` from now on (null: alone): the batch norms synchronized over it,
-  // the loss's counts and the gradients summed over it (distributed.h), and the model's weights
-  // now those of rank 0. `group` must outlive the trainer or the next call.
-  void SetGroup(TrainingGroup* group);
 
   // One optimizer step on `batch` at `learning_rate`. Returns the loss before the step (with a
   // group, this rank's share of the whole batch's: its terms add up over the ranks).
@@ -146,23 +136,6 @@ class SsdTrainer {
   // The loss on `batch` without changing anything (training-mode batch norm is not used: evaluation
   // mode, no gradients).
   LossParts Evaluate(const TrainBatch& batch) const;
-
-  // Weights + optimizer state + `epochs_done`, the model's config (SsdConfigToJson: encoding,
-  // classes, input size, boxes, width, hence every tensor's shape) and `training_run` (the id that
-  // model.json's WeightsRecord holds), written atomically.
-  void SaveCheckpoint(const std::filesystem::path& path, int epochs_done,
-                      const std::string& training_run = {}) const;
-  // Restores what SaveCheckpoint wrote (into the model given to the constructor); returns
-  // epochs_done. Throws std::runtime_error naming the file if it is missing or does not fit the
-  // model: its recorded config differs from the model's (the message names the first field that
-  // differs, e.g. "encoding"), or its parameter count does, or `training_run` is not empty and the
-  // checkpoint records another run or none (a checkpoint of another training, copied in). A
-  // checkpoint written before configs were recorded is checked by LibTorch's shapes only.
-  int LoadCheckpoint(const std::filesystem::path& path, const std::string& training_run = {});
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace stereodet

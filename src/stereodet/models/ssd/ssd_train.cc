@@ -93,28 +93,32 @@ double ScheduledLearningRate(const TrainSsdOptions& options, int64_t step, int64
                                   options.final_lr_fraction, step, total_steps);
 }
 
-TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
+namespace {
+
+// `given`, checked, with --stereo DIR's settings: the heights are the folder's, and so are the
+// settings model.json records.
+TrainSsdOptions WithStereoFolderSettings(const TrainSsdOptions& given) {
   given.Check();
-  // With --stereo DIR the heights are the folder's, and so are the settings model.json records.
   TrainSsdOptions options = given;
   if (!options.data.stereo_dir.empty() && UsesHeight(options.model.encoding)) {
     options.data.stereo = ReadStereoFolder(options.data.stereo_dir).stereo;
   }
-  const ComputeDevice device = ResolveComputeDevice(options.device);
-  const Timer total_timer;
-  SetTorchThreads(options.threads);
+  return options;
+}
+
+}  // namespace
+
+TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
+  TrainingRun<TrainSsdOptions> run(WithStereoFolderSettings(given), "train ssd",
+                                   {{"--stereo", given.data.stereo_dir}});
+  TrainSsdOptions& options = run.options();
   TrainSsdSummary summary;
 
   namespace fs = std::filesystem;
-  const std::unique_ptr<TrainingGroup> group = TrainingGroup::Connect(options.distributed);
-  options.progress = RankProgress(options.progress, group.get());
-  const TrainingFolder folder(options.out_dir, options.data_root,
-                              {{"--stereo", options.data.stereo_dir}}, "train ssd", options.resume,
-                              options.force, group.get());
-  const bool resuming = folder.resuming();
-  const fs::path& config_path = folder.config_path();
+  const bool resuming = run.folder().resuming();
+  const fs::path& config_path = run.folder().config_path();
   // With --resume the model folder's settings win; asking for different ones is a mistake.
-  const SsdConfig config = folder.ModelConfig(
+  const SsdConfig config = run.folder().ModelConfig(
       options.model, SsdConfigFromJson,
       [](const SsdConfig& c) { return std::string(InputEncodingName(c.encoding)); });
   if (resuming) {
@@ -126,7 +130,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
         << requested.InputHeight();
     if (UsesHeight(config.encoding)) {
       const std::string differ = DifferingStereoSettings(
-          ReadStereoRecord(folder.config_text(), config_path.string()), options.data.stereo);
+          ReadStereoRecord(run.folder().config_text(), config_path.string()), options.data.stereo);
       STEREODET_CHECK(differ.empty()) << "--resume: " << config_path.string()
                                       << " was trained with other stereo settings: " << differ;
     }
@@ -146,28 +150,19 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
     }
   }
 
-  SsdModel model(config, options.seed, device);
+  SsdModel model(config, options.seed, run.device());
   model.set_stereo(options.data.stereo);  // model.json records what the heights were made with
   SsdTrainer trainer(model, options.trainer);
   summary.parameters = model.ParameterCount();
   summary.compression_parameters = model.CompressionParameterCount();
-  const int start_epoch = folder.StartEpoch([&](const fs::path& path, const std::string& run) {
-    return trainer.LoadCheckpoint(path, run);
-  });
-  trainer.SetGroup(group.get());
-  summary.epochs_done = start_epoch;
-  if (start_epoch >= options.epochs) {
-    summary.seconds = total_timer.ElapsedSeconds();
-    return summary;
-  }
+  if (!run.Resume(trainer, summary)) return summary;
 
   const Timer data_timer;
   const SsdTrainingData data(dataset, ids, config, options.data, options.progress);
   summary.stereo_seconds = data_timer.ElapsedSeconds();
   summary.frames = data.size();
 
-  TrainingLoopOptions loop =
-      TrainingLoopOptions::Of(options, "train ssd", data.size(), start_epoch);
+  TrainingLoopOptions loop = run.LoopOptions(data.size());
   loop.columns = {.frames = "images",
                   .terms = {"localization_loss", "confidence_loss"},
                   .term_labels = {"box", "cls"},
@@ -178,18 +173,12 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
   }
   loop.settings_json = [&](int epochs_done) {
     return fmt::format(
-        R"({{"encoding": "{}", "epochs": {}, "epochs_done": {}, "batch_size": {}, )"
-        R"("learning_rate": {}, "warmup_steps": {}, "final_lr_fraction": {}, "seed": {}, )"
-        R"("max_frames": {}, "frames": {}, "width": {}, "height": {}, "base_channels": {}}})",
-        InputEncodingName(config.encoding), options.epochs, epochs_done, options.batch_size,
-        options.learning_rate, options.warmup_steps, options.final_lr_fraction, options.seed,
-        options.max_frames, ids.size(), config.InputWidth(), config.InputHeight(),
-        config.base_channels);
+        R"({{"encoding": "{}", {}, "width": {}, "height": {}, "base_channels": {}}})",
+        InputEncodingName(config.encoding), run.ScheduleSettings(epochs_done, ids.size()),
+        config.InputWidth(), config.InputHeight(), config.base_channels);
   };
-  loop.group = group.get();
-  SsdTrainingTask task(data, model, trainer, options, folder.training_run());
-  const TrainingLoopSummary done = RunTrainingLoop(task, loop);
-  summary.Finish(done, total_timer.ElapsedSeconds());
+  SsdTrainingTask task(data, model, trainer, options, run.folder().training_run());
+  run.Train(task, loop, summary);
   return summary;
 }
 
