@@ -18,6 +18,22 @@ namespace stereodet::internal {
 // `source` and `field`, nlohmann's exception when the field is missing.
 int JsonInt(const nlohmann::json& j, const std::string& field, const std::string& source);
 
+// j[field], a name, as the value `parse` (the family's Parse* of a name: std::optional) gives.
+// Throws ParseError naming `source` and `field` when `parse` knows no such name ("unknown input
+// encoding 'rgbd' (expected rgb, rgbh-fixed or rgbh-learned)": `what` and `names`), nlohmann's
+// exception when the field is missing or not a string.
+template <typename Parse>
+auto JsonNamedValue(const nlohmann::json& j, const std::string& field, const std::string& source,
+                    Parse parse, const std::string& what, const std::string& names) {
+  const std::string name = j.at(field).get<std::string>();
+  const auto parsed = parse(name);
+  if (!parsed) {
+    throw ParseError(source, 0, field,
+                     "unknown " + what + " '" + name + "' (expected " + names + ")");
+  }
+  return *parsed;
+}
+
 // Every family's rule for its config's class names (KITTI's spelling): 1 to 256 names, each
 // non-empty, without white space or commas (a label file's fields and the CLI's --classes lists).
 // Throws std::invalid_argument naming the first bad one.

@@ -77,6 +77,20 @@ inline std::filesystem::path WriteTinyImageDataset(const std::string& name, int 
   return root;
 }
 
+// A family's training options (TrainSsdOptions, TrainRpnOptions, TrainDet3dOptions) for the
+// KITTI-layout `root` into the model folder `out`, on one thread (one thread: OpenMP barriers spin
+// badly on a loaded 2-core machine), quiet; each family's tests add their tiny model.
+template <typename TrainOptions>
+TrainOptions TinyTrainingOptions(const std::filesystem::path& root,
+                                 const std::filesystem::path& out) {
+  TrainOptions o;
+  o.data_root = root;
+  o.out_dir = out;
+  o.threads = 1;
+  o.progress.stream = nullptr;
+  return o;
+}
+
 // A family's detect options (DetectSsdOptions, DetectRpnOptions, DetectDet3dOptions) for the model
 // in `model` over the KITTI-layout `root` (its val split), into `out`, on one thread, quiet.
 template <typename DetectOptions>

@@ -23,15 +23,20 @@ void AugmentOptions::Check() const {
       << "min_visible_fraction must be in [0, 1], got " << min_visible_fraction;
 }
 
+void LabelTargetOptions::Check() const {
+  STEREODET_CHECK(min_object_height_px >= 0.0)
+      << "min_object_height_px must be >= 0, got " << min_object_height_px;
+}
+
 std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
                                          const std::vector<std::string>& classes,
-                                         const std::vector<std::string>& ignore_types,
-                                         double min_object_height_px) {
+                                         const LabelTargetOptions& options) {
+  const std::vector<std::string>& ignore_types = options.ignore_types;
   std::vector<TargetBox> targets;
   for (const Object& label : labels) {
     const auto cls = std::find(classes.begin(), classes.end(), label.type);
     if (cls != classes.end()) {
-      const bool too_small = label.box.Height() < min_object_height_px;
+      const bool too_small = label.box.Height() < options.min_object_height_px;
       targets.push_back({label.box, too_small ? kIgnoreLabel : 1 + (cls - classes.begin())});
     } else if (std::find(ignore_types.begin(), ignore_types.end(), label.type) !=
                ignore_types.end()) {

@@ -46,12 +46,24 @@ struct AugmentOptions {
 // image in place, drawing three numbers from `rng`.
 void JitterColour(cv::Mat& bgr, const AugmentOptions& options, std::mt19937_64& rng);
 
+// Which labels the image families (ssd, rpn) train on as ignore regions (SsdDataOptions and
+// RpnDataOptions are these plus their own).
+struct LabelTargetOptions {
+  // Label types that become ignore regions; other types not among the model's classes are
+  // background. Van and Person_sitting are KITTI's "neighbouring classes" of Car and Pedestrian:
+  // detecting them is neither right nor wrong in KITTI's evaluation, so they are not negatives.
+  std::vector<std::string> ignore_types = {"DontCare", "Van", "Person_sitting"};
+  // Objects of a class whose box is less tall than this (original image px) become ignore regions:
+  // KITTI's evaluation ignores anything below 25 px, so they are neither taught nor punished.
+  double min_object_height_px = 20.0;
+  void Check() const;  // throws std::invalid_argument
+};
+
 // The training targets of a frame's labels in original image px: classes -> 1 + index in `classes`,
-// ignore types and too-small objects -> kIgnoreLabel, anything else dropped.
+// ignore types and too-small objects (`options`) -> kIgnoreLabel, anything else dropped.
 std::vector<TargetBox> TargetsFromLabels(const std::vector<Object>& labels,
                                          const std::vector<std::string>& classes,
-                                         const std::vector<std::string>& ignore_types,
-                                         double min_object_height_px);
+                                         const LabelTargetOptions& options);
 
 // What the image families (ssd, rpn) keep of every training frame; each adds its stereo codes.
 struct LabelledImageFrame {
@@ -62,14 +74,13 @@ struct LabelledImageFrame {
 
 // One Frame (a LabelledImageFrame with a family's fields) per id of `ids`, in their order, read in
 // parallel on `threads` (0 = all cores) with a progress line named `stage`: its id, its left
-// image's path and its label's targets (TargetsFromLabels of the other arguments), then
+// image's path and its label's targets (TargetsFromLabels of `classes` and `targets`), then
 // `more(paths, frame)` adds the family's fields. Throws what reading throws, naming the file.
 template <typename Frame>
 std::vector<Frame> ReadLabelledFrames(const KittiDataset& dataset,
                                       const std::vector<std::string>& ids,
                                       const std::vector<std::string>& classes,
-                                      const std::vector<std::string>& ignore_types,
-                                      double min_object_height_px, int threads,
+                                      const LabelTargetOptions& targets, int threads,
                                       const std::string& stage, const ProgressOptions& progress,
                                       const std::function<void(const FramePaths&, Frame&)>& more) {
   std::vector<Frame> frames(ids.size());
@@ -81,8 +92,7 @@ std::vector<Frame> ReadLabelledFrames(const KittiDataset& dataset,
         Frame& frame = frames[i];
         frame.id = ids[i];
         frame.image_path = paths.image_left;
-        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, classes, ignore_types,
-                                          min_object_height_px);
+        frame.targets = TargetsFromLabels(ReadObjects(paths.label).objects, classes, targets);
         more(paths, frame);
         reporter.Add(1);
       },
@@ -95,6 +105,24 @@ std::vector<Frame> ReadLabelledFrames(const KittiDataset& dataset,
 uint64_t SampleSeed(uint64_t seed, int epoch, int frame_index);
 // Frame order of an epoch: a permutation of 0..n-1 drawn from (seed, epoch).
 std::vector<int> EpochOrder(int n, uint64_t seed, int epoch);
+
+// A batch's training samples, in the batch's order: make(frame, SampleSeed(seed, epoch, frame))
+// for each frame index of `batch_frames`, in parallel on `threads` threads (0 = all cores). Each
+// sample draws from its own seed, so the batch is the same on any number of threads and in any
+// epoch a resumed training redoes.
+template <typename Make>
+auto MakeBatchSamples(const std::vector<int>& batch_frames, uint64_t seed, int epoch, int threads,
+                      Make make) {
+  std::vector<decltype(make(0, uint64_t{0}))> samples(batch_frames.size());
+  ParallelFor(
+      samples.size(),
+      [&](size_t k) {
+        const int frame = batch_frames[k];
+        samples[k] = make(frame, SampleSeed(seed, epoch, frame));
+      },
+      threads);
+  return samples;
+}
 
 }  // namespace stereodet
 

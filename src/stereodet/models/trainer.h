@@ -25,6 +25,7 @@
 #include "stereodet/kitti/dataset.h"
 #include "stereodet/models/device.h"
 #include "stereodet/models/distributed.h"
+#include "stereodet/models/train_common.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/progress.h"
 #include "stereodet/util/run_manifest.h"
@@ -328,6 +329,31 @@ class TrainingRun {
   TrainingFolder folder_;
   std::string tool_;
   int start_epoch_ = 0;
+};
+
+// A family's TrainingTask over its model and trainer (SsdModel and SsdTrainer, ...) in `run`'s
+// model folder: Save writes the model (model.pt, model.json with the training run), then the
+// trainer's checkpoint.pt, as TrainingTask::Save asks. The family adds Step (and BeginEpoch).
+// `run`, `model` and `trainer` must outlive the task.
+template <typename Model, typename Trainer, typename TrainOptions>
+class ModelTrainingTask : public TrainingTask {
+ public:
+  ModelTrainingTask(const TrainingRun<TrainOptions>& run, const Model& model, Trainer& trainer)
+      : options_(run.options()),
+        training_run_(run.folder().training_run()),
+        model_(model),
+        trainer_(trainer) {}
+
+  void Save(int epochs_done) override {
+    model_.Save(options_.out_dir, training_run_);
+    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
+  }
+
+ protected:
+  const TrainOptions& options_;
+  const std::string& training_run_;
+  const Model& model_;
+  Trainer& trainer_;
 };
 
 }  // namespace stereodet

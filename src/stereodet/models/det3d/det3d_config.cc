@@ -47,10 +47,8 @@ Det3dConfig Det3dConfigFromJson(const std::string& text, const std::string& sour
   return internal::ReadConfigFields<Det3dConfig>(
       source, [&](Det3dConfig& config, std::string& field) {
         field = "input";
-        const std::string input = j.at(field).get<std::string>();
-        const std::optional<PointSource> parsed = ParsePointSource(input);
-        if (!parsed) throw ParseError(source, 0, field, "expected lidar or stereo, got " + input);
-        config.input = *parsed;
+        config.input = internal::JsonNamedValue(j, field, source, ParsePointSource, "input",
+                                                "lidar or stereo");
         field = "classes";
         config.classes = j.at(field).get<std::vector<std::string>>();
         const nlohmann::json& g = j.at("grid");

@@ -457,27 +457,14 @@ torch::Tensor FocalLoss(const torch::Tensor& logits, const torch::Tensor& target
 
 }  // namespace
 
-struct internal::Det3dTrainerImpl {
+struct internal::Det3dTrainerImpl : TrainerCore {
   Det3dTrainerImpl(Det3dModelImpl& m, const Det3dLossOptions& o, double weight_decay)
-      : model(m),
-        options(o),
-        optimizer(m.net->parameters(),
-                  torch::optim::AdamWOptions(1e-3).weight_decay(weight_decay)) {}
+      : TrainerCore(*m.net, m.torch_device, Det3dConfigToJson(m.config), weight_decay),
+        model(m),
+        options(o) {}
 
   Det3dModelImpl& model;
   Det3dLossOptions options;
-  torch::optim::AdamW optimizer;
-  TrainingGroup* group = nullptr;
-  std::unique_ptr<internal::GradientReducer> reducer;  // with a group
-
-  // What TrainerHandle asks of a family (trainer_handle_internal.h).
-  torch::nn::Module& Network() const { return *model.net; }
-  torch::Device Device() const { return model.torch_device; }
-  CheckpointRecord Record(const std::string& training_run) const {
-    return {.config_json = Det3dConfigToJson(model.config),
-            .parameters = CountParameters(*model.net),
-            .training_run = training_run};
-  }
 
   // With `group`, this rank's share of the group's whole batch's loss: every term divided by the
   // whole batch's positives or foreground points.
@@ -596,10 +583,7 @@ Det3dTrainer::Det3dTrainer(Det3dModel& model, const Det3dLossOptions& loss, doub
     : TrainerHandle(internal::HandleOwned(NewTrainerImpl(*model.impl_, loss, weight_decay))) {}
 
 Det3dLossParts Det3dTrainer::Step(const std::vector<Det3dSample>& batch, double learning_rate) {
-  STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
-  for (auto& group : impl_->optimizer.param_groups()) {
-    static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
-  }
+  impl_->SetLearningRate(learning_rate);
   impl_->model.net->train();
   impl_->optimizer.zero_grad();
   auto [total, parts] = impl_->Loss(batch, impl_->group);

@@ -21,39 +21,31 @@ namespace {
 
 // The 3D detector's part of the training loop: a batch's frames augmented in parallel (GT
 // sampling, then AugmentFrame), each from its own seed, then one step of its losses.
-class Det3dTrainingTask : public TrainingTask {
+class Det3dTrainingTask : public ModelTrainingTask<Det3dModel, Det3dTrainer, TrainDet3dOptions> {
  public:
-  Det3dTrainingTask(const std::vector<Det3dFrame>& frames, const GtDatabase& gt_database,
-                    bool gt_sampling, const Det3dModel& model, Det3dTrainer& trainer,
-                    const TrainDet3dOptions& options, const std::string& training_run)
-      : frames_(frames),
+  Det3dTrainingTask(const TrainingRun<TrainDet3dOptions>& run, const Det3dModel& model,
+                    Det3dTrainer& trainer, const std::vector<Det3dFrame>& frames,
+                    const GtDatabase& gt_database, bool gt_sampling)
+      : ModelTrainingTask(run, model, trainer),
+        frames_(frames),
         gt_database_(gt_database),
-        gt_sampling_(gt_sampling),
-        model_(model),
-        trainer_(trainer),
-        options_(options),
-        training_run_(training_run) {}
+        gt_sampling_(gt_sampling) {}
 
   StepLoss Step(int epoch, int64_t /*step*/, const std::vector<int>& batch_frames,
                 double learning_rate) override {
-    std::vector<Det3dSample> batch(batch_frames.size());
-    ParallelFor(
-        batch.size(),
-        [&](size_t k) {
-          const int index = batch_frames[k];
+    const std::vector<Det3dSample> batch = MakeBatchSamples(
+        batch_frames, options_.seed, epoch, options_.threads, [&](int index, uint64_t seed) {
           // GT sampling draws from ~seed: a stream apart from AugmentFrame's, both fixed by
           // (seed, epoch, frame), so a resumed training samples the same objects.
-          const uint64_t seed = SampleSeed(options_.seed, epoch, index);
           const Det3dFrame augmented =
               gt_sampling_ ? AugmentFrame(SampleGtObjects(frames_[index], gt_database_,
                                                           options_.gt_sampling, ~seed)
                                               .frame,
                                           options_.augment, seed)
                            : AugmentFrame(frames_[index], options_.augment, seed);
-          batch[k] = MakeDet3dSample(augmented, model_.config(), model_.anchors(), true,
-                                     options_.max_aux_points);
-        },
-        options_.threads);
+          return MakeDet3dSample(augmented, model_.config(), model_.anchors(), true,
+                                 options_.max_aux_points);
+        });
     const Det3dLossParts loss = trainer_.Step(batch, learning_rate);
     return {loss.total,
             {loss.classification, loss.box, loss.direction, loss.part_warp, loss.segmentation,
@@ -61,19 +53,10 @@ class Det3dTrainingTask : public TrainingTask {
             {}};
   }
 
-  void Save(int epochs_done) override {
-    model_.Save(options_.out_dir, training_run_);
-    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
-  }
-
  private:
   const std::vector<Det3dFrame>& frames_;
   const GtDatabase& gt_database_;
   const bool gt_sampling_;
-  const Det3dModel& model_;
-  Det3dTrainer& trainer_;
-  const TrainDet3dOptions& options_;
-  const std::string& training_run_;
 };
 
 }  // namespace
@@ -160,8 +143,7 @@ TrainDet3dSummary TrainDet3d(const TrainDet3dOptions& given) {
         options.gt_sampling.max_per_class, options.gt_database.min_points,
         options.gt_database.box_margin_m, gt_database.ObjectCount());
   };
-  Det3dTrainingTask task(frames, gt_database, gt_sampling, model, trainer, options,
-                         run.folder().training_run());
+  Det3dTrainingTask task(run, model, trainer, frames, gt_database, gt_sampling);
   run.Train(task, loop, summary);
   return summary;
 }

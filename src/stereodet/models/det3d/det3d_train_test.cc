@@ -89,16 +89,12 @@ fs::path WriteTinyDataset(const std::string& name, int frames) {
 }
 
 TrainDet3dOptions TinyTraining(const fs::path& root, const fs::path& out) {
-  TrainDet3dOptions o;
-  o.data_root = root;
-  o.out_dir = out;
+  TrainDet3dOptions o = TinyTrainingOptions<TrainDet3dOptions>(root, out);
   o.model = TinyDet3dConfig();
   o.batch_size = 2;
   o.warmup_steps = 4;
   o.learning_rate = 5e-3;
-  o.threads = 1;
   o.augment.enabled = false;
-  o.progress.stream = nullptr;
   return o;
 }
 

@@ -78,10 +78,8 @@ RpnConfig RpnConfigFromJson(const std::string& text, const std::string& source) 
   const nlohmann::json j = internal::ParseModelJson(text, source, "rpn");
   return internal::ReadConfigFields<RpnConfig>(source, [&](RpnConfig& config, std::string& field) {
     field = "input";
-    const std::string input = j.at(field).get<std::string>();
-    const std::optional<RpnInput> parsed = ParseRpnInput(input);
-    if (!parsed) throw ParseError(source, 0, field, "unknown input '" + input + "' (rgb, rgbd)");
-    config.input = *parsed;
+    config.input =
+        internal::JsonNamedValue(j, field, source, ParseRpnInput, "input", "rgb or rgbd");
     field = "classes";
     config.classes = j.at(field).get<std::vector<std::string>>();
     for (auto [name, target] : {std::pair<const char*, int*>{"input_width", &config.input_width},

@@ -15,8 +15,7 @@ namespace stereodet {
 void RpnDataOptions::Check() const {
   colour.Check();
   stereo.Check();
-  STEREODET_CHECK(min_object_height_px >= 0.0)
-      << "min_object_height_px must be >= 0, got " << min_object_height_px;
+  LabelTargetOptions::Check();
   STEREODET_CHECK(flip_probability >= 0.0 && flip_probability <= 1.0)
       << "flip_probability must be in [0, 1], got " << flip_probability;
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
@@ -76,9 +75,8 @@ RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<
   StereoOptions stereo = options.stereo;
   stereo.blur.sigma_px = 0.0;  // training sees sharp images; blur is an evaluation setting
   frames_ = ReadLabelledFrames<RpnFrame>(
-      dataset, ids, config.classes, options.ignore_types, options.min_object_height_px,
-      options.threads, geometry ? "stereo" : "labels", progress,
-      [&](const FramePaths& paths, RpnFrame& frame) {
+      dataset, ids, config.classes, options, options.threads, geometry ? "stereo" : "labels",
+      progress, [&](const FramePaths& paths, RpnFrame& frame) {
         if (!geometry) return;
         const RpnGeometry g = ComputeRpnGeometry(paths, stereo);
         frame.depth_code = ResizeCodes(g.depth_code, network_size);

@@ -23,11 +23,9 @@
 
 namespace stereodet {
 
-struct RpnDataOptions {
-  // As ssd/ssd_data.h's SsdDataOptions (TargetsFromLabels): label types that become ignore
-  // regions, and objects of a class less tall than this (original px) become ignore regions too.
-  std::vector<std::string> ignore_types = {"DontCare", "Van", "Person_sitting"};
-  double min_object_height_px = 20.0;
+// The ignore regions of the labels (LabelTargetOptions, train_data.h) and the two-stage detector's
+// own settings.
+struct RpnDataOptions : LabelTargetOptions {
   bool augment = true;
   double flip_probability = 0.5;
   // Photometric jitter (only brightness, contrast and saturation are used).

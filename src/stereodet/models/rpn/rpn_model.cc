@@ -435,26 +435,13 @@ int RpnModel::InitFrom(const RpnModel& rgb, bool geometry_too) {
 // --- RpnTrainer
 // -------------------------------------------------------------------------------------
 
-struct internal::RpnTrainerImpl {
+struct internal::RpnTrainerImpl : TrainerCore {
   RpnTrainerImpl(RpnModel& m, const RpnTrainerOptions& o)
-      : model(m),
-        options(o),
-        optimizer(m.impl_->net->parameters(),
-                  torch::optim::AdamWOptions(1e-3).weight_decay(o.weight_decay)) {}
+      : TrainerCore(*m.impl_->net, m.impl_->device, RpnConfigToJson(m.config()), o.weight_decay),
+        model(m),
+        options(o) {}
   RpnModel& model;
   RpnTrainerOptions options;
-  torch::optim::AdamW optimizer;
-  TrainingGroup* group = nullptr;
-  std::unique_ptr<internal::GradientReducer> reducer;  // with a group
-
-  // What TrainerHandle asks of a family (trainer_handle_internal.h).
-  torch::nn::Module& Network() const { return *model.impl_->net; }
-  torch::Device Device() const { return model.impl_->device; }
-  CheckpointRecord Record(const std::string& training_run) const {
-    return {.config_json = RpnConfigToJson(model.config()),
-            .parameters = model.ParameterCount(),
-            .training_run = training_run};
-  }
 };
 
 template class TrainerHandle<internal::RpnTrainerImpl>;
@@ -473,7 +460,7 @@ RpnTrainer::RpnTrainer(RpnModel& model, const RpnTrainerOptions& options)
     : TrainerHandle(internal::HandleOwned(NewTrainerImpl(model, options))) {}
 
 RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint64_t step_seed) {
-  STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
+  impl_->SetLearningRate(learning_rate);
   STEREODET_CHECK(!batch.inputs.empty() && batch.inputs.size() == batch.objects.size())
       << "a batch needs inputs and one object list per input";
   STEREODET_CHECK(batch.sampling_seeds.empty() ||
@@ -482,9 +469,6 @@ RpnLossParts RpnTrainer::Step(const RpnBatch& batch, double learning_rate, uint6
       << " sampling seeds";
   TrainingGroup* const group = impl_->group;
   namespace F = torch::nn::functional;
-  for (auto& group : impl_->optimizer.param_groups()) {
-    static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
-  }
   torch::manual_seed(step_seed);
   // One sampling stream per image, so that an image's anchors and RoIs are drawn alike whichever
   // rank of a training group trains on it and whatever the images before it drew.

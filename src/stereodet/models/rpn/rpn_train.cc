@@ -26,27 +26,17 @@ uint64_t StepSeed(uint64_t seed, int64_t step) {
 
 // The two-stage detector's part of the training loop: a batch's samples drawn in parallel, each
 // from its own seed, then one step of the RPN and head losses.
-class RpnTrainingTask : public TrainingTask {
+class RpnTrainingTask : public ModelTrainingTask<RpnModel, RpnTrainer, TrainRpnOptions> {
  public:
-  RpnTrainingTask(const RpnTrainingData& data, const RpnModel& model, RpnTrainer& trainer,
-                  const TrainRpnOptions& options, const std::string& training_run)
-      : data_(data),
-        model_(model),
-        trainer_(trainer),
-        options_(options),
-        training_run_(training_run) {}
+  RpnTrainingTask(const TrainingRun<TrainRpnOptions>& run, const RpnModel& model,
+                  RpnTrainer& trainer, const RpnTrainingData& data)
+      : ModelTrainingTask(run, model, trainer), data_(data) {}
 
   StepLoss Step(int epoch, int64_t step, const std::vector<int>& batch_frames,
                 double learning_rate) override {
-    // The batch in order: each sample into its own slot, from its own seed.
-    std::vector<RpnSample> samples(batch_frames.size());
-    ParallelFor(
-        samples.size(),
-        [&](size_t k) {
-          const int index = batch_frames[k];
-          samples[k] = data_.Sample(index, SampleSeed(options_.seed, epoch, index));
-        },
-        options_.threads);
+    std::vector<RpnSample> samples =
+        MakeBatchSamples(batch_frames, options_.seed, epoch, options_.threads,
+                         [&](int index, uint64_t seed) { return data_.Sample(index, seed); });
     const uint64_t step_seed = StepSeed(options_.seed, step);
     RpnBatch batch;
     for (size_t k = 0; k < samples.size(); ++k) {
@@ -60,17 +50,8 @@ class RpnTrainingTask : public TrainingTask {
             {loss.positive_anchors, loss.foreground_rois}};
   }
 
-  void Save(int epochs_done) override {
-    model_.Save(options_.out_dir, training_run_);
-    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
-  }
-
  private:
   const RpnTrainingData& data_;
-  const RpnModel& model_;
-  RpnTrainer& trainer_;
-  const TrainRpnOptions& options_;
-  const std::string& training_run_;
 };
 
 }  // namespace
@@ -140,7 +121,7 @@ TrainRpnSummary TrainRpn(const TrainRpnOptions& given) {
         options.threads, options.device, options.data.augment, options.init_from.string(),
         options.init_geometry, summary.parameters);
   };
-  RpnTrainingTask task(data, model, trainer, options, run.folder().training_run());
+  RpnTrainingTask task(run, model, trainer, data);
   run.Train(task, loop, summary);
   return summary;
 }

@@ -35,9 +35,7 @@ fs::path WriteTinyDataset(const std::string& name, int frames) {
 }
 
 TrainRpnOptions TinyTraining(const fs::path& root, const fs::path& out) {
-  TrainRpnOptions o;
-  o.data_root = root;
-  o.out_dir = out;
+  TrainRpnOptions o = TinyTrainingOptions<TrainRpnOptions>(root, out);
   o.model.input_width = 128;
   o.model.input_height = 64;
   o.model.image_width = 8;
@@ -49,7 +47,6 @@ TrainRpnOptions TinyTraining(const fs::path& root, const fs::path& out) {
   o.batch_size = 3;
   o.learning_rate = 3e-3;
   o.warmup_steps = 5;
-  o.threads = 1;  // one thread: OpenMP barriers spin badly on a loaded 2-core machine
   o.data.augment = false;
   o.data.stereo.disparity.num_disparities = 32;
   o.data.stereo.ground.enabled = false;
@@ -57,7 +54,6 @@ TrainRpnOptions TinyTraining(const fs::path& root, const fs::path& out) {
   o.trainer.rois.samples_per_image = 32;
   o.trainer.proposals.pre_nms_top_n = 200;
   o.trainer.proposals.post_nms_top_n = 50;
-  o.progress.stream = nullptr;
   return o;
 }
 

@@ -37,14 +37,8 @@ SsdConfig SsdConfigFromJson(const std::string& text, const std::string& source) 
   const nlohmann::json j = internal::ParseModelJson(text, source, "ssd");
   return internal::ReadConfigFields<SsdConfig>(source, [&](SsdConfig& config, std::string& field) {
     field = "encoding";
-    const std::string encoding = j.at(field).get<std::string>();
-    const std::optional<InputEncoding> parsed = ParseInputEncoding(encoding);
-    if (!parsed) {
-      throw ParseError(
-          source, 0, field,
-          "unknown input encoding '" + encoding + "' (expected rgb, rgbh-fixed or rgbh-learned)");
-    }
-    config.encoding = *parsed;
+    config.encoding = internal::JsonNamedValue(j, field, source, ParseInputEncoding,
+                                               "input encoding", "rgb, rgbh-fixed or rgbh-learned");
     field = "classes";
     config.classes = j.at(field).get<std::vector<std::string>>();
     field = "input_width";

@@ -20,8 +20,7 @@ void SsdDataOptions::Check() const {
   augment.Check();
   match.Check();
   stereo.Check();
-  STEREODET_CHECK(min_object_height_px >= 0.0)
-      << "min_object_height_px must be >= 0, got " << min_object_height_px;
+  LabelTargetOptions::Check();
   STEREODET_CHECK(threads >= 0) << "threads must be >= 0, got " << threads;
 }
 
@@ -77,9 +76,8 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
   CheckRequiredFiles(dataset, ids, required);
   const cv::Size network_size(config.InputWidth(), config.InputHeight());
   frames_ = ReadLabelledFrames<TrainingFrame>(
-      dataset, ids, config.classes, options.ignore_types, options.min_object_height_px,
-      options.threads, height ? "stereo" : "labels", progress,
-      [&](const FramePaths& paths, TrainingFrame& frame) {
+      dataset, ids, config.classes, options, options.threads, height ? "stereo" : "labels",
+      progress, [&](const FramePaths& paths, TrainingFrame& frame) {
         if (from_folder) {
           // At the match size, as the in-line path below has them (ReadStereoFolderHeight's
           // full-resolution codes, resized to the network, would differ).

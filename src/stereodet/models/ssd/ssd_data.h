@@ -38,14 +38,8 @@
 
 namespace stereodet {
 
-struct SsdDataOptions {
-  // Label types that become ignore regions; other types not among the model's classes are
-  // background. Van and Person_sitting are KITTI's "neighbouring classes" of Car and Pedestrian:
-  // detecting them is neither right nor wrong in KITTI's evaluation, so they are not negatives.
-  std::vector<std::string> ignore_types = {"DontCare", "Van", "Person_sitting"};
-  // Objects of a class whose box is less tall than this (original image px) become ignore regions:
-  // KITTI's evaluation ignores anything below 25 px, so they are neither taught nor punished.
-  double min_object_height_px = 20.0;
+// The ignore regions of the labels (LabelTargetOptions, train_data.h) and the SSD's own settings.
+struct SsdDataOptions : LabelTargetOptions {
   AugmentOptions augment;
   MatchOptions match;
   // Stereo pipeline for the height codes (disparity, ground plane, 9-bit quantization). Blur is

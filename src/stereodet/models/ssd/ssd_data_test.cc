@@ -64,9 +64,8 @@ TEST(SsdDataTest, TargetsFromLabels) {
   Object cyclist = car;
   cyclist.type = "Cyclist";
   const SsdDataOptions defaults;  // ignores DontCare, Van and Person_sitting; below 20 px
-  const std::vector<TargetBox> t =
-      TargetsFromLabels({car, van, truck, small_car, cyclist}, {"Car", "Pedestrian", "Cyclist"},
-                        defaults.ignore_types, defaults.min_object_height_px);
+  const std::vector<TargetBox> t = TargetsFromLabels({car, van, truck, small_car, cyclist},
+                                                     {"Car", "Pedestrian", "Cyclist"}, defaults);
   ASSERT_EQ(t.size(), 4u);  // the truck is background
   EXPECT_EQ(t[0].label, 1);
   EXPECT_EQ(t[1].label, kIgnoreLabel);

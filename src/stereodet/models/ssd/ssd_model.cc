@@ -130,27 +130,14 @@ void SsdTrainerOptions::Check() const {
   STEREODET_CHECK(weight_decay >= 0.0) << "weight_decay must be >= 0, got " << weight_decay;
 }
 
-struct internal::SsdTrainerImpl {
+struct internal::SsdTrainerImpl : TrainerCore {
   SsdTrainerImpl(SsdModelImpl& m, const SsdTrainerOptions& o)
-      : model(m),
-        options(o),
-        optimizer(m.net->parameters(),
-                  torch::optim::AdamWOptions(1e-3).weight_decay(o.weight_decay)) {}
+      : TrainerCore(*m.net, m.device, SsdConfigToJson(m.config), o.weight_decay),
+        model(m),
+        options(o) {}
 
   SsdModelImpl& model;
   SsdTrainerOptions options;
-  torch::optim::AdamW optimizer;
-  TrainingGroup* group = nullptr;
-  std::unique_ptr<internal::GradientReducer> reducer;  // with a group
-
-  // What TrainerHandle asks of a family (trainer_handle_internal.h).
-  torch::nn::Module& Network() const { return *model.net; }
-  torch::Device Device() const { return model.device; }
-  CheckpointRecord Record(const std::string& training_run) const {
-    return {.config_json = SsdConfigToJson(model.config),
-            .parameters = CountParameters(*model.net),
-            .training_run = training_run};
-  }
 
   // Tensors viewing the batch's arrays (no copy; the batch outlives them). With `group`, this
   // rank's share of the group's whole batch's loss.
@@ -206,10 +193,7 @@ SsdTrainer::SsdTrainer(SsdModel& model, const SsdTrainerOptions& options)
     : TrainerHandle(internal::HandleOwned(NewTrainerImpl(*model.impl_, options))) {}
 
 LossParts SsdTrainer::Step(const TrainBatch& batch, double learning_rate) {
-  STEREODET_CHECK(learning_rate >= 0.0) << "learning rate must be >= 0, got " << learning_rate;
-  for (auto& group : impl_->optimizer.param_groups()) {
-    static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
-  }
+  impl_->SetLearningRate(learning_rate);
   impl_->model.net->train();
   impl_->optimizer.zero_grad();
   const internal::MultiBoxLossTerms terms = impl_->Loss(batch, impl_->group);

@@ -29,15 +29,11 @@ namespace {
 
 // The SSD's part of the training loop: batches from a BatchLoader thread (the epoch's order,
 // prepared ahead), MultiBox loss.
-class SsdTrainingTask : public TrainingTask {
+class SsdTrainingTask : public ModelTrainingTask<SsdModel, SsdTrainer, TrainSsdOptions> {
  public:
-  SsdTrainingTask(const SsdTrainingData& data, const SsdModel& model, SsdTrainer& trainer,
-                  const TrainSsdOptions& options, const std::string& training_run)
-      : data_(data),
-        model_(model),
-        trainer_(trainer),
-        options_(options),
-        training_run_(training_run) {}
+  SsdTrainingTask(const TrainingRun<TrainSsdOptions>& run, const SsdModel& model,
+                  SsdTrainer& trainer, const SsdTrainingData& data)
+      : ModelTrainingTask(run, model, trainer), data_(data) {}
 
   void BeginEpoch(int epoch, const std::vector<std::vector<int>>& batches) override {
     loader_.reset();  // the previous epoch's thread first
@@ -55,17 +51,8 @@ class SsdTrainingTask : public TrainingTask {
     return {loss.total, {loss.localization, loss.confidence}, {}};
   }
 
-  void Save(int epochs_done) override {
-    model_.Save(options_.out_dir, training_run_);
-    trainer_.SaveCheckpoint(options_.out_dir / kCheckpointFile, epochs_done, training_run_);
-  }
-
  private:
   const SsdTrainingData& data_;
-  const SsdModel& model_;
-  SsdTrainer& trainer_;
-  const TrainSsdOptions& options_;
-  const std::string& training_run_;
   std::unique_ptr<BatchLoader> loader_;
 };
 
@@ -177,7 +164,7 @@ TrainSsdSummary TrainSsd(const TrainSsdOptions& given) {
         InputEncodingName(config.encoding), run.ScheduleSettings(epochs_done, ids.size()),
         config.InputWidth(), config.InputHeight(), config.base_channels);
   };
-  SsdTrainingTask task(data, model, trainer, options, run.folder().training_run());
+  SsdTrainingTask task(run, model, trainer, data);
   run.Train(task, loop, summary);
   return summary;
 }

@@ -43,19 +43,15 @@ StereoOptions TinyStereo() {
 }
 
 TrainSsdOptions TinyTraining(const fs::path& root, const fs::path& out) {
-  TrainSsdOptions options;
-  options.data_root = root;
-  options.out_dir = out;
+  TrainSsdOptions options = TinyTrainingOptions<TrainSsdOptions>(root, out);
   options.model.encoding = InputEncoding::kRgbhLearned;
   options.model.boxes.input_width = 128;
   options.model.boxes.input_height = 40;
   options.model.base_channels = 4;
   options.batch_size = 2;
   options.warmup_steps = 2;
-  options.threads = 1;
   options.data.threads = 1;
   options.data.stereo = TinyStereo();
-  options.progress.stream = nullptr;
   return options;
 }
 
