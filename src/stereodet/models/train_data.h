@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "stereodet/kitti/dataset.h"
@@ -70,6 +71,37 @@ struct LabelledImageFrame {
   std::string id;
   std::filesystem::path image_path;  // left image (image_2), read at every use
   std::vector<TargetBox> targets;    // original image px (TargetsFromLabels)
+};
+
+// The frames of one split an image family trains on, in memory, with the model's config and the
+// family's data options (SsdTrainingData, RpnTrainingData: each adds how it reads its frames and
+// samples one). `Frame` is a LabelledImageFrame with the family's fields.
+template <typename Frame, typename Config, typename Options>
+class TrainingFrameSet {
+ public:
+  int size() const { return static_cast<int>(frames_.size()); }
+  const Frame& frame(int index) const { return frames_[index]; }
+  const Config& config() const { return config_; }
+  // Targets of the model's classes (label >= 1, not ignore regions) over all frames.
+  int NumObjects() const {
+    int count = 0;
+    for (const Frame& f : frames_) {
+      for (const TargetBox& t : f.targets) count += t.label >= 1 ? 1 : 0;
+    }
+    return count;
+  }
+
+ protected:
+  // Checks `config` and `options` (their Check(): std::invalid_argument).
+  TrainingFrameSet(std::vector<Frame> frames, const Config& config, const Options& options)
+      : frames_(std::move(frames)), config_(config), options_(options) {
+    config.Check();
+    options.Check();
+  }
+
+  std::vector<Frame> frames_;
+  Config config_;
+  Options options_;
 };
 
 // One Frame (a LabelledImageFrame with a family's fields) per id of `ids`, in their order, read in

@@ -62,9 +62,7 @@ PlanarImage PrepareRpnInput(const cv::Mat& bgr, const cv::Mat& depth_code,
 RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
                                  const RpnConfig& config, const RpnDataOptions& options,
                                  const ProgressOptions& progress)
-    : config_(config), options_(options) {
-  config.Check();
-  options.Check();
+    : TrainingFrameSet({}, config, options) {
   STEREODET_CHECK(!ids.empty()) << "no frames to train on";
   const bool geometry = config.input == RpnInput::kRgbd;
   RequiredFiles required;
@@ -86,18 +84,7 @@ RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<
 
 RpnTrainingData::RpnTrainingData(std::vector<RpnFrame> frames, const RpnConfig& config,
                                  const RpnDataOptions& options)
-    : frames_(std::move(frames)), config_(config), options_(options) {
-  config.Check();
-  options.Check();
-}
-
-int RpnTrainingData::NumObjects() const {
-  int count = 0;
-  for (const RpnFrame& f : frames_) {
-    for (const TargetBox& t : f.targets) count += t.label >= 1 ? 1 : 0;
-  }
-  return count;
-}
+    : TrainingFrameSet(std::move(frames), config, options) {}
 
 RpnSample RpnTrainingData::Sample(int index, uint64_t seed) const {
   STEREODET_CHECK(index >= 0 && index < size()) << "frame index " << index << " out of range";

@@ -59,7 +59,7 @@ PlanarImage PrepareRpnInput(const cv::Mat& bgr, const cv::Mat& depth_code,
                             const cv::Mat& height_code, const RpnConfig& config,
                             const DepthQuantization& depth = {});
 
-class RpnTrainingData {
+class RpnTrainingData : public TrainingFrameSet<RpnFrame, RpnConfig, RpnDataOptions> {
  public:
   // Reads every label file and, for RGB-D, runs stereo on every frame (parallel, with progress).
   // Throws std::runtime_error listing missing files (first few) before any work.
@@ -70,17 +70,8 @@ class RpnTrainingData {
   RpnTrainingData(std::vector<RpnFrame> frames, const RpnConfig& config,
                   const RpnDataOptions& options);
 
-  int size() const { return static_cast<int>(frames_.size()); }
-  const RpnFrame& frame(int index) const { return frames_[index]; }
-  int NumObjects() const;  // targets of the model's classes over all frames
-
   // The augmented, encoded sample of frame `index`; the same seed gives the same sample.
   RpnSample Sample(int index, uint64_t seed) const;
-
- private:
-  std::vector<RpnFrame> frames_;
-  RpnConfig config_;
-  RpnDataOptions options_;
 };
 
 }  // namespace stereodet

@@ -74,7 +74,7 @@ struct TrainSample {
 
 // The frames of one split, ready to sample from. Construction reads every label file and, for RGB-H
 // encodings, runs the stereo pipeline on every frame (in parallel, with progress).
-class SsdTrainingData {
+class SsdTrainingData : public TrainingFrameSet<TrainingFrame, SsdConfig, SsdDataOptions> {
  public:
   // Throws std::runtime_error listing missing files (first few) before doing any work.
   SsdTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
@@ -84,9 +84,6 @@ class SsdTrainingData {
   SsdTrainingData(std::vector<TrainingFrame> frames, const SsdConfig& config,
                   const SsdDataOptions& options);
 
-  int size() const { return static_cast<int>(frames_.size()); }
-  const TrainingFrame& frame(int index) const { return frames_[index]; }
-  const SsdConfig& config() const { return config_; }
   const std::vector<DefaultBox>& default_boxes() const { return default_boxes_; }
 
   // The augmented, encoded sample of frame `index`; the same seed gives the same sample.
@@ -95,9 +92,6 @@ class SsdTrainingData {
   TrainBatch MakeBatch(const std::vector<int>& indices, const std::vector<uint64_t>& seeds) const;
 
  private:
-  std::vector<TrainingFrame> frames_;
-  SsdConfig config_;
-  SsdDataOptions options_;
   std::vector<DefaultBox> default_boxes_;
 };
 
