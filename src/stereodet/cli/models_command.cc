@@ -56,18 +56,47 @@ struct TrainArgs {
   bool quiet = false;
 };
 
-// The flags of `detect ssd` that are not DetectSsdOptions fields.
-struct DetectArgs {
-  DetectSsdOptions options;
-  StereoOptions stereo;  // the stereo flags' values; options.stereo only when one was given
-  StereoFlagText stereo_text;
-  std::vector<CLI::Option*> stereo_flags;
+// A `detect` command's options and the flags every one has besides them.
+template <typename DetectOptions>
+struct DetectCommandArgs {
+  DetectOptions options;
   bool quiet = false;
   bool verbose = false;  // --verbose: the stage times too
 };
 
-// The flags every `train` command shares (the model folder, the schedule, resume/force, seed,
-// threads, device), bound to the fields of the same names in each family's options.
+// The flags of `detect ssd` that are not DetectSsdOptions fields.
+struct DetectArgs : DetectCommandArgs<DetectSsdOptions> {
+  StereoOptions stereo;  // the stereo flags' values; options.stereo only when one was given
+  StereoFlagText stereo_text;
+  std::vector<CLI::Option*> stereo_flags;
+};
+
+// The flags every `train` command shares, bound to the fields of the same names in each family's
+// options, in three groups so that each command's own flags keep their place in its --help. This
+// one: the data (and det3d's --points after --data, when `points_dir` is given).
+template <typename TrainOptions>
+void AddTrainingDataFlags(CLI::App* ts, TrainOptions& t,
+                          std::filesystem::path* points_dir = nullptr) {
+  ts->add_option("--data", t.data_root, "dataset root (training/, ImageSets/)")->required();
+  if (points_dir != nullptr) {
+    ts->add_option("--points", *points_dir,
+                   "stereo input: the folder `stereodet stereo --encode points` wrote");
+  }
+  ts->add_option("--split", t.split, "split name in ImageSets/ or a split file")
+      ->capture_default_str();
+}
+
+// The last group: how much of the data and of the epochs this run trains.
+template <typename TrainOptions>
+void AddTrainingStopFlags(CLI::App* ts, TrainOptions& t) {
+  ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
+      ->capture_default_str();
+  ts->add_option("--stop-after", t.max_epochs_this_run,
+                 "stop after N epochs in this run (0 = all); continue later with --resume")
+      ->capture_default_str();
+}
+
+// The middle group: the model folder, the schedule, resume/force, seed, threads, device.
 template <typename TrainOptions>
 void AddTrainingFlags(CLI::App* ts, TrainOptions& t) {
   ts->add_option("--out", t.out_dir, "model folder (model.json, model.pt, checkpoint, log)")
@@ -143,6 +172,14 @@ void AddDetectInputFlags(CLI::App* ds, DetectionRunOptions& d,
       ->required();
 }
 
+// The image families' --blur-sigma (the network's image only).
+void AddBlurOption(CLI::App* ds, double* blur_sigma_px) {
+  ds->add_option("--blur-sigma", *blur_sigma_px,
+                 "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
 // The other group: batch size, threads, device and frame limit.
 void AddDetectRunFlags(CLI::App* ds, DetectionRunOptions& d) {
   ds->add_option("--batch-size", d.batch_size, "frames per forward pass")
@@ -177,6 +214,37 @@ void PrintDetectSummary(const DetectSummary& s, const std::filesystem::path& out
   if (verbose) std::fputs(s.stage_times.c_str(), stderr);
 }
 
+// Runs a `detect` command: the warning for an unfinished model, then `detect(options)` (DetectSsd,
+// DetectRpn, DetectDet3d; a family may complete its options there first) with this process's
+// command line, then the closing line.
+template <typename DetectOptions, typename Detect>
+void RunDetectCommand(DetectCommandArgs<DetectOptions>& a, Detect detect) {
+  WarnIfTrainingUnfinished(a.options.model_dir);
+  if (a.quiet) a.options.progress.stream = nullptr;
+  a.options.command_line = ProcessCommandLine();
+  PrintDetectSummary(detect(a.options), a.options.out_dir, a.quiet, a.verbose);
+}
+
+// The last flags of every `detect` command: --shard, --quiet, --verbose.
+template <typename DetectOptions>
+void AddDetectOutputFlags(CLI::App* ds, DetectCommandArgs<DetectOptions>& a) {
+  AddShardOption(ds, &a.options.shard);
+  ds->add_flag("--quiet", a.quiet, "no progress or summary output");
+  ds->add_flag("--verbose", a.verbose, "after the summary line, the time each stage took");
+}
+
+// Runs a `train` command: `train(options)` (TrainSsd, TrainRpn, TrainDet3d) with this process's
+// command line and the training group of the environment (torchrun), then, unless quiet and on
+// rank 0 alone, `print(summary)`.
+template <typename TrainOptions, typename Train, typename Print>
+void RunTrainCommand(TrainOptions& options, bool quiet, Train train, Print print) {
+  if (quiet) options.progress.stream = nullptr;
+  options.command_line = ProcessCommandLine();
+  CompleteFromEnvironment(options);
+  const auto summary = train(options);
+  if (!quiet && PrintsSummary(options)) print(summary);
+}
+
 void RunTrain(TrainArgs& a) {
   TrainSsdOptions& options = a.options;
   const auto encoding = ParseInputEncoding(a.input);
@@ -203,11 +271,7 @@ void RunTrain(TrainArgs& a) {
     options.auto_match_scale = !scale_given;
   }
   options.data.threads = options.threads;
-  if (a.quiet) options.progress.stream = nullptr;
-  options.command_line = ProcessCommandLine();
-  CompleteFromEnvironment(options);
-  const TrainSsdSummary s = TrainSsd(options);
-  if (!a.quiet && PrintsSummary(options)) {
+  RunTrainCommand(options, a.quiet, TrainSsd, [&](const TrainSsdSummary& s) {
     std::fprintf(
         stderr,
         "trained %s: %d frames, epochs %d/%d (%d this run), final loss %.4f, %.1f images/s,"
@@ -216,12 +280,13 @@ void RunTrain(TrainArgs& a) {
         a.input.c_str(), s.frames, s.epochs_done, options.epochs, s.epochs_run, s.final_loss,
         s.frames_per_second, s.seconds, s.stereo_seconds, static_cast<long long>(s.parameters),
         static_cast<long long>(s.compression_parameters), options.out_dir.c_str());
-  }
+  });
 }
 
-void RunDetect(DetectArgs& a) {
-  DetectSsdOptions& options = a.options;
-  WarnIfTrainingUnfinished(options.model_dir);
+// The stereo flags given to `detect ssd`, applied to the RGB-H model's settings (partial flags
+// change only what they name), with a warning when the model is rgb or they differ from its
+// settings.
+void ApplyStereoFlags(DetectArgs& a, DetectSsdOptions& options) {
   if (AnyGiven(a.stereo_flags)) {
     const std::optional<StereoOptions> recorded = ModelStereoSettings(options.model_dir);
     if (!recorded) {
@@ -239,9 +304,14 @@ void RunDetect(DetectArgs& a) {
                    options.model_dir.c_str(), mismatch.c_str());
     }
   }
-  if (a.quiet) options.progress.stream = nullptr;
-  options.command_line = ProcessCommandLine();
-  PrintDetectSummary(DetectSsd(options), options.out_dir, a.quiet, a.verbose);
+}
+
+// `detect ssd`: the stereo flags applied, then DetectSsd.
+void RunDetect(DetectArgs& a) {
+  RunDetectCommand(a, [&a](DetectSsdOptions& options) {
+    ApplyStereoFlags(a, options);
+    return DetectSsd(options);
+  });
 }
 
 struct TrainDet3dArgs {
@@ -250,20 +320,12 @@ struct TrainDet3dArgs {
   bool quiet = false;
 };
 
-struct DetectDet3dArgs {
-  DetectDet3dOptions options;
-  bool quiet = false;
-  bool verbose = false;  // --verbose: the stage times too
-};
+using DetectDet3dArgs = DetectCommandArgs<DetectDet3dOptions>;
 
 void RunTrainDet3d(TrainDet3dArgs& a) {
   TrainDet3dOptions& options = a.options;
   options.model.input = *ParsePointSource(a.input);  // CLI::IsMember checked it
-  if (a.quiet) options.progress.stream = nullptr;
-  options.command_line = ProcessCommandLine();
-  CompleteFromEnvironment(options);
-  const TrainDet3dSummary s = TrainDet3d(options);
-  if (!a.quiet && PrintsSummary(options)) {
+  RunTrainCommand(options, a.quiet, TrainDet3d, [&](const TrainDet3dSummary& s) {
     std::fprintf(stderr,
                  "trained det3d on %s: %d frames (%d objects, %lld in the GT database with %lld "
                  "points), epochs "
@@ -276,15 +338,7 @@ void RunTrainDet3d(TrainDet3dArgs& a) {
                  s.epochs_run, s.final_loss, s.frames_per_second, s.seconds_per_step, s.seconds,
                  static_cast<long long>(s.parameters),
                  static_cast<long long>(s.auxiliary_parameters), options.out_dir.c_str());
-  }
-}
-
-void RunDetectDet3d(DetectDet3dArgs& a) {
-  DetectDet3dOptions& options = a.options;
-  WarnIfTrainingUnfinished(options.model_dir);
-  if (a.quiet) options.progress.stream = nullptr;
-  options.command_line = ProcessCommandLine();
-  PrintDetectSummary(DetectDet3d(options), options.out_dir, a.quiet, a.verbose);
+  });
 }
 
 void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
@@ -294,11 +348,7 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
       "det3d",
       "single-stage 3D detector (pillars, BEV CNN, SA-SSD auxiliary net, PSWarp) on "
       "lidar scans or stereo point clouds");
-  ts->add_option("--data", t.data_root, "dataset root (training/, ImageSets/)")->required();
-  ts->add_option("--points", t.points_dir,
-                 "stereo input: the folder `stereodet stereo --encode points` wrote");
-  ts->add_option("--split", t.split, "split name in ImageSets/ or a split file")
-      ->capture_default_str();
+  AddTrainingDataFlags(ts, t, &t.points_dir);
   ts->add_option("--input", targs->input, "point source")
       ->check(CLI::IsMember({"lidar", "stereo"}))
       ->capture_default_str();
@@ -319,11 +369,7 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
                  "GT database: leave out objects with fewer points")
       ->capture_default_str();
   ts->add_flag("!--no-auxiliary", t.loss.auxiliary, "do not train the auxiliary network");
-  ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
-      ->capture_default_str();
-  ts->add_option("--stop-after", t.max_epochs_this_run,
-                 "stop after N epochs in this run (0 = all); continue later with --resume")
-      ->capture_default_str();
+  AddTrainingStopFlags(ts, t);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrainDet3d(*targs); });
 
@@ -337,10 +383,8 @@ void AddDet3dCommands(CLI::App* train, CLI::App* detect) {
                  "stereo: drop points farther than this, m (0 = keep all)")
       ->capture_default_str();
   AddDetectRunFlags(ds, d);
-  AddShardOption(ds, &d.shard);
-  ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
-  ds->add_flag("--verbose", dargs->verbose, "after the summary line, the time each stage took");
-  ds->callback([dargs] { RunDetectDet3d(*dargs); });
+  AddDetectOutputFlags(ds, *dargs);
+  ds->callback([dargs] { RunDetectCommand(*dargs, DetectDet3d); });
 }
 
 struct DetectMergeArgs {
@@ -375,11 +419,7 @@ struct TrainRpnArgs {
   bool quiet = false;
 };
 
-struct DetectRpnArgs {
-  DetectRpnOptions options;
-  bool quiet = false;
-  bool verbose = false;  // --verbose: the stage times too
-};
+using DetectRpnArgs = DetectCommandArgs<DetectRpnOptions>;
 
 void RunTrainRpn(TrainRpnArgs& a) {
   TrainRpnOptions& options = a.options;
@@ -387,11 +427,7 @@ void RunTrainRpn(TrainRpnArgs& a) {
   options.model.anchors.stride_px = options.model.feature_stride;
   FinishStereoFlags(a.stereo, options.data.stereo);
   options.data.threads = options.threads;
-  if (a.quiet) options.progress.stream = nullptr;
-  options.command_line = ProcessCommandLine();
-  CompleteFromEnvironment(options);
-  const TrainRpnSummary s = TrainRpn(options);
-  if (!a.quiet && PrintsSummary(options)) {
+  RunTrainCommand(options, a.quiet, TrainRpn, [&](const TrainRpnSummary& s) {
     std::fprintf(
         stderr,
         "trained rpn on %s: %d frames (%d objects), epochs %d/%d (%d this run), final "
@@ -406,15 +442,7 @@ void RunTrainRpn(TrainRpnArgs& a) {
                   .c_str()
             : "",
         options.out_dir.c_str());
-  }
-}
-
-void RunDetectRpn(DetectRpnArgs& a) {
-  DetectRpnOptions& options = a.options;
-  WarnIfTrainingUnfinished(options.model_dir);
-  if (a.quiet) options.progress.stream = nullptr;
-  options.command_line = ProcessCommandLine();
-  PrintDetectSummary(DetectRpn(options), options.out_dir, a.quiet, a.verbose);
+  });
 }
 
 void AddRpnCommands(CLI::App* train, CLI::App* detect) {
@@ -424,9 +452,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
       "rpn",
       "two-stage detector (ResNet-style trunks, region proposal network, RoIAlign box head) on "
       "rgb, or rgbd with a late-fused depth and height branch");
-  ts->add_option("--data", t.data_root, "dataset root (training/, ImageSets/)")->required();
-  ts->add_option("--split", t.split, "split name in ImageSets/ or a split file")
-      ->capture_default_str();
+  AddTrainingDataFlags(ts, t);
   ts->add_option("--input", targs->input, "rgb (image branch) or rgbd (+ geometry branch)")
       ->check(CLI::IsMember({"rgb", "rgbd"}))
       ->capture_default_str();
@@ -455,11 +481,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   ts->add_flag("--init-geometry", t.init_geometry,
                "with --init-from: mirror the image branch into the geometry branch too");
   ts->add_flag("!--no-augment", t.data.augment, "no augmentation (flip, colour jitter)");
-  ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
-      ->capture_default_str();
-  ts->add_option("--stop-after", t.max_epochs_this_run,
-                 "stop after N epochs in this run (0 = all); continue later with --resume")
-      ->capture_default_str();
+  AddTrainingStopFlags(ts, t);
   AddStereoFlags(ts, t.data.stereo, targs->stereo);
   ts->add_flag("--quiet", targs->quiet, "no progress or summary output");
   ts->callback([targs] { RunTrainRpn(*targs); });
@@ -468,10 +490,7 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
   DetectRpnOptions& d = dargs->options;
   CLI::App* ds = detect->add_subcommand("rpn", "run a model from `stereodet train rpn`");
   AddDetectInputFlags(ds, d);
-  ds->add_option("--blur-sigma", d.blur_sigma_px,
-                 "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  AddBlurOption(ds, &d.blur_sigma_px);
   ds->add_option("--score-threshold", d.detect.decode.score_threshold,
                  "drop detections scoring below")
       ->capture_default_str();
@@ -479,10 +498,8 @@ void AddRpnCommands(CLI::App* train, CLI::App* detect) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   AddDetectRunFlags(ds, d);
-  AddShardOption(ds, &d.shard);
-  ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
-  ds->add_flag("--verbose", dargs->verbose, "after the summary line, the time each stage took");
-  ds->callback([dargs] { RunDetectRpn(*dargs); });
+  AddDetectOutputFlags(ds, *dargs);
+  ds->callback([dargs] { RunDetectCommand(*dargs, DetectRpn); });
 }
 
 }  // namespace
@@ -495,9 +512,7 @@ void AddModelsCommand(CLI::App& app) {
   TrainSsdOptions& t = targs->options;
   CLI::App* ts = train->add_subcommand(
       "ssd", "single-shot image detector on rgb, rgbh-fixed or rgbh-learned input");
-  ts->add_option("--data", t.data_root, "dataset root (training/, ImageSets/)")->required();
-  ts->add_option("--split", t.split, "split name in ImageSets/ or a split file")
-      ->capture_default_str();
+  AddTrainingDataFlags(ts, t);
   ts->add_option("--input", targs->input, "input encoding")
       ->check(CLI::IsMember({"rgb", "rgbh-fixed", "rgbh-learned"}))
       ->capture_default_str();
@@ -506,11 +521,7 @@ void AddModelsCommand(CLI::App& app) {
       ->capture_default_str();
   ts->add_option("--height", t.model.boxes.input_height, "network input height, px")
       ->capture_default_str();
-  ts->add_option("--max-frames", t.max_frames, "use only the first N frames (0 = all)")
-      ->capture_default_str();
-  ts->add_option("--stop-after", t.max_epochs_this_run,
-                 "stop after N epochs in this run (0 = all); continue later with --resume")
-      ->capture_default_str();
+  AddTrainingStopFlags(ts, t);
   targs->stereo_flags = AddStereoFlags(ts, t.data.stereo, targs->stereo);
   CLI::Option* train_stereo_dir = ts->add_option(
       "--stereo", t.data.stereo_dir,
@@ -524,25 +535,20 @@ void AddModelsCommand(CLI::App& app) {
   DetectSsdOptions& d = dargs->options;
   CLI::App* ds = detect->add_subcommand("ssd", "run a model from `stereodet train ssd`");
   AddDetectInputFlags(ds, d);
-  ds->add_option("--blur-sigma", d.blur_sigma_px,
-                 "Gaussian blur of the network's image, px (stereo stays sharp); 0 = none")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  AddBlurOption(ds, &d.blur_sigma_px);
   ds->add_option("--score-threshold", d.decode.score_threshold, "drop detections scoring below")
       ->capture_default_str();
   AddDetectRunFlags(ds, d);
   ds->add_flag("!--no-pipeline", d.pipeline,
                "prepare each batch (reading, stereo) only after the network's previous one "
                "(default: the next batch is prepared while the network runs; same detections)");
-  AddShardOption(ds, &d.shard);
   dargs->stereo_flags = AddStereoFlags(ds, dargs->stereo, dargs->stereo_text);
   CLI::Option* detect_stereo_dir = ds->add_option(
       "--stereo", d.stereo_dir,
       "RGB-H: read the heights from this `stereodet stereo` folder instead of matching; refused "
       "when its stereo.json's settings differ from the model's");
   for (CLI::Option* flag : dargs->stereo_flags) detect_stereo_dir->excludes(flag);
-  ds->add_flag("--quiet", dargs->quiet, "no progress or summary output");
-  ds->add_flag("--verbose", dargs->verbose, "after the summary line, the time each stage took");
+  AddDetectOutputFlags(ds, *dargs);
   ds->callback([dargs] { RunDetect(*dargs); });
 
   AddDet3dCommands(train, detect);
