@@ -2,14 +2,14 @@
 // complete: `template class ModelHandle<SsdModel, SsdConfig, internal::SsdModelImpl>;`. Includes
 // LibTorch.
 //
-// What a family's Impl provides:
-//   Impl(const Config& config, ComputeDevice device)   builds the network on `device`
-//   Config config;                                      the settings
-//   torch::nn::ModuleHolder net;                        the network (`*net` is its
-//   torch::nn::Module) static Config ConfigFromJson(const std::string& text, const std::string&
-//   source); void ReadModelJson(const std::string& text, const std::string& source);  // what else
-//   it records int InputChannels() const;                          the network input's channels
-//   std::string ModelJson(const WeightsRecord& weights) const;  // model.json's text
+// What a family's Impl provides (the SSD's in ssd_model.cc is an example):
+//   Impl(const Config&, ComputeDevice);  builds the network on the device
+//   Config config;                       the settings
+//   net                                  the network, a torch::nn::ModuleHolder
+//   static Config ConfigFromJson(text, source);  the family's *ConfigFromJson
+//   void ReadModelJson(text, source);    what else model.json records (stereo settings)
+//   int InputChannels() const;           the network input's channels (WeightsRecord)
+//   std::string ModelJson(const WeightsRecord&) const;  model.json's text
 #ifndef STEREODET_MODELS_MODEL_HANDLE_INTERNAL_H_
 #define STEREODET_MODELS_MODEL_HANDLE_INTERNAL_H_
 

@@ -242,11 +242,12 @@ std::string ScheduleSettingsJson(const TrainingSchedule& schedule, int max_frame
 // What every family's training (TrainSsd, TrainRpn, TrainDet3d) does the same way around its own
 // model, data and task, in the order of these calls:
 //   TrainingRun<TrainRpnOptions> run(options, "train rpn", {{"--init-from", dir}});
-//   const RpnConfig config = run.folder().ModelConfig(...);  // the flags' or, resuming,
-//   model.json's RpnModel model(config, run.options().seed, run.device());  // and the family's
-//   trainer if (!run.Resume(trainer, summary)) return summary;      // nothing left to train
+//   RpnConfig config = run.folder().ModelConfig(...);  // the flags', or model.json's
+//   RpnModel model(config, run.options().seed, run.device());
+//   RpnTrainer trainer(model, ...);
+//   if (!run.Resume(trainer, summary)) return summary;  // nothing left to train
 //   ... the family's data ...
-//   TrainingLoopOptions loop = run.LoopOptions(frames);     // + its columns, inputs, settings
+//   TrainingLoopOptions loop = run.LoopOptions(frames);  // + columns, inputs, settings
 //   run.Train(task, loop, summary);
 // `TrainOptions` has a Check() and the fields CheckTrainingSchedule names.
 template <typename TrainOptions>
