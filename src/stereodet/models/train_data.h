@@ -79,6 +79,14 @@ struct LabelledImageFrame {
 template <typename Frame, typename Config, typename Options>
 class TrainingFrameSet {
  public:
+  // From frames already in memory (tests; the families read theirs). Checks `config` and
+  // `options` (their Check(): std::invalid_argument).
+  TrainingFrameSet(std::vector<Frame> frames, const Config& config, const Options& options)
+      : frames_(std::move(frames)), config_(config), options_(options) {
+    config.Check();
+    options.Check();
+  }
+
   int size() const { return static_cast<int>(frames_.size()); }
   const Frame& frame(int index) const { return frames_[index]; }
   const Config& config() const { return config_; }
@@ -92,13 +100,6 @@ class TrainingFrameSet {
   }
 
  protected:
-  // Checks `config` and `options` (their Check(): std::invalid_argument).
-  TrainingFrameSet(std::vector<Frame> frames, const Config& config, const Options& options)
-      : frames_(std::move(frames)), config_(config), options_(options) {
-    config.Check();
-    options.Check();
-  }
-
   std::vector<Frame> frames_;
   Config config_;
   Options options_;

@@ -82,10 +82,6 @@ RpnTrainingData::RpnTrainingData(const KittiDataset& dataset, const std::vector<
       });
 }
 
-RpnTrainingData::RpnTrainingData(std::vector<RpnFrame> frames, const RpnConfig& config,
-                                 const RpnDataOptions& options)
-    : TrainingFrameSet(std::move(frames), config, options) {}
-
 RpnSample RpnTrainingData::Sample(int index, uint64_t seed) const {
   STEREODET_CHECK(index >= 0 && index < size()) << "frame index " << index << " out of range";
   const RpnFrame& frame = frames_[index];

@@ -66,9 +66,7 @@ class RpnTrainingData : public TrainingFrameSet<RpnFrame, RpnConfig, RpnDataOpti
   RpnTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
                   const RpnConfig& config, const RpnDataOptions& options,
                   const ProgressOptions& progress = {});
-  // From frames already in memory (tests).
-  RpnTrainingData(std::vector<RpnFrame> frames, const RpnConfig& config,
-                  const RpnDataOptions& options);
+  using TrainingFrameSet::TrainingFrameSet;  // from frames in memory
 
   // The augmented, encoded sample of frame `index`; the same seed gives the same sample.
   RpnSample Sample(int index, uint64_t seed) const;

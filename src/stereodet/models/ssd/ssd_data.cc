@@ -55,7 +55,7 @@ PlanarImage PrepareNetworkInput(const cv::Mat& bgr, const cv::Mat& height_code,
 SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
                                  const SsdConfig& config, const SsdDataOptions& options,
                                  const ProgressOptions& progress)
-    : TrainingFrameSet({}, config, options), default_boxes_(GenerateDefaultBoxes(config.boxes)) {
+    : TrainingFrameSet({}, config, options) {
   STEREODET_CHECK(!ids.empty()) << "no frames to train on";
   const bool height = UsesHeight(config.encoding);
   RequiredFiles required;
@@ -100,11 +100,6 @@ SsdTrainingData::SsdTrainingData(const KittiDataset& dataset, const std::vector<
         }
       });
 }
-
-SsdTrainingData::SsdTrainingData(std::vector<TrainingFrame> frames, const SsdConfig& config,
-                                 const SsdDataOptions& options)
-    : TrainingFrameSet(std::move(frames), config, options),
-      default_boxes_(GenerateDefaultBoxes(config.boxes)) {}
 
 TrainSample SsdTrainingData::Sample(int index, uint64_t seed) const {
   STEREODET_CHECK(index >= 0 && index < size()) << "frame index " << index << " out of range";

@@ -80,9 +80,7 @@ class SsdTrainingData : public TrainingFrameSet<TrainingFrame, SsdConfig, SsdDat
   SsdTrainingData(const KittiDataset& dataset, const std::vector<std::string>& ids,
                   const SsdConfig& config, const SsdDataOptions& options,
                   const ProgressOptions& progress = {});
-  // From frames already in memory (tests).
-  SsdTrainingData(std::vector<TrainingFrame> frames, const SsdConfig& config,
-                  const SsdDataOptions& options);
+  using TrainingFrameSet::TrainingFrameSet;  // from frames in memory
 
   const std::vector<DefaultBox>& default_boxes() const { return default_boxes_; }
 
@@ -92,7 +90,7 @@ class SsdTrainingData : public TrainingFrameSet<TrainingFrame, SsdConfig, SsdDat
   TrainBatch MakeBatch(const std::vector<int>& indices, const std::vector<uint64_t>& seeds) const;
 
  private:
-  std::vector<DefaultBox> default_boxes_;
+  std::vector<DefaultBox> default_boxes_ = GenerateDefaultBoxes(config_.boxes);
 };
 
 // Builds the batches of one epoch on a background thread, up to `capacity` batches ahead of the
