@@ -8,12 +8,8 @@
 #include "stereodet/models/train_common.h"
 #include "stereodet/models/train_data.h"
 #include "stereodet/models/trainer.h"
-#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
 #include "stereodet/util/parallel.h"
-#include "stereodet/util/run_manifest.h"
-#include "stereodet/util/timer.h"
-#include "stereodet/util/version.h"
 
 namespace stereodet {
 

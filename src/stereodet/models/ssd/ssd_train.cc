@@ -15,13 +15,8 @@
 #include "stereodet/models/trainer.h"
 #include "stereodet/stereo/dataset_encoder.h"
 #include "stereodet/stereo/image_io.h"
-#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
-#include "stereodet/util/hash.h"
-#include "stereodet/util/run_manifest.h"
-#include "stereodet/util/strings.h"
 #include "stereodet/util/timer.h"
-#include "stereodet/util/version.h"
 
 namespace stereodet {
 
