@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <nlohmann/json.hpp>
 #include <numeric>
 #include <unordered_map>
 
@@ -17,10 +16,7 @@
 #include "stereodet/models/model_handle_internal.h"
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/trainer_handle_internal.h"
-#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
-#include "stereodet/util/hash.h"
-#include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
 

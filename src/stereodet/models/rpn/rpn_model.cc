@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <nlohmann/json.hpp>
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
@@ -15,8 +13,6 @@
 #include "stereodet/models/train_data.h"
 #include "stereodet/models/trainer_handle_internal.h"
 #include "stereodet/util/check.h"
-#include "stereodet/util/hash.h"
-#include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
 

@@ -2,8 +2,6 @@
 #include "stereodet/models/ssd/ssd_model.h"
 
 #include <cstdint>
-#include <limits>
-#include <nlohmann/json.hpp>
 
 #include "stereodet/models/checkpoint_internal.h"
 #include "stereodet/models/device_internal.h"
@@ -12,10 +10,7 @@
 #include "stereodet/models/model_json_internal.h"
 #include "stereodet/models/ssd/ssd_net.h"
 #include "stereodet/models/trainer_handle_internal.h"
-#include "stereodet/util/atomic_file.h"
 #include "stereodet/util/check.h"
-#include "stereodet/util/hash.h"
-#include "stereodet/util/run_manifest.h"
 
 namespace stereodet {
 
