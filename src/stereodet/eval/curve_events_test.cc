@@ -69,9 +69,9 @@ TEST(CurveEventsTest, HugeComponentIsSampledAndExactAtTheLowestScore) {
 
 // Property, on random frames (crowded and not, tied scores) for every matcher, 2D and
 // LET-3D, every difficulty: the breakdown bins' curves from AppendAssociationEvents (one
-// association per distinct score that can change a pair, the rest read from the association of
-// all detections) hold, at every score of the set, exactly the counts of tallying the matcher's
-// association at that score (TallyBins), frame by frame.
+// association per distinct score that can change a pair, the lone false positives of the other
+// scores counted from each detection's own fields) hold, at every score of the set, exactly the
+// counts of tallying the matcher's association at that score (TallyBins), frame by frame.
 TEST(CurveEventsTest, BinEventsGiveTheAssociationsCountsAtEveryScore) {
   const double inf = std::numeric_limits<double>::infinity();
   for (const bool crowded : {false, true}) {

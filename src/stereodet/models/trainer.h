@@ -261,7 +261,7 @@ class TrainingRun {
   // those throw, naming the flag or the file.
   TrainingRun(const TrainOptions& options, const std::string& tool,
               const std::vector<std::pair<std::string, std::filesystem::path>>& inputs)
-      : options_(Checked(options)),
+      : options_(CheckedWithThreadsSet(options)),
         device_(ResolveComputeDevice(options_.device)),
         group_(TrainingGroup::Connect(options_.distributed)),
         folder_(options_.out_dir, options_.data_root, inputs, tool, options_.resume, options_.force,
@@ -318,7 +318,8 @@ class TrainingRun {
   }
 
  private:
-  static TrainOptions Checked(const TrainOptions& options) {
+  // `options` after its Check() and SetTorchThreads(options.threads), in this order.
+  static TrainOptions CheckedWithThreadsSet(const TrainOptions& options) {
     options.Check();
     SetTorchThreads(options.threads);
     return options;
